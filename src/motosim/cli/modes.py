@@ -1,0 +1,104 @@
+"""``motosim modes``: capsize, weave and wobble of the Sharp motorcycle against speed."""
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from motosim.cli._common import (
+    check_figure_path,
+    parse_float_list,
+    parse_range,
+    print_json,
+    save_figure,
+)
+from motosim.model.sharp import MODE_NAMES, ModeTable, modes
+from motosim.params import load_parameters
+
+__all__ = ["register"]
+
+_DEFAULT_RANGE = "2:60:2"
+
+
+def register(sub: Any) -> None:
+    """Add ``modes`` to the subcommands."""
+    parser = sub.add_parser(
+        "modes",
+        help="eigenvalues and modes of the motorcycle against speed",
+        description="Capsize, weave and wobble of Sharp's (1971) motorcycle at each speed.",
+    )
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--speeds", help="comma-separated speeds [m/s], e.g. 3,5,10")
+    where.add_argument(
+        "--range", dest="speed_range", help=f"start:stop:step [m/s] (default {_DEFAULT_RANGE})"
+    )
+    parser.add_argument(
+        "--params", default="sharp1971", help="Sharp parameter set name or TOML file"
+    )
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--plot", metavar="FILE", help="save a figure (.png, .svg or .pdf)")
+    parser.set_defaults(func=run)
+
+
+def _pairs(values: np.ndarray) -> list[list[float]]:
+    return [[float(z.real), float(z.imag)] for z in values]
+
+
+def _payload(table: ModeTable, params: str) -> dict[str, Any]:
+    payload: dict[str, Any] = {
+        "params": params,
+        "speeds": [float(s) for s in table.speeds],
+        "eigenvalues": [_pairs(row) for row in table.eigenvalues],
+        "modes": {},
+    }
+    for name in MODE_NAMES:
+        values = table.mode(name)
+        payload["modes"][name] = {
+            "eigenvalue": _pairs(values),
+            "frequency_hz": [float(f) for f in ModeTable.frequency_hz(values)],
+            "damping_ratio": [float(z) for z in ModeTable.damping_ratio(values)],
+            "stable": [bool(z.real < 0) for z in values],
+        }
+    return payload
+
+
+def _print_table(table: ModeTable) -> None:
+    print(
+        f"{'speed':>7}  {'capsize':>9}  {'weave':^27}  {'wobble':^27}\n"
+        f"{'[m/s]':>7}  {'Re [1/s]':>9}  {'Re [1/s]':>9} {'f [Hz]':>7} {'zeta':>8}  "
+        f"{'Re [1/s]':>9} {'f [Hz]':>7} {'zeta':>8}"
+    )
+    for k, speed in enumerate(table.speeds):
+        cells = [f"{speed:7.2f}", f"{table.capsize[k].real:9.3f}"]
+        for name in ("weave", "wobble"):
+            z = table.mode(name)[k]
+            f = ModeTable.frequency_hz(np.array([z]))[0]
+            zeta = ModeTable.damping_ratio(np.array([z]))[0]
+            cells.append(f"{z.real:9.3f} {f:7.3f} {zeta:8.3f}")
+        unstable = [n for n in MODE_NAMES if table.mode(n)[k].real > 0]
+        note = "  unstable: " + ", ".join(unstable) if unstable else ""
+        print("  ".join(cells) + note)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Compute, print and optionally plot the modes."""
+    speeds = (
+        parse_float_list("--speeds", args.speeds)
+        if args.speeds
+        else parse_range("--range", args.speed_range or _DEFAULT_RANGE)
+    )
+    if args.plot:
+        check_figure_path(args.plot)
+    params = load_parameters(args.params, "sharp")
+    table = modes(params, speeds)
+    if args.json:
+        print_json(_payload(table, args.params))
+    else:
+        _print_table(table)
+    if args.plot:
+        from motosim.plotting import plot_modes
+
+        path = save_figure(plot_modes(table), args.plot)
+        if not args.json:
+            print(f"\nfigure written to {path}")
+    return 0

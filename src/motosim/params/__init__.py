@@ -1,0 +1,304 @@
+"""Validated physical parameters and the packaged reference sets.
+
+A parameter set is a TOML file with a ``[set]`` table (name, model, title, source) and a
+``[parameters]`` table. Each parameter is either a bare number in SI units or a table with
+``value``, ``unit`` (checked against the expected unit), ``source`` and ``note``::
+
+    [set]
+    name = "my_handlebar"
+    model = "handlebar"
+
+    [parameters.J_eq]
+    value = 0.0415
+    unit = "kg*m^2"
+    source = "identified with motosim identify, run 2026-11-02"
+
+Unknown keys, missing values, NaN and values out of range are :class:`MotosimError` with a
+one-line message naming the value and the expected range.
+"""
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from importlib import resources
+from pathlib import Path
+from typing import Any, Literal, TypeAlias, overload
+
+from motosim.errors import MotosimError
+from motosim.params.handlebar import HandlebarParameters
+from motosim.params.sharp import SharpParameters, derived_geometry
+
+__all__ = [
+    "HandlebarParameters",
+    "ParameterSet",
+    "SharpParameters",
+    "derived_geometry",
+    "dump_parameter_set",
+    "list_parameter_sets",
+    "load_parameter_set",
+    "load_parameters",
+    "parse_parameter_set",
+]
+
+Parameters: TypeAlias = SharpParameters | HandlebarParameters
+ModelKind: TypeAlias = Literal["sharp", "handlebar"]
+
+_MODELS: dict[str, type[SharpParameters] | type[HandlebarParameters]] = {
+    "sharp": SharpParameters,
+    "handlebar": HandlebarParameters,
+}
+_SET_KEYS = {"name", "model", "title", "source"}
+_ENTRY_KEYS = {"value", "unit", "source", "note"}
+
+
+@dataclass(frozen=True, slots=True)
+class ParameterSet:
+    """A named parameter set with the provenance of each value.
+
+    Attributes
+    ----------
+    name : str
+        Short name, e.g. ``"sharp1971"``.
+    model : {"sharp", "handlebar"}
+        Which model the values belong to.
+    title : str
+        One-line description.
+    source : str
+        Where the set as a whole comes from.
+    values : SharpParameters or HandlebarParameters
+        The validated values, SI units.
+    sources : Mapping[str, str]
+        Per-parameter source (paper, table, equation) or, for assumed values, the reason.
+    """
+
+    name: str
+    model: ModelKind
+    title: str
+    source: str
+    values: Parameters
+    sources: Mapping[str, str]
+
+
+def _packaged_dir() -> Any:
+    return resources.files("motosim.params") / "data"
+
+
+def list_parameter_sets() -> list[str]:
+    """Names of the packaged reference parameter sets, sorted."""
+    return sorted(
+        p.name.removesuffix(".toml") for p in _packaged_dir().iterdir() if p.name.endswith(".toml")
+    )
+
+
+def _as_number(origin: str, name: str, raw: Any) -> float:
+    if isinstance(raw, bool) or not isinstance(raw, int | float):
+        raise MotosimError(f"{origin}: parameter {name} = {raw!r} is not a number")
+    return float(raw)
+
+
+def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet:
+    """Validate the contents of a parameter file into a :class:`ParameterSet`.
+
+    Parameters
+    ----------
+    data : Mapping
+        The parsed TOML document.
+    origin : str
+        Where it came from, used as the prefix of error messages.
+
+    Returns
+    -------
+    ParameterSet
+        The validated set.
+
+    Raises
+    ------
+    MotosimError
+        On an unknown or missing key, a unit that is not the expected one, a value that is not
+        a finite number in its range.
+    """
+    unknown = set(data) - {"set", "parameters"}
+    if unknown:
+        raise MotosimError(
+            f"{origin}: unknown top-level key {sorted(unknown)[0]!r}; "
+            "expected the tables [set] and [parameters]"
+        )
+    head = data.get("set")
+    if not isinstance(head, Mapping):
+        raise MotosimError(f"{origin}: missing table [set] with name and model")
+    unknown = set(head) - _SET_KEYS
+    if unknown:
+        raise MotosimError(
+            f"{origin}: unknown key {sorted(unknown)[0]!r} in [set]; "
+            f"expected some of {sorted(_SET_KEYS)}"
+        )
+    model = head.get("model")
+    if model not in _MODELS:
+        raise MotosimError(f"{origin}: [set] model = {model!r}; expected one of {sorted(_MODELS)}")
+    cls = _MODELS[model]
+    specs = cls.SPECS
+    table = data.get("parameters")
+    if not isinstance(table, Mapping):
+        raise MotosimError(f"{origin}: missing table [parameters]")
+    values: dict[str, float] = {}
+    sources: dict[str, str] = {}
+    for name, entry in table.items():
+        if name not in specs:
+            raise MotosimError(
+                f"{origin}: unknown parameter {name!r} for the {model} model; "
+                f"expected one of {', '.join(specs)}"
+            )
+        if isinstance(entry, Mapping):
+            extra = set(entry) - _ENTRY_KEYS
+            if extra:
+                raise MotosimError(
+                    f"{origin}: unknown key {sorted(extra)[0]!r} in parameter {name}; "
+                    f"expected some of {sorted(_ENTRY_KEYS)}"
+                )
+            if "value" not in entry:
+                raise MotosimError(f"{origin}: parameter {name} has no value")
+            unit = entry.get("unit", specs[name].unit)
+            if unit != specs[name].unit:
+                raise MotosimError(
+                    f"{origin}: parameter {name} has unit {unit!r}; expected {specs[name].unit!r}"
+                )
+            values[name] = _as_number(origin, name, entry["value"])
+            sources[name] = str(entry.get("source", ""))
+        else:
+            values[name] = _as_number(origin, name, entry)
+            sources[name] = ""
+    missing = [n for n in specs if n not in values]
+    if missing:
+        raise MotosimError(
+            f"{origin}: missing parameter {missing[0]} ({specs[missing[0]].description}, "
+            f"{specs[missing[0]].expected()})"
+        )
+    try:
+        params = cls(**values)
+    except MotosimError as err:
+        raise MotosimError(f"{origin}: {err}") from None
+    return ParameterSet(
+        name=str(head.get("name", Path(origin).stem)),
+        model=model,
+        title=str(head.get("title", "")),
+        source=str(head.get("source", "")),
+        values=params,
+        sources=sources,
+    )
+
+
+def load_parameter_set(name_or_path: str | Path) -> ParameterSet:
+    """Load a packaged set by name, or a parameter file by path.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A name from :func:`list_parameter_sets` or the path of a TOML file.
+
+    Returns
+    -------
+    ParameterSet
+        The validated set.
+
+    Raises
+    ------
+    MotosimError
+        If there is no such set or file, the file is not valid TOML, or a value is invalid.
+    """
+    text: str
+    origin = str(name_or_path)
+    if isinstance(name_or_path, str) and name_or_path in list_parameter_sets():
+        text = (_packaged_dir() / f"{name_or_path}.toml").read_text(encoding="utf-8")
+    else:
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise MotosimError(
+                f"{origin}: no such parameter file or packaged set; "
+                f"packaged sets are {', '.join(list_parameter_sets())}"
+            )
+        text = path.read_text(encoding="utf-8")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise MotosimError(f"{origin}: not valid TOML: {err}") from None
+    return parse_parameter_set(data, origin=origin)
+
+
+@overload
+def load_parameters(name_or_path: str | Path, model: Literal["sharp"]) -> SharpParameters: ...
+@overload
+def load_parameters(
+    name_or_path: str | Path, model: Literal["handlebar"]
+) -> HandlebarParameters: ...
+@overload
+def load_parameters(name_or_path: str | Path, model: None = None) -> Parameters: ...
+def load_parameters(name_or_path: str | Path, model: ModelKind | None = None) -> Parameters:
+    """Load only the validated values of a parameter set.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A packaged set name or a file path.
+    model : {"sharp", "handlebar"}, optional
+        When given, the set must be of this model.
+
+    Returns
+    -------
+    SharpParameters or HandlebarParameters
+
+    Raises
+    ------
+    MotosimError
+        If the set is invalid or of the wrong model.
+
+    Examples
+    --------
+    >>> load_parameters("simacom_handlebar", "handlebar").J_eq
+    0.0415
+    """
+    pset = load_parameter_set(name_or_path)
+    if model is not None and pset.model != model:
+        raise MotosimError(
+            f"{name_or_path}: is a {pset.model} parameter set; expected a {model} parameter set"
+        )
+    return pset.values
+
+
+def _toml_string(text: str) -> str:
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
+    return f'"{escaped}"'
+
+
+def dump_parameter_set(pset: ParameterSet) -> str:
+    """Render a parameter set as TOML text that :func:`load_parameter_set` reads back.
+
+    Parameters
+    ----------
+    pset : ParameterSet
+        The set to write.
+
+    Returns
+    -------
+    str
+        TOML text, each value with its unit and source.
+    """
+    lines = [
+        "[set]",
+        f"name = {_toml_string(pset.name)}",
+        f"model = {_toml_string(pset.model)}",
+        f"title = {_toml_string(pset.title)}",
+        f"source = {_toml_string(pset.source)}",
+    ]
+    specs = type(pset.values).SPECS
+    for f in fields(pset.values):
+        value = float(getattr(pset.values, f.name))
+        assert math.isfinite(value)
+        lines += [
+            "",
+            f"[parameters.{f.name}]",
+            f"value = {value!r}",
+            f"unit = {_toml_string(specs[f.name].unit)}",
+            f"source = {_toml_string(pset.sources.get(f.name, ''))}",
+        ]
+    return "\n".join(lines) + "\n"

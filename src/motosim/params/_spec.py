@@ -1,0 +1,79 @@
+"""Field specifications: unit, meaning and admissible range of each physical parameter."""
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any, ClassVar, Protocol
+
+from motosim.errors import MotosimError
+
+__all__ = ["Spec", "validate_fields"]
+
+
+@dataclass(frozen=True, slots=True)
+class Spec:
+    """Unit, meaning and admissible open or closed interval of one parameter."""
+
+    unit: str
+    description: str
+    lower: float = -math.inf
+    lower_closed: bool = False
+    upper: float = math.inf
+    upper_closed: bool = False
+
+    @classmethod
+    def positive(cls, unit: str, description: str) -> "Spec":
+        """A quantity that must be > 0."""
+        return cls(unit, description, lower=0.0)
+
+    @classmethod
+    def non_negative(cls, unit: str, description: str) -> "Spec":
+        """A quantity that must be >= 0."""
+        return cls(unit, description, lower=0.0, lower_closed=True)
+
+    def expected(self) -> str:
+        """Describe the admissible range in words, e.g. ``a finite number > 0 [kg]``."""
+        parts = []
+        if self.lower > -math.inf:
+            parts.append(f"{'>=' if self.lower_closed else '>'} {self.lower:g}")
+        if self.upper < math.inf:
+            parts.append(f"{'<=' if self.upper_closed else '<'} {self.upper:g}")
+        bounds = " and ".join(parts)
+        return f"a finite number{' ' + bounds if bounds else ''} [{self.unit}]"
+
+    def admits(self, value: float) -> bool:
+        """Return True when ``value`` is finite and inside the interval."""
+        if not math.isfinite(value):
+            return False
+        above = value >= self.lower if self.lower_closed else value > self.lower
+        below = value <= self.upper if self.upper_closed else value < self.upper
+        return above and below
+
+
+class _HasSpecs(Protocol):
+    SPECS: ClassVar[dict[str, Spec]]
+
+
+def validate_fields(obj: _HasSpecs, *, context: str) -> None:
+    """Check every dataclass field of ``obj`` against its :class:`Spec`.
+
+    Parameters
+    ----------
+    obj : dataclass instance with a ``SPECS`` class attribute
+        The parameters to check.
+    context : str
+        What the parameters are, for the message (e.g. ``"Sharp parameters"``).
+
+    Raises
+    ------
+    MotosimError
+        Naming the first field whose value is not a finite number in its range.
+    """
+    for f in fields(obj):  # type: ignore[arg-type]
+        spec = obj.SPECS[f.name]
+        value: Any = getattr(obj, f.name)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise MotosimError(
+                f"{context}: {f.name} = {value!r} is not a number; expected {spec.expected()}"
+            )
+        if not spec.admits(float(value)):
+            raise MotosimError(f"{context}: {f.name} = {value!r}; expected {spec.expected()}")

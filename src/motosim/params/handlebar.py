@@ -1,0 +1,78 @@
+"""Parameters of the motorised handlebar: DC motor, belt reduction and handlebar (eqs. 3-7).
+
+The identified quantities are the equivalent ones of eq. (5), seen at the handlebar axis:
+``J_eq = J_h + N^2 J_m`` and ``beta_eq = beta_vh + N^2 beta_vm``. The regression of eq. (8)
+identifies exactly these, so the packaged Table I set stores them as such.
+"""
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+from motosim.errors import MotosimError
+from motosim.params._spec import Spec, validate_fields
+
+__all__ = ["HandlebarParameters"]
+
+
+@dataclass(frozen=True, slots=True)
+class HandlebarParameters:
+    """DC motor driving the handlebar through a belt of ratio ``N`` (theta_m = N theta_h).
+
+    Raises
+    ------
+    MotosimError
+        If a value is not finite or outside its range, or if the motor alone would have more
+        inertia or damping at the handlebar axis than the equivalent values.
+    """
+
+    J_eq: float
+    beta_eq: float
+    beta_s: float
+    N: float
+    k_t: float
+    J_m: float
+    beta_vm: float
+    R: float
+    L: float
+    k_e: float
+
+    SPECS: ClassVar[dict[str, Spec]] = {
+        "J_eq": Spec.positive("kg*m^2", "equivalent inertia at the handlebar axis, J_h + N^2 J_m"),
+        "beta_eq": Spec.positive("N*m*s/rad", "equivalent viscous friction, beta_vh + N^2 beta_vm"),
+        "beta_s": Spec.non_negative("N*m", "dry (Coulomb) friction torque"),
+        "N": Spec.positive("1", "belt reduction ratio, motor angle over handlebar angle"),
+        "k_t": Spec.positive("N*m/A", "motor torque constant"),
+        "J_m": Spec.non_negative("kg*m^2", "rotor inertia"),
+        "beta_vm": Spec.non_negative("N*m*s/rad", "rotor viscous friction"),
+        "R": Spec.positive("ohm", "armature resistance"),
+        "L": Spec.non_negative("H", "armature inductance"),
+        "k_e": Spec.non_negative("V*s/rad", "back-EMF constant, per rad/s of the motor shaft"),
+    }
+
+    def __post_init__(self) -> None:
+        validate_fields(self, context="handlebar parameters")
+        if self.N**2 * self.J_m >= self.J_eq:
+            raise MotosimError(
+                f"handlebar parameters: N^2 J_m = {self.N**2 * self.J_m:g} kg*m^2 is not below "
+                f"J_eq = {self.J_eq:g}; expected a positive handlebar inertia J_h = J_eq - N^2 J_m"
+            )
+        if self.N**2 * self.beta_vm > self.beta_eq:
+            raise MotosimError(
+                f"handlebar parameters: N^2 beta_vm = {self.N**2 * self.beta_vm:g} N*m*s/rad "
+                f"exceeds beta_eq = {self.beta_eq:g}; expected beta_vh = beta_eq - N^2 beta_vm >= 0"
+            )
+
+    @property
+    def torque_per_amp(self) -> float:
+        """Motor torque at the handlebar per ampere, N k_t [N*m/A]."""
+        return self.N * self.k_t
+
+    @property
+    def J_h(self) -> float:
+        """Handlebar inertia alone, J_eq - N^2 J_m [kg*m^2]."""
+        return self.J_eq - self.N**2 * self.J_m
+
+    @property
+    def beta_vh(self) -> float:
+        """Handlebar viscous friction alone, beta_eq - N^2 beta_vm [N*m*s/rad]."""
+        return self.beta_eq - self.N**2 * self.beta_vm

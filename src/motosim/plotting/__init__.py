@@ -1,0 +1,8 @@
+"""Figures from results. matplotlib is imported here and nowhere else.
+
+Every function returns a :class:`matplotlib.figure.Figure` and never shows it; callers save it.
+"""
+
+from motosim.plotting.modes import plot_modes
+
+__all__ = ["plot_modes"]

@@ -1,0 +1,87 @@
+"""Capsize, weave and wobble against speed."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from motosim.model.sharp import MODE_NAMES, ModeTable
+
+__all__ = ["plot_modes"]
+
+_COLOURS = {"capsize": "tab:blue", "weave": "tab:orange", "wobble": "tab:green"}
+
+
+def _unstable_spans(speeds: np.ndarray, unstable: np.ndarray) -> list[tuple[float, float]]:
+    spans = []
+    start = None
+    for s, flag in zip(speeds, unstable, strict=True):
+        if flag and start is None:
+            start = s
+        if not flag and start is not None:
+            spans.append((float(start), float(s)))
+            start = None
+    if start is not None:
+        spans.append((float(start), float(speeds[-1])))
+    return spans
+
+
+def plot_modes(table: ModeTable, *, title: str = "") -> Figure:
+    """Real part and frequency of the three modes against speed, unstable ranges shaded.
+
+    Parameters
+    ----------
+    table : ModeTable
+        From :func:`motosim.model.sharp.modes`.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+        Two panels sharing the speed axis [m/s].
+    """
+    order = np.argsort(table.speeds)
+    v = table.speeds[order]
+    fig = Figure(figsize=(8.0, 6.5), layout="constrained")
+    ax_re, ax_f = fig.subplots(2, 1, sharex=True)
+    ax_re.scatter(
+        np.repeat(v, table.eigenvalues.shape[1]),
+        table.eigenvalues[order].real.ravel(),
+        s=2,
+        color="0.8",
+        label="all eigenvalues",
+    )
+    for name in MODE_NAMES:
+        values = table.mode(name)[order]
+        unstable = values.real > 0
+        ax_re.plot(v, values.real, color=_COLOURS[name], label=name)
+        if name != "capsize":
+            ax_f.plot(v, ModeTable.frequency_hz(values), color=_COLOURS[name], label=name)
+        for lo, hi in _unstable_spans(v, unstable):
+            for ax in (ax_re, ax_f):
+                ax.axvspan(lo, hi, color=_COLOURS[name], alpha=0.12, lw=0)
+            ax_re.annotate(
+                f"{name} unstable",
+                xy=((lo + hi) / 2, 0),
+                xytext=(0, 6),
+                textcoords="offset points",
+                ha="center",
+                fontsize=8,
+                color=_COLOURS[name],
+            )
+    lowest = min(float(np.min(table.mode(n).real)) for n in MODE_NAMES)
+    highest = max(float(np.max(table.mode(n).real)) for n in MODE_NAMES)
+    ax_re.set_ylim(min(1.25 * lowest, -1.0), max(1.25 * highest, 1.0))
+    ax_re.axhline(0.0, color="k", lw=0.8)
+    ax_re.set_ylabel("real part [1/s]")
+    ax_re.legend(loc="lower left", fontsize=8)
+    ax_f.set_ylabel("frequency [Hz]")
+    ax_f.set_xlabel("forward speed [m/s]")
+    ax_f.legend(loc="center right", fontsize=8)
+    for ax in (ax_re, ax_f):
+        ax.grid(True, alpha=0.3)
+    fig.suptitle(title or "Sharp (1971) motorcycle: modes against speed (shaded: unstable)")
+    return fig

@@ -1,0 +1,68 @@
+"""Glossary of signal and parameter names, their meaning and their SI unit.
+
+Every CSV column, result field and plot label uses these names. New signals are added here
+first. Units are SI with angles in radians.
+"""
+
+from typing import Final, NamedTuple
+
+__all__ = ["SIGNALS", "Signal", "unit_of"]
+
+
+class Signal(NamedTuple):
+    """One named signal: its description and SI unit."""
+
+    description: str
+    unit: str
+
+
+SIGNALS: Final[dict[str, Signal]] = {
+    "t": Signal("time", "s"),
+    # handlebar
+    "tau_r": Signal("rider torque on the handlebar", "N*m"),
+    "tau_r_hat": Signal("estimated rider torque", "N*m"),
+    "tau_p": Signal("dry-friction torque on the handlebar axis", "N*m"),
+    "tau_m": Signal("motor torque at the handlebar, N k_t i_m", "N*m"),
+    "theta_h": Signal("handlebar angle", "rad"),
+    "theta_h_dot": Signal("handlebar rate", "rad/s"),
+    "theta_h_dot_hat": Signal("differentiated handlebar rate", "rad/s"),
+    "i_m": Signal("motor current", "A"),
+    "u": Signal("motor voltage", "V"),
+    # virtual motorcycle (Sharp 1971, the paper's state order) and eq. (2)
+    "v_x": Signal("forward speed", "m/s"),
+    "v_y": Signal("lateral velocity of the rear-frame ground point", "m/s"),
+    "psi_dot": Signal("yaw rate", "rad/s"),
+    "phi_dot": Signal("roll rate", "rad/s"),
+    "delta_dot": Signal("steer rate", "rad/s"),
+    "phi": Signal("roll angle, right side down positive", "rad"),
+    "delta": Signal("steer angle, the controller's reference", "rad"),
+    "F_yr": Signal("rear tyre side force", "N"),
+    "F_yf": Signal("front tyre side force", "N"),
+    "psi": Signal("yaw angle", "rad"),
+    "x": Signal("position east of the start (ground frame x)", "m"),
+    "y": Signal("position (ground frame y, right of the start heading)", "m"),
+    "tau_d": Signal("drive torque at the rear wheel", "N*m"),
+    "tau_b": Signal("brake torque", "N*m"),
+    "F_wx": Signal("longitudinal wind force", "N"),
+}
+
+
+def unit_of(name: str) -> str:
+    """Return the SI unit of a signal.
+
+    Parameters
+    ----------
+    name : str
+        Signal name from :data:`SIGNALS`.
+
+    Returns
+    -------
+    str
+        The unit, for example ``"rad/s"``.
+
+    Raises
+    ------
+    KeyError
+        If the name is not in the glossary.
+    """
+    return SIGNALS[name].unit
