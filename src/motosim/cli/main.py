@@ -11,12 +11,12 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from motosim import __version__
-from motosim.cli import modes, params
+from motosim.cli import excite, identify, modes, params
 from motosim.errors import MotosimError
 
 __all__ = ["main"]
 
-_COMMANDS = (params, modes)
+_COMMANDS = (params, modes, excite, identify)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -50,6 +50,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("motosim: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (e.g. `| head`): not an error of ours
+        sys.stderr.close()
+        return 0
     return code
 
 

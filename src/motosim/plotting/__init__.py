@@ -3,6 +3,7 @@
 Every function returns a :class:`matplotlib.figure.Figure` and never shows it; callers save it.
 """
 
+from motosim.plotting.identification import plot_identification
 from motosim.plotting.modes import plot_modes
 
-__all__ = ["plot_modes"]
+__all__ = ["plot_identification", "plot_modes"]

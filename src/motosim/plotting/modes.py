@@ -1,9 +1,5 @@
 """Capsize, weave and wobble against speed."""
 
-import matplotlib
-
-matplotlib.use("Agg")
-
 import numpy as np
 from matplotlib.figure import Figure
 

@@ -1,0 +1,52 @@
+"""Handlebar identification: excitation runs and the estimation of J_eq, beta_eq, beta_s.
+
+Section II.D of the paper: the motor drives the free handlebar in open loop (tau_r = 0); the
+angle and the current are logged; eq. (5) is written as the linear regression of eq. (8),
+Phi p = N k_t i_m, and solved. Layer: ``params -> model -> identification``; nothing here
+reads files or prints.
+
+Modules
+-------
+excitation
+    Chirp and rectangular voltages, the measurement model, simulated excitation runs.
+regressors
+    Eq. (8) from a log, with zero-phase Savitzky-Golay differentiation.
+least_squares, gradient, output_error
+    The estimators.
+identify
+    :func:`identify` and :func:`validate`.
+"""
+
+from motosim.identification.excitation import (
+    MeasurementModel,
+    chirp_voltage,
+    excitation_run,
+    measure,
+    square_voltage,
+)
+from motosim.identification.identify import (
+    METHODS,
+    Identification,
+    Validation,
+    back_emf_damping,
+    identified_parameters,
+    identify,
+    is_voltage_driven,
+    validate,
+)
+
+__all__ = [
+    "METHODS",
+    "Identification",
+    "MeasurementModel",
+    "Validation",
+    "back_emf_damping",
+    "chirp_voltage",
+    "excitation_run",
+    "identified_parameters",
+    "identify",
+    "is_voltage_driven",
+    "measure",
+    "square_voltage",
+    "validate",
+]
