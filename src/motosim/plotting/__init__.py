@@ -3,7 +3,8 @@
 Every function returns a :class:`matplotlib.figure.Figure` and never shows it; callers save it.
 """
 
+from motosim.plotting.estimation import plot_torque_estimates
 from motosim.plotting.identification import plot_identification
 from motosim.plotting.modes import plot_modes
 
-__all__ = ["plot_identification", "plot_modes"]
+__all__ = ["plot_identification", "plot_modes", "plot_torque_estimates"]
