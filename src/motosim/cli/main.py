@@ -11,12 +11,12 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from motosim import __version__
-from motosim.cli import estimate, excite, identify, modes, params
+from motosim.cli import design, estimate, excite, identify, modes, params
 from motosim.errors import MotosimError
 
 __all__ = ["main"]
 
-_COMMANDS = (params, modes, excite, identify, estimate)
+_COMMANDS = (params, modes, excite, identify, estimate, design)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -1,0 +1,229 @@
+"""``motosim design``: the observer and the torque-feedback controller for a handlebar."""
+
+import argparse
+import math
+import sys
+from datetime import date
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motosim import __version__
+from motosim.cli._common import print_json
+from motosim.control.torque_feedback import (
+    PAPER_CONTROLLER,
+    LoopAnalysis,
+    analyse_loop,
+    check_options,
+    design_torque_feedback,
+)
+from motosim.errors import MotosimError
+from motosim.estimation.walcott_zak import design as design_observer
+from motosim.io.design_file import ObserverSettings, dump_design
+from motosim.params import load_parameters
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``design`` to the subcommands."""
+    parser = sub.add_parser(
+        "design",
+        help="design the rider-torque observer and the torque-feedback controller",
+        description=(
+            "Design the Walcott-Zak observer and the H-infinity loop-shaping controller of "
+            "fixed order for a handlebar, analyse the loop (margins, tracking, rider-torque "
+            "rejection, sampling, +/-50 %% robustness) beside the paper's controller, and "
+            "write one design file for the simulator and the real-time loop."
+        ),
+    )
+    parser.add_argument(
+        "--handlebar", default="simacom_handlebar", help="handlebar set or TOML file (identified)"
+    )
+    parser.add_argument("--order", type=int, default=1, help="order of the tuned controller (1)")
+    parser.add_argument(
+        "--bandwidth", type=float, default=10.0, help="tracking bandwidth [Hz] (10)"
+    )
+    parser.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (1000)")
+    parser.add_argument("--starts", type=int, default=8, help="starts of the search (8)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the starts (0)")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.add_argument("--out", metavar="DESIGN.toml", help="write the design file")
+    parser.set_defaults(func=run)
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def _analysis(a: LoopAnalysis) -> dict[str, Any]:
+    return {
+        "four_block_gamma_unweighted": _finite(a.four_block_gamma),
+        "closed_loop_poles": [[float(p.real), float(p.imag)] for p in a.closed_loop_poles],
+        "gain_margin_db": _finite(a.gain_margin_db),
+        "phase_margin_deg": _finite(a.phase_margin_deg),
+        "crossover_rad_s": _finite(a.crossover),
+        "tracking_bandwidth_hz": _finite(a.tracking_bandwidth),
+        "stiffness_nm_per_rad": _finite(a.stiffness),
+        "peak_compliance_rad_per_nm": a.peak_compliance,
+        "tracking_error_1hz": a.tracking_error_1hz,
+        "compliance_1hz_rad_per_nm": a.compliance_1hz,
+        "discrete_spectral_radius": a.discrete_radius,
+        "discrete_stable": {m: r < 1.0 for m, r in a.discrete_radius.items()},
+        "robust_over_50_percent": a.robust_over_50_percent,
+        "worst_perturbed_gamma_unweighted": _finite(a.worst_perturbed_gamma),
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    """Design, report and optionally write the design file."""
+    if args.order < 0:
+        raise MotosimError(f"--order {args.order}; expected a controller order >= 0")
+    if args.starts < 1:
+        raise MotosimError(f"--starts {args.starts}; expected at least 1")
+    check_options(bandwidth=args.bandwidth, rate=args.rate)
+    hb = load_parameters(args.handlebar, "handlebar")
+    if not args.json:
+        print(f"designing for {args.handlebar} ({args.starts} starts) ...", file=sys.stderr)
+    ctrl = design_torque_feedback(
+        hb,
+        rng=np.random.default_rng(args.seed),
+        bandwidth=args.bandwidth,
+        order=args.order,
+        rate=args.rate,
+        n_starts=args.starts,
+    )
+    settings = ObserverSettings(
+        poles=(-0.1, -60.0),
+        eta=150.0,
+        injection_bandwidth=min(800.0, 0.8 * args.rate),
+        filter_time_constant=0.01,
+        dead_zone=0.05,
+        friction_width=0.05,
+        friction_compensation=True,
+    )
+    obs = design_observer(
+        hb,
+        poles=settings.poles,
+        eta=settings.eta,
+        injection_bandwidth=settings.injection_bandwidth,
+        filter_time_constant=settings.filter_time_constant,
+        dead_zone=settings.dead_zone,
+        friction_width=settings.friction_width,
+        friction_compensation=settings.friction_compensation,
+    )
+    paper = analyse_loop(hb, PAPER_CONTROLLER, rate=args.rate)
+    report: dict[str, Any] = {
+        "handlebar": args.handlebar,
+        "rate": args.rate,
+        "controller": {
+            "num": [float(v) for v in ctrl.num],
+            "den": [float(v) for v in ctrl.den],
+            "gamma": ctrl.gamma,
+            "order": ctrl.order,
+            "states": ctrl.controller.n_states,
+            "bandwidth_hz": ctrl.bandwidth,
+            "weight": {"gain": ctrl.weight_gain, "corner_rad_s": ctrl.weight_corner},
+            "analysis": _analysis(ctrl.analysis),
+        },
+        "gamma_min": ctrl.gamma_min,
+        "gamma_gap": ctrl.gamma / ctrl.gamma_min - 1.0,
+        "paper_controller": {
+            "num": [-2.355, -613.7],
+            "den": [1.0, 1445.0],
+            "gamma": paper.four_block_gamma,
+            "analysis": _analysis(paper),
+        },
+        "observer": {
+            "poles": list(settings.poles),
+            "eta": obs.eta,
+            "epsilon": obs.epsilon,
+            "L": obs.L.tolist(),
+            "P": obs.P.tolist(),
+            "F": np.atleast_1d(obs.F).tolist(),
+        },
+    }
+    if args.out:
+        text = dump_design(
+            header={
+                "version": __version__,
+                "date": str(date.today()),
+                "handlebar": args.handlebar,
+                "rate": args.rate,
+            },
+            handlebar=hb,
+            observer=settings,
+            observer_matrices={"L": obs.L, "P": obs.P, "F": np.atleast_1d(obs.F)},
+            controller={
+                "bandwidth": ctrl.bandwidth,
+                "order": ctrl.order,
+                "gamma": ctrl.gamma,
+                "gamma_min": ctrl.gamma_min,
+                "weight_gain": ctrl.weight_gain,
+                "weight_corner": ctrl.weight_corner,
+                "num": ctrl.num,
+                "den": ctrl.den,
+            },
+            continuous=ctrl.controller,
+            discrete={"zoh": ctrl.controller_zoh, "tustin": ctrl.controller_tustin},
+            paper_controller={
+                "num": [-2.355, -613.7],
+                "den": [1.0, 1445.0],
+                "gamma": paper.four_block_gamma,
+            },
+        )
+        target = Path(args.out)
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_text(text, encoding="utf-8")
+        except OSError as err:
+            raise MotosimError(f"cannot write {args.out}: {err.strerror}") from None
+        report["out"] = str(target)
+    if args.json:
+        print_json(report)
+    else:
+        _print(report)
+    return 0
+
+
+def _poly(coefficients: list[float]) -> str:
+    n = len(coefficients) - 1
+    terms = [
+        f"{c:.5g}" + (f" s^{n - k}" if n - k > 1 else " s" if n - k == 1 else "")
+        for k, c in enumerate(coefficients)
+        if c != 0.0
+    ]
+    return " + ".join(terms).replace("+ -", "- ")
+
+
+def _show(value: float | None) -> str:
+    return "inf" if value is None else f"{value:.4g}"
+
+
+def _print(report: dict[str, Any]) -> None:
+    c = report["controller"]
+    a = c["analysis"]
+    p = report["paper_controller"]["analysis"]
+    print(f"controller K(s) = ({_poly(c['num'])}) / ({_poly(c['den'])})  [A/rad]")
+    print(
+        f"  tuned order {c['order']} on the shaped plant: gamma {c['gamma']:.4f}, full-order "
+        f"optimum {report['gamma_min']:.4f} (+{100 * report['gamma_gap']:.2f} %)"
+    )
+    print(f"{'':28}{'ours':>14}{'paper eq. (26)':>18}")
+    rows = [
+        ("phase margin [deg]", "phase_margin_deg"),
+        ("tracking bandwidth [Hz]", "tracking_bandwidth_hz"),
+        ("tracking error at 1 Hz", "tracking_error_1hz"),
+        ("stiffness [N*m/rad]", "stiffness_nm_per_rad"),
+        ("compliance 1 Hz [rad/N*m]", "compliance_1hz_rad_per_nm"),
+    ]
+    for label, key in rows:
+        print(f"  {label:<26}{_show(a[key]):>14}{_show(p[key]):>18}")
+    print(
+        f"  discrete loop at {report['rate']:g} Hz stable: {a['discrete_stable']}; "
+        f"stable over +/-50 % J_eq, beta_eq: {a['robust_over_50_percent']}"
+    )
+    print(f"  paper controller four-block gamma (W = 1): {report['paper_controller']['gamma']:.4f}")
+    if "out" in report:
+        print(f"wrote {report['out']}")

@@ -1,0 +1,70 @@
+"""``motosim design`` end to end and the design file round trip."""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motosim.cli.main import main
+from motosim.io.design_file import read_design
+
+
+def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as info:
+        sys.exit(main(list(argv)))
+    out, err = capsys.readouterr()
+    return int(info.value.code or 0), out, err
+
+
+def test_design_json_and_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    out_file = tmp_path / "design.toml"
+    code, out, _ = _run(capsys, "design", "--json", "--starts", "4", "--out", str(out_file))
+    assert code == 0
+    report = json.loads(out)
+    c = report["controller"]
+    assert c["gamma"] <= 1.02 * report["gamma_min"]
+    assert c["analysis"]["discrete_stable"] == {"zoh": True, "tustin": True}
+    assert report["paper_controller"]["gamma"] == pytest.approx(2.5585, abs=2e-4)
+    design = read_design(out_file)
+    assert design.rate == 1000.0
+    assert design.handlebar.J_eq == 0.0415
+    # the file's continuous controller is the reported num/den
+    s = 5.0j
+    k = design.controller
+    k_ss = (k.C @ np.linalg.solve(s * np.eye(k.n_states) - k.A, k.B) + k.D)[0, 0]
+    k_tf = np.polyval(c["num"], s) / np.polyval(c["den"], s)
+    assert k_ss == pytest.approx(k_tf, rel=1e-9)
+    assert set(design.controller_discrete) == {"zoh", "tustin"}
+
+
+def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = _run(capsys, "design", "--json", "--starts", "2", "--rate", "100")
+    assert code == 0
+    assert json.loads(out)["controller"]["analysis"]["discrete_stable"]["zoh"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["design", "--bandwidth", "500"], "at most a fifth of the 1000 Hz control rate"),
+        (["design", "--order", "-1"], "--order -1; expected a controller order >= 0"),
+        (["design", "--handlebar", "sharp1971"], "expected a handlebar parameter set"),
+    ],
+)
+def test_bad_options(capsys: pytest.CaptureFixture[str], argv: list[str], message: str) -> None:
+    code, _, err = _run(capsys, *argv)
+    assert code == 2 and message in err and err.count("\n") == 1
+
+
+def test_bad_design_file(tmp_path: Path) -> None:
+    from motosim.errors import MotosimError
+
+    bad = tmp_path / "d.toml"
+    bad.write_text("[design]\nrate = 1000.0\n[extra]\n")
+    with pytest.raises(MotosimError, match="unknown table"):
+        read_design(bad)
+    bad.write_text("[design]\nrate = -1.0\n")
+    with pytest.raises(MotosimError, match=r"rate = -1\.0"):
+        read_design(bad)

@@ -1,0 +1,75 @@
+"""The handlebar's torque-feedback design and its analysis (section IV, eqs. (18)-(26))."""
+
+import math
+
+import numpy as np
+import pytest
+
+from motosim.control import closed_loop_poles, four_block_norm
+from motosim.control.torque_feedback import (
+    PAPER_CONTROLLER,
+    analyse_loop,
+    design_torque_feedback,
+    handlebar_plants,
+)
+from motosim.errors import MotosimError
+from motosim.params import HandlebarParameters
+
+
+@pytest.fixture(scope="module")
+def design(handlebar: HandlebarParameters):  # type: ignore[no-untyped-def]
+    return design_torque_feedback(handlebar, rng=np.random.default_rng(0), n_starts=4)
+
+
+def test_plants_are_eq_19(handlebar: HandlebarParameters) -> None:
+    G_h, G_w = handlebar_plants(handlebar)
+    s = 3.0j
+    want = handlebar.torque_per_amp / (handlebar.J_eq * s**2 + handlebar.beta_eq * s)
+    got = (G_h.C @ np.linalg.solve(s * np.eye(2) - G_h.A, G_h.B))[0, 0]
+    assert got == pytest.approx(want, rel=1e-12)
+    got_w = (G_w.C @ np.linalg.solve(s * np.eye(2) - G_w.A, G_w.B))[0, 0]
+    assert got_w == pytest.approx(want / handlebar.torque_per_amp, rel=1e-12)
+
+
+def test_first_order_within_2_percent_of_full_order(design) -> None:  # type: ignore[no-untyped-def]
+    assert design.gamma_min <= design.gamma <= 1.02 * design.gamma_min
+    assert design.order == 1
+    assert design.controller.n_states == 2  # K_s and the integrator of W1
+
+
+def test_loop_meets_its_specification(design, handlebar: HandlebarParameters) -> None:  # type: ignore[no-untyped-def]
+    a = design.analysis
+    G_h, _ = handlebar_plants(handlebar)
+    assert np.all(closed_loop_poles(G_h, design.controller).real < 0)
+    assert 8.0 < a.tracking_bandwidth < 16.0  # the 10 Hz asked for
+    assert a.phase_margin_deg > 45.0
+    assert math.isinf(a.stiffness)  # integral action: no steady deflection under rider torque
+    assert a.robust_over_50_percent
+    assert all(radius < 1.0 for radius in a.discrete_radius.values())
+    # the implemented K = W1 K_s: its shaped loop reaches the tuned gamma
+    assert four_block_norm(G_h, design.controller) > 1.0
+
+
+def test_paper_controller_on_our_plant(handlebar: HandlebarParameters) -> None:
+    # sqrt(1 + 2.355^2) = 2.5585: G_h vanishes at infinite frequency, where the four-block
+    # transfer tends to [[1, 0], [K(inf), 0]]; N k_t only scales G_h, not that limit
+    paper = analyse_loop(handlebar, PAPER_CONTROLLER, rate=1000.0)
+    assert paper.four_block_gamma == pytest.approx(math.sqrt(1 + 2.355**2), rel=1e-9)
+    assert paper.robust_over_50_percent
+    # K(0) = -613.7 / 1445 A/rad: a finite stiffness N k_t |K(0)|
+    assert paper.stiffness == pytest.approx(handlebar.torque_per_amp * 613.7 / 1445, rel=1e-9)
+
+
+def test_ours_tracks_and_rejects_better_than_the_paper(
+    design, handlebar: HandlebarParameters
+) -> None:  # type: ignore[no-untyped-def]
+    paper = analyse_loop(handlebar, PAPER_CONTROLLER, rate=1000.0)
+    assert design.analysis.tracking_error_1hz < 0.2 * paper.tracking_error_1hz
+    assert design.analysis.compliance_1hz < 0.2 * paper.compliance_1hz
+
+
+def test_bad_options(handlebar: HandlebarParameters) -> None:
+    with pytest.raises(MotosimError, match="at most a fifth"):
+        design_torque_feedback(handlebar, rng=np.random.default_rng(0), bandwidth=300.0)
+    with pytest.raises(MotosimError, match="rate"):
+        design_torque_feedback(handlebar, rng=np.random.default_rng(0), rate=-1.0)
