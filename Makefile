@@ -15,9 +15,9 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 demo: $(STAMP)
-	mkdir -p out
-	$(BIN)/motosim modes --range 2:60:0.5 --plot out/modes.png
-	@echo "Figure written to out/modes.png"
+	$(BIN)/motosim paper --out out/paper
+	$(BIN)/motosim modes --range 2:60:0.5 --plot out/modes.png > out/modes.txt
+	@echo "Open out/paper/index.html: the paper's section V regenerated, one report per run."
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests bench scripts

@@ -26,6 +26,7 @@ SIGNALS: Final[dict[str, Signal]] = {
     "theta_h": Signal("handlebar angle", "rad"),
     "theta_h_dot": Signal("handlebar rate", "rad/s"),
     "theta_h_dot_hat": Signal("differentiated handlebar rate", "rad/s"),
+    "theta_h_meas": Signal("measured handlebar angle (sampled, quantised)", "rad"),
     "i_m": Signal("motor current", "A"),
     "u": Signal("motor voltage", "V"),
     # virtual motorcycle (Sharp 1971, the paper's state order) and eq. (2)
@@ -44,6 +45,7 @@ SIGNALS: Final[dict[str, Signal]] = {
     "tau_d": Signal("drive torque at the rear wheel", "N*m"),
     "tau_b": Signal("brake torque", "N*m"),
     "F_wx": Signal("longitudinal wind force", "N"),
+    "e_y": Signal("virtual rider's lateral error from its path, right positive", "m"),
 }
 
 

@@ -7,6 +7,7 @@ these names.
 """
 
 import math
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -26,8 +27,10 @@ from motosim.params.handlebar import HandlebarParameters
 __all__ = [
     "ESTIMATORS",
     "EstimatorFactory",
+    "KernelArguments",
     "TorqueEstimator",
     "estimate",
+    "kernel_arguments",
     "walcott_zak_for_step",
 ]
 
@@ -178,3 +181,56 @@ def estimate(
     for k in range(tt.size):
         _, tau[k] = stepper.step(theta[k], rate[k], current[k])
     return rate, tau
+
+
+@dataclass(frozen=True, slots=True)
+class KernelArguments:
+    """The arrays of an estimator's compiled one-sample kernel, padded to common shapes.
+
+    ``kind`` 0 is :func:`~motosim.estimation.walcott_zak.wz_step` (Phi 2x2, Gamma 2x4, gain
+    F C_a in ``gain[:2]``, p[:8]); 1 is
+    :func:`~motosim.estimation.baselines.inverse_dynamics_step` (Phi 4x4, Gamma 4x2, p[:7]);
+    2 is :func:`~motosim.estimation.baselines.kalman_step` (Phi 3x3, Gamma 3x2, Kalman gain in
+    ``gain[:3]``, p[:3]). Compiled loops (:mod:`motosim.sim`) dispatch on ``kind``.
+    """
+
+    kind: int
+    Phi: Array
+    Gamma: Array
+    gain: Array
+    p: Array
+
+
+def _padded(values: Array, shape: tuple[int, ...]) -> Array:
+    out = np.zeros(shape)
+    out[tuple(slice(0, n) for n in values.shape)] = values
+    return out
+
+
+def kernel_arguments(
+    name: str, hb: HandlebarParameters, dt: float, *, friction_compensation: bool = True
+) -> KernelArguments:
+    """The compiled-kernel arrays of the estimator ``name`` designed for ``hb`` at ``dt``.
+
+    Raises
+    ------
+    MotosimError
+        On an unknown estimator or an impossible design at this step.
+    """
+    if name not in ESTIMATORS:
+        raise MotosimError(f"estimator {name!r} is unknown; expected one of {sorted(ESTIMATORS)}")
+    stepper = ESTIMATORS[name](hb, dt, friction_compensation=friction_compensation)
+    if isinstance(stepper, WalcottZakObserver):
+        kind, gain = 0, stepper._g
+    elif isinstance(stepper, InverseDynamicsEstimator):
+        kind, gain = 1, np.zeros(4)
+    else:
+        assert isinstance(stepper, KalmanTorqueEstimator)
+        kind, gain = 2, stepper._K
+    return KernelArguments(
+        kind=kind,
+        Phi=_padded(stepper._Phi, (4, 4)),
+        Gamma=_padded(stepper._Gamma, (4, 4)),
+        gain=_padded(np.asarray(gain, dtype=float), (4,)),
+        p=_padded(stepper._p, (8,)),
+    )

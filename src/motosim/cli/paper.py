@@ -1,0 +1,166 @@
+"""``motosim paper``: regenerate the figures of the paper's section V from scratch."""
+
+import argparse
+import html
+import tomllib
+from collections.abc import Callable
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from motosim.cli._common import print_json
+from motosim.cli.simulate import resolve, run_scenario
+from motosim.errors import MotosimError
+from motosim.io.results import SimResult, load_result
+from motosim.sim import Scenario, parse_scenario
+
+__all__ = ["paper_scenarios", "register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``paper`` to the subcommands."""
+    parser = sub.add_parser(
+        "paper",
+        help="regenerate every figure of the paper's section V",
+        description=(
+            "Simulate the paper's section V runs (square rider torque, nominal and perturbed "
+            "handlebar, dry friction with and without compensation, a rider on a trajectory "
+            "over the 100 Hz CAN link), write each result with its report, the paper's "
+            "figures and DIR/index.html."
+        ),
+    )
+    parser.add_argument("--out", required=True, help="folder for the runs and figures")
+    parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    parser.set_defaults(func=run)
+
+
+def paper_scenarios() -> list[Scenario]:
+    """The packaged scenarios of section V, in figure order."""
+    folder = resources.files("motosim.sim") / "data" / "paper"
+    out = []
+    for entry in sorted(folder.iterdir(), key=lambda p: p.name):
+        if entry.name.endswith(".toml"):
+            data = tomllib.loads(entry.read_text(encoding="utf-8"))
+            out.append(parse_scenario(data, origin=f"packaged {entry.name}"))
+    return out
+
+
+def _figures(runs: dict[str, SimResult], out: Path) -> list[tuple[str, str]]:
+    from motosim.plotting.closed_loop import (
+        plot_comparison,
+        plot_motor_torque,
+        plot_motorcycle,
+        plot_rate,
+        plot_tracking,
+    )
+
+    specs: list[tuple[str, str, Callable[[], Any]]] = [
+        (
+            "fig11_torque_estimation.png",
+            "Fig. 11: rider torque and its estimate, nominal and +50 % handlebar",
+            lambda: plot_comparison(
+                {k: runs[k] for k in ("fig11_nominal", "fig11_perturbed")},
+                [("tau_r", "tau_r_hat")],
+                title="Fig. 11: rider torque (solid) and estimate (dashed)",
+            ),
+        ),
+        (
+            "fig12_state_estimation.png",
+            "Fig. 12-13: handlebar angle against the steer reference",
+            lambda: plot_tracking(
+                runs["fig11_nominal"], title="Figs. 12-13: handlebar angle and steer angle"
+            ),
+        ),
+        (
+            "fig13_differentiator.png",
+            "Fig. 13 (right), Fig. 17: handlebar rate and its robust differentiation",
+            lambda: plot_rate(runs["fig11_nominal"], title="Fig. 13: rate and differentiator"),
+        ),
+        (
+            "fig14_friction_compensation.png",
+            "Fig. 14: dry friction, with and without compensation",
+            lambda: plot_comparison(
+                {k: runs[k] for k in ("fig14_compensated", "fig14_uncompensated")},
+                [("tau_r", "tau_r_hat"), ("theta_h", "delta")],
+                title="Fig. 14: estimate and steer angle, friction compensated or not",
+            ),
+        ),
+        (
+            "fig18_motor_torque.png",
+            "Fig. 18: estimated rider torque against the motor torque N k_t i_m",
+            lambda: plot_motor_torque(
+                runs["fig15_riding"], title="Fig. 18: estimate and motor torque"
+            ),
+        ),
+        (
+            "fig15_motorcycle.png",
+            "Figs. 15-16: the riding run: path, roll angle and speed",
+            lambda: plot_motorcycle(runs["fig15_riding"], title="Riding run: path, roll, speed"),
+        ),
+    ]
+    written = []
+    for name, caption, make in specs:
+        fig = make()
+        fig.savefig(out / name, dpi=110)
+        written.append((name, caption))
+    return written
+
+
+def _index(out: Path, figures: list[tuple[str, str]], summaries: dict[str, dict[str, Any]]) -> Path:
+    keys = ["rms_tau_r_error", "rms_tracking_error", "rms_rate_error", "max_abs_phi", "max_abs_e_y"]
+    rows = "".join(
+        f"<tr><td><a href='{html.escape(name)}/report.html'>{html.escape(name)}</a></td>"
+        + "".join(f"<td>{summary.get(k, float('nan')):.4g}</td>" for k in keys)
+        + "</tr>"
+        for name, summary in summaries.items()
+    )
+    figs = "".join(
+        f"<figure><img src='{html.escape(f)}' alt='{html.escape(c)}'><figcaption>{html.escape(c)}"
+        "</figcaption></figure>"
+        for f, c in figures
+    )
+    page = f"""<!doctype html><html><head><meta charset="utf-8">
+<title>motosim: the paper's section V</title>
+<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}}
+table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}}
+td:first-child{{text-align:left}}img{{max-width:100%}}figure{{margin:2em 0}}</style></head><body>
+<h1>Nehaoua, Arioui &amp; Mammar (2012), section V, regenerated by motosim</h1>
+<p>Each run has its own report (click its name). Units: N*m, rad, rad/s, m.</p>
+<table><tr><th>run</th>{"".join(f"<th>{k}</th>" for k in keys)}</tr>{rows}</table>
+{figs}</body></html>"""
+    path = out / "index.html"
+    path.write_text(page, encoding="utf-8")
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    """Simulate every run of section V, then the figures and the index."""
+    from motosim.report import build_report
+
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
+    summaries: dict[str, dict[str, Any]] = {}
+    runs: dict[str, SimResult] = {}
+    scenarios = paper_scenarios()
+    for k, scenario in enumerate(scenarios, 1):
+        folder = out / scenario.name
+        if (folder / "result.h5").exists():
+            for name in ("result.h5", "result.csv", "report.html"):
+                (folder / name).unlink(missing_ok=True)
+        if not args.json:
+            print(f"[{k}/{len(scenarios)}] {scenario.name}: {scenario.description}")
+        summaries[scenario.name] = run_scenario(
+            resolve(scenario, Path(".")), folder, progress=not args.json
+        )
+        build_report(folder)
+        runs[scenario.name] = load_result(folder)
+    figures = _figures(runs, out)
+    index = _index(out, figures, summaries)
+    if args.json:
+        print_json({"index": str(index), "figures": [f for f, _ in figures], "metrics": summaries})
+    else:
+        print(f"report: {index}")
+    return 0

@@ -1,0 +1,390 @@
+"""Figures of closed-loop runs, drawn from a :class:`motosim.io.results.SimResult`.
+
+Each function draws the columns of its figure that the result has, and raises
+:class:`motosim.errors.MotosimError` when it has none of them. Angles are stored in radians
+and shown in degrees; every axis names its unit.
+"""
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from numpy.typing import NDArray
+
+from motosim.errors import MotosimError
+from motosim.io.results import SimResult
+from motosim.signals import SIGNALS
+
+__all__ = [
+    "plot_comparison",
+    "plot_motor_torque",
+    "plot_motorcycle",
+    "plot_rate",
+    "plot_torque",
+    "plot_tracking",
+]
+
+_EXTRA_UNITS = {"e_y": "m"}
+_LABELS = {
+    "tau_r": "rider torque tau_r",
+    "tau_r_hat": "estimate tau_r_hat",
+    "tau_m": "motor torque tau_m = N k_t i_m",
+    "theta_h": "handlebar theta_h",
+    "delta": "virtual steer delta (reference)",
+    "theta_h_dot": "true rate theta_h_dot",
+    "theta_h_dot_hat": "differentiator theta_h_dot_hat",
+}
+_STYLES: dict[str, dict[str, Any]] = {
+    "tau_r": {"color": "k", "lw": 1.0},
+    "theta_h": {"color": "k", "lw": 1.0},
+    "theta_h_dot": {"color": "k", "lw": 1.0},
+    "tau_r_hat": {"color": "tab:red", "lw": 1.0, "ls": "--"},
+    "delta": {"color": "tab:blue", "lw": 1.0, "ls": "--"},
+    "theta_h_dot_hat": {"color": "tab:red", "lw": 1.0, "ls": "--"},
+    "tau_m": {"color": "tab:green", "lw": 1.0},
+}
+
+
+def _unit(name: str) -> str:
+    if name in SIGNALS:
+        return SIGNALS[name].unit
+    return _EXTRA_UNITS.get(name, "")
+
+
+def _display(name: str, values: NDArray[np.float64]) -> tuple[NDArray[np.float64], str]:
+    """Values and unit label for display: radians become degrees."""
+    unit = _unit(name)
+    if unit.startswith("rad"):
+        return np.rad2deg(values), "deg" + unit[3:]
+    return values, unit.replace("*", " ")
+
+
+def _present(result: SimResult, names: Sequence[str], figure: str) -> list[str]:
+    """The names the result has; an error when it has none."""
+    have = [n for n in names if n in result]
+    if not have:
+        raise MotosimError(
+            f"{figure}: the result has none of the signals {', '.join(names)}; "
+            f"it has {', '.join(result.names) or 'none'}"
+        )
+    return have
+
+
+def _time_panel(
+    ax: Axes, result: SimResult, names: Sequence[str], ylabel: str, *, legend: bool = True
+) -> None:
+    for name in names:
+        values, _ = _display(name, result[name])
+        ax.plot(result.t, values, label=_LABELS.get(name, name), **_STYLES.get(name, {}))
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    if legend:
+        ax.legend(loc="upper right", fontsize=8)
+
+
+def _title(result: SimResult, title: str) -> str:
+    if result.complete:
+        return title
+    return f"{title} (interrupted run)"
+
+
+def _pair_figure(
+    result: SimResult,
+    pair: tuple[str, str],
+    *,
+    figure: str,
+    title: str,
+    error_label: str,
+) -> Figure:
+    """Two signals against time and, when both exist, their difference below."""
+    have = _present(result, pair, figure)
+    _, unit = _display(have[0], result[have[0]])
+    both = len(have) == 2
+    fig = Figure(figsize=(9.0, 5.0 if both else 3.2), layout="constrained")
+    axes = fig.subplots(
+        2 if both else 1,
+        1,
+        sharex=True,
+        squeeze=False,
+        height_ratios=[2, 1] if both else None,
+    )[:, 0]
+    _time_panel(axes[0], result, have, f"[{unit}]")
+    if both:
+        first, _ = _display(pair[0], result[pair[0]])
+        second, _ = _display(pair[1], result[pair[1]])
+        axes[1].plot(result.t, second - first, color="tab:purple", lw=0.8)
+        axes[1].set_ylabel(f"{error_label} [{unit}]")
+        axes[1].grid(True, alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(_title(result, title))
+    return fig
+
+
+def plot_torque(result: SimResult, *, title: str = "Rider torque and its estimate") -> Figure:
+    """Rider torque ``tau_r`` and its estimate ``tau_r_hat`` [N*m] against time.
+
+    Figs. 11 and 14 of Nehaoua, Arioui & Mammar (2012). When both exist, a second panel shows
+    the estimation error ``tau_r_hat - tau_r``.
+
+    Parameters
+    ----------
+    result : SimResult
+        A run with ``tau_r`` and/or ``tau_r_hat``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+
+    Raises
+    ------
+    MotosimError
+        If the result has neither signal.
+    """
+    return _pair_figure(
+        result,
+        ("tau_r", "tau_r_hat"),
+        figure="plot_torque",
+        title=title,
+        error_label="tau_r_hat - tau_r",
+    )
+
+
+def plot_tracking(
+    result: SimResult, *, title: str = "Handlebar angle against the virtual steer angle"
+) -> Figure:
+    """Handlebar angle ``theta_h`` and its reference ``delta`` [deg] against time.
+
+    Fig. 13 (left) of Nehaoua, Arioui & Mammar (2012). When both exist, a second panel shows
+    the tracking error ``theta_h - delta``.
+
+    Parameters
+    ----------
+    result : SimResult
+        A run with ``theta_h`` and/or ``delta``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+
+    Raises
+    ------
+    MotosimError
+        If the result has neither signal.
+    """
+    return _pair_figure(
+        result,
+        ("delta", "theta_h"),
+        figure="plot_tracking",
+        title=title,
+        error_label="theta_h - delta",
+    )
+
+
+def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimate") -> Figure:
+    """True handlebar rate ``theta_h_dot`` and the differentiator's ``theta_h_dot_hat``.
+
+    Fig. 13 (right) and Fig. 17 of Nehaoua, Arioui & Mammar (2012), in [deg/s]. When both
+    exist, a second panel shows the error ``theta_h_dot_hat - theta_h_dot``.
+
+    Parameters
+    ----------
+    result : SimResult
+        A run with ``theta_h_dot`` and/or ``theta_h_dot_hat``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+
+    Raises
+    ------
+    MotosimError
+        If the result has neither signal.
+    """
+    return _pair_figure(
+        result,
+        ("theta_h_dot", "theta_h_dot_hat"),
+        figure="plot_rate",
+        title=title,
+        error_label="estimate - true",
+    )
+
+
+def plot_motor_torque(
+    result: SimResult, *, title: str = "Estimated rider torque and motor torque"
+) -> Figure:
+    """Estimated rider torque ``tau_r_hat`` and motor torque ``tau_m = N k_t i_m`` [N*m].
+
+    Fig. 18 of Nehaoua, Arioui & Mammar (2012); the motor current ``i_m`` [A], when present,
+    is drawn in a second panel.
+
+    Parameters
+    ----------
+    result : SimResult
+        A run with ``tau_r_hat`` and/or ``tau_m`` (and optionally ``i_m``).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+
+    Raises
+    ------
+    MotosimError
+        If the result has none of ``tau_r_hat``, ``tau_m``, ``i_m``.
+    """
+    _present(result, ("tau_r_hat", "tau_m", "i_m"), "plot_motor_torque")
+    torques = [n for n in ("tau_r_hat", "tau_m") if n in result]
+    panels = int(bool(torques)) + int("i_m" in result)
+    fig = Figure(figsize=(9.0, 2.4 * panels + 0.8), layout="constrained")
+    axes = fig.subplots(panels, 1, sharex=True, squeeze=False)[:, 0]
+    if torques:
+        _time_panel(axes[0], result, torques, "torque [N m]")
+    if "i_m" in result:
+        axes[-1].plot(result.t, result["i_m"], color="tab:green", lw=0.8)
+        axes[-1].set_ylabel("motor current i_m [A]")
+        axes[-1].grid(True, alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(_title(result, title))
+    return fig
+
+
+def plot_motorcycle(result: SimResult, *, title: str = "Virtual motorcycle") -> Figure:
+    """Path seen from above, roll angle, speed and lateral path error of the virtual rider.
+
+    The path ``x``-``y`` [m] is drawn with equal axes; ``y`` points to the right of the start
+    heading, so the ``y`` axis is drawn downwards and the path looks as seen from above.
+    Beside it, against time: roll ``phi`` [deg], forward speed ``v_x`` [m/s] and the lateral
+    path error ``e_y`` [m], each when present.
+
+    Parameters
+    ----------
+    result : SimResult
+        A run with some of ``x``, ``y``, ``phi``, ``v_x``, ``e_y``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+
+    Raises
+    ------
+    MotosimError
+        If the result has neither the path (``x`` and ``y``) nor any of the others.
+    """
+    has_path = "x" in result and "y" in result
+    series = [n for n in ("phi", "v_x", "e_y") if n in result]
+    if not has_path and not series:
+        raise MotosimError(
+            "plot_motorcycle: the result has neither x and y nor any of phi, v_x, e_y; "
+            f"it has {', '.join(result.names) or 'none'}"
+        )
+    ylabels = {"phi": "roll phi [deg]", "v_x": "speed v_x [m/s]", "e_y": "path error e_y [m]"}
+    rows = max(len(series), 1)
+    fig = Figure(figsize=(11.0 if has_path else 8.0, 2.2 * rows + 1.0), layout="constrained")
+    grid = fig.add_gridspec(
+        rows,
+        2 if has_path and series else 1,
+        width_ratios=[1.0, 1.3] if has_path and series else None,
+    )
+    axes: dict[str, Axes] = {}
+    if has_path:
+        axes["path"] = fig.add_subplot(grid[:, 0])
+    for i, name in enumerate(series):
+        axes[name] = fig.add_subplot(grid[i, -1], sharex=axes[series[0]] if i > 0 else None)
+    if has_path:
+        ax = axes["path"]
+        ax.plot(result["x"], result["y"], color="k", lw=1.0)
+        ax.plot(result["x"][:1], result["y"][:1], "o", color="tab:green", label="start")
+        ax.plot(result["x"][-1:], result["y"][-1:], "s", color="tab:red", label="end")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.invert_yaxis()
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m] (right of start heading)")
+        ax.set_title("path seen from above", fontsize=9)
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(True, alpha=0.3)
+    for i, name in enumerate(series):
+        ax = axes[name]
+        values, _ = _display(name, result[name])
+        ax.plot(result.t, values, color="tab:blue", lw=1.0)
+        ax.set_ylabel(ylabels[name])
+        ax.grid(True, alpha=0.3)
+        if i == len(series) - 1:
+            ax.set_xlabel("time [s]")
+    fig.suptitle(_title(result, title))
+    return fig
+
+
+def plot_comparison(
+    results: Mapping[str, SimResult],
+    signal_pairs: Sequence[tuple[str, str]],
+    *,
+    title: str = "Comparison of runs",
+) -> Figure:
+    """Overlay several runs: one panel per pair of signals, one colour per run.
+
+    For Figs. 11 and 14 of Nehaoua, Arioui & Mammar (2012): nominal against perturbed plant,
+    friction compensation on and off. In each panel the first signal of the pair is drawn
+    solid and the second dashed, in the colour of the run.
+
+    Parameters
+    ----------
+    results : Mapping of str to SimResult
+        Run label to result.
+    signal_pairs : sequence of (str, str)
+        For example ``[("tau_r", "tau_r_hat"), ("delta", "theta_h")]``. The two signals of a
+        pair share a unit.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+
+    Raises
+    ------
+    MotosimError
+        No runs or no pairs, a pair whose signals have different units, a signal that no run
+        has.
+    """
+    if not results or not signal_pairs:
+        raise MotosimError(
+            f"plot_comparison: {len(results)} runs and {len(signal_pairs)} signal pairs; "
+            "expected at least one of each"
+        )
+    for first, second in signal_pairs:
+        if _unit(first) != _unit(second):
+            raise MotosimError(
+                f"plot_comparison: {first} [{_unit(first)}] and {second} [{_unit(second)}] "
+                "have different units; expected a pair with one unit"
+            )
+        if not any(first in r or second in r for r in results.values()):
+            raise MotosimError(f"plot_comparison: no run has {first} or {second}")
+    fig = Figure(figsize=(9.0, 2.6 * len(signal_pairs) + 0.8), layout="constrained")
+    axes = fig.subplots(len(signal_pairs), 1, sharex=True, squeeze=False)[:, 0]
+    colours = [f"C{i % 10}" for i in range(len(results))]
+    for ax, (first, second) in zip(axes, signal_pairs, strict=True):
+        _, unit = _display(first, np.zeros(1))
+        for colour, (label, result) in zip(colours, results.items(), strict=True):
+            for name, style in ((first, "-"), (second, "--")):
+                if name in result:
+                    values, _ = _display(name, result[name])
+                    ax.plot(
+                        result.t, values, color=colour, ls=style, lw=1.0, label=f"{label}: {name}"
+                    )
+        ax.set_ylabel(f"{first}, {second} [{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=7, ncols=2)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(title)
+    return fig

@@ -1,0 +1,291 @@
+"""A self-contained HTML report of one run, built from its saved result only.
+
+:func:`build_report` reads ``folder/result.h5`` with :func:`motosim.io.results.load_result`,
+computes the metrics (:func:`metrics`) unless the run stored them, draws the figures of
+:mod:`motosim.plotting.closed_loop` and writes ``folder/report.html`` with the figures
+embedded as PNG: one file, no external resources, no JavaScript.
+"""
+
+import base64
+import html
+import io
+import json
+import math
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim.errors import MotosimError
+from motosim.io.results import SimResult, load_result
+from motosim.plotting.closed_loop import (
+    plot_motor_torque,
+    plot_motorcycle,
+    plot_rate,
+    plot_torque,
+    plot_tracking,
+)
+
+__all__ = ["build_report", "metrics"]
+
+_REPORT_NAME = "report.html"
+
+
+class _Metric(NamedTuple):
+    label: str
+    unit: str
+    scale: float  # display value = scale * stored SI value
+    display_unit: str
+
+
+_METRICS: dict[str, _Metric] = {
+    "duration": _Metric("duration", "s", 1.0, "s"),
+    "samples": _Metric("recorded instants", "", 1.0, ""),
+    "complete": _Metric("run complete (1) or interrupted (0)", "", 1.0, ""),
+    "rms_tau_r_error": _Metric("RMS of tau_r_hat - tau_r", "N*m", 1.0, "N m"),
+    "rms_tracking_error": _Metric("RMS of theta_h - delta", "rad", 180.0 / math.pi, "deg"),
+    "rms_rate_error": _Metric(
+        "RMS of theta_h_dot_hat - theta_h_dot", "rad/s", 180.0 / math.pi, "deg/s"
+    ),
+    "max_abs_phi": _Metric("max |phi| (roll)", "rad", 180.0 / math.pi, "deg"),
+    "max_abs_e_y": _Metric("max |e_y| (lateral path error)", "m", 1.0, "m"),
+}
+
+
+def _rms(values: NDArray[np.float64]) -> float:
+    return float(np.sqrt(np.mean(np.square(values))))
+
+
+def metrics(result: SimResult) -> dict[str, float]:
+    """Summary numbers of a run, in SI units.
+
+    Parameters
+    ----------
+    result : SimResult
+        A run, complete or interrupted.
+
+    Returns
+    -------
+    dict of str to float
+        Always ``duration`` [s] (last minus first time), ``samples`` and ``complete`` (1.0 or
+        0.0); when the run has at least one instant and the signals they need:
+        ``rms_tau_r_error`` [N*m] (RMS of ``tau_r_hat - tau_r``), ``rms_tracking_error`` [rad]
+        (RMS of ``theta_h - delta``), ``rms_rate_error`` [rad/s] (RMS of
+        ``theta_h_dot_hat - theta_h_dot``), ``max_abs_phi`` [rad], ``max_abs_e_y`` [m].
+
+    Examples
+    --------
+    >>> t = np.array([0.0, 1.0])
+    >>> r = SimResult(t, np.array([[0.1, 0.2], [-0.3, 0.0]]), ("tau_r", "phi"), {}, {}, False)
+    >>> m = metrics(r)
+    >>> m["duration"], m["complete"], round(m["max_abs_phi"], 3)
+    (1.0, 0.0, 0.2)
+    """
+    out = {
+        "duration": float(result.t[-1] - result.t[0]) if result.t.size else 0.0,
+        "samples": float(result.t.size),
+        "complete": 1.0 if result.complete else 0.0,
+    }
+    if result.t.size == 0:
+        return out
+    differences = {
+        "rms_tau_r_error": ("tau_r_hat", "tau_r"),
+        "rms_tracking_error": ("theta_h", "delta"),
+        "rms_rate_error": ("theta_h_dot_hat", "theta_h_dot"),
+    }
+    for key, (estimate, truth) in differences.items():
+        if estimate in result and truth in result:
+            out[key] = _rms(result[estimate] - result[truth])
+    for key, name in (("max_abs_phi", "phi"), ("max_abs_e_y", "e_y")):
+        if name in result:
+            out[key] = float(np.max(np.abs(result[name])))
+    return out
+
+
+_CSS = """
+body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; color: #222;
+       max-width: 1000px; margin: 2em auto; padding: 0 1em; line-height: 1.45; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; }
+h2 { font-size: 1.2em; margin-top: 1.8em; border-bottom: 1px solid #ddd; padding-bottom: 0.2em; }
+.status { display: inline-block; padding: 0.1em 0.6em; border-radius: 0.3em; font-size: 0.9em; }
+.complete { background: #e3f4e1; color: #1d5c17; }
+.interrupted { background: #fde8e8; color: #8a1c1c; }
+table { border-collapse: collapse; margin: 0.5em 0; }
+th, td { border: 1px solid #ddd; padding: 0.3em 0.8em; text-align: left; }
+th { background: #f5f5f5; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+figure { margin: 1.2em 0; }
+figure img { max-width: 100%; height: auto; border: 1px solid #eee; }
+figcaption { font-size: 0.9em; color: #555; }
+pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
+.note { color: #666; font-size: 0.9em; }
+"""
+
+_FIGURES: tuple[tuple[str, Callable[[SimResult], Any]], ...] = (
+    ("Rider torque tau_r and its estimate tau_r_hat (paper Figs. 11 and 14)", plot_torque),
+    (
+        "Handlebar angle theta_h against the virtual steer angle delta (Fig. 13, left)",
+        plot_tracking,
+    ),
+    ("Handlebar rate and the differentiator's estimate (Fig. 13 right, Fig. 17)", plot_rate),
+    ("Estimated rider torque and motor torque N k_t i_m (Fig. 18)", plot_motor_torque),
+    ("Virtual motorcycle: path, roll, speed, path error", plot_motorcycle),
+)
+
+
+def _esc(value: object) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _format(value: Any) -> str:
+    if isinstance(value, bool) or value is None:
+        return str(value)
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list | dict):
+        return json.dumps(value)
+    return str(value)
+
+
+def _is_scalar(value: Any) -> bool:
+    return value is None or isinstance(value, bool | int | float | str)
+
+
+def _run_rows(result: SimResult, folder: Path) -> list[tuple[str, str]]:
+    """Key facts of the run: folder, scenario, seed, version, rates, then scalar metadata."""
+    meta = result.metadata
+    scenario = meta.get("scenario")
+    scenario_map: Mapping[str, Any] = scenario if isinstance(scenario, dict) else {}
+    name = scenario_map.get("name", scenario if isinstance(scenario, str) else None)
+    rows = [("folder", str(folder))]
+    if name is not None:
+        rows.append(("scenario", _format(name)))
+    for key in ("seed", "version"):
+        value = meta.get(key, scenario_map.get(key))
+        if value is not None:
+            rows.append((key, _format(value)))
+    if result.t.size > 1:
+        step = float(np.median(np.diff(result.t)))
+        rows.append(("recording rate (median)", f"{1.0 / step:.6g} Hz (dt = {step:.6g} s)"))
+    shown = {"scenario", "seed", "version"}
+    rows += [(k, _format(v)) for k, v in meta.items() if k not in shown and _is_scalar(v)]
+    rows += [
+        (f"scenario.{k}", _format(v))
+        for k, v in scenario_map.items()
+        if k not in shown | {"name"} and _is_scalar(v)
+    ]
+    return rows
+
+
+def _metric_rows(result: SimResult) -> tuple[list[tuple[str, str, str]], str]:
+    """Rows (metric, value, unit) and a note saying where they come from."""
+    values: dict[str, Any] = dict(metrics(result))
+    values.update(result.summary)
+    rows = []
+    for key, value in values.items():
+        info = _METRICS.get(key)
+        if info is not None and isinstance(value, int | float) and not isinstance(value, bool):
+            rows.append((info.label, f"{info.scale * value:.6g}", info.display_unit))
+        else:
+            rows.append((key, _format(value), ""))
+    if result.summary:
+        note = "Stored by the run, completed by values computed from the saved signals."
+    else:
+        note = "Computed from the saved signals (the run stored no summary)."
+    return rows, note
+
+
+def _png(figure: Any) -> str:
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=100)
+    return base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def _table(header: tuple[str, ...], rows: list[tuple[str, ...]], numeric: int = -1) -> str:
+    head = "".join(f"<th>{_esc(h)}</th>" for h in header)
+    body = []
+    for row in rows:
+        cells = "".join(
+            f'<td class="num">{_esc(c)}</td>' if j == numeric else f"<td>{_esc(c)}</td>"
+            for j, c in enumerate(row)
+        )
+        body.append(f"<tr>{cells}</tr>")
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+
+
+def build_report(folder: str | Path) -> Path:
+    """Write ``folder/report.html`` from the result saved in ``folder``.
+
+    Parameters
+    ----------
+    folder : str or Path
+        A result folder written by :class:`motosim.io.results.ResultWriter`.
+
+    Returns
+    -------
+    Path
+        The report file: title, run facts (scenario, seed, version, rates), metrics table
+        (the stored summary, completed by :func:`metrics`), the figures of
+        :mod:`motosim.plotting.closed_loop` that the signals allow, embedded as PNG, and the
+        full metadata as JSON.
+
+    Raises
+    ------
+    MotosimError
+        One line naming the path: no readable result, or a report that cannot be written.
+    """
+    source = Path(folder)
+    result = load_result(source)
+    run_rows = _run_rows(result, source)
+    scenario = next((v for k, v in run_rows if k == "scenario"), source.name or str(source))
+    title = f"motosim run: {scenario}"
+    status = (
+        '<span class="status complete">complete</span>'
+        if result.complete
+        else '<span class="status interrupted">interrupted: partial result</span>'
+    )
+    metric_rows, note = _metric_rows(result)
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>{_esc(title)}</h1><p>{status}</p>",
+        "<h2>Run</h2>",
+        _table(("item", "value"), list(run_rows)),
+        "<h2>Metrics</h2>",
+        _table(("metric", "value", "unit"), list(metric_rows), numeric=1),
+        f'<p class="note">{_esc(note)} Angles shown in degrees.</p>',
+        "<h2>Figures</h2>",
+    ]
+    drawn = 0
+    if result.t.size:
+        for caption, plot in _FIGURES:
+            try:
+                figure = plot(result)
+            except MotosimError:
+                continue  # the run lacks this figure's signals
+            parts.append(
+                f'<figure><img alt="{_esc(caption)}" src="data:image/png;base64,'
+                f'{_png(figure)}"><figcaption>{_esc(caption)}</figcaption></figure>'
+            )
+            drawn += 1
+    if not drawn:
+        parts.append('<p class="note">No figure: the run has no recorded signals to draw.</p>')
+    signals = ", ".join(result.names) or "none"
+    parts += [
+        "<h2>Signals</h2>",
+        f"<p>{_esc(signals)}</p>",
+        "<details><summary>Full metadata (JSON)</summary>",
+        f"<pre>{_esc(json.dumps(result.metadata, indent=2))}</pre></details>",
+        "</body></html>",
+    ]
+    target = source / _REPORT_NAME if source.is_dir() else source.with_name(_REPORT_NAME)
+    try:
+        target.write_text("\n".join(parts) + "\n", encoding="utf-8")
+    except OSError as err:
+        raise MotosimError(f"cannot write {target}: {err.strerror}") from None
+    return target

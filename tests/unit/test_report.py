@@ -1,0 +1,131 @@
+"""Closed-loop figures (smoke tests on a tiny result) and the HTML report."""
+
+import base64
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from motosim.errors import MotosimError
+from motosim.io.results import ResultWriter, SimResult, load_result
+from motosim.plotting.closed_loop import (
+    plot_comparison,
+    plot_motor_torque,
+    plot_motorcycle,
+    plot_rate,
+    plot_torque,
+    plot_tracking,
+)
+from motosim.report import build_report, metrics
+
+NAMES = (
+    "t", "tau_r", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot", "theta_h_meas",
+    "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot", "phi_dot",
+    "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y",
+)  # fmt: skip
+
+
+def _rows(n: int = 60, dt: float = 0.01) -> np.ndarray:
+    t = np.arange(n) * dt
+    columns = {name: 0.01 * (j + 1) * np.sin(3 * t + j) for j, name in enumerate(NAMES)}
+    columns["t"] = t
+    columns["tau_r"] = np.sin(2 * t)
+    columns["tau_r_hat"] = np.sin(2 * t) + 0.1
+    columns["theta_h"] = np.full(n, 0.02)
+    columns["delta"] = np.zeros(n)
+    columns["phi"] = np.deg2rad(10.0) * np.sin(t)
+    columns["v_x"] = np.full(n, 20.0)
+    columns["x"] = 20.0 * t
+    columns["y"] = 0.5 * t**2
+    columns["e_y"] = -0.3 * t
+    return np.column_stack([columns[name] for name in NAMES])
+
+
+def _result(names: tuple[str, ...] = NAMES, *, complete: bool = True) -> SimResult:
+    rows = _rows()[:, [NAMES.index(n) for n in names]]
+    return SimResult(rows[:, 0], rows[:, 1:], names[1:], {"seed": 1}, {}, complete)
+
+
+PLOTS: list[Callable[[SimResult], Figure]] = [
+    plot_torque,
+    plot_tracking,
+    plot_rate,
+    plot_motor_torque,
+    plot_motorcycle,
+]
+
+
+@pytest.mark.parametrize("plot", PLOTS)
+def test_plots_return_a_figure(plot: Callable[[SimResult], Figure]) -> None:
+    fig = plot(_result(complete=False))
+    assert isinstance(fig, Figure) and fig.axes
+    fig.canvas.draw()  # layout and drawing raise no warning
+
+
+@pytest.mark.parametrize("plot", PLOTS)
+def test_plots_draw_what_there_is(plot: Callable[[SimResult], Figure]) -> None:
+    few = ("t", "tau_r_hat", "theta_h", "theta_h_dot", "i_m", "phi")
+    assert isinstance(plot(_result(few)), Figure)
+    with pytest.raises(MotosimError) as info:
+        plot(_result(("t", "psi")))
+    assert "\n" not in str(info.value)
+
+
+def test_plot_comparison() -> None:
+    runs = {"nominal": _result(), "perturbed": _result(("t", "tau_r", "tau_r_hat", "delta"))}
+    fig = plot_comparison(runs, [("tau_r", "tau_r_hat"), ("delta", "theta_h")])
+    assert isinstance(fig, Figure) and len(fig.axes) == 2
+    fig.canvas.draw()
+    with pytest.raises(MotosimError, match="different units"):
+        plot_comparison(runs, [("tau_r", "theta_h")])
+    with pytest.raises(MotosimError, match="expected at least one of each"):
+        plot_comparison({}, [("tau_r", "tau_r_hat")])
+
+
+def test_metrics() -> None:
+    m = metrics(_result())
+    assert m["rms_tau_r_error"] == pytest.approx(0.1)
+    assert m["rms_tracking_error"] == pytest.approx(0.02)
+    assert np.rad2deg(m["max_abs_phi"]) == pytest.approx(10.0 * np.sin(0.59))
+    assert m["max_abs_e_y"] == pytest.approx(0.3 * 0.59)
+    assert m["duration"] == pytest.approx(0.59) and m["samples"] == 60 and m["complete"] == 1
+    assert set(metrics(_result(("t", "psi")))) == {"duration", "samples", "complete"}
+
+
+def _write(folder: Path, *, interrupt: bool = False) -> None:
+    metadata = {"scenario": {"name": "lane <change>", "speed": 20.0}, "seed": 4, "version": "0"}
+    with ResultWriter(folder, NAMES, metadata) as writer:
+        writer.append(_rows())
+        if interrupt:
+            raise RuntimeError("solver crashed")
+        writer.close({"rms_tau_r_error": 0.1, "solver": "rk4"})
+
+
+def test_report(tmp_path: Path) -> None:
+    _write(tmp_path)
+    path = build_report(tmp_path)
+    assert path == tmp_path / "report.html"
+    text = path.read_text(encoding="utf-8")
+    assert "lane &lt;change&gt;" in text and "<change>" not in text  # escaped
+    assert "<h2>Metrics</h2>" in text and "RMS of theta_h - delta" in text and "rk4" in text
+    assert "100 Hz" in text and "complete" in text
+    images = text.split('src="data:image/png;base64,')[1:]
+    assert len(images) == 5
+    for image in images:
+        assert base64.b64decode(image.split('"', 1)[0]).startswith(b"\x89PNG")
+    assert "http://" not in text.replace("http://www.w3.org", "") and "<script" not in text
+
+
+def test_report_of_an_interrupted_run(tmp_path: Path) -> None:
+    with pytest.raises(RuntimeError, match="solver crashed"):
+        _write(tmp_path, interrupt=True)
+    assert not load_result(tmp_path).complete
+    text = build_report(tmp_path).read_text(encoding="utf-8")
+    assert "interrupted" in text and "computed from the saved signals" in text.lower()
+
+
+def test_report_without_result(tmp_path: Path) -> None:
+    with pytest.raises(MotosimError, match=r"no result\.h5"):
+        build_report(tmp_path)

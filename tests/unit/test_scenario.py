@@ -1,0 +1,87 @@
+"""Scenario files: the documented schema and its one-line errors."""
+
+import tomllib
+
+import pytest
+
+from motosim.errors import MotosimError
+from motosim.sim import parse_scenario
+
+MINIMAL = """
+[scenario]
+name = "minimal"
+[rider]
+kind = "torque"
+profile = { kind = "constant", value = 1.0 }
+"""
+
+
+def _parse(text: str):  # type: ignore[no-untyped-def]
+    return parse_scenario(tomllib.loads(text), origin="s.toml")
+
+
+def test_defaults() -> None:
+    sc = _parse(MINIMAL)
+    assert sc.duration == 10.0 and sc.architecture == "closed_loop"
+    assert (sc.rates.plant, sc.rates.control, sc.rates.measurement) == (10_000.0, 1000.0, 1000.0)
+    assert sc.estimator.name == "walcott_zak" and sc.controller.kind == "ours"
+    assert sc.motorcycle.speed == 20.0 and sc.handlebar.friction
+
+
+def test_virtual_rider_and_profiles() -> None:
+    sc = _parse(
+        """
+[scenario]
+duration = 5.0
+[motorcycle]
+speed = 15.0
+brake_torque = { kind = "steps", times = [1.0, 2.0], values = [100.0, 0.0] }
+[rider]
+kind = "virtual"
+path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition = 20.0 }
+"""
+    )
+    assert sc.rider.path is not None and sc.rider.path.settings["radius"] == -150.0
+    assert sc.motorcycle.brake_torque.kind == "steps"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (MINIMAL + "[rates]\ncontrol = 1000.0\nmeasurement = 300.0\n", "control / measurement"),
+        (MINIMAL + "[rates]\nplant = 500.0\n", "plant / control = 0.5"),
+        (MINIMAL.replace('name = "minimal"', "duration = -1.0"), "duration = -1.0"),
+        (MINIMAL.replace('name = "minimal"', "duration = nan"), "duration = nan"),
+        (MINIMAL + "[motorcycle]\nspeed = 0.5\n", "speed = 0.5; expected a finite number >= 1"),
+        (MINIMAL + "[motorcycle]\ncolour = 'red'\n", "unknown key 'colour'"),
+        (MINIMAL + "[weather]\nrain = true\n", "unknown key 'weather'"),
+        (
+            MINIMAL.replace('kind = "constant", value = 1.0', 'kind = "sawtooth"'),
+            "kind = 'sawtooth'",
+        ),
+        (MINIMAL.replace("value = 1.0", "value = 1.0, extra = 2"), "unknown key 'extra'"),
+        (
+            MINIMAL.replace('kind = "torque"\n', 'kind = "torque"\n').replace(
+                "profile = ", "prof = "
+            ),
+            "missing profile",
+        ),
+        (MINIMAL + "[estimator]\nname = 'oracle'\n", "name = 'oracle'; expected one of"),
+        (MINIMAL + "[controller]\nkind = 'pid'\n", "kind = 'pid'"),
+        (MINIMAL + "[handlebar]\ninertia_factor = 0.0\n", "inertia_factor = 0.0"),
+        (MINIMAL + "[measurement]\nencoder_bits = 40\n", "encoder_bits = 40"),
+        (
+            MINIMAL.replace(
+                'kind = "constant", value = 1.0',
+                'kind = "steps", times = [2.0, 1.0], values = [1.0, 2.0]',
+            ),
+            "expected increasing times",
+        ),
+        ("[rider]\nkind = 'virtual'\n", "missing table [scenario]"),
+    ],
+)
+def test_bad_scenarios(text: str, message: str) -> None:
+    with pytest.raises(MotosimError) as info:
+        _parse(text)
+    assert message in str(info.value) and "\n" not in str(info.value)
+    assert str(info.value).startswith("s.toml")
