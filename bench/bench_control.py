@@ -1,22 +1,11 @@
 """Control design: H-infinity norm against SLICOT, and the first-order synthesis time."""
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 
 from motosim.control import hinf_norm, ncfsyn
 from motosim.control.torque_feedback import design_torque_feedback
 from motosim.params import load_parameters
-
-
-def _best(fn: Callable[[], object], repeat: int = 3) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return float(best)
+from timing import best
 
 
 def _random_stable(rng: np.random.Generator, n: int) -> tuple[np.ndarray, ...]:
@@ -29,7 +18,7 @@ def run() -> dict[str, float]:
     """Seconds per H-infinity norm (ours and AB13DD) and per first-order design."""
     rng = np.random.default_rng(0)
     systems = [_random_stable(rng, 8) for _ in range(50)]
-    ours = _best(lambda: [hinf_norm(*s) for s in systems]) / len(systems)
+    ours = best(lambda: [hinf_norm(*s) for s in systems]) / len(systems)
     out = {"hinf_norm, 8 states 2x2 [ms]": 1e3 * ours}
     try:
         from slycot import ab13dd
@@ -37,15 +26,15 @@ def run() -> dict[str, float]:
         def oracle(A, B, C, D):  # type: ignore[no-untyped-def]
             return ab13dd("C", "I", "N", "D", A.shape[0], 2, 2, A, np.eye(A.shape[0]), B, C, D)
 
-        theirs = _best(lambda: [oracle(*s) for s in systems]) / len(systems)
+        theirs = best(lambda: [oracle(*s) for s in systems]) / len(systems)
         out["slycot ab13dd, same systems [ms]"] = 1e3 * theirs
         out["ours / ab13dd"] = ours / theirs
     except ImportError:
         out["slycot ab13dd"] = float("nan")
     hb = load_parameters("simacom_handlebar", "handlebar")
     design = design_torque_feedback(hb, rng=np.random.default_rng(0))
-    full = _best(lambda: ncfsyn(*_shaped(design)))
-    first = _best(lambda: design_torque_feedback(hb, rng=np.random.default_rng(0)), repeat=1)
+    full = best(lambda: ncfsyn(*_shaped(design)))
+    first = best(lambda: design_torque_feedback(hb, rng=np.random.default_rng(0)), repeat=1)
     out["first-order design of the handlebar loop [s]"] = first
     out["full-order ncfsyn on the same shaped plant [s]"] = full
     out["first-order gamma / full-order gamma_min"] = design.gamma / design.gamma_min

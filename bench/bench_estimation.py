@@ -1,8 +1,5 @@
 """Cost of one estimation step: differentiator + Walcott-Zak observer, compiled and not."""
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 from numba import njit
 
@@ -10,6 +7,7 @@ from motosim.estimation.differentiator import std_step
 from motosim.estimation.registry import walcott_zak_for_step
 from motosim.estimation.walcott_zak import wz_step
 from motosim.params import load_parameters
+from timing import best
 
 
 def _loop(theta, current, h, l1, l2, Phi, Gamma, g, p):  # type: ignore[no-untyped-def]
@@ -27,15 +25,6 @@ def _loop(theta, current, h, l1, l2, Phi, Gamma, g, p):  # type: ignore[no-untyp
 _compiled = njit(cache=True)(_loop)
 
 
-def _best(fn: Callable[[], object], repeat: int = 5) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return float(best)
-
-
 def run() -> dict[str, float]:
     """Nanoseconds per sample of the estimation step over 100 000 samples at 1 kHz."""
     hb = load_parameters("simacom_handlebar", "handlebar")
@@ -47,13 +36,13 @@ def run() -> dict[str, float]:
     lip = 300.0
     args = (h, 1.5 * np.sqrt(lip), 1.1 * lip, obs._Phi, obs._Gamma, obs._g, obs._p)
     _compiled(theta[:10], current[:10], *args)
-    compiled = _best(lambda: _compiled(theta, current, *args)) / t.size
+    compiled = best(lambda: _compiled(theta, current, *args)) / t.size
     few = 5_000
     plain = (
-        _best(lambda: _loop(theta[:few], current[:few], *args), repeat=1) / few
+        best(lambda: _loop(theta[:few], current[:few], *args), repeat=1) / few
     )  # the same code, interpreted, calling the compiled kernels
     stepper = (
-        _best(lambda: [obs.step(theta[k], 0.0, current[k]) for k in range(few)], repeat=1) / few
+        best(lambda: [obs.step(theta[k], 0.0, current[k]) for k in range(few)], repeat=1) / few
     )
     return {
         "compiled step [ns]": 1e9 * compiled,

@@ -1,8 +1,5 @@
 """Identification of 60 s of 100 Hz data: each method, against plain batch least squares."""
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 
 from motosim.identification import (
@@ -13,15 +10,7 @@ from motosim.identification import (
     identify,
 )
 from motosim.params import load_parameters
-
-
-def _best(fn: Callable[[], object], repeat: int = 5) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return float(best)
+from timing import best
 
 
 def run() -> dict[str, float]:
@@ -32,13 +21,13 @@ def run() -> dict[str, float]:
     out: dict[str, float] = {}
     for method in METHODS:
         identify(log, torque_per_amp=hb.torque_per_amp, method=method, back_emf_damping=damping)
-        out[f"{method} [s]"] = _best(
+        out[f"{method} [s]"] = best(
             lambda m=method: identify(  # type: ignore[misc]
                 log, torque_per_amp=hb.torque_per_amp, method=m, back_emf_damping=damping
             )
         )
     phi = np.column_stack([np.ones(log.t.size), log["theta_h"], log["i_m"]])
-    baseline = _best(lambda: np.linalg.lstsq(phi, log["i_m"], rcond=None))
+    baseline = best(lambda: np.linalg.lstsq(phi, log["i_m"], rcond=None))
     out["numpy lstsq on the raw 6000 x 3 regressor [s]"] = baseline
     out["output_error / lstsq"] = out["output_error [s]"] / baseline
     return out

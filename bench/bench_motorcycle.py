@@ -1,22 +1,11 @@
 """Coupled Sharp + eq. (2) simulation: compiled fixed-step RK4 against scipy's solve_ivp."""
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from motosim.model import sharp as model
 from motosim.params import derived_geometry, load_parameters
-
-
-def _best(fn: Callable[[], object], repeat: int = 3) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return float(best)
+from timing import best
 
 
 def run() -> dict[str, float]:
@@ -26,7 +15,7 @@ def run() -> dict[str, float]:
     torque = np.where(t < 0.5, 2.0, 0.0)
     brake = np.where(t > 5.0, 300.0, 0.0)
     model.simulate(p, t[:10], initial_speed=20.0)  # compile
-    ours = _best(
+    ours = best(
         lambda: model.simulate(p, t, initial_speed=20.0, rider_torque=torque, brake_torque=brake)
     )
     M = model.mass_matrix(p)
@@ -43,7 +32,7 @@ def run() -> dict[str, float]:
 
     z0 = np.zeros(9)
     z0[8] = 20.0
-    baseline = _best(
+    baseline = best(
         lambda: solve_ivp(rhs, (0.0, 10.0), z0, t_eval=t, method="RK45", max_step=1e-3),
         repeat=1,
     )

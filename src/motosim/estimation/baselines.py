@@ -26,6 +26,7 @@ from scipy.linalg import expm, solve_discrete_are
 
 from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
+from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
@@ -47,16 +48,6 @@ def _check(name: str, value: float, unit: str, *, allow_zero: bool = False) -> N
     if not ok:
         expected = ">= 0" if allow_zero else "> 0"
         raise MotosimError(f"{name} = {value!r}; expected a finite value {expected} [{unit}]")
-
-
-def _zoh(A: Array, inputs: Array, dt: float) -> tuple[Array, Array]:
-    """Phi = exp(A dt) and Gamma = int_0^dt exp(A s) ds inputs."""
-    n, k = inputs.shape
-    M = np.zeros((n + k, n + k))
-    M[:n, :n] = A * dt
-    M[:n, n:] = inputs * dt
-    E = expm(M)
-    return E[:n, :n], E[:n, n:]
 
 
 @dataclass(frozen=True, slots=True)
@@ -186,7 +177,7 @@ class InverseDynamicsEstimator:
         A[2:, 2:] = block
         inputs = np.zeros((4, 2))
         inputs[1, 0] = inputs[3, 1] = w * w
-        self._Phi, self._Gamma = _zoh(A, inputs, self.dt)
+        self._Phi, self._Gamma = zoh(A, inputs, self.dt)
         hb = gains.handlebar
         self._p = np.array(
             [
@@ -371,7 +362,7 @@ class KalmanTorqueEstimator:
             [[-hb.beta_eq / hb.J_eq, 0.0, 1.0 / hb.J_eq], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
         )
         inputs = np.array([[hb.torque_per_amp / hb.J_eq, 1.0 / hb.J_eq], [0.0, 0.0], [0.0, 0.0]])
-        self._Phi, self._Gamma = _zoh(A, inputs, h)
+        self._Phi, self._Gamma = zoh(A, inputs, h)
         # Van Loan: Q_d = int_0^h exp(A s) G q G^T exp(A^T s) ds
         Qc = np.zeros((3, 3))
         Qc[2, 2] = gains.torque_rate_noise**2

@@ -36,11 +36,12 @@ from typing import Literal
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
-from scipy.linalg import expm, solve_continuous_lyapunov
+from scipy.linalg import solve_continuous_lyapunov
 
 from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
 from motosim.model.handlebar import matrices
+from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
@@ -412,16 +413,6 @@ def wz_step(
     return out, E
 
 
-def _zoh(A: Array, inputs: Array, dt: float) -> tuple[Array, Array]:
-    """Phi = exp(A dt) and Gamma = int_0^dt exp(A s) ds inputs, via one exponential."""
-    n, k = inputs.shape
-    M = np.zeros((n + k, n + k))
-    M[:n, :n] = A * dt
-    M[:n, n:] = inputs * dt
-    E = expm(M)
-    return E[:n, :n], E[:n, n:]
-
-
 class WalcottZakObserver:
     """Stepper: the rider-torque observer of :func:`design` sampled at the step ``dt``.
 
@@ -475,7 +466,7 @@ class WalcottZakObserver:
         self.gains = gains
         self.dt = h = float(dt)
         K = gains.L @ gains.C
-        Phi, Gamma = _zoh(gains.A - K, np.column_stack([gains.B, K, gains.D]), h)
+        Phi, Gamma = zoh(gains.A - K, np.column_stack([gains.B, K, gains.D]), h)
         self._Phi = np.ascontiguousarray(Phi)
         self._Gamma = np.ascontiguousarray(Gamma)
         self._g = gains.F @ gains.C

@@ -8,9 +8,36 @@ from scipy.linalg import expm
 
 from motosim.errors import MotosimError
 
-__all__ = ["LinearModel"]
+__all__ = ["LinearModel", "zoh"]
 
 Array = NDArray[np.float64]
+
+
+def zoh(A: Array, B: Array, dt: float) -> tuple[Array, Array]:
+    """Exact zero-order-hold discretisation by one matrix exponential.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+        State matrix [1/s].
+    B : ndarray, shape (n, m)
+        Input matrix.
+    dt : float
+        Step [s], > 0.
+
+    Returns
+    -------
+    Ad, Bd : ndarray
+        exp(A dt) and int_0^dt exp(A s) ds B, so that x[k+1] = Ad x[k] + Bd u[k].
+    """
+    if not (np.isfinite(dt) and dt > 0):
+        raise MotosimError(f"dt = {dt!r}; expected a finite step > 0 [s]")
+    n, m = B.shape
+    block = np.zeros((n + m, n + m))
+    block[:n, :n] = A * dt
+    block[:n, n:] = B * dt
+    phi = expm(block)
+    return phi[:n, :n], phi[:n, n:]
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,11 +86,4 @@ class LinearModel:
         Ad, Bd : ndarray
             x[k+1] = Ad x[k] + Bd u[k], with u held over the step.
         """
-        if not (np.isfinite(dt) and dt > 0):
-            raise MotosimError(f"dt = {dt!r}; expected a finite step > 0 [s]")
-        n, m = self.B.shape
-        block = np.zeros((n + m, n + m))
-        block[:n, :n] = self.A * dt
-        block[:n, n:] = self.B * dt
-        phi = expm(block)
-        return phi[:n, :n], phi[:n, n:]
+        return zoh(self.A, self.B, dt)

@@ -32,6 +32,7 @@ __all__ = [
     "STATE_NAMES",
     "ModeTable",
     "MotorcycleResponse",
+    "bike_rk4",
     "check_speed",
     "eigenvalues",
     "input_matrix",
@@ -40,7 +41,6 @@ __all__ = [
     "mass_matrix",
     "modes",
     "simulate",
-    "step_coupled",
     "stiffness_matrices",
 ]
 
@@ -423,56 +423,65 @@ def longitudinal_acceleration(
 
 
 @njit(cache=True)
-def _coupled_rates(
-    z: NDArray[np.float64],
-    A0: NDArray[np.float64],
-    A1: NDArray[np.float64],
-    Bv: NDArray[np.float64],
-    tau_r: float,
-    force: float,
-    m: float,
-    m_eq: float,
+def _bike_rates(
+    z: Array, out: Array, A: Array, Bv: Array, tau: float, force: float, m: float, m_eq: float,
     v_min: float,
-) -> NDArray[np.float64]:
-    """Rates of z = [x_v (8), v_x, psi, x, y] with A_v = A0 + v_x A1."""
-    x = z[:8]
+) -> None:  # fmt: skip
     v_x = z[8]
-    dz = np.empty(12)
-    dz[:8] = A0 @ x + v_x * (A1 @ x) + Bv * tau_r
-    acc = (force + m * x[1] * x[0]) / m_eq
-    dz[8] = 0.0 if (v_x <= v_min and acc < 0.0) else acc
-    psi = z[9]
-    dz[9] = x[1]
-    dz[10] = v_x * math.cos(psi) - x[0] * math.sin(psi)
-    dz[11] = v_x * math.sin(psi) + x[0] * math.cos(psi)
-    return dz
+    for r in range(8):
+        acc = Bv[r] * tau
+        for c in range(8):
+            acc += A[r, c] * z[c]
+        out[r] = acc
+    dv = (force + m * z[1] * z[0]) / m_eq
+    out[8] = 0.0 if (v_x <= v_min and dv < 0.0) else dv
+    cos_psi, sin_psi = math.cos(z[9]), math.sin(z[9])
+    out[9] = z[1]
+    out[10] = v_x * cos_psi - z[0] * sin_psi
+    out[11] = v_x * sin_psi + z[0] * cos_psi
 
 
 @njit(cache=True)
-def step_coupled(
-    z: NDArray[np.float64],
-    A0: NDArray[np.float64],
-    A1: NDArray[np.float64],
-    Bv: NDArray[np.float64],
-    tau_r: float,
+def bike_rk4(
+    z: Array,
+    work: Array,
+    A0: Array,
+    A1: Array,
+    Bv: Array,
+    tau: float,
     force: float,
     m: float,
     m_eq: float,
     v_min: float,
     h: float,
-) -> NDArray[np.float64]:
-    """One RK4 step of the coupled lateral-longitudinal model; inputs held over ``h`` [s].
+) -> None:
+    """One RK4 step of the coupled Sharp + eq. (2) model, in place, without allocation.
 
-    ``force`` is (tau_d - tau_b) / r_D + F_wx [N]. The speed is held at ``v_min`` rather than
-    decelerated below it: the lateral model is not defined at standstill.
+    ``z`` = [x_v (8), v_x, psi, x, y]; ``work`` has shape (13, 12): five rows of stage
+    workspace and, in rows 5-12, the lateral matrix A_v = A0 + v_x A1 frozen at the start of
+    the step (the speed changes by a few mm/s over a millisecond); ``tau`` is the steer torque
+    [N*m] and ``force`` = (tau_d - tau_b) / r_D + F_wx [N], both held over ``h`` [s].
     """
-    k1 = _coupled_rates(z, A0, A1, Bv, tau_r, force, m, m_eq, v_min)
-    k2 = _coupled_rates(z + 0.5 * h * k1, A0, A1, Bv, tau_r, force, m, m_eq, v_min)
-    k3 = _coupled_rates(z + 0.5 * h * k2, A0, A1, Bv, tau_r, force, m, m_eq, v_min)
-    k4 = _coupled_rates(z + h * k3, A0, A1, Bv, tau_r, force, m, m_eq, v_min)
-    out = z + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    out[8] = max(out[8], v_min)
-    return out
+    k1, k2, k3, k4, tmp = work[0], work[1], work[2], work[3], work[4]
+    A = work[5:13, :8]
+    v = z[8]
+    for r in range(8):
+        for c in range(8):
+            A[r, c] = A0[r, c] + v * A1[r, c]
+    _bike_rates(z, k1, A, Bv, tau, force, m, m_eq, v_min)
+    for i in range(12):
+        tmp[i] = z[i] + 0.5 * h * k1[i]
+    _bike_rates(tmp, k2, A, Bv, tau, force, m, m_eq, v_min)
+    for i in range(12):
+        tmp[i] = z[i] + 0.5 * h * k2[i]
+    _bike_rates(tmp, k3, A, Bv, tau, force, m, m_eq, v_min)
+    for i in range(12):
+        tmp[i] = z[i] + h * k3[i]
+    _bike_rates(tmp, k4, A, Bv, tau, force, m, m_eq, v_min)
+    for i in range(12):
+        z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    if z[8] < v_min:
+        z[8] = v_min
 
 
 @njit(cache=True)
@@ -492,12 +501,13 @@ def _run_coupled(
     n = tau_r.size
     out = np.empty((n, 12))
     z = z0.copy()
+    work = np.zeros((13, 12))
     out[0] = z
     for k in range(n - 1):
         n_sub = max(1, int(math.ceil(dts[k] / max_step - 1e-9)))  # noqa: RUF046 - numba typing
         h = dts[k] / n_sub
         for _ in range(n_sub):
-            z = step_coupled(z, A0, A1, Bv, tau_r[k], force[k], m, m_eq, v_min, h)
+            bike_rk4(z, work, A0, A1, Bv, tau_r[k], force[k], m, m_eq, v_min, h)
         out[k + 1] = z
     return out
 
@@ -520,8 +530,9 @@ def simulate(
 ) -> TimeSeries:
     """Simulate the lateral model with the speed of eq. (2) changing in time.
 
-    The lateral matrices follow the speed at every RK4 stage (A_v = A0 + v_x A1), the
-    longitudinal equation is integrated alongside, and the yaw angle and ground position of
+    The lateral matrices follow the speed (A_v = A0 + v_x A1, taken at the start of each RK4
+    step: the speed changes by millimetres per second over a step), the longitudinal equation
+    is integrated alongside, and the yaw angle and ground position of
     the rear-frame ground point are integrated for the path.
 
     Parameters

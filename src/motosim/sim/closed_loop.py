@@ -3,7 +3,7 @@
 Each stack period the simulator: measures the handlebar (latest sample of the measurement
 rate, the angle quantised like the encoder, the current with noise), lets the stack command
 the motor (:func:`~motosim.sim.stack.stack_command`), updates the stack's estimator and
-virtual motorcycle (:func:`~motosim.sim.stack.stack_update`, :func:`~motosim.sim.stack.bike_rk4`),
+virtual motorcycle (:func:`~motosim.sim.stack.stack_update`, :func:`~motosim.model.sharp.bike_rk4`),
 asks the rider for a torque (a profile, or the virtual rider looking at the motorcycle), and
 advances the true handlebar over the period in plant sub-steps with exact stick-slip friction,
 the motor current held. One row of :data:`SIGNALS` is recorded per stack period.
@@ -25,12 +25,13 @@ from motosim.errors import MotosimError
 from motosim.estimation.registry import kernel_arguments
 from motosim.model import sharp as sharp_model
 from motosim.model.handlebar import step_exact
+from motosim.model.sharp import bike_rk4
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.sim import paths
 from motosim.sim.rider import design_rider, rider_torque
 from motosim.sim.scenario import PathSpec, Profile, Scenario
-from motosim.sim.stack import bike_rk4, stack_command, stack_update
+from motosim.sim.stack import stack_command, stack_update
 from motosim.timeseries import TimeSeries
 
 __all__ = ["SIGNALS", "RunInputs", "prepare", "run_metadata", "sample_profile", "simulate"]

@@ -9,15 +9,13 @@ real-time loop call the same two functions each sample:
 1. :func:`stack_command` -- the controller: i_m = K (theta_h - delta), positive feedback
    (eq. (24)), saturated, from the measured angle and the current steer angle;
 2. :func:`stack_update` -- with the current that will be held over the coming interval:
-   differentiator, estimator (dispatching on its kind, see
-   :func:`motosim.estimation.registry.kernel_arguments`) and the motorcycle advanced over the
-   stack period by allocation-free RK4 with the speed of eq. (2).
+   differentiator and estimator (dispatching on its kind, see
+   :func:`motosim.estimation.registry.kernel_arguments`); the loop then advances the
+   motorcycle with :func:`motosim.model.sharp.bike_rk4`.
 
 Everything is plain numeric code over float64 arrays, compiled with numba and runnable
 uncompiled under ``NUMBA_DISABLE_JIT=1``.
 """
-
-import math
 
 import numpy as np
 from numba import njit
@@ -27,7 +25,7 @@ from motosim.estimation.baselines import inverse_dynamics_step, kalman_step
 from motosim.estimation.differentiator import std_step
 from motosim.estimation.walcott_zak import wz_step
 
-__all__ = ["bike_rk4", "stack_command", "stack_update"]
+__all__ = ["stack_command", "stack_update"]
 
 Array = NDArray[np.float64]
 
@@ -67,68 +65,6 @@ def stack_command(
     for r in range(n):
         ctrl_x[r] = tmp[r]
     return float(min(max(u, -max_current), max_current))
-
-
-@njit(cache=True)
-def _bike_rates(
-    z: Array, out: Array, A: Array, Bv: Array, tau: float, force: float, m: float, m_eq: float,
-    v_min: float,
-) -> None:  # fmt: skip
-    v_x = z[8]
-    for r in range(8):
-        acc = Bv[r] * tau
-        for c in range(8):
-            acc += A[r, c] * z[c]
-        out[r] = acc
-    dv = (force + m * z[1] * z[0]) / m_eq
-    out[8] = 0.0 if (v_x <= v_min and dv < 0.0) else dv
-    cos_psi, sin_psi = math.cos(z[9]), math.sin(z[9])
-    out[9] = z[1]
-    out[10] = v_x * cos_psi - z[0] * sin_psi
-    out[11] = v_x * sin_psi + z[0] * cos_psi
-
-
-@njit(cache=True)
-def bike_rk4(
-    z: Array,
-    work: Array,
-    A0: Array,
-    A1: Array,
-    Bv: Array,
-    tau: float,
-    force: float,
-    m: float,
-    m_eq: float,
-    v_min: float,
-    h: float,
-) -> None:
-    """One RK4 step of the coupled Sharp + eq. (2) model, in place, without allocation.
-
-    ``z`` = [x_v (8), v_x, psi, x, y]; ``work`` has shape (13, 12): five rows of stage
-    workspace and, in rows 5-12, the lateral matrix A_v = A0 + v_x A1 frozen at the start of
-    the step (the speed changes by a few mm/s over a millisecond); ``tau`` is the steer torque
-    [N*m] and ``force`` = (tau_d - tau_b) / r_D + F_wx [N], both held over ``h`` [s].
-    """
-    k1, k2, k3, k4, tmp = work[0], work[1], work[2], work[3], work[4]
-    A = work[5:13, :8]
-    v = z[8]
-    for r in range(8):
-        for c in range(8):
-            A[r, c] = A0[r, c] + v * A1[r, c]
-    _bike_rates(z, k1, A, Bv, tau, force, m, m_eq, v_min)
-    for i in range(12):
-        tmp[i] = z[i] + 0.5 * h * k1[i]
-    _bike_rates(tmp, k2, A, Bv, tau, force, m, m_eq, v_min)
-    for i in range(12):
-        tmp[i] = z[i] + 0.5 * h * k2[i]
-    _bike_rates(tmp, k3, A, Bv, tau, force, m, m_eq, v_min)
-    for i in range(12):
-        tmp[i] = z[i] + h * k3[i]
-    _bike_rates(tmp, k4, A, Bv, tau, force, m, m_eq, v_min)
-    for i in range(12):
-        z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-    if z[8] < v_min:
-        z[8] = v_min
 
 
 @njit(cache=True)
