@@ -1,8 +1,13 @@
-"""Shared fixtures: the packaged reference parameter sets."""
+"""Shared fixtures: the packaged reference parameter sets; deterministic property tests."""
 
 import pytest
+from hypothesis import settings
 
 from motosim.params import HandlebarParameters, SharpParameters, load_parameters
+
+# property tests draw the same examples on every run, so CI is reproducible
+settings.register_profile("deterministic", derandomize=True, deadline=None)
+settings.load_profile("deterministic")
 
 
 @pytest.fixture(scope="session")

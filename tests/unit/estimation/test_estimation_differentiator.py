@@ -102,7 +102,7 @@ def test_quantised_signal_never_worse_than_backward_difference(amp, freq, phase,
     rms_bd = np.sqrt(np.mean((bd - df)[late] ** 2))
     ratio = 1.1 * L * h * h / QUANTUM
     if ratio <= 0.5:
-        assert rms_std <= rms_bd
+        assert rms_std <= rms_bd * (1 + 1e-9)  # equal runs differ by rounding only
     elif 1.1 * L * h * h >= 2 * QUANTUM + bound * h * h:  # never leaves the sliding case
         np.testing.assert_allclose(z[late], bd[late], rtol=0, atol=1e-9)
 
