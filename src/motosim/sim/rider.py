@@ -115,7 +115,7 @@ def design_rider(
     roll_tolerance: float = 0.3,
     torque_scale: float = 10.0,
     preview: float = 0.3,
-    max_torque: float = 60.0,
+    max_torque: float = 70.0,
 ) -> RiderGains:
     """Design the rider's gain schedule for the motorcycle ``p``.
 

@@ -206,7 +206,7 @@ class Rider:
     course_tolerance: float = 0.05
     torque_scale: float = 10.0
     preview: float = 0.3
-    max_torque: float = 60.0
+    max_torque: float = 70.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -393,7 +393,7 @@ def parse_scenario(data: Mapping[str, Any], *, origin: str) -> Scenario:
             course_tolerance=rd.number("course_tolerance", 0.05, low=0.0, low_open=True),
             torque_scale=rd.number("torque_scale", 10.0, low=0.0, low_open=True),
             preview=rd.number("preview", 0.3, low=0.0, high=5.0),
-            max_torque=rd.number("max_torque", 60.0, low=0.0, low_open=True),
+            max_torque=rd.number("max_torque", 70.0, low=0.0, low_open=True),
         )
     rd.done()
 
