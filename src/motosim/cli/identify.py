@@ -54,8 +54,9 @@ def register(sub: Any) -> None:
         choices=("auto", *DRIVES),
         default="auto",
         help=(
-            "what the motor torque did between samples; auto: voltage_held when the log's "
-            "current follows its voltage u by eq. (7), else the best fitting current drive"
+            "what the motor torque did between samples; auto: the best fitting drive, "
+            "voltage_held among them (and preferred in a tie) when the log's current follows "
+            "its voltage u by eq. (7)"
         ),
     )
     parser.add_argument(
@@ -99,14 +100,16 @@ def run(args: argparse.Namespace) -> int:
     assert isinstance(hb, HandlebarParameters)
     log = read_log(args.log, required=_COLUMNS)
     second = read_log(args.validate, required=_COLUMNS) if args.validate else None
-    # a log whose current follows its voltage by eq. (7) came from a voltage drive
+    # a log whose current follows its voltage by eq. (7) may come from a voltage command: that
+    # drive is tried too, and taken when the fits cannot tell the drives apart
     voltage = is_voltage_driven(log, torque_per_amp=hb.torque_per_amp)
     est = identify(
         log,
         torque_per_amp=hb.torque_per_amp,
         method=args.method,
-        drive="voltage_held" if args.drive == "auto" and voltage else args.drive,
-        back_emf_damping=back_emf_damping(hb),
+        drive=args.drive,
+        back_emf_damping=back_emf_damping(hb) if voltage or args.drive == "voltage_held" else 0.0,
+        tie_preference="voltage_held" if voltage else "current_sampled",
     )
     replay = validate(est, second or log, torque_per_amp=hb.torque_per_amp)
     report: dict[str, Any] = {
