@@ -97,7 +97,7 @@ def _python_control(duration: float, *, blocks: bool) -> float:
     p = load_parameters("sharp1971", "sharp")
     g = design(hb)
     K = _controller()
-    A0, A1, Bv = sm._state_space_parts(p)
+    A0, A1, Bv = sm.lpv_matrices(p)
     d = derived_geometry(p)
     nk = K.A.shape[0]
 

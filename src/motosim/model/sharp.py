@@ -38,6 +38,7 @@ __all__ = [
     "input_matrix",
     "linearize",
     "longitudinal_acceleration",
+    "lpv_matrices",
     "mass_matrix",
     "modes",
     "simulate",
@@ -169,8 +170,12 @@ def input_matrix(p: SharpParameters) -> Array:
     return F
 
 
-def _state_space_parts(p: SharpParameters) -> tuple[Array, Array, Array]:
-    """A0, A1, B_v with A_v(u) = A0 + u A1."""
+def lpv_matrices(p: SharpParameters) -> tuple[Array, Array, Array]:
+    """A0, A1 and B_v of the lateral model, A_v(u) = A0 + u A1 = -M^-1 (E0 + u E1).
+
+    The speed-scheduled (LPV) form used by the compiled steps, where the speed changes in
+    time; :func:`linearize` gives the model at one speed.
+    """
     M = mass_matrix(p)
     E0, E1 = stiffness_matrices(p)
     Minv = np.linalg.inv(M)
@@ -205,7 +210,7 @@ def linearize(p: SharpParameters, speed: float) -> LinearModel:
     (('v_y', 'psi_dot', 'phi_dot'), (8, 8))
     """
     u = check_speed(speed)
-    A0, A1, Bv = _state_space_parts(p)
+    A0, A1, Bv = lpv_matrices(p)
     return LinearModel(
         A=A0 + u * A1,
         B=Bv[:, None],
@@ -597,7 +602,7 @@ def simulate(
     if x0.shape != (8,) or not np.all(np.isfinite(x0)):
         raise MotosimError(f"initial_state has shape {x0.shape}; expected 8 finite values")
     d = derived_geometry(p)
-    A0, A1, Bv = _state_space_parts(p)
+    A0, A1, Bv = lpv_matrices(p)
     force = (series["drive_torque"] - series["brake_torque"]) / d["r_D"] + series["wind_force"]
     z0 = np.concatenate([x0, [u0, 0.0, 0.0, 0.0]])
     out = _run_coupled(

@@ -331,7 +331,7 @@ def simulate(
     diff_p = np.array([h_meas, 1.5 * math.sqrt(lip), 1.1 * lip])
     mc = sc.motorcycle
     d = derived_geometry(inputs.sharp)
-    A0, A1, Bv = sharp_model._state_space_parts(inputs.sharp)
+    A0, A1, Bv = sharp_model.lpv_matrices(inputs.sharp)
     drive = sample_profile(mc.drive_torque, t, inputs.tables)
     brake = np.maximum(sample_profile(mc.brake_torque, t, inputs.tables), 0.0)
     force = (drive - brake) / d["r_D"] + sample_profile(mc.wind_force, t, inputs.tables)
