@@ -14,7 +14,8 @@ from motosim.cli.simulate import load_scenario, resolve
 from motosim.io.results import ResultWriter, load_result
 from motosim.sim import SIGNALS, parse_scenario, run_metadata, simulate
 
-SCENARIOS = sorted((Path(__file__).parents[2] / "scenarios").glob("*.toml"))
+ROOT = Path(__file__).parents[2]
+SCENARIOS = sorted((ROOT / "scenarios").rglob("*.toml"))
 
 
 def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
@@ -45,6 +46,14 @@ def test_every_scenario_simulates(
     if scenario.controller.kind == "ours":
         # the handlebar follows the steer angle within a few tenths of a degree
         assert metrics["rms_tracking_error"] < math.radians(1.0)
+
+
+def test_paper_scenarios_in_the_repository_are_the_packaged_ones() -> None:
+    packaged = ROOT / "src/motosim/sim/data/paper"
+    copies = sorted((ROOT / "scenarios/paper").glob("*.toml"))
+    assert [p.name for p in copies] == sorted(p.name for p in packaged.glob("*.toml"))
+    for copy in copies:
+        assert copy.read_text() == (packaged / copy.name).read_text()
 
 
 def test_unseen_scenario_written_to_the_schema(tmp_path: Path) -> None:
