@@ -184,3 +184,13 @@ def test_paper_regenerates_every_figure(capsys: pytest.CaptureFixture[str], tmp_
     assert compensated["rms_tau_r_error"] < uncompensated["rms_tau_r_error"]
     for name in payload["metrics"]:
         assert (tmp_path / name / "report.html").exists()
+
+
+def test_an_existing_result_is_kept_unless_overwritten(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    argv = ("simulate", str(SCENARIOS[0]), "--out", str(tmp_path), "--no-report", "--json")
+    assert _run(capsys, *argv)[0] == 0
+    code, _, err = _run(capsys, *argv)
+    assert code == 2 and "already holds a result; give --overwrite" in err
+    assert _run(capsys, *argv, "--overwrite")[0] == 0

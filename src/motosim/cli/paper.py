@@ -147,13 +147,10 @@ def run(args: argparse.Namespace) -> int:
     scenarios = paper_scenarios()
     for k, scenario in enumerate(scenarios, 1):
         folder = out / scenario.name
-        if (folder / "result.h5").exists():
-            for name in ("result.h5", "result.csv", "report.html"):
-                (folder / name).unlink(missing_ok=True)
         if not args.json:
             print(f"[{k}/{len(scenarios)}] {scenario.name}: {scenario.description}")
         summaries[scenario.name] = run_scenario(
-            resolve(scenario, Path(".")), folder, progress=not args.json
+            resolve(scenario, Path(".")), folder, progress=not args.json, overwrite=True
         )
         build_report(folder)
         runs[scenario.name] = load_result(folder)

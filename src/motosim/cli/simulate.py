@@ -46,6 +46,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--out", required=True, help="folder for the result")
     parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
     parser.add_argument(
+        "--overwrite", action="store_true", help="replace a result already in the folder"
+    )
+    parser.add_argument(
         "--no-report", dest="report", action="store_false", help="skip the HTML report"
     )
     parser.set_defaults(func=run)
@@ -117,7 +120,9 @@ def resolve(scenario: Scenario, base: Path) -> RunInputs:
     )
 
 
-def run_scenario(inputs: RunInputs, folder: Path, *, progress: bool) -> dict[str, Any]:
+def run_scenario(
+    inputs: RunInputs, folder: Path, *, progress: bool, overwrite: bool = False
+) -> dict[str, Any]:
     """Simulate into ``folder`` with a progress bar; returns the metrics written."""
     from motosim.report import metrics
 
@@ -131,7 +136,7 @@ def run_scenario(inputs: RunInputs, folder: Path, *, progress: bool) -> dict[str
             total=n, unit=" steps", desc=sc.name, file=sys.stderr, leave=False, unit_scale=True
         )
     metadata = run_metadata(inputs)
-    with ResultWriter(folder, SIGNALS, metadata) as writer:
+    with ResultWriter(folder, SIGNALS, metadata, overwrite=overwrite) as writer:
 
         def on_block(block: np.ndarray) -> None:
             writer.append(block)
@@ -151,10 +156,12 @@ def run_scenario(inputs: RunInputs, folder: Path, *, progress: bool) -> dict[str
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     scenario = load_scenario(args.scenario)
-    inputs = resolve(scenario, Path(args.scenario).parent)
     folder = Path(args.out)
+    if (folder / "result.h5").exists() and not args.overwrite:
+        raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
+    inputs = resolve(scenario, Path(args.scenario).parent)
     try:
-        summary = run_scenario(inputs, folder, progress=not args.json)
+        summary = run_scenario(inputs, folder, progress=not args.json, overwrite=args.overwrite)
     except KeyboardInterrupt:
         print(f"motosim: interrupted; the partial result is in {folder}", file=sys.stderr)
         return 130
