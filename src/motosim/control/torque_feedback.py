@@ -30,6 +30,7 @@ from motosim.control.loops import closed_loop_poles, four_block_norm
 from motosim.control.ncf import ncfsyn
 from motosim.control.statespace import StateSpace, frequency_response
 from motosim.errors import MotosimError
+from motosim.model.handlebar import perturbed
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
@@ -221,17 +222,7 @@ def analyse_loop(hb: HandlebarParameters, controller: StateSpace, *, rate: float
     stable = True
     for fj in (0.5, 1.0, 1.5):
         for fb in (0.5, 1.0, 1.5):
-            G, _ = handlebar_plants(
-                HandlebarParameters(
-                    **{
-                        **{f: getattr(hb, f) for f in hb.SPECS},
-                        "J_eq": hb.J_eq * fj,
-                        "beta_eq": hb.beta_eq * fb,
-                        "J_m": 0.0,
-                        "beta_vm": 0.0,
-                    }
-                )
-            )
+            G, _ = handlebar_plants(perturbed(hb, inertia_factor=fj, damping_factor=fb))
             gamma = four_block_norm(G, controller)
             stable &= math.isfinite(gamma)
             gammas.append(gamma)

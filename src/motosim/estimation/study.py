@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.estimation.registry import ESTIMATORS, estimate
-from motosim.model.handlebar import simulate_handlebar
+from motosim.model.handlebar import perturbed, simulate_handlebar
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = ["PAPER_CASES", "Case", "Outcome", "run_case", "score"]
@@ -112,13 +112,11 @@ class Outcome:
 
 def _log(case: Case, nominal: HandlebarParameters) -> tuple[Array, Array, Array, Array]:
     """Sample times, true torque at the samples, measured angle and current."""
-    true = dataclasses.replace(
+    true = perturbed(
         nominal,
-        J_eq=nominal.J_eq * case.inertia_factor,
-        beta_eq=nominal.beta_eq * case.damping_factor,
-        beta_s=nominal.beta_s if case.friction else 0.0,
-        J_m=0.0,
-        beta_vm=0.0,
+        inertia_factor=case.inertia_factor,
+        damping_factor=case.damping_factor,
+        friction=case.friction,
     )
     m = round(_SIMULATION_RATE / case.rate)
     if not math.isclose(m * case.rate, _SIMULATION_RATE):

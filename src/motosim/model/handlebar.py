@@ -19,13 +19,14 @@ integrated by RK4 sub-steps.
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from motosim.errors import MotosimError
+from motosim.model._inputs import input_series, sample_times
 from motosim.model.linear import LinearModel
 from motosim.params.handlebar import HandlebarParameters
 from motosim.timeseries import TimeSeries
@@ -35,6 +36,7 @@ __all__ = [
     "friction_torque",
     "linear_model",
     "matrices",
+    "perturbed",
     "simulate_handlebar",
     "step_exact",
     "step_smooth",
@@ -54,6 +56,28 @@ class HandlebarMatrices:
     B: Array
     D: Array
     C: Array
+
+
+def perturbed(
+    hb: HandlebarParameters,
+    *,
+    inertia_factor: float = 1.0,
+    damping_factor: float = 1.0,
+    friction: bool = True,
+) -> HandlebarParameters:
+    """The handlebar with J_eq and beta_eq scaled and, without ``friction``, no dry friction.
+
+    The motor's own share (J_m, beta_vm) is set to zero so that any factor, including a
+    large cut, gives valid parameters: eq. (5) sees only the equivalent values.
+    """
+    return replace(
+        hb,
+        J_eq=hb.J_eq * inertia_factor,
+        beta_eq=hb.beta_eq * damping_factor,
+        beta_s=hb.beta_s if friction else 0.0,
+        J_m=0.0,
+        beta_vm=0.0,
+    )
 
 
 def matrices(hb: HandlebarParameters) -> HandlebarMatrices:
@@ -240,17 +264,6 @@ def _run(
     return out
 
 
-def _as_series(name: str, values: ArrayLike, n: int) -> Array:
-    arr = np.asarray(values, dtype=float)
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise MotosimError(f"{name} has shape {arr.shape}; expected ({n},) like t")
-    if not np.all(np.isfinite(arr)):
-        raise MotosimError(f"{name} has a NaN or infinite sample; expected finite values")
-    return arr
-
-
 def simulate_handlebar(
     hb: HandlebarParameters,
     t: ArrayLike,
@@ -296,9 +309,7 @@ def simulate_handlebar(
     MotosimError
         On inconsistent shapes, non-finite samples or options.
     """
-    tt = np.asarray(t, dtype=float)
-    if tt.ndim != 1 or tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
-        raise MotosimError("t must be a 1-D, finite, strictly increasing array of >= 2 samples")
+    tt = sample_times(t)
     if (current is None) == (voltage is None):
         raise MotosimError("give exactly one of current= or voltage=")
     if not (math.isfinite(friction_width) and friction_width >= 0):
@@ -310,13 +321,13 @@ def simulate_handlebar(
     if not (math.isfinite(max_step) and max_step > 0):
         raise MotosimError(f"max_step = {max_step!r}; expected > 0 [s]")
     n = tt.size
-    tau = _as_series("rider_torque", rider_torque, n)
+    tau = input_series("rider_torque", rider_torque, n)
     by_voltage = voltage is not None
     if voltage is not None:
-        drive = _as_series("voltage", voltage, n)
+        drive = input_series("voltage", voltage, n)
     else:
         assert current is not None
-        drive = _as_series("current", current, n)
+        drive = input_series("current", current, n)
     p = np.array(
         [
             hb.J_eq,

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linear_sum_assignment
 
 from motosim.errors import MotosimError
+from motosim.model._inputs import input_series, sample_times
 from motosim.model.linear import LinearModel
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.timeseries import TimeSeries
@@ -575,27 +576,20 @@ def simulate(
     >>> bool(r["v_x"][-1] > 20.0)
     True
     """
-    tt = np.asarray(t, dtype=float)
-    if tt.ndim != 1 or tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
-        raise MotosimError("t must be a 1-D, finite, strictly increasing array of >= 2 samples")
+    tt = sample_times(t)
     u0 = check_speed(initial_speed)
     if not (math.isfinite(max_step) and max_step > 0):
         raise MotosimError(f"max_step = {max_step!r}; expected > 0 [s]")
     n = tt.size
-    series = {}
-    for name, values in (
-        ("rider_torque", rider_torque),
-        ("drive_torque", drive_torque),
-        ("brake_torque", brake_torque),
-        ("wind_force", wind_force),
-    ):
-        arr = np.asarray(values, dtype=float)
-        arr = np.full(n, float(arr)) if arr.ndim == 0 else arr
-        if arr.shape != (n,) or not np.all(np.isfinite(arr)):
-            raise MotosimError(
-                f"{name} has shape {arr.shape}; expected finite values of shape ({n},)"
-            )
-        series[name] = arr
+    series = {
+        name: input_series(name, values, n)
+        for name, values in (
+            ("rider_torque", rider_torque),
+            ("drive_torque", drive_torque),
+            ("brake_torque", brake_torque),
+            ("wind_force", wind_force),
+        )
+    }
     if np.any(series["brake_torque"] < 0):
         raise MotosimError("brake_torque has a negative sample; expected >= 0 N*m")
     x0 = np.zeros(8) if initial_state is None else np.asarray(initial_state, dtype=float)

@@ -24,7 +24,7 @@ from motosim.control.torque_feedback import discretize
 from motosim.errors import MotosimError
 from motosim.estimation.registry import kernel_arguments
 from motosim.model import sharp as sharp_model
-from motosim.model.handlebar import step_exact
+from motosim.model.handlebar import perturbed, step_exact
 from motosim.model.sharp import bike_rk4
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
@@ -127,13 +127,11 @@ def prepare(
     dry friction then, as the paper neglects it in that case).
     """
     hb = scenario.handlebar
-    true = dataclasses.replace(
+    true = perturbed(
         true_handlebar,
-        J_eq=true_handlebar.J_eq * hb.inertia_factor,
-        beta_eq=true_handlebar.beta_eq * hb.damping_factor,
-        beta_s=true_handlebar.beta_s if hb.friction else 0.0,
-        J_m=0.0,
-        beta_vm=0.0,
+        inertia_factor=hb.inertia_factor,
+        damping_factor=hb.damping_factor,
+        friction=hb.friction,
     )
     nominal = (
         nominal_handlebar if hb.friction else dataclasses.replace(nominal_handlebar, beta_s=0.0)
