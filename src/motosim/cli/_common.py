@@ -9,7 +9,14 @@ import numpy as np
 
 from motosim.errors import MotosimError
 
-__all__ = ["check_figure_path", "parse_float_list", "parse_range", "print_json", "save_figure"]
+__all__ = [
+    "check_figure_path",
+    "parse_float_list",
+    "parse_range",
+    "print_json",
+    "save_figure",
+    "write_text",
+]
 
 _FIGURE_FORMATS = (".png", ".svg", ".pdf")
 
@@ -46,9 +53,30 @@ def parse_range(option: str, text: str, *, max_points: int = 100_000) -> list[fl
     return [float(x) for x in start + step * np.arange(count)]
 
 
+def _finite_or_none(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {key: _finite_or_none(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite_or_none(item) for item in value]
+    return value
+
+
 def print_json(payload: Any) -> None:
-    """Print an object as JSON on standard output."""
-    print(json.dumps(payload, indent=2, allow_nan=False))
+    """Print an object as strict JSON on standard output; inf and NaN become null."""
+    print(json.dumps(_finite_or_none(payload), indent=2, allow_nan=False))
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write a text file, creating its folder; a one-line error if it cannot be written."""
+    target = Path(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(text, encoding="utf-8")
+    except OSError as err:
+        raise MotosimError(f"cannot write {path}: {err.strerror}") from None
+    return target
 
 
 def check_figure_path(path: str) -> Path:

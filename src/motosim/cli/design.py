@@ -1,16 +1,14 @@
 """``motosim design``: the observer and the torque-feedback controller for a handlebar."""
 
 import argparse
-import math
 import sys
 from datetime import date
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from motosim import __version__
-from motosim.cli._common import print_json
+from motosim.cli._common import print_json, write_text
 from motosim.control.torque_feedback import (
     PAPER_CONTROLLER,
     LoopAnalysis,
@@ -53,26 +51,22 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=run)
 
 
-def _finite(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
-
-
 def _analysis(a: LoopAnalysis) -> dict[str, Any]:
     return {
-        "four_block_gamma_unweighted": _finite(a.four_block_gamma),
+        "four_block_gamma_unweighted": a.four_block_gamma,
         "closed_loop_poles": [[float(p.real), float(p.imag)] for p in a.closed_loop_poles],
-        "gain_margin_db": _finite(a.gain_margin_db),
-        "phase_margin_deg": _finite(a.phase_margin_deg),
-        "crossover_rad_s": _finite(a.crossover),
-        "tracking_bandwidth_hz": _finite(a.tracking_bandwidth),
-        "stiffness_nm_per_rad": _finite(a.stiffness),
+        "gain_margin_db": a.gain_margin_db,
+        "phase_margin_deg": a.phase_margin_deg,
+        "crossover_rad_s": a.crossover,
+        "tracking_bandwidth_hz": a.tracking_bandwidth,
+        "stiffness_nm_per_rad": a.stiffness,
         "peak_compliance_rad_per_nm": a.peak_compliance,
         "tracking_error_1hz": a.tracking_error_1hz,
         "compliance_1hz_rad_per_nm": a.compliance_1hz,
         "discrete_spectral_radius": a.discrete_radius,
         "discrete_stable": {m: r < 1.0 for m, r in a.discrete_radius.items()},
         "robust_over_50_percent": a.robust_over_50_percent,
-        "worst_perturbed_gamma_unweighted": _finite(a.worst_perturbed_gamma),
+        "worst_perturbed_gamma_unweighted": a.worst_perturbed_gamma,
     }
 
 
@@ -173,13 +167,7 @@ def run(args: argparse.Namespace) -> int:
                 "gamma": paper.four_block_gamma,
             },
         )
-        target = Path(args.out)
-        try:
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(text, encoding="utf-8")
-        except OSError as err:
-            raise MotosimError(f"cannot write {args.out}: {err.strerror}") from None
-        report["out"] = str(target)
+        report["out"] = str(write_text(args.out, text))
     if args.json:
         print_json(report)
     else:
@@ -197,8 +185,8 @@ def _poly(coefficients: list[float]) -> str:
     return " + ".join(terms).replace("+ -", "- ")
 
 
-def _show(value: float | None) -> str:
-    return "inf" if value is None else f"{value:.4g}"
+def _show(value: float) -> str:
+    return f"{value:.4g}"
 
 
 def _print(report: dict[str, Any]) -> None:

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_figure_path, print_json, save_figure
+from motosim.cli._common import check_figure_path, print_json, save_figure, write_text
 from motosim.errors import MotosimError
 from motosim.identification import (
     METHODS,
@@ -168,13 +168,7 @@ def _write(args: argparse.Namespace, motor: ParameterSet, est: Any) -> Path:
         values=hb,
         sources=sources,
     )
-    target = Path(args.out)
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(dump_parameter_set(pset), encoding="utf-8")
-    except OSError as err:
-        raise MotosimError(f"cannot write {args.out}: {err.strerror}") from None
-    return target
+    return write_text(args.out, dump_parameter_set(pset))
 
 
 def _print(report: dict[str, Any]) -> None:

@@ -1,7 +1,6 @@
 """``motosim simulate`` and ``motosim report``: run a scenario, write and report its result."""
 
 import argparse
-import math
 import sys
 import tomllib
 from pathlib import Path
@@ -175,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
             {
                 "out": str(folder),
                 "report": str(report) if report else None,
-                "metrics": _clean(summary),
+                "metrics": summary,
             }
         )
     else:
@@ -185,13 +184,6 @@ def run(args: argparse.Namespace) -> int:
                 f"  {key:<32} {value:.4g}" if isinstance(value, float) else f"  {key:<32} {value}"
             )
     return 0
-
-
-def _clean(summary: dict[str, Any]) -> dict[str, Any]:
-    return {
-        k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-        for k, v in summary.items()
-    }
 
 
 def run_report(args: argparse.Namespace) -> int:
