@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from motosim.cli.main import main
-from motosim.io.runs import load_scenario, resolve
 from motosim.io.results import ResultWriter, load_result
+from motosim.io.runs import load_scenario, resolve
 from motosim.sim import SIGNALS, parse_scenario, run_metadata, simulate
 
 ROOT = Path(__file__).parents[2]

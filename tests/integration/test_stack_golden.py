@@ -34,6 +34,8 @@ def test_signals_unchanged(name: str) -> None:
     for signal, values in pinned.items():
         if signal in ("t", "rms"):
             continue
-        np.testing.assert_allclose(result[signal][idx], values, rtol=1e-7, atol=1e-9, err_msg=signal)
+        np.testing.assert_allclose(
+            result[signal][idx], values, rtol=1e-7, atol=1e-9, err_msg=signal
+        )
     for signal, rms in pinned["rms"].items():
         np.testing.assert_allclose(np.sqrt(np.mean(result[signal] ** 2)), rms, rtol=1e-7)

@@ -12,7 +12,7 @@ from typing import NoReturn
 
 from motosim import __version__
 from motosim.cli import design, estimate, excite, identify, modes, paper, params, simulate
-from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailed
+from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailedError
 
 __all__ = ["main"]
 
@@ -47,7 +47,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except MotosimError as err:
         print(f"motosim: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except RunFailed as err:
+    except RunFailedError as err:
         print(f"motosim: run failed: {err}", file=sys.stderr)
         return EXIT_RUN_FAILED
     except KeyboardInterrupt:

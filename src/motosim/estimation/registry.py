@@ -6,7 +6,6 @@ super-twisting differentiator and runs the stepper over the samples. The command
 these names.
 """
 
-import math
 from typing import Protocol
 
 import numpy as np
