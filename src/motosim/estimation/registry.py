@@ -222,7 +222,7 @@ def start_kernel(
         kalman_start(state, theta, theta_dot, current)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def step_kernel(
     k: EstimatorKernel, state: Array, theta: float, theta_dot: float, current: float
 ) -> float:

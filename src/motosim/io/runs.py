@@ -160,8 +160,6 @@ def run_to_folder(
                 on_rows(block.shape[0])
 
         run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
-        summary = run_metrics(
-            run.t, lambda name: run[name] if name in run.names else None, complete=True
-        )
+        summary = run_metrics(run.t, lambda name: run[name] if name in run else None, complete=True)
         writer.close(summary)
     return summary

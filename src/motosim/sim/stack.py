@@ -260,7 +260,7 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
     data.periods[0] = 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     """i_m = K (theta_h - delta), positive feedback (eq. (24)), saturated; advances K's state."""
     if not model.feedback:
@@ -281,7 +281,7 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     return float(min(max(u, -model.max_current), model.max_current))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def step(
     model: StackModel,
     data: StackData,
