@@ -88,3 +88,18 @@ def test_rates_must_be_whole_multiples() -> None:
 
     with pytest.raises(MotosimError, match="whole number"):
         _stack(control=1000.0, measurement=300.0)
+
+
+def test_recorded_layout_recompiles_when_the_signal_table_changes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The loop's columns are compile-time constants from motosim.signals.RECORDED; numba's
+    # cache does not follow that module, so a changed table must trigger a recompilation.
+    from motosim.sim import closed_loop
+
+    monkeypatch.setattr(closed_loop, "_LAYOUT_KEY", closed_loop._LAYOUT_KEY + 1)
+    closed_loop._ensure_current_layout()
+    assert closed_loop._compiled_layout_key() == closed_loop._LAYOUT_KEY
+    monkeypatch.undo()
+    closed_loop._ensure_current_layout()
+    assert closed_loop._compiled_layout_key() == closed_loop._LAYOUT_KEY

@@ -11,6 +11,7 @@ held. The design happens once, before the run: :func:`build_stack` and :func:`bu
 
 import dataclasses
 import math
+import zlib
 from collections import namedtuple
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -56,8 +57,26 @@ SIGNALS = RECORDED
 """Recorded signals, in column order: :data:`motosim.signals.RECORDED`."""
 
 _Columns = namedtuple("_Columns", RECORDED)  # type: ignore[misc]
-_COLUMNS = _Columns(*range(len(RECORDED)))
-"""Column of each recorded signal by name, passed to the compiled loop (``col.tau_r``)."""
+_COLUMNS: Any = _Columns(*range(len(RECORDED)))
+"""Column of each recorded signal by name (``_COLUMNS.tau_r``): compile-time constants of the
+compiled loop, taken from :data:`motosim.signals.RECORDED` when it is compiled."""
+_LAYOUT_KEY = zlib.crc32(" ".join(RECORDED).encode())
+"""Fingerprint of the column layout, frozen into the compiled code beside the columns."""
+
+
+@njit(cache=True)
+def _compiled_layout_key() -> int:
+    return _LAYOUT_KEY
+
+
+def _ensure_current_layout() -> None:
+    """Recompile the loop if its cached machine code predates a change of the signal table.
+
+    numba's cache follows this file, not :mod:`motosim.signals`, where the columns come from.
+    """
+    if _compiled_layout_key() != _LAYOUT_KEY:
+        _compiled_layout_key.recompile()
+        _run_chunk.recompile()
 
 
 @dataclass(frozen=True, slots=True)
@@ -269,7 +288,6 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
 def _run_chunk(
     k0: int,
     out: Array,
-    col: Any,
     stack: StackModel,
     data: StackData,
     rig: RigModel,
@@ -297,22 +315,22 @@ def _run_chunk(
         else:
             tau_rider = rig.rider_profile[k * n_sub]
         o = out[row]
-        o[col.t] = k * h
-        o[col.tau_r] = tau_rider
-        o[col.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
-        o[col.theta_h] = hb[0]
-        o[col.theta_h_dot] = hb[1]
-        o[col.v_y], o[col.psi_dot], o[col.phi_dot], o[col.delta_dot] = z[0], z[1], z[2], z[3]
-        o[col.phi], o[col.delta], o[col.F_yr], o[col.F_yf] = z[4], z[5], z[6], z[7]
-        o[col.v_x], o[col.psi], o[col.x], o[col.y] = z[8], z[9], z[10], z[11]
-        o[col.e_y] = e_y
+        o[_COLUMNS.t] = k * h
+        o[_COLUMNS.tau_r] = tau_rider
+        o[_COLUMNS.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
+        o[_COLUMNS.theta_h] = hb[0]
+        o[_COLUMNS.theta_h_dot] = hb[1]
+        o[_COLUMNS.v_y], o[_COLUMNS.psi_dot], o[_COLUMNS.phi_dot], o[_COLUMNS.delta_dot] = z[0], z[1], z[2], z[3]
+        o[_COLUMNS.phi], o[_COLUMNS.delta], o[_COLUMNS.F_yr], o[_COLUMNS.F_yf] = z[4], z[5], z[6], z[7]
+        o[_COLUMNS.v_x], o[_COLUMNS.psi], o[_COLUMNS.x], o[_COLUMNS.y] = z[8], z[9], z[10], z[11]
+        o[_COLUMNS.e_y] = e_y
         # the stack: command, estimate, virtual motorcycle
         i_cmd = step(stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k])
-        o[col.theta_h_meas] = data.held[0]
-        o[col.theta_h_dot_hat] = data.held[2]
-        o[col.tau_r_hat] = data.held[3]
-        o[col.i_m] = i_cmd
-        o[col.tau_m] = nkt * i_cmd
+        o[_COLUMNS.theta_h_meas] = data.held[0]
+        o[_COLUMNS.theta_h_dot_hat] = data.held[2]
+        o[_COLUMNS.tau_r_hat] = data.held[3]
+        o[_COLUMNS.i_m] = i_cmd
+        o[_COLUMNS.tau_m] = nkt * i_cmd
         # the true handlebar over the period, the current held: one exact step while the
         # rider torque is constant over it, else one per plant sub-step
         steady = rig.virtual_rider
@@ -393,6 +411,7 @@ def simulate(
     sc = inputs.scenario
     model = build_stack(inputs) if stack is None else stack
     rig = build_rig(inputs, rng=rng)
+    _ensure_current_layout()
     data = new_data(model)
     world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
     reset(model, data, 0.0, 0.0)
@@ -401,7 +420,7 @@ def simulate(
     blocks = []
     for k0 in range(0, n, rows):
         out = np.full((min(rows, n - k0), len(SIGNALS)), np.nan)
-        _run_chunk(k0, out, _COLUMNS, model, data, rig, world)
+        _run_chunk(k0, out, model, data, rig, world)
         _check_block(out)
         if on_block is not None:
             on_block(out)
