@@ -23,7 +23,7 @@ from scipy.optimize import linear_sum_assignment
 
 from motosim.errors import MotosimError
 from motosim.model._inputs import input_series, sample_times
-from motosim.model.linear import LinearModel
+from motosim.model.linear import StateSpace
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.timeseries import TimeSeries
 
@@ -183,7 +183,7 @@ def lpv_matrices(p: SharpParameters) -> tuple[Array, Array, Array]:
     return -Minv @ E0, -Minv @ E1, Minv @ input_matrix(p)
 
 
-def linearize(p: SharpParameters, speed: float) -> LinearModel:
+def linearize(p: SharpParameters, speed: float) -> StateSpace:
     """The lateral model at a constant forward speed.
 
     Parameters
@@ -195,7 +195,7 @@ def linearize(p: SharpParameters, speed: float) -> LinearModel:
 
     Returns
     -------
-    LinearModel
+    StateSpace
         A_v = -M^-1 E(v_x), B_v = M^-1 F (input ``tau_r`` [N*m]), every state as output.
 
     Raises
@@ -212,7 +212,7 @@ def linearize(p: SharpParameters, speed: float) -> LinearModel:
     """
     u = check_speed(speed)
     A0, A1, Bv = lpv_matrices(p)
-    return LinearModel(
+    return StateSpace(
         A=A0 + u * A1,
         B=Bv[:, None],
         C=np.eye(8),

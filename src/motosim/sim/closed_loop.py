@@ -57,8 +57,8 @@ SIGNALS = RECORDED
 """Recorded signals, in column order: :data:`motosim.signals.RECORDED`."""
 
 _Columns = namedtuple("_Columns", RECORDED)  # type: ignore[misc]
-_COLUMNS: Any = _Columns(*range(len(RECORDED)))
-"""Column of each recorded signal by name (``_COLUMNS.tau_r``): compile-time constants of the
+_COL: Any = _Columns(*range(len(RECORDED)))
+"""Column of each recorded signal by name (``_COL.tau_r``): compile-time constants of the
 compiled loop, taken from :data:`motosim.signals.RECORDED` when it is compiled."""
 _LAYOUT_KEY = zlib.crc32(" ".join(RECORDED).encode())
 """Fingerprint of the column layout, frozen into the compiled code beside the columns."""
@@ -315,22 +315,32 @@ def _run_chunk(
         else:
             tau_rider = rig.rider_profile[k * n_sub]
         o = out[row]
-        o[_COLUMNS.t] = k * h
-        o[_COLUMNS.tau_r] = tau_rider
-        o[_COLUMNS.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
-        o[_COLUMNS.theta_h] = hb[0]
-        o[_COLUMNS.theta_h_dot] = hb[1]
-        o[_COLUMNS.v_y], o[_COLUMNS.psi_dot], o[_COLUMNS.phi_dot], o[_COLUMNS.delta_dot] = z[0], z[1], z[2], z[3]
-        o[_COLUMNS.phi], o[_COLUMNS.delta], o[_COLUMNS.F_yr], o[_COLUMNS.F_yf] = z[4], z[5], z[6], z[7]
-        o[_COLUMNS.v_x], o[_COLUMNS.psi], o[_COLUMNS.x], o[_COLUMNS.y] = z[8], z[9], z[10], z[11]
-        o[_COLUMNS.e_y] = e_y
+        o[_COL.t] = k * h
+        o[_COL.tau_r] = tau_rider
+        o[_COL.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
+        o[_COL.theta_h] = hb[0]
+        o[_COL.theta_h_dot] = hb[1]
+        o[_COL.v_y], o[_COL.psi_dot], o[_COL.phi_dot], o[_COL.delta_dot] = (
+            z[0],
+            z[1],
+            z[2],
+            z[3],
+        )
+        o[_COL.phi], o[_COL.delta], o[_COL.F_yr], o[_COL.F_yf] = (
+            z[4],
+            z[5],
+            z[6],
+            z[7],
+        )
+        o[_COL.v_x], o[_COL.psi], o[_COL.x], o[_COL.y] = z[8], z[9], z[10], z[11]
+        o[_COL.e_y] = e_y
         # the stack: command, estimate, virtual motorcycle
         i_cmd = step(stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k])
-        o[_COLUMNS.theta_h_meas] = data.held[0]
-        o[_COLUMNS.theta_h_dot_hat] = data.held[2]
-        o[_COLUMNS.tau_r_hat] = data.held[3]
-        o[_COLUMNS.i_m] = i_cmd
-        o[_COLUMNS.tau_m] = nkt * i_cmd
+        o[_COL.theta_h_meas] = data.held[0]
+        o[_COL.theta_h_dot_hat] = data.held[2]
+        o[_COL.tau_r_hat] = data.held[3]
+        o[_COL.i_m] = i_cmd
+        o[_COL.tau_m] = nkt * i_cmd
         # the true handlebar over the period, the current held: one exact step while the
         # rider torque is constant over it, else one per plant sub-step
         steady = rig.virtual_rider
