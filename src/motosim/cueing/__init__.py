@@ -1,0 +1,1 @@
+"""Motion cueing for the platform (roll, pitch, yaw) and vestibular scoring."""
