@@ -48,7 +48,10 @@ def tustin(num: tuple[float, ...], den: tuple[float, ...], dt: float) -> Array:
         raise MotosimError(f"filter {num}/{den}; expected a proper filter of order <= 2")
     from scipy.signal import bilinear
 
-    bz, az = bilinear(np.asarray(num, float), np.asarray(den, float), fs=1.0 / dt)
+    zero = not any(num)  # scipy's bilinear fails on a zero numerator
+    bz, az = bilinear(np.asarray((1.0,) if zero else num, float), np.asarray(den, float), fs=1 / dt)
+    if zero:
+        bz = np.zeros_like(bz)
     b = np.zeros(3)
     a = np.zeros(3)
     b[: bz.size] = bz  # both in powers of z^-1 from z^0, as long as the filter's order

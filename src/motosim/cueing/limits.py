@@ -130,14 +130,20 @@ def limit_step(lim: Array, state: Array, target: float) -> float:
         wanted = -wanted
     hi = min(v + c, V, _brake_speed(X - x, c, h))
     lo = max(v - c, -V, -_brake_speed(X + x, c, h))
+    floor, ceiling = -X, X
     if u >= 0.0 and x >= 0.0:  # do not carry the axis across neutral
         lo = max(lo, -_brake_speed(x, c, h))
+        floor = 0.0
     if u <= 0.0 and x <= 0.0:
         hi = min(hi, _brake_speed(-x, c, h))
-    if lo > hi:  # only if the state was not reachable under the limits; brake hardest
+        ceiling = 0.0
+    if lo > hi + 1e-9 * c:  # only from a state not reachable under the limits: brake hardest
         lo = hi = v - c if v > 0.0 else v + c
+        floor, ceiling = -X, X
+    elif lo > hi:  # an empty interval by rounding only: keep the braking bound
+        hi = lo
     v_new = min(hi, max(lo, wanted))
-    x_new = min(X, max(-X, x + v_new * dt))
+    x_new = min(ceiling, max(floor, x + v_new * dt))  # the bounds absorb rounding only
     state[1] = (x_new - x) / dt
     state[0] = x_new
     return x_new
