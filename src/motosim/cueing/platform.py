@@ -191,6 +191,9 @@ class MpcTuning:
     angle_weight, rate_weight, accel_weight : float
         Weights of the squared platform angle, rate and acceleration, each divided by its
         limit.
+    pitch_rate : float
+        Largest planned pitch rate [rad/s]: below the pitch threshold, so that a tilt is
+        not perceived as a rotation (the tilt-coordination rate limit of the washout).
     """
 
     horizon: int
@@ -200,6 +203,7 @@ class MpcTuning:
     angle_weight: float
     rate_weight: float
     accel_weight: float
+    pitch_rate: float
 
     def __post_init__(self) -> None:
         if isinstance(self.horizon, bool) or not isinstance(self.horizon, int) or not (
@@ -210,6 +214,7 @@ class MpcTuning:
         for name in ("canal_weight", "otolith_weight", "angle_weight", "rate_weight"):
             _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
         _check("mpc", "accel_weight", self.accel_weight, lower=0.0)
+        _check("mpc", "pitch_rate", self.pitch_rate, lower=0.0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -257,6 +262,7 @@ _MPC_KEYS = {
     "angle_weight": 1.0,
     "rate_weight": 1.0,
     "accel_weight": 1.0,
+    "pitch_rate_deg_s": _DEG,
 }
 
 
