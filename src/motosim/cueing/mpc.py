@@ -342,7 +342,7 @@ class MpcCueing:
             lo, hi = self._bounds(plan, x0)
             solver = self._solvers[j]
             solver.update(q=q, l=lo, u=hi)
-            result = solver.solve()
+            result = solver.solve(raise_error=False)
             if result.info.status_val == self._solved:
                 u = float(result.x[0])
             else:  # infeasible in the coarse prediction: brake
