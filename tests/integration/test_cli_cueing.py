@@ -15,7 +15,9 @@ def run_dir(tmp_path: Path) -> Path:
     t = np.arange(0.0, 4.0, 0.001)
     phi = np.radians(15.0) * np.sin(0.5 * np.pi * t)
     names = ("t", "v_x", "v_y", "psi_dot", "phi_dot", "phi")
-    data = np.column_stack([t, 15.0 + 0 * t, 0 * t, 9.81 * np.tan(phi) / 15.0, np.gradient(phi, t), phi])
+    data = np.column_stack(
+        [t, 15.0 + 0 * t, 0 * t, 9.81 * np.tan(phi) / 15.0, np.gradient(phi, t), phi]
+    )
     folder = tmp_path / "run"
     with ResultWriter(folder, names, {"scenario": {"name": "weave"}}) as writer:
         writer.append(data)

@@ -97,7 +97,7 @@ def biquad_step(coef: Array, c: int, state: Array, s: int, x: float) -> float:
     y = coef[c] * x + state[s]
     state[s] = coef[c + 1] * x - coef[c + 3] * y + state[s + 1]
     state[s + 1] = coef[c + 2] * x - coef[c + 4] * y
-    return y
+    return float(y)
 
 
 @njit(cache=True)

@@ -242,8 +242,8 @@ def platform_motion(
         is fixed), ``theta`` is the platform pitch.
     """
     dt = check_rate(t)
-    rates = [np.gradient(x, dt) for x in (roll, pitch, yaw)]
+    roll_dot, pitch_dot, yaw_dot = (np.gradient(x, dt) for x in (roll, pitch, yaw))
     zeros = np.zeros((t.size, 2))
-    omega, f = head_kinematics(zeros, roll, pitch, *rates, platform.head, dt)
-    data = np.column_stack([zeros, pitch, rates[1], omega, f])
+    omega, f = head_kinematics(zeros, roll, pitch, roll_dot, pitch_dot, yaw_dot, platform.head, dt)
+    data = np.column_stack([zeros, pitch, pitch_dot, omega, f])
     return TimeSeries(np.asarray(t, dtype=np.float64), data, HEAD_SIGNALS)

@@ -146,7 +146,7 @@ def limit_step(lim: Array, state: Array, target: float) -> float:
     x_new = min(ceiling, max(floor, x + v_new * dt))  # the bounds absorb rounding only
     state[1] = (x_new - x) / dt
     state[0] = x_new
-    return x_new
+    return float(x_new)
 
 
 @njit(cache=True)

@@ -283,9 +283,9 @@ class MpcCueing:
                 lo,
                 hi,
                 verbose=False,
-                eps_abs=1e-5,
-                eps_rel=1e-5,
-                max_iter=400,
+                eps_abs=1e-4,
+                eps_rel=1e-4,
+                max_iter=100,
                 polishing=False,
                 warm_starting=True,
             )

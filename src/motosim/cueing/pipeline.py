@@ -110,7 +110,9 @@ def cue(
         On an unknown algorithm, a bad rate or missing signals.
     """
     if algorithm not in ALGORITHMS:
-        raise MotosimError(f"cueing algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}")
+        raise MotosimError(
+            f"cueing algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}"
+        )
     run = series if rate is None else decimate(series, rate)
     dt = check_rate(run.t)
     vehicle = vehicle_motion(run, config.rider, params=params)

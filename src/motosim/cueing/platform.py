@@ -206,8 +206,10 @@ class MpcTuning:
     pitch_rate: float
 
     def __post_init__(self) -> None:
-        if isinstance(self.horizon, bool) or not isinstance(self.horizon, int) or not (
-            2 <= self.horizon <= 200
+        if (
+            isinstance(self.horizon, bool)
+            or not isinstance(self.horizon, int)
+            or not (2 <= self.horizon <= 200)
         ):
             raise MotosimError(f"mpc: horizon = {self.horizon!r}; expected an integer 2..200")
         _check("mpc", "step", self.step, lower=0.0, upper=1.0)
@@ -228,7 +230,12 @@ class CueingConfig:
 
 
 _DEG = math.pi / 180.0
-_AXIS_KEYS = {"angle_deg": _DEG, "rate_deg_s": _DEG, "accel_deg_s2": _DEG, "bandwidth_hz": 2 * math.pi}
+_AXIS_KEYS = {
+    "angle_deg": _DEG,
+    "rate_deg_s": _DEG,
+    "accel_deg_s2": _DEG,
+    "bandwidth_hz": 2 * math.pi,
+}
 _HEAD_KEYS = {"x_m": 1.0, "y_m": 1.0, "z_m": 1.0}
 _RIDER_KEYS = {
     "x_m": 1.0,
@@ -279,8 +286,7 @@ def _numbers(table: Mapping[str, Any], keys: Mapping[str, float], where: str,
     unknown = set(table) - set(keys)
     if unknown:
         raise MotosimError(
-            f"{origin}: unknown key {sorted(unknown)[0]!r} in [{where}]; expected "
-            f"{', '.join(keys)}"
+            f"{origin}: unknown key {sorted(unknown)[0]!r} in [{where}]; expected {', '.join(keys)}"
         )
     out = []
     for key, scale in keys.items():
@@ -330,7 +336,9 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
     axes_table = _table(data, "axes", origin)
     extra = set(axes_table) - {"roll", "pitch", "yaw"}
     if extra:
-        raise MotosimError(f"{origin}: unknown axis {sorted(extra)[0]!r}; expected roll, pitch, yaw")
+        raise MotosimError(
+            f"{origin}: unknown axis {sorted(extra)[0]!r}; expected roll, pitch, yaw"
+        )
     try:
         axes = []
         for axis in ("roll", "pitch", "yaw"):
@@ -338,7 +346,9 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
             try:
                 axes.append(AxisLimits(*values))
             except MotosimError as err:
-                raise MotosimError(f"{origin}: [axes.{axis}] {str(err).removeprefix('axis: ')}") from None
+                raise MotosimError(
+                    f"{origin}: [axes.{axis}] {str(err).removeprefix('axis: ')}"
+                ) from None
         hx, hy, hz = _numbers(_table(data, "head", origin), _HEAD_KEYS, "head", origin)
         platform = Platform(
             name=str(head["name"]),
@@ -360,7 +370,9 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
         mpc = MpcTuning(horizon, *_numbers(mpc_table, _MPC_KEYS, "mpc", origin))
     except MotosimError as err:
         message = str(err)
-        raise MotosimError(message if message.startswith(origin) else f"{origin}: {message}") from None
+        raise MotosimError(
+            message if message.startswith(origin) else f"{origin}: {message}"
+        ) from None
     return CueingConfig(platform, rider, washout, mpc)
 
 

@@ -106,14 +106,14 @@ TELBAN_CARDULLO_2005 = VestibularModel(
 def canal_tf(model: VestibularModel) -> tuple[Array, Array]:
     """Canal transfer function ``(num, den)``, highest power of s first."""
     ta, tl, ts = model.canal_tau_a, model.canal_tau_L, model.canal_tau_S
-    den = np.polymul(np.polymul([ta, 1.0], [tl, 1.0]), [ts, 1.0])
+    den = np.array([ta * tl * ts, ta * tl + ta * ts + tl * ts, ta + tl + ts, 1.0])
     return np.array([ta * tl, 0.0, 0.0]), den
 
 
 def otolith_tf(model: VestibularModel) -> tuple[Array, Array]:
     """Otolith transfer function ``(num, den)``, highest power of s first."""
     k, ta, tl, ts = model.otolith_K, model.otolith_tau_a, model.otolith_tau_L, model.otolith_tau_S
-    return k * np.array([ta, 1.0]), np.polymul([tl, 1.0], [ts, 1.0])
+    return np.array([k * ta, k]), np.array([tl * ts, tl + ts, 1.0])
 
 
 def _filter(num: Array, den: Array, x: Array, dt: float) -> Array:
@@ -203,7 +203,7 @@ def _lag(vehicle: Array, platform: Array, dt: float) -> float:
         return math.nan
     full = correlate(b, a, mode="full", method="fft")
     zero = a.size - 1
-    span = min(int(round(1.0 / dt)), a.size - 1)
+    span = min(round(1.0 / dt), a.size - 1)
     window = full[zero - span : zero + span + 1]
     return float((int(np.argmax(window)) - span) * dt)
 
@@ -227,7 +227,9 @@ def _channel(vehicle: Array, platform: Array, threshold: float, dt: float) -> Ch
     )
 
 
-def limit_margins(platform: Platform, commands: Array, dt: float) -> tuple[dict[str, tuple[float, float, float]], int]:
+def limit_margins(
+    platform: Platform, commands: Array, dt: float
+) -> tuple[dict[str, tuple[float, float, float]], int]:
     """Smallest remaining fraction of each limit and the number of violations.
 
     Parameters

@@ -143,14 +143,19 @@ def design_washout(tuning: WashoutTuning, dt: float, *, g: float = 9.81) -> Wash
     return WashoutDesign(
         dt=dt,
         roll_onset=tuple(
-            highpass2(tuning.roll_onset_gain, tuning.roll_onset_frequency,
-                      tuning.roll_onset_damping, dt)
-        ),  # fmt: skip
+            highpass2(
+                tuning.roll_onset_gain, tuning.roll_onset_frequency, tuning.roll_onset_damping, dt
+            )
+        ),
         tilt=tuple(lowpass2(1.0, tuning.tilt_frequency, tuning.tilt_damping, dt)),
         pitch_onset=tuple(
-            highpass2(tuning.pitch_onset_gain, tuning.pitch_onset_frequency,
-                      tuning.pitch_onset_damping, dt)
-        ),  # fmt: skip
+            highpass2(
+                tuning.pitch_onset_gain,
+                tuning.pitch_onset_frequency,
+                tuning.pitch_onset_damping,
+                dt,
+            )
+        ),
         yaw=tuple(tustin((tuning.yaw_gain, 0.0), (1.0, 2 * zy * wy, wy * wy), dt)),
         roll_scale=tuning.roll_scale,
         roll_sustained=tuning.roll_sustained,
@@ -166,7 +171,7 @@ def _section(coef: Array, c: int, state: Array, s: int, x: float) -> float:
     y = coef[c] * x + state[s]
     state[s] = coef[c + 1] * x - coef[c + 3] * y + state[s + 1]
     state[s + 1] = coef[c + 2] * x - coef[c + 4] * y
-    return y
+    return float(y)
 
 
 @njit(cache=True)

@@ -32,11 +32,17 @@ def test_washout_sections_within_one_percent(rate: float) -> None:
     tune = load_platform("simacom_platform").washout
     d = design_washout(tune, dt)
     w, z = tune.roll_onset_frequency, tune.roll_onset_damping
-    assert _error((tune.roll_onset_gain, 0, 0), (1, 2 * z * w, w * w), np.array(d.roll_onset), dt) < 0.01
+    assert (
+        _error((tune.roll_onset_gain, 0, 0), (1, 2 * z * w, w * w), np.array(d.roll_onset), dt)
+        < 0.01
+    )
     w, z = tune.tilt_frequency, tune.tilt_damping
     assert _error((w * w,), (1, 2 * z * w, w * w), np.array(d.tilt), dt) < 0.01
     w, z = tune.pitch_onset_frequency, tune.pitch_onset_damping
-    assert _error((tune.pitch_onset_gain, 0, 0), (1, 2 * z * w, w * w), np.array(d.pitch_onset), dt) < 0.01
+    assert (
+        _error((tune.pitch_onset_gain, 0, 0), (1, 2 * z * w, w * w), np.array(d.pitch_onset), dt)
+        < 0.01
+    )
     w, z = tune.yaw_frequency, tune.yaw_damping
     assert _error((tune.yaw_gain, 0), (1, 2 * z * w, w * w), np.array(d.yaw), dt) < 0.01
 

@@ -12,14 +12,16 @@ import pytest
 from scipy import signal
 
 from motosim.cueing.head import HEAD_SIGNALS
+from motosim.cueing.platform import load_platform
 from motosim.cueing.vestibular import (
     TELBAN_CARDULLO_2005 as VM,
+)
+from motosim.cueing.vestibular import (
     canal_tf,
     otolith_tf,
     perceive,
     score,
 )
-from motosim.cueing.platform import load_platform
 from motosim.timeseries import TimeSeries
 
 DT = 0.01
@@ -37,7 +39,10 @@ def test_published_constants() -> None:
     # tau_a 13.2 s, tau_L 5.33 s, tau_S 0.66 s; thresholds 3.0, 3.6, 2.6 deg/s, 0.17 m/s^2.
     assert (VM.canal_tau_L, VM.canal_tau_S, VM.canal_tau_a) == (5.73, 0.005, 80.0)
     assert (VM.otolith_K, VM.otolith_tau_a, VM.otolith_tau_L, VM.otolith_tau_S) == (
-        0.4, 13.2, 5.33, 0.66,
+        0.4,
+        13.2,
+        5.33,
+        0.66,
     )
     assert np.allclose(np.degrees(VM.thresholds[:3]), [3.0, 3.6, 2.6])
     assert VM.thresholds[3:] == (0.17, 0.17)

@@ -87,7 +87,9 @@ def test_braking_pitches_nose_down(rider: RiderHead) -> None:
     t = np.arange(0.0, 4.0, 0.01)
     v_x = np.where(t < 1.0, 20.0, 20.0 - 5.0 * (t - 1.0))  # 5 m/s^2 braking from 1 s
     z = 0 * t
-    ts = TimeSeries(t, np.column_stack([v_x, z, z, z, z]), ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))
+    ts = TimeSeries(
+        t, np.column_stack([v_x, z, z, z, z]), ("v_x", "v_y", "psi_dot", "phi_dot", "phi")
+    )
     vm = vehicle_motion(ts, rider)
     assert vm["a_x"][200] == pytest.approx(-5.0)
     assert vm["theta"][-1] == pytest.approx(-5.0 * rider.pitch_gain, rel=1e-3)  # quasi-static

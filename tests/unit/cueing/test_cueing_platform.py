@@ -32,7 +32,10 @@ def test_default_platform_has_the_simacom_ranges() -> None:
     [
         (lambda d: d["axes"]["roll"].update(angle_deg=-5.0), r"\[axes.roll\] angle = .*expected"),
         (lambda d: d["axes"]["roll"].update(speed=1.0), "unknown key 'speed' in \\[axes.roll\\]"),
-        (lambda d: d["axes"]["pitch"].pop("rate_deg_s"), "missing key 'rate_deg_s' in \\[axes.pitch\\]"),
+        (
+            lambda d: d["axes"]["pitch"].pop("rate_deg_s"),
+            "missing key 'rate_deg_s' in \\[axes.pitch\\]",
+        ),
         (lambda d: d["washout"].update(tilt_frequency=float("nan")), "tilt_frequency = nan"),
         (lambda d: d["mpc"].update(horizon=2.5), "horizon = 2.5; expected an integer"),
         (lambda d: d.update(extra={}), r"unknown table \[extra\]"),

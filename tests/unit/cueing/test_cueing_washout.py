@@ -33,7 +33,9 @@ def test_small_lean_is_sustained_at_the_scale(tuning: WashoutTuning) -> None:
 
 def test_large_lean_saturates_softly_below_the_sustained_level(tuning: WashoutTuning) -> None:
     out = _run(tuning, phi=math.radians(45.0))
-    expected = tuning.roll_sustained * math.tanh(tuning.roll_scale * math.radians(45) / tuning.roll_sustained)
+    expected = tuning.roll_sustained * math.tanh(
+        tuning.roll_scale * math.radians(45) / tuning.roll_sustained
+    )
     assert out[-1, 0] == pytest.approx(expected, rel=1e-3)
     assert out[-1, 0] < tuning.roll_sustained
 
@@ -55,7 +57,9 @@ def test_visual_horizon_completes_the_platform_roll(tuning: WashoutTuning) -> No
     inputs = np.zeros((500, 4))
     inputs[:, 0] = np.cumsum(rng.normal(0.0, 0.01, 500))
     out = apply_washout(design_washout(tuning, DT), inputs)
-    np.testing.assert_allclose(out[:, 0] + out[:, 3], tuning.horizon_gain * inputs[:, 0], atol=1e-15)
+    np.testing.assert_allclose(
+        out[:, 0] + out[:, 3], tuning.horizon_gain * inputs[:, 0], atol=1e-15
+    )
 
 
 def test_corner_above_a_fifth_of_nyquist_is_refused(tuning: WashoutTuning) -> None:
