@@ -21,7 +21,9 @@ future of the ride is unknown). The condensed QP (``N`` variables) has a constan
 constraint matrix; each step updates its linear term and bounds and warm-starts OSQP
 (Stellato et al., *OSQP: an operator splitting solver for quadratic programs*, Math. Prog.
 Comp. 12, 2020). The first acceleration is applied over the loop period; the commands then
-go through the limit manager like the washout's.
+go through the limit manager like the washout's. Near a limit the coarse prediction may have
+no admissible plan; that step is planned with the acceleration bounds only (the limit
+manager keeps the angle and rate limits) and counted in :attr:`MpcCueing.fallbacks`.
 
 ``osqp`` is an optional dependency (the ``cueing`` extra), imported when a controller is
 built.
@@ -272,6 +274,7 @@ class MpcCueing:
         self._canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
         self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
         self.fallbacks = 0
+        """Steps planned without the angle and rate bounds (no admissible plan)."""
         for plan in design.axes:
             solver = osqp.OSQP()
             n = plan.P.shape[0]
@@ -343,10 +346,18 @@ class MpcCueing:
             solver = self._solvers[j]
             solver.update(q=q, l=lo, u=hi)
             result = solver.solve(raise_error=False)
+            if result.info.status_val != self._solved:
+                # the angle and rate bounds of the coarse prediction cannot be met from this
+                # state (near a limit): plan with the input bounds only, the limit manager
+                # keeps the angle and rate limits
+                self.fallbacks += 1
+                n = plan.P.shape[0]
+                lo[n:], hi[n:] = -1e9, 1e9
+                solver.update(l=lo, u=hi)
+                result = solver.solve(raise_error=False)
             if result.info.status_val == self._solved:
                 u = float(result.x[0])
-            else:  # infeasible in the coarse prediction: brake
-                self.fallbacks += 1
+            else:  # not solved in the iteration budget: brake
                 u = -math.copysign(plan.limits[2], x0[1]) if x0[1] else 0.0
             u = min(plan.limits[2], max(-plan.limits[2], u))
             self._state[j] = plan.A_loop @ x0 + plan.B_loop * u
