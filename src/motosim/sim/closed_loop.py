@@ -176,6 +176,9 @@ def build_stack(inputs: RunInputs) -> StackModel:
         max_current=sc.controller.max_current,
         speed=sc.motorcycle.speed,
         true_torque=sc.motorcycle.input == "true",
+        handlebar=inputs.nominal_handlebar,
+        rider_feedforward="rider" in sc.controller.feedforward,
+        reference_feedforward="reference" in sc.controller.feedforward,
     )
 
 

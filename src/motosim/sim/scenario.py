@@ -51,6 +51,7 @@ from motosim.sim import paths
 from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "FEEDFORWARD",
     "PATHS",
     "PROFILES",
     "AvoidancePath",
@@ -441,6 +442,10 @@ class Estimator:
         _check("lipschitz", self.lipschitz, low=0.0, low_open=True, unit="rad/s^2")
 
 
+FEEDFORWARD = ("rider", "reference")
+"""Feedforward terms of the stack's command (:func:`motosim.sim.stack.step`)."""
+
+
 @dataclass(frozen=True, slots=True)
 class Controller:
     """The torque-feedback controller."""
@@ -451,8 +456,18 @@ class Controller:
     order: int = 1
     discretization: Literal["zoh", "tustin"] = "zoh"
     max_current: float = 30.0
+    feedforward: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
+        if self.feedforward is None:
+            default = FEEDFORWARD if self.kind == "ours" else ()
+            object.__setattr__(self, "feedforward", default)
+        assert self.feedforward is not None
+        unknown = [f for f in self.feedforward if f not in FEEDFORWARD]
+        if unknown:
+            raise MotosimError(
+                f"feedforward has {unknown[0]!r}; expected some of {', '.join(FEEDFORWARD)}"
+            )
         _check("bandwidth", self.bandwidth, low=0.0, low_open=True, unit="Hz")
         if self.order < 0:
             raise MotosimError(f"order = {self.order}; expected an integer >= 0")
@@ -500,7 +515,7 @@ def _describe(tp: Any) -> str:
     if get_origin(tp) is Literal:
         return "one of " + ", ".join(repr(a) for a in get_args(tp))
     if get_origin(tp) is tuple:
-        return "a list of numbers"
+        return "a list of numbers" if get_args(tp)[0] is float else "a list of strings"
     return "a table"
 
 
@@ -540,9 +555,10 @@ def _value(tp: Any, value: Any, key: str, where: str) -> Any:
             raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
         return value
     if origin is tuple:
-        if not isinstance(value, list) or not value:
-            raise MotosimError(f"{key} = {value!r}; expected a list of numbers")
-        return tuple(_value(float, item, f"{key} entry", where) for item in value)
+        item_type = get_args(tp)[0]
+        if not isinstance(value, list) or (item_type is float and not value):
+            raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
+        return tuple(_value(item_type, item, f"{key} entry", where) for item in value)
     return _build(tp, value, f"{where}.{key}")
 
 
