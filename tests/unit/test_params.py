@@ -69,11 +69,11 @@ def test_plain_numbers_accepted(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        ({"J_eq": "nan"}, "J_eq = nan; expected a finite number > 0 [kg*m^2]"),
+        ({"J_eq": "nan"}, "parameters.J_eq = nan; expected a finite number"),
         ({"J_eq": "-0.05"}, "J_eq = -0.05; expected a finite number > 0"),
         ({"beta_s": "-1.0"}, "beta_s = -1.0; expected a finite number >= 0 [N*m]"),
         ({"R": "0.0"}, "R = 0.0; expected a finite number > 0 [ohm]"),
-        ({"k_t": '"fast"'}, "parameter k_t = 'fast' is not a number"),
+        ({"k_t": '"fast"'}, "parameter k_t = 'fast' is a string; expected a finite number > 0"),
         ({"k_e": ""}, "missing parameter k_e"),
         ({"J_m": "1.0"}, "N^2 J_m = 100 kg*m^2 is not below J_eq = 0.05"),
         ({"zeta": "1.0"}, "unknown parameter 'zeta' for the handlebar model"),

@@ -11,7 +11,6 @@ the observer from its settings and run the controller's discrete matrices. TOML,
 """
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -21,7 +20,9 @@ import numpy as np
 
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError
+from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
+from motosim.params.toml import read_toml
 
 __all__ = ["DesignFile", "ObserverSettings", "dump_design", "read_design"]
 
@@ -129,13 +130,7 @@ def read_design(path: str | Path) -> DesignFile:
     MotosimError
         One line: no such file, invalid TOML, a missing table or key, an invalid value.
     """
-    source = Path(path)
-    if not source.is_file():
-        raise MotosimError(f"{path}: no such design file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
+    data = read_toml(Path(path), what="design file")
     known = {"design", "handlebar", "observer", "controller", "paper_controller"}
     unknown = set(data) - known
     if unknown:
@@ -143,9 +138,14 @@ def read_design(path: str | Path) -> DesignFile:
             f"{path}: unknown table [{sorted(unknown)[0]}]; expected {sorted(known)}"
         )
     design = _get(data, "design", str(path))
-    rate = float(_get(design, "rate", f"{path} [design]"))
-    if not (math.isfinite(rate) and rate > 0):
-        raise MotosimError(f"{path} [design]: rate = {rate!r}; expected a rate > 0 [Hz]")
+    rate = check_number(
+        _get(design, "rate", f"{path} [design]"),
+        where=f"{path} [design]: rate",
+        lower=0.0,
+        lower_closed=False,
+        upper=1e6,
+        unit="Hz",
+    )
     hb_table = dict(_get(data, "handlebar", str(path)))
     extra = set(hb_table) - set(HandlebarParameters.SPECS)
     if extra:

@@ -18,7 +18,6 @@ one-line message naming the value and the expected range.
 """
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from importlib import resources
@@ -26,19 +25,24 @@ from pathlib import Path
 from typing import Any, Literal, TypeAlias, overload
 
 from motosim.errors import MotosimError
+from motosim.params._spec import Spec
+from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
+from motosim.params.toml import parse_toml, read_toml
 
 __all__ = [
     "HandlebarParameters",
     "ParameterSet",
     "SharpParameters",
+    "check_number",
     "derived_geometry",
     "dump_parameter_set",
     "list_parameter_sets",
     "load_parameter_set",
     "load_parameters",
     "parse_parameter_set",
+    "read_toml",
 ]
 
 Parameters: TypeAlias = SharpParameters | HandlebarParameters
@@ -91,10 +95,16 @@ def list_parameter_sets() -> list[str]:
     )
 
 
-def _as_number(origin: str, name: str, raw: Any) -> float:
-    if isinstance(raw, bool) or not isinstance(raw, int | float):
-        raise MotosimError(f"{origin}: parameter {name} = {raw!r} is not a number")
-    return float(raw)
+def _as_number(origin: str, name: str, raw: Any, spec: Spec) -> float:
+    return check_number(
+        raw,
+        where=f"{origin}: parameter {name}",
+        lower=spec.lower,
+        upper=spec.upper,
+        lower_closed=spec.lower_closed,
+        upper_closed=spec.upper_closed,
+        unit=spec.unit,
+    )
 
 
 def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet:
@@ -163,10 +173,10 @@ def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet
                 raise MotosimError(
                     f"{origin}: parameter {name} has unit {unit!r}; expected {specs[name].unit!r}"
                 )
-            values[name] = _as_number(origin, name, entry["value"])
+            values[name] = _as_number(origin, name, entry["value"], specs[name])
             sources[name] = str(entry.get("source", ""))
         else:
-            values[name] = _as_number(origin, name, entry)
+            values[name] = _as_number(origin, name, entry, specs[name])
             sources[name] = ""
     missing = [n for n in specs if n not in values]
     if missing:
@@ -206,22 +216,18 @@ def load_parameter_set(name_or_path: str | Path) -> ParameterSet:
     MotosimError
         If there is no such set or file, the file is not valid TOML, or a value is invalid.
     """
-    text: str
     origin = str(name_or_path)
     if isinstance(name_or_path, str) and name_or_path in list_parameter_sets():
         text = (_packaged_dir() / f"{name_or_path}.toml").read_text(encoding="utf-8")
+        data = parse_toml(text, origin=origin)
     else:
         path = Path(name_or_path)
-        if not path.is_file():
+        if not path.exists():
             raise MotosimError(
                 f"{origin}: no such parameter file or packaged set; "
                 f"packaged sets are {', '.join(list_parameter_sets())}"
             )
-        text = path.read_text(encoding="utf-8")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{origin}: not valid TOML: {err}") from None
+        data = read_toml(path, what="parameter file")
     return parse_parameter_set(data, origin=origin)
 
 

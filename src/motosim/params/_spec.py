@@ -2,9 +2,9 @@
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar, Protocol
+from typing import ClassVar, Protocol
 
-from motosim.errors import MotosimError
+from motosim.params.checks import check_number, describe_range
 
 __all__ = ["Spec", "validate_fields"]
 
@@ -32,13 +32,13 @@ class Spec:
 
     def expected(self) -> str:
         """Describe the admissible range in words, e.g. ``a finite number > 0 [kg]``."""
-        parts = []
-        if self.lower > -math.inf:
-            parts.append(f"{'>=' if self.lower_closed else '>'} {self.lower:g}")
-        if self.upper < math.inf:
-            parts.append(f"{'<=' if self.upper_closed else '<'} {self.upper:g}")
-        bounds = " and ".join(parts)
-        return f"a finite number{' ' + bounds if bounds else ''} [{self.unit}]"
+        return describe_range(
+            self.lower,
+            self.upper,
+            lower_closed=self.lower_closed,
+            upper_closed=self.upper_closed,
+            unit=self.unit,
+        )
 
     def admits(self, value: float) -> bool:
         """Return True when ``value`` is finite and inside the interval."""
@@ -70,10 +70,12 @@ def validate_fields(obj: _HasSpecs, *, context: str) -> None:
     """
     for f in fields(obj):  # type: ignore[arg-type]
         spec = obj.SPECS[f.name]
-        value: Any = getattr(obj, f.name)
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise MotosimError(
-                f"{context}: {f.name} = {value!r} is not a number; expected {spec.expected()}"
-            )
-        if not spec.admits(float(value)):
-            raise MotosimError(f"{context}: {f.name} = {value!r}; expected {spec.expected()}")
+        check_number(
+            getattr(obj, f.name),
+            where=f"{context}: {f.name}",
+            lower=spec.lower,
+            upper=spec.upper,
+            lower_closed=spec.lower_closed,
+            upper_closed=spec.upper_closed,
+            unit=spec.unit,
+        )

@@ -1,0 +1,138 @@
+"""One check for every number that comes from a file or an option.
+
+:func:`check_number` is the single place where a value read from a file or typed on the
+command line becomes a ``float``: it refuses booleans, strings, lists, tables, integers too
+large for a float, NaN, infinities and values outside a stated range, each in one line that
+names the value and what was expected.
+"""
+
+import math
+from typing import Any
+
+from motosim.errors import MotosimError
+
+__all__ = ["check_number", "describe_range", "short_repr"]
+
+_REPR_LIMIT = 40
+
+
+def short_repr(value: Any, limit: int = _REPR_LIMIT) -> str:
+    """``repr(value)`` cut to ``limit`` characters, so a 400-digit number stays one short line.
+
+    Parameters
+    ----------
+    value : Any
+        The value to show.
+    limit : int, optional
+        Maximum number of characters kept.
+
+    Returns
+    -------
+    str
+        The representation, with ``...`` and the full length when cut.
+    """
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**30:
+        text = f"an integer of {len(str(abs(value)))} digits"
+        return text
+    text = repr(value)
+    text = text.replace("\n", "\\n").replace("\r", "\\r")
+    if len(text) > limit:
+        return f"{text[:limit]}... ({len(text)} characters)"
+    return text
+
+
+def describe_range(
+    lower: float = -math.inf,
+    upper: float = math.inf,
+    *,
+    lower_closed: bool = True,
+    upper_closed: bool = True,
+    unit: str = "",
+) -> str:
+    """Describe an interval in words, e.g. ``a finite number > 0 and <= 10 [m]``.
+
+    Parameters
+    ----------
+    lower, upper : float, optional
+        Bounds; infinite bounds are left out.
+    lower_closed, upper_closed : bool, optional
+        Whether each bound is admitted.
+    unit : str, optional
+        The SI unit, shown in brackets when given.
+
+    Returns
+    -------
+    str
+        The description.
+    """
+    parts = []
+    if lower > -math.inf:
+        parts.append(f"{'>=' if lower_closed else '>'} {lower:g}")
+    if upper < math.inf:
+        parts.append(f"{'<=' if upper_closed else '<'} {upper:g}")
+    bounds = " and ".join(parts)
+    text = f"a finite number{' ' + bounds if bounds else ''}"
+    return f"{text} [{unit}]" if unit else text
+
+
+def check_number(
+    value: Any,
+    *,
+    where: str,
+    lower: float = -math.inf,
+    upper: float = math.inf,
+    lower_closed: bool = True,
+    upper_closed: bool = True,
+    unit: str = "",
+) -> float:
+    """Return ``value`` as a float if it is a finite number in the interval, else refuse it.
+
+    Parameters
+    ----------
+    value : Any
+        What was read: it must be an ``int`` or ``float`` (not a ``bool``), or a NumPy scalar.
+    where : str
+        Names the value in the message, e.g. ``"sharp.toml: parameter m_f"``.
+    lower, upper : float, optional
+        The admissible interval (unbounded by default).
+    lower_closed, upper_closed : bool, optional
+        Whether each bound is admitted (both by default).
+    unit : str, optional
+        SI unit shown in the message.
+
+    Returns
+    -------
+    float
+        The value.
+
+    Raises
+    ------
+    MotosimError
+        One line ``{where} = {value}; expected a finite number ...`` when the value is not a
+        number, is too large for a float, is NaN or infinite, or is out of the interval.
+
+    Examples
+    --------
+    >>> check_number(2, where="m", lower=0.0, lower_closed=False)
+    2.0
+    """
+    expected = describe_range(
+        lower, upper, lower_closed=lower_closed, upper_closed=upper_closed, unit=unit
+    )
+    if isinstance(value, bool) or not hasattr(value, "__float__") or isinstance(value, str):
+        kind = type(value).__name__
+        names = {"str": "a string", "list": "a list", "dict": "a table", "bool": "a boolean"}
+        raise MotosimError(
+            f"{where} = {short_repr(value)} is {names.get(kind, kind)}; expected {expected}"
+        )
+    try:
+        number = float(value)
+    except (OverflowError, TypeError, ValueError):
+        raise MotosimError(f"{where} = {short_repr(value)}; expected {expected}") from None
+    if not math.isfinite(number):
+        raise MotosimError(f"{where} = {short_repr(value)}; expected {expected}")
+    above = number >= lower if lower_closed else number > lower
+    below = number <= upper if upper_closed else number < upper
+    if not (above and below):
+        raise MotosimError(f"{where} = {short_repr(value)}; expected {expected}")
+    return number
