@@ -48,11 +48,17 @@ def test_modes_json(capsys: pytest.CaptureFixture[str], sharp: SharpParameters) 
 
 
 def test_modes_table_and_plot(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    fig = tmp_path / "figs" / "modes.png"
+    fig = tmp_path / "modes.png"
     code, out, _ = _run(capsys, "modes", "--range", "2:20:2", "--plot", str(fig))
     assert code == 0
     assert out.count("\n") > 10 and "unstable: weave" in out
     assert fig.stat().st_size > 10_000
+    assert [p.name for p in tmp_path.iterdir()] == ["modes.png"]  # no temporary left
+    code, _, err = _run(capsys, "modes", "--range", "2:20:2", "--plot", str(fig))
+    assert code == 2 and "exists; give --overwrite to replace it" in err
+    assert _run(capsys, "modes", "--speeds", "3", "--plot", str(fig), "--overwrite")[0] == 0
+    code, _, err = _run(capsys, "modes", "--plot", str(tmp_path / "figs" / "m.png"))
+    assert code == 2 and "does not exist; expected an existing folder" in err
 
 
 @pytest.mark.parametrize(
@@ -84,7 +90,7 @@ def test_bad_parameter_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) 
     bad.write_text(text.read_text().replace("value = 30.647196", "value = -30.6"))
     code, _, err = _run(capsys, "modes", "--params", str(bad))
     assert code == 2
-    assert "m_f = -30.6; expected a finite number > 0 [kg]" in err
+    assert "m_f = -30.6; expected a finite number >= 2 and <= 150 [kg]" in err
 
 
 def test_console_script_exit_code() -> None:

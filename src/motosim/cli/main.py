@@ -1,51 +1,126 @@
 """Entry point of the ``motosim`` command.
 
 Each subcommand lives in its own module with ``register(subparsers)``, which adds its parser
-and sets ``func`` to a ``run(args) -> int``. Every :class:`MotosimError` raised below is
-printed as one line ``motosim: error: ...`` with exit code 2, without a traceback.
+and sets ``func`` to a ``run(args) -> int``. Only the module of the chosen subcommand is
+imported (the others are listed by name and one-line help), so ``motosim --help`` and a
+mistyped command answer at once instead of loading SciPy and the models.
+
+Every :class:`MotosimError` raised below, and every usage error of the parser, is printed as
+one line ``motosim: error: ...`` with exit code 2, without a traceback.
 """
 
 import argparse
+import importlib
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
 from motosim import __version__
-from motosim.cli import design, estimate, excite, identify, modes, paper, params, simulate
 from motosim.errors import MotosimError
+from motosim.params.checks import short_repr, suggestion
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "build_parser", "main"]
 
-_COMMANDS = (params, modes, excite, identify, estimate, design, simulate, paper)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "params": ("motosim.cli.params", "list and show parameter sets"),
+    "modes": ("motosim.cli.modes", "eigenvalues and modes of the motorcycle against speed"),
+    "excite": (
+        "motosim.cli.excite",
+        "simulate an open-loop excitation run of the handlebar (section II.D)",
+    ),
+    "identify": (
+        "motosim.cli.identify",
+        "identify the handlebar's inertia and frictions from an excitation log",
+    ),
+    "estimate": (
+        "motosim.cli.estimate",
+        "estimate the rider torque from a log of theta_h and i_m",
+    ),
+    "design": (
+        "motosim.cli.design",
+        "design the rider-torque observer and the torque-feedback controller",
+    ),
+    "simulate": (
+        "motosim.cli.simulate",
+        "simulate a scenario in closed loop (Fig. 7) and write its result",
+    ),
+    "report": ("motosim.cli.simulate", "build the HTML report of a result folder"),
+    "paper": ("motosim.cli.paper", "regenerate every figure of the paper's section V"),
+}
+"""Subcommand name -> (module that registers it, one-line help shown by ``motosim --help``)."""
 
 
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose usage errors are one line, exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        message = " ".join(message.split())
+        self.exit(2, f"motosim: error: {message} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser with every subcommand registered."""
+def _chosen(argv: Sequence[str]) -> str | None:
+    """The subcommand named on the command line: the first word that is not an option.
+
+    Raises
+    ------
+    MotosimError
+        If that word is not a subcommand, with the closest one as a suggestion.
+    """
+    for word in argv:
+        if not word.startswith("-"):
+            if word not in COMMANDS:
+                raise MotosimError(
+                    f"unknown command {short_repr(word)}{suggestion(word, COMMANDS)} "
+                    f"(expected one of {', '.join(COMMANDS)}; see motosim --help)"
+                )
+            return word
+    return None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser, with the full parser of ``command`` and the others listed by name.
+
+    Parameters
+    ----------
+    command : str, optional
+        The subcommand whose module is imported and registered; ``"all"`` registers every
+        module (for documentation and tests).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``motosim`` parser.
+    """
     parser = _Parser(
         prog="motosim",
         description="Motorcycle riding simulator with a motorised handlebar.",
     )
     parser.add_argument("--version", action="version", version=f"motosim {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for command in _COMMANDS:
-        command.register(sub)
+    sub = parser.add_subparsers(
+        dest="command", required=True, parser_class=_Parser, metavar="COMMAND"
+    )
+    for name, (module, text) in COMMANDS.items():
+        if name in sub.choices:
+            continue
+        if command in ("all", name):
+            importlib.import_module(module).register(sub)
+        else:
+            sub.add_parser(name, help=text, add_help=False)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code (0 success, 2 bad input)."""
-    args = build_parser().parse_args(argv)
+    """Run the command line; returns the exit code (0 success, 2 bad input, 130 interrupted)."""
+    words = list(sys.argv[1:] if argv is None else argv)
     try:
+        try:
+            args = build_parser(_chosen(words)).parse_args(words)
+        except SystemExit as stop:  # --help, --version and usage errors: already printed
+            return stop.code if isinstance(stop.code, int) else 2
         code: int = args.func(args)
     except MotosimError as err:
-        print(f"motosim: error: {err}", file=sys.stderr)
+        message = " ".join(str(err).split())
+        print(f"motosim: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("motosim: interrupted", file=sys.stderr)

@@ -1,4 +1,9 @@
-"""Field specifications: unit, meaning and admissible range of each physical parameter."""
+"""Field specifications: unit, meaning and admissible range of each physical parameter.
+
+Every range is physical, not only a sign: a value outside it is not a motorcycle or a
+handlebar this software can represent (or a unit slip such as grams for kilograms), and is
+refused before it reaches a model. Each :class:`Spec` says why its bounds are where they are.
+"""
 
 import math
 from dataclasses import dataclass, fields
@@ -11,7 +16,21 @@ __all__ = ["Spec", "validate_fields"]
 
 @dataclass(frozen=True, slots=True)
 class Spec:
-    """Unit, meaning and admissible open or closed interval of one parameter."""
+    """Unit, meaning and admissible open or closed interval of one parameter.
+
+    Attributes
+    ----------
+    unit : str
+        SI unit, as written in parameter files.
+    description : str
+        What the quantity is.
+    lower, upper : float
+        Bounds of the admissible interval.
+    lower_closed, upper_closed : bool
+        Whether each bound is admitted.
+    reason : str
+        Why the bounds are where they are (the physical argument).
+    """
 
     unit: str
     description: str
@@ -19,6 +38,22 @@ class Spec:
     lower_closed: bool = False
     upper: float = math.inf
     upper_closed: bool = False
+    reason: str = ""
+
+    @classmethod
+    def between(
+        cls, unit: str, description: str, lower: float, upper: float, *, reason: str
+    ) -> "Spec":
+        """A quantity in the closed interval [lower, upper], with the reason for the bounds."""
+        return cls(
+            unit,
+            description,
+            lower,
+            lower_closed=True,
+            upper=upper,
+            upper_closed=True,
+            reason=reason,
+        )
 
     @classmethod
     def positive(cls, unit: str, description: str) -> "Spec":
