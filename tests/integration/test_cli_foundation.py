@@ -104,3 +104,35 @@ def test_console_script_exit_code() -> None:
     assert proc.returncode == 2
     assert proc.stderr.strip().startswith("motosim: error:")
     assert "Traceback" not in proc.stderr
+
+
+def test_python_dash_m_and_a_light_help() -> None:
+    """``python -m motosim`` works; ``--help`` imports no subcommand, NumPy or SciPy."""
+    script = (
+        "import sys\n"
+        "from motosim.cli.main import main\n"
+        "code = main(['--help'])\n"
+        "heavy = [m for m in ('numpy', 'scipy', 'h5py', 'motosim.cli.modes') if m in sys.modules]\n"
+        "print(code, heavy)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.stdout.strip().endswith("0 []"), done.stdout[-300:]
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", "modes", "--speeds", "3", "--json"],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0 and json.loads(done.stdout)["speeds"] == [3.0]
+
+
+def test_every_command_module_registers_the_help_main_lists() -> None:
+    import argparse
+    import importlib
+
+    from motosim.cli.main import COMMANDS
+
+    for name, (module, text) in COMMANDS.items():
+        sub = argparse.ArgumentParser().add_subparsers()
+        importlib.import_module(module).register(sub)
+        helps = {action.dest: action.help for action in sub._choices_actions}
+        assert helps[name] == text, name

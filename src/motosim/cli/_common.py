@@ -42,13 +42,20 @@ _FIGURE_FORMATS = (".png", ".svg", ".pdf")
 def parse_float_list(option: str, text: str, *, max_items: int = MAX_LIST_ITEMS) -> list[float]:
     """Parse ``"3,5,10"`` into floats, with a one-line error naming the option.
 
-    The number of items is checked before anything is parsed; an empty list is refused.
+    The number of items is checked before anything is parsed; an empty list or an empty item
+    (``"3,,5"``, ``"3,"``) is refused.
     """
     count = text.count(",") + 1
     if count > max_items:
         raise MotosimError(f"{option} gives {count} values; expected at most {max_items}")
+    items = text.split(",")
+    if not text.strip() or any(not item.strip() for item in items):
+        raise MotosimError(
+            f"{option} {short_repr(text)}; expected comma-separated numbers such as 3,5,10, "
+            "none empty"
+        )
     try:
-        values = [float(item) for item in text.split(",") if item.strip()]
+        values = [float(item) for item in items]
     except ValueError:
         raise MotosimError(
             f"{option} {short_repr(text)}; expected comma-separated numbers such as 3,5,10"
@@ -140,6 +147,8 @@ def check_output(
         If the suffix is not admitted, the target is a folder, its folder does not exist, or
         it exists and ``overwrite`` is false.
     """
+    if not str(path).strip():
+        raise MotosimError(f"{option} is empty; expected a file name")
     target = Path(path)
     if suffixes and target.suffix.lower() not in suffixes:
         raise MotosimError(
@@ -162,6 +171,8 @@ def check_output_folder(path: str | Path, *, overwrite: bool, option: str = "--o
         If it is a file, its parent does not exist, or it holds files and ``overwrite`` is
         false.
     """
+    if not str(path).strip():
+        raise MotosimError(f"{option} is empty; expected a folder name")
     target = Path(path)
     if target.exists() and not target.is_dir():
         raise MotosimError(f"{option} {target} is a file; expected a folder")

@@ -108,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
     check_options(bandwidth=args.bandwidth, rate=args.rate)
-    if args.out:
+    if args.out is not None:
         check_output(args.out, overwrite=args.overwrite)
     hb = load_parameters(args.handlebar, "handlebar")
     if not args.json:
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
             "F": np.atleast_1d(obs.F).tolist(),
         },
     }
-    if args.out:
+    if args.out is not None:
         text = dump_design(
             header={
                 "version": __version__,

@@ -90,9 +90,13 @@ def run(args: argparse.Namespace) -> int:
     speeds = (
         parse_float_list("--speeds", args.speeds, max_items=_MAX_SPEEDS)
         if args.speeds is not None
-        else parse_range("--range", args.speed_range or _DEFAULT_RANGE, max_points=_MAX_SPEEDS)
+        else parse_range(
+            "--range",
+            _DEFAULT_RANGE if args.speed_range is None else args.speed_range,
+            max_points=_MAX_SPEEDS,
+        )
     )
-    if args.plot:
+    if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     params = load_parameters(args.params, "sharp")
     table = modes(params, speeds)
@@ -100,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
         print_json(_payload(table, args.params))
     else:
         _print_table(table)
-    if args.plot:
+    if args.plot is not None:
         from motosim.plotting import plot_modes
 
         path = save_figure(plot_modes(table), args.plot)

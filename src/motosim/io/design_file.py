@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError
-from motosim.params.checks import check_keys, check_number, check_table, short_repr
+from motosim.params.checks import check_keys, check_number, check_table, check_text, short_repr
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.toml import read_toml
 
@@ -293,6 +293,9 @@ def read_design(path: str | Path) -> DesignFile:
     check_keys(data, _TABLES, where=str(path), what="table")
     design = check_table(_get(data, "design", str(path)), where=f"{path}: design")
     check_keys(design, _DESIGN_KEYS, where=f"{path} [design]", what="key")
+    for key in ("version", "date", "handlebar"):
+        if key in design:
+            check_text(design[key], where=f"{path} [design] {key}")
     rate = check_number(
         _get(design, "rate", f"{path} [design]"),
         where=f"{path} [design]: rate",
@@ -312,12 +315,26 @@ def read_design(path: str | Path) -> DesignFile:
     observer = _observer(obs, handlebar, rate, f"{path} [observer]")
     ctrl = check_table(_get(data, "controller", str(path)), where=f"{path}: controller")
     check_keys(ctrl, _CONTROLLER_KEYS, where=f"{path} [controller]", what="key")
+    for key in ("bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner"):
+        if key in ctrl:  # what the design achieved, for people: numbers all the same
+            check_number(ctrl[key], where=f"{path} [controller] {key}")
+    for key in ("num", "den"):
+        if key in ctrl:
+            _matrix([ctrl[key]], f"{path} [controller] {key}")
     controller = _state_space(ctrl, f"{path} [controller]")
     if controller.n_states > MAX_CONTROLLER_STATES:
         raise MotosimError(
             f"{path} [controller]: {controller.n_states} states; expected at most "
             f"{MAX_CONTROLLER_STATES}"
         )
+    if "paper_controller" in data:  # the paper's eq. (26), for comparison
+        paper = check_table(data["paper_controller"], where=f"{path}: paper_controller")
+        check_keys(paper, ("num", "den", "gamma"), where=f"{path} [paper_controller]", what="key")
+        if "gamma" in paper:
+            check_number(paper["gamma"], where=f"{path} [paper_controller] gamma")
+        for key in ("num", "den"):
+            if key in paper:
+                _matrix([paper[key]], f"{path} [paper_controller] {key}")
     discrete = {
         m: _state_space(_get(ctrl, m, f"{path} [controller]"), f"{path} [controller.{m}]")
         for m in ("zoh", "tustin")
