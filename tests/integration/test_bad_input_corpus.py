@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from motosim.cli.main import main
+from motosim.cli.main import COMMANDS, main
 from motosim.errors import MotosimError
 from motosim.io.design_file import read_design
 from motosim.params import HandlebarParameters, SharpParameters, list_parameter_sets
@@ -205,6 +205,8 @@ def _option_cases(tmp: Path) -> Iterator[list[str]]:
     folder = tmp / "folder"
     yield []
     yield ["--bogus"]
+    for command in COMMANDS:
+        yield [command, "--bogus-option"]
     yield ["nonsense"]
     yield ["mdoes"]
     yield ["params"]

@@ -125,6 +125,14 @@ def test_python_dash_m_and_a_light_help() -> None:
     assert done.returncode == 0 and json.loads(done.stdout)["speeds"] == [3.0]
 
 
+def test_every_command_has_its_help(capsys: pytest.CaptureFixture[str]) -> None:
+    from motosim.cli.main import COMMANDS
+
+    for name in COMMANDS:
+        assert main([name, "--help"]) == 0, name
+        assert f"usage: motosim {name}" in capsys.readouterr().out
+
+
 def test_every_command_module_registers_the_help_main_lists() -> None:
     import argparse
     import importlib

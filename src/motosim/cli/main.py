@@ -99,10 +99,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(
         dest="command", required=True, parser_class=_Parser, metavar="COMMAND"
     )
+    chosen = COMMANDS[command][0] if command in COMMANDS else None
     for name, (module, text) in COMMANDS.items():
-        if name in sub.choices:
+        if name in sub.choices:  # registered with another command of its module
             continue
-        if command in ("all", name):
+        if command == "all" or module == chosen:
             importlib.import_module(module).register(sub)
         else:
             sub.add_parser(name, help=text, add_help=False)
