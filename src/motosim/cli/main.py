@@ -17,7 +17,6 @@ from typing import NoReturn
 
 from motosim import __version__
 from motosim.errors import MotosimError
-from motosim.params.checks import short_repr, suggestion
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
@@ -69,6 +68,8 @@ def _chosen(argv: Sequence[str]) -> str | None:
     for word in argv:
         if not word.startswith("-"):
             if word not in COMMANDS:
+                from motosim.params.checks import short_repr, suggestion
+
                 raise MotosimError(
                     f"unknown command {short_repr(word)}{suggestion(word, COMMANDS)} "
                     f"(expected one of {', '.join(COMMANDS)}; see motosim --help)"
