@@ -72,15 +72,18 @@ def parse_range(option: str, text: str, *, max_points: int = 100_000) -> list[fl
         start, stop, step = (float(x) for x in parts)
     except ValueError:
         raise MotosimError(
-            f"{option} {text!r}; expected start:stop:step such as 2:60:0.5"
+            f"{option} {short_repr(text)}; expected start:stop:step such as 2:60:0.5"
         ) from None
     if not all(math.isfinite(x) for x in (start, stop, step)) or step <= 0 or stop < start:
         raise MotosimError(
-            f"{option} {text!r}; expected finite start <= stop and a step > 0, e.g. 2:60:0.5"
+            f"{option} {short_repr(text)}; expected finite start <= stop and a step > 0, "
+            "e.g. 2:60:0.5"
         )
     count = math.floor((stop - start) / step + 1e-9) + 1
     if count > max_points:
-        raise MotosimError(f"{option} {text!r} gives {count} points; expected at most {max_points}")
+        raise MotosimError(
+            f"{option} {short_repr(text)} gives {count} points; expected at most {max_points}"
+        )
     return [start + step * k for k in range(count)]
 
 
@@ -164,6 +167,20 @@ def check_output(
 
 def check_output_folder(path: str | Path, *, overwrite: bool, option: str = "--out") -> Path:
     """Check an output folder before any work is done: absent or empty, or ``overwrite``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder to write; its parent must exist.
+    overwrite : bool
+        Whether a folder holding files may be written into (``--overwrite``).
+    option : str, optional
+        The option that named it, for messages.
+
+    Returns
+    -------
+    Path
+        The folder.
 
     Raises
     ------
