@@ -144,3 +144,20 @@ def test_every_command_module_registers_the_help_main_lists() -> None:
         importlib.import_module(module).register(sub)
         helps = {action.dest: action.help for action in sub._choices_actions}
         assert helps[name] == text, name
+
+
+def test_an_internal_error_is_one_line_exit_1(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from motosim.cli import params as params_command
+
+    def broken(args: object) -> int:
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(params_command, "_list", broken)
+    assert main(["params", "list"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("motosim: internal error: ZeroDivisionError: float division by zero")
+    assert err.count("\n") == 1
+    with pytest.raises(ZeroDivisionError):
+        main(["--debug", "params", "list"])

@@ -97,6 +97,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         description="Motorcycle riding simulator with a motorised handlebar.",
     )
     parser.add_argument("--version", action="version", version=f"motosim {__version__}")
+    parser.add_argument(
+        "--debug", action="store_true", help="show the traceback of an internal error"
+    )
     sub = parser.add_subparsers(
         dest="command", required=True, parser_class=_Parser, metavar="COMMAND"
     )
@@ -112,7 +115,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code (0 success, 2 bad input, 130 interrupted)."""
+    """Run the command line; returns the exit code.
+
+    0 success, 1 an internal error (a bug; ``--debug`` shows its traceback), 2 bad input,
+    130 interrupted (Ctrl-C, SIGTERM).
+    """
     words = list(sys.argv[1:] if argv is None else argv)
     try:
         try:
@@ -130,6 +137,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away (e.g. `| head`): not an error of ours
         sys.stderr.close()
         return 0
+    except Exception as err:  # a bug of ours: one line, exit 1, the traceback on request
+        if "--debug" in words:
+            raise
+        message = " ".join(str(err).split())[:300]
+        print(
+            f"motosim: internal error: {type(err).__name__}: {message} (a bug: please report "
+            "it with the output of motosim --debug and the same arguments)",
+            file=sys.stderr,
+        )
+        return 1
     return code
 
 
