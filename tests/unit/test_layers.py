@@ -22,6 +22,7 @@ LAYERS = [
     {"rt", "plotting"},
     {"report"},
     {"cli"},
+    {"__main__"},  # python -m motosim: the command line
 ]
 RANK = {package: rank for rank, layer in enumerate(LAYERS) for package in layer}
 

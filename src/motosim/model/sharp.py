@@ -28,6 +28,7 @@ from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "MAX_SPEED",
     "MIN_SPEED",
     "MODE_NAMES",
     "STATE_NAMES",
@@ -59,6 +60,13 @@ pace the tyre lags and slip angles lose their meaning (Sharp's tables start at 3
 standstill the model is singular in its divided form.
 """
 
+MAX_SPEED = 150.0
+"""Highest forward speed [m/s] accepted by the lateral model: 540 km/h, above any motorcycle.
+
+Sharp's tables stop at 60 m/s; beyond this bound a speed is a unit slip (km/h for m/s), and
+following the modes up to it would take an unbounded number of eigenvalue problems.
+"""
+
 
 def check_speed(speed: float) -> float:
     """Return ``speed`` as float if the lateral model accepts it.
@@ -66,13 +74,13 @@ def check_speed(speed: float) -> float:
     Raises
     ------
     MotosimError
-        If the speed is not finite or below :data:`MIN_SPEED`.
+        If the speed is not finite or outside [:data:`MIN_SPEED`, :data:`MAX_SPEED`].
     """
     value = float(speed)
-    if not (math.isfinite(value) and value >= MIN_SPEED):
+    if not (math.isfinite(value) and MIN_SPEED <= value <= MAX_SPEED):
         raise MotosimError(
             f"speed = {value:g} m/s; expected a finite forward speed >= {MIN_SPEED:g} m/s "
-            "(Sharp's lateral model linearises about forward running)"
+            f"and <= {MAX_SPEED:g} m/s (Sharp's lateral model linearises about forward running)"
         )
     return value
 

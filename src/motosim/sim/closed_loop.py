@@ -177,8 +177,8 @@ def build_stack(inputs: RunInputs) -> StackModel:
         speed=sc.motorcycle.speed,
         true_torque=sc.motorcycle.input == "true",
         handlebar=inputs.nominal_handlebar,
-        rider_feedforward="rider" in sc.controller.feedforward,
-        reference_feedforward="reference" in sc.controller.feedforward,
+        rider_feedforward="rider" in (sc.controller.feedforward or ()),
+        reference_feedforward="reference" in (sc.controller.feedforward or ()),
     )
 
 
