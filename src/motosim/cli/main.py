@@ -45,7 +45,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "report": ("motosim.cli.simulate", "build the HTML report of a result folder"),
     "paper": ("motosim.cli.paper", "regenerate every figure of the paper's section V"),
-    "cueing": ("motosim.cli.cueing", "motion cueing of a result for the platform, scored"),
+    "cueing": (
+        "motosim.cli.cueing",
+        "platform roll/pitch/yaw commands for a run, scored by what the rider perceives",
+    ),
 }
 """Subcommand name -> (module that registers it, one-line help shown by ``motosim --help``)."""
 

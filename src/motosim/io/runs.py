@@ -142,7 +142,9 @@ def run_to_folder(
     Raises
     ------
     RunFailedError
-        If the run diverged; the rows computed until then stay in the folder.
+        If the run diverged (the rows computed until then stay in the folder), or completed
+        but failed (:func:`motosim.sim.metrics.failure`: it fell, or saturated the motor most
+        of the time; the whole result is written, with its flags).
     """
     sc = inputs.scenario
     metadata = run_metadata(inputs)
