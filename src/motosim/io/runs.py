@@ -69,7 +69,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     nominal = load_parameters(_relative(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
-    profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force]
+    profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force, mc.side_wind]
     if scenario.rider.profile is not None:
         profiles.append(scenario.rider.profile)
     for profile in profiles:

@@ -179,6 +179,7 @@ def build_stack(inputs: RunInputs) -> StackModel:
         handlebar=inputs.nominal_handlebar,
         rider_feedforward="rider" in (sc.controller.feedforward or ()),
         reference_feedforward="reference" in (sc.controller.feedforward or ()),
+        side_force_height=sc.motorcycle.side_wind_height,
     )
 
 
@@ -207,6 +208,8 @@ class RigModel(NamedTuple):
         [preview [s], largest torque [N*m]].
     force : ndarray, shape (n,)
         Longitudinal force of eq. (2) each period [N].
+    side_force : ndarray, shape (n,)
+        Side force on the motorcycle (side wind, to the right) each period [N].
     current_noise : ndarray, shape (n,)
         Current-sensor error each period [A].
     """
@@ -224,6 +227,7 @@ class RigModel(NamedTuple):
     rider_tau_ss: Array
     rider_limits: Array
     force: Array
+    side_force: Array
     current_noise: Array
 
 
@@ -283,6 +287,7 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
         rider_tau_ss=gains.tau_ss,
         rider_limits=np.array([gains.preview, gains.max_torque]),
         force=force,
+        side_force=mc.side_wind.sample(t, inputs.tables),
         current_noise=rng.normal(0.0, noise, n) if noise else np.zeros(n),
     )
 
@@ -338,7 +343,10 @@ def _run_chunk(
         o[_COL.v_x], o[_COL.psi], o[_COL.x], o[_COL.y] = z[8], z[9], z[10], z[11]
         o[_COL.e_y] = e_y
         # the stack: command, estimate, virtual motorcycle
-        i_cmd = step(stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k])
+        i_cmd = step(
+            stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k],
+            rig.side_force[k],
+        )  # fmt: skip
         o[_COL.theta_h_meas] = data.held[0]
         o[_COL.theta_h_dot_hat] = data.held[2]
         o[_COL.tau_r_hat] = data.held[3]

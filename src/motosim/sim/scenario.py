@@ -15,7 +15,9 @@ so that an error is one line naming the key, the value and what was expected. Th
                    (control a multiple of measurement, plant a multiple of control)
     [measurement]  encoder_bits = 14 (0: exact angle), current_noise = 0 [A]
     [motorcycle]   params = "sharp1971", speed = 20 [m/s], input = "estimate" | "true",
-                   drive_torque, brake_torque [N*m], wind_force [N]: a number or a profile
+                   drive_torque, brake_torque [N*m], wind_force [N] (longitudinal),
+                   side_wind [N] (lateral, to the right): a number or a profile;
+                   side_wind_height = 1 [m] (where the side wind acts)
     [rider]        kind = "torque" with profile = {...}, or kind = "virtual" with path = {...}
                    and lateral_tolerance, course_tolerance, torque_scale, preview, max_torque
     [handlebar]    true = "simacom_handlebar", nominal = (true), inertia_factor = 1,
@@ -24,7 +26,8 @@ so that an error is one line naming the key, the value and what was expected. Th
                    friction_compensation = true, lipschitz = 300
     [controller]   kind = "ours" | "paper" | "none", design = "DESIGN.toml" (optional),
                    bandwidth = 10 [Hz], order = 1, discretization = "zoh" | "tustin",
-                   max_current = 30 [A]
+                   max_current = 30 [A], feedforward = ["rider", "reference"] for ours,
+                   [] for the paper's (the terms of :func:`motosim.sim.stack.step`)
 
 Profiles (rider torque, drive, brake, wind) are tables with ``kind``: ``constant`` (value),
 ``steps`` (times, values: the value after each time), ``square`` (low, high, period, start),
@@ -374,9 +377,12 @@ class Motorcycle:
     drive_torque: Profile = ConstantProfile(0.0)
     brake_torque: Profile = ConstantProfile(0.0)
     wind_force: Profile = ConstantProfile(0.0)
+    side_wind: Profile = ConstantProfile(0.0)
+    side_wind_height: float = 1.0
 
     def __post_init__(self) -> None:
         _check("speed", self.speed, low=1.0, high=100.0, unit="m/s")
+        _check("side_wind_height", self.side_wind_height, low=0.0, high=3.0, unit="m")
 
 
 @dataclass(frozen=True, slots=True)

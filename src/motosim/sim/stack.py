@@ -72,6 +72,8 @@ class StackModel(NamedTuple):
         Current command limit [A].
     A0, A1, Bv : ndarray
         The motorcycle's lateral matrices, A_v = A0 + v_x A1 (8x8), B_v (8,).
+    Bw : ndarray, shape (8,)
+        The side force's input (:func:`motosim.model.sharp.side_force_input`).
     motorcycle : ndarray, shape (3,)
         [m [kg], m + J_R / r_D^2 [kg], lowest speed [m/s]] of eq. (2).
     motorcycle_substeps : int
@@ -97,6 +99,7 @@ class StackModel(NamedTuple):
     A0: Array
     A1: Array
     Bv: Array
+    Bw: Array
     motorcycle: Array
     motorcycle_substeps: int
     speed: float
@@ -152,6 +155,7 @@ def design_stack(
     handlebar: HandlebarParameters | None = None,
     rider_feedforward: bool = False,
     reference_feedforward: bool = False,
+    side_force_height: float = 1.0,
 ) -> StackModel:
     """Build the stack's model from its designed parts (a pure function).
 
@@ -184,6 +188,8 @@ def design_stack(
     reference_feedforward : bool
         Drive the handlebar along the steer angle by its inverse dynamics:
         i += (J_eq delta'' + beta_eq delta' + beta_s sign(delta')) / (N k_t).
+    side_force_height : float
+        Height above the ground where a side force (wind) acts on the motorcycle [m].
 
     Returns
     -------
@@ -246,6 +252,7 @@ def design_stack(
         A0=A0,
         A1=A1,
         Bv=Bv,
+        Bw=sharp_model.side_force_input(sharp, height=side_force_height),
         motorcycle=np.array([d["m"], d["m_eq"], sharp_model.MIN_SPEED]),
         motorcycle_substeps=max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9)),
         speed=float(speed),
@@ -336,6 +343,7 @@ def step(
     current_error: float,
     rider_torque: float,
     force: float,
+    side_force: float,
 ) -> float:
     """Advance the stack by one period; return the motor current command [A].
 
@@ -360,6 +368,8 @@ def step(
         True rider torque [N*m], used only by a ``model.true_torque`` reference run.
     force : float
         Longitudinal force of eq. (2), (tau_d - tau_b) / r_D + F_wx [N].
+    side_force : float
+        Side force on the motorcycle (a side wind), to the right [N].
 
     Returns
     -------
@@ -385,6 +395,6 @@ def step(
     mc = model.motorcycle
     h = model.dt / model.motorcycle_substeps
     for _ in range(model.motorcycle_substeps):
-        bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, force,
-                 mc[0], mc[1], mc[2], h)  # fmt: skip
+        bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, model.Bw,
+                 side_force, force, mc[0], mc[1], mc[2], h)  # fmt: skip
     return float(held[1])
