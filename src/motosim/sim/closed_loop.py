@@ -198,6 +198,8 @@ class RigModel(NamedTuple):
         The rider is the path-following virtual rider (else ``rider_profile``).
     rider_profile : ndarray
         Rider torque at every plant sub-step [N*m].
+    rider_probe : ndarray, shape (n,)
+        Torque added to the virtual rider's each period (a chirp to measure the feel) [N*m].
     path : ndarray, shape (4, m)
         The virtual rider's path: x, y [m], heading [rad], curvature [1/m].
     path_ds : float
@@ -219,6 +221,7 @@ class RigModel(NamedTuple):
     quantum: float
     virtual_rider: bool
     rider_profile: Array
+    rider_probe: Array
     path: Array
     path_ds: float
     rider_speeds: Array
@@ -279,6 +282,7 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
         quantum=2 * math.pi / 2**bits if bits else 0.0,
         virtual_rider=rider.kind == "virtual",
         rider_profile=profile,
+        rider_probe=rider.probe.sample(t, inputs.tables) if rider.probe else np.zeros(n),
         path=path_arr,
         path_ds=float(path_ds),
         rider_speeds=gains.speeds,
@@ -320,6 +324,7 @@ def _run_chunk(
                 rig.rider_limits[0], rig.rider_limits[1],
             )  # fmt: skip
             world.path_index[0] = idx
+            tau_rider += rig.rider_probe[k]
         else:
             tau_rider = rig.rider_profile[k * n_sub]
         o = out[row]

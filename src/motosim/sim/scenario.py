@@ -19,7 +19,8 @@ so that an error is one line naming the key, the value and what was expected. Th
                    side_wind [N] (lateral, to the right): a number or a profile;
                    side_wind_height = 1 [m] (where the side wind acts)
     [rider]        kind = "torque" with profile = {...}, or kind = "virtual" with path = {...}
-                   and lateral_tolerance, course_tolerance, torque_scale, preview, max_torque
+                   and lateral_tolerance, course_tolerance, torque_scale, preview, max_torque,
+                   probe = {...} (a torque profile added to the virtual rider's, e.g. a chirp)
     [handlebar]    true = "simacom_handlebar", nominal = (true), inertia_factor = 1,
                    damping_factor = 1, friction = true
     [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman",
@@ -392,6 +393,7 @@ class Rider:
     kind: Literal["torque", "virtual"] = "torque"
     profile: Profile | None = None
     path: PathSpec | None = None
+    probe: Profile | None = None
     lateral_tolerance: float = 0.3
     course_tolerance: float = 0.05
     torque_scale: float = 10.0
@@ -405,6 +407,8 @@ class Rider:
             raise MotosimError('path is for kind = "virtual"; a torque rider has a profile')
         if self.kind == "virtual" and self.profile is not None:
             raise MotosimError('profile is for kind = "torque"; a virtual rider has a path')
+        if self.kind == "torque" and self.probe is not None:
+            raise MotosimError('probe is for kind = "virtual"; give a torque rider a profile')
         if self.kind == "virtual" and self.path is None:
             object.__setattr__(self, "path", StraightPath())
         _check("lateral_tolerance", self.lateral_tolerance, low=0.0, low_open=True, unit="m")
