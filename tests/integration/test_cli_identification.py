@@ -68,13 +68,14 @@ def test_identify_with_other_motor_constants(
     assert report["torque_per_amp"] == 1.5
     # half the torque per ampere: every identified parameter halves
     assert report["beta_eq"] == pytest.approx(13.956 / 2, rel=0.05)
-    assert set(report["confidence_95"]) == {"J_eq", "beta_eq", "beta_s"}
+    assert {"J_eq_ci95", "beta_eq_ci95", "beta_s_ci95"} <= set(report)
 
 
 @pytest.mark.parametrize(
     ("content", "message"),
     [
-        ("t,theta_h\n0,0\n", "missing column 'i_m'"),
+        ("t,theta_h\n" + "".join(f"{k * 0.01},0\n" for k in range(60)), "no current column"),
+        ("t,theta_h,i_cmd,u\n" + "".join(f"{k * 0.01},0,1,1\n" for k in range(60)), "--drive"),
         ("t,theta_h,i_m\n" + "".join(f"{k * 0.01},0,0\n" for k in range(5)), "5 samples"),
         ("t,theta_h,i_m\n" + "".join(f"{k * 0.01},0,nan\n" for k in range(50)), "nan"),
         (

@@ -25,10 +25,13 @@ from motosim.identification.excitation import (
     square_voltage,
 )
 from motosim.identification.identify import (
+    DRIVE_COLUMNS,
     METHODS,
     Identification,
     Validation,
     back_emf_damping,
+    current_noise,
+    drive_from_columns,
     identified_parameters,
     identify,
     is_voltage_driven,
@@ -36,12 +39,15 @@ from motosim.identification.identify import (
 )
 
 __all__ = [
+    "DRIVE_COLUMNS",
     "METHODS",
     "Identification",
     "MeasurementModel",
     "Validation",
     "back_emf_damping",
     "chirp_voltage",
+    "current_noise",
+    "drive_from_columns",
     "excitation_run",
     "identified_parameters",
     "identify",

@@ -32,7 +32,7 @@ def _with(log: TimeSeries, t=None, data=None, names=None) -> TimeSeries:
 
 def _raises(log: TimeSeries, match: str) -> None:
     with pytest.raises(MotosimError, match=match) as info:
-        identify(log, torque_per_amp=3.0)
+        identify(log, torque_per_amp=3.0, drive="current_sampled")
     assert "\n" not in str(info.value)
 
 
