@@ -332,7 +332,7 @@ class LogTiming:
     Attributes
     ----------
     period : float
-        Median sample period [s].
+        Nominal sample period [s]: the mean period, a gap counted as the periods it spans.
     jitter : float
         Largest deviation of a period from the median, excluding gaps, as a fraction of it.
     gaps : int
@@ -368,7 +368,11 @@ def log_timing(t: Array) -> LogTiming:
     1
     """
     dt = np.diff(t)
+    # the mean period, counting a gap as the whole periods it spans (the median of jittered
+    # or float32-rounded periods is off the nominal period by up to the jitter)
     h = float(np.median(dt))
+    missing = np.round(dt / h) - 1.0
+    h = float(t[-1] - t[0]) / (dt.size + float(np.sum(missing[dt > 1.5 * h])))
     gap = dt > 1.5 * h
     regular = dt[~gap]
     jitter = float(np.max(np.abs(regular - h)) / h) if regular.size else 0.0

@@ -37,7 +37,7 @@ def _integrate(
     omega0: float,
     every: int,
 ) -> tuple[Array, Array]:
-    n = int(round(duration / step))
+    n = int(duration / step + 0.5)
     m = n // every + 1
     theta_out = np.empty(m)
     omega_out = np.empty(m)
