@@ -112,7 +112,7 @@ def test_intervals_printed_and_in_the_parameter_file(
     assert code == 0
     assert "drive voltage_held (u: a voltage held by a voltage drive" in out
     assert out.count("95 % interval") >= 3
-    assert "fit NRMSE" in out and "RMS of simulated - measured angle" in out
+    assert "fit NRMSE" in out and "NRMSE = RMS(simulated - measured angle)" in out
     notes = tomllib.loads(out_file.read_text())
     for name in ("J_eq", "beta_eq", "beta_s"):
         assert "95 % interval" in json.dumps(notes), name
