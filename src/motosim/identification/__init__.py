@@ -18,10 +18,12 @@ identify
 """
 
 from motosim.identification.excitation import (
+    ExcitationPlan,
     MeasurementModel,
     chirp_voltage,
     excitation_run,
     measure,
+    plan_excitation,
     square_voltage,
 )
 from motosim.identification.identify import (
@@ -41,6 +43,7 @@ from motosim.identification.identify import (
 __all__ = [
     "DRIVE_COLUMNS",
     "METHODS",
+    "ExcitationPlan",
     "Identification",
     "MeasurementModel",
     "Validation",
@@ -53,6 +56,7 @@ __all__ = [
     "identify",
     "is_voltage_driven",
     "measure",
+    "plan_excitation",
     "square_voltage",
     "validate",
 ]

@@ -130,3 +130,38 @@ def test_weak_inertia_is_reported(capsys: pytest.CaptureFixture[str], tmp_path: 
     assert isinstance(warnings, list) and any("weakly identified" in w for w in warnings)
     assert "excite up to" in warnings[0]
     assert _inside(report, "J_eq", J)
+
+
+@pytest.mark.parametrize("case", ["1.5ms", "13ms"])
+def test_planned_excitation_identifies_all_three(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, case: str
+) -> None:
+    # motosim excite --plan from rough values 30 % off, then the rig runs the planned chirp:
+    # no weak-inertia warning, J_eq within 10 % and the frictions within 3 % at 100 Hz
+    J, beta, beta_s = HANDLEBARS[case]
+    rough = [f"{1.3 * J:g}", f"{0.7 * beta:g}", f"{1.3 * beta_s:g}"]
+    with pytest.raises(SystemExit):
+        sys.exit(
+            main(["excite", "--plan", "--max-current", "6", "--inertia", rough[0], "--damping",
+                  rough[1], "--dry-friction", rough[2], "--ratio", "1", "--torque-constant",
+                  "1", "--counts", "16384", "--pulley-ratio", "1", "--json"])
+        )  # fmt: skip
+    plan = json.loads(capsys.readouterr().out)
+    t, theta, current = rig_log(
+        J=J,
+        beta=beta,
+        beta_s=beta_s,
+        sample_rate=100.0,
+        duration=plan["duration"],
+        amplitude=plan["amplitude"],
+        f0=plan["f0"],
+        f1=plan["f1"],
+        seed=4,
+    )
+    path = tmp_path / "planned.csv"
+    write_csv(str(path), t, theta, current)
+    report = _identify(capsys, path)
+    assert report["warnings"] == []
+    assert abs(report["J_eq"] / J - 1.0) < 0.10
+    assert abs(report["beta_eq"] / beta - 1.0) < 0.03
+    assert abs(report["beta_s"] / beta_s - 1.0) < 0.03
