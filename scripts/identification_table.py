@@ -14,7 +14,6 @@ the seeds, the median 95 % half-width and how many intervals hold the true value
 import argparse
 import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -35,14 +34,13 @@ def main() -> int:
     parser.add_argument("--seeds", type=int, default=10)
     args = parser.parse_args()
     print(
-        "| J, beta, beta_s (J/beta) | rate | J_eq error, half-width, covered | "
-        "beta_eq | beta_s | time |"
+        "| J, beta, beta_s (J/beta) | rate | J_eq error, half-width, covered | beta_eq | beta_s |"
     )
-    print("|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|")
     for rate, duration in ((100.0, 60.0), (1000.0, 20.0)):
         for truth in HANDLEBARS:
             J, beta, beta_s = truth
-            errors, halves, inside, seconds = [], [], np.zeros(3, dtype=int), []
+            errors, halves, inside = [], [], np.zeros(3, dtype=int)
             for seed in range(args.seeds):
                 t, theta, current = rig_log(
                     J=J,
@@ -56,9 +54,7 @@ def main() -> int:
                     omega0=0.3,
                 )
                 log = TimeSeries(t, np.column_stack([theta, current]), ("theta_h", "i_m"))
-                start = time.perf_counter()
                 est = identify(log, torque_per_amp=1.0)
-                seconds.append(time.perf_counter() - start)
                 assert est.confidence is not None
                 p = np.array(truth)
                 errors.append(np.abs(est.parameters / p - 1.0))
@@ -73,7 +69,7 @@ def main() -> int:
             print(
                 f"| {J:g}, {beta:g}, {beta_s:g} ({1e3 * J / beta:.2g} ms) | {rate:g} Hz | "
                 + " | ".join(cells)
-                + f" | {np.median(seconds):.2f} s |"
+                + " |"
             )
     return 0
 
