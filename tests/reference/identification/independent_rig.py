@@ -3,7 +3,8 @@
 Nothing here calls motosim's model or kernel: eq. (5) of Nehaoua, Arioui & Mammar (2012),
 J theta'' + beta theta' + beta_s sign(theta') = N k_t i(t), is integrated with Heun's method
 (explicit trapezoidal rule) at a fine fixed step, with Karnopp's stick rule (the handlebar stops
-when its rate changes sign within a step and stays stuck while |N k_t i| <= beta_s). The motor
+when its rate changes sign within a step and stays stuck while |N k_t i| <= beta_s). (Optionally the
+dry friction is smooth, beta_s tanh(theta_h' / w), as some simulators model it.) The motor
 current i(t) is continuous (a current drive whose current is measured, not held), here a linear
 chirp; the log samples it with white noise, and samples the angle through an encoder of
 ``bits`` bits per handlebar turn (floored to whole counts).
@@ -36,6 +37,7 @@ def _integrate(
     theta0: float,
     omega0: float,
     every: int,
+    width: float,
 ) -> tuple[Array, Array]:
     n = int(duration / step + 0.5)
     m = n // every + 1
@@ -54,6 +56,15 @@ def _integrate(
         u0 = amplitude * math.sin(2.0 * math.pi * (f0 * t + 0.5 * k_rate * t * t))
         t1 = t + step
         u1 = amplitude * math.sin(2.0 * math.pi * (f0 * t1 + 0.5 * k_rate * t1 * t1))
+        if width > 0.0:
+            # smooth friction beta_s tanh(omega / width), no sticking
+            a0 = (u0 - beta * omega - beta_s * math.tanh(omega / width)) / J
+            omega_p = omega + step * a0
+            a1 = (u1 - beta * omega_p - beta_s * math.tanh(omega_p / width)) / J
+            omega_new = omega + 0.5 * step * (a0 + a1)
+            theta += 0.5 * step * (omega + omega_new)
+            omega = omega_new
+            continue
         if omega == 0.0:
             if abs(u0) <= beta_s:
                 continue  # stuck (Karnopp)
@@ -86,14 +97,29 @@ def rig_log(
     seed: int = 0,
     theta0: float = 0.0,
     omega0: float = 0.0,
+    friction_width: float = 0.0,
 ) -> tuple[Array, Array, Array]:
     """Sample a simulated rig: t [s], theta_h [rad] (encoder-floored), i_m [A] (noisy).
 
-    The torque per ampere N k_t is 1 N*m/A (``--ratio 1 --torque-constant 1``).
+    The torque per ampere N k_t is 1 N*m/A (``--ratio 1 --torque-constant 1``). With a
+    positive ``friction_width`` w [rad/s] the dry friction is beta_s tanh(theta_h' / w)
+    instead of Coulomb with Karnopp sticking (Heun stays stable for
+    FINE_STEP beta_s / (J w) < 2).
     """
     every = round(1.0 / (sample_rate * FINE_STEP))
     theta, _ = _integrate(
-        duration, FINE_STEP, J, beta, beta_s, amplitude, f0, f1, theta0, omega0, every
+        duration,
+        FINE_STEP,
+        J,
+        beta,
+        beta_s,
+        amplitude,
+        f0,
+        f1,
+        theta0,
+        omega0,
+        every,
+        friction_width,
     )
     t = np.arange(theta.size) / sample_rate
     rng = np.random.default_rng(seed)
