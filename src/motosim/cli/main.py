@@ -45,6 +45,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "report": ("motosim.cli.simulate", "build the HTML report of a result folder"),
     "paper": ("motosim.cli.paper", "regenerate every figure of the paper's section V"),
+    "fidelity": (
+        "motosim.cli.fidelity",
+        "the steering feel a design renders, against the virtual motorcycle's",
+    ),
     "cueing": (
         "motosim.cli.cueing",
         "platform roll/pitch/yaw commands for a run, scored by what the rider perceives",

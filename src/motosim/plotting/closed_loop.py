@@ -19,6 +19,7 @@ from motosim.signals import SIGNALS
 
 __all__ = [
     "plot_comparison",
+    "plot_feel",
     "plot_motor_torque",
     "plot_motorcycle",
     "plot_rate",
@@ -424,4 +425,29 @@ def plot_spectrum(
         ax.grid(True, which="both", alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]")
     fig.suptitle(_title(result, title))
+    return fig
+
+
+def plot_feel(feel: Any, *, speed: float) -> Figure:
+    """Bode plot of the rendered feel theta_h / tau_r against the motorcycle's delta / tau_r.
+
+    ``feel`` is a :class:`motosim.sim.fidelity.FeelResponse`.
+    """
+    fig = Figure(figsize=(9.0, 6.0), layout="constrained")
+    mag, phase = fig.subplots(2, 1, sharex=True)
+    curves = (
+        (feel.model, "motorcycle model delta / tau_r", {"color": "k", "lw": 1.5}),
+        (feel.steer, "virtual motorcycle in the run", {"color": "tab:blue", "ls": "--"}),
+        (feel.rendered, "handlebar theta_h / tau_r (rendered)", {"color": "tab:red"}),
+    )
+    for values, label, style in curves:
+        mag.semilogx(feel.frequency, 20 * np.log10(np.abs(values)), label=label, **style)
+        phase.semilogx(feel.frequency, np.degrees(np.angle(values)), **style)
+    mag.set_ylabel("magnitude [dB rad/(N m)]")
+    phase.set_ylabel("phase [deg]")
+    phase.set_xlabel("frequency [Hz]")
+    mag.legend(loc="lower left", fontsize="small")
+    for ax in (mag, phase):
+        ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(f"Rendered steering feel at {speed:g} m/s")
     return fig
