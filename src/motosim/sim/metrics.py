@@ -18,6 +18,7 @@ __all__ = [
     "BUZZ_CUTOFF",
     "BUZZ_LIMIT",
     "FALL_ROLL",
+    "QUIET_TORQUE",
     "STICK_RATE",
     "failure",
     "highpass",
@@ -34,6 +35,8 @@ BUZZ_CUTOFF = 3.0
 """Frequency above which current content counts as a buzz, not steering [Hz]."""
 BUZZ_LIMIT = 0.3
 """Peak-to-peak of the current's content above :data:`BUZZ_CUTOFF` that flags a buzz [A]."""
+QUIET_TORQUE = 1.0
+"""Rider torque [N*m] within which the rider counts as holding still (buzz judged then)."""
 _SATURATED_SHARE = 0.5  # a run saturated this share of the time has failed
 _TAIL = 2.0  # the last seconds examined for a sustained oscillation [s]
 
@@ -43,10 +46,8 @@ def _rms(values: Array) -> float:
 
 
 def _fraction(value: float, scale: float) -> float:
-    """value / scale, with 0 / 0 = 0 and x / 0 = inf."""
-    if scale > 0:
-        return value / scale
-    return 0.0 if value == 0 else math.inf
+    """value / scale; NaN (undefined, null in JSON) when the scale is 0."""
+    return value / scale if scale > 0 else math.nan
 
 
 def highpass(t: Array, values: Array, cutoff: float) -> Array:
@@ -119,7 +120,8 @@ def run_metrics(
           :data:`BUZZ_CUTOFF` over the last two seconds, and ``buzz_frequency`` [Hz], its
           strongest frequency;
         - ``saturated_share`` (time at the current limit, with ``max_current``);
-        - flags 1.0 or 0.0: ``flag_oscillation`` (buzz above :data:`BUZZ_LIMIT`),
+        - flags 1.0 or 0.0: ``flag_oscillation`` (buzz above :data:`BUZZ_LIMIT` while the
+          rider's torque stays within :data:`QUIET_TORQUE` over those two seconds),
           ``flag_saturation`` (saturated more than half the time), ``flag_fall`` (roll beyond
           :data:`FALL_ROLL`).
 
@@ -179,7 +181,9 @@ def run_metrics(
         spectrum = np.abs(np.fft.rfft(buzz))
         freqs = np.fft.rfftfreq(buzz.size, float(t[1] - t[0]))
         out["buzz_frequency"] = float(freqs[int(np.argmax(spectrum))])
-        out["flag_oscillation"] = float(out["buzz_current_p2p"] > BUZZ_LIMIT)
+        # a buzz is current the rider does not ask for: judged while the rider holds still
+        quiet = tau is None or float(np.max(np.abs(tau[tail]))) <= QUIET_TORQUE
+        out["flag_oscillation"] = float(quiet and out["buzz_current_p2p"] > BUZZ_LIMIT)
         if max_current is not None:
             share = float(np.mean(np.abs(current) >= 0.999 * max_current))
             out["saturated_share"] = share
