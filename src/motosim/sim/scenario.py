@@ -51,6 +51,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.estimation.registry import ESTIMATORS
+from motosim.params.checks import check_number
 from motosim.sim import paths
 from motosim.timeseries import TimeSeries
 
@@ -88,13 +89,8 @@ Array = NDArray[np.float64]
 
 def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
            low_open: bool = False, unit: str = "") -> None:  # fmt: skip
-    """Refuse a number outside [low, high] (or (low, high]) naming it."""
-    ok = math.isfinite(value) and value <= high and (value > low if low_open else value >= low)
-    if not ok:
-        bound = f"{'>' if low_open else '>='} {low:g}" if low > -math.inf else ""
-        bound += (" and " if bound else "") + (f"<= {high:g}" if high < math.inf else "")
-        suffix = f" [{unit}]" if unit else ""
-        raise MotosimError(f"{name} = {value!r}; expected a finite number {bound}{suffix}".strip())
+    """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error)."""
+    check_number(value, where=name, lower=low, upper=high, lower_closed=not low_open, unit=unit)
 
 
 # --- profiles: a signal of time ----------------------------------------------------------
