@@ -10,6 +10,7 @@ from motosim.errors import MotosimError
 from motosim.io.results import is_complete_result
 from motosim.io.runs import load_scenario, resolve, run_to_folder
 from motosim.sim import RunInputs
+from motosim.sim.metrics import warnings
 
 __all__ = ["register", "run_scenario"]
 
@@ -69,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print(f"motosim: interrupted; the partial result is in {folder}", file=sys.stderr)
         return 130
+    for line in warnings(summary):
+        print(f"motosim: warning: {line}", file=sys.stderr)
     report = None
     if args.report:
         from motosim.report import build_report

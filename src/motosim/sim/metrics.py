@@ -14,6 +14,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.sim.rider import SPEED_RANGE
+
 __all__ = [
     "BUZZ_CUTOFF",
     "BUZZ_LIMIT",
@@ -23,6 +25,7 @@ __all__ = [
     "failure",
     "highpass",
     "run_metrics",
+    "warnings",
 ]
 
 Array = NDArray[np.float64]
@@ -123,7 +126,10 @@ def run_metrics(
         - flags 1.0 or 0.0: ``flag_oscillation`` (buzz above :data:`BUZZ_LIMIT` while the
           rider's torque stays within :data:`QUIET_TORQUE` over those two seconds),
           ``flag_saturation`` (saturated more than half the time), ``flag_fall`` (roll beyond
-          :data:`FALL_ROLL`).
+          :data:`FALL_ROLL`), ``flag_out_of_range`` (the speed left 3-60 m/s, where the
+          virtual rider is scheduled and the linear model is meant for; below 1 m/s the
+          longitudinal equation holds the speed);
+        - ``min_speed``, ``max_speed`` [m/s].
 
     Examples
     --------
@@ -153,16 +159,19 @@ def run_metrics(
         if values is not None:
             out[key] = float(np.max(np.abs(values)))
     out["flag_fall"] = float(out.get("max_abs_phi", 0.0) > FALL_ROLL)
+    speed = signal("v_x")
+    if speed is not None:
+        out["min_speed"], out["max_speed"] = float(np.min(speed)), float(np.max(speed))
+        low, high = SPEED_RANGE
+        out["flag_out_of_range"] = float(out["min_speed"] < low or out["max_speed"] > high)
 
     theta, delta = signal("theta_h"), signal("delta")
     if theta is not None and delta is not None:
         peak = float(np.max(np.abs(delta)))
         error = theta - delta
         out["peak_steer"] = peak
-        out["tracking_rms_fraction"] = _rms(error) / peak if peak > 0 else math.inf
-        out["tracking_peak_fraction"] = (
-            float(np.max(np.abs(error))) / peak if peak > 0 else math.inf
-        )
+        out["tracking_rms_fraction"] = _fraction(_rms(error), peak)
+        out["tracking_peak_fraction"] = _fraction(float(np.max(np.abs(error))), peak)
     tau, tau_hat, rate = signal("tau_r"), signal("tau_r_hat"), signal("theta_h_dot")
     if tau is not None and tau_hat is not None:
         peak_tau = float(np.max(np.abs(tau)))
@@ -208,3 +217,19 @@ def failure(metrics: dict[str, float]) -> str | None:
             "the time"
         )
     return None
+
+
+def warnings(metrics: dict[str, float]) -> list[str]:
+    """One line for each flag that does not fail a run but that a user must know of."""
+    out = []
+    if metrics.get("flag_oscillation"):
+        out.append(
+            f"the motor current buzzes: {metrics['buzz_current_p2p']:.2g} A peak to peak at "
+            f"{metrics['buzz_frequency']:.3g} Hz while the rider holds still"
+        )
+    if metrics.get("flag_out_of_range"):
+        out.append(
+            f"the speed went from {metrics['min_speed']:.3g} to {metrics['max_speed']:.3g} "
+            "m/s, outside 3-60 m/s where the rider's gains and the model are meant for"
+        )
+    return out

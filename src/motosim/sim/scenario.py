@@ -53,6 +53,7 @@ from motosim.errors import MotosimError
 from motosim.estimation.registry import ESTIMATORS
 from motosim.params.checks import check_number
 from motosim.sim import paths
+from motosim.sim.rider import SPEED_RANGE as RIDER_SPEEDS
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -499,6 +500,12 @@ class Scenario:
 
     def __post_init__(self) -> None:
         _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
+        low, high = RIDER_SPEEDS
+        if self.rider.kind == "virtual" and not low <= self.motorcycle.speed <= high:
+            raise MotosimError(
+                f"[motorcycle] speed = {self.motorcycle.speed!r}; expected {low:g} to "
+                f"{high:g} m/s with the virtual rider (its gains are scheduled over these)"
+            )
         if self.seed < 0:
             raise MotosimError(f"seed = {self.seed}; expected an integer >= 0")
 
