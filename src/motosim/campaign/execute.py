@@ -134,6 +134,9 @@ class CampaignSummary:
         Planning and designing [s].
     busy : float
         Sum over tasks of their time in a worker [s].
+    cpu : float
+        Sum over tasks of the CPU time they used [s] (below ``busy`` when other processes
+        share the cores).
     compute : float
         Sum over runs of their simulation time [s].
     overhead : float
@@ -153,6 +156,7 @@ class CampaignSummary:
     wall: float
     design_time: float
     busy: float
+    cpu: float
     compute: float
     overhead: float
 
@@ -222,12 +226,12 @@ def _run_one(task: Task, planned: PlannedRun) -> tuple[str, str, float, list[flo
     return "ok", "", math.nan, _metrics(ts, task.metrics)
 
 
-def run_task(task: Task) -> tuple[dict[str, list[Any]], float]:
-    """Run a task's runs; returns their rows as columns and the task's time [s].
+def run_task(task: Task) -> tuple[dict[str, list[Any]], float, float]:
+    """Run a task's runs; returns their rows as columns, the task's time and CPU time [s].
 
     The columns are those of :mod:`motosim.campaign.results`.
     """
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     paths = [f.path for f in task.factors]
     columns: dict[str, list[Any]] = {
         k: []
@@ -250,7 +254,7 @@ def run_task(task: Task) -> tuple[dict[str, list[Any]], float]:
             columns[p].append(v)
         for m, v in zip(task.metrics, values, strict=True):
             columns[m].append(v)
-    return columns, time.perf_counter() - start
+    return columns, time.perf_counter() - start, time.process_time() - cpu
 
 
 def _batches(
@@ -274,12 +278,14 @@ def _batches(
     return tasks
 
 
-def _serial(tasks: Sequence[Task]) -> Iterator[tuple[dict[str, list[Any]], float]]:
+def _serial(tasks: Sequence[Task]) -> Iterator[tuple[dict[str, list[Any]], float, float]]:
     for task in tasks:
         yield run_task(task)
 
 
-def _joblib(tasks: Sequence[Task], jobs: int) -> Iterator[tuple[dict[str, list[Any]], float]]:
+def _joblib(
+    tasks: Sequence[Task], jobs: int
+) -> Iterator[tuple[dict[str, list[Any]], float, float]]:
     try:
         from joblib import Parallel, delayed
     except ImportError:  # pragma: no cover - the campaign group installs it
@@ -292,7 +298,7 @@ def _joblib(tasks: Sequence[Task], jobs: int) -> Iterator[tuple[dict[str, list[A
 
 def _dask(
     tasks: Sequence[Task], jobs: int, scheduler: str | None
-) -> Iterator[tuple[dict[str, list[Any]], float]]:
+) -> Iterator[tuple[dict[str, list[Any]], float, float]]:
     try:
         dd: Any = importlib.import_module("dask.distributed")
     except ImportError:
@@ -420,12 +426,12 @@ def run_campaign(
     }
     store.write_manifest(manifest)
     design_time = time.perf_counter() - start
-    done, failed, busy, compute = skipped, 0, 0.0, 0.0
+    done, failed, busy, compute, cpu = skipped, 0, 0.0, 0.0, 0.0
     if on_progress is not None:
         on_progress(done, len(plan.runs), failed)
     run_start = time.perf_counter()
     if not tasks:
-        results: Iterator[tuple[dict[str, list[Any]], float]] = iter(())
+        results: Iterator[tuple[dict[str, list[Any]], float, float]] = iter(())
     elif workers == 1 and chosen == "joblib":
         results = _serial(tasks)
     elif chosen == "joblib":
@@ -434,9 +440,10 @@ def run_campaign(
         results = _dask(tasks, workers, scheduler)
     status = "interrupted"
     try:
-        for columns, seconds in results:
+        for columns, seconds, cpu_seconds in results:
             store.write_part(columns)
             busy += seconds
+            cpu += cpu_seconds
             compute += float(sum(columns["elapsed"]))
             done += len(columns["run_id"])
             failed += sum(s != "ok" for s in columns["status"])
@@ -460,6 +467,7 @@ def run_campaign(
             wall=end - start,
             design_time=design_time,
             busy=busy,
+            cpu=cpu,
             compute=compute,
             overhead=max(overhead, 0.0),
         )
@@ -495,5 +503,5 @@ def rerun(plan: Plan, run_id: str) -> dict[str, Any]:
         (planned,),
         plan.campaign.metrics,
     )
-    columns, _ = run_task(task)
+    columns, _, _ = run_task(task)
     return {k: v[0] for k, v in columns.items() if k != "elapsed"}
