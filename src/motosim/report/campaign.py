@@ -3,9 +3,9 @@
 :func:`build_campaign_report` reads ``DIR/manifest.json`` and the Parquet parts
 (:func:`motosim.campaign.load_results`) and writes ``DIR/report.html``: what the campaign
 was, how many runs succeeded and failed (with the reasons), each kept metric against each
-factor, a heat map of the first metric over the first two numeric factors, the failure region
-in that plane, and the worst runs with the command that re-runs each one. One file, the
-figures embedded as PNG, no JavaScript.
+factor, a heat map of the first metric over the two factors most correlated with it (rank
+correlation), the failure region in that plane, and the worst runs with the command that
+re-runs each one. One file, the figures embedded as PNG, no JavaScript.
 """
 
 import collections
@@ -122,7 +122,7 @@ def build_campaign_report(folder: str | Path) -> Path:
         numeric = [f for f in factors if f in results and results[f].dtype.kind in "iuf"]
         shown = [m for m in metrics if m not in ("samples", "complete", "duration")]
         if len(numeric) >= 2 and shown and np.isfinite(results[shown[0]]).any():
-            fx, fy = numeric[0], numeric[1]
+            fx, fy = _strongest(results, numeric, shown[0])
             parts += [
                 "<h2>Heat map and failure region</h2>",
                 _figure(
@@ -156,6 +156,24 @@ def build_campaign_report(folder: str | Path) -> Path:
     except OSError as err:
         raise MotosimError(f"cannot write {target}: {err.strerror}") from None
     return target
+
+
+def _rank(values: Any) -> Any:
+    return np.argsort(np.argsort(values, kind="stable"), kind="stable").astype(float)
+
+
+def _strongest(results: dict[str, Any], factors: list[str], metric: str) -> tuple[str, str]:
+    """The two factors with the largest rank correlation (Spearman) with ``metric``."""
+    ok = np.isfinite(results[metric])
+    target = _rank(results[metric][ok])
+    strength = []
+    for f in factors:
+        x = _rank(results[f][ok])
+        spread = float(np.std(x) * np.std(target))
+        r = float(np.mean((x - x.mean()) * (target - target.mean())) / spread) if spread else 0.0
+        strength.append(abs(r))
+    order = np.argsort(strength, kind="stable")[::-1]
+    return factors[int(order[0])], factors[int(order[1])]
 
 
 def _worst(
