@@ -115,6 +115,27 @@ def test_invalid_combinations_are_recorded_failures(tmp_path: Path) -> None:
     assert all(math.isnan(v) for v in results["rms_tau_r_error"][bad])
 
 
+def test_runs_beyond_a_limit_are_failures_with_their_metrics(tmp_path: Path) -> None:
+    path = _write(tmp_path)
+    free = run_campaign(load_campaign(path), tmp_path / "free", jobs=1)
+    assert free.failed == 0
+    values = load_results(tmp_path / "free")["max_abs_i_m"]
+    limit = float(np.median(values))
+    text = path.read_text().replace(
+        "[factors]", f"limits = {{ max_abs_i_m = {limit!r} }}\n[factors]"
+    )
+    path.write_text(text)
+    run_campaign(load_campaign(path), tmp_path / "limited", jobs=1)
+    limited = load_results(tmp_path / "limited")
+    beyond = limited["max_abs_i_m"] > limit
+    assert beyond.sum() == 3  # half of the six runs, by the median
+    assert set(limited["status"][beyond]) == {"failed"} and set(limited["status"][~beyond]) == {
+        "ok"
+    }
+    assert all(r.startswith("beyond the limit: max_abs_i_m") for r in limited["reason"][beyond])
+    assert np.array_equal(limited["max_abs_i_m"], values)
+
+
 def test_joblib_and_dask_give_the_serial_metrics(tmp_path: Path) -> None:
     campaign = load_campaign(_write(tmp_path))
     run_campaign(campaign, tmp_path / "serial", jobs=1)

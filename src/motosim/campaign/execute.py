@@ -11,7 +11,8 @@ or PBS). Each task simulates its runs with :func:`motosim.sim.simulate` on the s
 and returns one row per run; the parent writes each task's rows as one Parquet part as soon
 as it arrives (:class:`motosim.campaign.results.ResultStore`). A run that diverges
 (:class:`~motosim.errors.RunFailedError`) or whose combination of values is invalid is a
-row with ``status = "failed"`` and its reason.
+row with ``status = "failed"`` and its reason, and so is a run whose metrics exceed the
+campaign's ``limits`` (its metrics kept).
 """
 
 import dataclasses
@@ -102,6 +103,7 @@ class Task:
     factors: tuple[Factor, ...]
     runs: tuple[PlannedRun, ...]
     metrics: tuple[str, ...]
+    limits: tuple[tuple[str, float], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -223,7 +225,12 @@ def _run_one(task: Task, planned: PlannedRun) -> tuple[str, str, float, list[flo
         )
     except RunFailedError as err:
         return "failed", str(err), math.nan if err.time is None else err.time, nan
-    return "ok", "", math.nan, _metrics(ts, task.metrics)
+    values = _metrics(ts, task.metrics)
+    found = dict(zip(task.metrics, values, strict=True))
+    beyond = [f"{k} = {found[k]:.4g} > {v:g}" for k, v in task.limits if not found[k] <= v]
+    if beyond:
+        return "failed", "beyond the limit: " + ", ".join(beyond), math.nan, values
+    return "ok", "", math.nan, values
 
 
 def run_task(task: Task) -> tuple[dict[str, list[Any]], float, float]:
@@ -274,7 +281,7 @@ def _batches(
     for key, runs in groups.items():
         for i in range(0, len(runs), size):
             tasks.append(Task(designs[key], plan.base, c.factors, tuple(runs[i : i + size]),
-                              c.metrics))  # fmt: skip
+                              c.metrics, c.limits))  # fmt: skip
     return tasks
 
 
@@ -502,6 +509,7 @@ def rerun(plan: Plan, run_id: str) -> dict[str, Any]:
         plan.campaign.factors,
         (planned,),
         plan.campaign.metrics,
+        plan.campaign.limits,
     )
     columns, _, _ = run_task(task)
     return {k: v[0] for k, v in columns.items() if k != "elapsed"}

@@ -11,6 +11,7 @@ A campaign is TOML with a ``[campaign]`` table and a ``[factors]`` table::
                                          # of the number of grid points (default: one each)
     seed = 0                             # the sample and every run's noise seed derive from it
     metrics = ["rms_tau_r_error"]        # default: all of METRICS
+    limits = { rms_tracking_error = 0.087 }   # a run beyond a limit is a failure
     task_seconds = 1.0                   # computing time per batch of runs [s]
 
     [factors]
@@ -176,6 +177,9 @@ class Campaign:
         Target computing time of one batch of runs [s].
     description : str
         Free text.
+    limits : tuple of (str, float)
+        Largest acceptable value of some kept metrics (SI units): a run beyond one is a
+        failure (its metrics are kept, its reason names the limit).
     source : str
         The campaign file, as given (not part of the campaign's identity).
     """
@@ -190,6 +194,7 @@ class Campaign:
     metrics: tuple[str, ...] = tuple(METRICS)
     task_seconds: float = 1.0
     description: str = ""
+    limits: tuple[tuple[str, float], ...] = ()
     source: str = ""
 
     def __post_init__(self) -> None:
@@ -222,6 +227,12 @@ class Campaign:
                 raise MotosimError(_unknown(name, list(METRICS), what="metric"))
         if not self.metrics:
             raise MotosimError("metrics = []; expected at least one metric")
+        for name, limit in self.limits:
+            if name not in self.metrics:
+                kept = ", ".join(self.metrics)
+                raise MotosimError(f"limits: {name!r} is not a kept metric; expected one of {kept}")
+            if not math.isfinite(limit):
+                raise MotosimError(f"limits: {name} = {limit!r}; expected a finite number")
         if not (math.isfinite(self.task_seconds) and 0.01 <= self.task_seconds <= 3600.0):
             raise MotosimError(f"task_seconds = {self.task_seconds!r}; expected 0.01 to 3600 [s]")
 
@@ -334,7 +345,7 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
     if not isinstance(factors, Mapping):
         raise MotosimError(f"{origin}: missing table [factors]")
     known = ["name", "description", "scenario", "sampling", "runs", "seed", "metrics",
-             "task_seconds"]  # fmt: skip
+             "task_seconds", "limits"]  # fmt: skip
     where = f"{origin} [campaign]"
     try:
         for key in head:
@@ -358,6 +369,13 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
             if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
                 raise MotosimError(f"metrics = {names!r}; expected a list of metric names")
             kwargs["metrics"] = tuple(names)
+        if "limits" in head:
+            limits = head["limits"]
+            if not isinstance(limits, Mapping):
+                raise MotosimError(f"limits = {limits!r}; expected a table of metric = limit")
+            kwargs["limits"] = tuple(
+                (str(k), _number(v, f"limits: {k}")) for k, v in limits.items()
+            )
     except MotosimError as err:
         raise MotosimError(f"{where}: {err}") from None
     try:

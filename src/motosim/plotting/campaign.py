@@ -38,7 +38,8 @@ def plot_metric_vs_factors(
     metric : ndarray, shape (n,)
         The metric of each run (NaN for failed runs).
     failed : ndarray of bool, shape (n,)
-        Failed runs, drawn as red crosses along the top of each panel.
+        Failed runs, drawn as red crosses (along the top of each panel when their metric is
+        NaN).
     label : str
         The metric's name and unit.
 
@@ -57,7 +58,8 @@ def plot_metric_vs_factors(
         x, labels = _numeric(values)
         ax.plot(x[~failed], metric[~failed], ".", ms=3, alpha=0.6, color="C0", label="ok")
         if failed.any():
-            ax.plot(x[failed], np.full(int(failed.sum()), top), "x", color="C3", label="failed")
+            shown = np.where(np.isfinite(metric[failed]), metric[failed], top)
+            ax.plot(x[failed], shown, "x", color="C3", label="failed")
         if labels:
             ax.set_xticks(range(len(labels)), labels)
         ax.set_xlabel(name)

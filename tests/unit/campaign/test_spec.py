@@ -48,6 +48,11 @@ UNIFORM = {"distribution": "uniform", "low": 0.5, "high": 1.5}
         (_doc({"x": [1.0, 2.0]}, sampling="grid", runs=3), "multiple of the 2 grid points"),
         (_doc({"true_handlebar.J": [1.0]}, runs=3), "did you mean 'true_handlebar.J_"),
         ({"campaign": {"runs": 3}, "factors": {"x": [1.0]}}, "missing scenario"),
+        (
+            _doc({"x": [1.0]}, runs=3, metrics=["max_abs_phi"], limits={"max_abs_e_y": 1.0}),
+            "not a kept metric",
+        ),
+        (_doc({"x": [1.0]}, runs=3, limits=[1.0]), "table of metric = limit"),
     ],
 )
 def test_invalid_campaigns_are_one_line_errors(doc: dict[str, object], message: str) -> None:
