@@ -320,7 +320,7 @@ def _dask(
         client = dd.Client(cluster)
     else:
         try:
-            client = dd.Client(scheduler, timeout=30)
+            client = dd.Client(scheduler, timeout=10)
         except OSError as err:
             raise MotosimError(
                 f"--scheduler {scheduler}: no Dask scheduler answered ({err}); expected an "

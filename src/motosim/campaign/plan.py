@@ -11,6 +11,7 @@ unchanged share one designed stack.
 
 import copy
 import dataclasses
+import difflib
 import hashlib
 import itertools
 import json
@@ -36,8 +37,8 @@ __all__ = [
     "PlannedRun",
     "is_design_factor",
     "plan_campaign",
-    "run_scenario",
     "sample_values",
+    "scenario_of",
 ]
 
 Array = NDArray[np.float64]
@@ -183,8 +184,6 @@ def _check_factor(factor: Factor, base: Mapping[str, Any], true: HandlebarParame
     try:
         current = _lookup(base, path)
     except KeyError:
-        import difflib
-
         known = [*_keys(base), f"{TRUE_HANDLEBAR}.<parameter>"]
         close = difflib.get_close_matches(path, known, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
