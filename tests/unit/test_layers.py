@@ -1,6 +1,7 @@
 """The one-way data flow of ARCHITECTURE.md, checked on the import statements.
 
-params -> model -> {identification, estimation, control, cueing} -> sim -> io -> {rt, plotting}
+params -> model -> {identification, estimation, control, cueing} -> sim -> io -> {rt, campaign,
+plotting}
 -> report -> cli: a module imports only from its own package and from layers to its left,
 and siblings in braces do not import each other.
 """
@@ -19,7 +20,7 @@ LAYERS = [
     {"identification", "estimation", "control", "cueing"},
     {"sim"},
     {"io"},
-    {"rt", "plotting"},
+    {"rt", "campaign", "plotting"},
     {"report"},
     {"cli"},
     {"__main__"},  # python -m motosim: the command line

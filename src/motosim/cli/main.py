@@ -45,6 +45,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "report": ("motosim.cli.simulate", "build the HTML report of a result folder"),
     "paper": ("motosim.cli.paper", "regenerate every figure of the paper's section V"),
+    "campaign": (
+        "motosim.cli.campaign",
+        "run many perturbed runs of a scenario (grid, Latin hypercube, random draws)",
+    ),
     "fidelity": (
         "motosim.cli.fidelity",
         "the steering feel a design renders, against the virtual motorcycle's",

@@ -1,0 +1,515 @@
+"""Running a campaign: one design per distinct design, runs batched into tasks, on a backend.
+
+:func:`run_campaign` plans the campaign (:func:`motosim.campaign.plan.plan_campaign`), skips
+the runs whose ids the result folder already holds, designs the stack once per design key
+that the remaining runs need (:func:`motosim.io.runs.resolve` and
+:func:`motosim.sim.build_stack`: parameter sets, controller synthesis, observer, motorcycle),
+cuts the runs into tasks of about ``task_seconds`` of computing each, and runs the tasks on
+all local cores with joblib (loky processes) or on a Dask cluster (a ``LocalCluster`` of local
+processes, or any scheduler by its address, for example one started by dask-jobqueue on SLURM
+or PBS). Each task simulates its runs with :func:`motosim.sim.simulate` on the shared stack
+and returns one row per run; the parent writes each task's rows as one Parquet part as soon
+as it arrives (:class:`motosim.campaign.results.ResultStore`). A run that diverges
+(:class:`~motosim.errors.RunFailedError`) or whose combination of values is invalid is a
+row with ``status = "failed"`` and its reason, and so is a run whose metrics exceed the
+campaign's ``limits`` (its metrics kept).
+"""
+
+import dataclasses
+import importlib
+import math
+import os
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from motosim.campaign.plan import Plan, PlannedRun, is_design_factor, plan_campaign, scenario_of
+from motosim.campaign.results import ResultStore
+from motosim.campaign.spec import TRUE_HANDLEBAR, Campaign, Factor
+from motosim.control.statespace import StateSpace
+from motosim.errors import MotosimError, RunFailedError
+from motosim.estimation.walcott_zak import ObserverSettings
+from motosim.io.runs import resolve
+from motosim.params import load_parameters
+from motosim.params.handlebar import HandlebarParameters
+from motosim.params.sharp import SharpParameters
+from motosim.sim import build_stack, prepare, simulate
+from motosim.sim.metrics import run_metrics
+from motosim.sim.stack import StackModel
+from motosim.timeseries import TimeSeries
+
+__all__ = [
+    "STEPS_PER_SECOND",
+    "CampaignSummary",
+    "Design",
+    "Task",
+    "design_for",
+    "rerun",
+    "run_campaign",
+    "run_task",
+]
+
+STEPS_PER_SECOND = 3.0e5
+"""Stack periods of a whole run (rig and stack) one core simulates per second, to size tasks
+(measured with bench/bench_campaign.py: 3e5 to 4e5 on this machine)."""
+
+Backend = Literal["joblib", "dask"]
+
+
+@dataclass(frozen=True, slots=True)
+class Design:
+    """What every run of one design shares: the designed stack and the resolved inputs.
+
+    Attributes
+    ----------
+    key : str
+        The design key.
+    stack : StackModel
+        The designed stack.
+    sharp : SharpParameters
+        The virtual motorcycle.
+    nominal : HandlebarParameters
+        The nominal handlebar as loaded (before :func:`motosim.sim.prepare`).
+    controller : StateSpace or None
+        The controller.
+    observer : ObserverSettings or None
+        Observer settings of a design file.
+    tables : Mapping of str to TimeSeries
+        CSV profiles.
+    true_handlebars : Mapping of str to HandlebarParameters
+        The true handlebar sets the runs name.
+    """
+
+    key: str
+    stack: StackModel
+    sharp: SharpParameters
+    nominal: HandlebarParameters
+    controller: StateSpace | None
+    observer: ObserverSettings | None
+    tables: Mapping[str, TimeSeries]
+    true_handlebars: Mapping[str, HandlebarParameters]
+
+
+@dataclass(frozen=True, slots=True)
+class Task:
+    """A batch of runs of one design, sent to a worker as one unit."""
+
+    design: Design
+    base: Mapping[str, Any]
+    factors: tuple[Factor, ...]
+    runs: tuple[PlannedRun, ...]
+    metrics: tuple[str, ...]
+    limits: tuple[tuple[str, float], ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class CampaignSummary:
+    """What a call of :func:`run_campaign` did and how long it took.
+
+    Attributes
+    ----------
+    name : str
+        The campaign.
+    folder : str
+        The result folder.
+    runs : int
+        Runs of the campaign.
+    skipped : int
+        Runs already in the folder, not run again.
+    computed : int
+        Runs computed by this call.
+    failed : int
+        Of these, the failed ones.
+    designs : int
+        Stacks designed by this call.
+    tasks : int
+        Tasks run.
+    workers : int
+        Worker processes.
+    wall : float
+        Wall time of the call [s].
+    design_time : float
+        Planning and designing [s].
+    busy : float
+        Sum over tasks of their time in a worker [s].
+    cpu : float
+        Sum over tasks of the CPU time they used [s] (below ``busy`` when other processes
+        share the cores).
+    compute : float
+        Sum over runs of their simulation time [s].
+    overhead : float
+        Fraction of the workers' time in the run phase not spent in a task (start-up,
+        scheduling, transfer, writing, waiting on the last tasks).
+    """
+
+    name: str
+    folder: str
+    runs: int
+    skipped: int
+    computed: int
+    failed: int
+    designs: int
+    tasks: int
+    workers: int
+    wall: float
+    design_time: float
+    busy: float
+    cpu: float
+    compute: float
+    overhead: float
+
+
+def design_for(plan: Plan, key: str) -> Design:
+    """Design the stack shared by the runs of design ``key`` (once per distinct design)."""
+    first = next(r for r in plan.runs if r.design == key)
+    scenario, _ = scenario_of(plan.base, plan.campaign.factors, first)
+    folder = Path(plan.folder)
+    inputs = resolve(scenario, folder)
+    name = scenario.handlebar.nominal
+    candidate = folder / name
+    source = candidate if candidate.suffix == ".toml" and candidate.is_file() else name
+    nominal = load_parameters(source, "handlebar")
+    return Design(
+        key=key,
+        stack=build_stack(inputs),
+        sharp=inputs.sharp,
+        nominal=nominal,
+        controller=inputs.controller,
+        observer=inputs.observer,
+        tables=inputs.tables,
+        true_handlebars=plan.true_handlebars,
+    )
+
+
+def _metrics(ts: TimeSeries, names: Sequence[str]) -> list[float]:
+    found = run_metrics(ts.t, lambda n: ts[n] if n in ts else None, complete=True)
+    extra = {
+        "max_abs_tau_r_error": ("tau_r_hat", "tau_r"),
+        "max_abs_tracking_error": ("theta_h", "delta"),
+    }
+    for key, (a, b) in extra.items():
+        if key in names:
+            found[key] = float(np.max(np.abs(ts[a] - ts[b])))
+    if "max_abs_i_m" in names:
+        found["max_abs_i_m"] = float(np.max(np.abs(ts["i_m"])))
+    return [found.get(n, math.nan) for n in names]
+
+
+def _run_one(task: Task, planned: PlannedRun) -> tuple[str, str, float, list[float]]:
+    """Simulate one run: (status, reason, failure time [s], metrics)."""
+    nan = [math.nan] * len(task.metrics)
+    d = task.design
+    try:
+        scenario, overrides = scenario_of(task.base, task.factors, planned)
+        true = d.true_handlebars[scenario.handlebar.true]
+        if overrides:
+            true = dataclasses.replace(true, **overrides)
+        inputs = prepare(
+            scenario,
+            sharp=d.sharp,
+            true_handlebar=true,
+            nominal_handlebar=d.nominal,
+            controller=d.controller,
+            observer=d.observer,
+            tables=d.tables,
+        )
+    except MotosimError as err:
+        return "failed", f"invalid: {err}", math.nan, nan
+    try:
+        ts = simulate(
+            inputs, rng=np.random.default_rng(scenario.seed), stack=d.stack, chunk=scenario.duration
+        )
+    except RunFailedError as err:
+        return "failed", str(err), math.nan if err.time is None else err.time, nan
+    values = _metrics(ts, task.metrics)
+    found = dict(zip(task.metrics, values, strict=True))
+    beyond = [f"{k} = {found[k]:.4g} > {v:g}" for k, v in task.limits if not found[k] <= v]
+    if beyond:
+        return "failed", "beyond the limit: " + ", ".join(beyond), math.nan, values
+    return "ok", "", math.nan, values
+
+
+def run_task(task: Task) -> tuple[dict[str, list[Any]], float, float]:
+    """Run a task's runs; returns their rows as columns, the task's time and CPU time [s].
+
+    The columns are those of :mod:`motosim.campaign.results`.
+    """
+    start, cpu = time.perf_counter(), time.process_time()
+    paths = [f.path for f in task.factors]
+    columns: dict[str, list[Any]] = {
+        k: []
+        for k in ("run_id", "index", "seed", "design", "status", "reason", "failed_at", "elapsed")
+    }
+    columns.update({p: [] for p in paths})
+    columns.update({m: [] for m in task.metrics})
+    for planned in task.runs:
+        t0 = time.perf_counter()
+        status, reason, failed_at, values = _run_one(task, planned)
+        columns["elapsed"].append(time.perf_counter() - t0)
+        columns["run_id"].append(planned.run_id)
+        columns["index"].append(planned.index)
+        columns["seed"].append(planned.seed)
+        columns["design"].append(planned.design)
+        columns["status"].append(status)
+        columns["reason"].append(reason)
+        columns["failed_at"].append(failed_at)
+        for p, v in zip(paths, planned.values, strict=True):
+            columns[p].append(v)
+        for m, v in zip(task.metrics, values, strict=True):
+            columns[m].append(v)
+    return columns, time.perf_counter() - start, time.process_time() - cpu
+
+
+def _batches(
+    plan: Plan, todo: Sequence[PlannedRun], designs: Mapping[str, Design], workers: int
+) -> list[Task]:
+    """Cut the runs into tasks of one design and about ``task_seconds`` each."""
+    c = plan.campaign
+    rates = plan.base["rates"]
+    per_run = float(plan.base["duration"]) * float(rates["control"]) / STEPS_PER_SECOND
+    size = max(1, round(c.task_seconds / per_run))
+    # at least four tasks per worker when there are enough runs, for an even finish
+    size = min(size, max(1, math.ceil(len(todo) / (4 * workers))))
+    groups: dict[str, list[PlannedRun]] = {}
+    for planned in todo:
+        groups.setdefault(planned.design, []).append(planned)
+    tasks = []
+    for key, runs in groups.items():
+        for i in range(0, len(runs), size):
+            tasks.append(Task(designs[key], plan.base, c.factors, tuple(runs[i : i + size]),
+                              c.metrics, c.limits))  # fmt: skip
+    return tasks
+
+
+def _serial(tasks: Sequence[Task]) -> Iterator[tuple[dict[str, list[Any]], float, float]]:
+    for task in tasks:
+        yield run_task(task)
+
+
+def _joblib(
+    tasks: Sequence[Task], jobs: int
+) -> Iterator[tuple[dict[str, list[Any]], float, float]]:
+    try:
+        from joblib import Parallel, delayed
+    except ImportError:  # pragma: no cover - the campaign group installs it
+        raise MotosimError(
+            "backend 'joblib' needs joblib: pip install 'motosim[campaign]'"
+        ) from None
+    parallel = Parallel(n_jobs=jobs, return_as="generator_unordered")
+    yield from parallel(delayed(run_task)(task) for task in tasks)
+
+
+def _dask(
+    tasks: Sequence[Task], jobs: int, scheduler: str | None
+) -> Iterator[tuple[dict[str, list[Any]], float, float]]:
+    try:
+        dd: Any = importlib.import_module("dask.distributed")
+    except ImportError:
+        raise MotosimError(
+            "backend 'dask' needs dask.distributed: pip install 'motosim[campaign]'"
+        ) from None
+    cluster = None
+    if scheduler is None:
+        cluster = dd.LocalCluster(
+            n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        client = dd.Client(cluster)
+    else:
+        try:
+            client = dd.Client(scheduler, timeout=10)
+        except OSError as err:
+            raise MotosimError(
+                f"--scheduler {scheduler}: no Dask scheduler answered ({err}); expected an "
+                "address like tcp://host:8786"
+            ) from None
+    try:
+        futures = client.map(run_task, tasks, pure=False)
+        for future in dd.as_completed(futures):
+            yield future.result()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _workers(backend: Backend, jobs: int | None, scheduler: str | None) -> int:
+    if jobs is not None and jobs < 1:
+        raise MotosimError(f"--jobs {jobs}; expected at least 1")
+    if backend == "dask" and scheduler is not None:
+        return jobs or 1  # the cluster's size; only used to size tasks
+    return jobs or os.cpu_count() or 1
+
+
+def _plain_campaign(campaign: Campaign) -> dict[str, Any]:
+    def clean(value: Any) -> Any:
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, dict):
+            return {k: clean(v) for k, v in value.items()}
+        if isinstance(value, list | tuple):
+            return [clean(v) for v in value]
+        return value
+
+    plain: dict[str, Any] = clean(dataclasses.asdict(campaign))
+    return plain
+
+
+def run_campaign(
+    campaign: Campaign,
+    out: str | Path,
+    *,
+    backend: Backend | None = None,
+    scheduler: str | None = None,
+    jobs: int | None = None,
+    on_progress: Callable[[int, int, int], None] | None = None,
+) -> CampaignSummary:
+    """Run a campaign into the folder ``out``, skipping the runs it already holds.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign (:func:`motosim.campaign.load_campaign`).
+    out : str or Path
+        Result folder: ``parts/part-*.parquet`` and ``manifest.json``.
+    backend : {"joblib", "dask"}, optional
+        joblib's loky processes on this machine (default), or Dask (the default when a
+        ``scheduler`` is given).
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``); without it the Dask
+        backend starts a ``LocalCluster`` of ``jobs`` processes.
+    jobs : int, optional
+        Local worker processes (default: every core); 1 runs in this process.
+    on_progress : callable, optional
+        Called as ``on_progress(done, total, failed)`` after each task.
+
+    Returns
+    -------
+    CampaignSummary
+
+    Raises
+    ------
+    MotosimError
+        On an invalid campaign, a folder holding another campaign, an impossible design or a
+        backend that is not installed or not reachable.
+    """
+    start = time.perf_counter()
+    chosen: Backend = backend or ("dask" if scheduler else "joblib")
+    if chosen == "joblib" and scheduler is not None:
+        raise MotosimError("--scheduler is for --backend dask")
+    workers = _workers(chosen, jobs, scheduler)
+    plan = plan_campaign(campaign)
+    kinds: list[type] = []
+    for f in campaign.factors:
+        first = plan.runs[0].values[len(kinds)]
+        kinds.append(float if f.path.startswith(f"{TRUE_HANDLEBAR}.") else type(first))
+    store = ResultStore(
+        out,
+        fingerprint=plan.fingerprint,
+        factors=[(f.path, k) for f, k in zip(campaign.factors, kinds, strict=True)],
+        metrics=campaign.metrics,
+    )
+    todo = [r for r in plan.runs if r.run_id not in store.done]
+    skipped = len(plan.runs) - len(todo)
+    needed = sorted({r.design for r in todo})
+    designs = {key: design_for(plan, key) for key in needed}
+    tasks = _batches(plan, todo, designs, workers)
+    design_paths = [f.path for f in campaign.factors if is_design_factor(f.path)]
+    manifest: dict[str, Any] = {
+        "name": campaign.name,
+        "campaign_file": campaign.source,
+        "fingerprint": plan.fingerprint,
+        "campaign": _plain_campaign(campaign),
+        "base_scenario": plan.base,
+        "runs": len(plan.runs),
+        "designs": {k: dict(zip(design_paths, v, strict=True)) for k, v in plan.designs.items()},
+        "backend": chosen,
+        "workers": workers,
+        "status": "running",
+        "written": skipped,
+    }
+    store.write_manifest(manifest)
+    design_time = time.perf_counter() - start
+    done, failed, busy, compute, cpu = skipped, 0, 0.0, 0.0, 0.0
+    if on_progress is not None:
+        on_progress(done, len(plan.runs), failed)
+    run_start = time.perf_counter()
+    if not tasks:
+        results: Iterator[tuple[dict[str, list[Any]], float, float]] = iter(())
+    elif workers == 1 and chosen == "joblib":
+        results = _serial(tasks)
+    elif chosen == "joblib":
+        results = _joblib(tasks, workers)
+    else:
+        results = _dask(tasks, workers, scheduler)
+    status = "interrupted"
+    try:
+        for columns, seconds, cpu_seconds in results:
+            store.write_part(columns)
+            busy += seconds
+            cpu += cpu_seconds
+            compute += float(sum(columns["elapsed"]))
+            done += len(columns["run_id"])
+            failed += sum(s != "ok" for s in columns["status"])
+            if on_progress is not None:
+                on_progress(done, len(plan.runs), failed)
+        status = "complete"
+    finally:
+        end = time.perf_counter()
+        run_wall = end - run_start
+        overhead = 1.0 - busy / (workers * run_wall) if tasks and run_wall > 0 else 0.0
+        summary = CampaignSummary(
+            name=campaign.name,
+            folder=str(out),
+            runs=len(plan.runs),
+            skipped=skipped,
+            computed=done - skipped,
+            failed=failed,
+            designs=len(designs),
+            tasks=len(tasks),
+            workers=workers,
+            wall=end - start,
+            design_time=design_time,
+            busy=busy,
+            cpu=cpu,
+            compute=compute,
+            overhead=max(overhead, 0.0),
+        )
+        manifest.update(
+            status=status,
+            written=len(store.done & {r.run_id for r in plan.runs}),
+            last_call=dataclasses.asdict(summary),
+        )
+        store.write_manifest(manifest)
+    return summary
+
+
+def rerun(plan: Plan, run_id: str) -> dict[str, Any]:
+    """Run one run of a campaign again, exactly as the campaign ran it.
+
+    Parameters
+    ----------
+    plan : Plan
+        The campaign's plan.
+    run_id : str
+        The run.
+
+    Returns
+    -------
+    dict
+        The run's row (the columns of :mod:`motosim.campaign.results` but ``elapsed``).
+    """
+    planned = plan.run(run_id)
+    task = Task(
+        design_for(plan, planned.design),
+        plan.base,
+        plan.campaign.factors,
+        (planned,),
+        plan.campaign.metrics,
+        plan.campaign.limits,
+    )
+    columns, _, _ = run_task(task)
+    return {k: v[0] for k, v in columns.items() if k != "elapsed"}

@@ -1,0 +1,183 @@
+"""A campaign's result folder: one Parquet part per task, and a manifest.
+
+``DIR/parts/part-*.parquet`` hold one row per run: ``run_id``, ``index`` (position in the
+sample), ``seed``, ``design``, ``status`` (``"ok"`` or ``"failed"``), ``reason`` (why it
+failed, else empty), ``failed_at`` [s] (NaN when unknown or ok), ``elapsed`` (computing time
+of the run [s]), one column per factor (named by its key) and one per kept metric (NaN for a
+failed run). Read them with pandas (``pandas.read_parquet("DIR/parts")``), polars, duckdb or
+:func:`load_results`. A part is written to a hidden file and renamed, so an interrupted
+campaign leaves only whole parts; ``DIR/manifest.json`` says what the campaign was (its file,
+base scenario, fingerprint, package version), how far it got and how long it took.
+"""
+
+import hashlib
+import json
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim import __version__
+from motosim.errors import MotosimError
+
+__all__ = [
+    "MANIFEST",
+    "PARTS",
+    "ResultStore",
+    "load_results",
+    "read_manifest",
+]
+
+MANIFEST = "manifest.json"
+"""File name of the manifest in a result folder."""
+PARTS = "parts"
+"""Folder of the Parquet parts in a result folder."""
+
+
+def _arrow_type(kind: type) -> Any:
+    import pyarrow as pa
+
+    return {float: pa.float64(), int: pa.int64(), bool: pa.bool_(), str: pa.string()}[kind]
+
+
+def read_manifest(folder: str | Path) -> dict[str, Any]:
+    """The manifest of a result folder.
+
+    Raises
+    ------
+    MotosimError
+        If the folder holds no campaign results.
+    """
+    path = Path(folder) / MANIFEST
+    if not path.is_file():
+        raise MotosimError(
+            f"{folder}: no {MANIFEST}; expected a folder written by motosim campaign"
+        )
+    try:
+        manifest: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        raise MotosimError(f"{path}: not a JSON manifest ({err})") from None
+    return manifest
+
+
+def load_results(folder: str | Path) -> dict[str, NDArray[Any]]:
+    """Every run written so far, as columns (see the module docstring), sorted by ``index``.
+
+    Parameters
+    ----------
+    folder : str or Path
+        A campaign's result folder.
+
+    Returns
+    -------
+    dict of str to ndarray
+        One 1-D array per column; strings as object arrays.
+    """
+    import pyarrow.parquet as pq
+
+    parts = Path(folder) / PARTS
+    files = sorted(parts.glob("part-*.parquet")) if parts.is_dir() else []
+    if not files:
+        return {}
+    table = pq.read_table(files)
+    order = np.argsort(table.column("index").to_numpy(), kind="stable")
+    out: dict[str, NDArray[Any]] = {}
+    for name in table.column_names:
+        column = table.column(name)
+        values = column.to_numpy(zero_copy_only=False)
+        out[name] = np.asarray(values)[order]
+    return out
+
+
+class ResultStore:
+    """Writes a campaign's parts and manifest; knows the runs already written.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The result folder (created).
+    fingerprint : str
+        The campaign's fingerprint; a folder holding another campaign is refused.
+    factors : Sequence of (str, type)
+        Factor column names and Python types, in order.
+    metrics : Sequence of str
+        Metric column names.
+
+    Raises
+    ------
+    MotosimError
+        If the folder holds results of a campaign with another fingerprint.
+    """
+
+    def __init__(
+        self,
+        folder: str | Path,
+        *,
+        fingerprint: str,
+        factors: Sequence[tuple[str, type]],
+        metrics: Sequence[str],
+    ) -> None:
+        self.folder = Path(folder)
+        self.parts = self.folder / PARTS
+        if (self.folder / MANIFEST).is_file():
+            previous = read_manifest(self.folder).get("fingerprint")
+            if previous != fingerprint:
+                raise MotosimError(
+                    f"{self.folder}: holds results of another campaign or version "
+                    f"(fingerprint {previous}, this one {fingerprint}); give another --out"
+                )
+        self.parts.mkdir(parents=True, exist_ok=True)
+        self.factors = tuple(factors)
+        self.metrics = tuple(metrics)
+        self.done: set[str] = set()
+        files = sorted(self.parts.glob("part-*.parquet"))
+        if files:
+            import pyarrow.parquet as pq
+
+            ids = pq.read_table(files, columns=["run_id"]).column("run_id").to_pylist()
+            self.done = {str(i) for i in ids}
+
+    def schema(self) -> Any:
+        """The parts' Arrow schema."""
+        import pyarrow as pa
+
+        fixed = [
+            ("run_id", pa.string()),
+            ("index", pa.int64()),
+            ("seed", pa.int64()),
+            ("design", pa.string()),
+            ("status", pa.string()),
+            ("reason", pa.string()),
+            ("failed_at", pa.float64()),
+            ("elapsed", pa.float64()),
+        ]
+        factors = [(name, _arrow_type(kind)) for name, kind in self.factors]
+        metrics = [(name, pa.float64()) for name in self.metrics]
+        return pa.schema(fixed + factors + metrics)
+
+    def write_part(self, columns: Mapping[str, Sequence[Any]]) -> Path:
+        """Write one task's rows as a part (atomically) and remember its run ids."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        ids = [str(i) for i in columns["run_id"]]
+        name = hashlib.sha256(" ".join(ids).encode()).hexdigest()[:16]
+        path = self.parts / f"part-{name}.parquet"
+        hidden = self.parts / f".part-{name}.tmp"
+        table = pa.table({k: list(columns[k]) for k in self.schema().names}, schema=self.schema())
+        pq.write_table(table, hidden)
+        os.replace(hidden, path)
+        self.done.update(ids)
+        return path
+
+    def write_manifest(self, payload: Mapping[str, Any]) -> Path:
+        """Write ``manifest.json`` (atomically) with the package version added."""
+        path = self.folder / MANIFEST
+        hidden = self.folder / f".{MANIFEST}.tmp"
+        text = json.dumps({"version": __version__, **payload}, indent=2, default=str)
+        hidden.write_text(text + "\n", encoding="utf-8")
+        os.replace(hidden, path)
+        return path

@@ -1,0 +1,154 @@
+"""``motosim campaign``: run a campaign file, resume it, report it, re-run one of its runs."""
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motosim.cli._common import print_json
+from motosim.errors import MotosimError
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``campaign`` to the subcommands."""
+    parser = sub.add_parser(
+        "campaign",
+        help="run many perturbed runs of a scenario (grid, Latin hypercube, random draws)",
+        description=(
+            "Run a campaign file into DIR: one Parquet part per batch of runs in DIR/parts, "
+            "DIR/manifest.json and DIR/report.html. Running it again resumes: the runs "
+            "already in DIR are skipped. --rerun RUN_ID runs one run again and compares it "
+            "with the stored one."
+        ),
+    )
+    parser.add_argument("campaign", help="campaign TOML file")
+    parser.add_argument("--out", required=True, help="result folder")
+    parser.add_argument("--backend", choices=("joblib", "dask"), help="joblib (default) or dask")
+    parser.add_argument(
+        "--scheduler", metavar="ADDRESS", help="a running Dask scheduler (tcp://host:8786)"
+    )
+    parser.add_argument(
+        "--jobs", type=int, metavar="N", help="local worker processes (default: every core)"
+    )
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument(
+        "--no-report", dest="report", action="store_false", help="skip DIR/report.html"
+    )
+    parser.add_argument("--rerun", metavar="RUN_ID", help="run one run again and compare it")
+    parser.add_argument(
+        "--write-scenario",
+        metavar="FILE",
+        help="with --rerun: also write the run as a scenario file for motosim simulate",
+    )
+    parser.set_defaults(func=run)
+
+
+def _progress_bar(enabled: bool) -> Any:
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(unit=" runs", file=sys.stderr, leave=False, dynamic_ncols=True)
+
+
+def _rerun(args: argparse.Namespace) -> int:
+    from motosim.campaign import load_campaign, load_results, plan_campaign, rerun
+    from motosim.campaign.export import export_run
+
+    plan = plan_campaign(load_campaign(args.campaign))
+    row = rerun(plan, args.rerun)
+    stored = load_results(args.out) if Path(args.out).is_dir() else {}
+    match: bool | None = None
+    if stored and args.rerun in set(stored["run_id"].tolist()):
+        j = int(np.flatnonzero(stored["run_id"] == args.rerun)[0])
+        match = (
+            all(
+                row[m] == stored[m][j] or (math.isnan(row[m]) and math.isnan(stored[m][j]))
+                for m in plan.campaign.metrics
+            )
+            and row["status"] == stored["status"][j]
+        )
+    written = export_run(plan, args.rerun, args.write_scenario) if args.write_scenario else []
+    if args.json:
+        print_json({"run": row, "identical_to_stored": match, "written": [str(p) for p in written]})
+        return 0
+    print(f"run {args.rerun}: {row['status']}" + (f" ({row['reason']})" if row["reason"] else ""))
+    for key, value in row.items():
+        if key not in ("run_id", "status", "reason"):
+            print(f"  {key:<32} {value!r}")
+    if match is None:
+        print(f"  not in {args.out}: nothing to compare with")
+    else:
+        print(
+            f"  identical to the stored run (every metric bit for bit): {'yes' if match else 'NO'}"
+        )
+    for path in written:
+        print(f"wrote {path}")
+    return 0 if match is not False else 1
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run (or resume) the campaign, then write its report."""
+    if args.write_scenario and not args.rerun:
+        raise MotosimError("--write-scenario is for --rerun RUN_ID")
+    if args.rerun:
+        return _rerun(args)
+    from motosim.campaign import load_campaign, run_campaign
+
+    campaign = load_campaign(args.campaign)
+    bar = _progress_bar(not args.json and sys.stderr.isatty())
+
+    def progress(done: int, total: int, failed: int) -> None:
+        if bar is not None:
+            bar.total = total
+            bar.n = done
+            bar.set_postfix_str(f"{failed} failed", refresh=False)
+            bar.refresh()
+
+    try:
+        summary = run_campaign(
+            campaign,
+            args.out,
+            backend=args.backend,
+            scheduler=args.scheduler,
+            jobs=args.jobs,
+            on_progress=progress,
+        )
+    except KeyboardInterrupt:
+        print(
+            f"motosim: interrupted; the runs written are in {args.out}: run the same command "
+            "to resume",
+            file=sys.stderr,
+        )
+        return 130
+    finally:
+        if bar is not None:
+            bar.close()
+    report = None
+    if args.report:
+        from motosim.report.campaign import build_campaign_report
+
+        report = build_campaign_report(args.out)
+    if args.json:
+        import dataclasses
+
+        print_json({**dataclasses.asdict(summary), "report": str(report) if report else None})
+        return 0
+    s = summary
+    print(
+        f"{s.name}: {s.runs} runs in {s.folder} ({s.skipped} already there, {s.computed} run "
+        f"now, {s.failed} failed); {s.designs} design(s), {s.tasks} tasks on {s.workers} workers"
+    )
+    rate = s.computed / (s.wall - s.design_time) if s.computed and s.wall > s.design_time else 0
+    print(
+        f"  wall {s.wall:.2f} s (planning and design {s.design_time:.2f} s), {rate:.1f} runs/s, "
+        f"scheduler overhead {100 * s.overhead:.1f} % of the workers' time"
+    )
+    if report:
+        print(f"  report {report}")
+    return 0
