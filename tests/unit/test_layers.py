@@ -1,7 +1,7 @@
 """The one-way data flow of ARCHITECTURE.md, checked on the import statements.
 
 params -> model -> {identification, estimation, control} -> sim -> io -> {rt, plotting}
--> report -> cli: a module imports only from its own package and from layers to its left,
+-> {report, view} -> cli: a module imports only from its own package and from layers to its left,
 and siblings in braces do not import each other.
 """
 
@@ -20,7 +20,7 @@ LAYERS = [
     {"sim"},
     {"io"},
     {"rt", "plotting"},
-    {"report"},
+    {"report", "view"},
     {"cli"},
 ]
 RANK = {package: rank for rank, layer in enumerate(LAYERS) for package in layer}

@@ -11,12 +11,12 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from motosim import __version__
-from motosim.cli import design, estimate, excite, identify, modes, paper, params, simulate
+from motosim.cli import design, estimate, excite, identify, modes, paper, params, simulate, view
 from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailedError
 
 __all__ = ["main"]
 
-_COMMANDS = (params, modes, excite, identify, estimate, design, simulate, paper)
+_COMMANDS = (params, modes, excite, identify, estimate, design, simulate, paper, view)
 
 
 class _Parser(argparse.ArgumentParser):
