@@ -133,13 +133,14 @@ class TelemetryRing:
         block : ndarray, shape (m, k)
             Rows in the order of :attr:`names`.
         """
-        block = block[-self.capacity :]
+        skipped = max(0, block.shape[0] - self.capacity)
+        block = block[skipped:]
         m = block.shape[0]
-        start = self._count % self.capacity
+        start = (self._count + skipped) % self.capacity
         first = min(m, self.capacity - start)
         self._rows[start : start + first] = block[:first]
         self._rows[: m - first] = block[first:]
-        self._count += m
+        self._count += skipped + m
 
     def read_since(self, cursor: int) -> tuple[Array, int]:
         """Rows written after ``cursor`` rows, and the new cursor.
@@ -170,7 +171,8 @@ class TelemetryRing:
         """A copy of the last row written, or None before the first."""
         if self._count == 0:
             return None
-        return self._rows[(self._count - 1) % self.capacity].copy()
+        row: Array = self._rows[(self._count - 1) % self.capacity].copy()
+        return row
 
 
 def pose_of(names: Sequence[str], row: Array) -> dict[str, float]:
@@ -485,7 +487,7 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
                     data=json.dumps(_pose_message(pose_of(names, row))).encode(),
                 )
                 count += 1
-        writer.finish()
+        writer.finish()  # type: ignore[no-untyped-call]
     return count
 
 

@@ -281,7 +281,8 @@ class ReplayFeed:
     def latest(self) -> Array | None:
         """The row at the replay time."""
         end = self._index()
-        return self._table[max(end - 1, 0)].copy()
+        row: Array = self._table[max(end - 1, 0)].copy()
+        return row
 
     def status(self) -> dict[str, Any]:
         """State, replay time and duration [s], rate, seek epoch."""

@@ -25,7 +25,7 @@ from motosim.view.feeds import LiveFeed, Road, road_from_xy
 __all__ = ["SimulatedRig"]
 
 
-class _Stopped(Exception):
+class _StoppedError(Exception):
     """Raised from ``on_block`` to end a run that was stopped."""
 
 
@@ -113,10 +113,10 @@ class SimulatedRig:
         def on_block(block: np.ndarray) -> None:
             self.ring.push_block(block)
             if self._stop.is_set():
-                raise _Stopped
+                raise _StoppedError
             ahead = start + float(block[-1, 0]) / self._rate - time.monotonic()
             if ahead > 0.0 and self._stop.wait(ahead):
-                raise _Stopped
+                raise _StoppedError
 
         try:
             simulate(
@@ -127,7 +127,7 @@ class SimulatedRig:
                 keep=False,
             )
             self._state = "done"
-        except _Stopped:
+        except _StoppedError:
             self._state = "stopped"
         except Exception as err:  # reported through state() and .error
             self.error = err
