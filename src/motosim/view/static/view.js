@@ -21,8 +21,9 @@ const scene = new THREE.Scene();
 const sky = new THREE.Color(0x9cc3e6);
 scene.background = sky;
 scene.fog = new THREE.Fog(sky, 150, 1500);
-const camera = new THREE.PerspectiveCamera(70, 1, 0.1, 4000);
+const camera = new THREE.PerspectiveCamera(70, 1, 0.3, 3000);
 camera.rotation.order = 'YXZ';
+Object.assign(stats, { camera, renderer, scene });
 
 // --- road ----------------------------------------------------------------------------
 const road = info.road;
@@ -39,6 +40,16 @@ for (let i = 0; i < n; i++) {
 const at = (i, offset, height) =>
   [road.x[i] - offset * ty[i], height, road.y[i] + offset * tx[i]];
 
+// The world is flat and the eye above it, so the flat layers (ground, shoulders, asphalt,
+// lines) are painted in order without the depth buffer (no z-fighting between coplanar
+// layers, whatever the GPU's depth precision) and the upright objects drawn after them.
+let layer = -10;
+function flat(mesh) {
+  mesh.material.depthTest = false; mesh.material.depthWrite = false;
+  mesh.renderOrder = layer++;
+  return mesh;
+}
+
 function ribbon(left, right, height, color, keep = () => true) {
   const pos = [];
   for (let i = 0; i + 1 < n; i++) {
@@ -50,8 +61,16 @@ function ribbon(left, right, height, color, keep = () => true) {
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.Float32BufferAttribute(pos, 3));
   const material = new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide });
-  return new THREE.Mesh(geometry, material);
+  return flat(new THREE.Mesh(geometry, material));
 }
+
+let cx = 0, cy = 0;
+for (let i = 0; i < n; i++) { cx += road.x[i] / n; cy += road.y[i] / n; }
+const ground = flat(new THREE.Mesh(new THREE.PlaneGeometry(12000, 12000),
+  new THREE.MeshBasicMaterial({ color: 0x5d8a3a })));
+ground.rotation.x = -Math.PI / 2;
+ground.position.set(cx, -0.02, cy);
+scene.add(ground);
 
 const w = road.width / 2;
 scene.add(ribbon(-w - 1.5, w + 1.5, 0.0, 0x8a8a7a));          // shoulders
@@ -61,13 +80,6 @@ scene.add(ribbon(w - 0.4, w - 0.25, 0.02, 0xf4f4f4));          // right edge lin
 scene.add(ribbon(-0.075, 0.075, 0.02, 0xf4f4f4,                // dashed centre line: 3 m in 9 m
   (i) => (s[i] % 9) < 3));
 
-let cx = 0, cy = 0;
-for (let i = 0; i < n; i++) { cx += road.x[i] / n; cy += road.y[i] / n; }
-const ground = new THREE.Mesh(new THREE.PlaneGeometry(12000, 12000),
-  new THREE.MeshBasicMaterial({ color: 0x5d8a3a }));
-ground.rotation.x = -Math.PI / 2;
-ground.position.set(cx, -0.02, cy);
-scene.add(ground);
 
 // --- speed and distance cues: posts every 25 m, trees at seeded random places ------------
 let seed = 12345;

@@ -6,12 +6,12 @@ import pytest
 pytest.importorskip("starlette", reason="the view server is in the optional group view")
 pytest.importorskip("httpx2", reason="starlette's TestClient needs httpx2 (group dev)")
 
-from starlette.testclient import TestClient  # noqa: E402
+from starlette.testclient import TestClient
 
-from motosim.errors import MotosimError  # noqa: E402
-from motosim.timeseries import TimeSeries  # noqa: E402
-from motosim.view.app import create_app  # noqa: E402
-from motosim.view.feeds import ReplayFeed, road_from_xy  # noqa: E402
+from motosim.errors import MotosimError
+from motosim.timeseries import TimeSeries
+from motosim.view.app import create_app
+from motosim.view.feeds import ReplayFeed, road_from_xy
 
 TOKEN = "secret-token-123"
 
