@@ -17,13 +17,13 @@ import pytest
 pytest.importorskip("uvicorn", reason="the view server is in the optional group view")
 pytest.importorskip("websockets", reason="the DevTools client needs websockets (group view)")
 
-from browser import CANVAS_PIXELS, CHROMIUM, Browser  # noqa: E402
+from browser import CANVAS_PIXELS, CHROMIUM, Browser
 
-from motosim.io.results import SimResult, load_result  # noqa: E402
-from motosim.io.runs import load_run, run_to_folder  # noqa: E402
-from motosim.view.app import ServerThread, create_app  # noqa: E402
-from motosim.view.feeds import ReplayFeed, road_from_xy  # noqa: E402
-from motosim.view.live import SimulatedRig  # noqa: E402
+from motosim.io.results import SimResult, load_result
+from motosim.io.runs import load_run, run_to_folder
+from motosim.view.app import ServerThread, create_app
+from motosim.view.feeds import ReplayFeed, road_from_xy
+from motosim.view.live import SimulatedRig
 
 pytestmark = pytest.mark.skipif(
     CHROMIUM is None, reason="no chromium on PATH (Debian package chromium; .ci/run installs it)"
