@@ -103,7 +103,6 @@ def run_telemetry(args: argparse.Namespace) -> int:
         PLOTJUGGLER_PORT,
         EsminiUdp,
         PlotJugglerUdp,
-        Sink,
         write_mcap,
     )
 
@@ -115,7 +114,7 @@ def run_telemetry(args: argparse.Namespace) -> int:
     if args.mcap:
         count = write_mcap(result, args.mcap, every=args.every)
         print(f"{args.mcap}: {count} messages")
-    sinks: list[Sink] = []
+    sinks: list[PlotJugglerUdp | EsminiUdp] = []
     if args.plotjuggler:
         sinks.append(PlotJugglerUdp(*_address("--plotjuggler", args.plotjuggler, PLOTJUGGLER_PORT)))
     if args.esmini:
@@ -126,12 +125,16 @@ def run_telemetry(args: argparse.Namespace) -> int:
         table = np.column_stack([result.t, result.data])
         start = time.monotonic()
         step = max(1, round(1.0 / (60.0 * float(np.median(np.diff(result.t))))))
-        for k in range(0, table.shape[0], step):
-            rows = table[k : k + step]
+        try:
+            for k in range(0, table.shape[0], step):
+                rows = table[k : k + step]
+                for sink in sinks:
+                    sink.send(names, rows)
+                ahead = start + (float(rows[-1, 0]) - result.t[0]) / args.rate - time.monotonic()
+                if ahead > 0:
+                    time.sleep(ahead)
+        finally:
             for sink in sinks:
-                sink.send(names, rows)
-            ahead = start + (float(rows[-1, 0]) - result.t[0]) / args.rate - time.monotonic()
-            if ahead > 0:
-                time.sleep(ahead)
+                sink.close()
         print(f"streamed {table.shape[0]} rows to {len(sinks)} UDP sink(s)")
     return 0
