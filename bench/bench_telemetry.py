@@ -149,15 +149,21 @@ def _fps() -> dict[str, float]:
     out = {}
     with ServerThread(app) as server, tempfile.TemporaryDirectory() as profile:
         feed.arm()
-        for width, height in ((1280, 720), (640, 360)):
-            browser = Browser(f"{server.url}/", Path(profile) / f"{width}", (width, height))
+        for width, height, query in (
+            (1280, 720, ""),
+            (1280, 720, "antialias=0"),
+            (1280, 720, "antialias=0&scale=0.5"),
+        ):
+            url = f"{server.url}/?{query}"
+            browser = Browser(url, Path(profile) / f"{len(query)}", (width, height))
             try:
                 browser.wait_for("window.motosimStats && motosimStats.frames > 5")
                 time.sleep(1.0)
                 f0, t0 = browser.evaluate("[motosimStats.frames, performance.now()]")
                 time.sleep(5.0)
                 f1, t1 = browser.evaluate("[motosimStats.frames, performance.now()]")
-                out[f"view_fps_{width}x{height}"] = 1e3 * (f1 - f0) / (t1 - t0)
+                key = f"view_fps_{width}x{height}" + (f"_{query}" if query else "")
+                out[key] = 1e3 * (f1 - f0) / (t1 - t0)
             finally:
                 browser.close()
     return out

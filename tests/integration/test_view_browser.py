@@ -69,7 +69,7 @@ def test_the_view_renders_the_road_and_rides_the_replay(
     replay: tuple[ReplayFeed, str], tmp_path: Path
 ) -> None:
     feed, url = replay
-    browser = Browser(f"{url}/?token={TOKEN}", tmp_path / "profile")
+    browser = Browser(f"{url}/?token={TOKEN}&readback=1", tmp_path / "profile")
     try:
         browser.wait_for("window.motosimStats && motosimStats.ready && motosimStats.poses > 3")
         pixels = browser.evaluate(f"{CANVAS_PIXELS}('#scene')")

@@ -15,8 +15,14 @@ const info = await (await fetch('/api/info')).json();
 document.title = `${info.title}: the rider's view`;
 
 const canvas = $('scene');
-const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
-renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+const params = new URLSearchParams(location.search);
+const renderer = new THREE.WebGLRenderer({
+  canvas,
+  antialias: params.get('antialias') !== '0',
+  preserveDrawingBuffer: params.get('readback') === '1',  // for tests that read pixels back
+});
+// ?scale=0.5 renders at half resolution (for a software renderer); ?antialias=0 drops MSAA
+renderer.setPixelRatio(Number(params.get('scale')) || Math.min(window.devicePixelRatio, 2));
 const scene = new THREE.Scene();
 const sky = new THREE.Color(0x9cc3e6);
 scene.background = sky;
