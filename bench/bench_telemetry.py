@@ -81,10 +81,11 @@ def _loop_costs() -> dict[str, float]:
 def _fake_run() -> TimeSeries:
     t = np.arange(0.0, 30.0, 0.001)
     names = ("x", "y", "psi", "phi", "delta", "v_x", "theta_h")
+    wave = np.sin(t)
     data = np.column_stack(
-        [20 * t, 2 * np.sin(0.3 * t), 0.03 * np.cos(0.3 * t), 0.2 * np.sin(t)]
-        + [0.01 * np.sin(t), 20 + 0 * t, 0.01 * np.sin(t)]
+        [20 * t, 2 * np.sin(0.3 * t), 0.03 * np.cos(0.3 * t), 0.2 * wave, 0.01 * wave, 20 + 0 * t]
     )
+    data = np.column_stack([data, 0.01 * wave])
     return TimeSeries(t, data, names)
 
 

@@ -133,7 +133,7 @@ def test_without_the_token_the_buttons_do_nothing(
 
 
 def test_a_live_simulated_run_drives_the_view_and_the_dashboard(tmp_path: Path) -> None:
-    rig = SimulatedRig(_inputs(3.0))  # type: ignore[arg-type]
+    rig = SimulatedRig(_inputs(6.0))  # type: ignore[arg-type]
     app = create_app(rig.feed(), rig.road(), token=TOKEN, title="live")
     with ServerThread(app) as server:
         view = Browser(f"{server.url}/?token={TOKEN}", tmp_path / "view")
@@ -142,13 +142,16 @@ def test_a_live_simulated_run_drives_the_view_and_the_dashboard(tmp_path: Path) 
             dash.wait_for("window.motosimDash && motosimDash.state === 'idle'")
             view.wait_for("window.motosimStats && motosimStats.ready")
             dash.evaluate("document.getElementById('arm').click()")
+            dash.wait_for("motosimDash.lastControl")
+            assert rig.state() == "running"  # the run lasts 6 s of wall-clock time
             view.wait_for("motosimStats.lastPose && motosimStats.lastPose.t > 1.0")
-            assert rig.state() == "running"
             dash.wait_for("motosimDash.rows > 100")
             _save(view, tmp_path, "live_view.png")
             _save(dash, tmp_path, "live_dashboard.png")
-            dash.wait_for("motosimDash.state === 'done'", timeout=20.0)
-            assert view.evaluate("motosimStats.lastPose.t") == pytest.approx(3.0, abs=0.01)
+            dash.wait_for("motosimDash.state === 'done'", timeout=40.0)
+            # the view's last pose is the run's last row (6 s at 1 kHz)
+            assert view.wait_for("motosimStats.lastPose.t >= 5.99 && motosimStats.lastPose.t")
+            assert view.evaluate("motosimStats.lastPose.t") == pytest.approx(6.0, abs=0.01)
         finally:
             view.close()
             dash.close()

@@ -55,9 +55,7 @@ def test_telemetry_writes_an_mcap_the_reader_opens(
     assert rows[-1]["tau_r"] == pytest.approx(np.sin(0.5))
 
 
-def test_telemetry_streams_esmini_packets(
-    capsys: pytest.CaptureFixture[str], folder: Path
-) -> None:
+def test_telemetry_streams_esmini_packets(capsys: pytest.CaptureFixture[str], folder: Path) -> None:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
         sock.bind(("127.0.0.1", 0))
         sock.settimeout(5.0)

@@ -190,7 +190,7 @@ class ReplayFeed:
 
     Examples
     --------
-    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> t = np.arange(11) / 10
     >>> run = TimeSeries(t, np.column_stack([t, 0 * t, 0 * t, 0 * t, 0 * t, 20 + 0 * t]),
     ...                  ("x", "y", "psi", "phi", "delta", "v_x"))
     >>> clock = [0.0]
