@@ -74,7 +74,8 @@ function draw(p) {
   for (const v of [lo + pad, (lo + hi) / 2, hi - pad]) { g.moveTo(left, Y(v)); g.lineTo(w - 6, Y(v)); }
   g.stroke();
   g.fillStyle = '#555';
-  for (const v of [lo + pad, (lo + hi) / 2, hi - pad]) g.fillText(v.toPrecision(3), 2, Y(v) + 4);
+  const digits = Math.min(6, Math.max(0, 1 - Math.floor(Math.log10(hi - lo - 2 * pad))));
+  for (const v of [lo + pad, (lo + hi) / 2, hi - pad]) g.fillText(v.toFixed(digits), 2, Y(v) + 4);
   g.fillText(`${t1.toFixed(1)} s`, w - 50, h - 4);
   p.lines.forEach(([n, k, color], j) => {
     g.strokeStyle = color; g.lineWidth = 1.5; g.beginPath();
