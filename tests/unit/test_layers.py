@@ -1,9 +1,8 @@
 """The one-way data flow of ARCHITECTURE.md, checked on the import statements.
 
 params -> model -> {identification, estimation, control, cueing} -> sim -> io -> {rt, campaign,
-plotting}
--> report -> cli: a module imports only from its own package and from layers to its left,
-and siblings in braces do not import each other.
+plotting} -> {report, view} -> cli: a module imports only from its own package and from layers
+to its left, and siblings in braces do not import each other.
 """
 
 import ast
@@ -21,7 +20,7 @@ LAYERS = [
     {"sim"},
     {"io"},
     {"rt", "campaign", "plotting"},
-    {"report"},
+    {"report", "view"},
     {"cli"},
     {"__main__"},  # python -m motosim: the command line
 ]

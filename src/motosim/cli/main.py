@@ -45,6 +45,14 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "report": ("motosim.cli.simulate", "build the HTML report of a result folder"),
     "paper": ("motosim.cli.paper", "regenerate every figure of the paper's section V"),
+    "view": (
+        "motosim.cli.view",
+        "ride a saved result in the browser: the rider's view and a dashboard",
+    ),
+    "telemetry": (
+        "motosim.cli.view",
+        "export a saved result as MCAP, or stream it to PlotJuggler or esmini over UDP",
+    ),
     "campaign": (
         "motosim.cli.campaign",
         "run many perturbed runs of a scenario (grid, Latin hypercube, random draws)",

@@ -1,0 +1,140 @@
+"""``motosim view`` and ``motosim telemetry``: ride a saved result in the browser, export it."""
+
+import argparse
+import ipaddress
+import sys
+import time
+from typing import Any
+
+from motosim.errors import MotosimError
+
+__all__ = ["register"]
+
+
+def _address(option: str, text: str, default_port: int) -> tuple[str, int]:
+    host, _, port = text.partition(":")
+    if not host:
+        raise MotosimError(f"{option} {text!r}; expected HOST or HOST:PORT")
+    try:
+        return host, int(port) if port else default_port
+    except ValueError:
+        raise MotosimError(f"{option} port {port!r}; expected an integer") from None
+
+
+def register(sub: Any) -> None:
+    """Add ``view`` and ``telemetry`` to the subcommands."""
+    view = sub.add_parser(
+        "view",
+        help="ride a saved result in the browser: the rider's view and a dashboard",
+        description=(
+            "Serve the rider's view (three.js) and a live dashboard of a result folder written "
+            "by motosim simulate, replayed against the clock; open the printed address. "
+            "Reading is open to whoever reaches the server; play/pause/seek need the token "
+            "in the address. Needs the optional group: pip install 'motosim[view]'."
+        ),
+    )
+    view.add_argument("folder", help="a result folder written by motosim simulate")
+    view.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    view.add_argument("--port", type=int, default=8000, help="TCP port (default 8000; 0: any)")
+    view.add_argument("--rate", type=float, default=1.0, help="replay speed (1: real time)")
+    view.add_argument("--loop", action="store_true", help="start over at the end")
+    view.set_defaults(func=run_view)
+
+    telemetry = sub.add_parser(
+        "telemetry",
+        help="export a saved result as MCAP, or stream it to PlotJuggler or esmini over UDP",
+        description=(
+            "Write a result folder as an MCAP file (Foxglove, Lichtblick) and/or replay it in "
+            "real time as PlotJuggler UDP JSON and esmini ControllerUDPDriver pose packets."
+        ),
+    )
+    telemetry.add_argument("folder", help="a result folder written by motosim simulate")
+    telemetry.add_argument("--mcap", help="MCAP file to write")
+    telemetry.add_argument("--every", type=int, default=1, help="keep one row in EVERY (MCAP)")
+    telemetry.add_argument(
+        "--plotjuggler", metavar="HOST[:PORT]", help="stream UDP JSON to PlotJuggler (port 9870)"
+    )
+    telemetry.add_argument(
+        "--esmini", metavar="HOST[:PORT]", help="stream the pose to esmini's UDP driver (49950)"
+    )
+    telemetry.add_argument("--rate", type=float, default=1.0, help="stream speed (1: real time)")
+    telemetry.set_defaults(func=run_telemetry)
+
+
+def run_view(args: argparse.Namespace) -> int:
+    """Serve the view of a result until interrupted."""
+    from motosim.io.results import load_result
+    from motosim.view.app import ServerThread, create_app, new_token
+    from motosim.view.feeds import ReplayFeed, road_from_xy
+
+    if not 0 <= args.port < 65536:
+        raise MotosimError(f"--port {args.port}; expected 0..65535")
+    result = load_result(args.folder)
+    feed = ReplayFeed(result, rate=args.rate, loop=args.loop)
+    road = road_from_xy(result["x"], result["y"])
+    token = new_token()
+    title = str(result.metadata.get("scenario", {}).get("name", args.folder))
+    app = create_app(feed, road, token=token, title=title)
+    try:
+        local = ipaddress.ip_address(args.host).is_loopback
+    except ValueError:
+        local = args.host == "localhost"
+    if not local:
+        print(f"motosim: warning: serving on {args.host}, reachable from the network",
+              file=sys.stderr)  # fmt: skip
+    server = ServerThread(app, args.host, args.port).start()
+    print(f"rider's view: {server.url}/?token={token}")
+    print(f"dashboard:    {server.url}/dashboard?token={token}")
+    print("Ctrl-C stops the server.", flush=True)
+    try:
+        while True:
+            time.sleep(0.5)
+    finally:
+        server.stop()
+
+
+def run_telemetry(args: argparse.Namespace) -> int:
+    """Write and/or stream a result's telemetry."""
+    import numpy as np
+
+    from motosim.io.results import load_result
+    from motosim.io.telemetry import (
+        ESMINI_PORT,
+        PLOTJUGGLER_PORT,
+        EsminiUdp,
+        PlotJugglerUdp,
+        write_mcap,
+    )
+
+    if not (args.mcap or args.plotjuggler or args.esmini):
+        raise MotosimError("nothing to do; expected --mcap, --plotjuggler or --esmini")
+    if not args.rate > 0.0:
+        raise MotosimError(f"--rate {args.rate}; expected a number > 0")
+    result = load_result(args.folder)
+    if args.mcap:
+        count = write_mcap(result, args.mcap, every=args.every)
+        print(f"{args.mcap}: {count} messages")
+    sinks: list[PlotJugglerUdp | EsminiUdp] = []
+    if args.plotjuggler:
+        sinks.append(PlotJugglerUdp(*_address("--plotjuggler", args.plotjuggler, PLOTJUGGLER_PORT)))
+    if args.esmini:
+        host, port = _address("--esmini", args.esmini, ESMINI_PORT)
+        sinks.append(EsminiUdp(host, port=port))
+    if sinks:
+        names = ("t", *result.names)
+        table = np.column_stack([result.t, result.data])
+        start = time.monotonic()
+        step = max(1, round(1.0 / (60.0 * float(np.median(np.diff(result.t))))))
+        try:
+            for k in range(0, table.shape[0], step):
+                rows = table[k : k + step]
+                for sink in sinks:
+                    sink.send(names, rows)
+                ahead = start + (float(rows[-1, 0]) - result.t[0]) / args.rate - time.monotonic()
+                if ahead > 0:
+                    time.sleep(ahead)
+        finally:
+            for sink in sinks:
+                sink.close()
+        print(f"streamed {table.shape[0]} rows to {len(sinks)} UDP sink(s)")
+    return 0

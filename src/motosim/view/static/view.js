@@ -1,0 +1,207 @@
+// The rider's view: a three.js scene of the road, seen from the rider's eye, posed by
+// /ws/pose. Frames: motosim's ground frame (x forward at the start, y right, z down) maps to
+// three.js (X = x, Y = up, Z = y), a proper rotation; yaw psi is -psi - pi/2 about Y for a
+// camera looking down its -Z axis; roll phi (right side down) is -phi about the view axis.
+import * as THREE from 'three';
+
+const EYE = 1.2;          // m, eye height above the road when upright
+const token = new URLSearchParams(location.search).get('token') || '';
+const $ = (id) => document.getElementById(id);
+const stats = { frames: 0, fps: 0, poses: 0, lastPose: null, status: null, ready: false };
+window.motosimStats = stats;
+for (const a of document.querySelectorAll('a')) a.href += location.search;
+
+const info = await (await fetch('/api/info')).json();
+document.title = `${info.title}: the rider's view`;
+
+const canvas = $('scene');
+const params = new URLSearchParams(location.search);
+const renderer = new THREE.WebGLRenderer({
+  canvas,
+  antialias: params.get('antialias') !== '0',
+  preserveDrawingBuffer: params.get('readback') === '1',  // for tests that read pixels back
+});
+// ?scale=0.5 renders at half resolution (for a software renderer); ?antialias=0 drops MSAA
+renderer.setPixelRatio(Number(params.get('scale')) || Math.min(window.devicePixelRatio, 2));
+const scene = new THREE.Scene();
+const sky = new THREE.Color(0x9cc3e6);
+scene.background = sky;
+scene.fog = new THREE.Fog(sky, 150, 1500);
+const camera = new THREE.PerspectiveCamera(70, 1, 0.3, 3000);
+camera.rotation.order = 'YXZ';
+Object.assign(stats, { camera, renderer, scene });
+
+// --- road ----------------------------------------------------------------------------
+const road = info.road;
+const n = road.x.length;
+const tx = [], ty = [], s = [0];
+for (let i = 0; i < n; i++) {
+  const j = Math.min(i + 1, n - 1), k = Math.max(i - 1, 0);
+  const dx = road.x[j] - road.x[k], dy = road.y[j] - road.y[k];
+  const d = Math.hypot(dx, dy) || 1;
+  tx.push(dx / d); ty.push(dy / d);
+  if (i > 0) s.push(s[i - 1] + Math.hypot(road.x[i] - road.x[i - 1], road.y[i] - road.y[i - 1]));
+}
+// point at lateral offset (right positive) from centre-line point i, in three.js coordinates
+const at = (i, offset, height) =>
+  [road.x[i] - offset * ty[i], height, road.y[i] + offset * tx[i]];
+
+// The world is flat and the eye above it, so the flat layers (ground, shoulders, asphalt,
+// lines) are painted in order without the depth buffer (no z-fighting between coplanar
+// layers, whatever the GPU's depth precision) and the upright objects drawn after them.
+let layer = -10;
+function flat(mesh) {
+  mesh.material.depthTest = false; mesh.material.depthWrite = false;
+  mesh.renderOrder = layer++;
+  return mesh;
+}
+
+function ribbon(left, right, height, color, keep = () => true) {
+  const pos = [];
+  for (let i = 0; i + 1 < n; i++) {
+    if (!keep(i)) continue;
+    const a = at(i, left, height), b = at(i, right, height);
+    const c = at(i + 1, left, height), d = at(i + 1, right, height);
+    pos.push(...a, ...b, ...c, ...b, ...d, ...c);
+  }
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.Float32BufferAttribute(pos, 3));
+  const material = new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide });
+  return flat(new THREE.Mesh(geometry, material));
+}
+
+let cx = 0, cy = 0;
+for (let i = 0; i < n; i++) { cx += road.x[i] / n; cy += road.y[i] / n; }
+const ground = flat(new THREE.Mesh(new THREE.PlaneGeometry(12000, 12000),
+  new THREE.MeshBasicMaterial({ color: 0x5d8a3a })));
+ground.rotation.x = -Math.PI / 2;
+ground.position.set(cx, -0.02, cy);
+scene.add(ground);
+
+const w = road.width / 2;
+scene.add(ribbon(-w - 1.5, w + 1.5, 0.0, 0x8a8a7a));          // shoulders
+scene.add(ribbon(-w, w, 0.01, 0x3c3c40));                      // asphalt
+scene.add(ribbon(-w + 0.25, -w + 0.4, 0.02, 0xf4f4f4));        // left edge line
+scene.add(ribbon(w - 0.4, w - 0.25, 0.02, 0xf4f4f4));          // right edge line
+scene.add(ribbon(-0.075, 0.075, 0.02, 0xf4f4f4,                // dashed centre line: 3 m in 9 m
+  (i) => (s[i] % 9) < 3));
+
+
+// --- speed and distance cues: posts every 25 m, trees at seeded random places ------------
+let seed = 12345;
+const random = () => ((seed = (seed * 16807) % 2147483647) / 2147483647);
+const dummy = new THREE.Object3D();
+function instances(geometry, color, places) {
+  const mesh = new THREE.InstancedMesh(geometry, new THREE.MeshBasicMaterial({ color }),
+    places.length);
+  places.forEach(([x, y, z, scale], k) => {
+    dummy.position.set(x, y, z); dummy.scale.setScalar(scale); dummy.updateMatrix();
+    mesh.setMatrixAt(k, dummy.matrix);
+  });
+  scene.add(mesh);
+}
+const posts = [], tops = [], trunks = [], crowns = [];
+let next = 0, nextTree = 0;
+for (let i = 0; i < n; i++) {
+  if (s[i] >= next) {
+    for (const side of [-1, 1]) {
+      const [x, , z] = at(i, side * (w + 1.0), 0);
+      posts.push([x, 0.5, z, 1]); tops.push([x, 1.05, z, 1]);
+    }
+    next += 25;
+  }
+  if (s[i] >= nextTree) {
+    const side = random() < 0.5 ? -1 : 1;
+    const scale = 0.7 + 0.8 * random();
+    const [x, , z] = at(i, side * (w + 6 + 30 * random()), 0);
+    trunks.push([x, 1.0 * scale, z, scale]); crowns.push([x, 4.0 * scale, z, scale]);
+    nextTree += 12 + 20 * random();
+  }
+}
+instances(new THREE.BoxGeometry(0.12, 1.0, 0.12), 0xf0f0f0, posts);
+instances(new THREE.BoxGeometry(0.13, 0.12, 0.13), 0xd02020, tops);
+instances(new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, trunks);
+instances(new THREE.ConeGeometry(1.6, 5.0, 8), 0x2f6a2a, crowns);
+
+// --- pose ------------------------------------------------------------------------------
+let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
+  phi: 0, delta: 0, v_x: 0, theta_h: 0 };
+let status = info.status;
+function connect() {
+  const ws = new WebSocket(`ws://${location.host}/ws/pose`);
+  ws.onmessage = (event) => {
+    const message = JSON.parse(event.data);
+    if (message.pose) { pose = message.pose; stats.lastPose = pose; }
+    status = message.status; stats.status = status; stats.poses++;
+  };
+  ws.onclose = () => { $('state').textContent = 'disconnected'; setTimeout(connect, 1000); };
+}
+connect();
+
+function place() {
+  const roll = $('roll-toggle').checked ? (pose.phi || 0) : 0;
+  const psi = pose.psi || 0, phi = pose.phi || 0;
+  // the eye leans with the motorcycle about the contact line
+  const right = EYE * Math.sin(phi), up = EYE * Math.cos(phi);
+  camera.position.set(pose.x - right * Math.sin(psi), up, pose.y + right * Math.cos(psi));
+  camera.rotation.set(-0.04, -psi - Math.PI / 2, -roll);
+}
+
+function resize() {
+  const width = canvas.clientWidth, height = canvas.clientHeight;
+  if (canvas.width !== Math.round(width * renderer.getPixelRatio())) {
+    renderer.setSize(width, height, false);
+    camera.aspect = width / height;
+    camera.updateProjectionMatrix();
+  }
+}
+
+const deg = (r) => (r == null ? 0 : (r * 180) / Math.PI).toFixed(1);
+let fpsFrames = 0, fpsSince = performance.now();
+function frame(now) {
+  resize(); place();
+  renderer.render(scene, camera);
+  stats.frames++; fpsFrames++; stats.ready = true;
+  if (now - fpsSince >= 1000) {
+    stats.fps = (1000 * fpsFrames) / (now - fpsSince);
+    $('fps').textContent = stats.fps.toFixed(0);
+    fpsFrames = 0; fpsSince = now;
+  }
+  $('speed').textContent = ((pose.v_x || 0) * 3.6).toFixed(0);
+  $('steer').textContent = deg(pose.delta);
+  $('handlebar').textContent = deg(pose.theta_h);
+  $('roll').textContent = deg(pose.phi);
+  $('bar').style.transform = `rotate(${deg(pose.theta_h)}deg)`;
+  if (status) {
+    $('state').textContent = status.state;
+    $('clock').textContent = `${(status.t || 0).toFixed(1)} s`;
+    $('play').textContent = status.state === 'playing' || status.state === 'running'
+      ? (info.replay ? 'Pause' : 'Stop') : (info.replay ? 'Play' : 'Arm');
+    if (status.duration && !seeking) {
+      $('seek').max = status.duration; $('seek').value = status.t;
+    }
+  }
+  requestAnimationFrame(frame);
+}
+requestAnimationFrame(frame);
+
+// --- controls (POST with the token) ---------------------------------------------------------
+async function command(body) {
+  const response = await fetch('/api/control', {
+    method: 'POST', headers: { 'Content-Type': 'application/json', 'X-Motosim-Token': token },
+    body: JSON.stringify(body),
+  });
+  const answer = await response.json();
+  if (!response.ok) $('state').textContent = answer.error;
+  return answer;
+}
+let seeking = false;
+$('play').onclick = () => command({
+  action: status && (status.state === 'playing' || status.state === 'running') ? 'stop' : 'arm',
+});
+$('seek').oninput = () => { seeking = true; };
+$('seek').onchange = async () => {
+  await command({ action: 'seek', t: Number($('seek').value) }); seeking = false;
+};
+$('rate').onchange = () => command({ action: 'rate', rate: Number($('rate').value) });
+if (!info.replay) { $('seek').disabled = true; $('rate').disabled = true; }
