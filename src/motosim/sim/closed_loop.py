@@ -452,8 +452,8 @@ def simulate(
             on_block(out)
         if keep or k0 + rows >= n:
             blocks.append(out)
-    out = np.vstack(blocks)
-    return TimeSeries(out[:, 0].copy(), out[:, 1:].copy(), SIGNALS[1:])
+    out = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
+    return TimeSeries(out[:, 0], out[:, 1:], SIGNALS[1:])  # views: no copy of the run
 
 
 def run_metadata(inputs: RunInputs) -> dict[str, object]:
