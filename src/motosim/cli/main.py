@@ -11,12 +11,22 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from motosim import __version__
-from motosim.cli import design, estimate, excite, identify, modes, paper, params, simulate
+from motosim.cli import (
+    design,
+    estimate,
+    excite,
+    identify,
+    modes,
+    paper,
+    params,
+    rtcheck,
+    simulate,
+)
 from motosim.errors import MotosimError
 
 __all__ = ["main"]
 
-_COMMANDS = (params, modes, excite, identify, estimate, design, simulate, paper)
+_COMMANDS = (params, modes, excite, identify, estimate, design, simulate, paper, rtcheck)
 
 
 class _Parser(argparse.ArgumentParser):
