@@ -1,5 +1,6 @@
 """The safety stage: each protection and each fault observed, time to zero counted in periods."""
 
+import itertools
 import math
 
 import pytest
@@ -50,7 +51,7 @@ def test_fade_in_takes_half_a_second_on_every_enable() -> None:
     d.stage.enable()
     out = [d.period() for _ in range(60)]
     assert out[0] == pytest.approx(10.0 * 0.02) and out[49] == pytest.approx(10.0)
-    assert all(b >= a for a, b in zip(out, out[1:], strict=False))
+    assert all(b >= a for a, b in itertools.pairwise(out))
     d.stage.request_stop()  # fade-out, then idle
     out = [d.period() for _ in range(60)]
     assert out[0] == pytest.approx(9.8) and out[49] == 0.0 and d.stage.state == State.IDLE
