@@ -6,7 +6,7 @@ first. Units are SI with angles in radians.
 
 from typing import Final, NamedTuple
 
-__all__ = ["SIGNALS", "Signal", "unit_of"]
+__all__ = ["RECORDED", "SIGNALS", "Signal", "unit_of"]
 
 
 class Signal(NamedTuple):
@@ -47,6 +47,18 @@ SIGNALS: Final[dict[str, Signal]] = {
     "F_wx": Signal("longitudinal wind force", "N"),
     "e_y": Signal("virtual rider's lateral error from its path, right positive", "m"),
 }
+
+
+RECORDED: Final[tuple[str, ...]] = (
+    "t", "tau_r", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot", "theta_h_meas",
+    "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot", "phi_dot",
+    "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y",
+)  # fmt: skip
+"""The signals a closed-loop run records, in column order (each one is in :data:`SIGNALS`).
+
+The simulator's output row, the result files' columns and the plots follow this tuple:
+adding a recorded signal is one entry here (and in :data:`SIGNALS`) plus the code that
+computes it."""
 
 
 def unit_of(name: str) -> str:

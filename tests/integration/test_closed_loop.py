@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from motosim.cli.main import main
-from motosim.cli.simulate import load_scenario, resolve
+from motosim.io.runs import load_scenario, resolve
 from motosim.io.results import ResultWriter, load_result
 from motosim.sim import SIGNALS, parse_scenario, run_metadata, simulate
 

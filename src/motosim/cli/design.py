@@ -11,14 +11,16 @@ from motosim import __version__
 from motosim.cli._common import print_json, write_text
 from motosim.control.torque_feedback import (
     PAPER_CONTROLLER,
+    PAPER_DEN,
+    PAPER_NUM,
     LoopAnalysis,
     analyse_loop,
     check_options,
     design_torque_feedback,
 )
 from motosim.errors import MotosimError
-from motosim.estimation.walcott_zak import design as design_observer
-from motosim.io.design_file import ObserverSettings, dump_design
+from motosim.estimation.walcott_zak import ObserverSettings, design_with
+from motosim.io.design_file import dump_design
 from motosim.params import load_parameters
 
 __all__ = ["register"]
@@ -88,25 +90,8 @@ def run(args: argparse.Namespace) -> int:
         rate=args.rate,
         n_starts=args.starts,
     )
-    settings = ObserverSettings(
-        poles=(-0.1, -60.0),
-        eta=150.0,
-        injection_bandwidth=min(800.0, 0.8 * args.rate),
-        filter_time_constant=0.01,
-        dead_zone=0.05,
-        friction_width=0.05,
-        friction_compensation=True,
-    )
-    obs = design_observer(
-        hb,
-        poles=settings.poles,
-        eta=settings.eta,
-        injection_bandwidth=settings.injection_bandwidth,
-        filter_time_constant=settings.filter_time_constant,
-        dead_zone=settings.dead_zone,
-        friction_width=settings.friction_width,
-        friction_compensation=settings.friction_compensation,
-    )
+    settings = ObserverSettings.for_step(1.0 / args.rate)
+    obs = design_with(hb, settings)
     paper = analyse_loop(hb, PAPER_CONTROLLER, rate=args.rate)
     report: dict[str, Any] = {
         "handlebar": args.handlebar,
@@ -124,8 +109,8 @@ def run(args: argparse.Namespace) -> int:
         "gamma_min": ctrl.gamma_min,
         "gamma_gap": ctrl.gamma / ctrl.gamma_min - 1.0,
         "paper_controller": {
-            "num": [-2.355, -613.7],
-            "den": [1.0, 1445.0],
+            "num": list(PAPER_NUM),
+            "den": list(PAPER_DEN),
             "gamma": paper.four_block_gamma,
             "analysis": _analysis(paper),
         },
@@ -162,8 +147,8 @@ def run(args: argparse.Namespace) -> int:
             continuous=ctrl.controller,
             discrete={"zoh": ctrl.controller_zoh, "tustin": ctrl.controller_tustin},
             paper_controller={
-                "num": [-2.355, -613.7],
-                "den": [1.0, 1445.0],
+                "num": list(PAPER_NUM),
+                "den": list(PAPER_DEN),
                 "gamma": paper.four_block_gamma,
             },
         )

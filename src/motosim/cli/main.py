@@ -22,7 +22,7 @@ from motosim.cli import (
     rtcheck,
     simulate,
 )
-from motosim.errors import MotosimError
+from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailed
 
 __all__ = ["main"]
 
@@ -50,13 +50,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code (0 success, 2 bad input)."""
+    """Run the command line; returns the exit code (0 success, 2 bad input, 3 a failed run)."""
     args = build_parser().parse_args(argv)
     try:
         code: int = args.func(args)
     except MotosimError as err:
         print(f"motosim: error: {err}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
+    except RunFailed as err:
+        print(f"motosim: run failed: {err}", file=sys.stderr)
+        return EXIT_RUN_FAILED
     except KeyboardInterrupt:
         print("motosim: interrupted", file=sys.stderr)
         return 130

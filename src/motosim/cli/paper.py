@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from motosim.cli._common import print_json
-from motosim.cli.simulate import resolve, run_scenario
+from motosim.cli.simulate import run_scenario
+from motosim.io.runs import resolve
 from motosim.errors import MotosimError
 from motosim.io.results import SimResult, load_result
 from motosim.sim import Scenario, parse_scenario

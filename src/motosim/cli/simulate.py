@@ -2,33 +2,15 @@
 
 import argparse
 import sys
-import tomllib
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from motosim.cli._common import print_json
-from motosim.control.statespace import StateSpace
-from motosim.control.torque_feedback import PAPER_CONTROLLER, design_torque_feedback
 from motosim.errors import MotosimError
-from motosim.io import read_log
-from motosim.io.design_file import read_design
-from motosim.io.results import ResultWriter, SimResult
-from motosim.params import HandlebarParameters, load_parameters
-from motosim.sim import (
-    SIGNALS,
-    RunInputs,
-    Scenario,
-    parse_scenario,
-    prepare,
-    run_metadata,
-    simulate,
-)
+from motosim.io.runs import load_scenario, resolve, run_to_folder
+from motosim.sim import RunInputs
 
-__all__ = ["load_scenario", "register", "resolve", "run_scenario"]
-
-_DESIGNS: dict[tuple[HandlebarParameters, float, int], StateSpace] = {}
+__all__ = ["register", "run_scenario"]
 
 
 def register(sub: Any) -> None:
@@ -56,100 +38,20 @@ def register(sub: Any) -> None:
     report.set_defaults(func=run_report)
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario file (one-line :class:`MotosimError` otherwise)."""
-    source = Path(path)
-    if not source.is_file():
-        raise MotosimError(f"{path}: no such scenario file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
-    return parse_scenario(data, origin=str(path))
-
-
-def _relative(name: str, base: Path) -> str | Path:
-    candidate = base / name
-    return candidate if candidate.suffix == ".toml" and candidate.is_file() else name
-
-
-def _controller(scenario: Scenario, nominal: HandlebarParameters, base: Path) -> StateSpace | None:
-    c = scenario.controller
-    if c.kind == "none" or scenario.architecture == "open_loop":
-        return None
-    if c.kind == "paper":
-        return PAPER_CONTROLLER
-    if c.design is not None:
-        return read_design(_relative(c.design, base)).controller
-    key = (nominal, c.bandwidth, c.order)
-    if key not in _DESIGNS:
-        _DESIGNS[key] = design_torque_feedback(
-            nominal, rng=np.random.default_rng(0), bandwidth=c.bandwidth, order=c.order,
-            rate=scenario.rates.measurement, n_starts=4,
-        ).controller  # fmt: skip
-    return _DESIGNS[key]
-
-
-def resolve(scenario: Scenario, base: Path) -> RunInputs:
-    """Load what the scenario names (parameter sets, design, CSV profiles), relative to ``base``."""
-    hb = scenario.handlebar
-    true = load_parameters(_relative(hb.true, base), "handlebar")
-    nominal = load_parameters(_relative(hb.nominal, base), "handlebar")
-    tables = {}
-    profiles = [
-        scenario.motorcycle.drive_torque,
-        scenario.motorcycle.brake_torque,
-        scenario.motorcycle.wind_force,
-    ]
-    if scenario.rider.profile is not None:
-        profiles.append(scenario.rider.profile)
-    for profile in profiles:
-        if profile.kind == "csv":
-            name = profile.settings["file"]
-            tables[name] = read_log(
-                base / name, required=(profile.settings["column"],), min_samples=2
-            )
-    return prepare(
-        scenario,
-        sharp=load_parameters(_relative(scenario.motorcycle.params, base), "sharp"),
-        true_handlebar=true,
-        nominal_handlebar=nominal,
-        controller=_controller(scenario, nominal, base),
-        tables=tables,
-    )
-
-
 def run_scenario(
     inputs: RunInputs, folder: Path, *, progress: bool, overwrite: bool = False
 ) -> dict[str, Any]:
-    """Simulate into ``folder`` with a progress bar; returns the metrics written."""
-    from motosim.report import metrics
-
+    """Simulate into ``folder``, with a progress bar on a terminal; returns the metrics."""
     sc = inputs.scenario
+    if not progress:
+        return run_to_folder(inputs, folder, overwrite=overwrite)
+    from tqdm import tqdm
+
     n = round(sc.duration * sc.rates.control)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=n, unit=" steps", desc=sc.name, file=sys.stderr, leave=False, unit_scale=True
-        )
-    metadata = run_metadata(inputs)
-    with ResultWriter(folder, SIGNALS, metadata, overwrite=overwrite) as writer:
-
-        def on_block(block: np.ndarray) -> None:
-            writer.append(block)
-            if bar is not None:
-                bar.update(block.shape[0])
-
-        try:
-            run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
-        finally:
-            if bar is not None:
-                bar.close()
-        summary = metrics(SimResult(run.t, run.data, run.names, metadata, {}, True))
-        writer.close(summary)
-    return summary
+    with tqdm(
+        total=n, unit=" steps", desc=sc.name, file=sys.stderr, leave=False, unit_scale=True
+    ) as bar:
+        return run_to_folder(inputs, folder, overwrite=overwrite, on_rows=bar.update)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -160,7 +62,9 @@ def run(args: argparse.Namespace) -> int:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
     inputs = resolve(scenario, Path(args.scenario).parent)
     try:
-        summary = run_scenario(inputs, folder, progress=not args.json, overwrite=args.overwrite)
+        summary = run_scenario(
+            inputs, folder, progress=not args.json and sys.stderr.isatty(), overwrite=args.overwrite
+        )
     except KeyboardInterrupt:
         print(f"motosim: interrupted; the partial result is in {folder}", file=sys.stderr)
         return 130

@@ -9,6 +9,7 @@ system algebra: interconnections live in :mod:`motosim.control.loops`. Every pub
 of :mod:`motosim.control` accepts either a :class:`StateSpace` or a 4-tuple of array-likes.
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,6 +51,9 @@ class StateSpace:
         Output matrix.
     D : NDArray[np.float64], shape (p, m)
         Direct feedthrough.
+    dt : float
+        Sampling time [s]: 0 for a continuous-time system, > 0 for a discrete-time one
+        (x_{k+1} = A x_k + B u_k, as :func:`motosim.control.torque_feedback.discretize` returns).
 
     Raises
     ------
@@ -61,8 +65,11 @@ class StateSpace:
     B: Array
     C: Array
     D: Array
+    dt: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.dt, int | float) and math.isfinite(self.dt) and self.dt >= 0):
+            raise MotosimError(f"dt = {self.dt!r}; expected a finite sampling time >= 0 [s]")
         A = _matrix(self.A, "A")
         n = A.shape[0]
         if A.shape != (n, n):
@@ -86,6 +93,11 @@ class StateSpace:
         object.__setattr__(self, "B", B)
         object.__setattr__(self, "C", C)
         object.__setattr__(self, "D", D)
+
+    @property
+    def is_discrete(self) -> bool:
+        """Whether this is a discrete-time system (``dt`` > 0)."""
+        return self.dt > 0
 
     @property
     def n_states(self) -> int:

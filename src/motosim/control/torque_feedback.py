@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from scipy.linalg import expm
 from scipy.signal import cont2discrete, ss2tf
 
-from motosim.control.fixed_order import fixed_order_synthesis
+from motosim.control.fixed_order import FixedOrderResult, fixed_order_synthesis
 from motosim.control.loops import closed_loop_poles, four_block_norm
 from motosim.control.ncf import ncfsyn
 from motosim.control.statespace import StateSpace, frequency_response
@@ -35,6 +35,8 @@ from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
     "PAPER_CONTROLLER",
+    "PAPER_DEN",
+    "PAPER_NUM",
     "LoopAnalysis",
     "TorqueFeedbackDesign",
     "analyse_loop",
@@ -43,15 +45,20 @@ __all__ = [
     "discretize",
     "handlebar_plants",
     "series",
+    "synthesize_controller",
 ]
 
 Array = NDArray[np.float64]
 
+PAPER_NUM = (-2.355, -613.7)
+"""Numerator of eq. (26), highest power first [A/rad]."""
+PAPER_DEN = (1.0, 1445.0)
+"""Denominator of eq. (26), highest power first."""
 PAPER_CONTROLLER = StateSpace(
-    np.array([[-1445.0]]),
+    np.array([[-PAPER_DEN[1]]]),
     np.array([[1.0]]),
-    np.array([[-613.7 + 2.355 * 1445.0]]),
-    np.array([[-2.355]]),
+    np.array([[PAPER_NUM[1] - PAPER_NUM[0] * PAPER_DEN[1]]]),
+    np.array([[PAPER_NUM[0]]]),
 )
 """Eq. (26): K(s) = (-2.355 s - 613.7) / (s + 1445) [A/rad], positive feedback."""
 
@@ -93,12 +100,14 @@ def discretize(system: StateSpace, dt: float, method: str) -> StateSpace:
     """Discrete-time matrices of ``system`` at the step ``dt`` [s], ``"zoh"`` or ``"tustin"``."""
     if method not in ("zoh", "tustin"):
         raise MotosimError(f"method = {method!r}; expected 'zoh' or 'tustin'")
+    if system.is_discrete:
+        raise MotosimError(f"the system is already discrete (dt = {system.dt:g} s)")
     Ad, Bd, Cd, Dd, _ = cont2discrete(
         (system.A, system.B, system.C, system.D),
         dt,
         method="bilinear" if method == "tustin" else "zoh",
     )
-    return StateSpace(Ad, Bd, Cd, Dd)
+    return StateSpace(Ad, Bd, Cd, Dd, dt=float(dt))
 
 
 def _discrete_loop_radius(
@@ -303,6 +312,54 @@ class TorqueFeedbackDesign:
     analysis: LoopAnalysis
 
 
+def _shaped_synthesis(
+    hb: HandlebarParameters,
+    *,
+    rng: np.random.Generator,
+    bandwidth: float,
+    order: int,
+    n_starts: int,
+) -> tuple[float, float, StateSpace, FixedOrderResult]:
+    """W1's gain and corner [rad/s], the shaped plant G_s = G_h W1 and K_s tuned on it."""
+    G_h, _ = handlebar_plants(hb)
+    omega_c = 2 * math.pi * bandwidth
+    corner = omega_c / 10.0
+    unit = abs(frequency_response(series(_weight(1.0, corner), G_h), omega_c)[0, 0])
+    gain = 1.0 / unit
+    G_s = series(_weight(gain, corner), G_h)
+    tuned = fixed_order_synthesis(G_s.A, G_s.B, G_s.C, G_s.D, order, rng=rng, n_starts=n_starts)
+    if not tuned.is_stable:
+        raise MotosimError(f"no stabilising controller of order {order} was found; try order + 1")
+    return gain, corner, G_s, tuned
+
+
+def synthesize_controller(
+    hb: HandlebarParameters,
+    *,
+    rng: np.random.Generator,
+    bandwidth: float = 10.0,
+    order: int = 1,
+    rate: float = 1000.0,
+    n_starts: int = 8,
+) -> StateSpace:
+    """The controller K = W1 K_s of :func:`design_torque_feedback`, without its analysis.
+
+    What a simulation needs: the same synthesis (same ``rng``, same K) without the full-order
+    optimum, the margins and the robustness grid. Parameters as for
+    :func:`design_torque_feedback`.
+
+    Returns
+    -------
+    StateSpace
+        Continuous controller K [A/rad], positive feedback.
+    """
+    check_options(bandwidth=bandwidth, rate=rate)
+    gain, corner, _, tuned = _shaped_synthesis(
+        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts
+    )
+    return series(tuned.controller, _weight(gain, corner))
+
+
 def design_torque_feedback(
     hb: HandlebarParameters,
     *,
@@ -340,18 +397,11 @@ def design_torque_feedback(
         On a bandwidth or rate out of range, or if no stabilising controller is found.
     """
     check_options(bandwidth=bandwidth, rate=rate)
-    G_h, _ = handlebar_plants(hb)
-    omega_c = 2 * math.pi * bandwidth
-    corner = omega_c / 10.0
-    unit = abs(frequency_response(series(_weight(1.0, corner), G_h), omega_c)[0, 0])
-    gain = 1.0 / unit
-    W1 = _weight(gain, corner)
-    G_s = series(W1, G_h)
+    gain, corner, G_s, tuned = _shaped_synthesis(
+        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts
+    )
     full = ncfsyn(G_s.A, G_s.B, G_s.C, G_s.D)
-    tuned = fixed_order_synthesis(G_s.A, G_s.B, G_s.C, G_s.D, order, rng=rng, n_starts=n_starts)
-    if not tuned.is_stable:
-        raise MotosimError(f"no stabilising controller of order {order} was found; try order + 1")
-    K = series(tuned.controller, W1)
+    K = series(tuned.controller, _weight(gain, corner))
     num, den = ss2tf(K.A, K.B, K.C, K.D)
     return TorqueFeedbackDesign(
         bandwidth=float(bandwidth),

@@ -26,6 +26,7 @@ from scipy.linalg import expm, solve_discrete_are
 
 from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
+from motosim.estimation.kernel import INVERSE_DYNAMICS, KALMAN, EstimatorKernel, pack
 from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
 
@@ -36,7 +37,9 @@ __all__ = [
     "KalmanTorqueEstimator",
     "design_inverse_dynamics",
     "design_kalman",
+    "inverse_dynamics_start",
     "inverse_dynamics_step",
+    "kalman_start",
     "kalman_step",
 ]
 
@@ -147,6 +150,15 @@ def inverse_dynamics_step(
     return out, tau
 
 
+@njit(cache=True)
+def inverse_dynamics_start(state: Array, theta: float, theta_dot: float, current: float) -> None:
+    """Start the filters at rest at the first sample's angle [rad] and current [A], in place."""
+    state[0] = theta
+    state[1] = 0.0
+    state[2] = current
+    state[3] = 0.0
+
+
 class InverseDynamicsEstimator:
     """Stepper: eq. (5) solved for tau_r with filtered derivatives.
 
@@ -192,6 +204,11 @@ class InverseDynamicsEstimator:
         )
         self.reset()
 
+    @property
+    def kernel(self) -> EstimatorKernel:
+        """The compiled kernel's record (:func:`inverse_dynamics_step`), for compiled loops."""
+        return pack(INVERSE_DYNAMICS, self._Phi, self._Gamma, np.zeros(4), self._p, self.dt)
+
     def reset(self) -> None:
         """Forget the past: the next sample initialises the filters at rest."""
         self._state: Array | None = None
@@ -208,7 +225,8 @@ class InverseDynamicsEstimator:
         """
         state = self._state
         if state is None:
-            state = np.array([float(theta_h), 0.0, float(i_m), 0.0])
+            state = np.zeros(4)
+            inverse_dynamics_start(state, float(theta_h), float(theta_h_dot), float(i_m))
         self._state, tau = inverse_dynamics_step(
             state, float(theta_h), float(i_m), self._Phi, self._Gamma, self._p
         )
@@ -334,6 +352,15 @@ def kalman_step(
     return post, nxt
 
 
+@njit(cache=True)
+def kalman_start(state: Array, theta: float, theta_dot: float, current: float) -> None:
+    """Start the prediction at the first sample's angle [rad], rate and torque 0, in place."""
+    state[0] = 0.0
+    state[1] = theta
+    state[2] = 0.0
+    state[3] = 0.0
+
+
 class KalmanTorqueEstimator:
     """Stepper: steady-state Kalman filter on eq. (10) with a random-walk rider torque.
 
@@ -380,6 +407,11 @@ class KalmanTorqueEstimator:
         self._p = np.array([gains.beta_s, gains.dead_zone, gains.friction_width])
         self.reset()
 
+    @property
+    def kernel(self) -> EstimatorKernel:
+        """The compiled kernel's record (:func:`kalman_step`, Kalman gain), for compiled loops."""
+        return pack(KALMAN, self._Phi, self._Gamma, self._K, self._p, self.dt)
+
     def reset(self) -> None:
         """Forget the past: the next sample initialises the angle; rate and torque 0."""
         self._z: Array | None = None
@@ -394,7 +426,11 @@ class KalmanTorqueEstimator:
         tau_r_hat : float
             Filtered rider-torque estimate [N*m].
         """
-        z = self._z if self._z is not None else np.array([0.0, float(theta_h), 0.0])
+        z = self._z
+        if z is None:
+            start = np.zeros(4)
+            kalman_start(start, float(theta_h), float(theta_h_dot), float(i_m))
+            z = start[:3]
         post, self._z = kalman_step(
             z, float(theta_h), float(i_m), self._Phi, self._Gamma, self._K, self._p
         )

@@ -7,10 +7,10 @@ these names.
 """
 
 import math
-from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from motosim.errors import MotosimError
@@ -19,18 +19,30 @@ from motosim.estimation.baselines import (
     KalmanTorqueEstimator,
     design_inverse_dynamics,
     design_kalman,
+    inverse_dynamics_start,
+    inverse_dynamics_step,
+    kalman_start,
+    kalman_step,
 )
 from motosim.estimation.differentiator import differentiate
-from motosim.estimation.walcott_zak import WalcottZakObserver, design
+from motosim.estimation.kernel import INVERSE_DYNAMICS, WALCOTT_ZAK, EstimatorKernel
+from motosim.estimation.walcott_zak import (
+    ObserverSettings,
+    WalcottZakObserver,
+    design_with,
+    wz_start,
+    wz_step,
+)
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
     "ESTIMATORS",
     "EstimatorFactory",
-    "KernelArguments",
     "TorqueEstimator",
     "estimate",
-    "kernel_arguments",
+    "kernel",
+    "start_kernel",
+    "step_kernel",
     "walcott_zak_for_step",
 ]
 
@@ -39,6 +51,11 @@ Array = NDArray[np.float64]
 
 class TorqueEstimator(Protocol):
     """Stepper interface shared by the rider-torque estimators."""
+
+    @property
+    def kernel(self) -> EstimatorKernel:
+        """The record of the compiled kernel, for compiled loops."""
+        ...
 
     def reset(self) -> None:
         """Return to the initial state."""
@@ -69,13 +86,8 @@ def walcott_zak_for_step(
     -------
     WalcottZakObserver
     """
-    if not (math.isfinite(dt) and dt > 0):
-        raise MotosimError(f"dt = {dt!r}; expected a finite step > 0 [s]")
-    gains = design(
-        hb,
-        injection_bandwidth=min(800.0, 0.8 / dt),
-        friction_compensation=friction_compensation,
-    )
+    settings = ObserverSettings.for_step(dt, friction_compensation=friction_compensation)
+    gains = design_with(hb, settings)
     return WalcottZakObserver(gains, dt)
 
 
@@ -183,34 +195,10 @@ def estimate(
     return rate, tau
 
 
-@dataclass(frozen=True, slots=True)
-class KernelArguments:
-    """The arrays of an estimator's compiled one-sample kernel, padded to common shapes.
-
-    ``kind`` 0 is :func:`~motosim.estimation.walcott_zak.wz_step` (Phi 2x2, Gamma 2x4, gain
-    F C_a in ``gain[:2]``, p[:8]); 1 is
-    :func:`~motosim.estimation.baselines.inverse_dynamics_step` (Phi 4x4, Gamma 4x2, p[:7]);
-    2 is :func:`~motosim.estimation.baselines.kalman_step` (Phi 3x3, Gamma 3x2, Kalman gain in
-    ``gain[:3]``, p[:3]). Compiled loops (:mod:`motosim.sim`) dispatch on ``kind``.
-    """
-
-    kind: int
-    Phi: Array
-    Gamma: Array
-    gain: Array
-    p: Array
-
-
-def _padded(values: Array, shape: tuple[int, ...]) -> Array:
-    out = np.zeros(shape)
-    out[tuple(slice(0, n) for n in values.shape)] = values
-    return out
-
-
-def kernel_arguments(
+def kernel(
     name: str, hb: HandlebarParameters, dt: float, *, friction_compensation: bool = True
-) -> KernelArguments:
-    """The compiled-kernel arrays of the estimator ``name`` designed for ``hb`` at ``dt``.
+) -> EstimatorKernel:
+    """The compiled-kernel record of the estimator ``name``, default design, for ``hb`` at ``dt``.
 
     Raises
     ------
@@ -219,18 +207,59 @@ def kernel_arguments(
     """
     if name not in ESTIMATORS:
         raise MotosimError(f"estimator {name!r} is unknown; expected one of {sorted(ESTIMATORS)}")
-    stepper = ESTIMATORS[name](hb, dt, friction_compensation=friction_compensation)
-    if isinstance(stepper, WalcottZakObserver):
-        kind, gain = 0, stepper._g
-    elif isinstance(stepper, InverseDynamicsEstimator):
-        kind, gain = 1, np.zeros(4)
+    return ESTIMATORS[name](hb, dt, friction_compensation=friction_compensation).kernel
+
+
+@njit(cache=True)
+def start_kernel(
+    k: EstimatorKernel, state: Array, theta: float, theta_dot: float, current: float
+) -> None:
+    """Start ``state`` (4,) at the first sample, as the estimator of ``k.kind`` does."""
+    if k.kind == WALCOTT_ZAK:
+        wz_start(state, theta, theta_dot, current)
+    elif k.kind == INVERSE_DYNAMICS:
+        inverse_dynamics_start(state, theta, theta_dot, current)
     else:
-        assert isinstance(stepper, KalmanTorqueEstimator)
-        kind, gain = 2, stepper._K
-    return KernelArguments(
-        kind=kind,
-        Phi=_padded(stepper._Phi, (4, 4)),
-        Gamma=_padded(stepper._Gamma, (4, 4)),
-        gain=_padded(np.asarray(gain, dtype=float), (4,)),
-        p=_padded(stepper._p, (8,)),
+        kalman_start(state, theta, theta_dot, current)
+
+
+@njit(cache=True)
+def step_kernel(
+    k: EstimatorKernel, state: Array, theta: float, theta_dot: float, current: float
+) -> float:
+    """One sample of the estimator of ``k.kind``: updates ``state`` (4,), returns tau_r_hat.
+
+    Parameters
+    ----------
+    k : EstimatorKernel
+        The estimator's record.
+    state : ndarray, shape (4,)
+        Its state, started by :func:`start_kernel`; advanced to the next sample in place.
+    theta, theta_dot : float
+        Measured angle [rad] and differentiated rate [rad/s].
+    current : float
+        Motor current held over the coming step [A].
+
+    Returns
+    -------
+    float
+        Rider-torque estimate at this sample [N*m].
+    """
+    if k.kind == WALCOTT_ZAK:
+        new, _ = wz_step(
+            state, theta, theta_dot, current, k.Phi[:2, :2], k.Gamma[:2, :], k.gain[:2], k.p
+        )
+        for i in range(4):
+            state[i] = new[i]
+        return float(new[2])
+    if k.kind == INVERSE_DYNAMICS:
+        new, tau = inverse_dynamics_step(state, theta, current, k.Phi, k.Gamma[:, :2], k.p[:7])
+        for i in range(4):
+            state[i] = new[i]
+        return float(tau)
+    post, nxt = kalman_step(
+        state[:3], theta, current, k.Phi[:3, :3], k.Gamma[:3, :2], k.gain[:3], k.p[:3]
     )
+    for i in range(3):
+        state[i] = nxt[i]
+    return float(post[2])

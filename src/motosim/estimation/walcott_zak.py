@@ -40,16 +40,20 @@ from scipy.linalg import solve_continuous_lyapunov
 
 from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
+from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel, pack
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
     "OUTPUT_ROWS",
+    "ObserverSettings",
     "WalcottZakGains",
     "WalcottZakObserver",
     "design",
+    "design_with",
     "invariant_zeros",
+    "wz_start",
     "wz_step",
 ]
 
@@ -164,19 +168,76 @@ def invariant_zeros(A: Array, D: Array, C: Array) -> Array:
     return np.array(zeros, dtype=complex)
 
 
+@dataclass(frozen=True, slots=True)
+class ObserverSettings:
+    """The settings of :func:`design` that a design file records; the defaults are ours.
+
+    Attributes
+    ----------
+    poles : tuple of two floats
+        Eigenvalues of A - L C_a [1/s].
+    eta : float
+        Injection amplitude [N*m].
+    injection_bandwidth : float
+        eta F D / epsilon, the injection's bandwidth inside its boundary layer [1/s].
+    filter_time_constant : float
+        Low-pass filter of the equivalent injection [s].
+    dead_zone, friction_width : float
+        Velocity dead zone (Remark 5.2) and tanh width of the friction compensation [rad/s].
+    friction_compensation : bool
+        Subtract the nominal dry friction.
+    """
+
+    poles: tuple[float, float] = (-0.1, -60.0)
+    eta: float = 150.0
+    injection_bandwidth: float = 800.0
+    filter_time_constant: float = 0.01
+    dead_zone: float = 0.05
+    friction_width: float = 0.05
+    friction_compensation: bool = True
+
+    @classmethod
+    def for_step(cls, dt: float, *, friction_compensation: bool = True) -> "ObserverSettings":
+        """The defaults with the injection as fast as a sampled loop at ``dt`` [s] allows.
+
+        The injection bandwidth is min(800, 0.8 / dt) [1/s] (see :class:`WalcottZakObserver`).
+        """
+        _check_positive("dt", dt, "s")
+        return cls(
+            injection_bandwidth=min(800.0, 0.8 / dt), friction_compensation=friction_compensation
+        )
+
+
+_DEFAULT = ObserverSettings()
+
+
+def design_with(hb: HandlebarParameters, settings: ObserverSettings) -> "WalcottZakGains":
+    """:func:`design` with the recorded ``settings`` (eq. (15) outputs, consistent sign)."""
+    return design(
+        hb,
+        poles=settings.poles,
+        eta=settings.eta,
+        injection_bandwidth=settings.injection_bandwidth,
+        filter_time_constant=settings.filter_time_constant,
+        dead_zone=settings.dead_zone,
+        friction_width=settings.friction_width,
+        friction_compensation=settings.friction_compensation,
+    )
+
+
 def design(
     hb: HandlebarParameters,
     *,
     outputs: tuple[str, ...] = ("theta_h", "theta_h_dot"),
-    poles: tuple[float, float] = (-0.1, -60.0),
-    eta: float = 150.0,
+    poles: tuple[float, float] = _DEFAULT.poles,
+    eta: float = _DEFAULT.eta,
     epsilon: float | None = None,
-    injection_bandwidth: float = 800.0,
+    injection_bandwidth: float = _DEFAULT.injection_bandwidth,
     state_weight: Array | None = None,
-    filter_time_constant: float = 0.01,
-    friction_compensation: bool = True,
-    dead_zone: float = 0.05,
-    friction_width: float = 0.05,
+    filter_time_constant: float = _DEFAULT.filter_time_constant,
+    friction_compensation: bool = _DEFAULT.friction_compensation,
+    dead_zone: float = _DEFAULT.dead_zone,
+    friction_width: float = _DEFAULT.friction_width,
     sign_convention: Literal["consistent", "printed"] = "consistent",
 ) -> WalcottZakGains:
     """Design the Walcott-Zak rider-torque observer for the handlebar ``hb``.
@@ -413,6 +474,18 @@ def wz_step(
     return out, E
 
 
+@njit(cache=True)
+def wz_start(state: Array, theta: float, theta_dot: float, current: float) -> None:
+    """Start the observer state at the first sample: x_hat = [theta_dot, theta], no torque.
+
+    ``state`` (4,) is written in place; ``current`` [A] is not needed by this observer.
+    """
+    state[0] = theta_dot
+    state[1] = theta
+    state[2] = 0.0
+    state[3] = theta_dot
+
+
 class WalcottZakObserver:
     """Stepper: the rider-torque observer of :func:`design` sampled at the step ``dt``.
 
@@ -494,6 +567,11 @@ class WalcottZakObserver:
         )
         self.reset()
 
+    @property
+    def kernel(self) -> EstimatorKernel:
+        """The compiled kernel's record (:func:`wz_step`, gain F C_a), for compiled loops."""
+        return pack(WALCOTT_ZAK, self._Phi, self._Gamma, self._g, self._p, self.dt)
+
     def reset(self) -> None:
         """Return to the initial state: the next sample initialises x_hat; tau_r_hat = 0."""
         self._state: Array | None = None
@@ -521,8 +599,8 @@ class WalcottZakObserver:
         """
         state = self._state
         if state is None:
-            rate = float(theta_h_dot)
-            state = np.array([rate, float(theta_h), 0.0, rate])
+            state = np.zeros(4)
+            wz_start(state, float(theta_h), float(theta_h_dot), float(i_m))
         new, _ = wz_step(
             state,
             float(theta_h),

@@ -20,23 +20,11 @@ from typing import Any
 import numpy as np
 
 from motosim.control.statespace import StateSpace
+from motosim.estimation.walcott_zak import ObserverSettings
 from motosim.errors import MotosimError
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = ["DesignFile", "ObserverSettings", "dump_design", "read_design"]
-
-
-@dataclass(frozen=True, slots=True)
-class ObserverSettings:
-    """The arguments of :func:`motosim.estimation.walcott_zak.design` that were used."""
-
-    poles: tuple[float, float]
-    eta: float
-    injection_bandwidth: float
-    filter_time_constant: float
-    dead_zone: float
-    friction_width: float
-    friction_compensation: bool
 
 
 @dataclass(frozen=True, slots=True)
@@ -114,9 +102,11 @@ def _get(table: Mapping[str, Any], key: str, where: str) -> Any:
     return table[key]
 
 
-def _state_space(table: Mapping[str, Any], where: str) -> StateSpace:
+def _state_space(table: Mapping[str, Any], where: str, dt: float = 0.0) -> StateSpace:
     try:
-        return StateSpace(*(np.asarray(_get(table, k, where), dtype=float) for k in "ABCD"))
+        return StateSpace(
+            *(np.asarray(_get(table, k, where), dtype=float) for k in "ABCD"), dt=dt
+        )
     except (TypeError, ValueError) as err:
         raise MotosimError(f"{where}: {err}") from None
 
@@ -174,7 +164,9 @@ def read_design(path: str | Path) -> DesignFile:
         observer=observer,
         controller=_state_space(ctrl, f"{path} [controller]"),
         controller_discrete={
-            m: _state_space(_get(ctrl, m, f"{path} [controller]"), f"{path} [controller.{m}]")
+            m: _state_space(
+                _get(ctrl, m, f"{path} [controller]"), f"{path} [controller.{m}]", 1.0 / rate
+            )
             for m in ("zoh", "tustin")
         },
     )

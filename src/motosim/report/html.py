@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
+from motosim.sim.metrics import run_metrics
 from motosim.io.results import SimResult, load_result
 from motosim.plotting.closed_loop import (
     plot_motor_torque,
@@ -54,54 +55,11 @@ _METRICS: dict[str, _Metric] = {
 }
 
 
-def _rms(values: NDArray[np.float64]) -> float:
-    return float(np.sqrt(np.mean(np.square(values))))
-
-
 def metrics(result: SimResult) -> dict[str, float]:
-    """Summary numbers of a run, in SI units.
-
-    Parameters
-    ----------
-    result : SimResult
-        A run, complete or interrupted.
-
-    Returns
-    -------
-    dict of str to float
-        Always ``duration`` [s] (last minus first time), ``samples`` and ``complete`` (1.0 or
-        0.0); when the run has at least one instant and the signals they need:
-        ``rms_tau_r_error`` [N*m] (RMS of ``tau_r_hat - tau_r``), ``rms_tracking_error`` [rad]
-        (RMS of ``theta_h - delta``), ``rms_rate_error`` [rad/s] (RMS of
-        ``theta_h_dot_hat - theta_h_dot``), ``max_abs_phi`` [rad], ``max_abs_e_y`` [m].
-
-    Examples
-    --------
-    >>> t = np.array([0.0, 1.0])
-    >>> r = SimResult(t, np.array([[0.1, 0.2], [-0.3, 0.0]]), ("tau_r", "phi"), {}, {}, False)
-    >>> m = metrics(r)
-    >>> m["duration"], m["complete"], round(m["max_abs_phi"], 3)
-    (1.0, 0.0, 0.2)
-    """
-    out = {
-        "duration": float(result.t[-1] - result.t[0]) if result.t.size else 0.0,
-        "samples": float(result.t.size),
-        "complete": 1.0 if result.complete else 0.0,
-    }
-    if result.t.size == 0:
-        return out
-    differences = {
-        "rms_tau_r_error": ("tau_r_hat", "tau_r"),
-        "rms_tracking_error": ("theta_h", "delta"),
-        "rms_rate_error": ("theta_h_dot_hat", "theta_h_dot"),
-    }
-    for key, (estimate, truth) in differences.items():
-        if estimate in result and truth in result:
-            out[key] = _rms(result[estimate] - result[truth])
-    for key, name in (("max_abs_phi", "phi"), ("max_abs_e_y", "e_y")):
-        if name in result:
-            out[key] = float(np.max(np.abs(result[name])))
-    return out
+    """Summary numbers of a saved run: :func:`motosim.sim.metrics.run_metrics` of its signals."""
+    return run_metrics(
+        result.t, lambda name: result[name] if name in result else None, complete=result.complete
+    )
 
 
 _CSS = """

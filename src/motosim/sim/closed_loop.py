@@ -1,18 +1,20 @@
 """The closed loop of Fig. 7 (and the open loop of Fig. 9), simulated.
 
-Each stack period the simulator: measures the handlebar (latest sample of the measurement
-rate, the angle quantised like the encoder, the current with noise), lets the stack command
-the motor (:func:`~motosim.sim.stack.stack_command`), updates the stack's estimator and
-virtual motorcycle (:func:`~motosim.sim.stack.stack_update`, :func:`~motosim.model.sharp.bike_rk4`),
-asks the rider for a torque (a profile, or the virtual rider looking at the motorcycle), and
-advances the true handlebar over the period in plant sub-steps with exact stick-slip friction,
-the motor current held. One row of :data:`SIGNALS` is recorded per stack period.
+The stack (:mod:`motosim.sim.stack`) runs as it would on the simulator; this module adds the
+world around it, the *rig*: the true handlebar, its sensors and the rider. Each stack period
+the simulator measures the handlebar (the angle quantised like the encoder, the current with
+noise), asks the rider for a torque (a profile, or the virtual rider looking at the
+motorcycle), records a row of :data:`SIGNALS`, calls :func:`motosim.sim.stack.step`, and
+advances the true handlebar over the period with exact stick-slip friction, the motor current
+held. The design happens once, before the run: :func:`build_stack` and :func:`build_rig`.
 """
 
 import dataclasses
 import math
+from collections import namedtuple
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -20,32 +22,44 @@ from numpy.typing import NDArray
 
 from motosim import __version__
 from motosim.control.statespace import StateSpace
-from motosim.control.torque_feedback import discretize
-from motosim.errors import MotosimError
-from motosim.estimation.registry import kernel_arguments
-from motosim.model import sharp as sharp_model
+from motosim.errors import MotosimError, RunFailed
+from motosim.estimation.registry import ESTIMATORS
+from motosim.estimation.walcott_zak import (
+    ObserverSettings,
+    WalcottZakObserver,
+    design_with,
+)
 from motosim.model.handlebar import perturbed, step_exact
-from motosim.model.sharp import bike_rk4
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
+from motosim.signals import RECORDED
 from motosim.sim import paths
 from motosim.sim.rider import design_rider, rider_torque
 from motosim.sim.scenario import PathSpec, Profile, Scenario
-from motosim.sim.stack import stack_command, stack_update
+from motosim.sim.stack import StackData, StackModel, design_stack, new_data, reset, step
 from motosim.timeseries import TimeSeries
 
-__all__ = ["SIGNALS", "RunInputs", "prepare", "run_metadata", "sample_profile", "simulate"]
+__all__ = [
+    "SIGNALS",
+    "RigData",
+    "RigModel",
+    "RunInputs",
+    "build_rig",
+    "build_stack",
+    "prepare",
+    "run_metadata",
+    "sample_profile",
+    "simulate",
+]
 
 Array = NDArray[np.float64]
 
-SIGNALS = (
-    "t", "tau_r", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot", "theta_h_meas",
-    "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot", "phi_dot",
-    "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y",
-)  # fmt: skip
-"""Recorded signals, in column order (see :mod:`motosim.signals`)."""
+SIGNALS = RECORDED
+"""Recorded signals, in column order: :data:`motosim.signals.RECORDED`."""
 
-_BIKE_STEP = 1e-3  # largest RK4 step of the virtual motorcycle [s]
+_Columns = namedtuple("_Columns", RECORDED)  # type: ignore[misc]
+_COLUMNS = _Columns(*range(len(RECORDED)))
+"""Column of each recorded signal by name, passed to the compiled loop (``col.tau_r``)."""
 
 
 def sample_profile(profile: Profile, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
@@ -101,7 +115,26 @@ def _path(spec: PathSpec, length: float) -> paths.Path:
 
 @dataclass(frozen=True, slots=True)
 class RunInputs:
-    """Everything a scenario refers to, resolved: parameter sets, controller, tables."""
+    """Everything a scenario refers to, resolved: parameter sets, designs, tables.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The run.
+    sharp : SharpParameters
+        The virtual motorcycle.
+    true_handlebar : HandlebarParameters
+        The simulated handlebar, the scenario's perturbations applied.
+    nominal_handlebar : HandlebarParameters
+        What the observer and the controller were designed for.
+    controller : StateSpace or None
+        Controller K [A/rad] (continuous, or discrete at the measurement step); None without
+        torque feedback.
+    observer : ObserverSettings or None
+        Walcott-Zak settings from a design file; None for the defaults at the measurement step.
+    tables : Mapping of str to TimeSeries
+        CSV profiles by file name.
+    """
 
     scenario: Scenario
     sharp: SharpParameters
@@ -109,6 +142,7 @@ class RunInputs:
     nominal_handlebar: HandlebarParameters
     controller: StateSpace | None
     tables: Mapping[str, TimeSeries]
+    observer: ObserverSettings | None = None
 
 
 def prepare(
@@ -118,6 +152,7 @@ def prepare(
     true_handlebar: HandlebarParameters,
     nominal_handlebar: HandlebarParameters,
     controller: StateSpace | None,
+    observer: ObserverSettings | None = None,
     tables: Mapping[str, TimeSeries] | None = None,
 ) -> RunInputs:
     """Apply the scenario's perturbations to the true handlebar and bundle the inputs.
@@ -136,133 +171,242 @@ def prepare(
     nominal = (
         nominal_handlebar if hb.friction else dataclasses.replace(nominal_handlebar, beta_s=0.0)
     )
-    if (
-        scenario.controller.kind != "none"
-        and scenario.architecture == "closed_loop"
-        and controller is None
-    ):
+    if _feedback(scenario) and controller is None:
         raise MotosimError('the scenario needs a controller: give one (or kind = "none")')
-    return RunInputs(scenario, sharp, true, nominal, controller, tables or {})
+    return RunInputs(scenario, sharp, true, nominal, controller, tables or {}, observer)
+
+
+def _feedback(scenario: Scenario) -> bool:
+    return scenario.controller.kind != "none" and scenario.architecture == "closed_loop"
+
+
+def build_stack(inputs: RunInputs) -> StackModel:
+    """Design the stack of a run: estimator, differentiator, controller, motorcycle.
+
+    The estimator is the scenario's, designed for the nominal handlebar at the measurement
+    step; a Walcott-Zak observer takes the design file's settings when the run has them.
+    """
+    sc = inputs.scenario
+    h_meas = 1.0 / sc.rates.measurement
+    est = sc.estimator
+    if est.name == "walcott_zak" and inputs.observer is not None:
+        settings = dataclasses.replace(
+            inputs.observer, friction_compensation=est.friction_compensation
+        )
+        kernel = WalcottZakObserver(design_with(inputs.nominal_handlebar, settings), h_meas).kernel
+    else:
+        stepper = ESTIMATORS[est.name](
+            inputs.nominal_handlebar, h_meas, friction_compensation=est.friction_compensation
+        )
+        kernel = stepper.kernel
+    return design_stack(
+        inputs.sharp,
+        kernel,
+        inputs.controller if _feedback(sc) else None,
+        control_rate=sc.rates.control,
+        measurement_rate=sc.rates.measurement,
+        lipschitz=est.lipschitz,
+        discretization=sc.controller.discretization,
+        max_current=sc.controller.max_current,
+        speed=sc.motorcycle.speed,
+        true_torque=sc.motorcycle.input == "true",
+    )
+
+
+class RigModel(NamedTuple):
+    """The simulated world around the stack: true handlebar, sensors, rider, longitudinal inputs.
+
+    Attributes
+    ----------
+    handlebar : ndarray, shape (4,)
+        The true handlebar's [J_eq, beta_eq, beta_s, N k_t] (SI units).
+    plant_substeps : int
+        Plant sub-steps per stack period (while the rider's torque changes within one).
+    quantum : float
+        Encoder resolution [rad]; 0 for an exact angle.
+    virtual_rider : bool
+        The rider is the path-following virtual rider (else ``rider_profile``).
+    rider_profile : ndarray
+        Rider torque at every plant sub-step [N*m].
+    path : ndarray, shape (4, m)
+        The virtual rider's path: x, y [m], heading [rad], curvature [1/m].
+    path_ds : float
+        Path spacing [m].
+    rider_speeds, rider_K, rider_x_ss, rider_tau_ss : ndarray
+        The virtual rider's gain schedule (:class:`~motosim.sim.rider.RiderGains`).
+    rider_limits : ndarray, shape (2,)
+        [preview [s], largest torque [N*m]].
+    force : ndarray, shape (n,)
+        Longitudinal force of eq. (2) each period [N].
+    current_noise : ndarray, shape (n,)
+        Current-sensor error each period [A].
+    """
+
+    handlebar: Array
+    plant_substeps: int
+    quantum: float
+    virtual_rider: bool
+    rider_profile: Array
+    path: Array
+    path_ds: float
+    rider_speeds: Array
+    rider_K: Array
+    rider_x_ss: Array
+    rider_tau_ss: Array
+    rider_limits: Array
+    force: Array
+    current_noise: Array
+
+
+class RigData(NamedTuple):
+    """The world's states: the true handlebar [theta_h, theta_h'] and the rider's path index."""
+
+    handlebar: Array
+    path_index: NDArray[np.int64]
+
+
+def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
+    """The world of a run: true handlebar, sensors (noise drawn from ``rng``), rider, inputs."""
+    sc = inputs.scenario
+    h = 1.0 / sc.rates.control
+    n_sub = round(sc.rates.plant / sc.rates.control)
+    n = round(sc.duration / h)
+    t: Array = np.arange(n, dtype=np.float64) * h
+    rider = sc.rider
+    if rider.kind == "torque":
+        assert rider.profile is not None
+        t_fine = (np.arange(n * n_sub) / (n * n_sub)) * (n * h)
+        profile = sample_profile(rider.profile, t_fine, inputs.tables)
+        path_arr, path_ds = np.zeros((4, 2)), 1.0
+        gains = design_rider(inputs.sharp, speeds=np.array([1.0, 2.0]))
+    else:
+        assert rider.path is not None
+        profile = np.zeros(1)
+        route = _path(rider.path, max(sc.motorcycle.speed, 20.0) * sc.duration * 1.5 + 200.0)
+        path_arr, path_ds = np.vstack([route.x, route.y, route.psi, route.kappa]), route.ds
+        gains = design_rider(
+            inputs.sharp,
+            lateral_tolerance=rider.lateral_tolerance,
+            course_tolerance=rider.course_tolerance,
+            torque_scale=rider.torque_scale,
+            preview=rider.preview,
+            max_torque=rider.max_torque,
+        )
+    mc = sc.motorcycle
+    r_D = derived_geometry(inputs.sharp)["r_D"]
+    drive = sample_profile(mc.drive_torque, t, inputs.tables)
+    brake = np.maximum(sample_profile(mc.brake_torque, t, inputs.tables), 0.0)
+    force = (drive - brake) / r_D + sample_profile(mc.wind_force, t, inputs.tables)
+    bits = sc.measurement.encoder_bits
+    noise = sc.measurement.current_noise
+    hb = inputs.true_handlebar
+    return RigModel(
+        handlebar=np.array([hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp]),
+        plant_substeps=n_sub,
+        quantum=2 * math.pi / 2**bits if bits else 0.0,
+        virtual_rider=rider.kind == "virtual",
+        rider_profile=profile,
+        path=path_arr,
+        path_ds=float(path_ds),
+        rider_speeds=gains.speeds,
+        rider_K=gains.K,
+        rider_x_ss=gains.x_ss,
+        rider_tau_ss=gains.tau_ss,
+        rider_limits=np.array([gains.preview, gains.max_torque]),
+        force=force,
+        current_noise=rng.normal(0.0, noise, n) if noise else np.zeros(n),
+    )
 
 
 @njit(cache=True)
 def _run_chunk(
     k0: int,
     out: Array,
-    hb: Array,
-    hbp: Array,
-    n_sub: int,
-    tau_profile: Array,
-    rider_kind: int,
-    path: Array,
-    path_ds: float,
-    rg_speeds: Array,
-    rg_K: Array,
-    rg_xss: Array,
-    rg_tauss: Array,
-    rg: Array,
-    rider_state: Array,
-    meas_every: int,
-    quantum: float,
-    noise: Array,
-    est: Array,
-    diff: Array,
-    flags: Array,
-    est_kind: int,
-    Phi: Array,
-    Gamma: Array,
-    gain: Array,
-    p: Array,
-    diff_p: Array,
-    z: Array,
-    work: Array,
-    A0: Array,
-    A1: Array,
-    Bv: Array,
-    bikep: Array,
-    force: Array,
-    n_bike: int,
-    true_input: bool,
-    ctrl_x: Array,
-    ctrl_work: Array,
-    Ad: Array,
-    Bd: Array,
-    Cd: Array,
-    Dd: Array,
-    max_current: float,
-    ctrl_on: bool,
-    held: Array,
-    h: float,
+    col: tuple[int, ...],
+    stack: StackModel,
+    data: StackData,
+    rig: RigModel,
+    world: RigData,
 ) -> None:
-    """Advance ``out.shape[0]`` stack periods from period ``k0``, recording each."""
-    J, beta, beta_s, nkt = hbp[0], hbp[1], hbp[2], hbp[3]
-    m, m_eq, v_min = bikep[0], bikep[1], bikep[2]
-    h_sub = h / n_sub
+    """Advance ``out.shape[0]`` stack periods from period ``k0``, recording a row each."""
+    J, beta, beta_s, nkt = rig.handlebar[0], rig.handlebar[1], rig.handlebar[2], rig.handlebar[3]
+    n_sub = rig.plant_substeps
+    h = stack.dt
+    hb = world.handlebar
+    z = data.motorcycle
     for row in range(out.shape[0]):
         k = k0 + row
-        t = k * h
-        new_sample = k % meas_every == 0
-        if new_sample:  # the sensors: quantised angle; the current loop's command is measured
-            theta_meas = math.floor(hb[0] / quantum + 0.5) * quantum if quantum > 0.0 else hb[0]
-            held[0] = theta_meas
-            held[1] = stack_command(
-                ctrl_x, Ad, Bd, Cd, Dd, theta_meas, z[5], max_current, ctrl_on, ctrl_work
-            )
-        theta_meas, i_cmd = held[0], held[1]
-        rate_hat, tau_hat = stack_update(
-            est, diff, flags, est_kind, Phi, Gamma, gain, p, diff_p,
-            theta_meas, i_cmd + noise[k], new_sample,
-        )  # fmt: skip
+        q = rig.quantum
+        theta_meas = math.floor(hb[0] / q + 0.5) * q if q > 0.0 else hb[0]
         # the rider: a profile, or the virtual rider looking at the motorcycle
         e_y = 0.0
-        if rider_kind == 1:
+        if rig.virtual_rider:
             tau_rider, idx, e_y = rider_torque(
-                z[:8], z[8], z[9], z[10], z[11], int(rider_state[0]), path, path_ds,
-                rg_speeds, rg_K, rg_xss, rg_tauss, rg[0], rg[1],
+                z[:8], z[8], z[9], z[10], z[11], int(world.path_index[0]), rig.path, rig.path_ds,
+                rig.rider_speeds, rig.rider_K, rig.rider_x_ss, rig.rider_tau_ss,
+                rig.rider_limits[0], rig.rider_limits[1],
             )  # fmt: skip
-            rider_state[0] = idx
+            world.path_index[0] = idx
         else:
-            tau_rider = tau_profile[k * n_sub]
-        friction = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
+            tau_rider = rig.rider_profile[k * n_sub]
         o = out[row]
-        o[0], o[1], o[2], o[3] = t, tau_rider, tau_hat, friction
-        o[4], o[5], o[6], o[7] = hb[0], hb[1], theta_meas, rate_hat
-        o[8], o[9], o[10], o[11] = i_cmd, nkt * i_cmd, z[5], z[8]
-        o[12], o[13], o[14], o[15], o[16] = z[0], z[1], z[2], z[3], z[4]
-        o[17], o[18], o[19], o[20], o[21], o[22] = z[6], z[7], z[9], z[10], z[11], e_y
-        # the virtual motorcycle, driven by the estimate (or the true torque)
-        steer = tau_rider if true_input else tau_hat
-        for _ in range(n_bike):
-            bike_rk4(z, work, A0, A1, Bv, steer, force[k], m, m_eq, v_min, h / n_bike)
+        o[col.t] = k * h
+        o[col.tau_r] = tau_rider
+        o[col.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
+        o[col.theta_h] = hb[0]
+        o[col.theta_h_dot] = hb[1]
+        o[col.v_y], o[col.psi_dot], o[col.phi_dot], o[col.delta_dot] = z[0], z[1], z[2], z[3]
+        o[col.phi], o[col.delta], o[col.F_yr], o[col.F_yf] = z[4], z[5], z[6], z[7]
+        o[col.v_x], o[col.psi], o[col.x], o[col.y] = z[8], z[9], z[10], z[11]
+        o[col.e_y] = e_y
+        # the stack: command, estimate, virtual motorcycle
+        i_cmd = step(stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k])
+        o[col.theta_h_meas] = data.held[0]
+        o[col.theta_h_dot_hat] = data.held[2]
+        o[col.tau_r_hat] = data.held[3]
+        o[col.i_m] = i_cmd
+        o[col.tau_m] = nkt * i_cmd
         # the true handlebar over the period, the current held: one exact step while the
         # rider torque is constant over it, else one per plant sub-step
-        steady = rider_kind == 1
+        steady = rig.virtual_rider
         if not steady:
             steady = True
             for j in range(1, n_sub):
-                if tau_profile[k * n_sub + j] != tau_rider:
+                if rig.rider_profile[k * n_sub + j] != tau_rider:
                     steady = False
                     break
         if steady:
             hb[0], hb[1] = step_exact(hb[0], hb[1], tau_rider + nkt * i_cmd, J, beta, beta_s, h)
         else:
             for j in range(n_sub):
-                tr = tau_profile[k * n_sub + j]
-                hb[0], hb[1] = step_exact(hb[0], hb[1], tr + nkt * i_cmd, J, beta, beta_s, h_sub)
+                tr = rig.rider_profile[k * n_sub + j]
+                hb[0], hb[1] = step_exact(
+                    hb[0], hb[1], tr + nkt * i_cmd, J, beta, beta_s, h / n_sub
+                )
 
 
-def _controller_arrays(inputs: RunInputs, h_meas: float) -> tuple[Array, ...]:
-    sc = inputs.scenario
-    if sc.architecture == "open_loop" or sc.controller.kind == "none" or inputs.controller is None:
-        return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.zeros((1, 1))
-    K = discretize(inputs.controller, h_meas, sc.controller.discretization)
-    return K.A, K.B, K.C, K.D
+def _check_block(out: Array) -> None:
+    """Refuse a block with a non-finite value: a signal never written, or a divergence."""
+    finite = np.isfinite(out)
+    if finite.all():
+        return
+    unwritten = [SIGNALS[j] for j in range(out.shape[1]) if np.isnan(out[:, j]).all()]
+    if unwritten and out.shape[0] > 1:
+        raise AssertionError(f"recorded signals never computed: {', '.join(unwritten)}")
+    row = int(np.argmin(finite.all(axis=1)))
+    bad = [SIGNALS[j] for j in range(out.shape[1]) if not finite[row, j]]
+    raise RunFailed(
+        f"the simulation diverged at t = {out[row, 0]:.3f} s ({', '.join(bad)} not finite); "
+        "check the rates, the controller and the rider",
+        time=float(out[row, 0]),
+    )
 
 
 def simulate(
     inputs: RunInputs,
     *,
     rng: np.random.Generator,
+    stack: StackModel | None = None,
     on_block: Callable[[Array], None] | None = None,
     chunk: float = 1.0,
     keep: bool = True,
@@ -275,6 +419,9 @@ def simulate(
         From :func:`prepare`.
     rng : numpy.random.Generator
         Source of the current-sensor noise.
+    stack : StackModel, optional
+        The designed stack; by default :func:`build_stack` of ``inputs``. A campaign builds
+        it once and runs it on many perturbed handlebars.
     on_block : callable, optional
         Called with each recorded block (rows of :data:`SIGNALS`) as soon as it is computed,
         for example to write it to a file and advance a progress bar.
@@ -292,88 +439,29 @@ def simulate(
     ------
     MotosimError
         If a design is impossible at the scenario's rates.
+    RunFailed
+        If the simulation diverges (a non-finite signal); the blocks before it were passed
+        to ``on_block``.
     """
     sc = inputs.scenario
-    h = 1.0 / sc.rates.control
-    h_meas = 1.0 / sc.rates.measurement
-    n_sub = round(sc.rates.plant / sc.rates.control)
-    meas_every = round(sc.rates.control / sc.rates.measurement)
-    n = round(sc.duration / h)
-    t: Array = np.arange(n, dtype=np.float64) * h
-    hb = inputs.true_handlebar
-    nominal = inputs.nominal_handlebar
-    t_fine = (np.arange(n * n_sub) / (n * n_sub)) * (n * h)
-    rider = sc.rider
-    if rider.kind == "torque":
-        assert rider.profile is not None
-        tau_profile = sample_profile(rider.profile, t_fine, inputs.tables)
-        path_arr, path_ds = np.zeros((4, 2)), 1.0
-        gains = design_rider(inputs.sharp, speeds=np.array([1.0, 2.0]))
-    else:
-        assert rider.path is not None
-        tau_profile = np.zeros(1)
-        route = _path(rider.path, max(sc.motorcycle.speed, 20.0) * sc.duration * 1.5 + 200.0)
-        path_arr, path_ds = np.vstack([route.x, route.y, route.psi, route.kappa]), route.ds
-        gains = design_rider(
-            inputs.sharp,
-            lateral_tolerance=rider.lateral_tolerance,
-            course_tolerance=rider.course_tolerance,
-            torque_scale=rider.torque_scale,
-            preview=rider.preview,
-            max_torque=rider.max_torque,
-        )
-    est = kernel_arguments(
-        sc.estimator.name, nominal, h_meas, friction_compensation=sc.estimator.friction_compensation
-    )
-    lip = sc.estimator.lipschitz
-    diff_p = np.array([h_meas, 1.5 * math.sqrt(lip), 1.1 * lip])
-    mc = sc.motorcycle
-    d = derived_geometry(inputs.sharp)
-    A0, A1, Bv = sharp_model.lpv_matrices(inputs.sharp)
-    drive = sample_profile(mc.drive_torque, t, inputs.tables)
-    brake = np.maximum(sample_profile(mc.brake_torque, t, inputs.tables), 0.0)
-    force = (drive - brake) / d["r_D"] + sample_profile(mc.wind_force, t, inputs.tables)
-    Ad, Bd, Cd, Dd = _controller_arrays(inputs, h_meas)
-    quantum = 2 * math.pi / 2**sc.measurement.encoder_bits if sc.measurement.encoder_bits else 0.0
-    noise = (
-        rng.normal(0.0, sc.measurement.current_noise, n)
-        if sc.measurement.current_noise
-        else np.zeros(n)
-    )
-    z = np.zeros(12)
-    z[8] = mc.speed
-    state = {
-        "hb": np.zeros(2), "rider": np.zeros(1), "est": np.zeros(4), "diff": np.zeros(2),
-        "flags": np.array([1.0, 0.0, 0.0]), "ctrl": np.zeros(Ad.shape[0]), "held": np.zeros(2),
-    }  # fmt: skip
-    rows = max(1, round(chunk / h))
-    hb_p = np.array([hb.J_eq, hb.beta_eq, hb.beta_s, nominal.torque_per_amp])
+    model = build_stack(inputs) if stack is None else stack
+    rig = build_rig(inputs, rng=rng)
+    data = new_data(model)
+    world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
+    reset(model, data, 0.0, 0.0)
+    n = rig.current_noise.size
+    rows = max(1, round(chunk * sc.rates.control))
     blocks = []
     for k0 in range(0, n, rows):
-        out = np.empty((min(rows, n - k0), len(SIGNALS)))
-        _run_chunk(
-            k0, out, state["hb"], hb_p,
-            n_sub, tau_profile, 1 if rider.kind == "virtual" else 0, path_arr, path_ds,
-            gains.speeds, gains.K, gains.x_ss, gains.tau_ss,
-            np.array([gains.preview, gains.max_torque]), state["rider"], meas_every, quantum,
-            noise, state["est"], state["diff"], state["flags"], est.kind, est.Phi, est.Gamma,
-            est.gain, est.p, diff_p, z, np.zeros((13, 12)), A0, A1, Bv,
-            np.array([d["m"], d["m_eq"], sharp_model.MIN_SPEED]), force,
-            max(1, math.ceil(h / _BIKE_STEP - 1e-9)), mc.input == "true", state["ctrl"],
-            np.zeros(max(1, Ad.shape[0])), Ad, Bd, Cd, Dd, sc.controller.max_current,
-            sc.architecture == "closed_loop" and Ad.shape[0] + abs(Dd[0, 0]) > 0, state["held"], h,
-        )  # fmt: skip
-        if not np.all(np.isfinite(out)):
-            raise MotosimError(
-                f"the simulation diverged near t = {out[0, 0]:.3f} s (a non-finite signal); "
-                "check the rates, the controller and the rider"
-            )
+        out = np.full((min(rows, n - k0), len(SIGNALS)), np.nan)
+        _run_chunk(k0, out, _COLUMNS, model, data, rig, world)
+        _check_block(out)
         if on_block is not None:
             on_block(out)
         if keep or k0 + rows >= n:
             blocks.append(out)
-    data = np.vstack(blocks)
-    return TimeSeries(data[:, 0].copy(), data[:, 1:].copy(), SIGNALS[1:])
+    out = np.vstack(blocks)
+    return TimeSeries(out[:, 0].copy(), out[:, 1:].copy(), SIGNALS[1:])
 
 
 def run_metadata(inputs: RunInputs) -> dict[str, object]:
@@ -386,5 +474,9 @@ def run_metadata(inputs: RunInputs) -> dict[str, object]:
         "nominal_handlebar": dataclasses.asdict(inputs.nominal_handlebar),
         "controller": None
         if inputs.controller is None
-        else {k: getattr(inputs.controller, k).tolist() for k in "ABCD"},
+        else {
+            **{k: getattr(inputs.controller, k).tolist() for k in "ABCD"},
+            "dt": inputs.controller.dt,
+        },
+        "observer": None if inputs.observer is None else dataclasses.asdict(inputs.observer),
     }

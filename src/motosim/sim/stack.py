@@ -1,124 +1,345 @@
-"""The compiled step of the riding simulator's software stack (Fig. 7), shared by both loops.
+"""The riding simulator's software stack (Fig. 7): a designed model, its data, and one step.
 
-The stack is what runs on the simulator's computer: it takes the measured handlebar angle and
-motor current, estimates the rider's torque (differentiator + observer), drives the virtual
-motorcycle with it, and commands the motor current that makes the handlebar follow the
-motorcycle's steer angle. The offline simulator (:mod:`motosim.sim.closed_loop`) and the
-real-time loop call the same two functions each sample:
+The stack is what runs on the simulator's computer. Each sample it takes the measured
+handlebar angle, commands the motor current that makes the handlebar follow the virtual
+motorcycle's steer angle, differentiates the angle, estimates the rider's torque and drives
+the virtual motorcycle with that estimate. As in MuJoCo, it is split in two:
 
-1. :func:`stack_command` -- the controller: i_m = K (theta_h - delta), positive feedback
-   (eq. (24)), saturated, from the measured angle and the current steer angle;
-2. :func:`stack_update` -- with the current that will be held over the coming interval:
-   differentiator and estimator (dispatching on its kind, see
-   :func:`motosim.estimation.registry.kernel_arguments`); the loop then advances the
-   motorcycle with :func:`motosim.model.sharp.bike_rk4`.
+- :class:`StackModel`, everything designed, built once by the pure function
+  :func:`design_stack`: the estimator's discrete kernel record, the differentiator's gains,
+  the discrete controller, the motorcycle's speed-scheduled matrices, the limits and rates;
+- :class:`StackData`, every state that changes in a run, made by :func:`new_data`.
 
-Everything is plain numeric code over float64 arrays, compiled with numba and runnable
-uncompiled under ``NUMBA_DISABLE_JIT=1``.
+:func:`reset` starts the data at a first measurement and :func:`step` advances the whole
+stack by one control period and returns the motor current command. The offline simulator
+(:mod:`motosim.sim.closed_loop`), the real-time loop and a campaign call exactly these two
+functions; they are plain numeric code compiled with numba (``NUMBA_DISABLE_JIT=1`` runs them
+as Python). Both records are named tuples so that compiled code takes them as they are.
 """
+
+import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from motosim.estimation.baselines import inverse_dynamics_step, kalman_step
-from motosim.estimation.differentiator import std_step
-from motosim.estimation.walcott_zak import wz_step
+from motosim.control.statespace import StateSpace
+from motosim.control.torque_feedback import discretize
+from motosim.errors import MotosimError
+from motosim.estimation.differentiator import LAMBDA_0, LAMBDA_1, std_step
+from motosim.estimation.kernel import EstimatorKernel
+from motosim.estimation.registry import start_kernel, step_kernel
+from motosim.model import sharp as sharp_model
+from motosim.model.sharp import bike_rk4
+from motosim.params.sharp import SharpParameters, derived_geometry
 
-__all__ = ["stack_command", "stack_update"]
+__all__ = ["StackData", "StackModel", "design_stack", "new_data", "reset", "step"]
 
 Array = NDArray[np.float64]
 
+MOTORCYCLE_STEP = 1e-3
+"""Largest RK4 step of the virtual motorcycle inside a stack period [s]."""
+
+
+class StackModel(NamedTuple):
+    """Everything the stack needs that a run does not change (build with :func:`design_stack`).
+
+    Attributes
+    ----------
+    dt : float
+        Stack (control) period h [s]; :func:`step` is called once per period.
+    measure_every : int
+        Periods per measurement: the controller, differentiator and estimator run on every
+        ``measure_every``-th call (the first included) and hold their outputs in between.
+    estimator : EstimatorKernel
+        The rider-torque estimator, discretised at the measurement step.
+    differentiator : ndarray, shape (3,)
+        [h_meas [s], lambda_1 L^(1/2), lambda_0 L] of the super-twisting differentiator.
+    Ad, Bd, Cd, Dd : ndarray
+        Discrete controller at the measurement step (x+ = Ad x + Bd e, i = Cd x + Dd e,
+        e = theta_h - delta [rad], i [A]); order 0 with Dd = 0 when there is no feedback.
+    feedback : bool
+        Whether the controller commands the motor (False: Fig. 9, 0 A).
+    max_current : float
+        Current command limit [A].
+    A0, A1, Bv : ndarray
+        The motorcycle's lateral matrices, A_v = A0 + v_x A1 (8x8), B_v (8,).
+    motorcycle : ndarray, shape (3,)
+        [m [kg], m + J_R / r_D^2 [kg], lowest speed [m/s]] of eq. (2).
+    motorcycle_substeps : int
+        RK4 steps of the motorcycle per period.
+    speed : float
+        Forward speed at :func:`reset` [m/s].
+    true_torque : bool
+        Drive the motorcycle with the rider's true torque instead of the estimate
+        (a simulation-only reference run).
+    """
+
+    dt: float
+    measure_every: int
+    estimator: EstimatorKernel
+    differentiator: Array
+    Ad: Array
+    Bd: Array
+    Cd: Array
+    Dd: Array
+    feedback: bool
+    max_current: float
+    A0: Array
+    A1: Array
+    Bv: Array
+    motorcycle: Array
+    motorcycle_substeps: int
+    speed: float
+    true_torque: bool
+
+
+class StackData(NamedTuple):
+    """Every state of the stack that changes during a run (make with :func:`new_data`).
+
+    Attributes
+    ----------
+    estimator : ndarray, shape (4,)
+        The estimator's state.
+    differentiator : ndarray, shape (2,)
+        [z0 [rad], z1 [rad/s]].
+    controller : ndarray, shape (n,)
+        The discrete controller's state.
+    motorcycle : ndarray, shape (12,)
+        [v_y, psi', phi', delta', phi, delta, F_yr, F_yf, v_x, psi, x, y] (SI units).
+    held : ndarray, shape (4,)
+        Outputs held between measurements: [theta_h measured [rad], i_m command [A],
+        theta_h'_hat [rad/s], tau_r_hat [N*m]].
+    count : ndarray of int64, shape (1,)
+        Periods since :func:`reset`.
+    work : ndarray, shape (13, 12)
+        Scratch space of the motorcycle's RK4.
+    controller_work : ndarray
+        Scratch space of the controller (at least one entry).
+    """
+
+    estimator: Array
+    differentiator: Array
+    controller: Array
+    motorcycle: Array
+    held: Array
+    count: NDArray[np.int64]
+    work: Array
+    controller_work: Array
+
+
+def design_stack(
+    sharp: SharpParameters,
+    estimator: EstimatorKernel,
+    controller: StateSpace | None,
+    *,
+    control_rate: float,
+    measurement_rate: float,
+    lipschitz: float,
+    discretization: str = "zoh",
+    max_current: float,
+    speed: float,
+    true_torque: bool = False,
+) -> StackModel:
+    """Build the stack's model from its designed parts (a pure function).
+
+    Parameters
+    ----------
+    sharp : SharpParameters
+        The virtual motorcycle.
+    estimator : EstimatorKernel
+        The estimator's record (``stepper.kernel``), discretised at ``1 / measurement_rate``.
+    controller : StateSpace or None
+        Controller K [A/rad], positive feedback i_m = K (theta_h - delta) (eq. (24)):
+        continuous (discretised here) or already discrete at the measurement step; None for
+        no torque feedback (Fig. 9).
+    control_rate, measurement_rate : float
+        Stack period and measurement rates [Hz]; a whole number of periods per measurement.
+    lipschitz : float
+        L, the bound on |theta_h''| that sets the differentiator's gains [rad/s^2].
+    discretization : {"zoh", "tustin"}
+        How a continuous controller is discretised at the measurement step.
+    max_current : float
+        Current command limit [A].
+    speed : float
+        Forward speed at the start [m/s].
+    true_torque : bool
+        Drive the motorcycle with the true rider torque (simulation only).
+
+    Returns
+    -------
+    StackModel
+
+    Raises
+    ------
+    MotosimError
+        On rates that are not whole multiples or an estimator designed for another step.
+    """
+    for name, value in (("control_rate", control_rate), ("measurement_rate", measurement_rate)):
+        if not (math.isfinite(value) and value > 0):
+            raise MotosimError(f"{name} = {value!r}; expected a finite rate > 0 [Hz]")
+    ratio = control_rate / measurement_rate
+    if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
+        raise MotosimError(
+            f"control / measurement rate = {ratio:g}; expected a whole number >= 1"
+        )
+    h_meas = 1.0 / measurement_rate
+    if abs(estimator.dt - h_meas) > 1e-12 * h_meas:
+        raise MotosimError(
+            f"the estimator was discretised at {estimator.dt:g} s; expected the measurement "
+            f"step {h_meas:g} s"
+        )
+    if not (math.isfinite(lipschitz) and lipschitz > 0):
+        raise MotosimError(f"lipschitz = {lipschitz!r}; expected a finite bound > 0 [rad/s^2]")
+    if controller is None:
+        Ad, Bd, Cd, Dd = np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.zeros((1, 1))
+    else:
+        if controller.is_discrete and abs(controller.dt - h_meas) > 1e-12 * h_meas:
+            raise MotosimError(
+                f"the controller is discrete at {controller.dt:g} s; expected the measurement "
+                f"step {h_meas:g} s (design it for {measurement_rate:g} Hz)"
+            )
+        K = controller if controller.is_discrete else discretize(controller, h_meas, discretization)
+        Ad, Bd, Cd, Dd = K.A, K.B, K.C, K.D
+    h = 1.0 / control_rate
+    d = derived_geometry(sharp)
+    A0, A1, Bv = sharp_model.lpv_matrices(sharp)
+    return StackModel(
+        dt=h,
+        measure_every=round(ratio),
+        estimator=estimator,
+        differentiator=np.array([h_meas, LAMBDA_1 * math.sqrt(lipschitz), LAMBDA_0 * lipschitz]),
+        Ad=np.ascontiguousarray(Ad),
+        Bd=np.ascontiguousarray(Bd),
+        Cd=np.ascontiguousarray(Cd),
+        Dd=np.ascontiguousarray(Dd),
+        feedback=controller is not None and bool(Ad.shape[0] + abs(Dd[0, 0]) > 0),
+        max_current=float(max_current),
+        A0=A0,
+        A1=A1,
+        Bv=Bv,
+        motorcycle=np.array([d["m"], d["m_eq"], sharp_model.MIN_SPEED]),
+        motorcycle_substeps=max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9)),
+        speed=float(speed),
+        true_torque=bool(true_torque),
+    )
+
+
+def new_data(model: StackModel) -> StackData:
+    """Fresh, zeroed data for ``model``; call :func:`reset` before the first step."""
+    n = model.Ad.shape[0]
+    return StackData(
+        estimator=np.zeros(4),
+        differentiator=np.zeros(2),
+        controller=np.zeros(n),
+        motorcycle=np.zeros(12),
+        held=np.zeros(4),
+        count=np.zeros(1, dtype=np.int64),
+        work=np.zeros((13, 12)),
+        controller_work=np.zeros(max(1, n)),
+    )
+
 
 @njit(cache=True)
-def stack_command(
-    ctrl_x: Array,
-    Ad: Array,
-    Bd: Array,
-    Cd: Array,
-    Dd: Array,
-    theta_meas: float,
-    delta: float,
-    max_current: float,
-    enabled: bool,
-    work: Array,
-) -> float:
-    """Motor current command [A] for this sample; advances the controller state in place.
+def reset(model: StackModel, data: StackData, theta: float, current: float) -> None:
+    """Start every state at a first measurement.
 
-    The controller is discrete (x+ = Ad x + Bd e, i = Cd x + Dd e) with the tracking error
-    e = theta_meas - delta [rad]; ``enabled`` False (Fig. 9, open loop) commands 0 A.
-    ``work`` is scratch space of at least the controller's order.
+    The differentiator and the estimator start at the angle ``theta`` [rad] (rate 0) and the
+    current ``current`` [A]; the controller at rest; the motorcycle upright and straight at
+    ``model.speed``.
     """
-    if not enabled:
+    data.differentiator[0] = theta
+    data.differentiator[1] = 0.0
+    start_kernel(model.estimator, data.estimator, theta, 0.0, current)
+    data.controller[:] = 0.0
+    data.motorcycle[:] = 0.0
+    data.motorcycle[8] = model.speed
+    data.held[0] = theta
+    data.held[1] = 0.0
+    data.held[2] = 0.0
+    data.held[3] = 0.0
+    data.count[0] = 0
+
+
+@njit(cache=True)
+def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
+    """i_m = K (theta_h - delta), positive feedback (eq. (24)), saturated; advances K's state."""
+    if not model.feedback:
         return 0.0
-    e = theta_meas - delta
-    n = ctrl_x.size
-    u = Dd[0, 0] * e
+    e = theta_meas - data.motorcycle[5]
+    x, tmp = data.controller, data.controller_work
+    n = x.size
+    u = model.Dd[0, 0] * e
     for j in range(n):
-        u += Cd[0, j] * ctrl_x[j]
-    tmp = work
+        u += model.Cd[0, j] * x[j]
     for r in range(n):
-        acc = Bd[r, 0] * e
+        acc = model.Bd[r, 0] * e
         for j in range(n):
-            acc += Ad[r, j] * ctrl_x[j]
+            acc += model.Ad[r, j] * x[j]
         tmp[r] = acc
     for r in range(n):
-        ctrl_x[r] = tmp[r]
-    return float(min(max(u, -max_current), max_current))
+        x[r] = tmp[r]
+    return min(max(u, -model.max_current), model.max_current)
 
 
 @njit(cache=True)
-def stack_update(
-    est: Array,
-    diff: Array,
-    flags: Array,
-    est_kind: int,
-    Phi: Array,
-    Gamma: Array,
-    gain: Array,
-    p: Array,
-    diff_p: Array,
+def step(
+    model: StackModel,
+    data: StackData,
     theta_meas: float,
-    current: float,
-    new_sample: bool,
-) -> tuple[float, float]:
-    """Differentiator and estimator on a new sample; returns (theta_h_dot_hat, tau_r_hat).
+    current_error: float,
+    rider_torque: float,
+    force: float,
+) -> float:
+    """Advance the stack by one period; return the motor current command [A].
 
-    ``diff`` = [z0, z1] of the super-twisting differentiator with ``diff_p`` = [h, l1, l2];
-    ``est`` (4,) is the estimator state; ``flags`` = [first sample?, last rate, last torque].
-    Between samples (``new_sample`` False) the last outputs are held.
+    On a measurement period: the controller commands the current from the measured angle
+    and the motorcycle's steer angle, the differentiator and the estimator take the sample,
+    told that the command plus ``current_error`` is what the motor carries over the coming
+    period. Between measurements the outputs are held. Then the virtual motorcycle advances
+    one period under the estimated rider torque.
+
+    Parameters
+    ----------
+    model : StackModel
+        The designed stack.
+    data : StackData
+        Its states, updated in place.
+    theta_meas : float
+        Measured handlebar angle [rad] (read on measurement periods only).
+    current_error : float
+        Measured minus commanded motor current [A]: sensor noise in simulation, 0 when the
+        drive's current loop is taken to follow its command.
+    rider_torque : float
+        True rider torque [N*m], used only by a ``model.true_torque`` reference run.
+    force : float
+        Longitudinal force of eq. (2), (tau_d - tau_b) / r_D + F_wx [N].
+
+    Returns
+    -------
+    float
+        Motor current command, held until the next measurement [A].
     """
-    if not new_sample:
-        return flags[1], flags[2]
-    if flags[0] > 0.5:  # first sample: start every state at the measurement
-        diff[0], diff[1] = theta_meas, 0.0
-        if est_kind == 0:
-            est[0], est[1], est[2], est[3] = 0.0, theta_meas, 0.0, 0.0
-        elif est_kind == 1:
-            est[0], est[1], est[2], est[3] = theta_meas, 0.0, current, 0.0
-        else:
-            est[0], est[1], est[2], est[3] = 0.0, theta_meas, 0.0, 0.0
-        flags[0] = 0.0
-    else:
-        diff[0], diff[1] = std_step(
-            diff[0], diff[1], theta_meas, diff_p[0], diff_p[1], diff_p[2], True
+    held = data.held
+    if data.count[0] % model.measure_every == 0:
+        held[0] = theta_meas
+        held[1] = _command(model, data, theta_meas)
+        p = model.differentiator
+        z0, z1 = std_step(
+            data.differentiator[0], data.differentiator[1], theta_meas, p[0], p[1], p[2], True
         )
-    rate = diff[1]
-    if est_kind == 0:
-        new, _ = wz_step(est, theta_meas, rate, current, Phi[:2, :2], Gamma[:2, :], gain[:2], p)
-        for i in range(4):
-            est[i] = new[i]
-        tau = new[2]
-    elif est_kind == 1:
-        new, tau = inverse_dynamics_step(est, theta_meas, current, Phi, Gamma[:, :2], p[:7])
-        for i in range(4):
-            est[i] = new[i]
-    else:
-        post, nxt = kalman_step(
-            est[:3], theta_meas, current, Phi[:3, :3], Gamma[:3, :2], gain[:3], p[:3]
+        data.differentiator[0] = z0
+        data.differentiator[1] = z1
+        held[2] = z1
+        held[3] = step_kernel(
+            model.estimator, data.estimator, theta_meas, z1, held[1] + current_error
         )
-        for i in range(3):
-            est[i] = nxt[i]
-        tau = post[2]
-    flags[1], flags[2] = rate, tau
-    return rate, tau
+    data.count[0] += 1
+    steer = rider_torque if model.true_torque else held[3]
+    mc = model.motorcycle
+    h = model.dt / model.motorcycle_substeps
+    for _ in range(model.motorcycle_substeps):
+        bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, force,
+                 mc[0], mc[1], mc[2], h)  # fmt: skip
+    return held[1]

@@ -1,0 +1,168 @@
+"""Runs from scenario files: resolve what a scenario names, simulate, write the result.
+
+The command line and any script build and run a scenario through these functions:
+:func:`load_scenario` reads and validates a file, :func:`resolve` loads what it names
+(parameter sets, a design file, CSV profiles; relative to the scenario's folder) and designs
+what it asks for, :func:`load_run` does both, and :func:`run_to_folder` simulates into a
+result folder as the run goes. Nothing is cached between calls: a campaign that runs one
+design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`) and passes
+it to :func:`motosim.sim.simulate`.
+"""
+
+import tomllib
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motosim.control.torque_feedback import PAPER_CONTROLLER, synthesize_controller
+from motosim.errors import MotosimError
+from motosim.io.design_file import read_design
+from motosim.io.logs import read_log
+from motosim.io.results import ResultWriter
+from motosim.params import load_parameters
+from motosim.sim import (
+    SIGNALS,
+    RunInputs,
+    Scenario,
+    parse_scenario,
+    prepare,
+    run_metadata,
+    simulate,
+)
+from motosim.sim.metrics import run_metrics
+from motosim.timeseries import TimeSeries
+
+__all__ = ["load_run", "load_scenario", "resolve", "run_to_folder"]
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file (one-line :class:`MotosimError` otherwise)."""
+    source = Path(path)
+    if not source.is_file():
+        raise MotosimError(f"{path}: no such scenario file")
+    try:
+        data = tomllib.loads(source.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as err:
+        raise MotosimError(f"{path}: not valid TOML: {err}") from None
+    except UnicodeDecodeError:
+        raise MotosimError(f"{path}: not UTF-8 text; expected a TOML scenario file") from None
+    return parse_scenario(data, origin=str(path))
+
+
+def _relative(name: str, base: Path) -> str | Path:
+    """A packaged name as is, or a file named relative to the scenario's folder."""
+    candidate = base / name
+    return candidate if candidate.suffix == ".toml" and candidate.is_file() else name
+
+
+def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
+    """Load what ``scenario`` names, relative to the folder ``base``, and design its controller.
+
+    The controller is the scenario's: none, the paper's eq. (26), the one of a design file
+    (whose observer settings the run then uses too), or ours synthesised for the nominal
+    handlebar at the scenario's bandwidth and order.
+
+    Raises
+    ------
+    MotosimError
+        On a missing or invalid file, or an impossible design.
+    """
+    folder = Path(base)
+    hb = scenario.handlebar
+    nominal = load_parameters(_relative(hb.nominal, folder), "handlebar")
+    tables: dict[str, TimeSeries] = {}
+    mc = scenario.motorcycle
+    profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force]
+    if scenario.rider.profile is not None:
+        profiles.append(scenario.rider.profile)
+    for profile in profiles:
+        if profile.kind == "csv":
+            name = profile.settings["file"]
+            tables[name] = read_log(
+                folder / name, required=(profile.settings["column"],), min_samples=2
+            )
+    c = scenario.controller
+    controller, observer = None, None
+    if c.kind == "paper":
+        controller = PAPER_CONTROLLER
+    elif c.kind == "ours" and c.design is not None:
+        design = read_design(_relative(c.design, folder))
+        observer = design.observer
+        method = c.discretization
+        rate = scenario.rates.measurement
+        # the design's own discrete matrices when it was made for this rate
+        matches = abs(design.rate - rate) <= 1e-9 * rate
+        controller = design.controller_discrete[method] if matches else design.controller
+    elif c.kind == "ours":
+        controller = synthesize_controller(
+            nominal,
+            rng=np.random.default_rng(0),
+            bandwidth=c.bandwidth,
+            order=c.order,
+            rate=scenario.rates.measurement,
+            n_starts=4,
+        )
+    return prepare(
+        scenario,
+        sharp=load_parameters(_relative(mc.params, folder), "sharp"),
+        true_handlebar=load_parameters(_relative(hb.true, folder), "handlebar"),
+        nominal_handlebar=nominal,
+        controller=controller,
+        observer=observer,
+        tables=tables,
+    )
+
+
+def load_run(path: str | Path) -> RunInputs:
+    """Read a scenario file and resolve it (:func:`load_scenario` then :func:`resolve`)."""
+    return resolve(load_scenario(path), Path(path).parent)
+
+
+def run_to_folder(
+    inputs: RunInputs,
+    folder: str | Path,
+    *,
+    overwrite: bool = False,
+    on_rows: Callable[[int], None] | None = None,
+) -> dict[str, Any]:
+    """Simulate ``inputs`` into ``folder`` (``result.h5``, ``result.csv``), block by block.
+
+    Parameters
+    ----------
+    inputs : RunInputs
+        The resolved run.
+    folder : str or Path
+        Result folder.
+    overwrite : bool
+        Replace a result already there.
+    on_rows : callable, optional
+        Called with the number of rows of each block written (for a progress bar).
+
+    Returns
+    -------
+    dict
+        The run's metrics (:func:`motosim.sim.metrics.run_metrics`), also stored in the file.
+
+    Raises
+    ------
+    RunFailed
+        If the run diverged; the rows computed until then stay in the folder.
+    """
+    sc = inputs.scenario
+    metadata = run_metadata(inputs)
+    with ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite) as writer:
+
+        def on_block(block: np.ndarray) -> None:
+            writer.append(block)
+            if on_rows is not None:
+                on_rows(block.shape[0])
+
+        run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
+        summary = run_metrics(
+            run.t, lambda name: run[name] if name in run.names else None, complete=True
+        )
+        writer.close(summary)
+    return summary
+

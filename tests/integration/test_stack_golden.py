@@ -1,0 +1,39 @@
+"""The stack refactor changed no number: signals pinned from the landed closed loop.
+
+``tests/data/stack_golden.json`` was written by the closed loop as it stood before the stack
+became a model/data pair (commit f8314a7): 41 evenly spaced samples and the RMS of a few
+signals of three scenarios (a virtual rider at 1 kHz, the paper's controller at 100 Hz, the
+paper's Fig. 14 run). Any later change of the step must reproduce them to rounding.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motosim.io.runs import load_run
+from motosim.sim import simulate
+
+ROOT = Path(__file__).parents[2]
+GOLDEN = json.loads((ROOT / "tests" / "data" / "stack_golden.json").read_text(encoding="utf-8"))
+FILES = {
+    "lane_change_20": "scenarios/lane_change_20.toml",
+    "paper_controller_square": "scenarios/paper_controller_square.toml",
+    "fig14_compensated": "scenarios/paper/fig14_compensated.toml",
+}
+
+
+@pytest.mark.parametrize("name", sorted(FILES))
+def test_signals_unchanged(name: str) -> None:
+    pinned = GOLDEN[name]
+    run = load_run(ROOT / FILES[name])
+    result = simulate(run, rng=np.random.default_rng(run.scenario.seed))
+    idx = np.linspace(0, result.t.size - 1, 41).astype(int)
+    np.testing.assert_allclose(result.t[idx], pinned["t"], rtol=0, atol=1e-12)
+    for signal, values in pinned.items():
+        if signal in ("t", "rms"):
+            continue
+        np.testing.assert_allclose(result[signal][idx], values, rtol=1e-7, atol=1e-9, err_msg=signal)
+    for signal, rms in pinned["rms"].items():
+        np.testing.assert_allclose(np.sqrt(np.mean(result[signal] ** 2)), rms, rtol=1e-7)
