@@ -217,6 +217,9 @@ class VirtualRig:
         Noise, jitter and frame loss.
     theta0 : float
         Initial angle [rad].
+    rider_on_enable : bool
+        Start the rider's profile when the first command with ENABLE arrives (a person takes
+        the handlebar when the simulator starts); else at the rig's t = 0.
     """
 
     def __init__(
@@ -229,6 +232,7 @@ class VirtualRig:
         rng: np.random.Generator,
         *,
         theta0: float = 0.0,
+        rider_on_enable: bool = True,
     ) -> None:
         tau = np.asarray(rider_torque, dtype=float)
         if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)):
@@ -265,6 +269,10 @@ class VirtualRig:
         self._command = np.zeros(len(codecs.command.names))
         self._c_current = codecs.position(codecs.command, "current_command")
         self._c_enable = codecs.position(codecs.command, "enable")
+        self._k_rider = -1 if rider_on_enable else 0
+        self._idle = np.zeros(1)
+        self._started = False
+        _plant_steps(self.x.copy(), 0.0, self._idle, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4)
         self.frames_sent = 0
         self.frames_dropped = 0
         self.commands = 0
@@ -291,18 +299,26 @@ class VirtualRig:
             self.i_cmd = float(self._command[self._c_current])
             self.enabled = self._command[self._c_enable] > 0.5
             self._last_command = self.t
+            if self.enabled and self._k_rider < 0:
+                self._k_rider = self.k
 
     def advance_to(self, t: float) -> None:
         """Take the commands received, run the plant to time ``t`` [s], send what is due."""
         self._receive()
         s = self.settings
         hb = self.hb
+        if not self._started:  # the drive reports its state from power-on
+            self._started = True
+            self._sample()
         while self.k * self.h < t - 1e-12:
             live = self.enabled and self.t - self._last_command <= s.command_timeout
             n = self._sub - self.k % self._sub  # up to the next status sample
+            rider, k0 = self.rider_torque, self.k - self._k_rider
+            if self._k_rider < 0:
+                rider, k0 = self._idle, 0
             _plant_steps(
-                self.x, self.i_cmd if live else 0.0, self.rider_torque, self.k, n, hb.J_eq,
-                hb.beta_eq, hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h,
+                self.x, self.i_cmd if live else 0.0, rider, k0, n, hb.J_eq, hb.beta_eq,
+                hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h,
             )  # fmt: skip
             self.k += n
             self._sample()

@@ -108,6 +108,8 @@ class RealtimeRunner:
         Rows the ring holds before the oldest are lost (the reader drains it meanwhile).
     linger : float
         How long the zero command is still sent after a fault before the run ends [s].
+    periods_per_frame : int
+        Control periods per status frame of the drive (the watchdog counts frame periods).
     """
 
     def __init__(
@@ -120,6 +122,7 @@ class RealtimeRunner:
         rate: float,
         capacity: int = 1 << 16,
         linger: float = 0.2,
+        periods_per_frame: int = 1,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -127,7 +130,7 @@ class RealtimeRunner:
         self.link = link
         self.codecs = codecs
         self.dt = 1.0 / rate
-        self.safety = SafetyStage(limits, dt=self.dt)
+        self.safety = SafetyStage(limits, dt=self.dt, periods_per_frame=periods_per_frame)
         self.names = LOOP_SIGNALS + tuple(stepper.names)
         self.ring = SampleRing(capacity, len(self.names))
         self._row = np.zeros(len(self.names))

@@ -157,6 +157,9 @@ class SafetyStage:
         The limits.
     dt : float
         The control period [s], > 0.
+    periods_per_frame : int
+        Control periods per status frame (the loop may run faster than the drive reports):
+        the watchdog waits ``watchdog_periods`` frame periods.
 
     Examples
     --------
@@ -191,15 +194,21 @@ class SafetyStage:
         "_quiet",
         "_state",
         "_t",
+        "_watchdog",
         "dt",
         "frames_lost",
         "frames_stale",
         "limits",
     )
 
-    def __init__(self, limits: SafetyLimits, *, dt: float) -> None:
+    def __init__(self, limits: SafetyLimits, *, dt: float, periods_per_frame: int = 1) -> None:
         if not (math.isfinite(dt) and dt > 0.0):
             raise MotosimError(f"dt = {dt!r} s: expected a positive period")
+        if periods_per_frame < 1:
+            raise MotosimError(
+                f"periods_per_frame = {periods_per_frame!r}: expected an integer >= 1"
+            )
+        self._watchdog = limits.watchdog_periods * periods_per_frame
         self.limits = limits
         self.dt = float(dt)
         self._state = State.IDLE
@@ -330,7 +339,7 @@ class SafetyStage:
             self._fresh = False
         else:
             self._missing += 1
-            if self._missing >= lim.watchdog_periods and self._state != State.IDLE:
+            if self._missing >= self._watchdog and self._state != State.IDLE:
                 self.trip(Fault.WATCHDOG)
         if not (
             math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)
