@@ -9,7 +9,6 @@ one-period fade-in). So the torque estimate and the tracking agree within what t
 explains.
 """
 
-import math
 
 import numpy as np
 import pytest
@@ -27,7 +26,7 @@ from motosim.sim import build_rig, build_stack, parse_scenario, prepare, simulat
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
-from motosim.io.can import handlebar_codecs, open_link  # noqa: E402
+from motosim.io.can import handlebar_codecs, open_link
 
 SCENARIO = {
     "scenario": {"name": "rt_vs_offline", "description": "square torque", "duration": 2.0},
