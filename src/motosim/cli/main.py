@@ -19,14 +19,28 @@ from motosim.cli import (
     modes,
     paper,
     params,
+    rig,
     rtcheck,
     simulate,
 )
+from motosim.cli import run as run_command
 from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailed
 
 __all__ = ["main"]
 
-_COMMANDS = (params, modes, excite, identify, estimate, design, simulate, paper, rtcheck)
+_COMMANDS = (
+    params,
+    modes,
+    excite,
+    identify,
+    estimate,
+    design,
+    simulate,
+    paper,
+    run_command,
+    rig,
+    rtcheck,
+)
 
 
 class _Parser(argparse.ArgumentParser):

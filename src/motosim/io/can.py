@@ -213,8 +213,9 @@ class FrameCodec:
         The checksum signal's value is ignored and computed; NaN encodes as raw 0.
         """
         raw = 0
+        items = values.tolist() if isinstance(values, np.ndarray) else values
         for value, (start, mask, _sign, _wrap, scale, offset, lo, hi) in zip(
-            values, self._fields, strict=True
+            items, self._fields, strict=True
         ):
             v = (value - offset) / scale
             r = 0 if v != v else round(min(max(v, lo), hi))

@@ -110,6 +110,11 @@ class RealtimeRunner:
         How long the zero command is still sent after a fault before the run ends [s].
     periods_per_frame : int
         Control periods per status frame of the drive (the watchdog counts frame periods).
+    start_timeout : float
+        How long to wait for the drive's first valid status frame [s] before the
+        ``NO_DRIVE`` fault.
+    shared_ring : bool
+        Put the ring in shared memory, for a writer process (:meth:`SampleRing.attach`).
     """
 
     def __init__(
@@ -123,6 +128,8 @@ class RealtimeRunner:
         capacity: int = 1 << 16,
         linger: float = 0.2,
         periods_per_frame: int = 1,
+        start_timeout: float = 1.0,
+        shared_ring: bool = False,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -132,7 +139,7 @@ class RealtimeRunner:
         self.dt = 1.0 / rate
         self.safety = SafetyStage(limits, dt=self.dt, periods_per_frame=periods_per_frame)
         self.names = LOOP_SIGNALS + tuple(stepper.names)
-        self.ring = SampleRing(capacity, len(self.names))
+        self.ring = SampleRing(capacity, len(self.names), shared=shared_ring)
         self._row = np.zeros(len(self.names))
         self._n_loop = len(LOOP_SIGNALS)
         st, cmd, es, hb = codecs.status, codecs.command, codecs.estop, codecs.heartbeat
@@ -157,6 +164,8 @@ class RealtimeRunner:
         self._s_rate = names.index("theta_h_dot_hat") if "theta_h_dot_hat" in names else -1
         self._heartbeat_every = max(1, round(0.1 * rate))
         self._linger = max(1, round(linger * rate))
+        self._start_timeout = max(1, round(start_timeout * rate))
+        self._t0 = math.nan
         self._theta = math.nan
         self._current = math.nan
         self._prev_theta = math.nan
@@ -176,6 +185,13 @@ class RealtimeRunner:
     def emergency_stop(self) -> None:
         """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
         self.safety.trip(Fault.ESTOP_KEY)
+
+    def discard_pending(self) -> int:
+        """Read and drop every frame already waiting (call just before the first period)."""
+        dropped = 0
+        while dropped < 100_000 and self.link.receive() is not None:
+            dropped += 1
+        return dropped
 
     # --- the period --------------------------------------------------------------------
     def _read_bus(self) -> bool:
@@ -206,9 +222,16 @@ class RealtimeRunner:
         return fresh
 
     def period(self, k: int, t: float) -> bool:
-        """Run one control period ``k`` (deadline ``t`` [s]); False when the run should end."""
+        """Run one control period ``k`` (deadline ``t`` [s]); False when the run should end.
+
+        The recorded time is ``t`` minus the first period's deadline.
+        """
         safety = self.safety
+        if self._t0 != self._t0:
+            self._t0 = t
         fresh = self._read_bus()
+        if not self._started and k >= self._start_timeout:
+            safety.trip(Fault.NO_DRIVE)
         if fresh and not self._started:
             self._started = True
             self.stepper.reset(self._theta, self._current)
@@ -227,11 +250,11 @@ class RealtimeRunner:
         self._prev_theta = self._theta
         tau_hat = stack_row[self._s_tau] if stack_row is not None and self._s_tau >= 0 else math.nan
         theta = self._theta if self._started else 0.0
-        out = safety.step(command, theta=theta, omega=omega, tau_hat=tau_hat)
+        out = safety.step(command, theta=theta, omega=omega, tau_hat=tau_hat, now=t - self._t0)
         state = safety.state
         self._send(out, state, k)
         row = self._row
-        row[0] = t
+        row[0] = t - self._t0
         row[1] = self._theta
         row[2] = self._current
         row[3] = command

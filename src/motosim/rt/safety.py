@@ -57,6 +57,7 @@ class Fault(IntEnum):
     ESTOP_KEY = 5
     DRIVE_FAULT = 6
     END_STOP = 7
+    NO_DRIVE = 8
 
 
 _REASONS = {
@@ -68,6 +69,7 @@ _REASONS = {
     Fault.ESTOP_KEY: "emergency stop (keyboard)",
     Fault.DRIVE_FAULT: "the drive reports a fault",
     Fault.END_STOP: "handlebar angle beyond the hard end stop",
+    Fault.NO_DRIVE: "no valid status frame from the drive since the start",
 }
 
 
@@ -319,7 +321,15 @@ class SafetyStage:
             self.trip(Fault.ESTOP_CAN)
 
     # --- the period --------------------------------------------------------------------
-    def step(self, command: float, *, theta: float, omega: float, tau_hat: float) -> float:
+    def step(
+        self,
+        command: float,
+        *,
+        theta: float,
+        omega: float,
+        tau_hat: float,
+        now: float | None = None,
+    ) -> float:
         """The current to send [A] for the stack's ``command`` [A] this period.
 
         Parameters
@@ -330,10 +340,13 @@ class SafetyStage:
             Last valid handlebar angle [rad] and its estimated rate [rad/s].
         tau_hat : float
             The estimated rider torque [N*m] (NaN if the stack has none: hands-off off).
+        now : float, optional
+            The loop's time [s], for the fault's time stamp; by default the stage counts
+            its own periods.
         """
         lim = self.limits
         dt = self.dt
-        self._t += dt
+        self._t = self._t + dt if now is None else now
         if self._fresh:
             self._missing = 0
             self._fresh = False
