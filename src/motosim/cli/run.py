@@ -146,7 +146,7 @@ def _keyboard(runner: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run in real time; write the result; exit 0, or 3 on a safety fault."""
+    """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
     from motosim.io.can import handlebar_codecs, open_link
     from motosim.rt.config import parse_safety
     from motosim.rt.run import RealtimeRunner
@@ -231,6 +231,9 @@ def run(args: argparse.Namespace) -> int:
         for p in privileges:
             print(f"  {p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
         print(f"  state {counters.state}; {counters.fault_reason}")
+    if counters.fault == "NONE" and runner.stop_requested:
+        print(f"motosim run: stopped, torque faded out; result in {folder}", file=sys.stderr)
+        return 130
     if counters.fault != "NONE":
         raise RunFailed(
             f"safety fault: {counters.fault_reason}; the result until then is in {folder}",
@@ -302,7 +305,7 @@ def _loop(
             thaw_gc()
             signal.signal(signal.SIGINT, previous)
         stats = loop.stats()
-        complete = runner.safety.fault.name == "NONE" and stats.served >= periods
+        complete = runner.safety.fault.name == "NONE" and stats.periods >= periods
         extra = {f"rt_{key}": float(value) for key, value in stats.as_dict().items()}
         ours.send(("close", complete, extra))
         if not ours.poll(120.0):

@@ -182,6 +182,11 @@ class RealtimeRunner:
         self._stop = True
         self.safety.request_stop()
 
+    @property
+    def stop_requested(self) -> bool:
+        """Whether :meth:`request_stop` was called."""
+        return self._stop
+
     def emergency_stop(self) -> None:
         """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
         self.safety.trip(Fault.ESTOP_KEY)
