@@ -28,6 +28,8 @@ typecheck: $(STAMP)
 
 test: lint typecheck
 	$(BIN)/pytest
+	NUMBA_DISABLE_JIT=1 $(BIN)/pytest -q -p no:cacheprovider tests/unit/test_stack.py \
+		tests/unit/estimation tests/integration/test_stack_golden.py::test_short_run_reproduces_the_pinned_start
 
 bench: $(STAMP)
 	$(BIN)/python bench/run.py

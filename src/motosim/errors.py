@@ -5,24 +5,24 @@ Two kinds of failure, kept apart because a user acts differently on each:
 - :class:`MotosimError`: invalid input, a parameter, an option, a file or a signal that the
   model cannot accept. Its message is one line that names the offending value and what was
   expected; the command line prints it and exits with code 2.
-- :class:`RunFailed`: the input was valid but the run did not succeed: the simulation
+- :class:`RunFailedError`: the input was valid but the run did not succeed: the simulation
   diverged, the motorcycle fell, the loop faulted. The command line prints its one-line
   reason and exits with code 3; what the run computed until then is kept.
 """
 
-__all__ = ["EXIT_BAD_INPUT", "EXIT_RUN_FAILED", "MotosimError", "RunFailed"]
+__all__ = ["EXIT_BAD_INPUT", "EXIT_RUN_FAILED", "MotosimError", "RunFailedError"]
 
 EXIT_BAD_INPUT = 2
 """Exit code of the command line for a :class:`MotosimError`."""
 EXIT_RUN_FAILED = 3
-"""Exit code of the command line for a :class:`RunFailed`."""
+"""Exit code of the command line for a :class:`RunFailedError`."""
 
 
 class MotosimError(ValueError):
     """Invalid input: a parameter, an option, a file or a signal that the model cannot accept."""
 
 
-class RunFailed(RuntimeError):
+class RunFailedError(RuntimeError):
     """A valid run that failed: it diverged, fell over or faulted (one-line reason).
 
     Attributes

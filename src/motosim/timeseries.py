@@ -37,13 +37,19 @@ class TimeSeries:
     def __post_init__(self) -> None:
         if self.t.ndim != 1 or self.data.shape != (self.t.size, len(self.names)):
             raise MotosimError(
-                f"TimeSeries: t {self.t.shape} and data {self.data.shape} with "
+                f"{type(self).__name__}: t {self.t.shape} and data {self.data.shape} with "
                 f"{len(self.names)} names; expected t (n,) and data (n, {len(self.names)})"
             )
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
-        """The column of the signal ``name``."""
+        """The column of the signal ``name`` (``"t"`` gives the time when not a column)."""
+        if name == "t" and "t" not in self.names:
+            return self.t
         try:
             return self.data[:, self.names.index(name)]
         except ValueError:
             raise KeyError(f"no signal {name!r}; have {', '.join(self.names)}") from None
+
+    def __contains__(self, name: object) -> bool:
+        """Whether the series has the signal ``name`` (``"t"`` included)."""
+        return name == "t" or name in self.names

@@ -10,9 +10,17 @@ import numpy as np
 import pytest
 
 from motosim.cli.main import main
-from motosim.io.runs import load_scenario, resolve
 from motosim.io.results import ResultWriter, load_result
-from motosim.sim import SIGNALS, parse_scenario, run_metadata, simulate
+from motosim.io.runs import load_run, load_scenario, resolve
+from motosim.sim import (
+    SIGNALS,
+    RunInputs,
+    build_rig,
+    build_stack,
+    parse_scenario,
+    run_metadata,
+    simulate,
+)
 
 ROOT = Path(__file__).parents[2]
 SCENARIOS = sorted((ROOT / "scenarios").rglob("*.toml"))
@@ -194,3 +202,56 @@ def test_an_existing_result_is_kept_unless_overwritten(
     code, _, err = _run(capsys, *argv)
     assert code == 2 and "already holds a result; give --overwrite" in err
     assert _run(capsys, *argv, "--overwrite")[0] == 0
+
+
+def _inputs_with(tmp_path: Path, extra: str) -> RunInputs:
+    path = tmp_path / "s.toml"
+    path.write_text(
+        '[scenario]\nname = "t"\nduration = 1.0\n'
+        '[rider]\nkind = "torque"\nprofile = { kind = "square", low = 0.0, high = 20.0, '
+        "period = 0.5 }\n" + extra
+    )
+    return load_run(path)
+
+
+def test_true_handlebar_uses_its_own_motor_constant(tmp_path: Path) -> None:
+    # A true handlebar whose gearing N differs from the nominal one: the plant must be driven
+    # with the true N k_t (the motor torque it produces), not the nominal one.
+    text = (ROOT / "src/motosim/params/data/simacom_handlebar.toml").read_text(encoding="utf-8")
+    (tmp_path / "geared.toml").write_text(
+        text.replace('name = "simacom_handlebar"', 'name = "geared"').replace(
+            "value = 12.0", "value = 15.0"
+        )
+    )
+    same = _inputs_with(tmp_path, "")
+    geared = _inputs_with(
+        tmp_path, '[handlebar]\ntrue = "geared.toml"\nnominal = "simacom_handlebar"\n'
+    )
+    assert geared.true_handlebar.torque_per_amp == pytest.approx(
+        1.25 * same.true_handlebar.torque_per_amp
+    )
+    rig = build_rig(geared, rng=np.random.default_rng(0))
+    assert rig.handlebar[3] == geared.true_handlebar.torque_per_amp
+    a = simulate(same, rng=np.random.default_rng(0))
+    b = simulate(geared, rng=np.random.default_rng(0))
+    np.testing.assert_allclose(b["tau_m"], geared.true_handlebar.torque_per_amp * b["i_m"])
+    assert np.max(np.abs(a["theta_h"] - b["theta_h"])) > 1e-4  # the plant did change
+
+
+def test_design_file_observer_is_what_runs(tmp_path: Path) -> None:
+    # A design file whose observer differs from the defaults (slower injection, other poles):
+    # the run must use it, so its torque estimate differs from the default observer's.
+    assert main(["design", "--order", "1", "--out", str(tmp_path / "d.toml")]) == 0
+    text = (tmp_path / "d.toml").read_text(encoding="utf-8")
+    (tmp_path / "slow.toml").write_text(
+        text.replace("injection_bandwidth = 800.0", "injection_bandwidth = 100.0")
+    )
+    default = _inputs_with(tmp_path, '[controller]\ndesign = "d.toml"\n')
+    slow = _inputs_with(tmp_path, '[controller]\ndesign = "slow.toml"\n')
+    assert slow.observer is not None and slow.observer.injection_bandwidth == 100.0
+    kernel_default = build_stack(default).estimator
+    kernel_slow = build_stack(slow).estimator
+    assert kernel_default.p[1] != kernel_slow.p[1]  # epsilon follows the injection bandwidth
+    a = simulate(default, rng=np.random.default_rng(0))
+    b = simulate(slow, rng=np.random.default_rng(0))
+    assert np.sqrt(np.mean((a["tau_r_hat"] - b["tau_r_hat"]) ** 2)) > 0.05

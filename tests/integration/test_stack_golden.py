@@ -6,6 +6,7 @@ signals of three scenarios (a virtual rider at 1 kHz, the paper's controller at 
 paper's Fig. 14 run). Any later change of the step must reproduce them to rounding.
 """
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -34,6 +35,20 @@ def test_signals_unchanged(name: str) -> None:
     for signal, values in pinned.items():
         if signal in ("t", "rms"):
             continue
-        np.testing.assert_allclose(result[signal][idx], values, rtol=1e-7, atol=1e-9, err_msg=signal)
+        np.testing.assert_allclose(
+            result[signal][idx], values, rtol=1e-7, atol=1e-9, err_msg=signal
+        )
     for signal, rms in pinned["rms"].items():
         np.testing.assert_allclose(np.sqrt(np.mean(result[signal] ** 2)), rms, rtol=1e-7)
+
+
+def test_short_run_reproduces_the_pinned_start() -> None:
+    # Short enough to run uncompiled too (make test runs this file under NUMBA_DISABLE_JIT=1):
+    # the first 0.3 s of the lane change give the pinned samples at t = 0 and 0.249 s.
+    pinned = GOLDEN["lane_change_20"]
+    run = load_run(ROOT / FILES["lane_change_20"])
+    run = dataclasses.replace(run, scenario=dataclasses.replace(run.scenario, duration=0.3))
+    result = simulate(run, rng=np.random.default_rng(run.scenario.seed))
+    idx = [0, 249]
+    for signal in ("tau_r_hat", "theta_h", "i_m", "delta", "phi"):
+        np.testing.assert_allclose(result[signal][idx], pinned[signal][:2], rtol=1e-7, atol=1e-9)

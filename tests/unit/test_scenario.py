@@ -6,6 +6,7 @@ import pytest
 
 from motosim.errors import MotosimError
 from motosim.sim import parse_scenario
+from motosim.sim.scenario import TurnPath, scenario_dict, scenario_from_dict
 
 MINIMAL = """
 [scenario]
@@ -41,7 +42,7 @@ kind = "virtual"
 path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition = 20.0 }
 """
     )
-    assert sc.rider.path is not None and sc.rider.path.settings["radius"] == -150.0
+    assert isinstance(sc.rider.path, TurnPath) and sc.rider.path.radius == -150.0
     assert sc.motorcycle.brake_torque.kind == "steps"
 
 
@@ -64,8 +65,9 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
             MINIMAL.replace('kind = "torque"\n', 'kind = "torque"\n').replace(
                 "profile = ", "prof = "
             ),
-            "missing profile",
+            "unknown key 'prof' (did you mean 'profile'?)",
         ),
+        (MINIMAL.replace("profile = ", "# no profile "), "missing profile"),
         (MINIMAL + "[estimator]\nname = 'oracle'\n", "name = 'oracle'; expected one of"),
         (MINIMAL + "[controller]\nkind = 'pid'\n", "kind = 'pid'"),
         (MINIMAL + "[handlebar]\ninertia_factor = 0.0\n", "inertia_factor = 0.0"),
@@ -85,3 +87,11 @@ def test_bad_scenarios(text: str, message: str) -> None:
         _parse(text)
     assert message in str(info.value) and "\n" not in str(info.value)
     assert str(info.value).startswith("s.toml")
+
+
+def test_round_trip_through_plain_data() -> None:
+    sc = _parse(
+        MINIMAL
+        + "[motorcycle]\nbrake_torque = { kind = 'square', low = 0.0, high = 5.0, period = 2.0 }\n"
+    )
+    assert scenario_from_dict(scenario_dict(sc), origin="meta") == sc

@@ -1,21 +1,90 @@
 """The compiled stack step against the library's reference implementations."""
 
 import numpy as np
+import pytest
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER, discretize
-from motosim.sim.stack import stack_command
+from motosim.estimation.registry import ESTIMATORS, estimate
+from motosim.params import load_parameters
+from motosim.sim.stack import design_stack, new_data, reset, step
+
+HB = load_parameters("simacom_handlebar", "handlebar")
+BIKE = load_parameters("sharp1971", "sharp")
 
 
-def test_controller_step_is_the_discretised_controller() -> None:
+def _stack(controller=PAPER_CONTROLLER, *, name="walcott_zak", control=1000.0, measurement=1000.0):
+    return design_stack(
+        BIKE,
+        ESTIMATORS[name](HB, 1.0 / measurement).kernel,
+        controller,
+        control_rate=control,
+        measurement_rate=measurement,
+        lipschitz=300.0,
+        discretization="tustin",
+        max_current=1e9,
+        speed=20.0,
+        true_torque=True,  # the motorcycle sees no torque: it stays upright, delta = 0
+    )
+
+
+def test_command_is_the_discretised_controller() -> None:
+    model = _stack()
+    data = new_data(model)
+    reset(model, data, 0.0, 0.0)
     K = discretize(PAPER_CONTROLLER, 1e-3, "tustin")
-    x = np.zeros(1)
     e = np.sin(np.arange(50) * 0.3)
-    ours = [stack_command(x, K.A, K.B, K.C, K.D, ek, 0.0, 1e9, True, np.zeros(1)) for ek in e]
+    ours = [step(model, data, ek, 0.0, 0.0, 0.0) for ek in e]
     xs, want = np.zeros(1), []
     for ek in e:
         want.append(float((K.C @ xs)[0] + K.D[0, 0] * ek))
         xs = K.A @ xs + K.B[:, 0] * ek
     np.testing.assert_allclose(ours, want, rtol=1e-12, atol=1e-12)
-    # saturation, and no current at all in the open loop of Fig. 9
-    assert stack_command(x, K.A, K.B, K.C, K.D, 100.0, 0.0, 5.0, True, np.zeros(1)) == -5.0
-    assert stack_command(x, K.A, K.B, K.C, K.D, 1.0, 0.0, 5.0, False, np.zeros(1)) == 0.0
+    assert np.all(data.motorcycle[:8] == 0.0)
+
+
+def test_saturation_and_no_feedback() -> None:
+    model = _stack()._replace(max_current=5.0)
+    data = new_data(model)
+    reset(model, data, 0.0, 0.0)
+    assert step(model, data, 100.0, 0.0, 0.0, 0.0) == -5.0
+    open_loop = _stack(None)
+    data = new_data(open_loop)
+    reset(open_loop, data, 0.0, 0.0)
+    assert not open_loop.feedback
+    assert step(open_loop, data, 1.0, 0.0, 0.0, 0.0) == 0.0
+
+
+@pytest.mark.parametrize("name", sorted(ESTIMATORS))
+def test_estimate_in_the_stack_is_the_estimator(name: str) -> None:
+    # Without feedback the estimator is told current_error is the current: the stack must
+    # then give the batch estimate of motosim.estimation.estimate, sample for sample.
+    t = np.arange(0.0, 0.5, 1e-3)
+    theta = 0.1 * np.sin(2 * np.pi * 1.5 * t)
+    current = 2.0 * np.cos(2 * np.pi * 0.7 * t)
+    _, want = estimate(name, t, theta, current, HB)
+    model = _stack(None, name=name)
+    data = new_data(model)
+    reset(model, data, theta[0], current[0])
+    ours = []
+    for k in range(t.size):
+        step(model, data, theta[k], current[k], 0.0, 0.0)
+        ours.append(data.held[3])
+    np.testing.assert_allclose(ours, want, rtol=1e-9, atol=1e-9)
+
+
+def test_outputs_held_between_measurements() -> None:
+    model = _stack(control=1000.0, measurement=100.0)
+    assert model.measure_every == 10
+    data = new_data(model)
+    reset(model, data, 0.0, 0.0)
+    commands = [step(model, data, 0.01 * (k + 1), 0.0, 0.0, 0.0) for k in range(30)]
+    for block in range(3):
+        assert len(set(commands[10 * block : 10 * block + 10])) == 1
+    assert commands[0] != commands[10] != commands[20]
+
+
+def test_rates_must_be_whole_multiples() -> None:
+    from motosim.errors import MotosimError
+
+    with pytest.raises(MotosimError, match="whole number"):
+        _stack(control=1000.0, measurement=300.0)

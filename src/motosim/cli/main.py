@@ -24,7 +24,7 @@ from motosim.cli import (
     simulate,
 )
 from motosim.cli import run as run_command
-from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailed
+from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailedError
 
 __all__ = ["main"]
 
@@ -71,7 +71,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except MotosimError as err:
         print(f"motosim: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except RunFailed as err:
+    except RunFailedError as err:
         print(f"motosim: run failed: {err}", file=sys.stderr)
         return EXIT_RUN_FAILED
     except KeyboardInterrupt:

@@ -10,9 +10,9 @@ from typing import Any
 
 from motosim.cli._common import print_json
 from motosim.cli.simulate import run_scenario
-from motosim.io.runs import resolve
 from motosim.errors import MotosimError
 from motosim.io.results import SimResult, load_result
+from motosim.io.runs import resolve
 from motosim.sim import Scenario, parse_scenario
 
 __all__ = ["paper_scenarios", "register"]

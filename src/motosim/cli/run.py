@@ -12,7 +12,7 @@ import numpy as np
 
 from motosim.cli._common import print_json, write_text
 from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
-from motosim.errors import MotosimError, RunFailed
+from motosim.errors import MotosimError, RunFailedError
 from motosim.io.results import ResultWriter
 from motosim.io.runs import resolve
 from motosim.sim import RunInputs, build_rig, build_stack, parse_scenario, run_metadata
@@ -235,7 +235,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"motosim run: stopped, torque faded out; result in {folder}", file=sys.stderr)
         return 130
     if counters.fault != "NONE":
-        raise RunFailed(
+        raise RunFailedError(
             f"safety fault: {counters.fault_reason}; the result until then is in {folder}",
             time=counters.fault_time,
         )

@@ -30,7 +30,7 @@ from motosim.control.loops import closed_loop_poles, four_block_norm
 from motosim.control.ncf import ncfsyn
 from motosim.control.statespace import StateSpace, frequency_response
 from motosim.errors import MotosimError
-from motosim.model.handlebar import perturbed
+from motosim.model.handlebar import matrices, perturbed
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
@@ -68,11 +68,9 @@ def handlebar_plants(hb: HandlebarParameters) -> tuple[StateSpace, StateSpace]:
 
     States [theta_h', theta_h] as in eq. (10).
     """
-    A = np.array([[-hb.beta_eq / hb.J_eq, 0.0], [1.0, 0.0]])
-    C = np.array([[0.0, 1.0]])
-    G_h = StateSpace(A, np.array([[hb.torque_per_amp / hb.J_eq], [0.0]]), C, np.zeros((1, 1)))
-    G_w = StateSpace(A, np.array([[1.0 / hb.J_eq], [0.0]]), C, np.zeros((1, 1)))
-    return G_h, G_w
+    m = matrices(hb)
+    C, D = m.C[None, :], np.zeros((1, 1))
+    return StateSpace(m.A, m.B[:, None], C, D), StateSpace(m.A, m.D[:, None], C, D)
 
 
 def series(first: StateSpace, second: StateSpace) -> StateSpace:

@@ -27,6 +27,7 @@ from scipy.linalg import expm, solve_discrete_are
 from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
 from motosim.estimation.kernel import INVERSE_DYNAMICS, KALMAN, EstimatorKernel, pack
+from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
 
@@ -385,10 +386,11 @@ class KalmanTorqueEstimator:
         self.gains = gains
         self.dt = h = float(dt)
         hb = gains.handlebar
-        A = np.array(
-            [[-hb.beta_eq / hb.J_eq, 0.0, 1.0 / hb.J_eq], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
-        )
-        inputs = np.array([[hb.torque_per_amp / hb.J_eq, 1.0 / hb.J_eq], [0.0, 0.0], [0.0, 0.0]])
+        m = matrices(hb)  # eq. (10), augmented with the random-walk torque
+        A = np.zeros((3, 3))
+        A[:2, :2], A[:2, 2] = m.A, m.D
+        inputs = np.zeros((3, 2))
+        inputs[:2, 0], inputs[:2, 1] = m.B, m.D
         self._Phi, self._Gamma = zoh(A, inputs, h)
         # Van Loan: Q_d = int_0^h exp(A s) G q G^T exp(A^T s) ds
         Qc = np.zeros((3, 3))

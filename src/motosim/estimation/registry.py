@@ -6,7 +6,6 @@ super-twisting differentiator and runs the stepper over the samples. The command
 these names.
 """
 
-import math
 from typing import Protocol
 
 import numpy as np
@@ -223,7 +222,7 @@ def start_kernel(
         kalman_start(state, theta, theta_dot, current)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def step_kernel(
     k: EstimatorKernel, state: Array, theta: float, theta_dot: float, current: float
 ) -> float:

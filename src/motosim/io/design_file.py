@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from motosim.control.statespace import StateSpace
-from motosim.estimation.walcott_zak import ObserverSettings
 from motosim.errors import MotosimError
+from motosim.estimation.walcott_zak import ObserverSettings
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = ["DesignFile", "ObserverSettings", "dump_design", "read_design"]
@@ -104,9 +104,8 @@ def _get(table: Mapping[str, Any], key: str, where: str) -> Any:
 
 def _state_space(table: Mapping[str, Any], where: str, dt: float = 0.0) -> StateSpace:
     try:
-        return StateSpace(
-            *(np.asarray(_get(table, k, where), dtype=float) for k in "ABCD"), dt=dt
-        )
+        A, B, C, D = (np.asarray(_get(table, k, where), dtype=float) for k in "ABCD")
+        return StateSpace(A, B, C, D, dt=dt)
     except (TypeError, ValueError) as err:
         raise MotosimError(f"{where}: {err}") from None
 

@@ -31,10 +31,11 @@ from typing import Any, Self
 
 import h5py
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from motosim import __version__
 from motosim.errors import MotosimError
+from motosim.timeseries import TimeSeries
 
 __all__ = ["ResultWriter", "SimResult", "load_result"]
 
@@ -337,8 +338,8 @@ def _first_line(err: BaseException) -> str:
 
 
 @dataclass(frozen=True, slots=True)
-class SimResult:
-    """A recorded run, as read back by :func:`load_result`.
+class SimResult(TimeSeries):
+    """A recorded run, as read back by :func:`load_result`: a time series and its provenance.
 
     Attributes
     ----------
@@ -363,34 +364,14 @@ class SimResult:
     (array([1., 2.]), array([0. , 0.5]))
     """
 
-    t: NDArray[np.float64]
-    data: NDArray[np.float64]
-    names: tuple[str, ...]
     metadata: dict[str, Any]
     summary: dict[str, Any]
     complete: bool
 
     def __post_init__(self) -> None:
-        if self.t.ndim != 1 or self.data.shape != (self.t.size, len(self.names)):
-            raise MotosimError(
-                f"SimResult: t {self.t.shape} and data {self.data.shape} with "
-                f"{len(self.names)} names; expected t (n,) and data (n, {len(self.names)})"
-            )
+        TimeSeries.__post_init__(self)
         if "t" in self.names:
             raise MotosimError("SimResult: 't' among the signal names; expected it apart")
-
-    def __getitem__(self, name: str) -> NDArray[np.float64]:
-        """The column of the signal ``name`` (``"t"`` gives the time)."""
-        if name == "t":
-            return self.t
-        try:
-            return self.data[:, self.names.index(name)]
-        except ValueError:
-            raise KeyError(f"no signal {name!r}; have {', '.join(self.names)}") from None
-
-    def __contains__(self, name: object) -> bool:
-        """Whether the result has the signal ``name`` (``"t"`` included)."""
-        return name == "t" or name in self.names
 
 
 def load_result(folder: str | Path) -> SimResult:

@@ -32,6 +32,7 @@ from motosim.sim import (
     simulate,
 )
 from motosim.sim.metrics import run_metrics
+from motosim.sim.scenario import CsvProfile
 from motosim.timeseries import TimeSeries
 
 __all__ = ["load_run", "load_scenario", "resolve", "run_to_folder"]
@@ -78,10 +79,9 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     if scenario.rider.profile is not None:
         profiles.append(scenario.rider.profile)
     for profile in profiles:
-        if profile.kind == "csv":
-            name = profile.settings["file"]
-            tables[name] = read_log(
-                folder / name, required=(profile.settings["column"],), min_samples=2
+        if isinstance(profile, CsvProfile):
+            tables[profile.file] = read_log(
+                folder / profile.file, required=(profile.column,), min_samples=2
             )
     c = scenario.controller
     controller, observer = None, None
@@ -147,7 +147,7 @@ def run_to_folder(
 
     Raises
     ------
-    RunFailed
+    RunFailedError
         If the run diverged; the rows computed until then stay in the folder.
     """
     sc = inputs.scenario
@@ -160,9 +160,6 @@ def run_to_folder(
                 on_rows(block.shape[0])
 
         run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
-        summary = run_metrics(
-            run.t, lambda name: run[name] if name in run.names else None, complete=True
-        )
+        summary = run_metrics(run.t, lambda name: run[name] if name in run else None, complete=True)
         writer.close(summary)
     return summary
-

@@ -16,10 +16,8 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
-from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.sim.metrics import run_metrics
 from motosim.io.results import SimResult, load_result
 from motosim.plotting.closed_loop import (
     plot_motor_torque,
@@ -28,6 +26,7 @@ from motosim.plotting.closed_loop import (
     plot_torque,
     plot_tracking,
 )
+from motosim.sim.metrics import run_metrics
 
 __all__ = ["build_report", "metrics"]
 

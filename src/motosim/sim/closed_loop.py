@@ -14,7 +14,7 @@ import math
 from collections import namedtuple
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from motosim import __version__
 from motosim.control.statespace import StateSpace
-from motosim.errors import MotosimError, RunFailed
+from motosim.errors import MotosimError, RunFailedError
 from motosim.estimation.registry import ESTIMATORS
 from motosim.estimation.walcott_zak import (
     ObserverSettings,
@@ -33,9 +33,8 @@ from motosim.model.handlebar import perturbed, step_exact
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
-from motosim.sim import paths
 from motosim.sim.rider import design_rider, rider_torque
-from motosim.sim.scenario import PathSpec, Profile, Scenario
+from motosim.sim.scenario import Scenario, scenario_dict
 from motosim.sim.stack import StackData, StackModel, design_stack, new_data, reset, step
 from motosim.timeseries import TimeSeries
 
@@ -48,7 +47,6 @@ __all__ = [
     "build_stack",
     "prepare",
     "run_metadata",
-    "sample_profile",
     "simulate",
 ]
 
@@ -60,57 +58,6 @@ SIGNALS = RECORDED
 _Columns = namedtuple("_Columns", RECORDED)  # type: ignore[misc]
 _COLUMNS = _Columns(*range(len(RECORDED)))
 """Column of each recorded signal by name, passed to the compiled loop (``col.tau_r``)."""
-
-
-def sample_profile(profile: Profile, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
-    """Values of a profile at the times ``t`` [s].
-
-    ``tables`` maps a CSV file name to its loaded log, for ``kind = "csv"`` (held samples).
-    """
-    s = profile.settings
-    if profile.kind == "constant":
-        return np.full(t.size, float(s["value"]))
-    if profile.kind == "steps":
-        idx = np.searchsorted(np.asarray(s["times"]), t, side="right") - 1
-        values = np.concatenate([[0.0], np.asarray(s["values"])])
-        return np.asarray(values[idx + 1], dtype=float)
-    if profile.kind == "square":
-        phase = np.floor((t - s["start"]) / (0.5 * s["period"]))
-        levels = np.where(phase % 2 == 0, s["high"], s["low"])
-        return np.asarray(np.where(t < s["start"], s["low"], levels), dtype=np.float64)
-    if profile.kind == "chirp":
-        tt = np.clip(t - s["start"], 0.0, None)
-        span = max(float(t[-1] - s["start"]), 1e-9)
-        phase = 2 * np.pi * (s["f0"] * tt + (s["f1"] - s["f0"]) * tt**2 / (2 * span))
-        return np.asarray(
-            s["offset"] + np.where(t < s["start"], 0.0, s["amplitude"] * np.sin(phase))
-        )
-    log = tables[s["file"]]
-    if s["column"] not in log.names:
-        raise MotosimError(f"{s['file']}: no column {s['column']!r}; have {', '.join(log.names)}")
-    idx = np.clip(np.searchsorted(log.t, t, side="right") - 1, 0, log.t.size - 1)
-    return np.asarray(log[s["column"]][idx], dtype=float)
-
-
-def _path(spec: PathSpec, length: float) -> paths.Path:
-    s = spec.settings
-    if spec.kind == "straight":
-        return paths.straight(length)
-    if spec.kind == "lane_change":
-        return paths.lane_change(s["offset"], length=s["length"], start=s["start"], total=length)
-    if spec.kind == "slalom":
-        return paths.slalom(
-            s["amplitude"], wavelength=s["wavelength"], cycles=s["cycles"], start=s["start"],
-            total=length,
-        )  # fmt: skip
-    if spec.kind == "turn":
-        return paths.constant_radius_turn(
-            s["radius"], angle=s["angle"], start=s["start"], transition=s["transition"],
-            total=length,
-        )  # fmt: skip
-    return paths.obstacle_avoidance(
-        s["offset"], length=s["length"], hold=s["hold"], start=s["start"], total=length
-    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -276,13 +223,13 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
     if rider.kind == "torque":
         assert rider.profile is not None
         t_fine = (np.arange(n * n_sub) / (n * n_sub)) * (n * h)
-        profile = sample_profile(rider.profile, t_fine, inputs.tables)
+        profile = rider.profile.sample(t_fine, inputs.tables)
         path_arr, path_ds = np.zeros((4, 2)), 1.0
         gains = design_rider(inputs.sharp, speeds=np.array([1.0, 2.0]))
     else:
         assert rider.path is not None
         profile = np.zeros(1)
-        route = _path(rider.path, max(sc.motorcycle.speed, 20.0) * sc.duration * 1.5 + 200.0)
+        route = rider.path.build(max(sc.motorcycle.speed, 20.0) * sc.duration * 1.5 + 200.0)
         path_arr, path_ds = np.vstack([route.x, route.y, route.psi, route.kappa]), route.ds
         gains = design_rider(
             inputs.sharp,
@@ -294,9 +241,9 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
         )
     mc = sc.motorcycle
     r_D = derived_geometry(inputs.sharp)["r_D"]
-    drive = sample_profile(mc.drive_torque, t, inputs.tables)
-    brake = np.maximum(sample_profile(mc.brake_torque, t, inputs.tables), 0.0)
-    force = (drive - brake) / r_D + sample_profile(mc.wind_force, t, inputs.tables)
+    drive = mc.drive_torque.sample(t, inputs.tables)
+    brake = np.maximum(mc.brake_torque.sample(t, inputs.tables), 0.0)
+    force = (drive - brake) / r_D + mc.wind_force.sample(t, inputs.tables)
     bits = sc.measurement.encoder_bits
     noise = sc.measurement.current_noise
     hb = inputs.true_handlebar
@@ -322,7 +269,7 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
 def _run_chunk(
     k0: int,
     out: Array,
-    col: tuple[int, ...],
+    col: Any,
     stack: StackModel,
     data: StackData,
     rig: RigModel,
@@ -395,7 +342,7 @@ def _check_block(out: Array) -> None:
         raise AssertionError(f"recorded signals never computed: {', '.join(unwritten)}")
     row = int(np.argmin(finite.all(axis=1)))
     bad = [SIGNALS[j] for j in range(out.shape[1]) if not finite[row, j]]
-    raise RunFailed(
+    raise RunFailedError(
         f"the simulation diverged at t = {out[row, 0]:.3f} s ({', '.join(bad)} not finite); "
         "check the rates, the controller and the rider",
         time=float(out[row, 0]),
@@ -439,7 +386,7 @@ def simulate(
     ------
     MotosimError
         If a design is impossible at the scenario's rates.
-    RunFailed
+    RunFailedError
         If the simulation diverges (a non-finite signal); the blocks before it were passed
         to ``on_block``.
     """
@@ -468,7 +415,7 @@ def run_metadata(inputs: RunInputs) -> dict[str, object]:
     """What produced a run: scenario, parameters and version, as plain JSON-able values."""
     return {
         "version": __version__,
-        "scenario": dataclasses.asdict(inputs.scenario),
+        "scenario": scenario_dict(inputs.scenario),
         "sharp": dataclasses.asdict(inputs.sharp),
         "true_handlebar": dataclasses.asdict(inputs.true_handlebar),
         "nominal_handlebar": dataclasses.asdict(inputs.nominal_handlebar),

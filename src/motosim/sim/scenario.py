@@ -1,8 +1,13 @@
-"""Scenario files: what one closed-loop run simulates, validated into frozen dataclasses.
+"""Scenario files: what one closed-loop run simulates, as typed, self-validating dataclasses.
 
-A scenario is TOML; every table and key is checked, unknown keys are errors, and each error
-is one line naming the key, the value and what was expected. The tables (all optional but
-``[scenario]``) and their defaults::
+A scenario is TOML. Each table is a frozen dataclass below whose fields are the table's keys,
+with their defaults written once, here; each dataclass validates itself in
+``__post_init__``. :func:`parse_scenario` only maps the TOML document onto the constructors:
+it checks each value's type against the field's annotation (numbers, integers, booleans,
+strings, ``Literal`` choices, lists of numbers, tagged profiles and paths), refuses unknown
+keys (suggesting the closest known one) and prefixes every error with the table it is in,
+so that an error is one line naming the key, the value and what was expected. The tables
+(all optional but ``[scenario]``)::
 
     [scenario]     name, description, duration [s] = 10, seed = 0,
                    architecture = "closed_loop" (Fig. 7) | "open_loop" (Fig. 9)
@@ -15,7 +20,8 @@ is one line naming the key, the value and what was expected. The tables (all opt
                    and lateral_tolerance, course_tolerance, torque_scale, preview, max_torque
     [handlebar]    true = "simacom_handlebar", nominal = (true), inertia_factor = 1,
                    damping_factor = 1, friction = true
-    [estimator]    name = "walcott_zak", friction_compensation = true, lipschitz = 300
+    [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman",
+                   friction_compensation = true, lipschitz = 300
     [controller]   kind = "ours" | "paper" | "none", design = "DESIGN.toml" (optional),
                    bandwidth = 10 [Hz], order = 1, discretization = "zoh" | "tustin",
                    max_current = 30 [A]
@@ -28,17 +34,33 @@ Paths have ``kind``: ``straight``, ``lane_change`` (offset, length, start), ``sl
 ``avoidance`` (offset, length, hold, start); the path is long enough for the run.
 """
 
+import dataclasses
+import difflib
 import math
+import types
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal, Union, get_args, get_origin, get_type_hints
+
+import numpy as np
+from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
+from motosim.estimation.registry import ESTIMATORS
+from motosim.sim import paths
+from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "PATHS",
+    "PROFILES",
+    "AvoidancePath",
+    "ChirpProfile",
+    "ConstantProfile",
     "Controller",
+    "CsvProfile",
     "Estimator",
     "Handlebar",
+    "LaneChangePath",
     "Measurement",
     "Motorcycle",
     "PathSpec",
@@ -46,124 +68,265 @@ __all__ = [
     "Rates",
     "Rider",
     "Scenario",
+    "SlalomPath",
+    "SquareProfile",
+    "StepsProfile",
+    "StraightPath",
+    "TurnPath",
     "parse_scenario",
+    "scenario_dict",
+    "scenario_from_dict",
 ]
 
-_PROFILE_KEYS = {
-    "constant": {"value"},
-    "steps": {"times", "values"},
-    "square": {"low", "high", "period", "start"},
-    "chirp": {"amplitude", "f0", "f1", "start", "offset"},
-    "csv": {"file", "column"},
-}
-_PATH_KEYS = {
-    "straight": set(),
-    "lane_change": {"offset", "length", "start"},
-    "slalom": {"amplitude", "wavelength", "cycles", "start"},
-    "turn": {"radius", "angle", "start", "transition"},
-    "avoidance": {"offset", "length", "hold", "start"},
-}
+Array = NDArray[np.float64]
 
 
-class _Table:
-    """Reads one TOML table, checking types and ranges; :meth:`done` rejects unknown keys."""
-
-    def __init__(self, data: Any, where: str) -> None:
-        if not isinstance(data, Mapping):
-            raise MotosimError(f"{where}: expected a table, got {data!r}")
-        self.data, self.where, self.used = data, where, set[str]()
-
-    def number(
-        self,
-        key: str,
-        default: float | None = None,
-        *,
-        low: float = -math.inf,
-        high: float = math.inf,
-        low_open: bool = False,
-    ) -> float:
-        self.used.add(key)
-        if key not in self.data:
-            if default is None:
-                raise MotosimError(f"{self.where}: missing {key}")
-            return default
-        value = self.data[key]
+def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
+           low_open: bool = False, unit: str = "") -> None:  # fmt: skip
+    """Refuse a number outside [low, high] (or (low, high]) naming it."""
+    ok = math.isfinite(value) and value <= high and (value > low if low_open else value >= low)
+    if not ok:
         bound = f"{'>' if low_open else '>='} {low:g}" if low > -math.inf else ""
         bound += (" and " if bound else "") + (f"<= {high:g}" if high < math.inf else "")
-        expected = f"a finite number{' ' + bound if bound else ''}"
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise MotosimError(f"{self.where}: {key} = {value!r}; expected {expected}")
-        ok = math.isfinite(value) and value <= high and (value > low if low_open else value >= low)
-        if not ok:
-            raise MotosimError(f"{self.where}: {key} = {value!r}; expected {expected}")
-        return float(value)
+        suffix = f" [{unit}]" if unit else ""
+        raise MotosimError(f"{name} = {value!r}; expected a finite number {bound}{suffix}".strip())
 
-    def integer(self, key: str, default: int, *, low: int = 0) -> int:
-        self.used.add(key)
-        value = self.data.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            raise MotosimError(f"{self.where}: {key} = {value!r}; expected an integer >= {low}")
-        return int(value)
 
-    def string(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
-        self.used.add(key)
-        value = self.data.get(key, default)
-        if value is None:
-            raise MotosimError(f"{self.where}: missing {key}")
-        if not isinstance(value, str) or (choices and value not in choices):
-            wanted = f"one of {', '.join(choices)}" if choices else "a string"
-            raise MotosimError(f"{self.where}: {key} = {value!r}; expected {wanted}")
-        return value
+# --- profiles: a signal of time ----------------------------------------------------------
 
-    def boolean(self, key: str, default: bool) -> bool:
-        self.used.add(key)
-        value = self.data.get(key, default)
-        if not isinstance(value, bool):
-            raise MotosimError(f"{self.where}: {key} = {value!r}; expected true or false")
-        return value
 
-    def numbers(self, key: str) -> tuple[float, ...]:
-        self.used.add(key)
-        value = self.data.get(key)
-        if not isinstance(value, list) or not value:
-            raise MotosimError(f"{self.where}: {key} = {value!r}; expected a list of numbers")
-        for item in value:
-            if (
-                isinstance(item, bool)
-                or not isinstance(item, int | float)
-                or not math.isfinite(item)
-            ):
-                raise MotosimError(f"{self.where}: {key} has {item!r}; expected finite numbers")
-        return tuple(float(v) for v in value)
+@dataclass(frozen=True, slots=True)
+class ConstantProfile:
+    """A constant value."""
 
-    def sub(self, key: str) -> "_Table":
-        self.used.add(key)
-        return _Table(self.data.get(key, {}), f"{self.where}.{key}")
+    value: float
+    kind: ClassVar[str] = "constant"
 
-    def done(self, allowed: set[str] | None = None) -> None:
-        unknown = set(self.data) - (allowed if allowed is not None else self.used)
-        if unknown:
-            name = sorted(unknown)[0]
-            keys = sorted(allowed if allowed is not None else self.used)
+    def __post_init__(self) -> None:
+        _check("value", self.value)
+
+    def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
+        """Values at the times ``t`` [s]."""
+        return np.full(t.size, float(self.value))
+
+
+@dataclass(frozen=True, slots=True)
+class StepsProfile:
+    """Piecewise constant: 0 before the first time, then ``values[i]`` from ``times[i]`` [s]."""
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+    kind: ClassVar[str] = "steps"
+
+    def __post_init__(self) -> None:
+        if len(self.times) != len(self.values) or not self.times:
             raise MotosimError(
-                f"{self.where}: unknown key {name!r}; expected some of {', '.join(keys)}"
+                f"times and values have {len(self.times)} and {len(self.values)} entries; "
+                "expected the same number, at least one"
             )
+        if any(b <= a for a, b in zip(self.times, self.times[1:], strict=False)):
+            raise MotosimError(f"times = {list(self.times)}; expected increasing times")
+
+    def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
+        """Values at the times ``t`` [s]."""
+        idx = np.searchsorted(np.asarray(self.times), t, side="right") - 1
+        values = np.concatenate([[0.0], np.asarray(self.values)])
+        return np.asarray(values[idx + 1], dtype=np.float64)
 
 
 @dataclass(frozen=True, slots=True)
-class Profile:
-    """A signal of time: ``kind`` and its settings (see the module docstring)."""
+class SquareProfile:
+    """A square wave between ``low`` and ``high`` of ``period`` [s], ``low`` before ``start``."""
 
-    kind: str
-    settings: Mapping[str, Any] = field(default_factory=dict)
+    low: float
+    high: float
+    period: float
+    start: float = 0.0
+    kind: ClassVar[str] = "square"
+
+    def __post_init__(self) -> None:
+        _check("low", self.low)
+        _check("high", self.high)
+        _check("period", self.period, low=0.0, low_open=True, unit="s")
+        _check("start", self.start, unit="s")
+
+    def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
+        """Values at the times ``t`` [s]."""
+        phase = np.floor((t - self.start) / (0.5 * self.period))
+        levels = np.where(phase % 2 == 0, self.high, self.low)
+        return np.asarray(np.where(t < self.start, self.low, levels), dtype=np.float64)
 
 
 @dataclass(frozen=True, slots=True)
-class PathSpec:
-    """A reference path for the virtual rider: ``kind`` and its lengths [m] and angle [rad]."""
+class ChirpProfile:
+    """A linear chirp from ``f0`` to ``f1`` [Hz] over the run, from ``start`` [s]."""
 
-    kind: str
-    settings: Mapping[str, float] = field(default_factory=dict)
+    amplitude: float
+    f0: float
+    f1: float
+    start: float = 0.0
+    offset: float = 0.0
+    kind: ClassVar[str] = "chirp"
+
+    def __post_init__(self) -> None:
+        _check("amplitude", self.amplitude)
+        _check("f0", self.f0, low=0.0, unit="Hz")
+        _check("f1", self.f1, low=0.0, unit="Hz")
+        _check("start", self.start, unit="s")
+        _check("offset", self.offset)
+
+    def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
+        """Values at the times ``t`` [s]."""
+        tt = np.clip(t - self.start, 0.0, None)
+        span = max(float(t[-1] - self.start), 1e-9)
+        phase = 2 * np.pi * (self.f0 * tt + (self.f1 - self.f0) * tt**2 / (2 * span))
+        wave = np.where(t < self.start, 0.0, self.amplitude * np.sin(phase))
+        return np.asarray(self.offset + wave, dtype=np.float64)
+
+
+@dataclass(frozen=True, slots=True)
+class CsvProfile:
+    """The column ``column`` of the CSV log ``file`` (relative to the scenario), held."""
+
+    file: str
+    column: str = "tau_r"
+    kind: ClassVar[str] = "csv"
+
+    def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
+        """Values at the times ``t`` [s], from the loaded log ``tables[file]``."""
+        log = tables[self.file]
+        if self.column not in log.names:
+            raise MotosimError(
+                f"{self.file}: no column {self.column!r}; have {', '.join(log.names)}"
+            )
+        idx = np.clip(np.searchsorted(log.t, t, side="right") - 1, 0, log.t.size - 1)
+        return np.asarray(log[self.column][idx], dtype=np.float64)
+
+
+Profile = ConstantProfile | StepsProfile | SquareProfile | ChirpProfile | CsvProfile
+"""A signal of time, tagged by its ``kind``."""
+PROFILES: dict[str, type[Profile]] = {
+    cls.kind: cls
+    for cls in (ConstantProfile, StepsProfile, SquareProfile, ChirpProfile, CsvProfile)
+}
+"""Profile types by ``kind``."""
+
+
+# --- paths: what the virtual rider follows ------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class StraightPath:
+    """Straight ahead."""
+
+    kind: ClassVar[str] = "straight"
+
+    def build(self, total: float) -> paths.Path:
+        """The path, ``total`` [m] long."""
+        return paths.straight(total)
+
+
+@dataclass(frozen=True, slots=True)
+class LaneChangePath:
+    """A lane change of ``offset`` [m] (right positive) over ``length`` [m] from ``start`` [m]."""
+
+    offset: float
+    length: float
+    start: float
+    kind: ClassVar[str] = "lane_change"
+
+    def __post_init__(self) -> None:
+        _check("offset", self.offset, unit="m")
+        _check("length", self.length, low=0.0, low_open=True, unit="m")
+        _check("start", self.start, unit="m")
+
+    def build(self, total: float) -> paths.Path:
+        """The path, ``total`` [m] long."""
+        return paths.lane_change(self.offset, length=self.length, start=self.start, total=total)
+
+
+@dataclass(frozen=True, slots=True)
+class SlalomPath:
+    """A slalom of ``amplitude`` [m] and ``wavelength`` [m], ``cycles`` times, from ``start``."""
+
+    amplitude: float
+    wavelength: float
+    cycles: float
+    start: float
+    kind: ClassVar[str] = "slalom"
+
+    def __post_init__(self) -> None:
+        _check("amplitude", self.amplitude, low=0.0, low_open=True, unit="m")
+        _check("wavelength", self.wavelength, low=0.0, low_open=True, unit="m")
+        _check("cycles", self.cycles, low=0.0, low_open=True)
+        _check("start", self.start, unit="m")
+
+    def build(self, total: float) -> paths.Path:
+        """The path, ``total`` [m] long."""
+        return paths.slalom(
+            self.amplitude, wavelength=self.wavelength, cycles=self.cycles, start=self.start,
+            total=total,
+        )  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True)
+class TurnPath:
+    """A turn of ``radius`` [m] (negative: left) through ``angle`` [rad] from ``start`` [m]."""
+
+    radius: float
+    angle: float
+    start: float
+    transition: float
+    kind: ClassVar[str] = "turn"
+
+    def __post_init__(self) -> None:
+        _check("radius", self.radius, unit="m")
+        if self.radius == 0.0:
+            raise MotosimError("radius = 0; expected a non-zero radius [m]")
+        _check("angle", self.angle, unit="rad")
+        _check("start", self.start, unit="m")
+        _check("transition", self.transition, low=0.0, low_open=True, unit="m")
+
+    def build(self, total: float) -> paths.Path:
+        """The path, ``total`` [m] long."""
+        return paths.constant_radius_turn(
+            self.radius, angle=self.angle, start=self.start, transition=self.transition,
+            total=total,
+        )  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True)
+class AvoidancePath:
+    """Out by ``offset`` [m] over ``length``, held for ``hold`` [m], and back, from ``start``."""
+
+    offset: float
+    length: float
+    hold: float
+    start: float
+    kind: ClassVar[str] = "avoidance"
+
+    def __post_init__(self) -> None:
+        _check("offset", self.offset, unit="m")
+        _check("length", self.length, low=0.0, low_open=True, unit="m")
+        _check("hold", self.hold, low=0.0, low_open=True, unit="m")
+        _check("start", self.start, unit="m")
+
+    def build(self, total: float) -> paths.Path:
+        """The path, ``total`` [m] long."""
+        return paths.obstacle_avoidance(
+            self.offset, length=self.length, hold=self.hold, start=self.start, total=total
+        )
+
+
+PathSpec = StraightPath | LaneChangePath | SlalomPath | TurnPath | AvoidancePath
+"""A reference path of the virtual rider, tagged by its ``kind``."""
+PATHS: dict[str, type[PathSpec]] = {
+    cls.kind: cls for cls in (StraightPath, LaneChangePath, SlalomPath, TurnPath, AvoidancePath)
+}
+"""Path types by ``kind``."""
+
+
+# --- the tables ---------------------------------------------------------------------------
 
 
 @dataclass(frozen=True, slots=True)
@@ -174,13 +337,30 @@ class Rates:
     control: float = 1000.0
     measurement: float = 1000.0
 
+    def __post_init__(self) -> None:
+        _check("plant", self.plant, low=0.0, low_open=True, high=1e6, unit="Hz")
+        _check("control", self.control, low=0.0, low_open=True, high=1e5, unit="Hz")
+        _check("measurement", self.measurement, low=0.0, low_open=True, high=1e5, unit="Hz")
+        for faster, slower, what in (
+            (self.plant, self.control, "plant / control"),
+            (self.control, self.measurement, "control / measurement"),
+        ):
+            ratio = faster / slower
+            if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
+                raise MotosimError(f"{what} = {ratio:g}; expected a whole number >= 1")
+
 
 @dataclass(frozen=True, slots=True)
 class Measurement:
-    """Encoder resolution (bits per revolution of the handlebar, 0 for exact) and noise."""
+    """Encoder resolution (bits per revolution of the handlebar, 0 for exact) and noise [A]."""
 
     encoder_bits: int = 14
     current_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.encoder_bits <= 32:
+            raise MotosimError(f"encoder_bits = {self.encoder_bits}; expected 0 to 32")
+        _check("current_noise", self.current_noise, low=0.0, high=100.0, unit="A")
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,17 +369,20 @@ class Motorcycle:
 
     params: str = "sharp1971"
     speed: float = 20.0
-    input: str = "estimate"
-    drive_torque: Profile = Profile("constant", {"value": 0.0})
-    brake_torque: Profile = Profile("constant", {"value": 0.0})
-    wind_force: Profile = Profile("constant", {"value": 0.0})
+    input: Literal["estimate", "true"] = "estimate"
+    drive_torque: Profile = ConstantProfile(0.0)
+    brake_torque: Profile = ConstantProfile(0.0)
+    wind_force: Profile = ConstantProfile(0.0)
+
+    def __post_init__(self) -> None:
+        _check("speed", self.speed, low=1.0, high=100.0, unit="m/s")
 
 
 @dataclass(frozen=True, slots=True)
 class Rider:
     """An open-loop torque profile or a virtual rider following a path."""
 
-    kind: str
+    kind: Literal["torque", "virtual"] = "torque"
     profile: Profile | None = None
     path: PathSpec | None = None
     lateral_tolerance: float = 0.3
@@ -208,104 +391,197 @@ class Rider:
     preview: float = 0.3
     max_torque: float = 70.0
 
+    def __post_init__(self) -> None:
+        if self.kind == "torque" and self.profile is None:
+            raise MotosimError('missing profile for kind = "torque"')
+        if self.kind == "torque" and self.path is not None:
+            raise MotosimError('path is for kind = "virtual"; a torque rider has a profile')
+        if self.kind == "virtual" and self.profile is not None:
+            raise MotosimError('profile is for kind = "torque"; a virtual rider has a path')
+        if self.kind == "virtual" and self.path is None:
+            object.__setattr__(self, "path", StraightPath())
+        _check("lateral_tolerance", self.lateral_tolerance, low=0.0, low_open=True, unit="m")
+        _check("course_tolerance", self.course_tolerance, low=0.0, low_open=True, unit="rad")
+        _check("torque_scale", self.torque_scale, low=0.0, low_open=True, unit="N*m")
+        _check("preview", self.preview, low=0.0, high=5.0, unit="s")
+        _check("max_torque", self.max_torque, low=0.0, low_open=True, unit="N*m")
+
 
 @dataclass(frozen=True, slots=True)
 class Handlebar:
-    """The true handlebar (simulated) and the nominal one (used by observer and controller)."""
+    """The true handlebar (simulated) and the nominal one (used by observer and controller).
+
+    ``nominal`` defaults to ``true``.
+    """
 
     true: str = "simacom_handlebar"
-    nominal: str = "simacom_handlebar"
+    nominal: str = ""
     inertia_factor: float = 1.0
     damping_factor: float = 1.0
     friction: bool = True
 
+    def __post_init__(self) -> None:
+        if not self.nominal:
+            object.__setattr__(self, "nominal", self.true)
+        _check("inertia_factor", self.inertia_factor, low=0.0, low_open=True, high=10.0)
+        _check("damping_factor", self.damping_factor, low=0.0, low_open=True, high=10.0)
+
 
 @dataclass(frozen=True, slots=True)
 class Estimator:
-    """Which estimator, with or without dry-friction compensation."""
+    """Which estimator (a name of :data:`motosim.estimation.registry.ESTIMATORS`)."""
 
-    name: str = "walcott_zak"
+    name: str = next(iter(ESTIMATORS))
     friction_compensation: bool = True
     lipschitz: float = 300.0
+
+    def __post_init__(self) -> None:
+        if self.name not in ESTIMATORS:
+            raise MotosimError(f"name = {self.name!r}; expected one of {', '.join(ESTIMATORS)}")
+        _check("lipschitz", self.lipschitz, low=0.0, low_open=True, unit="rad/s^2")
 
 
 @dataclass(frozen=True, slots=True)
 class Controller:
     """The torque-feedback controller."""
 
-    kind: str = "ours"
+    kind: Literal["ours", "paper", "none"] = "ours"
     design: str | None = None
     bandwidth: float = 10.0
     order: int = 1
-    discretization: str = "zoh"
+    discretization: Literal["zoh", "tustin"] = "zoh"
     max_current: float = 30.0
+
+    def __post_init__(self) -> None:
+        _check("bandwidth", self.bandwidth, low=0.0, low_open=True, unit="Hz")
+        if self.order < 0:
+            raise MotosimError(f"order = {self.order}; expected an integer >= 0")
+        _check("max_current", self.max_current, low=0.0, low_open=True, unit="A")
 
 
 @dataclass(frozen=True, slots=True)
 class Scenario:
-    """One closed-loop run."""
+    """One closed-loop run: the ``[scenario]`` table's keys and one field per other table."""
 
-    name: str
-    description: str
-    duration: float
-    seed: int
-    architecture: str
-    rates: Rates
-    measurement: Measurement
-    motorcycle: Motorcycle
-    rider: Rider
-    handlebar: Handlebar
-    estimator: Estimator
-    controller: Controller
+    name: str = "unnamed"
+    description: str = ""
+    duration: float = 10.0
+    seed: int = 0
+    architecture: Literal["closed_loop", "open_loop"] = "closed_loop"
+    rates: Rates = Rates()
+    measurement: Measurement = Measurement()
+    motorcycle: Motorcycle = Motorcycle()
+    rider: Rider = Rider("torque", ConstantProfile(0.0))
+    handlebar: Handlebar = Handlebar()
+    estimator: Estimator = Estimator()
+    controller: Controller = Controller()
 
-
-def _profile(table: _Table) -> Profile:
-    kind = table.string("kind", choices=tuple(_PROFILE_KEYS))
-    settings: dict[str, Any] = {}
-    for key in sorted(_PROFILE_KEYS[kind]):
-        if key in ("times", "values"):
-            settings[key] = table.numbers(key)
-        elif key == "file":
-            settings[key] = table.string(key)
-        elif key == "column":
-            settings[key] = table.string(key, "tau_r")
-        elif key in ("period",):
-            settings[key] = table.number(key, low=0.0, low_open=True)
-        elif key in ("f0", "f1"):
-            settings[key] = table.number(key, low=0.0)
-        elif key in ("start", "offset"):
-            settings[key] = table.number(key, 0.0)
-        else:
-            settings[key] = table.number(key)
-    if kind == "steps" and len(settings["times"]) != len(settings["values"]):
-        raise MotosimError(f"{table.where}: times and values have different lengths")
-    if kind == "steps" and any(
-        b <= a for a, b in zip(settings["times"], settings["times"][1:], strict=False)
-    ):
-        raise MotosimError(f"{table.where}: times = {settings['times']}; expected increasing times")
-    table.done({"kind", *_PROFILE_KEYS[kind]})
-    return Profile(kind, settings)
+    def __post_init__(self) -> None:
+        _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
+        if self.seed < 0:
+            raise MotosimError(f"seed = {self.seed}; expected an integer >= 0")
 
 
-def _signal(parent: _Table, key: str, default: float = 0.0) -> Profile:
-    parent.used.add(key)
-    value = parent.data.get(key, default)
-    if isinstance(value, Mapping):
-        return _profile(_Table(value, f"{parent.where}.{key}"))
-    return Profile("constant", {"value": parent.number(key, default)})
+# --- the parser: TOML onto the constructors -----------------------------------------------
+
+_TABLES = ("rates", "measurement", "motorcycle", "rider", "handlebar", "estimator", "controller")
 
 
-def _path(table: _Table) -> PathSpec:
-    kind = table.string("kind", choices=tuple(_PATH_KEYS))
-    positive = {"length", "wavelength", "cycles", "transition", "amplitude", "hold"}
-    settings = {
-        key: table.number(key, low=0.0, low_open=True) if key in positive else table.number(key)
-        for key in sorted(_PATH_KEYS[kind])
-    }
-    if kind == "turn" and settings["radius"] == 0.0:
-        raise MotosimError(f"{table.where}: radius = 0; expected a non-zero radius [m]")
-    table.done({"kind", *_PATH_KEYS[kind]})
-    return PathSpec(kind, settings)
+def _describe(tp: Any) -> str:
+    """What a value of the annotation ``tp`` looks like, in words."""
+    if tp is float:
+        return "a finite number"
+    if tp is int:
+        return "an integer"
+    if tp is bool:
+        return "true or false"
+    if tp is str:
+        return "a string"
+    if get_origin(tp) is Literal:
+        return "one of " + ", ".join(repr(a) for a in get_args(tp))
+    if get_origin(tp) is tuple:
+        return "a list of numbers"
+    return "a table"
+
+
+def _unknown(key: str, known: list[str]) -> MotosimError:
+    close = difflib.get_close_matches(key, known, n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return MotosimError(f"unknown key {key!r}{hint}; expected some of {', '.join(known)}")
+
+
+def _value(tp: Any, value: Any, key: str, where: str) -> Any:
+    """``value`` converted to the field type ``tp``, or a MotosimError naming ``key``."""
+    origin = get_origin(tp)
+    if origin in (Union, types.UnionType):
+        options = [a for a in get_args(tp) if a is not type(None)]
+        if options and all(a in PROFILES.values() for a in options):
+            return _tagged(PROFILES, value, key, where, number=True)
+        if options and all(a in PATHS.values() for a in options):
+            return _tagged(PATHS, value, key, where, number=False)
+        return _value(options[0], value, key, where)  # ``str | None``
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise MotosimError(f"{key} = {value!r}; expected a finite number")
+        try:
+            return float(value)
+        except OverflowError:
+            raise MotosimError(f"{key} = {value}; expected a finite number") from None
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int) or abs(value) > 2**63 - 1:
+            raise MotosimError(f"{key} = {value!r}; expected an integer")
+        return value
+    if tp is bool or tp is str:
+        if not isinstance(value, tp):
+            raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
+        return value
+    if origin is Literal:
+        if value not in get_args(tp):
+            raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
+        return value
+    if origin is tuple:
+        if not isinstance(value, list) or not value:
+            raise MotosimError(f"{key} = {value!r}; expected a list of numbers")
+        return tuple(_value(float, item, f"{key} entry", where) for item in value)
+    return _build(tp, value, f"{where}.{key}")
+
+
+def _tagged(registry: Mapping[str, type], value: Any, key: str, where: str, *, number: bool) -> Any:
+    """A profile or a path from its table (``kind`` picks the type); a number is a constant."""
+    if number and not isinstance(value, Mapping):
+        return ConstantProfile(_value(float, value, key, where))
+    if not isinstance(value, Mapping):
+        raise MotosimError(f"{key} = {value!r}; expected a table with a kind")
+    kind = value.get("kind")
+    if not isinstance(kind, str) or kind not in registry:
+        raise MotosimError(f"{where}.{key}: kind = {kind!r}; expected one of {', '.join(registry)}")
+    return _build(registry[kind], {k: v for k, v in value.items() if k != "kind"}, f"{where}.{key}")
+
+
+def _build(cls: type, table: Any, where: str) -> Any:
+    """Construct the dataclass ``cls`` from a TOML table, checking every key."""
+    if not isinstance(table, Mapping):
+        raise MotosimError(f"{where}: expected a table, got {table!r}")
+    hints = get_type_hints(cls)
+    names = [f.name for f in dataclasses.fields(cls)]
+    for key in table:
+        if key not in names:
+            raise MotosimError(f"{where}: {_unknown(key, names)}")
+    try:
+        kwargs = {key: _value(hints[key], value, key, where) for key, value in table.items()}
+        return cls(**kwargs)
+    except MotosimError as err:
+        text = str(err)
+        raise MotosimError(text if text.startswith(where) else f"{where}: {text}") from None
+    except TypeError:  # a required key is missing
+        missing = [
+            f.name
+            for f in dataclasses.fields(cls)
+            if f.name not in table
+            and f.default is dataclasses.MISSING
+            and f.default_factory is dataclasses.MISSING
+        ]
+        raise MotosimError(f"{where}: missing {', '.join(missing)}") from None
 
 
 def parse_scenario(data: Mapping[str, Any], *, origin: str) -> Scenario:
@@ -328,129 +604,69 @@ def parse_scenario(data: Mapping[str, Any], *, origin: str) -> Scenario:
         One line: an unknown table or key, a missing value, a value of the wrong type or out
         of range, inconsistent rates.
     """
-    root = _Table(data, origin)
-    head = root.sub("scenario")
-    name = head.string("name", "unnamed")
-    description = head.string("description", "")
-    duration = head.number("duration", 10.0, low=0.0, low_open=True, high=3600.0)
-    seed = head.integer("seed", 0)
-    architecture = head.string("architecture", "closed_loop", ("closed_loop", "open_loop"))
-    head.done()
-
-    r = root.sub("rates")
-    rates = Rates(
-        plant=r.number("plant", 10_000.0, low=0.0, low_open=True, high=1e6),
-        control=r.number("control", 1000.0, low=0.0, low_open=True, high=1e5),
-        measurement=r.number("measurement", 1000.0, low=0.0, low_open=True, high=1e5),
-    )
-    r.done()
-    for faster, slower, what in (
-        (rates.plant, rates.control, "plant / control"),
-        (rates.control, rates.measurement, "control / measurement"),
-    ):
-        ratio = faster / slower
-        if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
-            raise MotosimError(
-                f"{origin}: [rates] {what} = {ratio:g}; expected a whole number >= 1"
-            )
-
-    m = root.sub("measurement")
-    measurement = Measurement(
-        encoder_bits=m.integer("encoder_bits", 14),
-        current_noise=m.number("current_noise", 0.0, low=0.0),
-    )
-    m.done()
-    if measurement.encoder_bits > 32:
-        raise MotosimError(
-            f"{origin}: [measurement] encoder_bits = {measurement.encoder_bits}; expected 0 to 32"
-        )
-
-    mc = root.sub("motorcycle")
-    motorcycle = Motorcycle(
-        params=mc.string("params", "sharp1971"),
-        speed=mc.number("speed", 20.0, low=1.0, high=100.0),
-        input=mc.string("input", "estimate", ("estimate", "true")),
-        drive_torque=_signal(mc, "drive_torque"),
-        brake_torque=_signal(mc, "brake_torque"),
-        wind_force=_signal(mc, "wind_force"),
-    )
-    mc.done()
-
-    rd = root.sub("rider")
-    kind = rd.string("kind", "torque", ("torque", "virtual"))
-    if kind == "torque":
-        rd.used.add("profile")
-        if "profile" not in rd.data:
-            raise MotosimError(f'{rd.where}: missing profile for kind = "torque"')
-        rider = Rider(kind, profile=_profile(_Table(rd.data["profile"], f"{rd.where}.profile")))
-    else:
-        rd.used.add("path")
-        path = _path(_Table(rd.data.get("path", {"kind": "straight"}), f"{rd.where}.path"))
-        rider = Rider(
-            kind,
-            path=path,
-            lateral_tolerance=rd.number("lateral_tolerance", 0.3, low=0.0, low_open=True),
-            course_tolerance=rd.number("course_tolerance", 0.05, low=0.0, low_open=True),
-            torque_scale=rd.number("torque_scale", 10.0, low=0.0, low_open=True),
-            preview=rd.number("preview", 0.3, low=0.0, high=5.0),
-            max_torque=rd.number("max_torque", 70.0, low=0.0, low_open=True),
-        )
-    rd.done()
-
-    hb = root.sub("handlebar")
-    true = hb.string("true", "simacom_handlebar")
-    handlebar = Handlebar(
-        true=true,
-        nominal=hb.string("nominal", true),
-        inertia_factor=hb.number("inertia_factor", 1.0, low=0.0, low_open=True, high=10.0),
-        damping_factor=hb.number("damping_factor", 1.0, low=0.0, low_open=True, high=10.0),
-        friction=hb.boolean("friction", True),
-    )
-    hb.done()
-
-    es = root.sub("estimator")
-    estimator = Estimator(
-        name=es.string("name", "walcott_zak", ("walcott_zak", "inverse_dynamics", "kalman")),
-        friction_compensation=es.boolean("friction_compensation", True),
-        lipschitz=es.number("lipschitz", 300.0, low=0.0, low_open=True),
-    )
-    es.done()
-
-    ct = root.sub("controller")
-    controller = Controller(
-        kind=ct.string("kind", "ours", ("ours", "paper", "none")),
-        design=ct.string("design") if "design" in ct.data else None,
-        bandwidth=ct.number("bandwidth", 10.0, low=0.0, low_open=True),
-        order=ct.integer("order", 1),
-        discretization=ct.string("discretization", "zoh", ("zoh", "tustin")),
-        max_current=ct.number("max_current", 30.0, low=0.0, low_open=True),
-    )
-    ct.done()
-    root.done(
-        {
-            "scenario",
-            "rates",
-            "measurement",
-            "motorcycle",
-            "rider",
-            "handlebar",
-            "estimator",
-            "controller",
-        }
-    )
+    known = ["scenario", *_TABLES]
+    for key in data:
+        if key not in known:
+            raise MotosimError(f"{origin}: {_unknown(key, known)}")
     if "scenario" not in data:
         raise MotosimError(f"{origin}: missing table [scenario]")
-    return Scenario(
-        name=name,
-        description=description,
-        duration=duration,
-        seed=seed,
-        architecture=architecture,
-        rates=rates,
-        measurement=measurement,
-        motorcycle=motorcycle,
-        rider=rider,
-        handlebar=handlebar,
-        estimator=estimator,
-        controller=controller,
+    head = data["scenario"]
+    if not isinstance(head, Mapping):
+        raise MotosimError(f"{origin}: scenario = {head!r}; expected a table [scenario]")
+    own = [n for n in (f.name for f in dataclasses.fields(Scenario)) if n not in _TABLES]
+    for key in head:
+        if key not in own:
+            raise MotosimError(f"{origin} [scenario]: {_unknown(key, own)}")
+    hints = get_type_hints(Scenario)
+    where = f"{origin} [scenario]"
+    try:
+        kwargs = {key: _value(hints[key], value, key, where) for key, value in head.items()}
+        for table in _TABLES:
+            if table in data:
+                kwargs[table] = _build(hints[table], data[table], f"{origin} [{table}]")
+        if "rider" not in data:
+            raise MotosimError(f"{origin}: missing table [rider]")
+        return Scenario(**kwargs)
+    except MotosimError as err:
+        text = str(err)
+        raise MotosimError(text if text.startswith(origin) else f"{where}: {text}") from None
+
+
+def _plain(value: Any) -> Any:
+    """A scenario value as plain data: dataclasses as tables (tagged with ``kind``)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        tag = getattr(type(value), "kind", None)
+        out = {"kind": tag} if isinstance(tag, str) else {}
+        for f in dataclasses.fields(value):
+            item = getattr(value, f.name)
+            if item is not None:
+                out[f.name] = _plain(item)
+        return out
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def scenario_dict(scenario: Scenario) -> dict[str, Any]:
+    """The scenario as plain data: the ``[scenario]`` keys and one table per section.
+
+    Profiles and paths carry their ``kind``; :func:`scenario_from_dict` reads it back.
+
+    Examples
+    --------
+    >>> sc = Scenario(name="x")
+    >>> scenario_dict(sc)["rider"]["profile"]
+    {'kind': 'constant', 'value': 0.0}
+    >>> scenario_from_dict(scenario_dict(sc), origin="metadata") == sc
+    True
+    """
+    plain: dict[str, Any] = _plain(scenario)
+    return plain
+
+
+def scenario_from_dict(data: Mapping[str, Any], *, origin: str) -> Scenario:
+    """Read back :func:`scenario_dict` (validated like a file)."""
+    head = {k: v for k, v in data.items() if k not in _TABLES}
+    return parse_scenario(
+        {"scenario": head, **{k: data[k] for k in _TABLES if k in data}}, origin=origin
     )

@@ -111,7 +111,7 @@ class StackData(NamedTuple):
     held : ndarray, shape (4,)
         Outputs held between measurements: [theta_h measured [rad], i_m command [A],
         theta_h'_hat [rad/s], tau_r_hat [N*m]].
-    count : ndarray of int64, shape (1,)
+    periods : ndarray of int64, shape (1,)
         Periods since :func:`reset`.
     work : ndarray, shape (13, 12)
         Scratch space of the motorcycle's RK4.
@@ -124,7 +124,7 @@ class StackData(NamedTuple):
     controller: Array
     motorcycle: Array
     held: Array
-    count: NDArray[np.int64]
+    periods: NDArray[np.int64]
     work: Array
     controller_work: Array
 
@@ -181,9 +181,7 @@ def design_stack(
             raise MotosimError(f"{name} = {value!r}; expected a finite rate > 0 [Hz]")
     ratio = control_rate / measurement_rate
     if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
-        raise MotosimError(
-            f"control / measurement rate = {ratio:g}; expected a whole number >= 1"
-        )
+        raise MotosimError(f"control / measurement rate = {ratio:g}; expected a whole number >= 1")
     h_meas = 1.0 / measurement_rate
     if abs(estimator.dt - h_meas) > 1e-12 * h_meas:
         raise MotosimError(
@@ -235,7 +233,7 @@ def new_data(model: StackModel) -> StackData:
         controller=np.zeros(n),
         motorcycle=np.zeros(12),
         held=np.zeros(4),
-        count=np.zeros(1, dtype=np.int64),
+        periods=np.zeros(1, dtype=np.int64),
         work=np.zeros((13, 12)),
         controller_work=np.zeros(max(1, n)),
     )
@@ -259,10 +257,10 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
     data.held[1] = 0.0
     data.held[2] = 0.0
     data.held[3] = 0.0
-    data.count[0] = 0
+    data.periods[0] = 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     """i_m = K (theta_h - delta), positive feedback (eq. (24)), saturated; advances K's state."""
     if not model.feedback:
@@ -280,10 +278,10 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
         tmp[r] = acc
     for r in range(n):
         x[r] = tmp[r]
-    return min(max(u, -model.max_current), model.max_current)
+    return float(min(max(u, -model.max_current), model.max_current))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def step(
     model: StackModel,
     data: StackData,
@@ -322,7 +320,7 @@ def step(
         Motor current command, held until the next measurement [A].
     """
     held = data.held
-    if data.count[0] % model.measure_every == 0:
+    if data.periods[0] % model.measure_every == 0:
         held[0] = theta_meas
         held[1] = _command(model, data, theta_meas)
         p = model.differentiator
@@ -335,11 +333,11 @@ def step(
         held[3] = step_kernel(
             model.estimator, data.estimator, theta_meas, z1, held[1] + current_error
         )
-    data.count[0] += 1
+    data.periods[0] += 1
     steer = rider_torque if model.true_torque else held[3]
     mc = model.motorcycle
     h = model.dt / model.motorcycle_substeps
     for _ in range(model.motorcycle_substeps):
         bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, force,
                  mc[0], mc[1], mc[2], h)  # fmt: skip
-    return held[1]
+    return float(held[1])
