@@ -167,7 +167,7 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     timing = json.loads((out / "timing.json").read_text())["timing"]
     # one row per 1 kHz control period served (a missed deadline is skipped and counted)
     assert result.complete and result.t.size == timing["served"]
-    assert timing["periods"] == 2000 and result.t[-1] == pytest.approx(1.999)
+    assert timing["periods"] == 2000 and 1.9 < result.t[-1] <= 1.999 + 1e-9
     # offline, this scenario commands up to 12.7 mA and moves the handlebar by 0.045 rad,
     # and the estimate reaches 2.67 N*m of the rider's 3 N*m (motosim simulate, seed 0)
     assert np.max(np.abs(result["i_m"])) > 0.005

@@ -50,7 +50,6 @@ def run(args: argparse.Namespace) -> int:
     from motosim.rt.loop import RateLoop
     from motosim.rt.privileges import freeze_gc, thaw_gc
     from motosim.rt.rig import VirtualRig, parse_rig
-    from motosim.sim.closed_loop import sample_profile
 
     inputs, realtime = load_realtime(args.scenario)
     sc = inputs.scenario
@@ -74,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     if not (duration > 0.0):
         raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
     t_fine = np.arange(round(sc.duration * settings.plant_rate) + 1) / settings.plant_rate
-    rider = sample_profile(sc.rider.profile, t_fine, inputs.tables)
+    rider = sc.rider.profile.sample(t_fine, inputs.tables)
     clock = clock_from_args(args)
     codecs = handlebar_codecs()
     link = open_link(args.bus)
