@@ -9,7 +9,6 @@ one-period fade-in). So the torque estimate and the tracking agree within what t
 explains.
 """
 
-
 import numpy as np
 import pytest
 
