@@ -9,6 +9,9 @@ one-period fade-in). So the torque estimate and the tracking agree within what t
 explains.
 """
 
+import dataclasses
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -38,6 +41,15 @@ SCENARIO = {
 }
 
 
+def _limits(rate: float) -> SafetyLimits:
+    """Limits that never bind, and a one-period fade-in: the loop as offline."""
+    return SafetyLimits(
+        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
+        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
+        hands_off_gain=1.0, fade_in=1.0 / rate,
+    )  # fmt: skip
+
+
 def _inputs(measurement: float) -> object:
     data = {**SCENARIO, "rates": {**SCENARIO["rates"], "measurement": measurement}}
     scenario = parse_scenario(data, origin="test")
@@ -59,11 +71,7 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     model = build_stack(inputs)  # type: ignore[arg-type]
     world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
     rate = sc.rates.control
-    limits = SafetyLimits(
-        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
-        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
-        hands_off_gain=1.0, fade_in=1.0 / rate,
-    )  # fmt: skip
+    limits = _limits(rate)
     settings = RigSettings(
         plant_rate=sc.rates.plant,
         status_rate=sc.rates.measurement,
@@ -114,3 +122,51 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     assert rms(tau_rt - tau) == pytest.approx(rms(tau_off - tau), rel=0.05)
     assert rms(track_rt) == pytest.approx(rms(track_off), rel=0.01)
     assert np.max(np.abs(rows[:, col["delta"]] - offline["delta"])) < 1e-3  # rad
+
+
+def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
+    # lane_change_20 (the repository's scenario), shortened: the rider at the rig reads the
+    # run's state stream over UDP and must change lane as the offline rider does.
+    from motosim.io.runs import load_run
+    from motosim.rt.rig import VirtualRider
+    from motosim.rt.telemetry import StateReceiver, StateSender
+
+    full = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
+    inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, duration=6.0))
+    sc = inputs.scenario
+    offline = simulate(inputs, rng=np.random.default_rng(0))
+    model = build_stack(inputs)
+    world = build_rig(inputs, rng=np.random.default_rng(0))
+    rate = sc.rates.control
+    settings = RigSettings(
+        plant_rate=sc.rates.plant,
+        status_rate=sc.rates.measurement,
+        encoder_bits=sc.measurement.encoder_bits,
+        current_noise=0.0,
+        max_current=sc.controller.max_current,
+    )
+    codecs = handlebar_codecs()
+    receiver = StateReceiver(("127.0.0.1", 0))
+    sender = StateSender(receiver.address)
+    rider = VirtualRider(world, receiver)
+    with open_link("virtual:rt_rider") as host, open_link("virtual:rt_rider") as drive:
+        rig = VirtualRig(
+            inputs.true_handlebar, settings, codecs, drive, rider, np.random.default_rng(0),
+            rider_on_enable=False,
+        )  # fmt: skip
+        runner = RealtimeRunner(
+            CompiledStack(model, force=world.force), host, codecs, _limits(rate), rate=rate,
+            periods_per_frame=model.measure_every, telemetry=sender.send,
+        )  # fmt: skip
+        clock = SimulatedClock(-1.0 / rate)
+        clock.listen(rig.advance_to)
+        RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
+    sender.close()
+    receiver.close()
+    rows = runner.ring.drain()
+    y = rows[:, runner.names.index("y")]
+    assert runner.counters().fault == "NONE"
+    # the 3.5 m lane change (path: offset 3.5 m from 50 m to 110 m at 20 m/s) is made, and
+    # the lateral position follows the offline run's within 0.1 m
+    assert offline["y"][-1] == pytest.approx(3.5, abs=0.3)
+    assert np.max(np.abs(y - offline["y"])) < 0.1

@@ -24,10 +24,11 @@ def register(sub: Any) -> None:
             "DBC's frames as hardware does (status frames at the scenario's measurement rate, "
             "current commands, E-stop), with the latency, frame loss and faults of the "
             "[realtime.rig] table. The rider's torque profile starts with the first enabled "
-            "command. Runs until Ctrl-C or --duration."
+            "command; a virtual rider steers by the state that motosim run publishes "
+            "(--telemetry). Runs until Ctrl-C or --duration."
         ),
     )
-    parser.add_argument("scenario", help='scenario TOML file (rider kind = "torque")')
+    parser.add_argument("scenario", help="scenario TOML file")
     parser.add_argument(
         "--bus", required=True, help="python-can INTERFACE[:CHANNEL]: udp_multicast, ..."
     )
@@ -37,6 +38,12 @@ def register(sub: Any) -> None:
         type=float,
         default=1000.0,
         help="ticks per second [Hz] at which the rig takes commands and sends frames (1000)",
+    )
+    parser.add_argument(
+        "--telemetry",
+        default="127.0.0.1:47474",
+        metavar="HOST:PORT",
+        help="where a virtual rider reads the run's state stream (default 127.0.0.1:47474)",
     )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_privilege_options(parser)
@@ -53,11 +60,6 @@ def run(args: argparse.Namespace) -> int:
 
     inputs, realtime = load_realtime(args.scenario)
     sc = inputs.scenario
-    if sc.rider.kind != "torque" or sc.rider.profile is None:
-        raise MotosimError(
-            f'{args.scenario}: [rider] kind = "{sc.rider.kind}"; the rig takes the rider\'s '
-            'torque from a profile: expected kind = "torque"'
-        )
     settings = parse_rig(
         realtime.get("rig", {}),
         base={
@@ -72,8 +74,18 @@ def run(args: argparse.Namespace) -> int:
     duration = math.inf if args.duration is None else args.duration
     if not (duration > 0.0):
         raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
-    t_fine = np.arange(round(sc.duration * settings.plant_rate) + 1) / settings.plant_rate
-    rider = sc.rider.profile.sample(t_fine, inputs.tables)
+    receiver = None
+    rider: Any
+    if sc.rider.profile is not None:
+        t_fine = np.arange(round(sc.duration * settings.plant_rate) + 1) / settings.plant_rate
+        rider = sc.rider.profile.sample(t_fine, inputs.tables)
+    else:  # the virtual rider, steering by the run's state stream
+        from motosim.rt.rig import VirtualRider
+        from motosim.rt.telemetry import StateReceiver, parse_address
+        from motosim.sim import build_rig
+
+        receiver = StateReceiver(parse_address(args.telemetry))
+        rider = VirtualRider(build_rig(inputs, rng=np.random.default_rng(sc.seed)), receiver)
     clock = clock_from_args(args)
     codecs = handlebar_codecs()
     link = open_link(args.bus)
@@ -106,6 +118,8 @@ def run(args: argparse.Namespace) -> int:
             signal.signal(signal.SIGINT, previous)
     finally:
         link.close()
+        if receiver is not None:
+            receiver.close()
     stats = loop.stats()
     summary = {
         "time": rig.t,

@@ -42,6 +42,13 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--out", required=True, help="folder for the result")
     parser.add_argument("--duration", type=float, help="run for this long [s] (the scenario's)")
+    parser.add_argument(
+        "--telemetry",
+        default="127.0.0.1:47474",
+        metavar="HOST:PORT",
+        help="publish the stack's state each period as UDP datagrams here, or 'off' "
+        "(the virtual rig's virtual rider steers by it; default 127.0.0.1:47474)",
+    )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument(
         "--overwrite", action="store_true", help="replace a result already in the folder"
@@ -173,6 +180,11 @@ def run(args: argparse.Namespace) -> int:
     world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
     codecs = handlebar_codecs()
     stack = CompiledStack(model, force=world.force)
+    sender = None
+    if args.telemetry != "off":
+        from motosim.rt.telemetry import StateSender, parse_address
+
+        sender = StateSender(parse_address(args.telemetry), width=len(stack.names))
     link = open_link(args.bus)
     try:
         runner = RealtimeRunner(
@@ -184,6 +196,7 @@ def run(args: argparse.Namespace) -> int:
             periods_per_frame=model.measure_every,
             capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
             shared_ring=True,
+            telemetry=None if sender is None else sender.send,
         )
         metadata = run_metadata(inputs) | {
             "realtime": {"bus": args.bus, "safety": limits, "duration": duration}
@@ -195,6 +208,8 @@ def run(args: argparse.Namespace) -> int:
         counters = runner.counters()
     finally:
         link.close()
+        if sender is not None:
+            sender.close()
     timing = stats.as_dict()
     report = {
         "timing": timing,

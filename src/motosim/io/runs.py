@@ -49,6 +49,7 @@ def load_scenario(path: str | Path) -> Scenario:
         raise MotosimError(f"{path}: not valid TOML: {err}") from None
     except UnicodeDecodeError:
         raise MotosimError(f"{path}: not UTF-8 text; expected a TOML scenario file") from None
+    data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
     return parse_scenario(data, origin=str(path))
 
 

@@ -24,7 +24,7 @@ first) or by ``motosim rig`` in its own process on the wall clock.
 
 import heapq
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
 
@@ -37,8 +37,12 @@ from motosim.io.can import HandlebarCodecs
 from motosim.model.handlebar import step_exact
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.run import FrameLink
+from motosim.rt.stack import STACK_SIGNALS
+from motosim.rt.telemetry import StateReceiver
+from motosim.sim.closed_loop import RigModel
+from motosim.sim.rider import rider_torque
 
-__all__ = ["RigFaults", "RigSettings", "VirtualRig", "parse_rig"]
+__all__ = ["RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
 
 Array = NDArray[np.float64]
 _NEVER = math.inf
@@ -211,8 +215,10 @@ class VirtualRig:
         The frames.
     link : FrameLink
         The rig's end of the bus.
-    rider_torque : ndarray
-        The rider's torque [N*m] at each plant sub-step from t = 0 (held after the end).
+    rider_torque : ndarray or callable
+        The rider's torque [N*m] at each plant sub-step from the rider's start (held after
+        the end), or a function of no argument giving it now (a :class:`VirtualRider`),
+        asked once per status period.
     rng : numpy.random.Generator
         Noise, jitter and frame loss.
     theta0 : float
@@ -228,13 +234,14 @@ class VirtualRig:
         settings: RigSettings,
         codecs: HandlebarCodecs,
         link: FrameLink,
-        rider_torque: Array,
+        rider_torque: Array | Callable[[], float],
         rng: np.random.Generator,
         *,
         theta0: float = 0.0,
         rider_on_enable: bool = True,
     ) -> None:
-        tau = np.asarray(rider_torque, dtype=float)
+        self._policy = rider_torque if callable(rider_torque) else None
+        tau = np.zeros(1) if callable(rider_torque) else np.asarray(rider_torque, dtype=float)
         if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)):
             raise MotosimError("rider_torque: expected a non-empty 1-D array of finite N*m")
         self.hb = handlebar
@@ -271,6 +278,7 @@ class VirtualRig:
         self._c_enable = codecs.position(codecs.command, "enable")
         self._k_rider = -1 if rider_on_enable else 0
         self._idle = np.zeros(1)
+        self._held = np.zeros(1)
         self._started = False
         _plant_steps(self.x.copy(), 0.0, self._idle, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4)
         self.frames_sent = 0
@@ -316,6 +324,9 @@ class VirtualRig:
             rider, k0 = self.rider_torque, self.k - self._k_rider
             if self._k_rider < 0:
                 rider, k0 = self._idle, 0
+            elif self._policy is not None:
+                self._held[0] = self._policy()
+                rider, k0 = self._held, 0
             _plant_steps(
                 self.x, self.i_cmd if live else 0.0, rider, k0, n, hb.J_eq, hb.beta_eq,
                 hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h,
@@ -396,3 +407,51 @@ class VirtualRig:
             _, _, frame_id, frame = heapq.heappop(queue)
             if self.link.send(frame_id, frame):
                 self.frames_sent += 1
+
+
+class VirtualRider:
+    """The scenario's virtual rider at the rig, steering by the state that ``run`` publishes.
+
+    The rider of :func:`motosim.sim.rider.rider_torque` (the same path, gains and limits as
+    offline, from :func:`motosim.sim.build_rig`) looks at the virtual motorcycle's states in
+    the newest datagram of the run's state stream (:mod:`motosim.rt.telemetry`); before the
+    first one it holds 0 N*m.
+
+    Parameters
+    ----------
+    world : RigModel
+        The scenario's world (its path and the rider's gain schedule).
+    receiver : StateReceiver
+        The state stream.
+    names : tuple of str
+        The signals of the stream's rows.
+    """
+
+    _STATES = ("v_y", "psi_dot", "phi_dot", "delta_dot", "phi", "delta", "F_yr", "F_yf")
+
+    def __init__(
+        self, world: RigModel, receiver: StateReceiver, names: tuple[str, ...] = STACK_SIGNALS
+    ) -> None:
+        if not world.virtual_rider:
+            raise MotosimError("the scenario's rider is a torque profile, not a virtual rider")
+        self.world = world
+        self.receiver = receiver
+        self._cols = [names.index(n) for n in (*self._STATES, "v_x", "psi", "x", "y")]
+        self._x_v = np.zeros(8)
+        self._k_path = 0
+        self.torque = 0.0
+        self.lateral_error = 0.0
+
+    def __call__(self) -> float:
+        """The rider's torque now [N*m]."""
+        if self.receiver.poll():
+            row, c, w = self.receiver.row, self._cols, self.world
+            for i in range(8):
+                self._x_v[i] = row[c[i]]
+            tau, self._k_path, self.lateral_error = rider_torque(
+                self._x_v, row[c[8]], row[c[9]], row[c[10]], row[c[11]], self._k_path, w.path,
+                w.path_ds, w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss,
+                w.rider_limits[0], w.rider_limits[1],
+            )  # fmt: skip
+            self.torque = float(tau)
+        return self.torque

@@ -20,6 +20,7 @@ and ends the run ``linger`` seconds later, the zero command still sent meanwhile
 """
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -115,6 +116,9 @@ class RealtimeRunner:
         ``NO_DRIVE`` fault.
     shared_ring : bool
         Put the ring in shared memory, for a writer process (:meth:`SampleRing.attach`).
+    telemetry : callable, optional
+        ``telemetry(k, t, row)`` publishes each period's stack row (a
+        :class:`~motosim.rt.telemetry.StateSender`'s ``send``).
     """
 
     def __init__(
@@ -130,10 +134,12 @@ class RealtimeRunner:
         periods_per_frame: int = 1,
         start_timeout: float = 1.0,
         shared_ring: bool = False,
+        telemetry: Callable[[int, float, Array], None] | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
         self.stepper = stepper
+        self.telemetry = telemetry
         self.link = link
         self.codecs = codecs
         self.dt = 1.0 / rate
@@ -248,6 +254,8 @@ class RealtimeRunner:
         if self._started:
             command = self.stepper.step(self._theta, self._current)
             stack_row = self.stepper.row()
+        if stack_row is not None and self.telemetry is not None:
+            self.telemetry(k, t - self._t0, stack_row)
         if stack_row is not None and self._s_rate >= 0:
             omega = stack_row[self._s_rate]
         else:
