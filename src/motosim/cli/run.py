@@ -222,6 +222,7 @@ def run(args: argparse.Namespace) -> int:
             "frames_lost": counters.frames_lost,
             "frames_stale": counters.frames_stale,
             "send_errors": counters.send_errors,
+            "bus_errors": link.errors,
             "ring_dropped": int(summary.get("ring_dropped", 0)),
         },
         "state": counters.state,
