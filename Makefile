@@ -15,8 +15,9 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/motosim paper --out out/paper
-	$(BIN)/motosim modes --range 2:60:0.5 --plot out/modes.png > out/modes.txt
+	mkdir -p out
+	$(BIN)/motosim paper --out out/paper --overwrite
+	$(BIN)/motosim modes --range 2:60:0.5 --plot out/modes.png --overwrite > out/modes.txt
 	@echo "Open out/paper/index.html: the paper's section V regenerated, one report per run."
 
 lint: $(STAMP)

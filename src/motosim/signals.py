@@ -46,6 +46,27 @@ SIGNALS: Final[dict[str, Signal]] = {
     "tau_b": Signal("brake torque", "N*m"),
     "F_wx": Signal("longitudinal wind force", "N"),
     "e_y": Signal("virtual rider's lateral error from its path, right positive", "m"),
+    # motion at the rider's head and the platform (motosim.cueing)
+    "a_x": Signal(
+        "longitudinal acceleration of the rear contact point, v_x' - v_y psi_dot", "m/s^2"
+    ),
+    "a_y": Signal("lateral acceleration of the rear contact point, v_y' + v_x psi_dot", "m/s^2"),
+    "theta": Signal("pitch angle (motorcycle suspension, or platform), nose up positive", "rad"),
+    "theta_dot": Signal("pitch rate, nose up positive", "rad/s"),
+    "omega_x": Signal("angular velocity of the rider's head about its x axis (roll)", "rad/s"),
+    "omega_y": Signal("angular velocity of the rider's head about its y axis (pitch)", "rad/s"),
+    "omega_z": Signal("angular velocity of the rider's head about its z axis (yaw)", "rad/s"),
+    "f_x": Signal("specific force at the rider's head along its x axis (forward)", "m/s^2"),
+    "f_y": Signal("specific force at the rider's head along its y axis (right)", "m/s^2"),
+    "f_z": Signal(
+        "specific force at the rider's head along its z axis (down); -g at rest", "m/s^2"
+    ),
+    "phi_s": Signal("platform roll command, right side down positive", "rad"),
+    "theta_s": Signal("platform pitch command, nose up positive", "rad"),
+    "psi_s": Signal("platform yaw command, nose right positive", "rad"),
+    "phi_vis": Signal(
+        "roll of the visual horizon on the screen (which rolls with the platform)", "rad"
+    ),
 }
 
 

@@ -49,7 +49,7 @@ def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
     ("argv", "message"),
     [
         (["design", "--bandwidth", "500"], "at most a fifth of the 1000 Hz control rate"),
-        (["design", "--order", "-1"], "--order -1; expected a controller order >= 0"),
+        (["design", "--order", "-1"], "--order -1; expected an integer from 0 to 3"),
         (["design", "--handlebar", "sharp1971"], "expected a handlebar parameter set"),
     ],
 )

@@ -48,11 +48,17 @@ def test_modes_json(capsys: pytest.CaptureFixture[str], sharp: SharpParameters) 
 
 
 def test_modes_table_and_plot(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    fig = tmp_path / "figs" / "modes.png"
+    fig = tmp_path / "modes.png"
     code, out, _ = _run(capsys, "modes", "--range", "2:20:2", "--plot", str(fig))
     assert code == 0
     assert out.count("\n") > 10 and "unstable: weave" in out
     assert fig.stat().st_size > 10_000
+    assert [p.name for p in tmp_path.iterdir()] == ["modes.png"]  # no temporary left
+    code, _, err = _run(capsys, "modes", "--range", "2:20:2", "--plot", str(fig))
+    assert code == 2 and "exists; give --overwrite to replace it" in err
+    assert _run(capsys, "modes", "--speeds", "3", "--plot", str(fig), "--overwrite")[0] == 0
+    code, _, err = _run(capsys, "modes", "--plot", str(tmp_path / "figs" / "m.png"))
+    assert code == 2 and "does not exist; expected an existing folder" in err
 
 
 @pytest.mark.parametrize(
@@ -84,7 +90,7 @@ def test_bad_parameter_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) 
     bad.write_text(text.read_text().replace("value = 30.647196", "value = -30.6"))
     code, _, err = _run(capsys, "modes", "--params", str(bad))
     assert code == 2
-    assert "m_f = -30.6; expected a finite number > 0 [kg]" in err
+    assert "m_f = -30.6; expected a finite number >= 2 and <= 150 [kg]" in err
 
 
 def test_console_script_exit_code() -> None:
@@ -98,3 +104,60 @@ def test_console_script_exit_code() -> None:
     assert proc.returncode == 2
     assert proc.stderr.strip().startswith("motosim: error:")
     assert "Traceback" not in proc.stderr
+
+
+def test_python_dash_m_and_a_light_help() -> None:
+    """``python -m motosim`` works; ``--help`` imports no subcommand, NumPy or SciPy."""
+    script = (
+        "import sys\n"
+        "from motosim.cli.main import main\n"
+        "code = main(['--help'])\n"
+        "heavy = [m for m in ('numpy', 'scipy', 'h5py', 'motosim.cli.modes') if m in sys.modules]\n"
+        "print(code, heavy)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.stdout.strip().endswith("0 []"), done.stdout[-300:]
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", "modes", "--speeds", "3", "--json"],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0 and json.loads(done.stdout)["speeds"] == [3.0]
+
+
+def test_every_command_has_its_help(capsys: pytest.CaptureFixture[str]) -> None:
+    from motosim.cli.main import COMMANDS
+
+    for name in COMMANDS:
+        assert main([name, "--help"]) == 0, name
+        assert f"usage: motosim {name}" in capsys.readouterr().out
+
+
+def test_every_command_module_registers_the_help_main_lists() -> None:
+    import argparse
+    import importlib
+
+    from motosim.cli.main import COMMANDS
+
+    for name, (module, text) in COMMANDS.items():
+        sub = argparse.ArgumentParser().add_subparsers()
+        importlib.import_module(module).register(sub)
+        helps = {action.dest: action.help for action in sub._choices_actions}
+        assert helps[name] == text, name
+
+
+def test_an_internal_error_is_one_line_exit_1(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from motosim.cli import params as params_command
+
+    def broken(args: object) -> int:
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(params_command, "_list", broken)
+    assert main(["params", "list"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("motosim: internal error: ZeroDivisionError: float division by zero")
+    assert err.count("\n") == 1
+    with pytest.raises(ZeroDivisionError):
+        main(["--debug", "params", "list"])

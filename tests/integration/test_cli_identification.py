@@ -68,13 +68,14 @@ def test_identify_with_other_motor_constants(
     assert report["torque_per_amp"] == 1.5
     # half the torque per ampere: every identified parameter halves
     assert report["beta_eq"] == pytest.approx(13.956 / 2, rel=0.05)
-    assert set(report["confidence_95"]) == {"J_eq", "beta_eq", "beta_s"}
+    assert {"J_eq_ci95", "beta_eq_ci95", "beta_s_ci95"} <= set(report)
 
 
 @pytest.mark.parametrize(
     ("content", "message"),
     [
-        ("t,theta_h\n0,0\n", "missing column 'i_m'"),
+        ("t,theta_h\n" + "".join(f"{k * 0.01},0\n" for k in range(60)), "no current column"),
+        ("t,theta_h,i_cmd,u\n" + "".join(f"{k * 0.01},0,1,1\n" for k in range(60)), "--drive"),
         ("t,theta_h,i_m\n" + "".join(f"{k * 0.01},0,0\n" for k in range(5)), "5 samples"),
         ("t,theta_h,i_m\n" + "".join(f"{k * 0.01},0,nan\n" for k in range(50)), "nan"),
         (
@@ -101,3 +102,66 @@ def test_bad_options(capsys: pytest.CaptureFixture[str], runs: Path) -> None:
     assert code == 2 and "invalid choice" in err
     code, _, err = _run(capsys, "excite", "--duration", "-1", "--out", "x.csv")
     assert code == 2 and "duration" in err
+
+
+def test_intervals_printed_and_in_the_parameter_file(
+    capsys: pytest.CaptureFixture[str], runs: Path
+) -> None:
+    out_file = runs / "noted.toml"
+    code, out, _ = _run(capsys, "identify", str(runs / "chirp.csv"), "--out", str(out_file))
+    assert code == 0
+    assert "drive voltage_held (u: a voltage held by a voltage drive" in out
+    assert out.count("95 % interval") >= 3
+    assert "fit NRMSE" in out and "NRMSE = RMS(simulated - measured angle)" in out
+    notes = tomllib.loads(out_file.read_text())
+    for name in ("J_eq", "beta_eq", "beta_s"):
+        assert "95 % interval" in json.dumps(notes), name
+
+
+def test_drive_option_overrides_the_columns(
+    capsys: pytest.CaptureFixture[str], runs: Path, tmp_path: Path
+) -> None:
+    # the same rows under a ';' delimiter, a decimal comma, units and other column names
+    rows = (runs / "chirp.csv").read_text().splitlines()[1:]
+    text = "time [s];angle [rad];current [A];volts\n" + "\n".join(
+        row.replace(",", ";").replace(".", ",") for row in rows
+    )
+    log = tmp_path / "rig.csv"
+    log.write_text(text)
+    columns = "t=time,theta_h=angle,i_m=current"
+    code, out, _ = _run(capsys, "identify", str(log), "--columns", columns, "--json")
+    report = json.loads(out)
+    assert code == 0 and report["drive"] == "current_sampled"  # no u column mapped
+    code, out, _ = _run(capsys, "identify", str(log), "--columns", columns + ",u=volts", "--json")
+    assert json.loads(out)["drive"] == "voltage_held"
+    code, out, _ = _run(
+        capsys, "identify", str(log), "--columns", columns, "--drive", "current_held", "--json"
+    )
+    report = json.loads(out)
+    assert (report["drive"], report["drive_reason"]) == ("current_held", "given")
+
+
+def test_validate_flags_a_model_that_does_not_generalise(
+    capsys: pytest.CaptureFixture[str], runs: Path, tmp_path: Path
+) -> None:
+    # validated on a run whose angle is halved: another handlebar, or a wrong encoder scale
+    assert main(["excite", "--signal", "square", "--duration", "20", "--out",
+                 str(tmp_path / "square.csv")]) == 0  # fmt: skip
+    capsys.readouterr()
+    heavy = tmp_path / "heavy.csv"
+    lines = (tmp_path / "square.csv").read_text().splitlines()
+    # the same current, the angle halved: the handlebar moved half as far
+    heavy.write_text(
+        lines[0]
+        + "\n"
+        + "\n".join(
+            ",".join([t, repr(float(th) * 0.5), i, u])
+            for t, th, i, u in (row.split(",") for row in lines[1:])
+        )
+    )
+    code, out, _ = _run(
+        capsys, "identify", str(runs / "chirp.csv"), "--validate", str(heavy), "--json"
+    )
+    report = json.loads(out)
+    assert code == 0
+    assert any("does not generalise" in w for w in report["warnings"])

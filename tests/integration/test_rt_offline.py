@@ -92,7 +92,7 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
             rider_on_enable=False,
         )
         runner = RealtimeRunner(
-            CompiledStack(model, force=world.force),
+            CompiledStack(model, force=world.force, side_force=world.side_force),
             host,
             codecs,
             limits,
@@ -154,8 +154,9 @@ def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
             inputs.true_handlebar, settings, codecs, drive, rider, np.random.default_rng(0),
             rider_on_enable=False,
         )  # fmt: skip
+        stack = CompiledStack(model, force=world.force, side_force=world.side_force)
         runner = RealtimeRunner(
-            CompiledStack(model, force=world.force), host, codecs, _limits(rate), rate=rate,
+            stack, host, codecs, _limits(rate), rate=rate,
             periods_per_frame=model.measure_every, telemetry=sender.send,
         )  # fmt: skip
         clock = SimulatedClock(-1.0 / rate)

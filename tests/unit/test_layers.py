@@ -1,6 +1,6 @@
 """The one-way data flow of ARCHITECTURE.md, checked on the import statements.
 
-params -> model -> {identification, estimation, control} -> sim -> io -> {rt, plotting}
+params -> model -> {identification, estimation, control, cueing} -> sim -> io -> {rt, plotting}
 -> report -> cli: a module imports only from its own package and from layers to its left,
 and siblings in braces do not import each other.
 """
@@ -16,12 +16,13 @@ LAYERS = [
     {"signals", "timeseries"},
     {"params"},
     {"model"},
-    {"identification", "estimation", "control"},
+    {"identification", "estimation", "control", "cueing"},
     {"sim"},
     {"io"},
     {"rt", "plotting"},
     {"report"},
     {"cli"},
+    {"__main__"},  # python -m motosim: the command line
 ]
 RANK = {package: rank for rank, layer in enumerate(LAYERS) for package in layer}
 

@@ -69,14 +69,14 @@ def test_plain_numbers_accepted(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        ({"J_eq": "nan"}, "J_eq = nan; expected a finite number > 0 [kg*m^2]"),
-        ({"J_eq": "-0.05"}, "J_eq = -0.05; expected a finite number > 0"),
-        ({"beta_s": "-1.0"}, "beta_s = -1.0; expected a finite number >= 0 [N*m]"),
-        ({"R": "0.0"}, "R = 0.0; expected a finite number > 0 [ohm]"),
-        ({"k_t": '"fast"'}, "parameter k_t = 'fast' is not a number"),
+        ({"J_eq": "nan"}, "parameters.J_eq = nan; expected a finite number"),
+        ({"J_eq": "-0.05"}, "J_eq = -0.05; expected a finite number >= 0.0001 and <= 10 [kg*m^2]"),
+        ({"beta_s": "-1.0"}, "beta_s = -1.0; expected a finite number >= 0 and <= 200 [N*m]"),
+        ({"R": "0.0"}, "R = 0.0; expected a finite number >= 0.001 and <= 100 [ohm]"),
+        ({"k_t": '"fast"'}, "k_t = 'fast' is a string; expected a finite number >= 0.001"),
         ({"k_e": ""}, "missing parameter k_e"),
-        ({"J_m": "1.0"}, "N^2 J_m = 100 kg*m^2 is not below J_eq = 0.05"),
-        ({"zeta": "1.0"}, "unknown parameter 'zeta' for the handlebar model"),
+        ({"J_m": "0.01"}, "N^2 J_m = 1 kg*m^2 is not below J_eq = 0.05"),
+        ({"zeta": "1.0"}, "unknown handlebar parameter 'zeta' (expected one of J_eq,"),
     ],
 )
 def test_bad_values(tmp_path: Path, overrides: dict[str, str], message: str) -> None:
@@ -90,9 +90,9 @@ def test_bad_values(tmp_path: Path, overrides: dict[str, str], message: str) -> 
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("[set]\nname='x'\nmodel='car'\n[parameters]\n", "model = 'car'; expected one of"),
-        ("[set]\nmodel='handlebar'\ncolour='red'\n", "unknown key 'colour' in [set]"),
-        ("[sett]\n", "unknown top-level key 'sett'"),
+        ("[set]\nname='x'\nmodel='car'\n[parameters]\n", "model = 'car' (expected one of sharp"),
+        ("[set]\nmodel='handlebar'\ncolour='red'\n", "unknown key 'colour' (expected"),
+        ("[sett]\n", "unknown table 'sett'; did you mean 'set'?"),
         ("[parameters]\n", "missing table [set]"),
         ("[set\n", "not valid TOML"),
         (
@@ -105,8 +105,16 @@ def test_bad_values(tmp_path: Path, overrides: dict[str, str], message: str) -> 
         ),
         (
             "[set]\nmodel='handlebar'\n[parameters.J_eq]\nvalue=1.0\nsauce='x'\n",
-            "unknown key 'sauce' in parameter J_eq",
+            "parameter J_eq: unknown key 'sauce'; did you mean 'source'?",
         ),
+        ("[set]\nmodel=['sharp']\n", "[set] model = ['sharp'] is a list; expected a string"),
+        ("[set]\nmodel='sharpp'\n", "model = 'sharpp'; did you mean 'sharp'?"),
+        ("[set]\nmodel='sharp'\nname={a=1}\n", "[set] name = {'a': 1} is a table"),
+        ("set = 3\n", "set = 3 is a number; expected a table"),
+        ("[set]\nmodel='sharp'\n[parameter]\n", "unknown table 'parameter'; did you mean"),
+        ("[set]\nmodel='handlebar'\n[parameters]\nJ_eg=1\n", "'J_eg'; did you mean 'J_eq'?"),
+        ("[set]\nmodel='handlebar'\n[parameters]\nJ_eq=[1]\n", "J_eq = [1] is a list"),
+        ("[set]\nmodel='handlebar'\n[parameters]\nJ_eq=1e-300\n", "J_eq = 1e-300; expected"),
     ],
 )
 def test_bad_files(tmp_path: Path, text: str, message: str) -> None:
@@ -118,13 +126,15 @@ def test_bad_files(tmp_path: Path, text: str, message: str) -> None:
 def test_missing_file_and_wrong_model(tmp_path: Path) -> None:
     with pytest.raises(MotosimError, match="no such parameter file or packaged set"):
         load_parameter_set(tmp_path / "none.toml")
+    with pytest.raises(MotosimError, match="did you mean 'sharp1971'"):
+        load_parameter_set("sharp1917")
     with pytest.raises(MotosimError, match="is a handlebar parameter set; expected a sharp"):
         load_parameters("simacom_handlebar", "sharp")
 
 
 def test_dataclass_validation(sharp: SharpParameters) -> None:
     with pytest.raises(
-        MotosimError, match=re.escape("m_f = -1.0; expected a finite number > 0 [kg]")
+        MotosimError, match=re.escape("m_f = -1.0; expected a finite number >= 2 and <= 150 [kg]")
     ):
         replace(sharp, m_f=-1.0)
     with pytest.raises(MotosimError, match=re.escape("I_fz = 0.0")):

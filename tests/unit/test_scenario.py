@@ -80,6 +80,10 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
             "expected increasing times",
         ),
         ("[rider]\nkind = 'virtual'\n", "missing table [scenario]"),
+        (
+            "[scenario]\n[motorcycle]\nspeed = 2.0\n[rider]\nkind = 'virtual'\n",
+            "speed = 2.0; expected 3 to 60 m/s with the virtual rider",
+        ),
     ],
 )
 def test_bad_scenarios(text: str, message: str) -> None:

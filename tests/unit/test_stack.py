@@ -33,7 +33,7 @@ def test_command_is_the_discretised_controller() -> None:
     reset(model, data, 0.0, 0.0)
     K = discretize(PAPER_CONTROLLER, 1e-3, "tustin")
     e = np.sin(np.arange(50) * 0.3)
-    ours = [step(model, data, ek, 0.0, 0.0, 0.0) for ek in e]
+    ours = [step(model, data, ek, 0.0, 0.0, 0.0, 0.0) for ek in e]
     xs, want = np.zeros(1), []
     for ek in e:
         want.append(float((K.C @ xs)[0] + K.D[0, 0] * ek))
@@ -46,12 +46,12 @@ def test_saturation_and_no_feedback() -> None:
     model = _stack()._replace(max_current=5.0)
     data = new_data(model)
     reset(model, data, 0.0, 0.0)
-    assert step(model, data, 100.0, 0.0, 0.0, 0.0) == -5.0
+    assert step(model, data, 100.0, 0.0, 0.0, 0.0, 0.0) == -5.0
     open_loop = _stack(None)
     data = new_data(open_loop)
     reset(open_loop, data, 0.0, 0.0)
     assert not open_loop.feedback
-    assert step(open_loop, data, 1.0, 0.0, 0.0, 0.0) == 0.0
+    assert step(open_loop, data, 1.0, 0.0, 0.0, 0.0, 0.0) == 0.0
 
 
 @pytest.mark.parametrize("name", sorted(ESTIMATORS))
@@ -67,7 +67,7 @@ def test_estimate_in_the_stack_is_the_estimator(name: str) -> None:
     reset(model, data, theta[0], current[0])
     ours = []
     for k in range(t.size):
-        step(model, data, theta[k], current[k], 0.0, 0.0)
+        step(model, data, theta[k], current[k], 0.0, 0.0, 0.0)
         ours.append(data.held[3])
     np.testing.assert_allclose(ours, want, rtol=1e-9, atol=1e-9)
 
@@ -77,7 +77,7 @@ def test_outputs_held_between_measurements() -> None:
     assert model.measure_every == 10
     data = new_data(model)
     reset(model, data, 0.0, 0.0)
-    commands = [step(model, data, 0.01 * (k + 1), 0.0, 0.0, 0.0) for k in range(30)]
+    commands = [step(model, data, 0.01 * (k + 1), 0.0, 0.0, 0.0, 0.0) for k in range(30)]
     for block in range(3):
         assert len(set(commands[10 * block : 10 * block + 10])) == 1
     assert commands[0] != commands[10] != commands[20]
@@ -88,3 +88,18 @@ def test_rates_must_be_whole_multiples() -> None:
 
     with pytest.raises(MotosimError, match="whole number"):
         _stack(control=1000.0, measurement=300.0)
+
+
+def test_recorded_layout_recompiles_when_the_signal_table_changes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The loop's columns are compile-time constants from motosim.signals.RECORDED; numba's
+    # cache does not follow that module, so a changed table must trigger a recompilation.
+    from motosim.sim import closed_loop
+
+    monkeypatch.setattr(closed_loop, "_LAYOUT_KEY", closed_loop._LAYOUT_KEY + 1)
+    closed_loop._ensure_current_layout()
+    assert closed_loop._compiled_layout_key() == closed_loop._LAYOUT_KEY
+    monkeypatch.undo()
+    closed_loop._ensure_current_layout()
+    assert closed_loop._compiled_layout_key() == closed_loop._LAYOUT_KEY

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from motosim import __version__
-from motosim.cli._common import print_json, write_text
+from motosim.cli._common import check_output, print_json, write_text
 from motosim.control.torque_feedback import (
     PAPER_CONTROLLER,
     PAPER_DEN,
@@ -22,8 +22,23 @@ from motosim.errors import MotosimError
 from motosim.estimation.walcott_zak import ObserverSettings, design_with
 from motosim.io.design_file import dump_design
 from motosim.params import load_parameters
+from motosim.params.checks import check_number, short_repr
 
-__all__ = ["register"]
+__all__ = ["MAX_ORDER", "MAX_STARTS", "register"]
+
+MAX_ORDER = 3
+"""Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
+controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
+
+MAX_STARTS = 32
+"""Most random starts of the fixed-order search: each takes a fraction of a second at order 1
+and about 10 s at order 3 (measured on a shared 2-core machine), so 32 bound a run to minutes."""
+
+MAX_SEED = 2**63 - 1
+"""Largest seed (a 64-bit signed integer, as in a TOML file)."""
+
+RATE_RANGE = (10.0, 100_000.0)
+"""Control rates admitted [Hz]: a real-time loop runs at 100 Hz to tens of kHz."""
 
 
 def register(sub: Any) -> None:
@@ -41,15 +56,22 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--handlebar", default="simacom_handlebar", help="handlebar set or TOML file (identified)"
     )
-    parser.add_argument("--order", type=int, default=1, help="order of the tuned controller (1)")
+    parser.add_argument(
+        "--order", type=int, default=1, help=f"order of the tuned controller, 0-{MAX_ORDER} (1)"
+    )
     parser.add_argument(
         "--bandwidth", type=float, default=10.0, help="tracking bandwidth [Hz] (10)"
     )
     parser.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (1000)")
-    parser.add_argument("--starts", type=int, default=8, help="starts of the search (8)")
+    parser.add_argument(
+        "--starts", type=int, default=8, help=f"starts of the search, 1-{MAX_STARTS} (8)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the starts (0)")
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument("--out", metavar="DESIGN.toml", help="write the design file")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace the --out file if it exists"
+    )
     parser.set_defaults(func=run)
 
 
@@ -74,11 +96,23 @@ def _analysis(a: LoopAnalysis) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     """Design, report and optionally write the design file."""
-    if args.order < 0:
-        raise MotosimError(f"--order {args.order}; expected a controller order >= 0")
-    if args.starts < 1:
-        raise MotosimError(f"--starts {args.starts}; expected at least 1")
+    if not 0 <= args.order <= MAX_ORDER:
+        raise MotosimError(
+            f"--order {short_repr(args.order)}; expected an integer from 0 to {MAX_ORDER} "
+            "(the shaped plant's order, which gives the full-order optimum)"
+        )
+    if not 1 <= args.starts <= MAX_STARTS:
+        raise MotosimError(
+            f"--starts {short_repr(args.starts)}; expected an integer from 1 to {MAX_STARTS}"
+        )
+    if not 0 <= args.seed <= MAX_SEED:
+        raise MotosimError(
+            f"--seed {short_repr(args.seed)}; expected an integer from 0 to 2^63 - 1"
+        )
+    check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
     check_options(bandwidth=args.bandwidth, rate=args.rate)
+    if args.out is not None:
+        check_output(args.out, overwrite=args.overwrite)
     hb = load_parameters(args.handlebar, "handlebar")
     if not args.json:
         print(f"designing for {args.handlebar} ({args.starts} starts) ...", file=sys.stderr)
@@ -123,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
             "F": np.atleast_1d(obs.F).tolist(),
         },
     }
-    if args.out:
+    if args.out is not None:
         text = dump_design(
             header={
                 "version": __version__,

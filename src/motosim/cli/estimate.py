@@ -7,7 +7,7 @@ import numpy as np
 
 from motosim.cli._common import print_json
 from motosim.estimation import ESTIMATORS, estimate
-from motosim.io import read_log, write_log
+from motosim.io import parse_columns, read_rig_log, write_log
 from motosim.params import load_parameters
 from motosim.timeseries import TimeSeries
 
@@ -21,7 +21,8 @@ def register(sub: Any) -> None:
         help="estimate the rider torque from a log of theta_h and i_m",
         description=(
             "Reconstruct the rider's torque offline from a CSV log with columns t [s], "
-            "theta_h [rad] and i_m [A] at any constant rate; writes t, theta_h_dot_hat "
+            "theta_h [rad] and i_m [A] (units in the header or --columns are converted; jittered "
+            "or gappy time stamps are resampled); writes t, theta_h_dot_hat "
             "[rad/s] and tau_r_hat [N*m]. A tau_r column in the log, if present, is taken as "
             "the truth and the error is reported."
         ),
@@ -48,6 +49,11 @@ def register(sub: Any) -> None:
         default=300.0,
         help="bound on |theta_h''| for the differentiator [rad/s^2] (300)",
     )
+    parser.add_argument(
+        "--columns",
+        metavar="MAP",
+        help="the log's columns with units, e.g. t=time:ms,theta_h=angle:deg,i_m=cur:mA",
+    )
     parser.add_argument("--out", required=True, help="CSV file to write")
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
     parser.set_defaults(func=run)
@@ -56,7 +62,9 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read, estimate, write and summarise."""
     hb = load_parameters(args.handlebar, "handlebar")
-    log = read_log(args.log, required=("theta_h", "i_m"))
+    columns = parse_columns(args.columns) if args.columns else None
+    rig = read_rig_log(args.log, required=("theta_h", "i_m"), columns=columns)
+    log = rig.series
     rate, tau_hat = estimate(
         args.estimator,
         log.t,
@@ -74,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
         "out": str(path),
         "estimator": args.estimator,
         "samples": int(log.t.size),
+        "timing": rig.timing.describe(),
         "sample_rate": float((log.t.size - 1) / (log.t[-1] - log.t[0])),
         "tau_r_hat": {
             "mean": float(np.mean(tau_hat)),

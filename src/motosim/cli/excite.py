@@ -6,9 +6,11 @@ from typing import Any
 import numpy as np
 
 from motosim.cli._common import print_json
-from motosim.identification import MeasurementModel, excitation_run
+from motosim.errors import MotosimError
+from motosim.identification import MeasurementModel, excitation_run, plan_excitation
 from motosim.io import write_log
 from motosim.params import load_parameters
+from motosim.timeseries import TimeSeries
 
 __all__ = ["register"]
 
@@ -44,13 +46,86 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--handlebar", default="simacom_handlebar", help="handlebar set name or TOML file"
     )
-    parser.add_argument("--out", required=True, help="CSV log to write")
+    parser.add_argument("--out", help="CSV log to write (with --plan: the current command)")
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
+    plan = parser.add_argument_group(
+        "planning an identification run on the rig (--plan)",
+        "recommend the current chirp that makes J_eq, beta_eq and beta_s identifiable, from "
+        "rough values (--handlebar, or the three options below), the rig's --rate and its "
+        "current limit; --out then writes the command t [s], i_cmd [A]",
+    )
+    plan.add_argument("--plan", action="store_true", help="recommend instead of simulating")
+    plan.add_argument("--max-current", type=float, help="current limit of the drive [A]")
+    plan.add_argument("--inertia", type=float, help="rough J_eq [kg*m^2]")
+    plan.add_argument("--damping", type=float, help="rough beta_eq [N*m*s/rad]")
+    plan.add_argument("--dry-friction", type=float, help="rough beta_s [N*m]")
+    plan.add_argument("--ratio", type=float, help="belt ratio N (default: from --handlebar)")
+    plan.add_argument("--torque-constant", type=float, help="k_t [N*m/A] (from --handlebar)")
+    plan.add_argument(
+        "--angle-limit", type=float, default=0.5, help="largest angle from the start [rad] (0.5)"
+    )
     parser.set_defaults(func=run)
 
 
+def _plan(args: argparse.Namespace) -> int:
+    """Recommend the chirp, print it, optionally write the current command."""
+    if args.max_current is None:
+        raise MotosimError("--plan needs --max-current A; expected the drive's current limit")
+    hb = load_parameters(args.handlebar, "handlebar")
+    given = {
+        "J_eq": args.inertia,
+        "beta_eq": args.damping,
+        "beta_s": args.dry_friction,
+        "N": args.ratio,
+        "k_t": args.torque_constant,
+    }
+    rough = {name: getattr(hb, name) if value is None else value for name, value in given.items()}
+    plan = plan_excitation(
+        J_eq=rough["J_eq"],
+        beta_eq=rough["beta_eq"],
+        beta_s=rough["beta_s"],
+        torque_per_amp=rough["N"] * rough["k_t"],
+        sample_rate=args.rate,
+        max_current=args.max_current,
+        angle_limit=args.angle_limit,
+        encoder_counts=round(args.counts * args.pulley_ratio),
+    )
+    summary: dict[str, Any] = {
+        "f0": plan.f0,
+        "f1": plan.f1,
+        "amplitude": plan.amplitude,
+        "duration": plan.duration,
+        "sample_rate": args.rate,
+        "inertia_share": plan.inertia_share,
+        "counts_at_f1": plan.counts_at_f1,
+        "notes": list(plan.notes),
+    }
+    if args.out:
+        t = np.arange(round(plan.duration * args.rate) + 1) / args.rate
+        phase = plan.f0 * t + 0.5 * (plan.f1 - plan.f0) / plan.duration * t**2
+        command = plan.amplitude * np.sin(2.0 * np.pi * phase)
+        summary["out"] = str(write_log(args.out, TimeSeries(t, command[:, None], ("i_cmd",))))
+    if args.json:
+        print_json(summary)
+        return 0
+    print(
+        f"chirp {plan.f0:.3g}-{plan.f1:.3g} Hz, {plan.amplitude:.3g} A, {plan.duration:.3g} s at "
+        f"{args.rate:g} Hz: J theta'' reaches {100 * plan.inertia_share:.2g} % of beta theta' "
+        f"at the top, where the angle moves {plan.counts_at_f1:.3g} encoder counts"
+    )
+    for note in plan.notes:
+        print(f"  note: {note}")
+    if "out" in summary:
+        print(f"  wrote the current command to {summary['out']}")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
-    """Simulate, measure and write the run."""
+    """Simulate, measure and write the run (or, with --plan, recommend one)."""
+    if args.plan:
+        return _plan(args)
+    if not args.out:
+        raise MotosimError("excite needs --out RUN.csv; expected the log file to write")
     hb = load_parameters(args.handlebar, "handlebar")
     measurement = MeasurementModel(
         sample_rate=args.rate,

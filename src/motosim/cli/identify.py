@@ -2,6 +2,7 @@
 
 import argparse
 import dataclasses
+import math
 from datetime import date
 from pathlib import Path
 from typing import Any
@@ -13,19 +14,17 @@ from motosim.errors import MotosimError
 from motosim.identification import (
     METHODS,
     back_emf_damping,
+    drive_from_columns,
     identified_parameters,
     identify,
-    is_voltage_driven,
     validate,
 )
 from motosim.identification.output_error import DRIVES
-from motosim.io import read_log
+from motosim.io import parse_columns, read_rig_log
 from motosim.params import ParameterSet, dump_parameter_set, load_parameter_set
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = ["register"]
-
-_COLUMNS = ("theta_h", "i_m")
 
 
 def register(sub: Any) -> None:
@@ -35,10 +34,13 @@ def register(sub: Any) -> None:
         help="identify the handlebar's inertia and frictions from an excitation log",
         description=(
             "Identify J_eq, beta_eq and beta_s of eq. (5) from a CSV log with columns t [s], "
-            "theta_h [rad] and i_m [A], uniformly sampled, rider hands off."
+            "theta_h [rad] and a current: i_m [A] (measured, continuous), i_cmd [A] (a "
+            "set-point held by a current drive) and/or u [V] (a voltage held by a voltage "
+            "drive); rider hands off. Units in the header (t [ms], theta_h (deg)) are "
+            "converted; a ';' or tab delimiter, a decimal comma and '#' comments are read."
         ),
     )
-    parser.add_argument("log", help="CSV log, e.g. from motosim excite")
+    parser.add_argument("log", help="CSV log, e.g. from motosim excite or the rig")
     parser.add_argument(
         "--handlebar",
         default="simacom_handlebar",
@@ -48,23 +50,39 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--torque-constant", type=float, help="motor k_t [N*m/A] (default: from --handlebar)"
     )
+    parser.add_argument(
+        "--columns",
+        metavar="MAP",
+        help=(
+            "the log's columns for motosim's signals, with units: e.g. "
+            "t=time:ms,theta_h=angle_deg:deg,i_m=cur:A (units s, ms, us, rad, deg, A, mA, V)"
+        ),
+    )
     parser.add_argument("--method", choices=METHODS, default="output_error")
     parser.add_argument(
         "--drive",
         choices=("auto", *DRIVES),
         default="auto",
         help=(
-            "what the motor torque did between samples; auto: the best fitting drive, "
-            "voltage_held among them (and preferred in a tie) when the log's current follows "
-            "its voltage u by eq. (7)"
+            "what the motor torque did between samples; auto (default) follows the columns: "
+            "i_cmd -> current_held, u with i_m -> voltage_held, i_m only -> current_sampled"
         ),
+    )
+    parser.add_argument(
+        "--current-delay",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="how late the logged current is [s], e.g. one sample of CAN latency (0)",
     )
     parser.add_argument(
         "--validate", metavar="LOG", help="a second run to replay the identified model on"
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument("--out", metavar="PARAMS.toml", help="write a handlebar parameter file")
-    parser.add_argument("--plot", metavar="FIG.png", help="convergence and validation figure")
+    parser.add_argument(
+        "--plot", metavar="FIG.png", help="fit, validation, input, residual and parameters"
+    )
     parser.set_defaults(func=run)
 
 
@@ -90,6 +108,10 @@ def _motor(args: argparse.Namespace) -> ParameterSet:
     return dataclasses.replace(base, values=values, sources=sources)
 
 
+_NAMES = ("J_eq", "beta_eq", "beta_s")
+_UNITS = {"J_eq": "kg*m^2", "beta_eq": "N*m*s/rad", "beta_s": "N*m"}
+
+
 def run(args: argparse.Namespace) -> int:
     """Identify, report, and optionally write the parameter file and the figure."""
     for path in (args.plot,):
@@ -98,51 +120,72 @@ def run(args: argparse.Namespace) -> int:
     motor = _motor(args)
     hb = motor.values
     assert isinstance(hb, HandlebarParameters)
-    log = read_log(args.log, required=_COLUMNS)
-    second = read_log(args.validate, required=_COLUMNS) if args.validate else None
-    # a log whose current follows its voltage by eq. (7) may come from a voltage command: that
-    # drive is tried too, and taken when the fits cannot tell the drives apart
-    voltage = is_voltage_driven(log, torque_per_amp=hb.torque_per_amp)
+    columns = parse_columns(args.columns) if args.columns else None
+    rig = read_rig_log(args.log, required=("theta_h",), columns=columns)
+    second = (
+        read_rig_log(args.validate, required=("theta_h",), columns=columns)
+        if args.validate
+        else None
+    )
+    log = rig.series
+    drive = args.drive if args.drive != "auto" else drive_from_columns(log.names)[0]
     est = identify(
         log,
         torque_per_amp=hb.torque_per_amp,
         method=args.method,
         drive=args.drive,
-        back_emf_damping=back_emf_damping(hb) if voltage or args.drive == "voltage_held" else 0.0,
-        tie_preference="voltage_held" if voltage else "current_sampled",
+        back_emf_damping=back_emf_damping(hb) if drive == "voltage_held" else 0.0,
+        current_delay=args.current_delay,
     )
-    replay = validate(est, second or log, torque_per_amp=hb.torque_per_amp)
-    report: dict[str, Any] = {
-        "J_eq": est.J_eq,
-        "beta_eq": est.beta_eq,
-        "beta_s": est.beta_s,
-        "method": est.method,
-        "drive": est.drive,
-        "nrmse": est.nrmse,
-        "samples": int(log.t.size),
-        "sample_rate": float((log.t.size - 1) / (log.t[-1] - log.t[0])),
-        "torque_per_amp": hb.torque_per_amp,
-    }
+    fit = validate(est, log, torque_per_amp=hb.torque_per_amp, current_delay=args.current_delay)
+    replay = (
+        validate(
+            est, second.series, torque_per_amp=hb.torque_per_amp, current_delay=args.current_delay
+        )
+        if second is not None
+        else None
+    )
+    report: dict[str, Any] = {name: getattr(est, name) for name in _NAMES}
     if est.confidence is not None:
-        report["confidence_95"] = {
-            name: [float(lo), float(hi)]
-            for name, (lo, hi) in zip(("J_eq", "beta_eq", "beta_s"), est.confidence, strict=True)
+        for name, (lo, hi) in zip(_NAMES, est.confidence, strict=True):
+            report[f"{name}_ci95"] = [float(lo), float(hi)]
+    report.update(
+        {
+            "units": dict(_UNITS),
+            "method": est.method,
+            "drive": est.drive,
+            "drive_reason": est.drive_reason,
+            "nrmse": est.nrmse,
+            "segment_nrmse": est.segment_nrmse,
+            "samples": int(log.t.size),
+            "sample_rate": float(1.0 / rig.timing.period),
+            "timing": rig.timing.describe(),
+            "torque_per_amp": hb.torque_per_amp,
+            "warnings": list(est.warnings),
         }
-    if second is not None:
+    )
+    if replay is not None:
         report["validation_nrmse"] = replay.nrmse
+        # a model that fits its own log much better than another run does not generalise
+        if replay.nrmse > max(3.0 * est.nrmse, 0.05):
+            report["warnings"].append(
+                f"the model does not generalise: validation NRMSE {replay.nrmse:.3g} against "
+                f"{est.nrmse:.3g} on the identification log; check the drive (--drive), the "
+                "current delay (--current-delay) and that the two runs share the handlebar"
+            )
     if args.out:
         report["out"] = str(_write(args, motor, est))
     if args.plot:
         from motosim.plotting import plot_identification
 
         fig = plot_identification(
-            t=replay.t,
-            measured=replay.theta_h_measured,
-            simulated=replay.theta_h,
+            fit=fit,
+            validation=replay,
             estimate=est.parameters,
+            confidence=est.confidence,
             history_t=est.history_t,
             history=est.history,
-            title=f"{Path(args.validate or args.log).name}: replay, NRMSE {replay.nrmse:.3f}",
+            title=f"{Path(args.log).name}: method {est.method}, drive {est.drive}",
         )
         report["plot"] = str(save_figure(fig, args.plot))
     if args.json:
@@ -159,7 +202,12 @@ def _write(args: argparse.Namespace, motor: ParameterSet, est: Any) -> Path:
         f"(method {est.method}, drive {est.drive}, NRMSE {est.nrmse:.3g})"
     )
     sources = dict(motor.sources)
-    sources.update(dict.fromkeys(("J_eq", "beta_eq", "beta_s"), note))
+    for k, name in enumerate(_NAMES):
+        interval = ""
+        if est.confidence is not None:
+            lo, hi = est.confidence[k]
+            interval = f"; 95 % interval {lo:.4g} .. {hi:.4g} {_UNITS[name]}"
+        sources[name] = note + interval
     pset = ParameterSet(
         name=Path(args.out).stem,
         model="handlebar",
@@ -172,17 +220,35 @@ def _write(args: argparse.Namespace, motor: ParameterSet, est: Any) -> Path:
 
 
 def _print(report: dict[str, Any]) -> None:
-    ci = report.get("confidence_95", {})
     print(
-        f"{report['samples']} samples at {report['sample_rate']:.4g} Hz, method "
-        f"{report['method']}, drive {report['drive']}"
+        f"{report['samples']} samples at {report['sample_rate']:.4g} Hz ({report['timing']}); "
+        f"method {report['method']}, drive {report['drive']} ({report['drive_reason']})"
     )
-    for name, unit in (("J_eq", "kg*m^2"), ("beta_eq", "N*m*s/rad"), ("beta_s", "N*m")):
-        interval = f"  (95 %: {ci[name][0]:.4g} .. {ci[name][1]:.4g})" if name in ci else ""
-        print(f"  {name:<8} {report[name]:10.5g} {unit:<10}{interval}")
-    print(f"  fit NRMSE {report['nrmse']:.4f}")
+    for name in _NAMES:
+        key = f"{name}_ci95"
+        interval = (
+            f"  95 % interval {report[key][0]:.4g} .. {report[key][1]:.4g}" if key in report else ""
+        )
+        print(f"  {name:<8} {report[name]:10.5g} {_UNITS[name]:<10}{interval}")
+    print(
+        "  NRMSE = RMS(simulated - measured angle) / RMS(measured angle - its mean); "
+        "0 is a perfect fit, 1 no better than the mean"
+    )
+    if report["segment_nrmse"] is not None and math.isfinite(report["segment_nrmse"]):
+        print(
+            f"  fit NRMSE {report['segment_nrmse']:.4f} (the fit's criterion: restarted from "
+            "the measured angle every second)"
+        )
+    print(
+        f"  replay NRMSE {report['nrmse']:.4f} (one open-loop run of the identification log: "
+        "a small torque offset or stick-slip position error accumulates over its length)"
+    )
     if "validation_nrmse" in report:
-        print(f"  validation NRMSE {report['validation_nrmse']:.4f}")
+        print(
+            f"  validation NRMSE {report['validation_nrmse']:.4f} (one open-loop run of --validate)"
+        )
+    for warning in report["warnings"]:
+        print(f"  warning: {warning}")
     for key in ("out", "plot"):
         if key in report:
             print(f"  wrote {report[key]}")

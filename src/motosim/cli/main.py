@@ -1,78 +1,156 @@
 """Entry point of the ``motosim`` command.
 
 Each subcommand lives in its own module with ``register(subparsers)``, which adds its parser
-and sets ``func`` to a ``run(args) -> int``. Every :class:`MotosimError` raised below is
-printed as one line ``motosim: error: ...`` with exit code 2, without a traceback.
+and sets ``func`` to a ``run(args) -> int``. Only the module of the chosen subcommand is
+imported (the others are listed by name and one-line help), so ``motosim --help`` and a
+mistyped command answer at once instead of loading SciPy and the models.
+
+Every :class:`MotosimError` raised below, and every usage error of the parser, is printed as
+one line ``motosim: error: ...`` with exit code 2, without a traceback.
 """
 
 import argparse
+import importlib
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
 from motosim import __version__
-from motosim.cli import (
-    design,
-    estimate,
-    excite,
-    identify,
-    modes,
-    paper,
-    params,
-    rig,
-    rtcheck,
-    simulate,
-)
-from motosim.cli import run as run_command
 from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailedError
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "build_parser", "main"]
 
-_COMMANDS = (
-    params,
-    modes,
-    excite,
-    identify,
-    estimate,
-    design,
-    simulate,
-    paper,
-    run_command,
-    rig,
-    rtcheck,
-)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "params": ("motosim.cli.params", "list and show parameter sets"),
+    "modes": ("motosim.cli.modes", "eigenvalues and modes of the motorcycle against speed"),
+    "excite": (
+        "motosim.cli.excite",
+        "simulate an open-loop excitation run of the handlebar (section II.D)",
+    ),
+    "identify": (
+        "motosim.cli.identify",
+        "identify the handlebar's inertia and frictions from an excitation log",
+    ),
+    "estimate": (
+        "motosim.cli.estimate",
+        "estimate the rider torque from a log of theta_h and i_m",
+    ),
+    "design": (
+        "motosim.cli.design",
+        "design the rider-torque observer and the torque-feedback controller",
+    ),
+    "simulate": (
+        "motosim.cli.simulate",
+        "simulate a scenario in closed loop (Fig. 7) and write its result",
+    ),
+    "report": ("motosim.cli.simulate", "build the HTML report of a result folder"),
+    "paper": ("motosim.cli.paper", "regenerate every figure of the paper's section V"),
+    "fidelity": (
+        "motosim.cli.fidelity",
+        "the steering feel a design renders, against the virtual motorcycle's",
+    ),
+    "cueing": (
+        "motosim.cli.cueing",
+        "platform roll/pitch/yaw commands for a run, scored by what the rider perceives",
+    ),
+    "run": ("motosim.cli.run", "run the stack in real time against the handlebar over CAN"),
+    "rig": (
+        "motosim.cli.rig",
+        "start the virtual rig: the scenario's handlebar and drive on a CAN bus",
+    ),
+    "rt-check": (
+        "motosim.cli.rtcheck",
+        "measure this machine's wake-up latency and missed deadlines at a rate",
+    ),
+}
+"""Subcommand name -> (module that registers it, one-line help shown by ``motosim --help``)."""
 
 
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose usage errors are one line, exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        message = " ".join(message.split())
+        self.exit(2, f"motosim: error: {message} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser with every subcommand registered."""
+def _chosen(argv: Sequence[str]) -> str | None:
+    """The subcommand named on the command line: the first word that is not an option.
+
+    Raises
+    ------
+    MotosimError
+        If that word is not a subcommand, with the closest one as a suggestion.
+    """
+    for word in argv:
+        if not word.startswith("-"):
+            if word not in COMMANDS:
+                from motosim.params.checks import short_repr, suggestion
+
+                raise MotosimError(
+                    f"unknown command {short_repr(word)}{suggestion(word, COMMANDS)} "
+                    f"(expected one of {', '.join(COMMANDS)}; see motosim --help)"
+                )
+            return word
+    return None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser, with the full parser of ``command`` and the others listed by name.
+
+    Parameters
+    ----------
+    command : str, optional
+        The subcommand whose module is imported and registered; ``"all"`` registers every
+        module (for documentation and tests).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``motosim`` parser.
+    """
     parser = _Parser(
         prog="motosim",
         description="Motorcycle riding simulator with a motorised handlebar.",
     )
     parser.add_argument("--version", action="version", version=f"motosim {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for command in _COMMANDS:
-        command.register(sub)
+    parser.add_argument(
+        "--debug", action="store_true", help="show the traceback of an internal error"
+    )
+    sub = parser.add_subparsers(
+        dest="command", required=True, parser_class=_Parser, metavar="COMMAND"
+    )
+    chosen = COMMANDS[command][0] if command in COMMANDS else None
+    for name, (module, text) in COMMANDS.items():
+        if name in sub.choices:  # registered with another command of its module
+            continue
+        if command == "all" or module == chosen:
+            importlib.import_module(module).register(sub)
+        else:
+            sub.add_parser(name, help=text, add_help=False)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code (0 success, 2 bad input, 3 a failed run)."""
-    args = build_parser().parse_args(argv)
+    """Run the command line; returns the exit code.
+
+    0 success, 1 an internal error (a bug; ``--debug`` shows its traceback), 2 bad input,
+    3 a run that failed (diverged, fell, faulted), 130 interrupted (Ctrl-C, SIGTERM).
+    """
+    words = list(sys.argv[1:] if argv is None else argv)
     try:
+        try:
+            args = build_parser(_chosen(words)).parse_args(words)
+        except SystemExit as stop:  # --help, --version and usage errors: already printed
+            return stop.code if isinstance(stop.code, int) else 2
         code: int = args.func(args)
     except MotosimError as err:
-        print(f"motosim: error: {err}", file=sys.stderr)
+        message = " ".join(str(err).split())
+        print(f"motosim: error: {message}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except RunFailedError as err:
-        print(f"motosim: run failed: {err}", file=sys.stderr)
+        message = " ".join(str(err).split())
+        print(f"motosim: run failed: {message}", file=sys.stderr)
         return EXIT_RUN_FAILED
     except KeyboardInterrupt:
         print("motosim: interrupted", file=sys.stderr)
@@ -80,6 +158,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away (e.g. `| head`): not an error of ours
         sys.stderr.close()
         return 0
+    except Exception as err:  # a bug of ours: one line, exit 1, the traceback on request
+        if "--debug" in words:
+            raise
+        message = " ".join(str(err).split())[:300]
+        print(
+            f"motosim: internal error: {type(err).__name__}: {message} (a bug: please report "
+            "it with the output of motosim --debug and the same arguments)",
+            file=sys.stderr,
+        )
+        return 1
     return code
 
 

@@ -18,6 +18,8 @@ from motosim.params import load_parameters
 __all__ = ["register"]
 
 _DEFAULT_RANGE = "2:60:2"
+_MAX_SPEEDS = 2_000
+"""Most speeds in one table: a step of 0.075 m/s over the whole admitted range, in 1 s."""
 
 
 def register(sub: Any) -> None:
@@ -37,6 +39,9 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--plot", metavar="FILE", help="save a figure (.png, .svg or .pdf)")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace the --plot file if it exists"
+    )
     parser.set_defaults(func=run)
 
 
@@ -83,19 +88,23 @@ def _print_table(table: ModeTable) -> None:
 def run(args: argparse.Namespace) -> int:
     """Compute, print and optionally plot the modes."""
     speeds = (
-        parse_float_list("--speeds", args.speeds)
-        if args.speeds
-        else parse_range("--range", args.speed_range or _DEFAULT_RANGE)
+        parse_float_list("--speeds", args.speeds, max_items=_MAX_SPEEDS)
+        if args.speeds is not None
+        else parse_range(
+            "--range",
+            _DEFAULT_RANGE if args.speed_range is None else args.speed_range,
+            max_points=_MAX_SPEEDS,
+        )
     )
-    if args.plot:
-        check_figure_path(args.plot)
+    if args.plot is not None:
+        check_figure_path(args.plot, overwrite=args.overwrite)
     params = load_parameters(args.params, "sharp")
     table = modes(params, speeds)
     if args.json:
         print_json(_payload(table, args.params))
     else:
         _print_table(table)
-    if args.plot:
+    if args.plot is not None:
         from motosim.plotting import plot_modes
 
         path = save_figure(plot_modes(table), args.plot)

@@ -2,17 +2,17 @@
 
 import argparse
 import html
-import tomllib
 from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from motosim.cli._common import print_json
+from motosim.cli._common import check_output_folder, print_json, show_progress
 from motosim.cli.simulate import run_scenario
 from motosim.errors import MotosimError
 from motosim.io.results import SimResult, load_result
 from motosim.io.runs import resolve
+from motosim.params.toml import parse_toml
 from motosim.sim import Scenario, parse_scenario
 
 __all__ = ["paper_scenarios", "register"]
@@ -32,6 +32,9 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--out", required=True, help="folder for the runs and figures")
     parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace what an existing --out folder holds"
+    )
     parser.set_defaults(func=run)
 
 
@@ -41,7 +44,7 @@ def paper_scenarios() -> list[Scenario]:
     out = []
     for entry in sorted(folder.iterdir(), key=lambda p: p.name):
         if entry.name.endswith(".toml"):
-            data = tomllib.loads(entry.read_text(encoding="utf-8"))
+            data = parse_toml(entry.read_text(encoding="utf-8"), origin=f"packaged {entry.name}")
             out.append(parse_scenario(data, origin=f"packaged {entry.name}"))
     return out
 
@@ -138,9 +141,9 @@ def run(args: argparse.Namespace) -> int:
     """Simulate every run of section V, then the figures and the index."""
     from motosim.report import build_report
 
-    out = Path(args.out)
+    out = check_output_folder(args.out, overwrite=args.overwrite)
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        out.mkdir(exist_ok=True)
     except OSError as err:
         raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
     summaries: dict[str, dict[str, Any]] = {}
@@ -151,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
         if not args.json:
             print(f"[{k}/{len(scenarios)}] {scenario.name}: {scenario.description}")
         summaries[scenario.name] = run_scenario(
-            resolve(scenario, Path(".")), folder, progress=not args.json, overwrite=True
+            resolve(scenario, Path(".")), folder, progress=show_progress(args.json), overwrite=True
         )
         build_report(folder)
         runs[scenario.name] = load_result(folder)

@@ -179,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
     model = build_stack(inputs)
     world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
     codecs = handlebar_codecs()
-    stack = CompiledStack(model, force=world.force)
+    stack = CompiledStack(model, force=world.force, side_force=world.side_force)
     sender = None
     if args.telemetry != "off":
         from motosim.rt.telemetry import StateSender, parse_address

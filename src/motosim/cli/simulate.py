@@ -5,10 +5,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from motosim.cli._common import print_json
+from motosim.cli._common import print_json, show_progress
 from motosim.errors import MotosimError
+from motosim.io.results import is_complete_result
 from motosim.io.runs import load_scenario, resolve, run_to_folder
 from motosim.sim import RunInputs
+from motosim.sim.metrics import warnings
 
 __all__ = ["register", "run_scenario"]
 
@@ -58,16 +60,18 @@ def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     scenario = load_scenario(args.scenario)
     folder = Path(args.out)
-    if (folder / "result.h5").exists() and not args.overwrite:
+    if is_complete_result(folder) and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
     inputs = resolve(scenario, Path(args.scenario).parent)
     try:
         summary = run_scenario(
-            inputs, folder, progress=not args.json and sys.stderr.isatty(), overwrite=args.overwrite
+            inputs, folder, progress=show_progress(args.json), overwrite=args.overwrite
         )
     except KeyboardInterrupt:
         print(f"motosim: interrupted; the partial result is in {folder}", file=sys.stderr)
         return 130
+    for line in warnings(summary):
+        print(f"motosim: warning: {line}", file=sys.stderr)
     report = None
     if args.report:
         from motosim.report import build_report

@@ -24,11 +24,11 @@ from numba import njit
 from numpy.typing import NDArray
 from scipy.linalg import expm, solve_discrete_are
 
-from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
 from motosim.estimation.kernel import INVERSE_DYNAMICS, KALMAN, EstimatorKernel, pack
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
+from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
@@ -48,10 +48,7 @@ Array = NDArray[np.float64]
 
 
 def _check(name: str, value: float, unit: str, *, allow_zero: bool = False) -> None:
-    ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
-    if not ok:
-        expected = ">= 0" if allow_zero else "> 0"
-        raise MotosimError(f"{name} = {value!r}; expected a finite value {expected} [{unit}]")
+    check_number(value, where=name, lower=0.0, lower_closed=allow_zero, unit=unit)
 
 
 @dataclass(frozen=True, slots=True)

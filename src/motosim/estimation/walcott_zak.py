@@ -43,6 +43,7 @@ from motosim.estimation._friction import smooth_sign
 from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel, pack
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
+from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
@@ -401,8 +402,7 @@ def design(
 
 
 def _check_positive(name: str, value: float, unit: str) -> None:
-    if not (math.isfinite(value) and value > 0):
-        raise MotosimError(f"{name} = {value!r}; expected a finite value > 0 [{unit}]")
+    check_number(value, where=name, lower=0.0, lower_closed=False, unit=unit)
 
 
 @njit(cache=True)

@@ -18,17 +18,22 @@ identify
 """
 
 from motosim.identification.excitation import (
+    ExcitationPlan,
     MeasurementModel,
     chirp_voltage,
     excitation_run,
     measure,
+    plan_excitation,
     square_voltage,
 )
 from motosim.identification.identify import (
+    DRIVE_COLUMNS,
     METHODS,
     Identification,
     Validation,
     back_emf_damping,
+    current_noise,
+    drive_from_columns,
     identified_parameters,
     identify,
     is_voltage_driven,
@@ -36,17 +41,22 @@ from motosim.identification.identify import (
 )
 
 __all__ = [
+    "DRIVE_COLUMNS",
     "METHODS",
+    "ExcitationPlan",
     "Identification",
     "MeasurementModel",
     "Validation",
     "back_emf_damping",
     "chirp_voltage",
+    "current_noise",
+    "drive_from_columns",
     "excitation_run",
     "identified_parameters",
     "identify",
     "is_voltage_driven",
     "measure",
+    "plan_excitation",
     "square_voltage",
     "validate",
 ]

@@ -24,10 +24,13 @@ from motosim.params.handlebar import HandlebarParameters
 from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "INERTIA_SHARE",
+    "ExcitationPlan",
     "MeasurementModel",
     "chirp_voltage",
     "excitation_run",
     "measure",
+    "plan_excitation",
     "square_voltage",
 ]
 
@@ -327,3 +330,148 @@ def excitation_run(
     u_fine = np.repeat(command["u"], m)[:n_fine]
     truth = simulate_handlebar(hb, t_fine, voltage=u_fine)
     return measure(truth, measurement, rng)
+
+
+@dataclass(frozen=True, slots=True)
+class ExcitationPlan:
+    """A current chirp that makes J_eq, beta_eq and beta_s identifiable on a given rig.
+
+    Attributes
+    ----------
+    f0, f1 : float
+        Start and end frequency of the linear chirp [Hz].
+    amplitude : float
+        Current amplitude [A].
+    duration : float
+        Length of the run [s].
+    inertia_share : float
+        J theta'' / (beta theta') at f1, 2 pi f1 J/beta: how visible the inertia is.
+    counts_at_f1 : float
+        Angle amplitude at f1 in encoder counts.
+    notes : tuple of str
+        One line per limit the plan ran into, with what would lift it.
+    """
+
+    f0: float
+    f1: float
+    amplitude: float
+    duration: float
+    inertia_share: float
+    counts_at_f1: float
+    notes: tuple[str, ...] = ()
+
+
+INERTIA_SHARE = 0.15
+"""J theta'' / (beta theta') aimed for at the chirp's top frequency."""
+
+
+def plan_excitation(
+    *,
+    J_eq: float,
+    beta_eq: float,
+    beta_s: float,
+    torque_per_amp: float,
+    sample_rate: float,
+    max_current: float,
+    angle_limit: float = 0.5,
+    encoder_counts: int = 2**14,
+) -> ExcitationPlan:
+    """Recommend a current chirp for identifying a handlebar known roughly.
+
+    Parameters
+    ----------
+    J_eq, beta_eq, beta_s : float
+        Rough inertia [kg*m^2], viscous friction [N*m*s/rad] and dry friction [N*m].
+    torque_per_amp : float
+        N k_t [N*m/A].
+    sample_rate : float
+        The log's sample rate [Hz].
+    max_current : float
+        The largest current the drive may be commanded [A].
+    angle_limit : float
+        Largest handlebar angle from the start allowed [rad] (the steering lock).
+    encoder_counts : int
+        Encoder counts per handlebar turn.
+
+    Returns
+    -------
+    ExcitationPlan
+        Band, amplitude, duration, and the notes on the limits met.
+
+    Raises
+    ------
+    MotosimError
+        On non-positive values, or a current limit whose torque does not exceed twice the
+        dry friction (the handlebar would hardly slide).
+
+    Notes
+    -----
+    With a current amplitude I, eq. (5) moves the sliding handlebar at a rate amplitude of
+    about (N k_t I - beta_s) / (beta_eq sqrt(1 + (2 pi f tau)^2)), tau = J_eq / beta_eq, and
+    J theta'' is 2 pi f tau of beta theta'. So:
+
+    * the amplitude is 80 % of the current limit (headroom for the drive's loop), and its
+      torque must exceed twice the dry friction so that sliding dominates;
+    * the top frequency f1 makes J theta'' :data:`INERTIA_SHARE` of beta theta', but stays
+      below a tenth of the sample rate (the cubic inter-sample model and the encoder need
+      ten samples per period);
+    * the start frequency f0 (at least 0.1 Hz) keeps the angle within ``angle_limit``;
+    * the duration gives at least 6000 samples, 20 s, and 6 periods of f0.
+
+    Examples
+    --------
+    >>> plan = plan_excitation(J_eq=0.06, beta_eq=9.0, beta_s=1.0, torque_per_amp=1.0,
+    ...                        sample_rate=100.0, max_current=5.0)
+    >>> round(plan.f1, 2), plan.amplitude
+    (3.58, 4.0)
+    """
+    for name, value, unit in (
+        ("J_eq", J_eq, "kg*m^2"),
+        ("beta_eq", beta_eq, "N*m*s/rad"),
+        ("torque_per_amp", torque_per_amp, "N*m/A"),
+        ("sample_rate", sample_rate, "Hz"),
+        ("max_current", max_current, "A"),
+        ("angle_limit", angle_limit, "rad"),
+    ):
+        _check_positive(name, value, unit)
+    if not (math.isfinite(beta_s) and beta_s >= 0.0):
+        raise MotosimError(f"beta_s = {beta_s!r}; expected a finite value >= 0 [N*m]")
+    amplitude = 0.8 * max_current
+    torque = torque_per_amp * amplitude
+    if torque <= 2.0 * beta_s:
+        raise MotosimError(
+            f"max_current = {max_current:g} A gives {torque:.3g} N*m at 80 %; expected more than "
+            f"2 beta_s = {2 * beta_s:.3g} N*m so that the handlebar slides (raise the limit)"
+        )
+    tau = J_eq / beta_eq
+    notes: list[str] = []
+    f1 = INERTIA_SHARE / (2.0 * math.pi * tau)
+    if f1 > 0.1 * sample_rate:
+        f1 = 0.1 * sample_rate
+        notes.append(
+            f"the top frequency is held at a tenth of the sample rate ({f1:.3g} Hz): J theta'' "
+            f"reaches only {100 * 2 * math.pi * f1 * tau:.2g} % of beta theta' (15 % aimed "
+            f"for), so J_eq is less sharply identified; sample at "
+            f"{10 * INERTIA_SHARE / (2 * math.pi * tau):.3g} Hz or faster to reach 15 %"
+        )
+    rate_amplitude = (torque - beta_s) / beta_eq
+    f0 = max(0.1, rate_amplitude / (2.0 * math.pi * angle_limit))
+    if f0 >= 0.5 * f1:
+        raise MotosimError(
+            f"angle_limit = {angle_limit:g} rad needs a chirp from {f0:.3g} Hz, too close to its "
+            f"top {f1:.3g} Hz; expected a larger angle range or a smaller current limit"
+        )
+    counts = (
+        rate_amplitude
+        / (2.0 * math.pi * f1 * math.sqrt(1.0 + (2.0 * math.pi * f1 * tau) ** 2))
+        / (2.0 * math.pi / encoder_counts)
+    )
+    if counts < 20.0:
+        notes.append(
+            f"the angle moves only {counts:.3g} encoder counts at {f1:.3g} Hz; a finer encoder "
+            "or a larger current limit would sharpen J_eq"
+        )
+    duration = max(20.0, 6000.0 / sample_rate, 6.0 / f0)
+    return ExcitationPlan(
+        f0, f1, amplitude, duration, 2.0 * math.pi * f1 * tau, counts, tuple(notes)
+    )

@@ -106,7 +106,8 @@ def sample_period(t: Array) -> float:
     h = float(np.median(dt))
     if np.max(np.abs(dt - h)) > 0.01 * h:
         raise MotosimError(
-            f"log sampling periods span {dt.min():g}-{dt.max():g} s; expected uniform sampling"
+            f"log sampling periods span {dt.min():g}-{dt.max():g} s; expected uniform sampling "
+            "(motosim.io.read_rig_log and motosim.io.resample put a log on a uniform grid)"
         )
     return h
 

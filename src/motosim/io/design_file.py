@@ -11,20 +11,29 @@ the observer from its settings and run the controller's discrete matrices. TOML,
 """
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError
 from motosim.estimation.walcott_zak import ObserverSettings
+from motosim.params.checks import check_keys, check_number, check_table, check_text, short_repr
 from motosim.params.handlebar import HandlebarParameters
+from motosim.params.toml import read_toml
 
-__all__ = ["DesignFile", "ObserverSettings", "dump_design", "read_design"]
+__all__ = [
+    "MAX_CONTROLLER_STATES",
+    "RATE_RANGE",
+    "DesignFile",
+    "ObserverSettings",
+    "dump_design",
+    "read_design",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,76 +105,224 @@ def dump_design(
     return "\n".join(lines)
 
 
+MAX_CONTROLLER_STATES = 10
+"""Most states of a controller in a design file (``motosim design`` writes at most 4)."""
+
+RATE_RANGE = (10.0, 100_000.0)
+"""Control rates admitted [Hz]: a real-time loop runs at 100 Hz to tens of kHz."""
+
+_TABLES = ("design", "handlebar", "observer", "controller", "paper_controller")
+_DESIGN_KEYS = ("version", "date", "handlebar", "rate")
+_OBSERVER_KEYS = (*(f.name for f in fields(ObserverSettings)), "L", "P", "F")
+_MATRIX_KEYS = ("A", "B", "C", "D")
+_CONTROLLER_KEYS = (
+    "bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner", "num", "den",
+    *_MATRIX_KEYS, "zoh", "tustin",
+)  # fmt: skip
+
+
 def _get(table: Mapping[str, Any], key: str, where: str) -> Any:
     if key not in table:
         raise MotosimError(f"{where}: missing {key!r}")
     return table[key]
 
 
-def _state_space(table: Mapping[str, Any], where: str, dt: float = 0.0) -> StateSpace:
+def _matrix(value: Any, where: str) -> NDArray[np.float64]:
+    """A 2-D matrix of at most MAX_CONTROLLER_STATES + 1 rows and columns, from nested lists."""
+    limit = MAX_CONTROLLER_STATES + 1
+    if not isinstance(value, list) or len(value) > limit:
+        raise MotosimError(
+            f"{where} = {short_repr(value)}; expected a matrix as a list of at most {limit} rows"
+        )
     try:
-        A, B, C, D = (np.asarray(_get(table, k, where), dtype=float) for k in "ABCD")
-        return StateSpace(A, B, C, D, dt=dt)
-    except (TypeError, ValueError) as err:
+        matrix = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise MotosimError(
+            f"{where} = {short_repr(value)}; expected a matrix of numbers, rows of equal length"
+        ) from None
+    if matrix.ndim != 2 or matrix.shape[1] > limit:
+        raise MotosimError(f"{where} has shape {matrix.shape}; expected a 2-D matrix")
+    return matrix
+
+
+def _state_space(table: Any, where: str, dt: float = 0.0) -> StateSpace:
+    table = check_table(table, where=where)
+    A, B, C, D = (_matrix(_get(table, k, where), f"{where} {k}") for k in _MATRIX_KEYS)
+    try:
+        system = StateSpace(A, B, C, D, dt=dt)
+    except MotosimError as err:
         raise MotosimError(f"{where}: {err}") from None
+    if system.B.shape[1] != 1 or system.C.shape[0] != 1:
+        raise MotosimError(
+            f"{where}: B has shape {system.B.shape} and C {system.C.shape}; expected one input "
+            "(theta_h - delta) and one output (i_m)"
+        )
+    return system
+
+
+def _loop_matrix(plant: StateSpace, controller: StateSpace) -> NDArray[np.float64]:
+    """State matrix of the loop i_m = K (theta_h - delta) (positive feedback, no feedthrough)."""
+    Ap, Bp, Cp = plant.A, plant.B, plant.C
+    return np.block(
+        [
+            [Ap + Bp @ controller.D @ Cp, Bp @ controller.C],
+            [controller.B @ Cp, controller.A],
+        ]
+    )
+
+
+def _check_loops(
+    handlebar: HandlebarParameters,
+    continuous: StateSpace,
+    discrete: Mapping[str, StateSpace],
+    rate: float,
+    where: str,
+) -> None:
+    """Refuse a controller that does not stabilise the nominal handlebar, continuous or sampled."""
+    from scipy.linalg import expm
+
+    from motosim.control.torque_feedback import handlebar_plants
+
+    plant, _ = handlebar_plants(handlebar)
+    growth = float(np.max(np.linalg.eigvals(_loop_matrix(plant, continuous)).real))
+    if not growth < 0.0:
+        raise MotosimError(
+            f"{where} [controller]: the loop with the nominal handlebar has a pole with real "
+            f"part {growth:.4g} 1/s; expected a stabilising controller (all < 0)"
+        )
+    n = plant.n_states
+    phi = expm(np.block([[plant.A, plant.B], [np.zeros((1, n + 1))]]) / rate)
+    sampled = StateSpace(phi[:n, :n], phi[:n, n:], plant.C, plant.D)
+    for method, system in discrete.items():
+        if system.n_states != continuous.n_states:
+            raise MotosimError(
+                f"{where} [controller.{method}]: {system.n_states} states; expected "
+                f"{continuous.n_states} as the continuous controller"
+            )
+        radius = float(np.max(np.abs(np.linalg.eigvals(_loop_matrix(sampled, system)))))
+        if not radius < 1.0:
+            raise MotosimError(
+                f"{where} [controller.{method}]: the loop sampled at {rate:g} Hz has a spectral "
+                f"radius of {radius:.4g}; expected a stable discrete loop (< 1)"
+            )
+
+
+def _observer(
+    table: Mapping[str, Any], handlebar: HandlebarParameters, rate: float, where: str
+) -> ObserverSettings:
+    """Read the observer settings; refuse them unless the observer sampled at ``rate`` is stable."""
+    from motosim.estimation.walcott_zak import WalcottZakObserver, design_with
+
+    check_keys(table, _OBSERVER_KEYS, where=where, what="key")
+    poles = _get(table, "poles", where)
+    if not isinstance(poles, list) or len(poles) != 2:
+        raise MotosimError(f"{where} poles = {short_repr(poles)}; expected two negative numbers")
+    number = {
+        key: check_number(_get(table, key, where), where=f"{where} {key}", lower=0.0)
+        for key in ("eta", "injection_bandwidth", "filter_time_constant")
+    }
+    for key in ("dead_zone", "friction_width"):
+        number[key] = check_number(_get(table, key, where), where=f"{where} {key}", lower=0.0)
+    compensation = _get(table, "friction_compensation", where)
+    if not isinstance(compensation, bool):
+        raise MotosimError(
+            f"{where} friction_compensation = {short_repr(compensation)}; expected true or false"
+        )
+    settings = ObserverSettings(
+        poles=(
+            check_number(poles[0], where=f"{where} poles[0]", upper=0.0, upper_closed=False),
+            check_number(poles[1], where=f"{where} poles[1]", upper=0.0, upper_closed=False),
+        ),
+        eta=number["eta"],
+        injection_bandwidth=number["injection_bandwidth"],
+        filter_time_constant=number["filter_time_constant"],
+        dead_zone=number["dead_zone"],
+        friction_width=number["friction_width"],
+        friction_compensation=compensation,
+    )
+    for key in ("L", "P"):  # informative copies of what the settings rebuild
+        if key in table and _matrix(table[key], f"{where} {key}").shape != (2, 2):
+            raise MotosimError(f"{where} {key}: expected a 2 x 2 matrix")
+    if "F" in table:
+        _matrix([table["F"]], f"{where} F")
+    try:
+        WalcottZakObserver(design_with(handlebar, settings), dt=1.0 / rate)
+    except MotosimError as err:
+        raise MotosimError(f"{where}: {err}") from None
+    return settings
 
 
 def read_design(path: str | Path) -> DesignFile:
     """Read and validate a design file written by ``motosim design``.
 
+    Besides the structure and the types, the design must work: the rate in
+    :data:`RATE_RANGE`, the handlebar in its physical ranges, the observer rebuilt from its
+    settings stable once sampled at the rate, the continuous controller stabilising the
+    nominal handlebar, and each discrete controller stabilising it sampled at the rate.
+
     Raises
     ------
     MotosimError
-        One line: no such file, invalid TOML, a missing table or key, an invalid value.
+        One line: no such file, invalid TOML, a missing or unknown table or key, an invalid
+        value, an unstable observer or loop.
     """
-    source = Path(path)
-    if not source.is_file():
-        raise MotosimError(f"{path}: no such design file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
-    known = {"design", "handlebar", "observer", "controller", "paper_controller"}
-    unknown = set(data) - known
-    if unknown:
-        raise MotosimError(
-            f"{path}: unknown table [{sorted(unknown)[0]}]; expected {sorted(known)}"
-        )
-    design = _get(data, "design", str(path))
-    rate = float(_get(design, "rate", f"{path} [design]"))
-    if not (math.isfinite(rate) and rate > 0):
-        raise MotosimError(f"{path} [design]: rate = {rate!r}; expected a rate > 0 [Hz]")
-    hb_table = dict(_get(data, "handlebar", str(path)))
-    extra = set(hb_table) - set(HandlebarParameters.SPECS)
-    if extra:
-        raise MotosimError(f"{path} [handlebar]: unknown parameter {sorted(extra)[0]!r}")
+    data = read_toml(Path(path), what="design file")
+    check_keys(data, _TABLES, where=str(path), what="table")
+    design = check_table(_get(data, "design", str(path)), where=f"{path}: design")
+    check_keys(design, _DESIGN_KEYS, where=f"{path} [design]", what="key")
+    for key in ("version", "date", "handlebar"):
+        if key in design:
+            check_text(design[key], where=f"{path} [design] {key}")
+    rate = check_number(
+        _get(design, "rate", f"{path} [design]"),
+        where=f"{path} [design]: rate",
+        lower=RATE_RANGE[0],
+        upper=RATE_RANGE[1],
+        unit="Hz",
+    )
+    hb_table = check_table(_get(data, "handlebar", str(path)), where=f"{path}: handlebar")
+    check_keys(hb_table, HandlebarParameters.SPECS, where=f"{path} [handlebar]", what="parameter")
     try:
         handlebar = HandlebarParameters(
             **{k: _get(hb_table, k, f"{path} [handlebar]") for k in HandlebarParameters.SPECS}
         )
     except MotosimError as err:
         raise MotosimError(f"{path}: {err}") from None
-    obs = _get(data, "observer", str(path))
-    where = f"{path} [observer]"
-    observer = ObserverSettings(
-        poles=tuple(float(v) for v in _get(obs, "poles", where)),  # type: ignore[arg-type]
-        eta=float(_get(obs, "eta", where)),
-        injection_bandwidth=float(_get(obs, "injection_bandwidth", where)),
-        filter_time_constant=float(_get(obs, "filter_time_constant", where)),
-        dead_zone=float(_get(obs, "dead_zone", where)),
-        friction_width=float(_get(obs, "friction_width", where)),
-        friction_compensation=bool(_get(obs, "friction_compensation", where)),
-    )
-    ctrl = _get(data, "controller", str(path))
+    obs = check_table(_get(data, "observer", str(path)), where=f"{path}: observer")
+    observer = _observer(obs, handlebar, rate, f"{path} [observer]")
+    ctrl = check_table(_get(data, "controller", str(path)), where=f"{path}: controller")
+    check_keys(ctrl, _CONTROLLER_KEYS, where=f"{path} [controller]", what="key")
+    for key in ("bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner"):
+        if key in ctrl:  # what the design achieved, for people: numbers all the same
+            check_number(ctrl[key], where=f"{path} [controller] {key}")
+    for key in ("num", "den"):
+        if key in ctrl:
+            _matrix([ctrl[key]], f"{path} [controller] {key}")
+    controller = _state_space(ctrl, f"{path} [controller]")
+    if controller.n_states > MAX_CONTROLLER_STATES:
+        raise MotosimError(
+            f"{path} [controller]: {controller.n_states} states; expected at most "
+            f"{MAX_CONTROLLER_STATES}"
+        )
+    if "paper_controller" in data:  # the paper's eq. (26), for comparison
+        paper = check_table(data["paper_controller"], where=f"{path}: paper_controller")
+        check_keys(paper, ("num", "den", "gamma"), where=f"{path} [paper_controller]", what="key")
+        if "gamma" in paper:
+            check_number(paper["gamma"], where=f"{path} [paper_controller] gamma")
+        for key in ("num", "den"):
+            if key in paper:
+                _matrix([paper[key]], f"{path} [paper_controller] {key}")
+    discrete = {
+        m: _state_space(
+            _get(ctrl, m, f"{path} [controller]"), f"{path} [controller.{m}]", 1.0 / rate
+        )
+        for m in ("zoh", "tustin")
+    }
+    _check_loops(handlebar, controller, discrete, rate, str(path))
     return DesignFile(
         rate=rate,
         handlebar=handlebar,
         observer=observer,
-        controller=_state_space(ctrl, f"{path} [controller]"),
-        controller_discrete={
-            m: _state_space(
-                _get(ctrl, m, f"{path} [controller]"), f"{path} [controller.{m}]", 1.0 / rate
-            )
-            for m in ("zoh", "tustin")
-        },
+        controller=controller,
+        controller_discrete=discrete,
     )

@@ -1,7 +1,6 @@
 """Result files of closed-loop runs: HDF5 for the program, CSV for people and PlotJuggler.
 
-A run is recorded in one folder while it goes, so that an interrupted run (Ctrl-C, crash)
-leaves a readable file with every row computed so far:
+A result is a folder holding:
 
 - ``result.h5``: one resizable, chunked float64 dataset ``signals`` of shape ``(n, k)``,
   time-first, column ``j`` being the signal ``names[j]`` (attribute ``names`` of the dataset;
@@ -10,24 +9,50 @@ leaves a readable file with every row computed so far:
   caller), ``complete`` (False until :meth:`ResultWriter.close`) and, once closed, ``summary``
   (JSON metrics).
 - ``result.csv``: header ``t,...`` then one row per instant, full float precision, strictly
-  increasing ``t``; pandas and PlotJuggler read it as is.
+  increasing ``t``; pandas and PlotJuggler read it as is. While a run goes, and in a run that
+  did not complete, this file is called ``result.partial.csv``: its name says it is partial.
 
-The HDF5 file is written in single-writer/multiple-reader (SWMR) mode and flushed after each
-block: a reader (a live plot, :func:`load_result`) can open it while the run goes, and a file
-left by a killed process stays consistent. Such a file keeps HDF5's "open for writing" flag;
-:func:`load_result` reads it regardless, other tools may need ``h5clear -s result.h5`` first.
+How a result is never lost or corrupted:
+
+- **Lock.** While a run writes ``NAME``, it holds an exclusive lock (``flock``) on the file
+  ``.NAME.lock`` beside it; a second writer of the same folder, with or without
+  ``overwrite``, is refused. The operating system releases the lock when the process ends,
+  however it ends, so a killed run never blocks the next one.
+- **Staging.** The run writes into the sibling folder ``NAME.partial``; only
+  :meth:`ResultWriter.close` moves it to ``NAME``, replacing a previous result in two renames
+  (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
+  complete result untouched; with no previous result its rows are moved to ``NAME`` marked
+  partial (``complete`` False, ``result.partial.csv``), and a rerun replaces them without
+  ``overwrite``.
+- **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
+  them. Ctrl-C (SIGINT) and, inside ``with ResultWriter(...)``, SIGTERM close both files,
+  readable, marked partial. The HDF5 file is written without SWMR, so it carries no "open
+  for writing" flag: after SIGKILL or a power cut, ``NAME.partial/result.h5`` opens with plain
+  h5py, pandas or HDFView and holds every row flushed before the kill (``complete`` False),
+  as ``result.partial.csv`` does (each block is one ``write`` call, so no row is cut
+  short). :func:`load_result` reads it; the next run of the same folder replaces it.
+- **Full disk.** ``expected_rows`` lets the writer refuse a run the free space cannot hold
+  before it starts; a write that fails anyway is one :class:`MotosimError` line saying how
+  many rows were kept, and where.
 
 Units are those of :mod:`motosim.signals`: SI, angles in radians.
 """
 
+import fcntl
 import json
 import logging
 import math
-from collections.abc import Mapping
+import os
+import re
+import shutil
+import signal
+import threading
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
-from types import TracebackType
-from typing import Any, Self
+from types import FrameType, TracebackType
+from typing import Any, NoReturn, Self
 
 import h5py
 import numpy as np
@@ -37,12 +62,26 @@ from motosim import __version__
 from motosim.errors import MotosimError
 from motosim.timeseries import TimeSeries
 
-__all__ = ["ResultWriter", "SimResult", "load_result"]
+__all__ = [
+    "RESERVE_BYTES",
+    "ResultWriter",
+    "SimResult",
+    "is_complete_result",
+    "load_result",
+    "lock_file",
+    "partial_folder",
+    "terminate_as_interrupt",
+]
 
 _log = logging.getLogger(__name__)
 
 _H5_NAME = "result.h5"
 _CSV_NAME = "result.csv"
+_CSV_PARTIAL = "result.partial.csv"
+_PARTIAL = ".partial"
+
+RESERVE_BYTES = 16_000_000
+"""Free disk space a run leaves untouched [bytes], so that its files can always be closed."""
 _FORMAT = "motosim-result"
 _FORMAT_VERSION = 1
 _CHUNK_BYTES = 64 * 1024
@@ -101,13 +140,100 @@ def _check_names(names: tuple[str, ...]) -> tuple[str, ...]:
     return names
 
 
+def partial_folder(folder: str | Path) -> Path:
+    """Where a run of ``folder`` writes, and where a stopped run leaves its rows: NAME.partial."""
+    target = Path(folder)
+    return target.with_name(target.name + _PARTIAL)
+
+
+def lock_file(folder: str | Path) -> Path:
+    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it."""
+    target = Path(folder)
+    return target.with_name(f".{target.name}.lock")
+
+
+def is_complete_result(folder: str | Path) -> bool:
+    """Whether ``folder`` holds a completed result (its ``result.csv`` is renamed at the end)."""
+    return (Path(folder) / _CSV_NAME).is_file()
+
+
+class _FolderLock:
+    """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends."""
+
+    def __init__(self, folder: Path) -> None:
+        self.path = lock_file(folder)
+        self._fd: int | None = None
+        for _ in range(10):  # retry if a finishing run unlinked the file we opened
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.read(fd, 64).decode("ascii", "replace").strip() or "another process"
+                os.close(fd)
+                raise MotosimError(
+                    f"{folder}: another run ({holder}) is writing this result; wait for it to "
+                    "end or choose another folder"
+                ) from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                os.ftruncate(fd, 0)
+                os.write(fd, f"pid {os.getpid()}\n".encode())
+                self._fd = fd
+                return
+            os.close(fd)
+        raise MotosimError(f"{folder}: could not lock {self.path}; try again")
+
+    def release(self) -> None:
+        """Delete the lock file, then release the lock (in that order, so no one races in)."""
+        if self._fd is None:
+            return
+        self.path.unlink(missing_ok=True)
+        os.close(self._fd)
+        self._fd = None
+
+
+@contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM and SIGHUP raise :class:`KeyboardInterrupt`, as Ctrl-C does.
+
+    A service manager, ``timeout`` or a closed terminal stops a run with SIGTERM or SIGHUP,
+    whose default action ends the process at once, leaving files open. Turned into
+    ``KeyboardInterrupt``, they unwind the ``with`` blocks like Ctrl-C: the result is closed
+    and marked partial. Outside the main thread (where Python cannot install handlers) the
+    block runs unchanged. The previous handlers are restored on leaving.
+
+    Examples
+    --------
+    >>> with terminate_as_interrupt():
+    ...     pass
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def _raise(signum: int, frame: FrameType | None) -> None:
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
+    previous = {sig: signal.signal(sig, _raise) for sig in stops}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
 class ResultWriter:
-    """Record a run as it goes into ``folder/result.h5`` and ``folder/result.csv``.
+    """Record a run as it goes, then publish it as ``folder/result.h5`` and ``result.csv``.
 
     Parameters
     ----------
     folder : str or Path
-        Created if needed (with its parents).
+        The result folder. Its parent is created if needed; the folder itself must be new,
+        empty, hold an earlier partial result, or (with ``overwrite``) a complete one.
     names : tuple of str
         Column names, ``"t"`` [s] first, then signal names of :mod:`motosim.signals`.
     metadata : Mapping of str to Any
@@ -115,29 +241,34 @@ class ResultWriter:
         Values may be numbers, strings, booleans, None, numpy arrays, sequences, mappings and
         dataclasses of those.
     overwrite : bool
-        Replace a result already in ``folder``; by default that is an error.
+        Replace a complete result already in ``folder``; by default that is an error.
+    expected_rows : int, optional
+        Rows the run will write; when given, a run the free disk space cannot hold is refused
+        before it starts.
 
     Raises
     ------
     MotosimError
         One line naming the path or value: bad names, metadata that cannot be stored, a
-        result already there, a file that cannot be created.
+        result already there, another run writing the folder, not enough disk space, a file
+        that cannot be created.
 
     Notes
     -----
-    Each :meth:`append` writes its rows to both files and flushes them, so an interrupted run
-    leaves both readable with every appended row. :meth:`close` stores the summary and marks
-    the result complete; leaving the ``with`` block on an exception closes the files without
-    marking them complete.
+    Use it in a ``with`` block: SIGTERM and SIGHUP then stop the run as Ctrl-C does
+    (:func:`terminate_as_interrupt`), and leaving the block on an exception closes the files
+    without marking them complete (see the module notes for where the rows go). After an
+    interruption :attr:`location` says where the rows are. Leaving the block normally
+    completes the result (without summary if :meth:`close` was not called).
 
     Examples
     --------
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     with ResultWriter(tmp, ("t", "theta_h"), {"seed": 1}) as writer:
+    ...     with ResultWriter(Path(tmp) / "run", ("t", "theta_h"), {"seed": 1}) as writer:
     ...         writer.append(np.array([[0.0, 0.1], [0.001, 0.2]]))
     ...         writer.close({"rms": 0.5})
-    ...     result = load_result(tmp)
+    ...     result = load_result(Path(tmp) / "run")
     >>> result["theta_h"], result.complete, result.summary
     (array([0.1, 0.2]), True, {'rms': 0.5})
     """
@@ -149,30 +280,43 @@ class ResultWriter:
         metadata: Mapping[str, Any],
         *,
         overwrite: bool = False,
+        expected_rows: int | None = None,
     ) -> None:
         self._names = _check_names(names)
         metadata_json = _to_json(metadata, "metadata")
-        self._folder = Path(folder)
-        self._h5_path = self._folder / _H5_NAME
-        self._csv_path = self._folder / _CSV_NAME
+        self._folder = _check_folder(folder, overwrite=overwrite)
+        self._staging = partial_folder(self._folder)
+        self._location = self._staging
         self._rows = 0
         self._last_t = -math.inf
         self._closed = False
-        k = len(self._names)
+        self._signals: Any = None
         try:
-            self._folder.mkdir(parents=True, exist_ok=True)
+            self._folder.parent.mkdir(parents=True, exist_ok=True)
         except OSError as err:
             raise MotosimError(f"cannot create result folder {folder}: {err.strerror}") from None
-        if not overwrite:
-            for path in (self._h5_path, self._csv_path):
-                if path.exists():
-                    raise MotosimError(
-                        f"{path}: a result is already there; choose another folder or overwrite"
-                    )
+        self._lock = _FolderLock(self._folder)
         try:
-            self._h5 = h5py.File(self._h5_path, "w", libver="latest")
+            # checked again under the lock: another run may have completed meanwhile
+            _check_folder(self._folder, overwrite=overwrite)
+            _check_space(self._folder.parent, expected_rows or 0, len(self._names))
+            if self._staging.exists():
+                _log.warning("replacing the partial result left in %s", self._staging)
+                shutil.rmtree(self._staging)
+            self._staging.mkdir()
+            self._h5_path = self._staging / _H5_NAME
+            self._csv_path = self._staging / _CSV_PARTIAL
+            self._open(metadata_json)
         except OSError as err:
-            raise MotosimError(f"cannot create {self._h5_path}: {_first_line(err)}") from None
+            self._lock.release()
+            raise MotosimError(f"cannot create a result in {folder}: {_first_line(err)}") from None
+        except BaseException:
+            self._lock.release()
+            raise
+
+    def _open(self, metadata_json: str) -> None:
+        k = len(self._names)
+        self._h5 = h5py.File(self._h5_path, "w")
         try:
             dataset = self._h5.create_dataset(
                 "signals",
@@ -188,24 +332,23 @@ class ResultWriter:
             self._h5.attrs["motosim_version"] = __version__
             self._h5.attrs["metadata"] = metadata_json
             self._h5.attrs["complete"] = False
-            self._h5.swmr_mode = True
             self._h5.flush()
             self._dataset = dataset
-            self._csv = self._csv_path.open("w", newline="", encoding="utf-8")
-        except OSError as err:
+            self._csv = os.open(self._csv_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            _write_all(self._csv, (",".join(self._names) + "\n").encode())
+        except BaseException:
             self._h5.close()
-            raise MotosimError(f"cannot create a result in {folder}: {_first_line(err)}") from None
-        try:
-            self._csv.write(",".join(self._names) + "\n")
-            self._csv.flush()
-        except OSError as err:
-            self._abort()
-            raise MotosimError(f"cannot write {self._csv_path}: {err.strerror}") from None
+            raise
 
     @property
     def folder(self) -> Path:
-        """The result folder."""
+        """The result folder, where a completed run is published."""
         return self._folder
+
+    @property
+    def location(self) -> Path:
+        """Where the rows are now: the staging folder while running, then where they were kept."""
+        return self._location
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -230,10 +373,11 @@ class ResultWriter:
         ------
         MotosimError
             A block of the wrong shape, times that do not strictly increase, a closed writer,
-            a write that fails (naming the file).
+            a write that fails (naming the file and what was kept; the writer is then
+            closed, the result partial).
         """
         if self._closed:
-            raise MotosimError(f"{self._folder}: result writer is closed; cannot append")
+            raise MotosimError(f"{self._folder}: the result is closed; cannot add rows")
         rows = np.asarray(block, dtype=np.float64)
         k = len(self._names)
         if rows.ndim != 2 or rows.shape[1] != k:
@@ -255,23 +399,53 @@ class ResultWriter:
                 "expected strictly increasing t"
             )
         m = rows.shape[0]
+        text = "".join(",".join(map(repr, row)) + "\n" for row in rows.tolist()).encode()
+        self._check_reserve(len(text) + rows.nbytes)
         try:
             self._dataset.resize(self._rows + m, axis=0)
             self._dataset[self._rows :] = rows
             self._h5.flush()
-        except OSError as err:
-            raise MotosimError(f"cannot write {self._h5_path}: {_first_line(err)}") from None
-        text = "".join(",".join(map(repr, row)) + "\n" for row in rows.tolist())
+        except (OSError, RuntimeError) as err:  # HDF5 reports a failed write as either
+            self._fail(self._h5_path, err)
         try:
-            self._csv.write(text)
-            self._csv.flush()
+            _write_all(self._csv, text)
         except OSError as err:
-            raise MotosimError(f"cannot write {self._csv_path}: {err.strerror}") from None
+            self._fail(self._csv_path, err)
         self._rows += m
         self._last_t = float(t[-1])
 
+    def _check_reserve(self, block_bytes: int) -> None:
+        """Stop while the files can still be closed cleanly, before the disk is full.
+
+        HDF5 does not recover from a write refused by a full disk (its file can no longer be
+        closed, and the process may crash on exit), so the writer stops first, keeping
+        :data:`RESERVE_BYTES` free.
+        """
+        try:
+            free = shutil.disk_usage(self._staging).free
+        except OSError:
+            return
+        if free < RESERVE_BYTES + 2 * block_bytes:
+            self._abort()
+            upto = f" (t <= {self._last_t:g} s)" if self._rows else ""
+            raise MotosimError(
+                f"{self._staging}: the disk is full ({free / 1e6:.1f} MB free, "
+                f"{RESERVE_BYTES / 1e6:.0f} MB kept in reserve); the result is partial, "
+                f"{self._rows} rows{upto} kept in {self._location}"
+            )
+
+    def _fail(self, path: Path, err: OSError | RuntimeError) -> NoReturn:
+        """A write failed (full disk...): close what can be closed, say what was kept."""
+        reason = _reason(err)
+        self._abort()
+        upto = f" (t <= {self._last_t:g} s)" if self._rows else ""
+        raise MotosimError(
+            f"cannot write {path.name}: {reason}; the result is partial, {self._rows} rows"
+            f"{upto} kept in {self._location}"
+        ) from None
+
     def close(self, summary: Mapping[str, Any] | None = None) -> None:
-        """Store the summary, mark the result complete and close both files.
+        """Store the summary, mark the result complete and publish it in :attr:`folder`.
 
         Parameters
         ----------
@@ -282,7 +456,8 @@ class ResultWriter:
         Raises
         ------
         MotosimError
-            A summary that cannot be stored or a write that fails (naming the file).
+            A summary that cannot be stored or a write that fails (naming the file); the
+            result is then left partial and a previous result untouched.
 
         Notes
         -----
@@ -291,27 +466,55 @@ class ResultWriter:
         if self._closed:
             return
         summary_json = _to_json(summary or {}, "summary")
-        self._abort()
         try:
-            with h5py.File(self._h5_path, "r+") as h5:
-                h5.attrs["summary"] = summary_json
-                h5.attrs["complete"] = True
+            self._h5.attrs["summary"] = summary_json
+            self._h5.attrs["complete"] = True
+            self._h5.close()
+            os.fsync(self._csv)
+            os.close(self._csv)
+            os.replace(self._csv_path, self._staging / _CSV_NAME)
+            self._publish()
         except OSError as err:
-            raise MotosimError(f"cannot complete {self._h5_path}: {_first_line(err)}") from None
+            self._fail(self._h5_path, err)
+        self._closed = True
+        self._location = self._folder
+        self._lock.release()
+
+    def _publish(self) -> None:
+        """Move the staging folder to the result folder, the previous one aside then deleted."""
+        old = self._folder.with_name(f".{self._folder.name}.old")
+        if old.exists():
+            shutil.rmtree(old)
+        if self._folder.exists():
+            os.replace(self._folder, old)
+        os.replace(self._staging, self._folder)
+        shutil.rmtree(old, ignore_errors=True)
 
     def _abort(self) -> None:
-        """Close both files without marking the result complete."""
+        """Close both files without marking the result complete; keep the rows where they help."""
+        if self._closed:
+            return
         self._closed = True
         try:
-            self._csv.close()
-        except (OSError, AttributeError) as err:
+            os.close(self._csv)
+        except OSError as err:
             _log.warning("closing %s: %s", self._csv_path, err)
+        del self._dataset  # no HDF5 object may outlive its file (a crash at exit otherwise)
         try:
             self._h5.close()
-        except OSError as err:
+        except (OSError, RuntimeError) as err:
             _log.warning("closing %s: %s", self._h5_path, _first_line(err))
+        try:
+            if not self._folder.exists() or not any(self._folder.iterdir()):
+                self._publish()  # no previous result: the partial one goes where one looks
+                self._location = self._folder
+        except OSError as err:
+            _log.warning("keeping %s: %s", self._staging, err)
+        self._lock.release()
 
     def __enter__(self) -> Self:
+        self._signals = terminate_as_interrupt()
+        self._signals.__enter__()
         return self
 
     def __exit__(
@@ -320,16 +523,70 @@ class ResultWriter:
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        if exc_type is None:
-            self.close()
-        elif not self._closed:
-            _log.warning(
-                "run interrupted by %s: %s keeps %d rows, marked incomplete",
-                exc_type.__name__,
-                self._folder,
-                self._rows,
+        try:
+            if exc_type is None:
+                self.close()
+            elif not self._closed:
+                _log.warning(
+                    "run interrupted by %s: %d rows kept in %s, marked partial",
+                    exc_type.__name__,
+                    self._rows,
+                    self._location,
+                )
+                self._abort()
+        finally:
+            if self._signals is not None:
+                self._signals.__exit__(None, None, None)
+                self._signals = None
+
+
+def _reason(err: BaseException) -> str:
+    """The system's reason for a failed write, e.g. ``No space left on device``."""
+    if isinstance(err, OSError) and err.strerror:
+        return err.strerror
+    found = re.search(r"error message = '([^']+)'", str(err))
+    return found.group(1) if found else _first_line(err)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    """Write ``data`` whole (one call unless the system splits it)."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view) :]
+
+
+def _check_folder(folder: str | Path, *, overwrite: bool) -> Path:
+    """The result folder if a run may write it (see :class:`ResultWriter`), else refuse."""
+    target = Path(folder).absolute()
+    if not target.name or target == Path.cwd() or target in Path.cwd().parents:
+        raise MotosimError(
+            f"{folder}: is the current folder or one of its parents; expected a result folder"
+        )
+    if target.exists() and not target.is_dir():
+        raise MotosimError(f"{folder}: is a file; expected a result folder")
+    if is_complete_result(target):
+        if not overwrite:
+            raise MotosimError(
+                f"{folder}: a result is already there; choose another folder or overwrite"
             )
-            self._abort()
+    elif target.is_dir() and any(target.iterdir()) and not (target / _H5_NAME).exists():
+        raise MotosimError(
+            f"{folder}: holds files that are not a motosim result; expected a new or empty folder"
+        )
+    return target
+
+
+def _check_space(parent: Path, rows: int, columns: int) -> None:
+    """Refuse a run whose files would not fit in the free space of ``parent``."""
+    # HDF5 8 bytes a value; CSV about 24 characters a value (repr of a float64 and a comma)
+    need = int(rows * columns * (8 + 24) * 1.05) + RESERVE_BYTES
+    free = shutil.disk_usage(parent).free
+    if need > free:
+        raise MotosimError(
+            f"{parent}: a run of {rows} rows of {columns} signals needs about "
+            f"{need / 1e6:.0f} MB with the {RESERVE_BYTES / 1e6:.0f} MB reserve; only "
+            f"{free / 1e6:.0f} MB are free"
+        )
 
 
 def _first_line(err: BaseException) -> str:
@@ -385,7 +642,8 @@ def load_result(folder: str | Path) -> SimResult:
     Returns
     -------
     SimResult
-        Every row written; for an interrupted run, those flushed before the interruption.
+        Every row written; for an interrupted or killed run, those flushed before the stop
+        (read ``NAME.partial`` for a run killed before it completed).
 
     Raises
     ------
@@ -395,14 +653,25 @@ def load_result(folder: str | Path) -> SimResult:
     """
     path = Path(folder)
     if not path.exists():
-        raise MotosimError(f"{folder}: no such result folder")
+        stopped = partial_folder(path)
+        hint = f"; a stopped run left its rows in {stopped}" if stopped.is_dir() else ""
+        raise MotosimError(f"{folder}: no such result folder{hint}")
     file = path / _H5_NAME if path.is_dir() else path
     if not file.is_file():
-        raise MotosimError(f"{folder}: no {_H5_NAME}; expected a folder written by ResultWriter")
-    try:
-        h5 = h5py.File(file, "r", swmr=True)
-    except OSError as err:
-        raise MotosimError(f"{file}: not a readable HDF5 file ({_first_line(err)})") from None
+        raise MotosimError(f"{folder}: no {_H5_NAME}; expected a folder written by motosim")
+    h5 = None
+    failure: OSError | None = None
+    # plain; then without HDF5's file lock (a run in progress in another process); then
+    # SWMR, in which motosim <= 0.1 wrote its results
+    for options in ({}, {"locking": False}, {"swmr": True, "locking": False}):
+        try:
+            h5 = h5py.File(file, "r", **options)
+            break
+        except OSError as err:
+            failure = err
+    if h5 is None:
+        reason = _first_line(failure) if failure else "unknown"
+        raise MotosimError(f"{file}: not a readable HDF5 file ({reason})")
     with h5:
         if h5.attrs.get("format") != _FORMAT or not isinstance(h5.get("signals"), h5py.Dataset):
             raise MotosimError(f"{file}: not a motosim result (no {_FORMAT!r} format marker)")

@@ -9,7 +9,6 @@ design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`
 it to :func:`motosim.sim.simulate`.
 """
 
-import tomllib
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -22,6 +21,7 @@ from motosim.io.design_file import read_design
 from motosim.io.logs import read_log
 from motosim.io.results import ResultWriter
 from motosim.params import load_parameters
+from motosim.params.toml import read_toml
 from motosim.sim import (
     SIGNALS,
     RunInputs,
@@ -43,12 +43,7 @@ def load_scenario(path: str | Path) -> Scenario:
     source = Path(path)
     if not source.is_file():
         raise MotosimError(f"{path}: no such scenario file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
-    except UnicodeDecodeError:
-        raise MotosimError(f"{path}: not UTF-8 text; expected a TOML scenario file") from None
+    data = dict(read_toml(source, what="scenario file"))
     data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
     return parse_scenario(data, origin=str(path))
 
@@ -76,7 +71,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     nominal = load_parameters(_relative(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
-    profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force]
+    profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force, mc.side_wind]
     if scenario.rider.profile is not None:
         profiles.append(scenario.rider.profile)
     for profile in profiles:
@@ -149,11 +144,16 @@ def run_to_folder(
     Raises
     ------
     RunFailedError
-        If the run diverged; the rows computed until then stay in the folder.
+        If the run diverged (the rows computed until then stay in the folder), or completed
+        but failed (:func:`motosim.sim.metrics.failure`: it fell, or saturated the motor most
+        of the time; the whole result is written, with its flags).
     """
     sc = inputs.scenario
     metadata = run_metadata(inputs)
-    with ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite) as writer:
+    rows = round(sc.duration * sc.rates.control)
+    with ResultWriter(
+        Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows
+    ) as writer:
 
         def on_block(block: np.ndarray) -> None:
             writer.append(block)

@@ -4,6 +4,6 @@ Each model is a set of pure functions of the parameters; steppers with memory li
 :mod:`motosim.model.handlebar` and :mod:`motosim.model.sharp` as plain numeric kernels.
 """
 
-from motosim.model.linear import LinearModel
+from motosim.model.linear import StateSpace
 
-__all__ = ["LinearModel"]
+__all__ = ["StateSpace"]

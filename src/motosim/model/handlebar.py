@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from motosim.errors import MotosimError
 from motosim.model._inputs import input_series, sample_times
-from motosim.model.linear import LinearModel
+from motosim.model.linear import StateSpace
 from motosim.params.handlebar import HandlebarParameters
 from motosim.timeseries import TimeSeries
 
@@ -98,13 +98,13 @@ def matrices(hb: HandlebarParameters) -> HandlebarMatrices:
     )
 
 
-def linear_model(hb: HandlebarParameters) -> LinearModel:
-    """Eq. (10) as a :class:`LinearModel` with inputs (i_m, tau_r) and output theta_h.
+def linear_model(hb: HandlebarParameters) -> StateSpace:
+    """Eq. (10) as a :class:`StateSpace` with inputs (i_m, tau_r) and output theta_h.
 
     Dry friction is left out: it acts like rider torque, through D (tau_p = -beta_s sign).
     """
     m = matrices(hb)
-    return LinearModel(
+    return StateSpace(
         A=m.A,
         B=np.column_stack([m.B, m.D]),
         C=m.C[None, :],

@@ -23,11 +23,12 @@ from scipy.optimize import linear_sum_assignment
 
 from motosim.errors import MotosimError
 from motosim.model._inputs import input_series, sample_times
-from motosim.model.linear import LinearModel
+from motosim.model.linear import StateSpace
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "MAX_SPEED",
     "MIN_SPEED",
     "MODE_NAMES",
     "STATE_NAMES",
@@ -42,6 +43,7 @@ __all__ = [
     "lpv_matrices",
     "mass_matrix",
     "modes",
+    "side_force_input",
     "simulate",
     "stiffness_matrices",
 ]
@@ -59,6 +61,13 @@ pace the tyre lags and slip angles lose their meaning (Sharp's tables start at 3
 standstill the model is singular in its divided form.
 """
 
+MAX_SPEED = 150.0
+"""Highest forward speed [m/s] accepted by the lateral model: 540 km/h, above any motorcycle.
+
+Sharp's tables stop at 60 m/s; beyond this bound a speed is a unit slip (km/h for m/s), and
+following the modes up to it would take an unbounded number of eigenvalue problems.
+"""
+
 
 def check_speed(speed: float) -> float:
     """Return ``speed`` as float if the lateral model accepts it.
@@ -66,13 +75,13 @@ def check_speed(speed: float) -> float:
     Raises
     ------
     MotosimError
-        If the speed is not finite or below :data:`MIN_SPEED`.
+        If the speed is not finite or outside [:data:`MIN_SPEED`, :data:`MAX_SPEED`].
     """
     value = float(speed)
-    if not (math.isfinite(value) and value >= MIN_SPEED):
+    if not (math.isfinite(value) and MIN_SPEED <= value <= MAX_SPEED):
         raise MotosimError(
             f"speed = {value:g} m/s; expected a finite forward speed >= {MIN_SPEED:g} m/s "
-            "(Sharp's lateral model linearises about forward running)"
+            f"and <= {MAX_SPEED:g} m/s (Sharp's lateral model linearises about forward running)"
         )
     return value
 
@@ -171,6 +180,32 @@ def input_matrix(p: SharpParameters) -> Array:
     return F
 
 
+def side_force_input(p: SharpParameters, *, height: float, ahead: float = 0.0) -> Array:
+    """B_w of x' = A_v x + B_v tau_r + B_w F_wy: a side force on the rear frame, shape (8,).
+
+    A lateral force F_wy [N] (to the right, +y), as a side wind, applied at ``height`` [m]
+    above the ground and ``ahead`` [m] of the reference point A (below G_r), enters the
+    lateral-force equation with F_wy, the yaw moment about A with ``ahead`` F_wy and the roll
+    moment about the ground line with ``height`` F_wy (a force to the right above the ground
+    tips the machine right side down, as phi is counted); the steer and tyre equations are not
+    touched. Sharp's model has no aerodynamics; this adds the generalised force of one
+    concentrated side force to its equations (section 5 of Sharp 1971's derivation).
+
+    Examples
+    --------
+    >>> from motosim.params import load_parameters
+    >>> B_w = side_force_input(load_parameters("sharp1971", "sharp"), height=0.9)
+    >>> B_w.shape
+    (8,)
+    """
+    for name, value in (("height", height), ("ahead", ahead)):
+        if not (math.isfinite(value) and abs(value) <= 10.0):
+            raise MotosimError(f"{name} = {value!r}; expected a finite lever within 10 m")
+    F = np.zeros(8)
+    F[0], F[1], F[2] = 1.0, ahead, height
+    return np.asarray(np.linalg.solve(mass_matrix(p), F), dtype=np.float64)
+
+
 def lpv_matrices(p: SharpParameters) -> tuple[Array, Array, Array]:
     """A0, A1 and B_v of the lateral model, A_v(u) = A0 + u A1 = -M^-1 (E0 + u E1).
 
@@ -183,7 +218,7 @@ def lpv_matrices(p: SharpParameters) -> tuple[Array, Array, Array]:
     return -Minv @ E0, -Minv @ E1, Minv @ input_matrix(p)
 
 
-def linearize(p: SharpParameters, speed: float) -> LinearModel:
+def linearize(p: SharpParameters, speed: float) -> StateSpace:
     """The lateral model at a constant forward speed.
 
     Parameters
@@ -195,7 +230,7 @@ def linearize(p: SharpParameters, speed: float) -> LinearModel:
 
     Returns
     -------
-    LinearModel
+    StateSpace
         A_v = -M^-1 E(v_x), B_v = M^-1 F (input ``tau_r`` [N*m]), every state as output.
 
     Raises
@@ -212,7 +247,7 @@ def linearize(p: SharpParameters, speed: float) -> LinearModel:
     """
     u = check_speed(speed)
     A0, A1, Bv = lpv_matrices(p)
-    return LinearModel(
+    return StateSpace(
         A=A0 + u * A1,
         B=Bv[:, None],
         C=np.eye(8),
@@ -430,12 +465,12 @@ def longitudinal_acceleration(
 
 @njit(cache=True)
 def _bike_rates(
-    z: Array, out: Array, A: Array, Bv: Array, tau: float, force: float, m: float, m_eq: float,
-    v_min: float,
+    z: Array, out: Array, A: Array, Bv: Array, tau: float, Bw: Array, side: float, force: float,
+    m: float, m_eq: float, v_min: float,
 ) -> None:  # fmt: skip
     v_x = z[8]
     for r in range(8):
-        acc = Bv[r] * tau
+        acc = Bv[r] * tau + Bw[r] * side
         for c in range(8):
             acc += A[r, c] * z[c]
         out[r] = acc
@@ -455,6 +490,8 @@ def bike_rk4(
     A1: Array,
     Bv: Array,
     tau: float,
+    Bw: Array,
+    side: float,
     force: float,
     m: float,
     m_eq: float,
@@ -466,7 +503,8 @@ def bike_rk4(
     ``z`` = [x_v (8), v_x, psi, x, y]; ``work`` has shape (13, 12): five rows of stage
     workspace and, in rows 5-12, the lateral matrix A_v = A0 + v_x A1 frozen at the start of
     the step (the speed changes by a few mm/s over a millisecond); ``tau`` is the steer torque
-    [N*m] and ``force`` = (tau_d - tau_b) / r_D + F_wx [N], both held over ``h`` [s].
+    [N*m], ``side`` a side force F_wy [N] entering through ``Bw`` (:func:`side_force_input`)
+    and ``force`` = (tau_d - tau_b) / r_D + F_wx [N], all held over ``h`` [s].
     """
     k1, k2, k3, k4, tmp = work[0], work[1], work[2], work[3], work[4]
     A = work[5:13, :8]
@@ -474,16 +512,16 @@ def bike_rk4(
     for r in range(8):
         for c in range(8):
             A[r, c] = A0[r, c] + v * A1[r, c]
-    _bike_rates(z, k1, A, Bv, tau, force, m, m_eq, v_min)
+    _bike_rates(z, k1, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
     for i in range(12):
         tmp[i] = z[i] + 0.5 * h * k1[i]
-    _bike_rates(tmp, k2, A, Bv, tau, force, m, m_eq, v_min)
+    _bike_rates(tmp, k2, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
     for i in range(12):
         tmp[i] = z[i] + 0.5 * h * k2[i]
-    _bike_rates(tmp, k3, A, Bv, tau, force, m, m_eq, v_min)
+    _bike_rates(tmp, k3, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
     for i in range(12):
         tmp[i] = z[i] + h * k3[i]
-    _bike_rates(tmp, k4, A, Bv, tau, force, m, m_eq, v_min)
+    _bike_rates(tmp, k4, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
     for i in range(12):
         z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     if z[8] < v_min:
@@ -498,6 +536,8 @@ def _run_coupled(
     A1: NDArray[np.float64],
     Bv: NDArray[np.float64],
     tau_r: NDArray[np.float64],
+    Bw: NDArray[np.float64],
+    side: NDArray[np.float64],
     force: NDArray[np.float64],
     m: float,
     m_eq: float,
@@ -513,7 +553,7 @@ def _run_coupled(
         n_sub = max(1, int(math.ceil(dts[k] / max_step - 1e-9)))  # noqa: RUF046 - numba typing
         h = dts[k] / n_sub
         for _ in range(n_sub):
-            bike_rk4(z, work, A0, A1, Bv, tau_r[k], force[k], m, m_eq, v_min, h)
+            bike_rk4(z, work, A0, A1, Bv, tau_r[k], Bw, side[k], force[k], m, m_eq, v_min, h)
         out[k + 1] = z
     return out
 
@@ -531,6 +571,8 @@ def simulate(
     drive_torque: ArrayLike = 0.0,
     brake_torque: ArrayLike = 0.0,
     wind_force: ArrayLike = 0.0,
+    side_force: ArrayLike = 0.0,
+    side_force_height: float = 1.0,
     initial_state: ArrayLike | None = None,
     max_step: float = 1e-3,
 ) -> TimeSeries:
@@ -551,6 +593,9 @@ def simulate(
         v_x at t[0] [m/s], at least :data:`MIN_SPEED`.
     rider_torque, drive_torque, brake_torque, wind_force : array_like, shape (n,) or scalar
         tau_r [N*m], tau_d [N*m], tau_b >= 0 [N*m] and F_wx [N].
+    side_force : array_like, shape (n,) or scalar
+        F_wy, a side force to the right (a side wind) [N], applied at ``side_force_height``
+        [m] above the ground below the rear frame's mass centre (:func:`side_force_input`).
     initial_state : array_like, shape (8,), optional
         Lateral state at t[0] in the order of :data:`STATE_NAMES`; zero (upright) by default.
     max_step : float
@@ -588,6 +633,7 @@ def simulate(
             ("drive_torque", drive_torque),
             ("brake_torque", brake_torque),
             ("wind_force", wind_force),
+            ("side_force", side_force),
         )
     }
     if np.any(series["brake_torque"] < 0):
@@ -606,6 +652,8 @@ def simulate(
         A1,
         Bv,
         series["rider_torque"],
+        side_force_input(p, height=side_force_height),
+        series["side_force"],
         force,
         d["m"],
         d["m_eq"],

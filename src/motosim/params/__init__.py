@@ -18,7 +18,6 @@ one-line message naming the value and the expected range.
 """
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from importlib import resources
@@ -26,19 +25,31 @@ from pathlib import Path
 from typing import Any, Literal, TypeAlias, overload
 
 from motosim.errors import MotosimError
+from motosim.params._spec import Spec
+from motosim.params.checks import (
+    check_keys,
+    check_number,
+    check_table,
+    check_text,
+    short_repr,
+    suggestion,
+)
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
+from motosim.params.toml import parse_toml, read_toml
 
 __all__ = [
     "HandlebarParameters",
     "ParameterSet",
     "SharpParameters",
+    "check_number",
     "derived_geometry",
     "dump_parameter_set",
     "list_parameter_sets",
     "load_parameter_set",
     "load_parameters",
     "parse_parameter_set",
+    "read_toml",
 ]
 
 Parameters: TypeAlias = SharpParameters | HandlebarParameters
@@ -48,8 +59,8 @@ _MODELS: dict[str, type[SharpParameters] | type[HandlebarParameters]] = {
     "sharp": SharpParameters,
     "handlebar": HandlebarParameters,
 }
-_SET_KEYS = {"name", "model", "title", "source"}
-_ENTRY_KEYS = {"value", "unit", "source", "note"}
+_SET_KEYS = ("name", "model", "title", "source")
+_ENTRY_KEYS = ("value", "unit", "source", "note")
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,10 +102,16 @@ def list_parameter_sets() -> list[str]:
     )
 
 
-def _as_number(origin: str, name: str, raw: Any) -> float:
-    if isinstance(raw, bool) or not isinstance(raw, int | float):
-        raise MotosimError(f"{origin}: parameter {name} = {raw!r} is not a number")
-    return float(raw)
+def _as_number(origin: str, name: str, raw: Any, spec: Spec) -> float:
+    return check_number(
+        raw,
+        where=f"{origin}: parameter {name}",
+        lower=spec.lower,
+        upper=spec.upper,
+        lower_closed=spec.lower_closed,
+        upper_closed=spec.upper_closed,
+        unit=spec.unit,
+    )
 
 
 def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet:
@@ -118,55 +135,48 @@ def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet
         On an unknown or missing key, a unit that is not the expected one, a value that is not
         a finite number in its range.
     """
-    unknown = set(data) - {"set", "parameters"}
-    if unknown:
-        raise MotosimError(
-            f"{origin}: unknown top-level key {sorted(unknown)[0]!r}; "
-            "expected the tables [set] and [parameters]"
-        )
-    head = data.get("set")
-    if not isinstance(head, Mapping):
+    check_keys(data, ("set", "parameters"), where=origin, what="table")
+    if "set" not in data:
         raise MotosimError(f"{origin}: missing table [set] with name and model")
-    unknown = set(head) - _SET_KEYS
-    if unknown:
-        raise MotosimError(
-            f"{origin}: unknown key {sorted(unknown)[0]!r} in [set]; "
-            f"expected some of {sorted(_SET_KEYS)}"
-        )
-    model = head.get("model")
+    head = check_table(data["set"], where=f"{origin}: set")
+    check_keys(head, _SET_KEYS, where=f"{origin}: [set]", what="key")
+    if "model" not in head:
+        raise MotosimError(f"{origin}: [set] has no model; expected one of {', '.join(_MODELS)}")
+    model = check_text(head["model"], where=f"{origin}: [set] model")
     if model not in _MODELS:
-        raise MotosimError(f"{origin}: [set] model = {model!r}; expected one of {sorted(_MODELS)}")
+        raise MotosimError(
+            f"{origin}: [set] model = {short_repr(model)}{suggestion(model, _MODELS)} "
+            f"(expected one of {', '.join(_MODELS)})"
+        )
+    texts = {
+        key: check_text(head.get(key, ""), where=f"{origin}: [set] {key}", one_line=key == "name")
+        for key in ("name", "title", "source")
+    }
     cls = _MODELS[model]
     specs = cls.SPECS
-    table = data.get("parameters")
-    if not isinstance(table, Mapping):
+    if "parameters" not in data:
         raise MotosimError(f"{origin}: missing table [parameters]")
+    table = check_table(data["parameters"], where=f"{origin}: parameters")
+    check_keys(table, specs, where=f"{origin}: [parameters]", what=f"{model} parameter")
     values: dict[str, float] = {}
     sources: dict[str, str] = {}
     for name, entry in table.items():
-        if name not in specs:
-            raise MotosimError(
-                f"{origin}: unknown parameter {name!r} for the {model} model; "
-                f"expected one of {', '.join(specs)}"
-            )
         if isinstance(entry, Mapping):
-            extra = set(entry) - _ENTRY_KEYS
-            if extra:
-                raise MotosimError(
-                    f"{origin}: unknown key {sorted(extra)[0]!r} in parameter {name}; "
-                    f"expected some of {sorted(_ENTRY_KEYS)}"
-                )
+            check_keys(entry, _ENTRY_KEYS, where=f"{origin}: parameter {name}", what="key")
             if "value" not in entry:
                 raise MotosimError(f"{origin}: parameter {name} has no value")
-            unit = entry.get("unit", specs[name].unit)
+            unit = check_text(entry.get("unit", specs[name].unit), where=f"{origin}: {name}.unit")
             if unit != specs[name].unit:
                 raise MotosimError(
-                    f"{origin}: parameter {name} has unit {unit!r}; expected {specs[name].unit!r}"
+                    f"{origin}: parameter {name} has unit {short_repr(unit)}; "
+                    f"expected {specs[name].unit!r}"
                 )
-            values[name] = _as_number(origin, name, entry["value"])
-            sources[name] = str(entry.get("source", ""))
+            values[name] = _as_number(origin, name, entry["value"], specs[name])
+            for key in ("source", "note"):
+                check_text(entry.get(key, ""), where=f"{origin}: {name}.{key}", one_line=False)
+            sources[name] = entry.get("source", "")
         else:
-            values[name] = _as_number(origin, name, entry)
+            values[name] = _as_number(origin, name, entry, specs[name])
             sources[name] = ""
     missing = [n for n in specs if n not in values]
     if missing:
@@ -179,10 +189,10 @@ def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet
     except MotosimError as err:
         raise MotosimError(f"{origin}: {err}") from None
     return ParameterSet(
-        name=str(head.get("name", Path(origin).stem)),
-        model=model,
-        title=str(head.get("title", "")),
-        source=str(head.get("source", "")),
+        name=texts["name"] or Path(origin).stem,
+        model=model,  # type: ignore[arg-type]  # checked against _MODELS above
+        title=texts["title"],
+        source=texts["source"],
         values=params,
         sources=sources,
     )
@@ -206,22 +216,19 @@ def load_parameter_set(name_or_path: str | Path) -> ParameterSet:
     MotosimError
         If there is no such set or file, the file is not valid TOML, or a value is invalid.
     """
-    text: str
     origin = str(name_or_path)
     if isinstance(name_or_path, str) and name_or_path in list_parameter_sets():
         text = (_packaged_dir() / f"{name_or_path}.toml").read_text(encoding="utf-8")
+        data = parse_toml(text, origin=origin)
     else:
         path = Path(name_or_path)
-        if not path.is_file():
+        if not path.exists():
+            sets = list_parameter_sets()
             raise MotosimError(
-                f"{origin}: no such parameter file or packaged set; "
-                f"packaged sets are {', '.join(list_parameter_sets())}"
+                f"{origin}: no such parameter file or packaged set{suggestion(origin, sets)} "
+                f"(packaged sets are {', '.join(sets)})"
             )
-        text = path.read_text(encoding="utf-8")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{origin}: not valid TOML: {err}") from None
+        data = read_toml(path, what="parameter file")
     return parse_parameter_set(data, origin=origin)
 
 

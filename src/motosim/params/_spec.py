@@ -1,17 +1,36 @@
-"""Field specifications: unit, meaning and admissible range of each physical parameter."""
+"""Field specifications: unit, meaning and admissible range of each physical parameter.
+
+Every range is physical, not only a sign: a value outside it is not a motorcycle or a
+handlebar this software can represent (or a unit slip such as grams for kilograms), and is
+refused before it reaches a model. Each :class:`Spec` says why its bounds are where they are.
+"""
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar, Protocol
+from typing import ClassVar, Protocol
 
-from motosim.errors import MotosimError
+from motosim.params.checks import check_number, describe_range
 
 __all__ = ["Spec", "validate_fields"]
 
 
 @dataclass(frozen=True, slots=True)
 class Spec:
-    """Unit, meaning and admissible open or closed interval of one parameter."""
+    """Unit, meaning and admissible open or closed interval of one parameter.
+
+    Attributes
+    ----------
+    unit : str
+        SI unit, as written in parameter files.
+    description : str
+        What the quantity is.
+    lower, upper : float
+        Bounds of the admissible interval.
+    lower_closed, upper_closed : bool
+        Whether each bound is admitted.
+    reason : str
+        Why the bounds are where they are (the physical argument).
+    """
 
     unit: str
     description: str
@@ -19,6 +38,22 @@ class Spec:
     lower_closed: bool = False
     upper: float = math.inf
     upper_closed: bool = False
+    reason: str = ""
+
+    @classmethod
+    def between(
+        cls, unit: str, description: str, lower: float, upper: float, *, reason: str
+    ) -> "Spec":
+        """A quantity in the closed interval [lower, upper], with the reason for the bounds."""
+        return cls(
+            unit,
+            description,
+            lower,
+            lower_closed=True,
+            upper=upper,
+            upper_closed=True,
+            reason=reason,
+        )
 
     @classmethod
     def positive(cls, unit: str, description: str) -> "Spec":
@@ -32,13 +67,13 @@ class Spec:
 
     def expected(self) -> str:
         """Describe the admissible range in words, e.g. ``a finite number > 0 [kg]``."""
-        parts = []
-        if self.lower > -math.inf:
-            parts.append(f"{'>=' if self.lower_closed else '>'} {self.lower:g}")
-        if self.upper < math.inf:
-            parts.append(f"{'<=' if self.upper_closed else '<'} {self.upper:g}")
-        bounds = " and ".join(parts)
-        return f"a finite number{' ' + bounds if bounds else ''} [{self.unit}]"
+        return describe_range(
+            self.lower,
+            self.upper,
+            lower_closed=self.lower_closed,
+            upper_closed=self.upper_closed,
+            unit=self.unit,
+        )
 
     def admits(self, value: float) -> bool:
         """Return True when ``value`` is finite and inside the interval."""
@@ -70,10 +105,12 @@ def validate_fields(obj: _HasSpecs, *, context: str) -> None:
     """
     for f in fields(obj):  # type: ignore[arg-type]
         spec = obj.SPECS[f.name]
-        value: Any = getattr(obj, f.name)
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise MotosimError(
-                f"{context}: {f.name} = {value!r} is not a number; expected {spec.expected()}"
-            )
-        if not spec.admits(float(value)):
-            raise MotosimError(f"{context}: {f.name} = {value!r}; expected {spec.expected()}")
+        check_number(
+            getattr(obj, f.name),
+            where=f"{context}: {f.name}",
+            lower=spec.lower,
+            upper=spec.upper,
+            lower_closed=spec.lower_closed,
+            upper_closed=spec.upper_closed,
+            unit=spec.unit,
+        )

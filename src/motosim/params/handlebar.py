@@ -37,16 +37,76 @@ class HandlebarParameters:
     k_e: float
 
     SPECS: ClassVar[dict[str, Spec]] = {
-        "J_eq": Spec.positive("kg*m^2", "equivalent inertia at the handlebar axis, J_h + N^2 J_m"),
-        "beta_eq": Spec.positive("N*m*s/rad", "equivalent viscous friction, beta_vh + N^2 beta_vm"),
-        "beta_s": Spec.non_negative("N*m", "dry (Coulomb) friction torque"),
-        "N": Spec.positive("1", "belt reduction ratio, motor angle over handlebar angle"),
-        "k_t": Spec.positive("N*m/A", "motor torque constant"),
-        "J_m": Spec.non_negative("kg*m^2", "rotor inertia"),
-        "beta_vm": Spec.non_negative("N*m*s/rad", "rotor viscous friction"),
-        "R": Spec.positive("ohm", "armature resistance"),
-        "L": Spec.non_negative("H", "armature inductance"),
-        "k_e": Spec.non_negative("V*s/rad", "back-EMF constant, per rad/s of the motor shaft"),
+        "J_eq": Spec.between(
+            "kg*m^2",
+            "equivalent inertia at the handlebar axis, J_h + N^2 J_m",
+            1e-4,
+            10.0,
+            reason="a handlebar with its motor: Table I of the paper gives 0.0415",
+        ),
+        "beta_eq": Spec.between(
+            "N*m*s/rad",
+            "equivalent viscous friction, beta_vh + N^2 beta_vm",
+            1e-4,
+            1000.0,
+            reason="bearings, belt and motor seen at the handlebar: Table I gives 13.956",
+        ),
+        "beta_s": Spec.between(
+            "N*m",
+            "dry (Coulomb) friction torque",
+            0.0,
+            200.0,
+            reason="below the torque a rider can apply (Table I gives 1.734)",
+        ),
+        "N": Spec.between(
+            "1",
+            "belt reduction ratio, motor angle over handlebar angle",
+            0.1,
+            200.0,
+            reason="direct drive (1) to a two-stage reduction",
+        ),
+        "k_t": Spec.between(
+            "N*m/A",
+            "motor torque constant",
+            1e-3,
+            20.0,
+            reason="small servo motors to large torque motors",
+        ),
+        "J_m": Spec.between(
+            "kg*m^2",
+            "rotor inertia",
+            0.0,
+            0.1,
+            reason="the rotor of a motor of a few kilowatts at most",
+        ),
+        "beta_vm": Spec.between(
+            "N*m*s/rad",
+            "rotor viscous friction",
+            0.0,
+            10.0,
+            reason="bearing and brush drag of such a rotor",
+        ),
+        "R": Spec.between(
+            "ohm",
+            "armature resistance",
+            1e-3,
+            100.0,
+            reason="from a large low-voltage motor to a small high-voltage one",
+        ),
+        "L": Spec.between(
+            "H",
+            "armature inductance",
+            0.0,
+            1.0,
+            reason="millihenries for such motors (Remark 2.2: very low)",
+        ),
+        "k_e": Spec.between(
+            "V*s/rad",
+            "back-EMF constant, per rad/s of the motor shaft",
+            0.0,
+            20.0,
+            reason="equal to k_t in SI units for a DC motor",
+        ),
     }
 
     def __post_init__(self) -> None:

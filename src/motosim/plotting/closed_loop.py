@@ -19,9 +19,11 @@ from motosim.signals import SIGNALS
 
 __all__ = [
     "plot_comparison",
+    "plot_feel",
     "plot_motor_torque",
     "plot_motorcycle",
     "plot_rate",
+    "plot_spectrum",
     "plot_torque",
     "plot_tracking",
 ]
@@ -387,4 +389,65 @@ def plot_comparison(
         ax.legend(loc="upper right", fontsize=7, ncols=2)
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(title)
+    return fig
+
+
+def plot_spectrum(
+    result: SimResult, *, title: str = "Spectra: motor current and tracking error"
+) -> Figure:
+    """Amplitude spectra of the motor current and of theta_h - delta, whole run and last 2 s.
+
+    A buzz that an RMS hides (a sustained oscillation of the loop) shows as a peak here; the
+    dotted line is where the run metrics start counting current content as a buzz.
+    """
+    from motosim.sim.metrics import BUZZ_CUTOFF
+
+    if not {"i_m", "theta_h", "delta"} <= set(result.names) or result.t.size < 16:
+        raise MotosimError("plot_spectrum: the result has no i_m, theta_h and delta to analyse")
+    dt = float(np.median(np.diff(result.t)))
+    fig = Figure(figsize=(9.0, 6.0), layout="constrained")
+    axes = fig.subplots(2, 1)
+    series = (
+        ("i_m", result["i_m"], "A"),
+        ("theta_h - delta", np.degrees(result["theta_h"] - result["delta"]), "deg"),
+    )
+    tail = result.t >= result.t[-1] - 2.0
+    for ax, (name, values, unit) in zip(axes, series, strict=True):
+        for part, label, style in ((slice(None), "whole run", "-"), (tail, "last 2 s", "--")):
+            x = values[part]
+            amplitude = 2.0 * np.abs(np.fft.rfft(x - np.mean(x))) / max(x.size, 1)
+            freqs = np.fft.rfftfreq(x.size, dt)
+            ax.semilogy(freqs[1:], amplitude[1:] + 1e-12, style, lw=1.0, label=label)
+        ax.axvline(BUZZ_CUTOFF, color="0.5", ls=":", lw=1.0)
+        ax.set_xlim(0.0, min(50.0, 0.5 / dt))
+        ax.set_ylabel(f"{name} amplitude [{unit}]")
+        ax.legend(loc="upper right", fontsize="small")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[-1].set_xlabel("frequency [Hz]")
+    fig.suptitle(_title(result, title))
+    return fig
+
+
+def plot_feel(feel: Any, *, speed: float) -> Figure:
+    """Bode plot of the rendered feel theta_h / tau_r against the motorcycle's delta / tau_r.
+
+    ``feel`` is a :class:`motosim.sim.fidelity.FeelResponse`.
+    """
+    fig = Figure(figsize=(9.0, 6.0), layout="constrained")
+    mag, phase = fig.subplots(2, 1, sharex=True)
+    curves = (
+        (feel.model, "motorcycle model delta / tau_r", {"color": "k", "lw": 1.5}),
+        (feel.steer, "virtual motorcycle in the run", {"color": "tab:blue", "ls": "--"}),
+        (feel.rendered, "handlebar theta_h / tau_r (rendered)", {"color": "tab:red"}),
+    )
+    for values, label, style in curves:
+        mag.semilogx(feel.frequency, 20 * np.log10(np.abs(values)), label=label, **style)
+        phase.semilogx(feel.frequency, np.degrees(np.angle(values)), **style)
+    mag.set_ylabel("magnitude [dB rad/(N m)]")
+    phase.set_ylabel("phase [deg]")
+    phase.set_xlabel("frequency [Hz]")
+    mag.legend(loc="lower left", fontsize="small")
+    for ax in (mag, phase):
+        ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(f"Rendered steering feel at {speed:g} m/s")
     return fig

@@ -23,6 +23,7 @@ from motosim.plotting.closed_loop import (
     plot_motor_torque,
     plot_motorcycle,
     plot_rate,
+    plot_spectrum,
     plot_torque,
     plot_tracking,
 )
@@ -51,6 +52,21 @@ _METRICS: dict[str, _Metric] = {
     ),
     "max_abs_phi": _Metric("max |phi| (roll)", "rad", 180.0 / math.pi, "deg"),
     "max_abs_e_y": _Metric("max |e_y| (lateral path error)", "m", 1.0, "m"),
+    "peak_steer": _Metric("peak |delta| (steer angle)", "rad", 180.0 / math.pi, "deg"),
+    "tracking_rms_fraction": _Metric("RMS of theta_h - delta / peak steer", "", 100.0, "%"),
+    "tracking_peak_fraction": _Metric("max |theta_h - delta| / peak steer", "", 100.0, "%"),
+    "peak_rider_torque": _Metric("peak |tau_r|", "N*m", 1.0, "N m"),
+    "estimate_rms_fraction": _Metric("RMS of tau_r_hat - tau_r / peak |tau_r|", "", 100.0, "%"),
+    "stick_share": _Metric("time with the handlebar sticking", "", 100.0, "%"),
+    "rms_tau_r_error_moving": _Metric("RMS of tau_r_hat - tau_r outside stick", "N*m", 1.0, "N m"),
+    "buzz_current_p2p": _Metric("current above 3 Hz, last 2 s, peak to peak", "A", 1.0, "A"),
+    "buzz_frequency": _Metric("its strongest frequency", "Hz", 1.0, "Hz"),
+    "saturated_share": _Metric("time at the current limit", "", 100.0, "%"),
+}
+_FLAGS = {
+    "flag_oscillation": "sustained oscillation: the motor current buzzes above 3 Hz",
+    "flag_saturation": "the motor current was at its limit more than half the time",
+    "flag_fall": "the motorcycle fell (roll beyond 45 deg)",
 }
 
 
@@ -89,6 +105,11 @@ _FIGURES: tuple[tuple[str, Callable[[SimResult], Any]], ...] = (
     ("Handlebar rate and the differentiator's estimate (Fig. 13 right, Fig. 17)", plot_rate),
     ("Estimated rider torque and motor torque N k_t i_m (Fig. 18)", plot_motor_torque),
     ("Virtual motorcycle: path, roll, speed, path error", plot_motorcycle),
+    (
+        "Spectra of the motor current and of theta_h - delta: a peak above the dotted line is a "
+        "buzz the rider feels",
+        plot_spectrum,
+    ),
 )
 
 
@@ -206,11 +227,19 @@ def build_report(folder: str | Path) -> Path:
         else '<span class="status interrupted">interrupted: partial result</span>'
     )
     metric_rows, note = _metric_rows(result)
+    values = {**metrics(result), **result.summary}
+    raised = [text for key, text in _FLAGS.items() if values.get(key)]
+    flags = (
+        "".join(f'<p class="status interrupted">warning: {_esc(text)}</p>' for text in raised)
+        if raised
+        else '<p class="note">No flag: no buzz, no saturation, no fall.</p>'
+    )
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body>",
         f"<h1>{_esc(title)}</h1><p>{status}</p>",
+        flags,
         "<h2>Run</h2>",
         _table(("item", "value"), list(run_rows)),
         "<h2>Metrics</h2>",

@@ -49,6 +49,9 @@ class CompiledStack:
         From :func:`motosim.sim.build_stack`.
     force : ndarray, optional
         Longitudinal force of eq. (2) for each period [N] (the last one held); 0 by default.
+    side_force : ndarray, optional
+        Side force on the motorcycle (a side wind, to the right) for each period [N] (the
+        last one held); 0 by default.
 
     Notes
     -----
@@ -58,19 +61,19 @@ class CompiledStack:
 
     names = STACK_SIGNALS
 
-    def __init__(self, model: StackModel, *, force: Array | None = None) -> None:
+    def __init__(
+        self, model: StackModel, *, force: Array | None = None, side_force: Array | None = None
+    ) -> None:
         self.model = model
         self.data = new_data(model)
-        f = np.zeros(1) if force is None else np.asarray(force, dtype=float)
-        if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)):
-            raise MotosimError("force: expected a non-empty 1-D array of finite values [N]")
-        self._force = f
+        self._force = _series(force, "force")
+        self._side = _series(side_force, "side_force")
         self._k = 0
         self._last = 0.0
         self._row = np.zeros(len(STACK_SIGNALS))
         scratch = new_data(model)  # warm-up: compile (or load) every kernel now
         reset(model, scratch, 0.0, 0.0)
-        step(model, scratch, 0.0, 0.0, 0.0, 0.0)
+        step(model, scratch, 0.0, 0.0, 0.0, 0.0, 0.0)
 
     def reset(self, theta: float, current: float) -> None:
         """Start the stack at the measured angle [rad] and current [A]."""
@@ -80,9 +83,11 @@ class CompiledStack:
 
     def step(self, theta_meas: float, i_meas: float) -> float:
         """One period of the compiled stack: the motor current command [A]."""
-        force = self._force
-        f = force[self._k] if self._k < force.size else force[-1]
-        command: float = step(self.model, self.data, theta_meas, i_meas - self._last, 0.0, f)
+        k = self._k
+        force, side = self._force, self._side
+        f = force[k] if k < force.size else force[-1]
+        fy = side[k] if k < side.size else side[-1]
+        command: float = step(self.model, self.data, theta_meas, i_meas - self._last, 0.0, f, fy)
         self._last = command
         self._k += 1
         held, z, row = self.data.held, self.data.motorcycle, self._row
@@ -95,6 +100,13 @@ class CompiledStack:
     def row(self) -> Array:
         """The values of :data:`STACK_SIGNALS` after the last step."""
         return self._row
+
+
+def _series(values: Array | None, name: str) -> Array:
+    out = np.zeros(1) if values is None else np.asarray(values, dtype=float)
+    if out.ndim != 1 or out.size == 0 or not np.all(np.isfinite(out)):
+        raise MotosimError(f"{name}: expected a non-empty 1-D array of finite values [N]")
+    return out
 
 
 def result_block(rows: Array, names: tuple[str, ...], torque_per_amp: float) -> Array:

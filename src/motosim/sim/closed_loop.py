@@ -11,6 +11,7 @@ held. The design happens once, before the run: :func:`build_stack` and :func:`bu
 
 import dataclasses
 import math
+import zlib
 from collections import namedtuple
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -56,8 +57,26 @@ SIGNALS = RECORDED
 """Recorded signals, in column order: :data:`motosim.signals.RECORDED`."""
 
 _Columns = namedtuple("_Columns", RECORDED)  # type: ignore[misc]
-_COLUMNS = _Columns(*range(len(RECORDED)))
-"""Column of each recorded signal by name, passed to the compiled loop (``col.tau_r``)."""
+_COL: Any = _Columns(*range(len(RECORDED)))
+"""Column of each recorded signal by name (``_COL.tau_r``): compile-time constants of the
+compiled loop, taken from :data:`motosim.signals.RECORDED` when it is compiled."""
+_LAYOUT_KEY = zlib.crc32(" ".join(RECORDED).encode())
+"""Fingerprint of the column layout, frozen into the compiled code beside the columns."""
+
+
+@njit(cache=True)
+def _compiled_layout_key() -> int:
+    return _LAYOUT_KEY
+
+
+def _ensure_current_layout() -> None:
+    """Recompile the loop if its cached machine code predates a change of the signal table.
+
+    numba's cache follows this file, not :mod:`motosim.signals`, where the columns come from.
+    """
+    if _compiled_layout_key() != _LAYOUT_KEY:
+        _compiled_layout_key.recompile()
+        _run_chunk.recompile()
 
 
 @dataclass(frozen=True, slots=True)
@@ -157,6 +176,10 @@ def build_stack(inputs: RunInputs) -> StackModel:
         max_current=sc.controller.max_current,
         speed=sc.motorcycle.speed,
         true_torque=sc.motorcycle.input == "true",
+        handlebar=inputs.nominal_handlebar,
+        rider_feedforward="rider" in (sc.controller.feedforward or ()),
+        reference_feedforward="reference" in (sc.controller.feedforward or ()),
+        side_force_height=sc.motorcycle.side_wind_height,
     )
 
 
@@ -175,6 +198,8 @@ class RigModel(NamedTuple):
         The rider is the path-following virtual rider (else ``rider_profile``).
     rider_profile : ndarray
         Rider torque at every plant sub-step [N*m].
+    rider_probe : ndarray, shape (n,)
+        Torque added to the virtual rider's each period (a chirp to measure the feel) [N*m].
     path : ndarray, shape (4, m)
         The virtual rider's path: x, y [m], heading [rad], curvature [1/m].
     path_ds : float
@@ -185,6 +210,8 @@ class RigModel(NamedTuple):
         [preview [s], largest torque [N*m]].
     force : ndarray, shape (n,)
         Longitudinal force of eq. (2) each period [N].
+    side_force : ndarray, shape (n,)
+        Side force on the motorcycle (side wind, to the right) each period [N].
     current_noise : ndarray, shape (n,)
         Current-sensor error each period [A].
     """
@@ -194,6 +221,7 @@ class RigModel(NamedTuple):
     quantum: float
     virtual_rider: bool
     rider_profile: Array
+    rider_probe: Array
     path: Array
     path_ds: float
     rider_speeds: Array
@@ -202,6 +230,7 @@ class RigModel(NamedTuple):
     rider_tau_ss: Array
     rider_limits: Array
     force: Array
+    side_force: Array
     current_noise: Array
 
 
@@ -253,6 +282,7 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
         quantum=2 * math.pi / 2**bits if bits else 0.0,
         virtual_rider=rider.kind == "virtual",
         rider_profile=profile,
+        rider_probe=rider.probe.sample(t, inputs.tables) if rider.probe else np.zeros(n),
         path=path_arr,
         path_ds=float(path_ds),
         rider_speeds=gains.speeds,
@@ -261,6 +291,7 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
         rider_tau_ss=gains.tau_ss,
         rider_limits=np.array([gains.preview, gains.max_torque]),
         force=force,
+        side_force=mc.side_wind.sample(t, inputs.tables),
         current_noise=rng.normal(0.0, noise, n) if noise else np.zeros(n),
     )
 
@@ -269,7 +300,6 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
 def _run_chunk(
     k0: int,
     out: Array,
-    col: Any,
     stack: StackModel,
     data: StackData,
     rig: RigModel,
@@ -294,25 +324,39 @@ def _run_chunk(
                 rig.rider_limits[0], rig.rider_limits[1],
             )  # fmt: skip
             world.path_index[0] = idx
+            tau_rider += rig.rider_probe[k]
         else:
             tau_rider = rig.rider_profile[k * n_sub]
         o = out[row]
-        o[col.t] = k * h
-        o[col.tau_r] = tau_rider
-        o[col.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
-        o[col.theta_h] = hb[0]
-        o[col.theta_h_dot] = hb[1]
-        o[col.v_y], o[col.psi_dot], o[col.phi_dot], o[col.delta_dot] = z[0], z[1], z[2], z[3]
-        o[col.phi], o[col.delta], o[col.F_yr], o[col.F_yf] = z[4], z[5], z[6], z[7]
-        o[col.v_x], o[col.psi], o[col.x], o[col.y] = z[8], z[9], z[10], z[11]
-        o[col.e_y] = e_y
+        o[_COL.t] = k * h
+        o[_COL.tau_r] = tau_rider
+        o[_COL.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
+        o[_COL.theta_h] = hb[0]
+        o[_COL.theta_h_dot] = hb[1]
+        o[_COL.v_y], o[_COL.psi_dot], o[_COL.phi_dot], o[_COL.delta_dot] = (
+            z[0],
+            z[1],
+            z[2],
+            z[3],
+        )
+        o[_COL.phi], o[_COL.delta], o[_COL.F_yr], o[_COL.F_yf] = (
+            z[4],
+            z[5],
+            z[6],
+            z[7],
+        )
+        o[_COL.v_x], o[_COL.psi], o[_COL.x], o[_COL.y] = z[8], z[9], z[10], z[11]
+        o[_COL.e_y] = e_y
         # the stack: command, estimate, virtual motorcycle
-        i_cmd = step(stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k])
-        o[col.theta_h_meas] = data.held[0]
-        o[col.theta_h_dot_hat] = data.held[2]
-        o[col.tau_r_hat] = data.held[3]
-        o[col.i_m] = i_cmd
-        o[col.tau_m] = nkt * i_cmd
+        i_cmd = step(
+            stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k],
+            rig.side_force[k],
+        )  # fmt: skip
+        o[_COL.theta_h_meas] = data.held[0]
+        o[_COL.theta_h_dot_hat] = data.held[2]
+        o[_COL.tau_r_hat] = data.held[3]
+        o[_COL.i_m] = i_cmd
+        o[_COL.tau_m] = nkt * i_cmd
         # the true handlebar over the period, the current held: one exact step while the
         # rider torque is constant over it, else one per plant sub-step
         steady = rig.virtual_rider
@@ -393,6 +437,7 @@ def simulate(
     sc = inputs.scenario
     model = build_stack(inputs) if stack is None else stack
     rig = build_rig(inputs, rng=rng)
+    _ensure_current_layout()
     data = new_data(model)
     world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
     reset(model, data, 0.0, 0.0)
@@ -401,7 +446,7 @@ def simulate(
     blocks = []
     for k0 in range(0, n, rows):
         out = np.full((min(rows, n - k0), len(SIGNALS)), np.nan)
-        _run_chunk(k0, out, _COLUMNS, model, data, rig, world)
+        _run_chunk(k0, out, model, data, rig, world)
         _check_block(out)
         if on_block is not None:
             on_block(out)

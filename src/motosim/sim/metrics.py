@@ -1,27 +1,97 @@
-"""Summary numbers of a closed-loop run, computed from its recorded signals.
+"""Summary numbers and flags of a closed-loop run, computed from its recorded signals.
 
 Free of plotting and of files: the simulator, the report, the real-time loop and campaigns
-all summarise runs with :func:`run_metrics`.
+all summarise runs with :func:`run_metrics`, and :func:`failure` says whether a run that
+completed numerically still failed (the motorcycle fell, the motor saturated most of the
+time). The fidelity numbers are those a rider feels: how far the handlebar is from the
+virtual steer angle, how wrong the torque estimate driving the motorcycle is, and whether the
+motor buzzes once the rider holds still.
 """
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["run_metrics"]
+from motosim.sim.rider import SPEED_RANGE
+
+__all__ = [
+    "BUZZ_CUTOFF",
+    "BUZZ_LIMIT",
+    "FALL_ROLL",
+    "QUIET_TORQUE",
+    "STICK_RATE",
+    "failure",
+    "highpass",
+    "run_metrics",
+    "warnings",
+]
 
 Array = NDArray[np.float64]
 
+FALL_ROLL = math.radians(45.0)
+"""Roll beyond which the motorcycle is taken as fallen, and the linear model invalid [rad]."""
+STICK_RATE = 0.05
+"""Handlebar rate below which it is taken as sticking (dry friction undetermined) [rad/s]."""
+BUZZ_CUTOFF = 3.0
+"""Frequency above which current content counts as a buzz, not steering [Hz]."""
+BUZZ_LIMIT = 0.3
+"""Peak-to-peak of the current's content above :data:`BUZZ_CUTOFF` that flags a buzz [A]."""
+QUIET_TORQUE = 1.0
+"""Rider torque [N*m] within which the rider counts as holding still (buzz judged then)."""
+_SATURATED_SHARE = 0.5  # a run saturated this share of the time has failed
+_TAIL = 2.0  # the last seconds examined for a sustained oscillation [s]
+
 
 def _rms(values: Array) -> float:
-    return float(np.sqrt(np.mean(np.square(values))))
+    return float(np.sqrt(np.mean(np.square(values)))) if values.size else 0.0
+
+
+def _fraction(value: float, scale: float) -> float:
+    """value / scale; NaN (undefined, null in JSON) when the scale is 0."""
+    return value / scale if scale > 0 else math.nan
+
+
+def highpass(t: Array, values: Array, cutoff: float) -> Array:
+    """``values`` without their content below ``cutoff`` [Hz] (FFT, mean removed).
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Uniform time [s].
+    values : ndarray, shape (n,)
+        The signal.
+    cutoff : float
+        Frequency [Hz] below which the content is removed.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Examples
+    --------
+    >>> t = np.arange(0.0, 2.0, 1e-3)
+    >>> x = np.sin(2 * np.pi * 0.5 * t) + 0.1 * np.sin(2 * np.pi * 10 * t)
+    >>> round(float(np.ptp(highpass(t, x, 3.0))), 2)
+    0.2
+    """
+    if values.size < 4:
+        return values - np.mean(values) if values.size else values
+    spectrum = np.fft.rfft(values - np.mean(values))
+    freqs = np.fft.rfftfreq(values.size, float(t[1] - t[0]))
+    spectrum[freqs < cutoff] = 0.0
+    return np.fft.irfft(spectrum, values.size)
 
 
 def run_metrics(
-    t: Array, signal: Callable[[str], Array | None], *, complete: bool
+    t: Array,
+    signal: Callable[[str], Array | None],
+    *,
+    complete: bool,
+    max_current: float | None = None,
 ) -> dict[str, float]:
-    """Summary numbers of a run, in SI units.
+    """Summary numbers and flags of a run, in SI units.
 
     Parameters
     ----------
@@ -32,22 +102,41 @@ def run_metrics(
         the run did not record it.
     complete : bool
         Whether the run reached its end.
+    max_current : float, optional
+        The controller's current limit [A], for the saturation share.
 
     Returns
     -------
     dict of str to float
-        Always ``duration`` [s] (last minus first time), ``samples`` and ``complete`` (1.0 or
-        0.0); when the run has at least one instant and the signals they need:
-        ``rms_tau_r_error`` [N*m] (RMS of ``tau_r_hat - tau_r``), ``rms_tracking_error`` [rad]
-        (RMS of ``theta_h - delta``), ``rms_rate_error`` [rad/s] (RMS of
-        ``theta_h_dot_hat - theta_h_dot``), ``max_abs_phi`` [rad], ``max_abs_e_y`` [m].
+        Always ``duration`` [s], ``samples`` and ``complete`` (1.0 or 0.0); with the
+        signals they need:
+
+        - ``rms_tau_r_error`` [N*m], ``rms_tracking_error`` [rad], ``rms_rate_error``
+          [rad/s], ``max_abs_phi`` [rad], ``max_abs_e_y`` [m];
+        - fidelity: ``peak_steer`` [rad] and ``tracking_rms_fraction``,
+          ``tracking_peak_fraction`` (of ``theta_h - delta`` against the peak steer angle);
+          ``peak_rider_torque`` [N*m], ``estimate_rms_fraction`` (of ``tau_r_hat - tau_r``
+          against it), ``stick_share`` (time with |theta_h'| < :data:`STICK_RATE`) and
+          ``rms_tau_r_error_moving`` [N*m] outside those stick phases, where the dry
+          friction is determined;
+        - ``buzz_current_p2p`` [A]: peak-to-peak of the current's content above
+          :data:`BUZZ_CUTOFF` over the last two seconds, and ``buzz_frequency`` [Hz], its
+          strongest frequency;
+        - ``saturated_share`` (time at the current limit, with ``max_current``);
+        - flags 1.0 or 0.0: ``flag_oscillation`` (buzz above :data:`BUZZ_LIMIT` while the
+          rider's torque stays within :data:`QUIET_TORQUE` over those two seconds),
+          ``flag_saturation`` (saturated more than half the time), ``flag_fall`` (roll beyond
+          :data:`FALL_ROLL`), ``flag_out_of_range`` (the speed left 3-60 m/s, where the
+          virtual rider is scheduled and the linear model is meant for; below 1 m/s the
+          longitudinal equation holds the speed);
+        - ``min_speed``, ``max_speed`` [m/s].
 
     Examples
     --------
     >>> cols = {"phi": np.array([0.2, 0.0])}
     >>> m = run_metrics(np.array([0.0, 1.0]), cols.get, complete=False)
-    >>> m["duration"], m["complete"], round(m["max_abs_phi"], 3)
-    (1.0, 0.0, 0.2)
+    >>> m["duration"], m["complete"], round(m["max_abs_phi"], 3), m["flag_fall"]
+    (1.0, 0.0, 0.2, 0.0)
     """
     out = {
         "duration": float(t[-1] - t[0]) if t.size else 0.0,
@@ -69,4 +158,78 @@ def run_metrics(
         values = signal(name)
         if values is not None:
             out[key] = float(np.max(np.abs(values)))
+    out["flag_fall"] = float(out.get("max_abs_phi", 0.0) > FALL_ROLL)
+    speed = signal("v_x")
+    if speed is not None:
+        out["min_speed"], out["max_speed"] = float(np.min(speed)), float(np.max(speed))
+        low, high = SPEED_RANGE
+        out["flag_out_of_range"] = float(out["min_speed"] < low or out["max_speed"] > high)
+
+    theta, delta = signal("theta_h"), signal("delta")
+    if theta is not None and delta is not None:
+        peak = float(np.max(np.abs(delta)))
+        error = theta - delta
+        out["peak_steer"] = peak
+        out["tracking_rms_fraction"] = _fraction(_rms(error), peak)
+        out["tracking_peak_fraction"] = _fraction(float(np.max(np.abs(error))), peak)
+    tau, tau_hat, rate = signal("tau_r"), signal("tau_r_hat"), signal("theta_h_dot")
+    if tau is not None and tau_hat is not None:
+        peak_tau = float(np.max(np.abs(tau)))
+        out["peak_rider_torque"] = peak_tau
+        error = tau_hat - tau
+        out["estimate_rms_fraction"] = _fraction(_rms(error), peak_tau)
+        if rate is not None:
+            moving = np.abs(rate) >= STICK_RATE
+            out["stick_share"] = float(1.0 - np.mean(moving))
+            out["rms_tau_r_error_moving"] = _rms(error[moving])
+    current = signal("i_m")
+    if current is not None and t.size > 8:
+        tail = t >= t[-1] - _TAIL
+        buzz = highpass(t[tail], current[tail], BUZZ_CUTOFF)
+        out["buzz_current_p2p"] = float(np.ptp(buzz))
+        spectrum = np.abs(np.fft.rfft(buzz))
+        freqs = np.fft.rfftfreq(buzz.size, float(t[1] - t[0]))
+        out["buzz_frequency"] = float(freqs[int(np.argmax(spectrum))])
+        # a buzz is current the rider does not ask for: judged while the rider holds still
+        quiet = tau is None or float(np.max(np.abs(tau[tail]))) <= QUIET_TORQUE
+        out["flag_oscillation"] = float(quiet and out["buzz_current_p2p"] > BUZZ_LIMIT)
+        if max_current is not None:
+            share = float(np.mean(np.abs(current) >= 0.999 * max_current))
+            out["saturated_share"] = share
+            out["flag_saturation"] = float(share > _SATURATED_SHARE)
+    return out
+
+
+def failure(metrics: dict[str, float]) -> str | None:
+    """Why a run that completed numerically failed, in one line, or None.
+
+    A run fails when the motorcycle fell (roll beyond :data:`FALL_ROLL`, where the linear
+    model no longer holds) or the motor was saturated more than half the time.
+    """
+    if metrics.get("flag_fall"):
+        return (
+            f"the motorcycle fell: roll reached {math.degrees(metrics['max_abs_phi']):.0f} deg "
+            f"(beyond {math.degrees(FALL_ROLL):.0f} deg the linear model does not hold)"
+        )
+    if metrics.get("flag_saturation"):
+        return (
+            f"the motor current was at its limit {100 * metrics['saturated_share']:.0f} % of "
+            "the time"
+        )
+    return None
+
+
+def warnings(metrics: dict[str, float]) -> list[str]:
+    """One line for each flag that does not fail a run but that a user must know of."""
+    out = []
+    if metrics.get("flag_oscillation"):
+        out.append(
+            f"the motor current buzzes: {metrics['buzz_current_p2p']:.2g} A peak to peak at "
+            f"{metrics['buzz_frequency']:.3g} Hz while the rider holds still"
+        )
+    if metrics.get("flag_out_of_range"):
+        out.append(
+            f"the speed went from {metrics['min_speed']:.3g} to {metrics['max_speed']:.3g} "
+            "m/s, outside 3-60 m/s where the rider's gains and the model are meant for"
+        )
     return out

@@ -25,9 +25,12 @@ from motosim.errors import MotosimError
 from motosim.model import sharp as sharp_model
 from motosim.params.sharp import SharpParameters
 
-__all__ = ["RiderGains", "design_rider", "rider_torque"]
+__all__ = ["SPEED_RANGE", "RiderGains", "design_rider", "rider_torque"]
 
 Array = NDArray[np.float64]
+
+SPEED_RANGE = (3.0, 60.0)
+"""Speeds the virtual rider's gains are scheduled over by default [m/s]."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -143,7 +146,11 @@ def design_rider(
     MotosimError
         If a setting is out of range.
     """
-    grid = np.arange(3.0, 60.01, 1.0) if speeds is None else np.asarray(speeds, dtype=float)
+    grid = (
+        np.arange(SPEED_RANGE[0], SPEED_RANGE[1] + 0.01, 1.0)
+        if speeds is None
+        else np.asarray(speeds, dtype=float)
+    )
     for name, value in (
         ("lateral_tolerance", lateral_tolerance),
         ("course_tolerance", course_tolerance),

@@ -15,16 +15,20 @@ so that an error is one line naming the key, the value and what was expected. Th
                    (control a multiple of measurement, plant a multiple of control)
     [measurement]  encoder_bits = 14 (0: exact angle), current_noise = 0 [A]
     [motorcycle]   params = "sharp1971", speed = 20 [m/s], input = "estimate" | "true",
-                   drive_torque, brake_torque [N*m], wind_force [N]: a number or a profile
+                   drive_torque, brake_torque [N*m], wind_force [N] (longitudinal),
+                   side_wind [N] (lateral, to the right): a number or a profile;
+                   side_wind_height = 1 [m] (where the side wind acts)
     [rider]        kind = "torque" with profile = {...}, or kind = "virtual" with path = {...}
-                   and lateral_tolerance, course_tolerance, torque_scale, preview, max_torque
+                   and lateral_tolerance, course_tolerance, torque_scale, preview, max_torque,
+                   probe = {...} (a torque profile added to the virtual rider's, e.g. a chirp)
     [handlebar]    true = "simacom_handlebar", nominal = (true), inertia_factor = 1,
                    damping_factor = 1, friction = true
     [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman",
                    friction_compensation = true, lipschitz = 300
     [controller]   kind = "ours" | "paper" | "none", design = "DESIGN.toml" (optional),
                    bandwidth = 10 [Hz], order = 1, discretization = "zoh" | "tustin",
-                   max_current = 30 [A]
+                   max_current = 30 [A], feedforward = ["rider", "reference"] for ours,
+                   [] for the paper's (the terms of :func:`motosim.sim.stack.step`)
 
 Profiles (rider torque, drive, brake, wind) are tables with ``kind``: ``constant`` (value),
 ``steps`` (times, values: the value after each time), ``square`` (low, high, period, start),
@@ -47,10 +51,13 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.estimation.registry import ESTIMATORS
+from motosim.params.checks import check_number
 from motosim.sim import paths
+from motosim.sim.rider import SPEED_RANGE as RIDER_SPEEDS
 from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "FEEDFORWARD",
     "PATHS",
     "PROFILES",
     "AvoidancePath",
@@ -83,13 +90,8 @@ Array = NDArray[np.float64]
 
 def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
            low_open: bool = False, unit: str = "") -> None:  # fmt: skip
-    """Refuse a number outside [low, high] (or (low, high]) naming it."""
-    ok = math.isfinite(value) and value <= high and (value > low if low_open else value >= low)
-    if not ok:
-        bound = f"{'>' if low_open else '>='} {low:g}" if low > -math.inf else ""
-        bound += (" and " if bound else "") + (f"<= {high:g}" if high < math.inf else "")
-        suffix = f" [{unit}]" if unit else ""
-        raise MotosimError(f"{name} = {value!r}; expected a finite number {bound}{suffix}".strip())
+    """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error)."""
+    check_number(value, where=name, lower=low, upper=high, lower_closed=not low_open, unit=unit)
 
 
 # --- profiles: a signal of time ----------------------------------------------------------
@@ -373,9 +375,12 @@ class Motorcycle:
     drive_torque: Profile = ConstantProfile(0.0)
     brake_torque: Profile = ConstantProfile(0.0)
     wind_force: Profile = ConstantProfile(0.0)
+    side_wind: Profile = ConstantProfile(0.0)
+    side_wind_height: float = 1.0
 
     def __post_init__(self) -> None:
         _check("speed", self.speed, low=1.0, high=100.0, unit="m/s")
+        _check("side_wind_height", self.side_wind_height, low=0.0, high=3.0, unit="m")
 
 
 @dataclass(frozen=True, slots=True)
@@ -385,6 +390,7 @@ class Rider:
     kind: Literal["torque", "virtual"] = "torque"
     profile: Profile | None = None
     path: PathSpec | None = None
+    probe: Profile | None = None
     lateral_tolerance: float = 0.3
     course_tolerance: float = 0.05
     torque_scale: float = 10.0
@@ -398,6 +404,8 @@ class Rider:
             raise MotosimError('path is for kind = "virtual"; a torque rider has a profile')
         if self.kind == "virtual" and self.profile is not None:
             raise MotosimError('profile is for kind = "torque"; a virtual rider has a path')
+        if self.kind == "torque" and self.probe is not None:
+            raise MotosimError('probe is for kind = "virtual"; give a torque rider a profile')
         if self.kind == "virtual" and self.path is None:
             object.__setattr__(self, "path", StraightPath())
         _check("lateral_tolerance", self.lateral_tolerance, low=0.0, low_open=True, unit="m")
@@ -441,6 +449,10 @@ class Estimator:
         _check("lipschitz", self.lipschitz, low=0.0, low_open=True, unit="rad/s^2")
 
 
+FEEDFORWARD = ("rider", "reference")
+"""Feedforward terms of the stack's command (:func:`motosim.sim.stack.step`)."""
+
+
 @dataclass(frozen=True, slots=True)
 class Controller:
     """The torque-feedback controller."""
@@ -451,8 +463,18 @@ class Controller:
     order: int = 1
     discretization: Literal["zoh", "tustin"] = "zoh"
     max_current: float = 30.0
+    feedforward: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
+        if self.feedforward is None:
+            default = FEEDFORWARD if self.kind == "ours" else ()
+            object.__setattr__(self, "feedforward", default)
+        assert self.feedforward is not None
+        unknown = [f for f in self.feedforward if f not in FEEDFORWARD]
+        if unknown:
+            raise MotosimError(
+                f"feedforward has {unknown[0]!r}; expected some of {', '.join(FEEDFORWARD)}"
+            )
         _check("bandwidth", self.bandwidth, low=0.0, low_open=True, unit="Hz")
         if self.order < 0:
             raise MotosimError(f"order = {self.order}; expected an integer >= 0")
@@ -478,6 +500,12 @@ class Scenario:
 
     def __post_init__(self) -> None:
         _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
+        low, high = RIDER_SPEEDS
+        if self.rider.kind == "virtual" and not low <= self.motorcycle.speed <= high:
+            raise MotosimError(
+                f"[motorcycle] speed = {self.motorcycle.speed!r}; expected {low:g} to "
+                f"{high:g} m/s with the virtual rider (its gains are scheduled over these)"
+            )
         if self.seed < 0:
             raise MotosimError(f"seed = {self.seed}; expected an integer >= 0")
 
@@ -500,7 +528,7 @@ def _describe(tp: Any) -> str:
     if get_origin(tp) is Literal:
         return "one of " + ", ".join(repr(a) for a in get_args(tp))
     if get_origin(tp) is tuple:
-        return "a list of numbers"
+        return "a list of numbers" if get_args(tp)[0] is float else "a list of strings"
     return "a table"
 
 
@@ -540,9 +568,10 @@ def _value(tp: Any, value: Any, key: str, where: str) -> Any:
             raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
         return value
     if origin is tuple:
-        if not isinstance(value, list) or not value:
-            raise MotosimError(f"{key} = {value!r}; expected a list of numbers")
-        return tuple(_value(float, item, f"{key} entry", where) for item in value)
+        item_type = get_args(tp)[0]
+        if not isinstance(value, list) or (item_type is float and not value):
+            raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
+        return tuple(_value(item_type, item, f"{key} entry", where) for item in value)
     return _build(tp, value, f"{where}.{key}")
 
 

@@ -32,6 +32,7 @@ from motosim.estimation.kernel import EstimatorKernel
 from motosim.estimation.registry import start_kernel, step_kernel
 from motosim.model import sharp as sharp_model
 from motosim.model.sharp import bike_rk4
+from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 
 __all__ = ["StackData", "StackModel", "design_stack", "new_data", "reset", "step"]
@@ -40,6 +41,8 @@ Array = NDArray[np.float64]
 
 MOTORCYCLE_STEP = 1e-3
 """Largest RK4 step of the virtual motorcycle inside a stack period [s]."""
+FEEDFORWARD_FRICTION_WIDTH = 0.02
+"""Rate scale of the tanh in the reference feedforward's dry-friction term [rad/s]."""
 
 
 class StackModel(NamedTuple):
@@ -61,10 +64,16 @@ class StackModel(NamedTuple):
         e = theta_h - delta [rad], i [A]); order 0 with Dd = 0 when there is no feedback.
     feedback : bool
         Whether the controller commands the motor (False: Fig. 9, 0 A).
+    feedforward : ndarray, shape (7,)
+        [rider-torque cancellation gain (0 or 1), reference inverse-dynamics gain (0 or 1),
+        J_eq [kg*m^2], beta_eq [N*m*s/rad], beta_s [N*m], N k_t [N*m/A], tanh width of the
+        friction term [rad/s]] of the nominal handlebar (see :func:`step`).
     max_current : float
         Current command limit [A].
     A0, A1, Bv : ndarray
         The motorcycle's lateral matrices, A_v = A0 + v_x A1 (8x8), B_v (8,).
+    Bw : ndarray, shape (8,)
+        The side force's input (:func:`motosim.model.sharp.side_force_input`).
     motorcycle : ndarray, shape (3,)
         [m [kg], m + J_R / r_D^2 [kg], lowest speed [m/s]] of eq. (2).
     motorcycle_substeps : int
@@ -85,10 +94,12 @@ class StackModel(NamedTuple):
     Cd: Array
     Dd: Array
     feedback: bool
+    feedforward: Array
     max_current: float
     A0: Array
     A1: Array
     Bv: Array
+    Bw: Array
     motorcycle: Array
     motorcycle_substeps: int
     speed: float
@@ -141,6 +152,10 @@ def design_stack(
     max_current: float,
     speed: float,
     true_torque: bool = False,
+    handlebar: HandlebarParameters | None = None,
+    rider_feedforward: bool = False,
+    reference_feedforward: bool = False,
+    side_force_height: float = 1.0,
 ) -> StackModel:
     """Build the stack's model from its designed parts (a pure function).
 
@@ -166,6 +181,15 @@ def design_stack(
         Forward speed at the start [m/s].
     true_torque : bool
         Drive the motorcycle with the true rider torque (simulation only).
+    handlebar : HandlebarParameters, optional
+        The nominal handlebar, needed by the feedforward terms.
+    rider_feedforward : bool
+        Cancel the estimated rider torque with the motor: i += -tau_r_hat / (N k_t).
+    reference_feedforward : bool
+        Drive the handlebar along the steer angle by its inverse dynamics:
+        i += (J_eq delta'' + beta_eq delta' + beta_s sign(delta')) / (N k_t).
+    side_force_height : float
+        Height above the ground where a side force (wind) acts on the motorcycle [m].
 
     Returns
     -------
@@ -200,6 +224,16 @@ def design_stack(
             )
         K = controller if controller.is_discrete else discretize(controller, h_meas, discretization)
         Ad, Bd, Cd, Dd = K.A, K.B, K.C, K.D
+    if (rider_feedforward or reference_feedforward) and handlebar is None:
+        raise MotosimError("feedforward needs the nominal handlebar; give handlebar=")
+    on = controller is not None
+    ff = np.zeros(7)
+    if handlebar is not None:
+        ff[:] = (
+            float(on and rider_feedforward), float(on and reference_feedforward),
+            handlebar.J_eq, handlebar.beta_eq, handlebar.beta_s, handlebar.torque_per_amp,
+            FEEDFORWARD_FRICTION_WIDTH,
+        )  # fmt: skip
     h = 1.0 / control_rate
     d = derived_geometry(sharp)
     A0, A1, Bv = sharp_model.lpv_matrices(sharp)
@@ -213,10 +247,12 @@ def design_stack(
         Cd=np.ascontiguousarray(Cd),
         Dd=np.ascontiguousarray(Dd),
         feedback=controller is not None and bool(Ad.shape[0] + abs(Dd[0, 0]) > 0),
+        feedforward=ff,
         max_current=float(max_current),
         A0=A0,
         A1=A1,
         Bv=Bv,
+        Bw=sharp_model.side_force_input(sharp, height=side_force_height),
         motorcycle=np.array([d["m"], d["m_eq"], sharp_model.MIN_SPEED]),
         motorcycle_substeps=max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9)),
         speed=float(speed),
@@ -262,10 +298,16 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
 
 @njit(cache=True, inline="always")
 def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
-    """i_m = K (theta_h - delta), positive feedback (eq. (24)), saturated; advances K's state."""
+    """The motor current for this sample, saturated; advances the controller's state.
+
+    Feedback i = K (theta_h - delta), positive feedback (eq. (24)), plus the feedforward
+    terms switched on in ``model.feedforward``: the estimated rider torque cancelled, and the
+    nominal handlebar's inverse dynamics along the steer angle delta of the motorcycle.
+    """
     if not model.feedback:
         return 0.0
-    e = theta_meas - data.motorcycle[5]
+    z = data.motorcycle
+    e = theta_meas - z[5]
     x, tmp = data.controller, data.controller_work
     n = x.size
     u = model.Dd[0, 0] * e
@@ -278,6 +320,18 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
         tmp[r] = acc
     for r in range(n):
         x[r] = tmp[r]
+    ff = model.feedforward
+    torque = 0.0
+    if ff[0] > 0.0:  # cancel what the rider is estimated to apply
+        torque -= data.held[3]
+    if ff[1] > 0.0:  # J delta'' + beta delta' + beta_s sign(delta'), delta'' from the model
+        v = z[8]
+        dd = model.Bv[3] * data.held[3]
+        for c in range(8):
+            dd += (model.A0[3, c] + v * model.A1[3, c]) * z[c]
+        torque += ff[2] * dd + ff[3] * z[3] + ff[4] * math.tanh(z[3] / ff[6])
+    if ff[0] > 0.0 or ff[1] > 0.0:
+        u += torque / ff[5]
     return float(min(max(u, -model.max_current), model.max_current))
 
 
@@ -289,6 +343,7 @@ def step(
     current_error: float,
     rider_torque: float,
     force: float,
+    side_force: float,
 ) -> float:
     """Advance the stack by one period; return the motor current command [A].
 
@@ -313,6 +368,8 @@ def step(
         True rider torque [N*m], used only by a ``model.true_torque`` reference run.
     force : float
         Longitudinal force of eq. (2), (tau_d - tau_b) / r_D + F_wx [N].
+    side_force : float
+        Side force on the motorcycle (a side wind), to the right [N].
 
     Returns
     -------
@@ -338,6 +395,6 @@ def step(
     mc = model.motorcycle
     h = model.dt / model.motorcycle_substeps
     for _ in range(model.motorcycle_substeps):
-        bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, force,
-                 mc[0], mc[1], mc[2], h)  # fmt: skip
+        bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, model.Bw,
+                 side_force, force, mc[0], mc[1], mc[2], h)  # fmt: skip
     return float(held[1])

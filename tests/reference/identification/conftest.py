@@ -40,7 +40,7 @@ def current_driven_log(
     amplitude: float = 2.0,
     held: bool = True,
 ) -> TimeSeries:
-    """A 0.1-2 Hz chirp current [A], held between samples or continuous, sampled.
+    """A 0.1-2 Hz chirp current [A], held between samples (i_cmd) or continuous (i_m).
 
     Simulated by simulate_handlebar at 10 kHz, then sampled and quantised like the encoder
     of the default measurement model (no current noise).
@@ -57,7 +57,13 @@ def current_driven_log(
         current = amplitude * np.cos(2 * np.pi * (0.1 * t + (2.0 - 0.1) * t**2 / (2 * duration)))
     truth = simulate_handlebar(hb, t, current=current)
     model = MeasurementModel(sample_rate=sample_rate, current_noise=0.0)
-    return measure(truth, model, np.random.default_rng(0))
+    log = measure(truth, model, np.random.default_rng(0))
+    # the log schema: a held set-point is i_cmd, a measured continuous current i_m
+    return TimeSeries(
+        log.t,
+        np.column_stack([log["theta_h"], log["i_m"]]),
+        ("theta_h", "i_cmd" if held else "i_m"),
+    )
 
 
 @pytest.fixture(scope="session")

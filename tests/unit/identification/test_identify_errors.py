@@ -9,9 +9,11 @@ from motosim.errors import MotosimError
 from motosim.identification import (
     MeasurementModel,
     chirp_voltage,
+    drive_from_columns,
     excitation_run,
     identify,
     measure,
+    plan_excitation,
     square_voltage,
 )
 from motosim.params import load_parameters
@@ -32,7 +34,7 @@ def _with(log: TimeSeries, t=None, data=None, names=None) -> TimeSeries:
 
 def _raises(log: TimeSeries, match: str) -> None:
     with pytest.raises(MotosimError, match=match) as info:
-        identify(log, torque_per_amp=3.0)
+        identify(log, torque_per_amp=3.0, drive="current_sampled")
     assert "\n" not in str(info.value)
 
 
@@ -125,3 +127,48 @@ def test_excitation_run_columns():
     assert run.t.size == 201
     with pytest.raises(MotosimError, match="signal"):
         excitation_run(hb, "noise", 2.0, MeasurementModel(), np.random.default_rng(2))  # type: ignore[arg-type]
+
+
+def test_plan_excitation_limits():
+    # 2 pi f1 J/beta = 15 % where the sample rate allows; a tenth of the rate otherwise
+    plan = plan_excitation(
+        J_eq=0.06, beta_eq=9.0, beta_s=1.0, torque_per_amp=1.0, sample_rate=100.0, max_current=5.0
+    )
+    assert plan.inertia_share == pytest.approx(0.15)
+    assert plan.amplitude == pytest.approx(4.0) and plan.notes == ()
+    fast = plan_excitation(
+        J_eq=0.015, beta_eq=15.0, beta_s=1.0, torque_per_amp=1.0, sample_rate=100.0, max_current=5.0
+    )
+    assert fast.f1 == pytest.approx(10.0) and "sample at" in fast.notes[0]
+    with pytest.raises(MotosimError, match="2 beta_s"):
+        plan_excitation(
+            J_eq=0.06, beta_eq=9.0, beta_s=3.0, torque_per_amp=1.0, sample_rate=100.0,
+            max_current=5.0,
+        )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("names", "drive"),
+    [
+        (("theta_h", "i_m"), "current_sampled"),
+        (("theta_h", "i_cmd"), "current_held"),
+        (("theta_h", "i_m", "i_cmd"), "current_held"),
+        (("theta_h", "i_m", "u"), "voltage_held"),
+    ],
+)
+def test_drive_follows_the_columns(names, drive):
+    assert drive_from_columns(names)[0] == drive
+
+
+@pytest.mark.parametrize(
+    ("names", "message"),
+    [
+        (("theta_h", "i_cmd", "u"), "give --drive current_held or --drive voltage_held"),
+        (("theta_h", "u"), "no measured current i_m"),
+        (("theta_h",), "no current column"),
+    ],
+)
+def test_ambiguous_columns_name_the_option(names, message):
+    with pytest.raises(MotosimError, match=message) as info:
+        drive_from_columns(names)
+    assert "\n" not in str(info.value)

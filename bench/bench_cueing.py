@@ -1,0 +1,142 @@
+"""Cost of the motion cueing: washout + limit manager step, MPC step, scoring a 60 s run.
+
+Targets of issue 13: washout step <= 1 us compiled, MPC step <= 2 ms p99 at 100 Hz,
+scoring a 60 s run <= 1 s. The MPC's wall-clock p99 includes the waits of a loaded machine;
+its thread CPU time shows the cost of the step itself.
+"""
+
+import time
+
+import numpy as np
+from numba import njit
+
+from motosim.cueing import (
+    TELBAN_CARDULLO_2005,
+    design_limits,
+    design_washout,
+    limit_step,
+    load_platform,
+    platform_motion,
+    score,
+    vehicle_motion,
+    washout_step,
+)
+from motosim.cueing.mpc import MpcCueing, design_mpc
+from motosim.timeseries import TimeSeries
+from timing import best
+
+
+@njit(cache=True)
+def _loop(coef, lim, inputs, out):  # type: ignore[no-untyped-def]
+    state = np.zeros(9)
+    limit_states = np.zeros((3, 2))
+    cmd = np.zeros(4)
+    for k in range(inputs.shape[0]):
+        washout_step(coef, state, inputs[k, 0], inputs[k, 1], inputs[k, 2], inputs[k, 3], cmd)
+        for j in range(3):
+            out[k, j] = limit_step(lim[j], limit_states[j], cmd[j])
+
+
+def _ride(duration: float, rate: float) -> TimeSeries:
+    t = np.arange(0.0, duration, 1.0 / rate)
+    phi = 0.4 * np.sin(0.5 * np.pi * t)
+    v_x = 15.0 + 3.0 * np.sin(0.2 * t)
+    data = np.column_stack([v_x, 0 * t, 9.81 * np.tan(phi) / v_x, np.gradient(phi, t), phi])
+    return TimeSeries(t, data, ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))
+
+
+def run() -> dict[str, float]:
+    """Per-step costs and the scoring time of a 60 s run at 100 Hz."""
+    cfg = load_platform("simacom_platform")
+    dt = 0.01
+    coef = design_washout(cfg.washout, dt).coefficients()
+    lim = design_limits(cfg.platform, dt).coefficients()
+    n = 200_000
+    rng = np.random.default_rng(0)
+    inputs = np.cumsum(rng.normal(0.0, 0.01, (n, 4)), axis=0)
+    out = np.empty((n, 3))
+    _loop(coef, lim, inputs[:10], out)
+    step_ns = best(lambda: _loop(coef, lim, inputs, out)) / n * 1e9
+    state, cmd = np.zeros(9), np.zeros(4)
+    washout_step(coef, state, 0.1, 0.0, 0.0, 0.0, cmd)
+    calls = 20_000
+    start = time.perf_counter()
+    for _ in range(calls):
+        washout_step(coef, state, 0.1, 0.0, 0.0, 0.0, cmd)
+    python_call_ns = (time.perf_counter() - start) / calls * 1e9
+
+    ride = _ride(60.0, 100.0)
+    vm = vehicle_motion(ride, cfg.rider)
+    mpc = MpcCueing(design_mpc(cfg, TELBAN_CARDULLO_2005, dt))
+    motion = np.column_stack([vm[c] for c in ("omega_x", "omega_y", "omega_z", "f_x", "f_y")])
+    times, cpu = [], []
+    for k in range(motion.shape[0]):
+        start, start_cpu = time.perf_counter(), time.thread_time()
+        mpc.step(motion[k], np.zeros(3))
+        times.append(time.perf_counter() - start)
+        cpu.append(time.thread_time() - start_cpu)
+    ms, cpu_ms = np.array(times) * 1e3, np.array(cpu) * 1e3
+
+    def _score() -> None:
+        v = vehicle_motion(ride, cfg.rider)
+        zeros = np.zeros(ride.t.size)
+        p = platform_motion(ride.t, 0.5 * ride["phi"], zeros, zeros, cfg.platform)
+        score(TELBAN_CARDULLO_2005, v, p, cfg.platform, np.zeros((ride.t.size, 3)))
+
+    return {
+        "washout+limits step, compiled loop [ns]": step_ns,
+        "washout step called from Python [ns]": python_call_ns,
+        "MPC step median [ms]": float(np.median(ms)),
+        "MPC step p99 [ms]": float(np.percentile(ms, 99)),
+        "MPC step p99, thread CPU time [ms]": float(np.percentile(cpu_ms, 99)),
+        "MPC fallbacks in 6000 steps": float(mpc.fallbacks),
+        "head motion + score of a 60 s run at 100 Hz [s]": best(_score),
+    }
+
+
+TRAINING = ("emergency_braking", "lane_change_20", "obstacle_avoidance_15", "slalom_10")
+OTHERS = ("turn_30", "straight_50_gust")
+
+
+def table(runs: str) -> str:
+    """Markdown table washout vs MPC on result folders ``runs/NAME`` of `motosim simulate`.
+
+    Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario,
+    then ``python bench/bench_cueing.py RUNS``.
+    """
+    from pathlib import Path
+
+    from motosim.cueing import cue
+    from motosim.io.results import load_result
+
+    cfg = load_platform("simacom_platform")
+    deg = 180 / np.pi
+    lines = [
+        "| scenario | algorithm | violations | false cues % | missing cues % | roll rate RMS "
+        "[deg/s] | pitch rate RMS [deg/s] | yaw rate RMS [deg/s] | lateral force RMS [m/s^2] |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name in (*TRAINING, *OTHERS):
+        folder = Path(runs) / name
+        if not folder.is_dir():
+            continue
+        r = load_result(folder)
+        series = TimeSeries(r.t, r.data, r.names)
+        for algorithm in ("washout", "mpc"):
+            s = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0).score  # type: ignore[arg-type]
+            ch = s.channels
+            false = 100 * np.mean([c.false_cue_share for c in ch.values()])
+            missing = 100 * np.mean([c.missing_cue_share for c in ch.values()])
+            label = name + ("" if name in TRAINING else " (not training)")
+            lines.append(
+                f"| {label} | {algorithm} | {s.violations} | {false:.1f} | {missing:.1f} | "
+                f"{ch['roll'].rms_error * deg:.2f} | {ch['pitch'].rms_error * deg:.2f} | "
+                f"{ch['yaw'].rms_error * deg:.2f} | {ch['sway'].rms_error:.2f} |"
+            )
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    import sys
+
+    print(table(sys.argv[1]) if len(sys.argv) > 1 else run())

@@ -1,0 +1,122 @@
+"""``motosim cueing``: platform commands for a recorded run, scored by the rider's perception."""
+
+import argparse
+import dataclasses
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motosim.cli._common import print_json, save_figure
+from motosim.cueing import (
+    ALGORITHMS,
+    COMMAND_SIGNALS,
+    TELBAN_CARDULLO_2005,
+    CueingRun,
+    CueingScore,
+    cue,
+    load_platform,
+)
+from motosim.errors import MotosimError
+from motosim.io.results import ResultWriter, load_result
+from motosim.timeseries import TimeSeries
+
+__all__ = ["register", "score_summary"]
+
+
+def register(sub: Any) -> None:
+    """Add ``cueing`` to the subcommands."""
+    parser = sub.add_parser(
+        "cueing",
+        help="platform roll/pitch/yaw commands for a run, scored by what the rider perceives",
+        description=(
+            "Compute the motion at the rider's head from a result folder written by "
+            "`motosim simulate`, cue the platform (classical washout or MPC), apply the limit "
+            "manager, and score the platform's perceived motion against the motorcycle's "
+            "(Telban & Cardullo 2005 vestibular models). Writes the commands to "
+            "OUT/result.h5 and OUT/result.csv (t, phi_s, theta_s, psi_s, phi_vis [rad]) and "
+            "the figures OUT/perception.png and OUT/commands.png."
+        ),
+    )
+    parser.add_argument("result", help="result folder of `motosim simulate`")
+    parser.add_argument(
+        "--platform", default="simacom_platform", help="packaged platform or TOML file"
+    )
+    parser.add_argument("--algorithm", choices=ALGORITHMS, default="washout")
+    parser.add_argument(
+        "--rate", type=float, default=100.0, help="loop rate [Hz], divides the run's (100)"
+    )
+    parser.add_argument("--out", required=True, help="folder to write")
+    parser.add_argument("--overwrite", action="store_true", help="replace a result in --out")
+    parser.add_argument("--json", action="store_true", help="print the scores as JSON")
+    parser.set_defaults(func=run)
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+def score_summary(score: CueingScore) -> dict[str, Any]:
+    """Flat JSON-ready summary of a score (NaN as None), angles and rates in SI."""
+    out: dict[str, Any] = {"violations": score.violations}
+    for name, cs in score.channels.items():
+        for key, value in dataclasses.asdict(cs).items():
+            out[f"{name}_{key}"] = _finite(float(value))
+    for key, values in score.margins.items():
+        for axis, value in zip(("roll", "pitch", "yaw"), values, strict=True):
+            out[f"margin_{key}_{axis}"] = float(value)
+    return out
+
+
+def _write(run: CueingRun, folder: Path, metadata: dict[str, Any], overwrite: bool) -> None:
+    names = ("t", *COMMAND_SIGNALS)
+    with ResultWriter(folder, names, metadata, overwrite=overwrite) as writer:
+        writer.append(np.column_stack([run.commands.t, run.commands.data]))
+        writer.close(score_summary(run.score))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Cue, write, plot and summarise."""
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise MotosimError(f"--rate {args.rate}; expected a loop rate > 0 [Hz]")
+    config = load_platform(args.platform)
+    result = load_result(args.result)
+    series = TimeSeries(result.t, result.data, result.names)
+    model = TELBAN_CARDULLO_2005
+    outcome = cue(config, series, model, algorithm=args.algorithm, rate=args.rate)
+    folder = Path(args.out)
+    metadata = {
+        "source": str(args.result),
+        "algorithm": args.algorithm,
+        "rate": args.rate,
+        "platform": config,
+        "vestibular": model,
+    }
+    _write(outcome, folder, metadata, args.overwrite)
+    from motosim.plotting.cueing import plot_commands, plot_perception
+
+    scenario = result.metadata.get("scenario")
+    name = str(scenario.get("name")) if isinstance(scenario, dict) else Path(args.result).name
+    title = f"{name}: {args.algorithm} on {config.platform.name}"
+    save_figure(
+        plot_perception(outcome, thresholds=model.thresholds, title=title),
+        str(folder / "perception.png"),
+    )
+    limits = tuple(axis.angle for axis in config.platform.axes)
+    save_figure(
+        plot_commands(outcome, limits=(limits[0], limits[1], limits[2]), title=title),
+        str(folder / "commands.png"),
+    )
+    summary = score_summary(outcome.score)
+    if args.json:
+        print_json({"out": str(folder), "algorithm": args.algorithm, "score": summary})
+    else:
+        print(f"{name}: {args.algorithm} commands in {folder} ({summary['violations']} violations)")
+        print(f"  {'channel':<8} {'rms':>9} {'corr':>6} {'lag s':>6} {'false %':>8} {'miss %':>7}")
+        for channel, cs in outcome.score.channels.items():
+            print(
+                f"  {channel:<8} {cs.rms_error:9.4f} {cs.correlation:6.2f} {cs.lag:6.2f} "
+                f"{100 * cs.false_cue_share:8.1f} {100 * cs.missing_cue_share:7.1f}"
+            )
+    return 0

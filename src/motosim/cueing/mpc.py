@@ -1,0 +1,389 @@
+"""Model-predictive cueing on the vestibular states, solved with OSQP.
+
+Each platform axis is planned on its own as a linear MPC. The prediction model is the
+platform axis as a double integrator (input: angular acceleration ``u``) driving the
+semicircular-canal model with its rate and, for roll and pitch, the otolith model with the
+specific force the tilt and the head's offset give (linearised: ``f_y = -g phi - z_h
+phi''`` for roll, ``f_x = g theta + z_h theta''`` for pitch, ``z_h`` the head's z in the
+platform frame, negative above the centre of rotation). The vestibular models are those of
+:mod:`motosim.cueing.vestibular`.
+
+Over ``N`` steps of ``h`` (the input held over each) the plan minimises::
+
+    sum_k w_c ((canal_k - r_c) / thr_c)^2 + w_o ((otolith_k - r_o) / thr_o)^2
+          + w_a ((angle_k - a_ref) / X)^2 + w_v (rate_k / V)^2 + w_u (u_k / A)^2
+
+subject to ``|angle_k| <= X``, ``|rate_k| <= V`` (for pitch, the smaller of ``V`` and the
+tuning's ``pitch_rate``, below the pitch threshold), ``|u_k| <= A``, where ``r_c`` and ``r_o``
+are the vehicle's perceived rate and specific force predicted by the same vestibular models
+from their present state with the motorcycle's present motion held over the horizon (the
+future of the ride is unknown). The condensed QP (``N`` variables) has a constant Hessian and
+constraint matrix; each step updates its linear term and bounds and warm-starts OSQP
+(Stellato et al., *OSQP: an operator splitting solver for quadratic programs*, Math. Prog.
+Comp. 12, 2020). The first acceleration is applied over the loop period; the commands then
+go through the limit manager like the washout's. Near a limit the coarse prediction may have
+no admissible plan; that step is planned with the acceleration bounds only (the limit
+manager keeps the angle and rate limits) and counted in :attr:`MpcCueing.fallbacks`.
+
+``osqp`` is an optional dependency (the ``cueing`` extra), imported when a controller is
+built.
+"""
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim.cueing.platform import CueingConfig
+from motosim.cueing.vestibular import VestibularModel, canal_tf, otolith_tf
+from motosim.errors import MotosimError
+from motosim.timeseries import TimeSeries
+
+__all__ = ["MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "design_mpc"]
+
+Array = NDArray[np.float64]
+
+GRAVITY = 9.81  # [m/s^2]
+MOTION_INPUTS = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
+"""What :meth:`MpcCueing.step` reads, in order."""
+
+
+@dataclass(frozen=True, slots=True)
+class AxisPlan:
+    """The condensed QP of one axis and its state propagation at the loop period.
+
+    Attributes
+    ----------
+    A_loop, B_loop : ndarray
+        Augmented model (platform angle, rate, canal and otolith states) at the loop period.
+    P : ndarray, shape (N, N)
+        QP Hessian.
+    F : ndarray, shape (N, nx)
+        Linear term per unit initial state.
+    G_canal, G_otolith : ndarray, shape (N, n + 1)
+        Linear term per unit vehicle vestibular state and held vehicle input (the vehicle's
+        predicted perception), with the minus sign.
+    G_angle : ndarray, shape (N,)
+        Linear term per unit angle reference, with the minus sign.
+    vehicle_canal, vehicle_otolith : tuple of ndarray
+        ``(A, B)`` of the vehicle's canal and otolith models at the loop period.
+    A_con : ndarray, shape (3N, N)
+        Constraint matrix: inputs, angles, rates.
+    H : ndarray, shape (2N, nx)
+        Angle and rate predictions per unit initial state.
+    limits : tuple of float
+        ``(X, V, A)``.
+    """
+
+    A_loop: Array
+    B_loop: Array
+    P: Array
+    F: Array
+    G_canal: Array
+    G_otolith: Array
+    G_angle: Array
+    vehicle_canal: tuple[Array, Array]
+    vehicle_otolith: tuple[Array, Array]
+    A_con: Array
+    H: Array
+    limits: tuple[float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class MpcDesign:
+    """Per-axis plans (roll, pitch, yaw) at one loop period ``dt`` [s]."""
+
+    dt: float
+    axes: tuple[AxisPlan, AxisPlan, AxisPlan]
+
+
+def _ss(num: Array, den: Array) -> tuple[Array, Array, Array]:
+    from scipy.signal import tf2ss
+
+    A, B, C, D = tf2ss(num, den)
+    if np.any(D):
+        raise MotosimError("vestibular model with a direct feedthrough; expected strictly proper")
+    return A, B[:, 0], C[0]
+
+
+def _discrete(A: Array, B: Array, dt: float) -> tuple[Array, Array]:
+    from scipy.linalg import expm
+
+    n = A.shape[0]
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n] = A
+    M[:n, n] = B
+    E = expm(M * dt)
+    return E[:n, :n], E[:n, n]
+
+
+def _held_prediction(A: Array, B: Array, C: Array, h: float, N: int) -> Array:
+    """Outputs at steps 1..N of a model from state x with its input w held: (N, n + 1) map
+    of ``[x, w]``."""
+    Ad, Bd = _discrete(A, B, h)
+    n = A.shape[0]
+    out = np.zeros((N, n + 1))
+    power = np.eye(n)
+    forced = np.zeros(n)
+    for k in range(N):
+        forced = Ad @ forced + Bd
+        power = Ad @ power
+        out[k, :n] = C @ power
+        out[k, n] = C @ forced
+    return out
+
+
+def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) -> AxisPlan:
+    tuning = config.mpc
+    limits = config.platform.axes[axis]
+    rate = min(limits.rate, tuning.pitch_rate) if axis == 1 else limits.rate
+    z_h = config.platform.head[2]
+    Ac, Bc, Cc = _ss(*canal_tf(model))
+    with_otolith = axis < 2
+    Ao, Bo, Co = _ss(*otolith_tf(model))
+    nc, no = Ac.shape[0], Ao.shape[0] if with_otolith else 0
+    nx = 2 + nc + no
+    A = np.zeros((nx, nx))
+    B = np.zeros(nx)
+    A[0, 1] = 1.0
+    B[1] = 1.0
+    A[2 : 2 + nc, 2 : 2 + nc] = Ac
+    A[2 : 2 + nc, 1] = Bc  # canal driven by the platform rate
+    if with_otolith:
+        sign = -1.0 if axis == 0 else 1.0  # f_y = -g phi, f_x = +g theta
+        A[2 + nc :, 2 + nc :] = Ao
+        A[2 + nc :, 0] = Bo * sign * GRAVITY
+        B[2 + nc :] = Bo * (sign * z_h)
+    C_canal = np.zeros(nx)
+    C_canal[2 : 2 + nc] = Cc
+    C_oto = np.zeros(nx)
+    if with_otolith:
+        C_oto[2 + nc :] = Co
+    N, h = tuning.horizon, tuning.step
+    Ad, Bd = _discrete(A, B, h)
+    A_loop, B_loop = _discrete(A, B, dt)
+    # condensed prediction X_k = Phi_k x0 + sum_j Gamma_kj u_j, k = 1..N
+    Phi = np.zeros((N, nx, nx))
+    Gam = np.zeros((N, nx, N))
+    power = np.eye(nx)
+    for k in range(N):
+        power = Ad @ power
+        Phi[k] = power
+        Gam[k, :, k] = Bd
+        if k > 0:
+            Gam[k, :, :k] = Ad @ Gam[k - 1, :, :k]
+    thr_c, thr_o = model.thresholds[axis], model.thresholds[3 if axis == 1 else 4]
+    rows = [
+        (C_canal, tuning.canal_weight / thr_c**2, 0),
+        (C_oto, tuning.otolith_weight / thr_o**2 if with_otolith else 0.0, 1),
+    ]
+    e_angle, e_rate = np.eye(nx)[0], np.eye(nx)[1]
+    P = np.eye(N) * tuning.accel_weight / limits.accel**2
+    F = np.zeros((N, nx))
+    G = []
+    for C, w, ref in rows:
+        M = np.einsum("i,kij->kj", C, Gam)  # (N outputs, N inputs)
+        E = np.einsum("i,kij->kj", C, Phi)
+        P += w * M.T @ M
+        F += w * M.T @ E
+        Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
+        G.append(w * M.T @ _held_prediction(Av, Bv, Cv, h, N))
+    for e, w in ((e_angle, tuning.angle_weight / limits.angle**2),
+                 (e_rate, tuning.rate_weight / rate**2)):  # fmt: skip
+        M = np.einsum("i,kij->kj", e, Gam)
+        E = np.einsum("i,kij->kj", e, Phi)
+        P += w * M.T @ M
+        F += w * M.T @ E
+    M_a = np.einsum("i,kij->kj", e_angle, Gam)
+    M_v = np.einsum("i,kij->kj", e_rate, Gam)
+    H = np.vstack([np.einsum("i,kij->kj", e_angle, Phi), np.einsum("i,kij->kj", e_rate, Phi)])
+    return AxisPlan(
+        A_loop=A_loop,
+        B_loop=B_loop,
+        P=0.5 * (P + P.T),
+        F=F,
+        G_canal=G[0],
+        G_otolith=G[1],
+        G_angle=tuning.angle_weight / limits.angle**2 * M_a.T @ np.ones(N),
+        vehicle_canal=_discrete(Ac, Bc, dt),
+        vehicle_otolith=_discrete(Ao, Bo, dt),
+        A_con=np.vstack([np.eye(N), M_a, M_v]),
+        H=H,
+        limits=(limits.angle, rate, limits.accel),
+    )
+
+
+def design_mpc(config: CueingConfig, model: VestibularModel, dt: float) -> MpcDesign:
+    """Build the three condensed QPs of the module docstring.
+
+    Parameters
+    ----------
+    config : CueingConfig
+        Platform limits, head position and :class:`~motosim.cueing.platform.MpcTuning`.
+    model : VestibularModel
+        Canal and otolith models and the thresholds that scale the errors.
+    dt : float
+        Loop period [s]; at most the prediction step.
+
+    Returns
+    -------
+    MpcDesign
+        The plans.
+
+    Raises
+    ------
+    MotosimError
+        If ``dt`` is not positive or exceeds the prediction step.
+    """
+    if not (math.isfinite(dt) and 0.0 < dt <= config.mpc.step):
+        raise MotosimError(
+            f"loop period dt = {dt!r} s; expected > 0 and <= the MPC step {config.mpc.step:g} s"
+        )
+    return MpcDesign(dt, (_axis(config, model, 0, dt), _axis(config, model, 1, dt),
+                          _axis(config, model, 2, dt)))  # fmt: skip
+
+
+class MpcCueing:
+    """Runtime MPC cueing: one OSQP problem per axis, warm-started step after step.
+
+    Parameters
+    ----------
+    design : MpcDesign
+        From :func:`design_mpc`.
+
+    Raises
+    ------
+    MotosimError
+        If osqp is not installed (``pip install motosim[cueing]``).
+    """
+
+    def __init__(self, design: MpcDesign) -> None:
+        try:
+            import osqp
+        except ImportError:
+            raise MotosimError(
+                "the MPC cueing needs osqp; expected it installed (pip install 'motosim[cueing]')"
+            ) from None
+        from scipy import sparse
+
+        self.design = design
+        self._solvers: list[Any] = []
+        self._state = [np.zeros(plan.A_loop.shape[0]) for plan in design.axes]
+        self._canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
+        self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
+        self.fallbacks = 0
+        """Steps planned without the angle and rate bounds (no admissible plan)."""
+        for plan in design.axes:
+            solver = osqp.OSQP()
+            n = plan.P.shape[0]
+            lo, hi = self._bounds(plan, np.zeros(plan.A_loop.shape[0]))
+            solver.setup(
+                sparse.csc_matrix(np.triu(plan.P)),
+                np.zeros(n),
+                sparse.csc_matrix(plan.A_con),
+                lo,
+                hi,
+                verbose=False,
+                eps_abs=1e-4,
+                eps_rel=1e-4,
+                max_iter=100,
+                polishing=False,
+                warm_starting=True,
+            )
+            self._solvers.append(solver)
+        self._solved = osqp.SolverStatus.OSQP_SOLVED
+
+    @staticmethod
+    def _bounds(plan: AxisPlan, x0: Array) -> tuple[Array, Array]:
+        X, V, A = plan.limits
+        N = plan.P.shape[0]
+        pred = plan.H @ x0
+        upper = np.concatenate([np.full(N, A), X - pred[:N], V - pred[N:]])
+        lower = np.concatenate([np.full(N, -A), -X - pred[:N], -V - pred[N:]])
+        return lower, upper
+
+    def reset(self) -> None:
+        """Back to neutral rest, vestibular states at zero."""
+        for x in (*self._state, *self._canal, *self._otolith):
+            x[:] = 0.0
+
+    def step(self, motion: Array, reference: Array) -> Array:
+        """One loop step.
+
+        Parameters
+        ----------
+        motion : ndarray, shape (5,)
+            The motorcycle's motion at the rider's head now: ``omega_x``, ``omega_y``,
+            ``omega_z`` [rad/s], ``f_x``, ``f_y`` [m/s^2] (held over the horizon).
+        reference : ndarray, shape (3,)
+            Roll, pitch and yaw angles [rad] the plan is drawn to by the angle weight (the
+            washout's commands, or zeros for neutral).
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            Platform roll, pitch and yaw targets [rad] for the limit manager.
+        """
+        out = np.empty(3)
+        inputs = ((motion[0], motion[4]), (motion[1], motion[3]), (motion[2], 0.0))
+        for j, plan in enumerate(self.design.axes):
+            x0 = self._state[j]
+            w_c, w_o = inputs[j]
+            xc, xo = self._canal[j], self._otolith[j]
+            q = (
+                plan.F @ x0
+                - plan.G_canal @ np.append(xc, w_c)
+                - plan.G_otolith @ np.append(xo, w_o)
+                - plan.G_angle * reference[j]
+            )
+            Ac, Bc = plan.vehicle_canal
+            Ao, Bo = plan.vehicle_otolith
+            self._canal[j] = Ac @ xc + Bc * w_c
+            self._otolith[j] = Ao @ xo + Bo * w_o
+            lo, hi = self._bounds(plan, x0)
+            solver = self._solvers[j]
+            solver.update(q=q, l=lo, u=hi)
+            result = solver.solve(raise_error=False)
+            if result.info.status_val != self._solved:
+                # the angle and rate bounds of the coarse prediction cannot be met from this
+                # state (near a limit): plan with the input bounds only, the limit manager
+                # keeps the angle and rate limits
+                self.fallbacks += 1
+                n = plan.P.shape[0]
+                lo[n:], hi[n:] = -1e9, 1e9
+                solver.update(l=lo, u=hi)
+                result = solver.solve(raise_error=False)
+            if result.info.status_val == self._solved:
+                u = float(result.x[0])
+            else:  # not solved in the iteration budget: brake
+                u = -math.copysign(plan.limits[2], x0[1]) if x0[1] else 0.0
+            u = min(plan.limits[2], max(-plan.limits[2], u))
+            self._state[j] = plan.A_loop @ x0 + plan.B_loop * u
+            out[j] = self._state[j][0]
+        return out
+
+
+def apply_mpc(design: MpcDesign, vehicle: TimeSeries, reference: Array) -> Array:
+    """Run the MPC cueing over a whole series from rest.
+
+    Parameters
+    ----------
+    design : MpcDesign
+        At the series' sample period.
+    vehicle : TimeSeries
+        The motorcycle's motion at the head with ``omega_x``, ``omega_y``, ``omega_z``,
+        ``f_x``, ``f_y`` (:func:`motosim.cueing.head.vehicle_motion`).
+    reference : ndarray, shape (n, 3)
+        Angle references [rad] (see :meth:`MpcCueing.step`).
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Platform roll, pitch, yaw targets [rad].
+    """
+    mpc = MpcCueing(design)
+    motion = np.column_stack([vehicle[name] for name in MOTION_INPUTS])
+    ref = np.asarray(reference, dtype=np.float64)
+    return np.array([mpc.step(motion[k], ref[k]) for k in range(motion.shape[0])])

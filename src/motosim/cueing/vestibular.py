@@ -1,0 +1,313 @@
+"""Vestibular models and the scoring of a cueing run by what the rider would perceive.
+
+Semicircular canals (angular velocity) and otoliths (specific force) after Telban &
+Cardullo, *Motion Cueing Algorithm Development: Human-Centered Linear and Nonlinear
+Approaches*, NASA CR-2005-213747 (2005)::
+
+    canal:    w_hat / w = tau_a tau_L s^2 / ((tau_a s + 1)(tau_L s + 1)(tau_S s + 1))
+    otolith:  f_hat / f = K (tau_a s + 1) / ((tau_L s + 1)(tau_S s + 1))
+
+both of unit gain in their mid band, with the perception thresholds of the same report.
+:func:`score` passes the motion at the rider's head on the motorcycle and on the platform
+through the same models and compares them channel by channel: roll, pitch and yaw rates
+(canals) and the longitudinal and lateral specific forces (otoliths).
+
+A *false cue* is a sample where the platform's perceived value is above threshold and the
+vehicle's is not above threshold in the same direction (perceived in the wrong direction,
+or perceived where the motorcycle gives nothing); a *missing cue* is a sample where the
+vehicle's is above threshold and the platform's is not. Shares are fractions of the run.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim.cueing.head import check_rate
+from motosim.cueing.platform import Platform
+from motosim.errors import MotosimError
+from motosim.timeseries import TimeSeries
+
+__all__ = [
+    "CHANNELS",
+    "TELBAN_CARDULLO_2005",
+    "ChannelScore",
+    "CueingScore",
+    "VestibularModel",
+    "canal_tf",
+    "limit_margins",
+    "otolith_tf",
+    "perceive",
+    "score",
+]
+
+Array = NDArray[np.float64]
+
+CHANNELS = ("roll", "pitch", "yaw", "surge", "sway")
+"""Scored channels: canal roll, pitch, yaw rates; otolith longitudinal, lateral force."""
+_SOURCES = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
+
+
+@dataclass(frozen=True, slots=True)
+class VestibularModel:
+    """Time constants [s], otolith gain and perception thresholds of the vestibular system.
+
+    Attributes
+    ----------
+    canal_tau_L, canal_tau_S, canal_tau_a : float
+        Canal long, short and adaptation time constants [s].
+    otolith_K : float
+        Otolith gain (its DC gain; mid-band gain ``K tau_a / tau_L``).
+    otolith_tau_a, otolith_tau_L, otolith_tau_S : float
+        Otolith lead, long and short time constants [s].
+    thresholds : tuple of float
+        Thresholds of :data:`CHANNELS`: roll, pitch, yaw rate [rad/s], longitudinal and
+        lateral specific force [m/s^2].
+    """
+
+    canal_tau_L: float
+    canal_tau_S: float
+    canal_tau_a: float
+    otolith_K: float
+    otolith_tau_a: float
+    otolith_tau_L: float
+    otolith_tau_S: float
+    thresholds: tuple[float, float, float, float, float]
+
+    def __post_init__(self) -> None:
+        values = [getattr(self, n) for n in ("canal_tau_L", "canal_tau_S", "canal_tau_a",
+                                             "otolith_K", "otolith_tau_a", "otolith_tau_L",
+                                             "otolith_tau_S")]  # fmt: skip
+        if not all(math.isfinite(v) and v > 0 for v in [*values, *self.thresholds]) or len(
+            self.thresholds
+        ) != len(CHANNELS):
+            raise MotosimError(
+                f"vestibular model {values} thresholds {self.thresholds}; expected finite "
+                f"numbers > 0 and {len(CHANNELS)} thresholds"
+            )
+
+
+_D = math.pi / 180.0
+TELBAN_CARDULLO_2005 = VestibularModel(
+    canal_tau_L=5.73,
+    canal_tau_S=0.005,
+    canal_tau_a=80.0,
+    otolith_K=0.4,
+    otolith_tau_a=13.2,
+    otolith_tau_L=5.33,
+    otolith_tau_S=0.66,
+    thresholds=(3.0 * _D, 3.6 * _D, 2.6 * _D, 0.17, 0.17),
+)
+"""Telban & Cardullo (2005), NASA CR-2005-213747: canal and otolith models and thresholds
+(roll 3.0, pitch 3.6, yaw 2.6 deg/s; 0.17 m/s^2 in x and y)."""
+
+
+def canal_tf(model: VestibularModel) -> tuple[Array, Array]:
+    """Canal transfer function ``(num, den)``, highest power of s first."""
+    ta, tl, ts = model.canal_tau_a, model.canal_tau_L, model.canal_tau_S
+    den = np.array([ta * tl * ts, ta * tl + ta * ts + tl * ts, ta + tl + ts, 1.0])
+    return np.array([ta * tl, 0.0, 0.0]), den
+
+
+def otolith_tf(model: VestibularModel) -> tuple[Array, Array]:
+    """Otolith transfer function ``(num, den)``, highest power of s first."""
+    k, ta, tl, ts = model.otolith_K, model.otolith_tau_a, model.otolith_tau_L, model.otolith_tau_S
+    return np.array([k * ta, k]), np.array([tl * ts, tl + ts, 1.0])
+
+
+def _filter(num: Array, den: Array, x: Array, dt: float) -> Array:
+    from scipy.signal import bilinear, lfilter, lfilter_zi
+
+    b, a = bilinear(num, den, fs=1.0 / dt)
+    zi = lfilter_zi(b, a) * x[0]  # start in the steady state of the first sample
+    y: Array = lfilter(b, a, x, zi=zi)[0]
+    return y
+
+
+def perceive(model: VestibularModel, motion: TimeSeries) -> TimeSeries:
+    """Perceived motion of :data:`CHANNELS` for a motion at the head.
+
+    Parameters
+    ----------
+    model : VestibularModel
+        For example :data:`TELBAN_CARDULLO_2005`.
+    motion : TimeSeries
+        Head motion with ``omega_x``, ``omega_y``, ``omega_z`` [rad/s], ``f_x``, ``f_y``
+        [m/s^2] at a constant rate (:func:`motosim.cueing.head.vehicle_motion`).
+
+    Returns
+    -------
+    TimeSeries
+        Columns :data:`CHANNELS` in the units of their inputs, the models discretised with
+        Tustin and started in the steady state of the first sample.
+    """
+    dt = check_rate(motion.t)
+    canal, otolith = canal_tf(model), otolith_tf(model)
+    cols = []
+    for name in _SOURCES:
+        num, den = canal if name.startswith("omega") else otolith
+        cols.append(_filter(num, den, motion[name], dt))
+    return TimeSeries(motion.t, np.column_stack(cols), CHANNELS)
+
+
+@dataclass(frozen=True, slots=True)
+class ChannelScore:
+    """Comparison of the perceived platform motion with the perceived vehicle motion.
+
+    Attributes
+    ----------
+    rms_error : float
+        RMS of the difference, in the channel's unit.
+    correlation : float
+        Pearson correlation (NaN when a signal is constant).
+    lag : float
+        Delay of the platform's perception that maximises the cross-correlation, within
+        +/- 1 s [s] (positive: the platform is late).
+    false_cue_share, missing_cue_share : float
+        Fractions of the samples with a false or a missing cue (module docstring).
+    """
+
+    rms_error: float
+    correlation: float
+    lag: float
+    false_cue_share: float
+    missing_cue_share: float
+
+
+@dataclass(frozen=True, slots=True)
+class CueingScore:
+    """Scores of one cueing run.
+
+    Attributes
+    ----------
+    channels : dict of str to ChannelScore
+        One entry per name of :data:`CHANNELS`.
+    margins : dict of str to tuple of float
+        For ``"angle"``, ``"rate"`` and ``"accel"``, the smallest remaining fraction of the
+        limit over the run, per axis (roll, pitch, yaw); negative means a violation.
+    violations : int
+        Samples beyond an angle, rate or acceleration limit (with a 1e-9 relative tolerance).
+    """
+
+    channels: dict[str, ChannelScore]
+    margins: dict[str, tuple[float, float, float]]
+    violations: int
+
+
+def _lag(vehicle: Array, platform: Array, dt: float) -> float:
+    from scipy.signal import correlate
+
+    a, b = vehicle - vehicle.mean(), platform - platform.mean()
+    if not (np.any(a) and np.any(b)):
+        return math.nan
+    full = correlate(b, a, mode="full", method="fft")
+    zero = a.size - 1
+    span = min(round(1.0 / dt), a.size - 1)
+    window = full[zero - span : zero + span + 1]
+    return float((int(np.argmax(window)) - span) * dt)
+
+
+def _channel(vehicle: Array, platform: Array, threshold: float, dt: float) -> ChannelScore:
+    err = platform - vehicle
+    if np.std(vehicle) > 0 and np.std(platform) > 0:
+        corr = float(np.corrcoef(vehicle, platform)[0, 1])
+    else:
+        corr = math.nan
+    felt_v = np.where(np.abs(vehicle) > threshold, np.sign(vehicle), 0.0)
+    felt_p = np.where(np.abs(platform) > threshold, np.sign(platform), 0.0)
+    false = np.mean((felt_p != 0) & (felt_p != felt_v))
+    missing = np.mean((felt_v != 0) & (felt_p == 0))
+    return ChannelScore(
+        rms_error=float(np.sqrt(np.mean(err**2))),
+        correlation=corr,
+        lag=_lag(vehicle, platform, dt),
+        false_cue_share=float(false),
+        missing_cue_share=float(missing),
+    )
+
+
+def limit_margins(
+    platform: Platform, commands: Array, dt: float
+) -> tuple[dict[str, tuple[float, float, float]], int]:
+    """Smallest remaining fraction of each limit and the number of violations.
+
+    Parameters
+    ----------
+    platform : Platform
+        The limits.
+    commands : ndarray, shape (n, 3)
+        Platform roll, pitch, yaw [rad], from neutral rest before the first sample.
+    dt : float
+        Sample period [s].
+
+    Returns
+    -------
+    margins : dict
+        ``{"angle": (roll, pitch, yaw), "rate": ..., "accel": ...}``, ``1 - max|x| / limit``.
+    violations : int
+        Samples beyond a limit by more than 1e-9 of it.
+    """
+    x = np.asarray(commands, dtype=np.float64)
+    padded = np.vstack([np.zeros((2, 3)), x])
+    v = np.diff(padded, axis=0)[1:] / dt
+    a = np.diff(padded, n=2, axis=0) / dt**2
+    margins: dict[str, tuple[float, float, float]] = {}
+    violations = 0
+    for key, values in (("angle", x), ("rate", v), ("accel", a)):
+        limits = np.array([getattr(ax, key) for ax in platform.axes])
+        peak = np.max(np.abs(values), axis=0) if values.size else np.zeros(3)
+        margins[key] = (
+            float(1 - peak[0] / limits[0]),
+            float(1 - peak[1] / limits[1]),
+            float(1 - peak[2] / limits[2]),
+        )
+        slack = 1e-9 * limits + (1e-6 if key == "accel" else 0.0)
+        violations += int(np.sum(np.abs(values) > limits + slack))
+    return margins, violations
+
+
+def score(
+    model: VestibularModel,
+    vehicle: TimeSeries,
+    platform_motion: TimeSeries,
+    platform: Platform,
+    commands: Array,
+) -> CueingScore:
+    """Score a cueing run by the rider's perception and the platform's limits.
+
+    Parameters
+    ----------
+    model : VestibularModel
+        The vestibular model and thresholds.
+    vehicle, platform_motion : TimeSeries
+        Head motion on the motorcycle and on the platform, same instants
+        (:func:`motosim.cueing.head.vehicle_motion`, :func:`~motosim.cueing.head.platform_motion`).
+    platform : Platform
+        The limits.
+    commands : ndarray, shape (n, 3)
+        The platform commands [rad] whose limit margins are reported.
+
+    Returns
+    -------
+    CueingScore
+        Per channel scores, limit margins and violations.
+
+    Raises
+    ------
+    MotosimError
+        If the two motions are not on the same instants.
+    """
+    if vehicle.t.shape != platform_motion.t.shape or not np.allclose(vehicle.t, platform_motion.t):
+        raise MotosimError(
+            f"vehicle ({vehicle.t.size} samples) and platform ({platform_motion.t.size}) "
+            "motions; expected the same instants"
+        )
+    dt = check_rate(vehicle.t)
+    pv, pp = perceive(model, vehicle), perceive(model, platform_motion)
+    channels = {
+        name: _channel(pv[name], pp[name], model.thresholds[i], dt)
+        for i, name in enumerate(CHANNELS)
+    }
+    margins, violations = limit_margins(platform, commands, dt)
+    return CueingScore(channels, margins, violations)

@@ -1,0 +1,45 @@
+"""`motosim cueing` end to end on a small recorded run."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motosim.cli.main import main
+from motosim.io.results import ResultWriter, load_result
+
+
+@pytest.fixture
+def run_dir(tmp_path: Path) -> Path:
+    t = np.arange(0.0, 4.0, 0.001)
+    phi = np.radians(15.0) * np.sin(0.5 * np.pi * t)
+    names = ("t", "v_x", "v_y", "psi_dot", "phi_dot", "phi")
+    data = np.column_stack(
+        [t, 15.0 + 0 * t, 0 * t, 9.81 * np.tan(phi) / 15.0, np.gradient(phi, t), phi]
+    )
+    folder = tmp_path / "run"
+    with ResultWriter(folder, names, {"scenario": {"name": "weave"}}) as writer:
+        writer.append(data)
+        writer.close({})
+    return folder
+
+
+def test_cueing_writes_commands_figures_and_json(run_dir: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "cue"
+    assert main(["cueing", str(run_dir), "--out", str(out), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["score"]["violations"] == 0
+    commands = load_result(out)
+    assert commands.names == ("phi_s", "theta_s", "psi_s", "phi_vis")
+    assert commands.t.size == 400  # 100 Hz
+    assert (out / "perception.png").is_file() and (out / "commands.png").is_file()
+    assert (out / "result.csv").read_text().startswith("t,phi_s,theta_s,psi_s,phi_vis\n")
+
+
+def test_bad_platform_is_one_line_exit_2(run_dir: Path, tmp_path: Path, capsys) -> None:
+    bad = tmp_path / "p.toml"
+    bad.write_text("[platform]\nname = 'x'\n")
+    assert main(["cueing", str(run_dir), "--platform", str(bad), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "missing table [axes]" in err

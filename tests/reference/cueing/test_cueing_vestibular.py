@@ -1,0 +1,83 @@
+"""Vestibular models against their published transfer functions and the score's definitions.
+
+Canal and otolith models, time constants and thresholds: Telban & Cardullo, NASA
+CR-2005-213747 (2005). Responses are checked against scipy.signal.lsim of the continuous
+transfer functions.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from motosim.cueing.head import HEAD_SIGNALS
+from motosim.cueing.platform import load_platform
+from motosim.cueing.vestibular import (
+    TELBAN_CARDULLO_2005 as VM,
+)
+from motosim.cueing.vestibular import (
+    canal_tf,
+    otolith_tf,
+    perceive,
+    score,
+)
+from motosim.timeseries import TimeSeries
+
+DT = 0.01
+
+
+def _motion(t: np.ndarray, **columns: np.ndarray) -> TimeSeries:
+    data = np.zeros((t.size, len(HEAD_SIGNALS)))
+    for name, values in columns.items():
+        data[:, HEAD_SIGNALS.index(name)] = values
+    return TimeSeries(t, data, HEAD_SIGNALS)
+
+
+def test_published_constants() -> None:
+    # Telban & Cardullo (2005): canal tau_L 5.73 s, tau_S 0.005 s, tau_a 80 s; otolith K 0.4,
+    # tau_a 13.2 s, tau_L 5.33 s, tau_S 0.66 s; thresholds 3.0, 3.6, 2.6 deg/s, 0.17 m/s^2.
+    assert (VM.canal_tau_L, VM.canal_tau_S, VM.canal_tau_a) == (5.73, 0.005, 80.0)
+    assert (VM.otolith_K, VM.otolith_tau_a, VM.otolith_tau_L, VM.otolith_tau_S) == (
+        0.4,
+        13.2,
+        5.33,
+        0.66,
+    )
+    assert np.allclose(np.degrees(VM.thresholds[:3]), [3.0, 3.6, 2.6])
+    assert VM.thresholds[3:] == (0.17, 0.17)
+
+
+def test_perception_matches_lsim_of_the_continuous_models() -> None:
+    t = np.arange(0.0, 20.0, DT)
+    w = 0.2 * np.sin(1.3 * t) ** 2  # smooth from rest
+    f = 1.5 * (1.0 - np.cos(0.4 * t))
+    perceived = perceive(VM, _motion(t, omega_x=w, f_y=f))
+    _, canal, _ = signal.lsim(canal_tf(VM), w, t)
+    _, oto, _ = signal.lsim(otolith_tf(VM), f, t)
+    assert np.max(np.abs(perceived["roll"] - canal)) < 0.01 * np.max(np.abs(canal))
+    assert np.max(np.abs(perceived["sway"] - oto)) < 0.01 * np.max(np.abs(oto))
+
+
+def test_mid_band_gains_are_one() -> None:
+    # canal: tau_a tau_L s^2 / (...) ~ 1 between 1/tau_L and 1/tau_S; otolith: K tau_a / tau_L
+    _, h = signal.freqs(*canal_tf(VM), worN=[3.0])
+    assert abs(h[0]) == pytest.approx(1.0, abs=0.02)
+    assert VM.otolith_K * VM.otolith_tau_a / VM.otolith_tau_L == pytest.approx(0.99, abs=0.01)
+
+
+def test_false_missing_and_lag_definitions() -> None:
+    platform = load_platform("simacom_platform").platform
+    t = np.arange(0.0, 10.0, DT)
+    vehicle = _motion(t, omega_y=0.3 * np.sin(2 * t))
+    late = _motion(t, omega_y=0.3 * np.sin(2 * (t - 0.2)))  # the platform 0.2 s late
+    s = score(VM, vehicle, late, platform, np.zeros((t.size, 3)))
+    assert s.channels["pitch"].lag == pytest.approx(0.2, abs=1.5 * DT)
+    opposite = _motion(t, omega_y=-0.3 * np.sin(2 * t))
+    s = score(VM, vehicle, opposite, platform, np.zeros((t.size, 3)))
+    above = np.mean(np.abs(perceive(VM, vehicle)["pitch"]) > VM.thresholds[1])
+    assert s.channels["pitch"].false_cue_share == pytest.approx(above, abs=0.01)
+    s = score(VM, vehicle, _motion(t), platform, np.zeros((t.size, 3)))
+    assert s.channels["pitch"].missing_cue_share == pytest.approx(above, abs=1e-12)
+    assert s.channels["pitch"].false_cue_share == 0.0
+    assert math.isnan(s.channels["pitch"].correlation)

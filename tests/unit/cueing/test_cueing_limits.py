@@ -1,0 +1,85 @@
+"""Limit manager: zero violations on a stress corpus, no overshoot across neutral."""
+
+import numpy as np
+import pytest
+
+from motosim.cueing.limits import actuator_response, apply_limits, design_limits
+from motosim.cueing.platform import Platform, load_platform
+
+DT = 0.01
+N = 2000
+
+
+@pytest.fixture(scope="module")
+def platform() -> Platform:
+    return load_platform("simacom_platform").platform
+
+
+def _corpus() -> list[np.ndarray]:
+    """Abrupt inputs: steps, square waves, impulses, noise, chirps, far beyond the limits."""
+    rng = np.random.default_rng(13)
+    t = np.arange(N) * DT
+    out = []
+    for amplitude in (0.05, 0.5, 3.0):
+        out.append(np.where(t > 1.0, amplitude, 0.0))
+        out.append(amplitude * np.sign(np.sin(2 * np.pi * rng.uniform(0.1, 5.0) * t)))
+        spikes = np.zeros(N)
+        spikes[rng.integers(0, N, 20)] = amplitude * rng.choice([-1.0, 1.0], 20)
+        out.append(spikes)
+        out.append(amplitude * rng.standard_normal(N))
+        out.append(amplitude * np.sin(2 * np.pi * (0.05 + 2.0 * t) * t))
+        out.append(np.cumsum(rng.normal(0.0, amplitude * 0.05, N)))
+        out.append(amplitude * rng.choice([-1.0, 1.0], N // 50).repeat(50))
+    return out
+
+
+def _violations(x: np.ndarray, limit: float, rate: float, accel: float) -> int:
+    tol = 1e-9
+    v = np.diff(np.concatenate([[0.0, 0.0], x])) / DT  # from neutral rest
+    a = np.diff(v) / DT
+    return int(
+        np.sum(np.abs(x) > limit * (1 + tol))
+        + np.sum(np.abs(v) > rate * (1 + tol))
+        + np.sum(np.abs(a) > accel * (1 + tol) + 1e-6)
+    )
+
+
+def test_zero_violations_on_the_stress_corpus(platform: Platform) -> None:
+    design = design_limits(platform, DT)
+    total = 0
+    for signal in _corpus():
+        targets = np.column_stack([signal, signal, signal])
+        out = apply_limits(design, targets)
+        for j, axis in enumerate(platform.axes):
+            total += _violations(out[:, j], axis.angle, axis.rate, axis.accel)
+            achieved = actuator_response(platform, DT, out)
+            total += _violations(achieved[:, j], axis.angle, axis.rate, axis.accel)
+    assert total == 0
+
+
+def test_held_target_is_reached_without_overshoot(platform: Platform) -> None:
+    design = design_limits(platform, DT)
+    targets = np.zeros((N, 3))
+    targets[10:] = [0.2, 0.1, -0.15]
+    out = apply_limits(design, targets)
+    np.testing.assert_allclose(out[-1], [0.2, 0.1, -0.15], atol=1e-12)
+    assert np.all(out[:, 0] <= 0.2 + 1e-12) and np.all(out[:, 2] >= -0.15 - 1e-12)
+
+
+def test_return_to_neutral_never_crosses_it(platform: Platform) -> None:
+    design = design_limits(platform, DT)
+    rng = np.random.default_rng(5)
+    for _ in range(20):  # one-signed inputs that drop to neutral abruptly, at any speed
+        signal = np.abs(rng.normal(0.0, 0.3, N // 20)).repeat(20)
+        signal[rng.integers(0, N, 30)] = 0.0
+        out = apply_limits(design, np.column_stack([signal, signal, -signal]))
+        assert np.all(out[:, :2] >= 0.0) and np.all(out[:, 2] <= 0.0)
+
+
+def test_never_moves_away_from_a_held_neutral(platform: Platform) -> None:
+    design = design_limits(platform, DT)
+    targets = np.zeros((N, 3))
+    targets[:300] = 0.17  # a cue, then neutral held: the approach is monotonic
+    out = apply_limits(design, targets)
+    tail = out[300:, 0]
+    assert np.all(np.diff(tail) <= 1e-15) and tail[-1] == 0.0

@@ -1,0 +1,58 @@
+"""The cueing chain on a synthetic ride: limits kept, MPC within limits, one-line errors."""
+
+import numpy as np
+import pytest
+
+from motosim.cueing import TELBAN_CARDULLO_2005, cue, decimate, load_platform
+from motosim.errors import MotosimError
+from motosim.timeseries import TimeSeries
+
+
+def _ride(rate: float = 100.0, duration: float = 12.0) -> TimeSeries:
+    """A slalom with braking: lean to +/-25 deg at 0.25 Hz, speed 20 -> 12 m/s."""
+    t = np.arange(0.0, duration, 1.0 / rate)
+    v_x = np.where(t < 4.0, 20.0, np.maximum(12.0, 20.0 - 4.0 * (t - 4.0)))
+    phi = np.radians(25.0) * np.sin(0.5 * np.pi * t) * np.minimum(1.0, t / 2.0)
+    phi_dot = np.gradient(phi, t)
+    psi_dot = 9.81 * np.tan(phi) / v_x
+    data = np.column_stack([v_x, 0 * t, psi_dot, phi_dot, phi])
+    return TimeSeries(t, data, ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))
+
+
+@pytest.mark.parametrize("algorithm", ["washout", "mpc"])
+def test_no_limit_violation_and_a_roll_cue_in_phase(algorithm: str) -> None:
+    if algorithm == "mpc":
+        pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    cfg = load_platform("simacom_platform")
+    run = cue(cfg, _ride(), TELBAN_CARDULLO_2005, algorithm=algorithm)  # type: ignore[arg-type]
+    assert run.score.violations == 0
+    assert all(m > -1e-6 for margins in run.score.margins.values() for m in margins)
+    assert run.score.channels["roll"].correlation > 0.8
+    np.testing.assert_allclose(
+        run.commands["phi_s"] + run.commands["phi_vis"],
+        cfg.washout.horizon_gain * _ride()["phi"],
+        atol=1e-12,
+    )
+
+
+def test_decimate_and_bad_inputs() -> None:
+    ride = _ride(rate=1000.0, duration=1.0)
+    assert decimate(ride, 100.0).t.size == 100
+    with pytest.raises(MotosimError, match="integer divisor"):
+        decimate(ride, 300.0)
+    cfg = load_platform("simacom_platform")
+    with pytest.raises(MotosimError, match="cueing algorithm 'lqr'"):
+        cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="lqr")  # type: ignore[arg-type]
+
+
+def test_mpc_rests_at_neutral_and_refuses_a_slow_loop() -> None:
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+
+    cfg = load_platform("simacom_platform")
+    mpc = MpcCueing(design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01))
+    for _ in range(20):
+        out = mpc.step(np.zeros(5), np.zeros(3))
+    np.testing.assert_allclose(out, 0.0, atol=1e-9)
+    with pytest.raises(MotosimError, match="<= the MPC step"):
+        design_mpc(cfg, TELBAN_CARDULLO_2005, 0.1)

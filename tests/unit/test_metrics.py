@@ -1,0 +1,49 @@
+"""Run metrics and flags against hand-made signals."""
+
+import math
+
+import numpy as np
+
+from motosim.sim.metrics import failure, run_metrics, warnings
+
+
+def _metrics(**columns: np.ndarray) -> dict[str, float]:
+    t = np.arange(0.0, 4.0, 1e-3)
+    full = {name: np.broadcast_to(values, t.shape).copy() for name, values in columns.items()}
+    return run_metrics(t, full.get, complete=True, max_current=30.0)
+
+
+def test_buzz_is_flagged_only_while_the_rider_holds_still() -> None:
+    t = np.arange(0.0, 4.0, 1e-3)
+    buzz = 0.5 * np.sin(2 * np.pi * 10.0 * t)  # 1 A peak to peak at 10 Hz
+    quiet = _metrics(i_m=buzz, tau_r=np.zeros(1))
+    assert quiet["flag_oscillation"] == 1.0
+    assert math.isclose(quiet["buzz_current_p2p"], 1.0, rel_tol=0.02)
+    assert math.isclose(quiet["buzz_frequency"], 10.0, rel_tol=0.05)
+    assert "buzzes" in warnings(quiet)[0]
+    steering = _metrics(i_m=buzz, tau_r=20.0 * np.sin(2 * np.pi * 10.0 * t))
+    assert steering["flag_oscillation"] == 0.0  # current the rider asks for is no buzz
+    slow = _metrics(i_m=5.0 * np.sin(2 * np.pi * 0.5 * t), tau_r=np.zeros(1))
+    assert slow["flag_oscillation"] == 0.0  # steering-rate current is below the 3 Hz cutoff
+
+
+def test_fall_saturation_and_speed_flags() -> None:
+    fell = _metrics(phi=np.linspace(0.0, math.radians(60.0), 4000))
+    assert fell["flag_fall"] == 1.0 and "fell" in (failure(fell) or "")
+    saturated = _metrics(i_m=np.full(1, 30.0))
+    assert saturated["flag_saturation"] == 1.0 and "limit" in (failure(saturated) or "")
+    stopped = _metrics(v_x=np.linspace(10.0, 1.0, 4000))
+    assert stopped["flag_out_of_range"] == 1.0 and failure(stopped) is None
+    fine = _metrics(phi=np.full(1, 0.2), i_m=np.full(1, 2.0), v_x=np.full(1, 20.0))
+    assert failure(fine) is None and warnings(fine) == []
+
+
+def test_fractions_of_the_peaks() -> None:
+    t = np.arange(0.0, 4.0, 1e-3)
+    delta = 0.02 * np.sin(t)
+    m = _metrics(
+        delta=delta, theta_h=delta + 0.001, tau_r=np.full(1, 10.0), tau_r_hat=np.full(1, 10.5)
+    )
+    assert math.isclose(m["tracking_rms_fraction"], 0.001 / np.max(np.abs(delta)), rel_tol=1e-9)
+    assert math.isclose(m["estimate_rms_fraction"], 0.05, rel_tol=1e-9)
+    assert math.isnan(_metrics(delta=np.zeros(1), theta_h=np.zeros(1))["tracking_rms_fraction"])

@@ -1,0 +1,162 @@
+"""Results survive every stop: SIGTERM, SIGKILL, a second run, a failed overwrite, a full disk."""
+
+import csv
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from motosim.errors import MotosimError
+from motosim.io.results import ResultWriter, load_result, lock_file, partial_folder
+
+NAMES = ("t", "phi")
+
+# A child process writing 10-row blocks forever; it prints "ready" after the first block.
+_WRITER = """
+import sys, time, numpy as np
+from motosim.io.results import ResultWriter
+with ResultWriter(sys.argv[1], ("t", "phi"), {"seed": 3}) as w:
+    for k in range(10**6):
+        w.append(np.column_stack([np.arange(10 * k, 10 * k + 10) * 1e-3, np.ones(10)]))
+        if k == 4:
+            print("ready", flush=True)
+        time.sleep(0.01)
+"""
+
+
+def _block(start: int, m: int) -> np.ndarray:
+    return np.column_stack([(start + np.arange(m)) * 1e-3, np.ones(m)])
+
+
+def _start_writer(folder: Path) -> subprocess.Popen[str]:
+    child = subprocess.Popen(
+        [sys.executable, "-c", _WRITER, str(folder)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout is not None and child.stdout.readline().strip() == "ready"
+    return child
+
+
+def _plainly_readable(folder: Path) -> int:
+    """Rows of the result, read with plain h5py (no SWMR) and the csv module."""
+    with h5py.File(folder / "result.h5", "r") as h5:
+        rows = h5["signals"].shape[0]
+        assert not h5.attrs["complete"]
+    csv_file = folder / "result.partial.csv"
+    with csv_file.open(newline="") as handle:
+        table = list(csv.reader(handle))
+    assert table[0] == list(NAMES) and all(len(row) == 2 for row in table)
+    assert len(table) - 1 == rows
+    return rows
+
+
+def test_sigterm_closes_the_files_like_ctrl_c(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    child = _start_writer(folder)
+    child.send_signal(signal.SIGTERM)
+    _, err = child.communicate(timeout=30)
+    assert child.returncode != 0 and "KeyboardInterrupt" in err
+    rows = _plainly_readable(folder)  # no previous result: the rows moved to the folder
+    assert rows >= 50 and not lock_file(folder).exists()
+    assert load_result(folder).t.size == rows
+
+
+def test_sigkill_leaves_a_plainly_readable_partial_result(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    child = _start_writer(folder)
+    child.kill()
+    child.communicate(timeout=30)
+    assert not folder.exists()
+    with pytest.raises(MotosimError, match=r"a stopped run left its rows in .*run\.partial"):
+        load_result(folder)
+    rows = _plainly_readable(partial_folder(folder))
+    assert rows >= 50 and load_result(partial_folder(folder)).t.size == rows
+    # the lock died with the process: a rerun goes ahead and replaces the partial rows
+    with ResultWriter(folder, NAMES, {}) as writer:
+        writer.append(_block(0, 3))
+    assert load_result(folder).complete and not partial_folder(folder).exists()
+
+
+def test_a_second_run_of_the_same_folder_is_refused(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    child = _start_writer(folder)
+    try:
+        for overwrite in (False, True):
+            with pytest.raises(MotosimError, match=r"another run \(pid \d+\) is writing"):
+                ResultWriter(folder, NAMES, {}, overwrite=overwrite)
+    finally:
+        child.terminate()
+        child.communicate(timeout=30)
+    assert load_result(folder).t.size >= 50
+
+
+def test_a_failed_overwrite_keeps_the_previous_result(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    with ResultWriter(folder, NAMES, {"run": 1}) as writer:
+        writer.append(_block(0, 7))
+
+    def diverging_run() -> None:
+        with ResultWriter(folder, NAMES, {"run": 2}, overwrite=True) as w:
+            w.append(_block(0, 2))
+            raise RuntimeError("the model diverged")
+
+    with pytest.raises(RuntimeError):
+        diverging_run()
+    kept = load_result(folder)
+    assert kept.complete and kept.metadata == {"run": 1} and kept.t.size == 7
+    assert load_result(partial_folder(folder)).metadata == {"run": 2}
+    with ResultWriter(folder, NAMES, {"run": 3}, overwrite=True) as writer:
+        writer.append(_block(0, 1))
+    assert load_result(folder).metadata == {"run": 3} and not partial_folder(folder).exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+
+def test_a_folder_of_other_files_is_refused(tmp_path: Path) -> None:
+    (tmp_path / "notes.txt").write_text("mine")
+    with pytest.raises(MotosimError, match="holds files that are not a motosim result"):
+        ResultWriter(tmp_path, NAMES, {})
+    with pytest.raises(MotosimError, match="is the current folder or one of its parents"):
+        ResultWriter(Path.cwd(), NAMES, {})
+
+
+def test_not_enough_space_is_refused_before_the_run(tmp_path: Path) -> None:
+    with pytest.raises(MotosimError) as info:
+        ResultWriter(tmp_path / "run", NAMES, {}, expected_rows=10**15)
+    assert "MB are free" in str(info.value) and not (tmp_path / "run.partial").exists()
+
+
+def test_a_full_disk_is_one_line_and_keeps_the_rows(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "run"
+    real = shutil.disk_usage
+    with ResultWriter(folder, NAMES, {}) as writer:
+        writer.append(_block(0, 100))
+        # the disk fills up (another process) down to 10 MB
+        full = real(tmp_path)._replace(free=10_000_000)
+        monkeypatch.setattr(shutil, "disk_usage", lambda _: full)
+        with pytest.raises(MotosimError) as info:
+            writer.append(_block(100, 100))
+    message = str(info.value)
+    assert "\n" not in message and "the disk is full (10.0 MB free" in message
+    assert f"100 rows (t <= 0.099 s) kept in {folder}" in message
+    assert _plainly_readable(folder) == 100
+
+
+def test_leaving_no_stale_lock_after_an_error_in_the_constructor(tmp_path: Path) -> None:
+    with pytest.raises(MotosimError):
+        ResultWriter(tmp_path / "run", ("x",), {})
+    with ResultWriter(tmp_path / "run", NAMES, {}) as writer:
+        writer.append(_block(0, 1))
+    assert not lock_file(tmp_path / "run").exists()
+    time.sleep(0)
+    assert os.listdir(tmp_path) == ["run"]
