@@ -288,5 +288,5 @@ def test_side_wind_tips_the_motorcycle_and_the_rider_corrects() -> None:
     run = load_run(ROOT / "scenarios" / "crosswind_30.toml")
     result = simulate(run, rng=np.random.default_rng(0))
     assert np.max(np.abs(result["tau_r"])) > 5.0  # the rider has something to correct
-    assert np.max(np.abs(result["e_y"])) < 1.0  # is blown less than a metre off the lane
+    assert np.max(np.abs(result["e_y"])) < 0.5  # is blown less than half a metre off the lane
     assert abs(result["e_y"][-1]) < 0.2  # and is back on it when the gust is over

@@ -112,7 +112,7 @@ def test_report(tmp_path: Path) -> None:
     assert "<h2>Metrics</h2>" in text and "RMS of theta_h - delta" in text and "rk4" in text
     assert "100 Hz" in text and "complete" in text
     images = text.split('src="data:image/png;base64,')[1:]
-    assert len(images) == 5
+    assert len(images) == 6  # torque, tracking, rate, motor torque, motorcycle, spectra
     for image in images:
         assert base64.b64decode(image.split('"', 1)[0]).startswith(b"\x89PNG")
     assert "http://" not in text.replace("http://www.w3.org", "") and "<script" not in text

@@ -158,7 +158,8 @@ def run_metrics(
         values = signal(name)
         if values is not None:
             out[key] = float(np.max(np.abs(values)))
-    out["flag_fall"] = float(out.get("max_abs_phi", 0.0) > FALL_ROLL)
+    if "max_abs_phi" in out:
+        out["flag_fall"] = float(out["max_abs_phi"] > FALL_ROLL)
     speed = signal("v_x")
     if speed is not None:
         out["min_speed"], out["max_speed"] = float(np.min(speed)), float(np.max(speed))
