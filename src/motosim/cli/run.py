@@ -282,6 +282,18 @@ def _loop(
     from motosim.rt.loop import RateLoop
     from motosim.rt.privileges import freeze_gc, thaw_gc
 
+    presses = [0]
+
+    def on_sigint(signum: int, frame: object) -> None:
+        presses[0] += 1
+        if presses[0] == 1:
+            runner.request_stop()  # before the loop starts: it ends at once
+        else:
+            runner.emergency_stop()
+
+    # from here to the end Ctrl-C is ours: a stop, then an E-stop; never an exception that
+    # would leave the writer and the shared ring behind
+    previous = signal.signal(signal.SIGINT, on_sigint)
     ctx = multiprocessing.get_context("spawn")
     ours, theirs = ctx.Pipe()
     writer = ctx.Process(
@@ -300,16 +312,6 @@ def _loop(
             raise MotosimError(answer[1])
         privileges = privileges_from_args(args)
         loop = RateLoop(rate, clock, capacity=max(1, min(periods, 1 << 22)))
-        presses = [0]
-
-        def on_sigint(signum: int, frame: object) -> None:
-            presses[0] += 1
-            if presses[0] == 1:
-                runner.request_stop()
-            else:
-                runner.emergency_stop()
-
-        previous = signal.signal(signal.SIGINT, on_sigint)
         if sys.stdin is not None and sys.stdin.isatty():
             threading.Thread(target=_keyboard, args=(runner,), daemon=True).start()
             print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=sys.stderr)
@@ -319,7 +321,6 @@ def _loop(
             loop.run(runner.period, periods=periods)
         finally:
             thaw_gc()
-            signal.signal(signal.SIGINT, previous)
         stats = loop.stats()
         complete = runner.safety.fault.name == "NONE" and stats.periods >= periods
         extra = {f"rt_{key}": float(value) for key, value in stats.as_dict().items()}
@@ -332,4 +333,5 @@ def _loop(
         if writer.is_alive():
             writer.kill()
         runner.ring.close()
+        signal.signal(signal.SIGINT, previous)
     return stats, privileges, summary
