@@ -65,6 +65,15 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "motosim.cli.cueing",
         "platform roll/pitch/yaw commands for a run, scored by what the rider perceives",
     ),
+    "run": ("motosim.cli.run", "run the stack in real time against the handlebar over CAN"),
+    "rig": (
+        "motosim.cli.rig",
+        "start the virtual rig: the scenario's handlebar and drive on a CAN bus",
+    ),
+    "rt-check": (
+        "motosim.cli.rtcheck",
+        "measure this machine's wake-up latency and missed deadlines at a rate",
+    ),
 }
 """Subcommand name -> (module that registers it, one-line help shown by ``motosim --help``)."""
 

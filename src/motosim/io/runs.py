@@ -43,7 +43,9 @@ def load_scenario(path: str | Path) -> Scenario:
     source = Path(path)
     if not source.is_file():
         raise MotosimError(f"{path}: no such scenario file")
-    return parse_scenario(read_toml(source, what="scenario file"), origin=str(path))
+    data = dict(read_toml(source, what="scenario file"))
+    data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
+    return parse_scenario(data, origin=str(path))
 
 
 def _relative(name: str, base: Path) -> str | Path:

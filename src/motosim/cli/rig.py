@@ -1,0 +1,145 @@
+"""``motosim rig``: the virtual rig, a handlebar and its drive on the bus, in its own process."""
+
+import argparse
+import math
+import signal
+from typing import Any
+
+import numpy as np
+
+from motosim.cli._common import print_json
+from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
+from motosim.errors import MotosimError
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``rig`` to the subcommands."""
+    parser = sub.add_parser(
+        "rig",
+        help="start the virtual rig: the scenario's handlebar and drive on a CAN bus",
+        description=(
+            "Simulate the scenario's true handlebar and its drive on the bus, answering the "
+            "DBC's frames as hardware does (status frames at the scenario's measurement rate, "
+            "current commands, E-stop), with the latency, frame loss and faults of the "
+            "[realtime.rig] table. The rider's torque profile starts with the first enabled "
+            "command; a virtual rider steers by the state that motosim run publishes "
+            "(--telemetry). Runs until Ctrl-C or --duration."
+        ),
+    )
+    parser.add_argument("scenario", help="scenario TOML file")
+    parser.add_argument(
+        "--bus", required=True, help="python-can INTERFACE[:CHANNEL]: udp_multicast, ..."
+    )
+    parser.add_argument("--duration", type=float, help="stop after this long [s]")
+    parser.add_argument(
+        "--rate",
+        type=float,
+        default=1000.0,
+        help="ticks per second [Hz] at which the rig takes commands and sends frames (1000)",
+    )
+    parser.add_argument(
+        "--telemetry",
+        default="127.0.0.1:47474",
+        metavar="HOST:PORT",
+        help="where a virtual rider reads the run's state stream (default 127.0.0.1:47474)",
+    )
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_privilege_options(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the rig until Ctrl-C or the duration; print what it did."""
+    from motosim.cli.run import load_realtime
+    from motosim.io.can import handlebar_codecs, open_link
+    from motosim.rt.loop import RateLoop
+    from motosim.rt.privileges import freeze_gc, thaw_gc
+    from motosim.rt.rig import VirtualRig, parse_rig
+
+    inputs, realtime = load_realtime(args.scenario)
+    sc = inputs.scenario
+    settings = parse_rig(
+        realtime.get("rig", {}),
+        base={
+            "plant_rate": sc.rates.plant,
+            "status_rate": sc.rates.measurement,
+            "encoder_bits": sc.measurement.encoder_bits,
+            "current_noise": sc.measurement.current_noise,
+            "max_current": sc.controller.max_current,
+        },
+        where=f"{args.scenario}: [realtime.rig]",
+    )
+    duration = math.inf if args.duration is None else args.duration
+    if not (duration > 0.0):
+        raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
+    receiver = None
+    rider: Any
+    if sc.rider.profile is not None:
+        t_fine = np.arange(round(sc.duration * settings.plant_rate) + 1) / settings.plant_rate
+        rider = sc.rider.profile.sample(t_fine, inputs.tables)
+    else:  # the virtual rider, steering by the run's state stream
+        from motosim.rt.rig import VirtualRider
+        from motosim.rt.telemetry import StateReceiver, parse_address
+        from motosim.sim import build_rig
+
+        receiver = StateReceiver(parse_address(args.telemetry))
+        rider = VirtualRider(build_rig(inputs, rng=np.random.default_rng(sc.seed)), receiver)
+    clock = clock_from_args(args)
+    codecs = handlebar_codecs()
+    link = open_link(args.bus)
+    try:
+        rig = VirtualRig(
+            inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed)
+        )
+        rate = args.rate
+        if not (math.isfinite(rate) and 0.0 < rate <= settings.plant_rate):
+            raise MotosimError(
+                f"--rate {rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz"
+            )
+        periods = 2**62 if math.isinf(duration) else round(duration * rate)
+        loop = RateLoop(rate, clock, capacity=min(periods, 1 << 20))
+        privileges = privileges_from_args(args)
+        t0 = [math.nan]
+
+        def tick(k: int, t: float) -> bool:
+            if t0[0] != t0[0]:
+                t0[0] = t
+            rig.advance_to(t - t0[0])
+            return True
+
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: loop.stop())
+        freeze_gc()
+        try:
+            loop.run(tick, periods=periods)
+        finally:
+            thaw_gc()
+            signal.signal(signal.SIGINT, previous)
+    finally:
+        link.close()
+        if receiver is not None:
+            receiver.close()
+    stats = loop.stats()
+    summary = {
+        "time": rig.t,
+        "frames_sent": rig.frames_sent,
+        "frames_dropped": rig.frames_dropped,
+        "commands": rig.commands,
+        "bad_commands": rig.bad_commands,
+        "bus_errors": link.errors,
+        "timing": stats.as_dict(),
+        "privileges": [
+            {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
+        ],
+    }
+    if args.json:
+        print_json(summary)
+    else:
+        print(
+            f"rig: {rig.t:.3f} s simulated, {rig.frames_sent} status frames sent "
+            f"({rig.frames_dropped} dropped), {rig.commands} commands received "
+            f"({rig.bad_commands} bad); wake-up p99 {stats.wake_p99 * 1e6:.0f} us, "
+            f"missed {stats.missed}"
+        )
+    return 0

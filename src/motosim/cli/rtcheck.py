@@ -1,0 +1,111 @@
+"""``motosim rt-check``: this machine's wake-up latency and missed deadlines at a given rate."""
+
+import argparse
+import math
+from typing import Any
+
+from motosim.cli._common import parse_float_list, print_json
+from motosim.errors import MotosimError
+from motosim.rt.check import check_timing
+from motosim.rt.clock import MonotonicClock
+from motosim.rt.loop import TimingStats
+from motosim.rt.privileges import Privilege, apply_privileges
+
+__all__ = ["add_privilege_options", "privileges_from_args", "register"]
+
+
+def add_privilege_options(parser: argparse.ArgumentParser) -> None:
+    """The real-time options shared by ``rt-check``, ``run`` and ``rig``."""
+    parser.add_argument(
+        "--fifo",
+        type=int,
+        metavar="PRIORITY",
+        help="run under SCHED_FIFO at this priority, 1..99 (needs root, CAP_SYS_NICE or ulimit -r)",
+    )
+    parser.add_argument("--cpu", metavar="LIST", help="pin the process to these CPUs, e.g. 1")
+    parser.add_argument(
+        "--mlock", action="store_true", help="lock the process's memory in RAM (mlockall)"
+    )
+    parser.add_argument(
+        "--spin",
+        type=float,
+        default=200.0,
+        metavar="US",
+        help="poll the clock for the last US microseconds before each deadline (default 200)",
+    )
+
+
+def privileges_from_args(args: argparse.Namespace) -> tuple[Privilege, ...]:
+    """Apply the privileges asked for on the command line; each reported, none fatal."""
+    cpus = None
+    if args.cpu is not None:
+        values = parse_float_list("--cpu", args.cpu)
+        if not all(v >= 0 and v == int(v) for v in values):
+            raise MotosimError(f"--cpu {args.cpu!r}; expected CPU numbers such as 1 or 0,1")
+        cpus = [int(v) for v in values]
+    return apply_privileges(priority=args.fifo, cpus=cpus, mlock=args.mlock)
+
+
+def clock_from_args(args: argparse.Namespace) -> MonotonicClock:
+    """The monotonic clock with the ``--spin`` margin [us] converted to seconds."""
+    if not (math.isfinite(args.spin) and 0.0 <= args.spin < 1e6):
+        raise MotosimError(f"--spin {args.spin!r}; expected microseconds in [0, 1000000)")
+    return MonotonicClock(spin=args.spin * 1e-6)
+
+
+def register(sub: Any) -> None:
+    """Add ``rt-check`` to the subcommands."""
+    parser = sub.add_parser(
+        "rt-check",
+        help="measure this machine's wake-up latency and missed deadlines at a rate",
+        description=(
+            "Run an empty fixed-rate loop and print the wake-up latency after each deadline "
+            "(p50, p99, p99.9, max) and the missed deadlines. Run it first on a new lab PC, "
+            "with and without --fifo/--cpu/--mlock."
+        ),
+    )
+    parser.add_argument("--rate", type=float, default=1000.0, help="loop rate [Hz] (1000)")
+    parser.add_argument("--duration", type=float, default=5.0, help="how long [s] (5)")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    add_privilege_options(parser)
+    parser.set_defaults(func=run)
+
+
+def _table(stats: TimingStats, privileges: tuple[Privilege, ...]) -> str:
+    us = 1e6
+    lines = [
+        f"rate {stats.rate:g} Hz, {stats.periods} deadlines, {stats.served} served",
+        f"{'':8}{'p50':>10}{'p99':>10}{'p99.9':>10}{'max':>10}  [us]",
+        f"{'wake-up':8}{stats.wake_p50 * us:10.1f}{stats.wake_p99 * us:10.1f}"
+        f"{stats.wake_p999 * us:10.1f}{stats.wake_max * us:10.1f}",
+        f"missed deadlines: {stats.missed} ({100.0 * stats.miss_ratio:.3f} %)",
+    ]
+    for p in privileges:
+        lines.append(f"{p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
+    if not privileges:
+        lines.append("no real-time privilege asked for (see --fifo, --cpu, --mlock)")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; exit 0."""
+    if not (math.isfinite(args.rate) and 0.0 < args.rate <= 100_000.0):
+        raise MotosimError(f"--rate {args.rate!r}; expected a rate in (0, 100000] Hz")
+    if not (math.isfinite(args.duration) and 0.0 < args.duration <= 86_400.0):
+        raise MotosimError(f"--duration {args.duration!r}; expected seconds in (0, 86400]")
+    clock = clock_from_args(args)
+    privileges = privileges_from_args(args)
+    stats = check_timing(args.rate, args.duration, clock=clock)
+    if args.json:
+        print_json(
+            {
+                "timing": stats.as_dict(),
+                "units": "s",
+                "privileges": [
+                    {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
+                ],
+            }
+        )
+    else:
+        print(_table(stats, privileges))
+    return 0

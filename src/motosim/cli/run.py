@@ -1,0 +1,337 @@
+"""``motosim run``: the stack in real time against the handlebar drive over CAN."""
+
+import argparse
+import signal
+import sys
+import threading
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motosim.cli._common import print_json, write_text
+from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
+from motosim.errors import MotosimError, RunFailedError
+from motosim.io.results import ResultWriter
+from motosim.io.runs import resolve
+from motosim.sim import RunInputs, build_rig, build_stack, parse_scenario, run_metadata
+from motosim.sim.metrics import run_metrics
+
+__all__ = ["load_realtime", "register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``run`` to the subcommands."""
+    parser = sub.add_parser(
+        "run",
+        help="run the stack in real time against the handlebar over CAN",
+        description=(
+            "Run the scenario's stack in real time: read the drive's status frames, step the "
+            "compiled stack at the control rate, pass the command through the safety stage and "
+            "send it. Writes DIR/result.h5 and DIR/result.csv (as simulate does, one row per "
+            "control period) and DIR/timing.json. Ctrl-C fades the torque out and stops; a "
+            "second Ctrl-C, or Enter on the terminal, is an emergency stop."
+        ),
+    )
+    parser.add_argument("scenario", help="scenario TOML file with a [realtime.safety] table")
+    parser.add_argument(
+        "--bus",
+        required=True,
+        help="python-can INTERFACE[:CHANNEL]: socketcan:can0, virtual, udp_multicast, ...",
+    )
+    parser.add_argument("--out", required=True, help="folder for the result")
+    parser.add_argument("--duration", type=float, help="run for this long [s] (the scenario's)")
+    parser.add_argument(
+        "--telemetry",
+        default="127.0.0.1:47474",
+        metavar="HOST:PORT",
+        help="publish the stack's state each period as UDP datagrams here, or 'off' "
+        "(the virtual rig's virtual rider steers by it; default 127.0.0.1:47474)",
+    )
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace a result already in the folder"
+    )
+    parser.add_argument(
+        "--no-report", dest="report", action="store_false", help="skip the HTML report"
+    )
+    add_privilege_options(parser)
+    parser.set_defaults(func=run)
+
+
+def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
+    """Read a scenario file: its resolved run and its ``[realtime]`` table."""
+    from motosim.rt.config import split_realtime
+
+    source = Path(path)
+    if not source.is_file():
+        raise MotosimError(f"{path}: no such scenario file")
+    try:
+        data = tomllib.loads(source.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as err:
+        raise MotosimError(f"{path}: not valid TOML: {err}") from None
+    except UnicodeDecodeError:
+        raise MotosimError(f"{path}: not UTF-8 text; expected a TOML scenario file") from None
+    rest, realtime = split_realtime(data, origin=str(path))
+    scenario = parse_scenario(rest, origin=str(path))
+    return resolve(scenario, source.parent), realtime
+
+
+class _EarlyStopError(Exception):
+    """The run ended before its duration (stop or fault): the result is kept, incomplete."""
+
+
+def _writer_main(
+    conn: Any,
+    handle: Any,
+    names: tuple[str, ...],
+    folder: str,
+    metadata: dict[str, Any],
+    overwrite: bool,
+    torque_per_amp: float,
+) -> None:
+    """The writer process: drain the loop's shared ring into the result files every 0.1 s.
+
+    Writing files takes milliseconds with the interpreter lock held; in its own process it
+    cannot delay the loop. Messages on ``conn``: ("ready",) or ("error", text) first; then,
+    on ("close", complete, extra summary), the last rows are written and ("done", summary)
+    sent back.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the loop's to handle
+    from motosim.rt.ring import SampleRing
+    from motosim.rt.stack import RESULT_SIGNALS, result_block
+
+    ring = SampleRing.attach(handle)
+    try:
+        writer = ResultWriter(Path(folder), RESULT_SIGNALS, metadata, overwrite=overwrite)
+    except MotosimError as err:
+        conn.send(("error", str(err)))
+        ring.close()
+        return
+    conn.send(("ready",))
+    blocks: list[np.ndarray] = []
+
+    def flush() -> None:
+        rows = ring.drain()
+        if rows.shape[0]:
+            block = result_block(rows, names, torque_per_amp)
+            writer.append(block)
+            blocks.append(block)
+
+    summary: dict[str, Any] = {}
+    try:
+        with writer:
+            while True:
+                if conn.poll(0.1):
+                    _, complete, extra = conn.recv()
+                    break
+                flush()
+            flush()
+            rows = np.vstack(blocks) if blocks else np.zeros((0, len(RESULT_SIGNALS)))
+            col = {name: j for j, name in enumerate(RESULT_SIGNALS)}
+            summary = run_metrics(
+                rows[:, 0], lambda n: rows[:, col[n]] if n in col else None, complete=complete
+            )
+            summary |= extra
+            summary["ring_dropped"] = float(ring.dropped)
+            if not complete:  # stopped or faulted: files closed, marked incomplete
+                raise _EarlyStopError
+            writer.close(summary)
+    except _EarlyStopError:
+        pass
+    finally:
+        ring.close()
+    conn.send(("done", summary))
+
+
+def _keyboard(runner: Any) -> None:
+    """Enter on the terminal: emergency stop."""
+    for _ in sys.stdin:
+        runner.emergency_stop()
+        return
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
+    from motosim.io.can import handlebar_codecs, open_link
+    from motosim.rt.config import parse_safety
+    from motosim.rt.run import RealtimeRunner
+    from motosim.rt.stack import CompiledStack
+
+    inputs, realtime = load_realtime(args.scenario)
+    sc = inputs.scenario
+    if sc.motorcycle.input == "true":
+        raise MotosimError(
+            f'{args.scenario}: motorcycle input = "true" is a simulation-only reference; '
+            'expected "estimate" for a real-time run'
+        )
+    limits = parse_safety(realtime.get("safety"), origin=args.scenario)
+    duration = sc.duration if args.duration is None else args.duration
+    if not (np.isfinite(duration) and 0.0 < duration <= 86_400.0):
+        raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
+    folder = Path(args.out)
+    if (folder / "result.h5").exists() and not args.overwrite:
+        raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
+    clock = clock_from_args(args)
+    rate = sc.rates.control
+    periods = round(duration * rate)
+    model = build_stack(inputs)
+    world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
+    codecs = handlebar_codecs()
+    stack = CompiledStack(model, force=world.force, side_force=world.side_force)
+    sender = None
+    if args.telemetry != "off":
+        from motosim.rt.telemetry import StateSender, parse_address
+
+        sender = StateSender(parse_address(args.telemetry), width=len(stack.names))
+    link = open_link(args.bus)
+    try:
+        runner = RealtimeRunner(
+            stack,
+            link,
+            codecs,
+            limits,
+            rate=rate,
+            periods_per_frame=model.measure_every,
+            capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
+            shared_ring=True,
+            telemetry=None if sender is None else sender.send,
+        )
+        metadata = run_metadata(inputs) | {
+            "realtime": {"bus": args.bus, "safety": limits, "duration": duration}
+        }
+        stats, privileges, summary = _loop(
+            args, runner, clock, rate, periods, folder, metadata,
+            inputs.nominal_handlebar.torque_per_amp,
+        )  # fmt: skip
+        counters = runner.counters()
+    finally:
+        link.close()
+        if sender is not None:
+            sender.close()
+    timing = stats.as_dict()
+    report = {
+        "timing": timing,
+        "units": "s",
+        "privileges": [
+            {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
+        ],
+        "counters": {
+            "status_frames": counters.status_frames,
+            "frames_lost": counters.frames_lost,
+            "frames_stale": counters.frames_stale,
+            "send_errors": counters.send_errors,
+            "bus_errors": link.errors,
+            "ring_dropped": int(summary.get("ring_dropped", 0)),
+        },
+        "state": counters.state,
+        "fault": counters.fault,
+        "fault_reason": counters.fault_reason,
+    }
+    write_text(folder / "timing.json", _json(report))
+    html = None
+    if args.report:
+        from motosim.report import build_report
+
+        html = build_report(folder)
+    if args.json:
+        print_json({"out": str(folder), "report": str(html) if html else None} | report)
+    else:
+        us = 1e6
+        print(f"{sc.name}: {stats.served} periods at {rate:g} Hz, result in {folder}")
+        print(
+            f"  wake-up p99 {stats.wake_p99 * us:.0f} us, compute p99 "
+            f"{stats.compute_p99 * us:.0f} us, missed {stats.missed} of {stats.periods}"
+        )
+        for p in privileges:
+            print(f"  {p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
+        print(f"  state {counters.state}; {counters.fault_reason}")
+    if counters.fault == "NONE" and runner.stop_requested:
+        print(f"motosim run: stopped, torque faded out; result in {folder}", file=sys.stderr)
+        return 130
+    if counters.fault != "NONE":
+        raise RunFailedError(
+            f"safety fault: {counters.fault_reason}; the result until then is in {folder}",
+            time=counters.fault_time,
+        )
+    return 0
+
+
+def _json(payload: Any) -> str:
+    import json
+
+    from motosim.cli._common import _finite_or_none
+
+    return json.dumps(_finite_or_none(payload), indent=2, allow_nan=False) + "\n"
+
+
+def _loop(
+    args: argparse.Namespace,
+    runner: Any,
+    clock: Any,
+    rate: float,
+    periods: int,
+    folder: Path,
+    metadata: dict[str, Any],
+    torque_per_amp: float,
+) -> tuple[Any, tuple[Any, ...], dict[str, Any]]:
+    """The real-time part: writer process, privileges, signals, keyboard, the loop."""
+    import multiprocessing
+
+    from motosim.rt.loop import RateLoop
+    from motosim.rt.privileges import freeze_gc, thaw_gc
+
+    presses = [0]
+
+    def on_sigint(signum: int, frame: object) -> None:
+        presses[0] += 1
+        if presses[0] == 1:
+            runner.request_stop()  # before the loop starts: it ends at once
+        else:
+            runner.emergency_stop()
+
+    # from here to the end Ctrl-C is ours: a stop, then an E-stop; never an exception that
+    # would leave the writer and the shared ring behind
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    ctx = multiprocessing.get_context("spawn")
+    ours, theirs = ctx.Pipe()
+    writer = ctx.Process(
+        target=_writer_main,
+        args=(theirs, runner.ring.handle, runner.names, str(folder), metadata,
+              bool(args.overwrite), torque_per_amp),
+        name="motosim-writer",
+        daemon=True,
+    )  # fmt: skip
+    writer.start()
+    try:
+        if not ours.poll(120.0):
+            raise MotosimError(f"{folder}: the result writer did not start")
+        answer = ours.recv()
+        if answer[0] == "error":
+            raise MotosimError(answer[1])
+        privileges = privileges_from_args(args)
+        loop = RateLoop(rate, clock, capacity=max(1, min(periods, 1 << 22)))
+        if sys.stdin is not None and sys.stdin.isatty():
+            threading.Thread(target=_keyboard, args=(runner,), daemon=True).start()
+            print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=sys.stderr)
+        freeze_gc()
+        runner.discard_pending()  # frames queued while the writer started are stale
+        try:
+            loop.run(runner.period, periods=periods)
+        finally:
+            thaw_gc()
+        stats = loop.stats()
+        complete = runner.safety.fault.name == "NONE" and stats.periods >= periods
+        extra = {f"rt_{key}": float(value) for key, value in stats.as_dict().items()}
+        ours.send(("close", complete, extra))
+        if not ours.poll(120.0):
+            raise MotosimError(f"{folder}: the result writer did not finish")
+        summary: dict[str, Any] = ours.recv()[1]
+    finally:
+        writer.join(timeout=10.0)
+        if writer.is_alive():
+            writer.kill()
+        runner.ring.close()
+        signal.signal(signal.SIGINT, previous)
+    return stats, privileges, summary

@@ -1,0 +1,220 @@
+"""The fixed-period loop: absolute deadlines, overruns skipped and counted, timing recorded.
+
+:class:`RateLoop` calls a step function once per period at the absolute deadlines
+``t0 + k T``. A step that overruns (it ends after the next deadline), or a wake-up delayed
+past it, does not make the loop run the missed steps back to back ("bunching", which would
+send several commands to the drive at once): the deadlines that have passed are skipped and
+counted as misses, and the loop resumes on the next deadline still ahead. This is the
+"Ratekeeper" pattern of openpilot's ``common/realtime.py``.
+
+The wake-up latency (time of wake-up minus deadline [s]) and the compute time of each step
+[s] go into arrays preallocated before the first deadline; nothing inside the loop allocates
+beyond Python's small floats, and nothing logs. :meth:`RateLoop.stats` summarises them once
+the loop has ended.
+"""
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from motosim.errors import MotosimError
+from motosim.rt.clock import Clock
+
+__all__ = ["RateLoop", "TimingStats", "timing_stats"]
+
+
+@dataclass(frozen=True, slots=True)
+class TimingStats:
+    """Timing of a loop run.
+
+    Attributes
+    ----------
+    rate : float
+        The loop's rate [Hz].
+    periods : int
+        Deadlines that passed (served plus missed).
+    served : int
+        Steps run.
+    missed : int
+        Deadlines skipped because the loop was late.
+    wake_p50, wake_p99, wake_p999, wake_max : float
+        Wake-up latency after the deadline [s] (median, 99th, 99.9th percentile, maximum).
+    compute_p50, compute_p99, compute_p999, compute_max : float
+        Compute time of one step [s], same statistics.
+    """
+
+    rate: float
+    periods: int
+    served: int
+    missed: int
+    wake_p50: float
+    wake_p99: float
+    wake_p999: float
+    wake_max: float
+    compute_p50: float
+    compute_p99: float
+    compute_p999: float
+    compute_max: float
+
+    @property
+    def miss_ratio(self) -> float:
+        """Missed deadlines over all deadlines (0 when none passed)."""
+        return self.missed / self.periods if self.periods else 0.0
+
+    def as_dict(self) -> dict[str, float | int]:
+        """The statistics as a flat dictionary (times in seconds), with ``miss_ratio``."""
+        out: dict[str, float | int] = asdict(self)
+        out["miss_ratio"] = self.miss_ratio
+        return out
+
+
+def timing_stats(
+    rate: float, wake: np.ndarray, compute: np.ndarray, *, periods: int, missed: int
+) -> TimingStats:
+    """Summarise wake-up latencies and compute times [s] of the served steps.
+
+    Examples
+    --------
+    >>> s = timing_stats(100.0, np.zeros(3), np.full(3, 1e-4), periods=4, missed=1)
+    >>> s.served, s.compute_max, s.miss_ratio
+    (3, 0.0001, 0.25)
+    """
+    if wake.size == 0:
+        nan = float("nan")
+        return TimingStats(rate, periods, 0, missed, *(nan,) * 8)
+    qs = (50.0, 99.0, 99.9)
+    w = np.percentile(wake, qs)
+    c = np.percentile(compute, qs)
+    return TimingStats(
+        rate=rate,
+        periods=periods,
+        served=int(wake.size),
+        missed=missed,
+        wake_p50=float(w[0]),
+        wake_p99=float(w[1]),
+        wake_p999=float(w[2]),
+        wake_max=float(wake.max()),
+        compute_p50=float(c[0]),
+        compute_p99=float(c[1]),
+        compute_p999=float(c[2]),
+        compute_max=float(compute.max()),
+    )
+
+
+class RateLoop:
+    """Run a step at a fixed rate on absolute deadlines.
+
+    Parameters
+    ----------
+    rate : float
+        Steps per second [Hz], > 0.
+    clock : Clock
+        Where time comes from (:class:`~motosim.rt.clock.MonotonicClock` in a lab,
+        :class:`~motosim.rt.clock.SimulatedClock` in tests).
+    capacity : int
+        Steps whose timing is kept (a ring: the last ``capacity`` steps are summarised).
+
+    Examples
+    --------
+    >>> from motosim.rt.clock import SimulatedClock
+    >>> clock = SimulatedClock()
+    >>> loop = RateLoop(100.0, clock, capacity=16)
+    >>> times = []
+    >>> loop.run(lambda k, t: times.append(round(t, 6)) is None, periods=3)
+    3
+    >>> times
+    [0.01, 0.02, 0.03]
+    """
+
+    def __init__(self, rate: float, clock: Clock, *, capacity: int = 1 << 17) -> None:
+        if not (np.isfinite(rate) and rate > 0.0):
+            raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
+        if capacity < 1:
+            raise MotosimError(f"capacity = {capacity!r}: expected at least 1 step")
+        self._rate = float(rate)
+        self._period = 1.0 / self._rate
+        self._clock = clock
+        self._wake = np.zeros(capacity)
+        self._compute = np.zeros(capacity)
+        self._served = 0
+        self._missed = 0
+        self._periods = 0
+        self._stop = False
+
+    @property
+    def period(self) -> float:
+        """The period [s]."""
+        return self._period
+
+    def stop(self) -> None:
+        """Ask the loop to end after the current step (safe from a signal handler)."""
+        self._stop = True
+
+    def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
+        """Call ``step(k, deadline)`` at each deadline until it returns False or ``periods`` pass.
+
+        Parameters
+        ----------
+        step : callable
+            ``step(k, deadline) -> bool``: ``k`` is the deadline's index (0, 1, ...; skipped
+            indices are not called), ``deadline`` its time [s] on the clock; False ends the
+            loop.
+        periods : int
+            The largest number of deadlines, >= 0; the first is one period from now.
+
+        Returns
+        -------
+        int
+            The number of steps run.
+        """
+        if periods < 0:
+            raise MotosimError(f"periods = {periods!r}: expected a non-negative count")
+        clock = self._clock
+        now = clock.now
+        sleep_until = clock.sleep_until
+        wake, compute = self._wake, self._compute
+        cap = wake.size
+        period = self._period
+        t0 = now() + period
+        served = self._served
+        missed = 0
+        self._stop = False
+        k = 0
+        while k < periods and not self._stop:
+            deadline = t0 + k * period
+            sleep_until(deadline)
+            woke = now()
+            carry_on = step(k, deadline)
+            done = now()
+            slot = served % cap
+            wake[slot] = woke - deadline
+            compute[slot] = done - woke
+            served += 1
+            k += 1
+            late = done - (t0 + k * period)
+            if late >= 0.0:  # the next deadline has passed: skip it and any others passed
+                skip = int(late // period) + 1
+                missed += skip
+                k += skip
+            if not carry_on:
+                break
+        if k > periods:  # skipped deadlines past the end of the run are not misses
+            missed -= k - periods
+            k = periods
+        self._missed += missed
+        self._periods += k
+        ran = served - self._served
+        self._served = served
+        return ran
+
+    def stats(self) -> TimingStats:
+        """The timing of every run so far (the last ``capacity`` steps for the percentiles)."""
+        n = min(self._served, self._wake.size)
+        return timing_stats(
+            self._rate,
+            self._wake[:n],
+            self._compute[:n],
+            periods=self._periods,
+            missed=self._missed,
+        )

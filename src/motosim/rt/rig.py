@@ -1,0 +1,457 @@
+"""The virtual rig: the true handlebar and its drive on the bus, for runs without hardware.
+
+:class:`VirtualRig` answers the frames of the DBC as a real drive does, so that the loop of
+``motosim run`` cannot tell it from hardware:
+
+- the true handlebar of eq. (5), integrated in plant sub-steps (10 kHz by default) with
+  exact stick-slip (:func:`motosim.model.handlebar.step_exact`), driven by the rider's torque
+  (a profile of the scenario) and the motor torque ``N k_t i_m``;
+- the drive's current loop, a first-order lag of ``current_time_constant`` [s] towards the
+  commanded current, limited to ``max_current`` [A]; no command for ``command_timeout``
+  [s], or ENABLE 0, and the drive stops the torque (its own STO);
+- the status frame at ``status_rate`` [Hz]: the angle quantised by the encoder
+  (``encoder_bits`` per handlebar revolution) and by the DBC scaling, the current with noise;
+- the bus: a latency with jitter (truncated normal), random frame loss (Bernoulli) and
+  bursts (a two-state Gilbert-Elliott channel), stale frames (the previous frame sent again,
+  counter unchanged) and duplicated frames, a bus-off window (nothing sent);
+- injected faults from a given time: frozen encoder, sign flip of the angle, an offset on the
+  current sensor, a frame with a wrong checksum, an E-stop frame, the drive's fault flag.
+
+The rig is stepped with :meth:`VirtualRig.advance_to`: in one process on a
+:class:`~motosim.rt.clock.SimulatedClock` (lock-step tests, each deadline advances the rig
+first) or by ``motosim rig`` in its own process on the wall clock.
+"""
+
+import heapq
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from motosim.errors import MotosimError
+from motosim.io.can import HandlebarCodecs
+from motosim.model.handlebar import step_exact
+from motosim.params.handlebar import HandlebarParameters
+from motosim.rt.run import FrameLink
+from motosim.rt.stack import STACK_SIGNALS
+from motosim.rt.telemetry import StateReceiver
+from motosim.sim.closed_loop import RigModel
+from motosim.sim.rider import rider_torque
+
+__all__ = ["RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
+
+Array = NDArray[np.float64]
+_NEVER = math.inf
+
+
+@dataclass(frozen=True, slots=True)
+class RigFaults:
+    """Times [s] from which each fault is injected (inf: never) and the current offset [A]."""
+
+    frozen_encoder: float = _NEVER
+    sign_flip: float = _NEVER
+    current_offset_at: float = _NEVER
+    current_offset: float = 0.0
+    bad_checksum: float = _NEVER
+    estop: float = _NEVER
+    drive_fault: float = _NEVER
+
+
+@dataclass(frozen=True, slots=True)
+class RigSettings:
+    """The drive, the sensors and the bus of the virtual rig.
+
+    Parameters
+    ----------
+    plant_rate, status_rate : float
+        Plant sub-step rate and status frame rate [Hz]; the first a multiple of the second.
+    encoder_bits : int
+        Encoder resolution per handlebar revolution [bits]; 0 for an exact angle.
+    current_noise : float
+        Standard deviation of the current measurement noise [A].
+    max_current, current_time_constant, command_timeout : float
+        The drive's current limit [A], its current loop's time constant [s] (0: ideal) and
+        how long it keeps the last command without a new one [s].
+    latency, jitter : float
+        Mean one-way delay of a status frame [s] and its standard deviation [s].
+    loss : float
+        Probability that a frame is lost, independently.
+    burst_enter, burst_leave : float
+        Per-frame probabilities of entering and leaving a burst in which every frame is lost.
+    stale, duplicate : float
+        Probabilities of sending the previous frame again instead of a new one, and of sending
+        a new frame twice.
+    bus_off_at, bus_off_duration : float
+        A window [s] in which the rig sends nothing.
+    faults : RigFaults
+        Injected faults.
+    """
+
+    plant_rate: float
+    status_rate: float
+    encoder_bits: int
+    current_noise: float
+    max_current: float
+    current_time_constant: float = 0.0
+    command_timeout: float = 0.05
+    latency: float = 0.0
+    jitter: float = 0.0
+    loss: float = 0.0
+    burst_enter: float = 0.0
+    burst_leave: float = 1.0
+    stale: float = 0.0
+    duplicate: float = 0.0
+    bus_off_at: float = _NEVER
+    bus_off_duration: float = 0.0
+    faults: RigFaults = field(default_factory=RigFaults)
+
+    def __post_init__(self) -> None:
+        for name in ("plant_rate", "status_rate", "max_current", "command_timeout"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise MotosimError(f"rig {name} = {value!r}: expected a positive number")
+        ratio = self.plant_rate / self.status_rate
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise MotosimError(
+                f"rig plant_rate = {self.plant_rate!r} Hz: expected a multiple of "
+                f"status_rate = {self.status_rate!r} Hz"
+            )
+        for name in ("current_noise", "current_time_constant", "latency", "jitter"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise MotosimError(f"rig {name} = {value!r}: expected a number >= 0")
+        for name in ("loss", "burst_enter", "burst_leave", "stale", "duplicate"):
+            value = getattr(self, name)
+            if not 0.0 <= value <= 1.0:
+                raise MotosimError(f"rig {name} = {value!r}: expected a probability in [0, 1]")
+        if not 0 <= self.encoder_bits <= 32:
+            raise MotosimError(f"rig encoder_bits = {self.encoder_bits!r}: expected 0..32")
+
+
+def parse_rig(
+    table: Mapping[str, Any], *, base: Mapping[str, Any], where: str = "[realtime.rig]"
+) -> RigSettings:
+    """:class:`RigSettings` from a TOML table over the values ``base`` (from the scenario).
+
+    Unknown keys and wrong types are one-line errors; ``faults`` is a sub-table whose keys
+    are the fields of :class:`RigFaults`.
+    """
+    values: dict[str, Any] = dict(base)
+    allowed = {f.name for f in fields(RigSettings)}
+    for key, value in table.items():
+        if key not in allowed:
+            raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
+        if key == "faults":
+            values[key] = _parse_faults(value, f"{where[:-1]}.faults]")
+        elif key == "encoder_bits":
+            if not isinstance(value, int) or isinstance(value, bool):
+                raise MotosimError(f"{where} {key} = {value!r}: expected an integer")
+            values[key] = value
+        else:
+            values[key] = _number(value, f"{where} {key}")
+    return RigSettings(**values)
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise MotosimError(f"{where} = {value!r}: expected a number")
+    return float(value)
+
+
+def _parse_faults(table: Any, where: str) -> RigFaults:
+    if not isinstance(table, Mapping):
+        raise MotosimError(f"{where}: expected a table")
+    allowed = {f.name for f in fields(RigFaults)}
+    for key in table:
+        if key not in allowed:
+            raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
+    return RigFaults(**{key: _number(value, f"{where} {key}") for key, value in table.items()})
+
+
+@njit(cache=True)
+def _plant_steps(
+    x: Array,
+    i_cmd: float,
+    tau_r: Array,
+    k0: int,
+    n: int,
+    J: float,
+    beta: float,
+    beta_s: float,
+    torque_per_amp: float,
+    a_i: float,
+    max_i: float,
+    h: float,
+) -> None:
+    """Advance [theta, omega, i_m] by ``n`` sub-steps of ``h`` [s] in place.
+
+    The current follows its command with ``i += (i_cmd - i) a_i`` (``a_i = 1 - exp(-h/T)``),
+    limited to ``max_i``; the rider's torque is ``tau_r[k0 + k]`` (held at its last value).
+    """
+    theta, omega, i = x[0], x[1], x[2]
+    last = tau_r.size - 1
+    for k in range(n):
+        i += (i_cmd - i) * a_i
+        i = min(max(i, -max_i), max_i)
+        torque = tau_r[min(k0 + k, last)] + torque_per_amp * i
+        theta, omega = step_exact(theta, omega, torque, J, beta, beta_s, h)
+    x[0], x[1], x[2] = theta, omega, i
+
+
+class VirtualRig:
+    """The true handlebar and its drive, answering the DBC's frames (see the module docstring).
+
+    Parameters
+    ----------
+    handlebar : HandlebarParameters
+        The true handlebar.
+    settings : RigSettings
+        The drive, sensors, bus and faults.
+    codecs : HandlebarCodecs
+        The frames.
+    link : FrameLink
+        The rig's end of the bus.
+    rider_torque : ndarray or callable
+        The rider's torque [N*m] at each plant sub-step from the rider's start (held after
+        the end), or a function of no argument giving it now (a :class:`VirtualRider`),
+        asked once per status period.
+    rng : numpy.random.Generator
+        Noise, jitter and frame loss.
+    theta0 : float
+        Initial angle [rad].
+    rider_on_enable : bool
+        Start the rider's profile when the first command with ENABLE arrives (a person takes
+        the handlebar when the simulator starts); else at the rig's t = 0.
+    """
+
+    def __init__(
+        self,
+        handlebar: HandlebarParameters,
+        settings: RigSettings,
+        codecs: HandlebarCodecs,
+        link: FrameLink,
+        rider_torque: Array | Callable[[], float],
+        rng: np.random.Generator,
+        *,
+        theta0: float = 0.0,
+        rider_on_enable: bool = True,
+    ) -> None:
+        self._policy = rider_torque if callable(rider_torque) else None
+        tau = np.zeros(1) if callable(rider_torque) else np.asarray(rider_torque, dtype=float)
+        if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)):
+            raise MotosimError("rider_torque: expected a non-empty 1-D array of finite N*m")
+        self.hb = handlebar
+        self.settings = settings
+        self.codecs = codecs
+        self.link = link
+        self.rng = rng
+        self.rider_torque = tau
+        self.x = np.array([float(theta0), 0.0, 0.0])
+        self.h = 1.0 / settings.plant_rate
+        self._sub = round(settings.plant_rate / settings.status_rate)
+        tc = settings.current_time_constant
+        self._a_i = 1.0 if tc == 0.0 else -math.expm1(-self.h / tc)
+        self.k = 0  # plant sub-steps done
+        self.i_cmd = 0.0
+        self.enabled = False
+        self._last_command = -math.inf
+        self._queue: list[tuple[float, int, int, bytes]] = []
+        self._seq = 0
+        self._counter = 0
+        self._estop_counter = 0
+        self._previous: bytes | None = None
+        self._burst = False
+        self._frozen = math.nan
+        self._estop_sent = False
+        self._bad_sent = False
+        st = codecs.status
+        self._values = np.zeros(len(st.names))
+        self._p = {part: codecs.position(st, part) for part in ("angle", "current", "enabled")}
+        self._p["counter"] = codecs.position(st, "counter")
+        self._p["drive_fault"] = codecs.position(st, "drive_fault")
+        self._command = np.zeros(len(codecs.command.names))
+        self._c_current = codecs.position(codecs.command, "current_command")
+        self._c_enable = codecs.position(codecs.command, "enable")
+        self._k_rider = -1 if rider_on_enable else 0
+        self._idle = np.zeros(1)
+        self._held = np.zeros(1)
+        self._started = False
+        _plant_steps(self.x.copy(), 0.0, self._idle, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4)
+        self.frames_sent = 0
+        self.frames_dropped = 0
+        self.commands = 0
+        self.bad_commands = 0
+
+    @property
+    def t(self) -> float:
+        """The rig's time [s]."""
+        return self.k * self.h
+
+    def _receive(self) -> None:
+        cmd = self.codecs.command
+        for _ in range(256):
+            frame = self.link.receive()
+            if frame is None:
+                return
+            frame_id, data = frame
+            if frame_id != cmd.frame_id:
+                continue
+            if not cmd.decode(data, self._command):
+                self.bad_commands += 1
+                continue
+            self.commands += 1
+            self.i_cmd = float(self._command[self._c_current])
+            self.enabled = self._command[self._c_enable] > 0.5
+            self._last_command = self.t
+            if self.enabled and self._k_rider < 0:
+                self._k_rider = self.k
+
+    def advance_to(self, t: float) -> None:
+        """Take the commands received, run the plant to time ``t`` [s], send what is due."""
+        self._receive()
+        s = self.settings
+        hb = self.hb
+        if not self._started:  # the drive reports its state from power-on
+            self._started = True
+            self._sample()
+        while self.k * self.h < t - 1e-12:
+            live = self.enabled and self.t - self._last_command <= s.command_timeout
+            n = self._sub - self.k % self._sub  # up to the next status sample
+            rider, k0 = self.rider_torque, self.k - self._k_rider
+            if self._k_rider < 0:
+                rider, k0 = self._idle, 0
+            elif self._policy is not None:
+                self._held[0] = self._policy()
+                rider, k0 = self._held, 0
+            _plant_steps(
+                self.x, self.i_cmd if live else 0.0, rider, k0, n, hb.J_eq, hb.beta_eq,
+                hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h,
+            )  # fmt: skip
+            self.k += n
+            self._sample()
+            self._deliver(self.t)
+        self._deliver(t)
+
+    def _sample(self) -> None:
+        s, f = self.settings, self.settings.faults
+        t = self.t
+        theta, i = float(self.x[0]), float(self.x[2])
+        if s.encoder_bits > 0:
+            q = 2.0 * math.pi / (1 << s.encoder_bits)
+            theta = math.floor(theta / q + 0.5) * q
+        if t >= f.frozen_encoder:
+            if self._frozen != self._frozen:
+                self._frozen = theta
+            theta = self._frozen
+        if t >= f.sign_flip:
+            theta = -theta
+        if s.current_noise > 0.0:
+            i += s.current_noise * float(self.rng.standard_normal())
+        if t >= f.current_offset_at:
+            i += f.current_offset
+        if t >= f.estop and not self._estop_sent:
+            self._estop_sent = True
+            es = self.codecs.estop
+            values = np.zeros(len(es.names))
+            values[self.codecs.position(es, "estop_signal")] = 1.0
+            self._push(t, es.encode(values), es.frame_id)
+        v = self._values
+        v[self._p["angle"]] = theta
+        v[self._p["current"]] = i
+        v[self._p["enabled"]] = 1.0 if self.enabled else 0.0
+        v[self._p["drive_fault"]] = 1.0 if t >= f.drive_fault else 0.0
+        v[self._p["counter"]] = self._counter
+        frame = self.codecs.status.encode(v)
+        if t >= f.bad_checksum and not self._bad_sent:
+            self._bad_sent = True
+            frame = bytes([frame[0] ^ 0x5A]) + frame[1:]
+        rng = self.rng
+        if self._previous is not None and s.stale > 0.0 and rng.random() < s.stale:
+            frame = self._previous  # the previous frame again, counter unchanged
+        else:
+            self._counter = (self._counter + 1) & 0xF
+        self._previous = frame
+        if s.burst_enter > 0.0:
+            if self._burst:
+                self._burst = rng.random() >= s.burst_leave
+            else:
+                self._burst = rng.random() < s.burst_enter
+        if self._burst or (s.loss > 0.0 and rng.random() < s.loss):
+            self.frames_dropped += 1
+            return
+        if s.bus_off_at <= t < s.bus_off_at + s.bus_off_duration:
+            self.frames_dropped += 1
+            return
+        self._push(t, frame)
+        if s.duplicate > 0.0 and rng.random() < s.duplicate:
+            self._push(t, frame)
+
+    def _push(self, t: float, frame: bytes, frame_id: int | None = None) -> None:
+        s = self.settings
+        delay = s.latency
+        if s.jitter > 0.0:
+            delay += s.jitter * float(self.rng.standard_normal())
+        due = t + max(delay, 0.0)
+        if frame_id is None:
+            frame_id = self.codecs.status.frame_id
+        heapq.heappush(self._queue, (due, self._seq, frame_id, frame))
+        self._seq += 1
+
+    def _deliver(self, t: float) -> None:
+        queue = self._queue
+        while queue and queue[0][0] <= t + 1e-12:
+            _, _, frame_id, frame = heapq.heappop(queue)
+            if self.link.send(frame_id, frame):
+                self.frames_sent += 1
+
+
+class VirtualRider:
+    """The scenario's virtual rider at the rig, steering by the state that ``run`` publishes.
+
+    The rider of :func:`motosim.sim.rider.rider_torque` (the same path, gains and limits as
+    offline, from :func:`motosim.sim.build_rig`) looks at the virtual motorcycle's states in
+    the newest datagram of the run's state stream (:mod:`motosim.rt.telemetry`); before the
+    first one it holds 0 N*m.
+
+    Parameters
+    ----------
+    world : RigModel
+        The scenario's world (its path and the rider's gain schedule).
+    receiver : StateReceiver
+        The state stream.
+    names : tuple of str
+        The signals of the stream's rows.
+    """
+
+    _STATES = ("v_y", "psi_dot", "phi_dot", "delta_dot", "phi", "delta", "F_yr", "F_yf")
+
+    def __init__(
+        self, world: RigModel, receiver: StateReceiver, names: tuple[str, ...] = STACK_SIGNALS
+    ) -> None:
+        if not world.virtual_rider:
+            raise MotosimError("the scenario's rider is a torque profile, not a virtual rider")
+        self.world = world
+        self.receiver = receiver
+        self._cols = [names.index(n) for n in (*self._STATES, "v_x", "psi", "x", "y")]
+        self._x_v = np.zeros(8)
+        self._k_path = 0
+        self.torque = 0.0
+        self.lateral_error = 0.0
+
+    def __call__(self) -> float:
+        """The rider's torque now [N*m]."""
+        if self.receiver.poll():
+            row, c, w = self.receiver.row, self._cols, self.world
+            for i in range(8):
+                self._x_v[i] = row[c[i]]
+            tau, self._k_path, self.lateral_error = rider_torque(
+                self._x_v, row[c[8]], row[c[9]], row[c[10]], row[c[11]], self._k_path, w.path,
+                w.path_ds, w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss,
+                w.rider_limits[0], w.rider_limits[1],
+            )  # fmt: skip
+            self.torque = float(tau)
+        return self.torque

@@ -1,0 +1,315 @@
+"""One control period over the bus: read the drive, step the stack, guard, send, record.
+
+:class:`RealtimeRunner` is what ``motosim run`` drives with a :class:`~motosim.rt.loop.RateLoop`.
+Each period it
+
+1. reads every frame waiting on the bus (non-blocking): status frames are decoded with the
+   precompiled codec and checked by the safety stage (checksum, alive counter, drive fault);
+   E-stop frames trip the emergency stop;
+2. steps the stack (anything with the :class:`StackStepper` protocol: the compiled stack of
+   :mod:`motosim.sim` in ``motosim run``) with the last valid angle [rad] and current [A];
+3. passes its command through the :class:`~motosim.rt.safety.SafetyStage`;
+4. encodes and sends the command frame (and a heartbeat frame at about 10 Hz);
+5. copies one row of signals into a :class:`~motosim.rt.ring.SampleRing`, read outside the
+   loop.
+
+The stack starts on the first valid status frame (reset at its angle and current) and the
+safety stage is enabled then, so the torque fades in over 0.5 s. A stop request (Ctrl-C)
+fades the torque out and ends the run once it is zero; a fault zeroes the command at once
+and ends the run ``linger`` seconds later, the zero command still sent meanwhile.
+"""
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim.errors import MotosimError
+from motosim.io.can import HandlebarCodecs
+from motosim.rt.ring import SampleRing
+from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
+
+__all__ = ["LOOP_SIGNALS", "FrameLink", "RealtimeRunner", "RunCounters", "StackStepper"]
+
+Array = NDArray[np.float64]
+
+LOOP_SIGNALS = ("t", "theta_h_meas", "i_m_meas", "i_cmd", "i_safe", "state", "fault")
+"""The loop's own columns, before the stack's: time [s], the measured angle [rad] and current
+[A] used this period, the stack's command and the one sent [A], the safety state and fault
+codes (:class:`~motosim.rt.safety.State`, :class:`~motosim.rt.safety.Fault`)."""
+
+
+class StackStepper(Protocol):
+    """What the loop needs of the stack: reset, one step, and the signals of the last step."""
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The signals of :meth:`row` (``tau_r_hat`` and ``theta_h_dot_hat`` are used when
+        present: hands-off detection and the speed limiter)."""
+        ...
+
+    def reset(self, theta: float, current: float) -> None:
+        """Start every state at the measured angle [rad] and current [A]."""
+        ...
+
+    def step(self, theta_meas: float, i_meas: float) -> float:
+        """One control period: the motor current command [A]."""
+        ...
+
+    def row(self) -> Array:
+        """The values of :attr:`names` after the last step (read, not kept, by the loop)."""
+        ...
+
+
+class FrameLink(Protocol):
+    """A CAN link: :class:`~motosim.io.can.CanLink` or a test double."""
+
+    def send(self, frame_id: int, data: bytes) -> bool:
+        """Send one frame; False if the bus refused it."""
+        ...
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        """The next frame ``(frame_id, data)`` or None."""
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class RunCounters:
+    """What happened on the bus and in the safety stage during a run."""
+
+    status_frames: int
+    frames_lost: int
+    frames_stale: int
+    send_errors: int
+    state: str
+    fault: str
+    fault_reason: str
+    fault_time: float
+
+
+class RealtimeRunner:
+    """The control period of ``motosim run`` (see the module docstring).
+
+    Parameters
+    ----------
+    stepper : StackStepper
+        The stack.
+    link : FrameLink
+        The CAN link to the drive.
+    codecs : HandlebarCodecs
+        The frames (from the DBC).
+    limits : SafetyLimits
+        The safety stage's limits.
+    rate : float
+        The control rate [Hz].
+    capacity : int
+        Rows the ring holds before the oldest are lost (the reader drains it meanwhile).
+    linger : float
+        How long the zero command is still sent after a fault before the run ends [s].
+    periods_per_frame : int
+        Control periods per status frame of the drive (the watchdog counts frame periods).
+    start_timeout : float
+        How long to wait for the drive's first valid status frame [s] before the
+        ``NO_DRIVE`` fault.
+    shared_ring : bool
+        Put the ring in shared memory, for a writer process (:meth:`SampleRing.attach`).
+    telemetry : callable, optional
+        ``telemetry(k, t, row)`` publishes each period's stack row (a
+        :class:`~motosim.rt.telemetry.StateSender`'s ``send``).
+    """
+
+    def __init__(
+        self,
+        stepper: StackStepper,
+        link: FrameLink,
+        codecs: HandlebarCodecs,
+        limits: SafetyLimits,
+        *,
+        rate: float,
+        capacity: int = 1 << 16,
+        linger: float = 0.2,
+        periods_per_frame: int = 1,
+        start_timeout: float = 1.0,
+        shared_ring: bool = False,
+        telemetry: Callable[[int, float, Array], None] | None = None,
+    ) -> None:
+        if not (math.isfinite(rate) and rate > 0.0):
+            raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
+        self.stepper = stepper
+        self.telemetry = telemetry
+        self.link = link
+        self.codecs = codecs
+        self.dt = 1.0 / rate
+        self.safety = SafetyStage(limits, dt=self.dt, periods_per_frame=periods_per_frame)
+        self.names = LOOP_SIGNALS + tuple(stepper.names)
+        self.ring = SampleRing(capacity, len(self.names), shared=shared_ring)
+        self._row = np.zeros(len(self.names))
+        self._n_loop = len(LOOP_SIGNALS)
+        st, cmd, es, hb = codecs.status, codecs.command, codecs.estop, codecs.heartbeat
+        self._status = np.zeros(len(st.names))
+        self._estop = np.zeros(len(es.names))
+        self._command = np.zeros(len(cmd.names))
+        self._heartbeat = np.zeros(len(hb.names))
+        self._ids = (st.frame_id, es.frame_id)
+        self._i_angle = codecs.position(st, "angle")
+        self._i_current = codecs.position(st, "current")
+        self._i_counter = codecs.position(st, "counter")
+        self._i_drive_fault = codecs.position(st, "drive_fault")
+        self._i_estop = codecs.position(es, "estop_signal")
+        self._c_current = codecs.position(cmd, "current_command")
+        self._c_enable = codecs.position(cmd, "enable")
+        self._c_counter = codecs.position(cmd, "counter")
+        self._h_state = codecs.position(hb, "state")
+        self._h_fault = codecs.position(hb, "fault")
+        self._h_counter = codecs.position(hb, "counter")
+        names = tuple(stepper.names)
+        self._s_tau = names.index("tau_r_hat") if "tau_r_hat" in names else -1
+        self._s_rate = names.index("theta_h_dot_hat") if "theta_h_dot_hat" in names else -1
+        self._heartbeat_every = max(1, round(0.1 * rate))
+        self._linger = max(1, round(linger * rate))
+        self._start_timeout = max(1, round(start_timeout * rate))
+        self._t0 = math.nan
+        self._theta = math.nan
+        self._current = math.nan
+        self._prev_theta = math.nan
+        self._started = False
+        self._stop = False
+        self._after_fault = 0
+        self._sent = 0
+        self.status_frames = 0
+        self.send_errors = 0
+
+    # --- operator ----------------------------------------------------------------------
+    def request_stop(self) -> None:
+        """Fade the torque out and end the run (safe from a signal handler)."""
+        self._stop = True
+        self.safety.request_stop()
+
+    @property
+    def stop_requested(self) -> bool:
+        """Whether :meth:`request_stop` was called."""
+        return self._stop
+
+    def emergency_stop(self) -> None:
+        """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
+        self.safety.trip(Fault.ESTOP_KEY)
+
+    def discard_pending(self) -> int:
+        """Read and drop every frame already waiting (call just before the first period)."""
+        dropped = 0
+        while dropped < 100_000 and self.link.receive() is not None:
+            dropped += 1
+        return dropped
+
+    # --- the period --------------------------------------------------------------------
+    def _read_bus(self) -> bool:
+        link, safety = self.link, self.safety
+        status_id, estop_id = self._ids
+        st, es = self.codecs.status, self.codecs.estop
+        fresh = False
+        for _ in range(64):  # bounded: a flooded bus cannot hold the loop
+            frame = link.receive()
+            if frame is None:
+                break
+            frame_id, data = frame
+            if frame_id == status_id:
+                self.status_frames += 1
+                ok = st.decode(data, self._status)
+                values = self._status
+                if safety.status_frame(
+                    checksum_ok=ok,
+                    counter=values[self._i_counter],
+                    drive_fault=values[self._i_drive_fault] > 0.5,
+                ):
+                    self._theta = float(values[self._i_angle])
+                    self._current = float(values[self._i_current])
+                    fresh = True
+            elif frame_id == estop_id:
+                ok = es.decode(data, self._estop)
+                safety.estop_frame(checksum_ok=ok, pressed=self._estop[self._i_estop] > 0.5)
+        return fresh
+
+    def period(self, k: int, t: float) -> bool:
+        """Run one control period ``k`` (deadline ``t`` [s]); False when the run should end.
+
+        The recorded time is ``t`` minus the first period's deadline.
+        """
+        safety = self.safety
+        if self._t0 != self._t0:
+            self._t0 = t
+        fresh = self._read_bus()
+        if not self._started and k >= self._start_timeout:
+            safety.trip(Fault.NO_DRIVE)
+        if fresh and not self._started:
+            self._started = True
+            self.stepper.reset(self._theta, self._current)
+            self._prev_theta = self._theta
+            if not self._stop:
+                safety.enable()
+        command = 0.0
+        stack_row = None
+        if self._started:
+            command = self.stepper.step(self._theta, self._current)
+            stack_row = self.stepper.row()
+        if stack_row is not None and self.telemetry is not None:
+            self.telemetry(k, t - self._t0, stack_row)
+        if stack_row is not None and self._s_rate >= 0:
+            omega = stack_row[self._s_rate]
+        else:
+            omega = (self._theta - self._prev_theta) / self.dt if self._started else 0.0
+        self._prev_theta = self._theta
+        tau_hat = stack_row[self._s_tau] if stack_row is not None and self._s_tau >= 0 else math.nan
+        theta = self._theta if self._started else 0.0
+        out = safety.step(command, theta=theta, omega=omega, tau_hat=tau_hat, now=t - self._t0)
+        state = safety.state
+        self._send(out, state, k)
+        row = self._row
+        row[0] = t - self._t0
+        row[1] = self._theta
+        row[2] = self._current
+        row[3] = command
+        row[4] = out
+        row[5] = state
+        row[6] = safety.fault
+        if stack_row is not None:
+            row[self._n_loop :] = stack_row
+        self.ring.push(row)
+        if state == State.FAULT:
+            self._after_fault += 1
+            return self._after_fault < self._linger
+        return not (self._stop and state == State.IDLE)
+
+    def _send(self, current: float, state: State, k: int) -> None:
+        cmd = self._command
+        cmd[self._c_current] = current
+        live = state in (State.FADE_IN, State.RUNNING, State.STOPPING)
+        cmd[self._c_enable] = 1.0 if live else 0.0
+        cmd[self._c_counter] = self._sent & 0xF
+        self._sent += 1
+        codecs = self.codecs
+        if not self.link.send(codecs.command.frame_id, codecs.command.encode(cmd)):
+            self.send_errors += 1
+        if k % self._heartbeat_every == 0:
+            hb = self._heartbeat
+            hb[self._h_state] = state
+            hb[self._h_fault] = self.safety.fault
+            hb[self._h_counter] = (k // self._heartbeat_every) & 0xF
+            if not self.link.send(codecs.heartbeat.frame_id, codecs.heartbeat.encode(hb)):
+                self.send_errors += 1
+
+    def counters(self) -> RunCounters:
+        """What happened on the bus and in the safety stage so far."""
+        s = self.safety
+        return RunCounters(
+            status_frames=self.status_frames,
+            frames_lost=s.frames_lost,
+            frames_stale=s.frames_stale,
+            send_errors=self.send_errors,
+            state=s.state.name,
+            fault=s.fault.name,
+            fault_reason=s.describe(),
+            fault_time=s.fault_time,
+        )

@@ -1,0 +1,405 @@
+"""The safety stage: the last stage before the bus, always on.
+
+Software limits are a second line of defence. The real safety function of a motorised
+handlebar is the drive's hardware safe torque off (STO, IEC 61800-5-2; stop category 0 of
+IEC 60204-1) wired to an emergency-stop button; the drive must also stop the torque on its
+own when command frames stop coming. What this stage adds, after the stack has computed its
+current command and before the command is encoded (the protections of force-feedback wheel
+firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
+
+- a current clamp (``max_current`` [A]) and a slew-rate limit (``max_slew`` [A/s]);
+- a speed limiter that only ever reduces the command pushing the handlebar faster beyond
+  ``max_speed`` [rad/s] (to zero ``speed_band`` [rad/s] above it), never adds torque;
+- soft end stops: beyond ``soft_stop`` [rad] the command pushing further out is dropped and
+  a restoring spring ``end_stop_gain`` [A/rad] is added; beyond ``hard_stop`` a fault;
+- a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request;
+- a communication watchdog: no valid status frame for ``watchdog_periods`` periods -> zero
+  command and a latched fault; a status frame is valid when its checksum is right and its
+  alive counter has moved (a stale or duplicated frame does not feed the watchdog);
+- guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
+  drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
+  latched fault with its reason and time;
+- hands-off detection: while the estimated rider torque stays below ``hands_off_torque``
+  [N*m] for ``hands_off_time`` [s], the command is scaled by ``hands_off_gain``.
+
+A fault gives a zero command in the same period it is detected, without slew limiting, and
+stays latched until :meth:`SafetyStage.clear`; enabling again starts a new fade-in. The stage
+works on Python floats only and allocates nothing per period.
+"""
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+
+from motosim.errors import MotosimError
+
+__all__ = ["Fault", "SafetyLimits", "SafetyStage", "State"]
+
+
+class State(IntEnum):
+    """The stage's state (the ``STATE`` of the heartbeat frame)."""
+
+    IDLE = 0
+    FADE_IN = 1
+    RUNNING = 2
+    FAULT = 3
+    STOPPING = 4
+
+
+class Fault(IntEnum):
+    """Why the torque was stopped (the ``FAULT`` of the heartbeat frame)."""
+
+    NONE = 0
+    WATCHDOG = 1
+    NON_FINITE = 2
+    CHECKSUM = 3
+    ESTOP_CAN = 4
+    ESTOP_KEY = 5
+    DRIVE_FAULT = 6
+    END_STOP = 7
+    NO_DRIVE = 8
+
+
+_REASONS = {
+    Fault.NONE: "no fault",
+    Fault.WATCHDOG: "communication watchdog: no valid status frame for {n} periods",
+    Fault.NON_FINITE: "NaN or inf in a measurement, the estimate or the command",
+    Fault.CHECKSUM: "a frame with a wrong checksum",
+    Fault.ESTOP_CAN: "emergency stop (CAN frame)",
+    Fault.ESTOP_KEY: "emergency stop (keyboard)",
+    Fault.DRIVE_FAULT: "the drive reports a fault",
+    Fault.END_STOP: "handlebar angle beyond the hard end stop",
+    Fault.NO_DRIVE: "no valid status frame from the drive since the start",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class SafetyLimits:
+    """The limits of the safety stage (see the module docstring for each one's role).
+
+    Parameters
+    ----------
+    max_current : float
+        Current clamp [A], > 0.
+    max_slew : float
+        Largest change of the command [A/s], > 0.
+    max_speed, speed_band : float
+        Handlebar rate where the speed limiter starts [rad/s] and the excess over it where
+        the command has gone to zero [rad/s], both > 0.
+    soft_stop, hard_stop : float
+        Angles [rad] of the soft end stop and of the fault, 0 < soft_stop < hard_stop.
+    end_stop_gain : float
+        Restoring current per radian beyond the soft stop [A/rad], >= 0.
+    hands_off_torque, hands_off_time, hands_off_gain : float
+        Rider torque below which nobody holds the handlebar [N*m] (>= 0; 0 disables), the
+        time it must last [s] (> 0) and the command's scale meanwhile, in [0, 1].
+    fade_in : float
+        Ramp of the command on enable and on stop [s], > 0.
+    watchdog_periods : int
+        Periods without a valid status frame that trip the watchdog, >= 1.
+    """
+
+    max_current: float
+    max_slew: float
+    max_speed: float
+    speed_band: float
+    soft_stop: float
+    hard_stop: float
+    end_stop_gain: float
+    hands_off_torque: float
+    hands_off_time: float
+    hands_off_gain: float
+    fade_in: float = 0.5
+    watchdog_periods: int = 3
+
+    def __post_init__(self) -> None:
+        positive = {
+            "max_current": self.max_current,
+            "max_slew": self.max_slew,
+            "max_speed": self.max_speed,
+            "speed_band": self.speed_band,
+            "soft_stop": self.soft_stop,
+            "hands_off_time": self.hands_off_time,
+            "fade_in": self.fade_in,
+        }
+        for name, value in positive.items():
+            if not (math.isfinite(value) and value > 0.0):
+                raise MotosimError(f"safety {name} = {value!r}: expected a positive number")
+        for name, value in (
+            ("end_stop_gain", self.end_stop_gain),
+            ("hands_off_torque", self.hands_off_torque),
+        ):
+            if not (math.isfinite(value) and value >= 0.0):
+                raise MotosimError(f"safety {name} = {value!r}: expected a number >= 0")
+        if not (math.isfinite(self.hard_stop) and self.hard_stop > self.soft_stop):
+            raise MotosimError(
+                f"safety hard_stop = {self.hard_stop!r} rad: expected more than soft_stop "
+                f"= {self.soft_stop!r} rad"
+            )
+        if not 0.0 <= self.hands_off_gain <= 1.0:
+            raise MotosimError(
+                f"safety hands_off_gain = {self.hands_off_gain!r}: expected a scale in [0, 1]"
+            )
+        if not (isinstance(self.watchdog_periods, int) and self.watchdog_periods >= 1):
+            raise MotosimError(
+                f"safety watchdog_periods = {self.watchdog_periods!r}: expected an integer >= 1"
+            )
+
+
+class SafetyStage:
+    """The safety stage of one handlebar, stepped once per control period.
+
+    Each period: :meth:`status_frame` for every status frame received (and
+    :meth:`estop_frame` for every E-stop frame), then :meth:`step` with the stack's command;
+    the value it returns is the only one to send.
+
+    Parameters
+    ----------
+    limits : SafetyLimits
+        The limits.
+    dt : float
+        The control period [s], > 0.
+    periods_per_frame : int
+        Control periods per status frame (the loop may run faster than the drive reports):
+        the watchdog waits ``watchdog_periods`` frame periods.
+
+    Examples
+    --------
+    >>> lim = SafetyLimits(max_current=10.0, max_slew=1000.0, max_speed=10.0, speed_band=5.0,
+    ...                    soft_stop=0.5, hard_stop=0.7, end_stop_gain=0.0,
+    ...                    hands_off_torque=0.0, hands_off_time=1.0, hands_off_gain=1.0)
+    >>> stage = SafetyStage(lim, dt=0.01)
+    >>> stage.enable()
+    >>> out = []
+    >>> for k in range(60):
+    ...     _ = stage.status_frame(checksum_ok=True, counter=k % 16, drive_fault=False)
+    ...     out.append(stage.step(5.0, theta=0.0, omega=0.0, tau_hat=1.0))
+    >>> round(out[24], 3), out[-1], stage.state.name    # half-way through the 0.5 s fade-in
+    (2.5, 5.0, 'RUNNING')
+    >>> stage.step(5.0, theta=0.0, omega=0.0, tau_hat=1.0)    # one period without status
+    5.0
+    >>> stage.step(5.0, theta=0.0, omega=0.0, tau_hat=1.0)
+    5.0
+    >>> stage.step(5.0, theta=0.0, omega=0.0, tau_hat=1.0), stage.describe()
+    (0.0, 'communication watchdog: no valid status frame for 3 periods (t = 0.630 s)')
+    """
+
+    __slots__ = (
+        "_counter",
+        "_envelope",
+        "_fault",
+        "_fault_time",
+        "_fresh",
+        "_hands_off",
+        "_last",
+        "_missing",
+        "_quiet",
+        "_state",
+        "_t",
+        "_watchdog",
+        "dt",
+        "frames_lost",
+        "frames_stale",
+        "limits",
+    )
+
+    def __init__(self, limits: SafetyLimits, *, dt: float, periods_per_frame: int = 1) -> None:
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise MotosimError(f"dt = {dt!r} s: expected a positive period")
+        if periods_per_frame < 1:
+            raise MotosimError(
+                f"periods_per_frame = {periods_per_frame!r}: expected an integer >= 1"
+            )
+        self._watchdog = limits.watchdog_periods * periods_per_frame
+        self.limits = limits
+        self.dt = float(dt)
+        self._state = State.IDLE
+        self._fault = Fault.NONE
+        self._fault_time = math.nan
+        self._t = 0.0
+        self._envelope = 0.0
+        self._last = 0.0
+        self._counter = -1
+        self._fresh = False
+        self._missing = 0
+        self._quiet = 0.0
+        self._hands_off = False
+        self.frames_lost = 0
+        self.frames_stale = 0
+
+    # --- state -------------------------------------------------------------------------
+    @property
+    def state(self) -> State:
+        """IDLE, FADE_IN, RUNNING, FAULT or STOPPING."""
+        return self._state
+
+    @property
+    def fault(self) -> Fault:
+        """The latched fault (NONE when there is none)."""
+        return self._fault
+
+    @property
+    def fault_time(self) -> float:
+        """When the fault was detected [s since the stage started] (NaN without a fault)."""
+        return self._fault_time
+
+    @property
+    def hands_off(self) -> bool:
+        """Whether nobody seems to hold the handlebar."""
+        return self._hands_off
+
+    @property
+    def envelope(self) -> float:
+        """The fade-in/fade-out scale of the command, in [0, 1]."""
+        return self._envelope
+
+    def describe(self) -> str:
+        """The latched fault's reason and time, in words."""
+        if self._fault == Fault.NONE:
+            return "no fault"
+        reason = _REASONS[self._fault].format(n=self.limits.watchdog_periods)
+        return f"{reason} (t = {self._fault_time:.3f} s)"
+
+    # --- operator ----------------------------------------------------------------------
+    def enable(self) -> None:
+        """Start the torque with a fade-in (ignored while a fault is latched)."""
+        if self._state in (State.IDLE, State.STOPPING):
+            self._state = State.FADE_IN
+
+    def request_stop(self) -> None:
+        """Fade the torque out over ``fade_in`` seconds, then go IDLE."""
+        if self._state in (State.FADE_IN, State.RUNNING):
+            self._state = State.STOPPING
+
+    def trip(self, fault: Fault) -> None:
+        """Latch ``fault`` now: the next :meth:`step` returns 0."""
+        if fault == Fault.NONE:
+            return
+        if self._fault == Fault.NONE:
+            self._fault = fault
+            self._fault_time = self._t
+        self._state = State.FAULT
+        self._envelope = 0.0
+        self._last = 0.0
+
+    def clear(self) -> None:
+        """Forget a latched fault and go IDLE (the watchdog starts afresh)."""
+        self._fault = Fault.NONE
+        self._fault_time = math.nan
+        self._state = State.IDLE
+        self._missing = 0
+        self._counter = -1
+
+    # --- frames ------------------------------------------------------------------------
+    def status_frame(self, *, checksum_ok: bool, counter: float, drive_fault: bool) -> bool:
+        """Check a received status frame; True if it is valid and fresh (use its values).
+
+        A wrong checksum trips CHECKSUM; a drive fault flag trips DRIVE_FAULT; a counter
+        that has not moved (a stale or duplicated frame) makes the frame invalid; a counter
+        that jumped counts the lost frames.
+        """
+        if not checksum_ok:
+            self.trip(Fault.CHECKSUM)
+            return False
+        c = int(counter) & 0xF
+        if c == self._counter:
+            self.frames_stale += 1
+            return False
+        if self._counter >= 0:
+            self.frames_lost += (c - self._counter - 1) & 0xF
+        self._counter = c
+        if drive_fault:
+            self.trip(Fault.DRIVE_FAULT)
+        self._fresh = True
+        return True
+
+    def estop_frame(self, *, checksum_ok: bool, pressed: bool) -> None:
+        """An E-stop frame: pressed (or unreadable) trips the emergency stop."""
+        if not checksum_ok:
+            self.trip(Fault.CHECKSUM)
+        elif pressed:
+            self.trip(Fault.ESTOP_CAN)
+
+    # --- the period --------------------------------------------------------------------
+    def step(
+        self,
+        command: float,
+        *,
+        theta: float,
+        omega: float,
+        tau_hat: float,
+        now: float | None = None,
+    ) -> float:
+        """The current to send [A] for the stack's ``command`` [A] this period.
+
+        Parameters
+        ----------
+        command : float
+            The stack's current command [A].
+        theta, omega : float
+            Last valid handlebar angle [rad] and its estimated rate [rad/s].
+        tau_hat : float
+            The estimated rider torque [N*m] (NaN if the stack has none: hands-off off).
+        now : float, optional
+            The loop's time [s], for the fault's time stamp; by default the stage counts
+            its own periods.
+        """
+        lim = self.limits
+        dt = self.dt
+        self._t = self._t + dt if now is None else now
+        if self._fresh:
+            self._missing = 0
+            self._fresh = False
+        else:
+            self._missing += 1
+            if self._missing >= self._watchdog and self._state != State.IDLE:
+                self.trip(Fault.WATCHDOG)
+        if not (
+            math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)
+        ) or math.isinf(tau_hat):
+            self.trip(Fault.NON_FINITE)
+        elif abs(theta) > lim.hard_stop:
+            self.trip(Fault.END_STOP)
+        state = self._state
+        if state == State.FAULT or state == State.IDLE:
+            self._last = 0.0
+            self._envelope = 0.0
+            return 0.0
+        # speed limiter: only reduces a command that pushes the handlebar faster
+        i = command
+        excess = abs(omega) - lim.max_speed
+        if excess > 0.0 and i * omega > 0.0:
+            i *= max(0.0, 1.0 - excess / lim.speed_band)
+        # soft end stops
+        over = abs(theta) - lim.soft_stop
+        if over > 0.0:
+            out = 1.0 if theta > 0.0 else -1.0
+            if i * out > 0.0:
+                i = 0.0
+            i -= out * lim.end_stop_gain * over
+        # hands-off: reduce the gain while nobody holds the handlebar
+        if lim.hands_off_torque > 0.0 and tau_hat == tau_hat:
+            if abs(tau_hat) < lim.hands_off_torque:
+                self._quiet += dt
+                self._hands_off = self._quiet >= lim.hands_off_time
+            else:
+                self._quiet = 0.0
+                self._hands_off = False
+            if self._hands_off:
+                i *= lim.hands_off_gain
+        # clamp, fade, slew
+        i = min(max(i, -lim.max_current), lim.max_current)
+        ramp = dt / lim.fade_in
+        if state == State.STOPPING:
+            self._envelope = max(0.0, self._envelope - ramp)
+            if self._envelope == 0.0:
+                self._state = State.IDLE
+        elif state == State.FADE_IN:
+            self._envelope = min(1.0, self._envelope + ramp)
+            if self._envelope >= 1.0:
+                self._state = State.RUNNING
+        i *= self._envelope
+        step = lim.max_slew * dt
+        i = min(max(i, self._last - step), self._last + step)
+        self._last = i
+        return i

@@ -1,0 +1,194 @@
+"""The loop against the virtual rig through python-can's virtual bus, lock-step (untimed).
+
+A :class:`SimulatedClock` moves one period at a time; at each deadline the rig first advances
+its handlebar to that time and sends the status frames due, then the loop reads them, steps a
+stack, guards the command and sends it. Everything is deterministic.
+"""
+
+import math
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from motosim.params import load_parameters
+from motosim.rt.clock import SimulatedClock
+from motosim.rt.loop import RateLoop
+from motosim.rt.rig import RigFaults, RigSettings, VirtualRig
+from motosim.rt.run import RealtimeRunner
+from motosim.rt.safety import Fault, SafetyLimits, State
+
+pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
+pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
+
+from motosim.io.can import CanLink, handlebar_codecs, open_link
+
+HB = load_parameters("simacom_handlebar", "handlebar")
+CODECS = handlebar_codecs()
+LIMITS = SafetyLimits(
+    max_current=20.0,
+    max_slew=5000.0,
+    max_speed=20.0,
+    speed_band=10.0,
+    soft_stop=1.0,
+    hard_stop=1.4,
+    end_stop_gain=50.0,
+    hands_off_torque=0.0,
+    hands_off_time=0.5,
+    hands_off_gain=0.5,
+)
+
+
+class SpringStack:
+    """A stand-in stack: a virtual spring i = -K theta [A], recording its input."""
+
+    names = ("theta_in", "i_out")
+
+    def __init__(self, gain: float) -> None:
+        self.gain = gain
+        self._row = np.zeros(2)
+        self.resets: list[tuple[float, float]] = []
+
+    def reset(self, theta: float, current: float) -> None:
+        self.resets.append((theta, current))
+
+    def step(self, theta_meas: float, i_meas: float) -> float:
+        command = -self.gain * theta_meas
+        self._row[0], self._row[1] = theta_meas, command
+        return command
+
+    def row(self) -> np.ndarray:
+        return self._row
+
+
+def _settings(rate: float, **kw: object) -> RigSettings:
+    base: dict[str, object] = {
+        "plant_rate": 10_000.0,
+        "status_rate": rate,
+        "encoder_bits": 14,
+        "current_noise": 0.0,
+        "max_current": 30.0,
+    }
+    return RigSettings(**(base | kw))  # type: ignore[arg-type]
+
+
+_channels = iter(range(10**6))
+
+
+@pytest.fixture
+def links() -> Iterator[tuple[CanLink, CanLink]]:
+    channel = f"virtual:lockstep{next(_channels)}"
+    host, drive = open_link(channel), open_link(channel)
+    yield host, drive
+    host.close()
+    drive.close()
+
+
+def _run(
+    links: tuple[CanLink, CanLink],
+    rate: float,
+    seconds: float,
+    *,
+    rider: float = 0.0,
+    gain: float = 20.0,
+    **rig: object,
+) -> tuple[RealtimeRunner, VirtualRig, np.ndarray]:
+    host, drive = links
+    settings = _settings(rate, **rig)
+    tau = np.full(round(seconds * settings.plant_rate) + 1, rider)
+    vrig = VirtualRig(HB, settings, CODECS, drive, tau, np.random.default_rng(0))
+    runner = RealtimeRunner(SpringStack(gain), host, CODECS, LIMITS, rate=rate)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    RateLoop(rate, clock).run(runner.period, periods=round(seconds * rate))
+    rows = runner.ring.drain()
+    return runner, vrig, rows
+
+
+def test_closed_loop_over_the_bus_settles_where_the_spring_balances_the_rider(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    runner, vrig, rows = _run(links, 1000.0, 2.0, rider=3.0, gain=20.0)
+    # Eq. (5) at rest: tau_r + N k_t i_m = 0 within dry friction, with i_m = -K theta, so
+    # theta = (tau_r +- beta_s) / (K N k_t); the encoder adds 2 pi / 2^14.
+    stiffness = 20.0 * HB.torque_per_amp
+    theta = rows[-1, 1]
+    assert abs(theta - 3.0 / stiffness) <= HB.beta_s / stiffness + 2 * math.pi / 2**14
+    # every command but the last (sent after the rig's final advance) arrived
+    assert vrig.commands == rows.shape[0] - 1 and runner.counters().fault == "NONE"
+    assert rows[-1, 5] == State.RUNNING
+    # the command sent went through the DBC: the rig holds it to 1 mA
+    assert vrig.i_cmd == pytest.approx(rows[-2, 4], abs=5e-4)
+
+
+def test_the_first_status_resets_the_stack_and_the_torque_fades_in(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    runner, _, rows = _run(links, 100.0, 1.0, rider=3.0)
+    sent = rows[:, 4]
+    assert runner.stepper.resets == [(rows[0, 1], rows[0, 2])]  # type: ignore[attr-defined]
+    fade = rows[:50, 5]
+    assert fade[0] == State.FADE_IN and rows[55, 5] == State.RUNNING
+    assert np.all(np.abs(sent[:50]) <= np.abs(rows[:50, 3]) + 1e-12)
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+@pytest.mark.parametrize(
+    ("fault", "rig"),
+    [
+        (Fault.CHECKSUM, {"faults": RigFaults(bad_checksum=0.8)}),
+        (Fault.ESTOP_CAN, {"faults": RigFaults(estop=0.8)}),
+        (Fault.DRIVE_FAULT, {"faults": RigFaults(drive_fault=0.8)}),
+    ],
+)
+def test_faults_at_the_rig_zero_the_command_in_the_period_they_arrive(
+    links: tuple[CanLink, CanLink], rate: float, fault: Fault, rig: dict[str, object]
+) -> None:
+    runner, _, rows = _run(links, rate, 1.2, rider=3.0, **rig)
+    k = int(np.argmax(rows[:, 6] > 0))  # the period the fault was detected
+    assert runner.counters().fault == fault.name
+    assert rows[k, 0] == pytest.approx(0.8, abs=1.5 / rate)
+    assert rows[k - 1, 4] != 0.0 and np.all(rows[k:, 4] == 0.0)
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_bus_off_trips_the_watchdog_within_three_periods(
+    links: tuple[CanLink, CanLink], rate: float
+) -> None:
+    runner, _, rows = _run(links, rate, 1.2, rider=3.0, bus_off_at=0.8, bus_off_duration=1.0)
+    k = int(np.argmax(rows[:, 6] > 0))
+    last_valid = 0.8 - 1.0 / rate  # the last status frame before the bus went off
+    assert runner.counters().fault == "WATCHDOG"
+    assert rows[k, 0] - last_valid <= 3.0 / rate + 1e-9
+    assert np.all(rows[k:, 4] == 0.0) and rows[k - 1, 4] != 0.0
+
+
+def test_random_loss_and_latency_are_tolerated_and_counted(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    runner, vrig, _rows = _run(
+        links, 1000.0, 1.0, rider=3.0, loss=0.05, latency=3e-4, jitter=1e-4, stale=0.02
+    )
+    c = runner.counters()
+    assert c.fault == "NONE" and vrig.frames_dropped > 20
+    assert c.frames_lost >= vrig.frames_dropped - 2 and c.frames_stale > 5
+
+
+def test_a_stop_request_fades_out_and_ends_the_run(links: tuple[CanLink, CanLink]) -> None:
+    host, drive = links
+    settings = _settings(100.0)
+    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(100_000, 3.0), np.random.default_rng(1))
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+
+    def period(k: int, t: float) -> bool:
+        if k == 100:
+            runner.request_stop()
+        return runner.period(k, t)
+
+    served = RateLoop(100.0, clock).run(period, periods=1000)
+    rows = runner.ring.drain()
+    assert served == 100 + 50 and rows[-1, 4] == 0.0 and rows[-1, 5] == State.IDLE
+    envelope = 1.0 - np.arange(1, 51) / 50.0  # 0.5 s fade-out at 100 Hz
+    assert np.allclose(rows[100:, 4], envelope * rows[100:, 3], atol=1e-12)

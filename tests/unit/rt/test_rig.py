@@ -1,0 +1,174 @@
+"""The virtual rig: plant, quantisation, the bus's imperfections and the injected faults."""
+
+import math
+
+import numpy as np
+import pytest
+
+from motosim.errors import MotosimError
+from motosim.model.handlebar import step_exact
+from motosim.params import load_parameters
+from motosim.rt.rig import RigFaults, RigSettings, VirtualRig, parse_rig
+
+pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
+
+from motosim.io.can import handlebar_codecs
+
+HB = load_parameters("simacom_handlebar", "handlebar")
+CODECS = handlebar_codecs()
+ST = CODECS.status
+
+
+class FakeLink:
+    """Frames the rig sends, and commands queued for it."""
+
+    def __init__(self) -> None:
+        self.sent: list[tuple[int, bytes]] = []
+        self.inbox: list[tuple[int, bytes]] = []
+
+    def send(self, frame_id: int, data: bytes) -> bool:
+        self.sent.append((frame_id, data))
+        return True
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        return self.inbox.pop(0) if self.inbox else None
+
+
+def _rig(rider: float = 0.0, **kw: object) -> tuple[VirtualRig, FakeLink]:
+    base: dict[str, object] = {
+        "plant_rate": 10_000.0,
+        "status_rate": 1000.0,
+        "encoder_bits": 14,
+        "current_noise": 0.0,
+        "max_current": 30.0,
+    }
+    link = FakeLink()
+    settings = RigSettings(**(base | kw))  # type: ignore[arg-type]
+    rig = VirtualRig(
+        HB, settings, CODECS, link, np.full(100_000, rider), np.random.default_rng(0),
+        rider_on_enable=False,
+    )  # fmt: skip
+    return rig, link
+
+
+def _status(link: FakeLink, *, strict: bool = True) -> np.ndarray:
+    rows = []
+    for frame_id, data in link.sent:
+        if frame_id == ST.frame_id:
+            out = np.zeros(len(ST.names))
+            assert ST.decode(data, out) or not strict
+            rows.append(out)
+    return np.array(rows)
+
+
+def _command(current: float, enable: bool = True) -> tuple[int, bytes]:
+    values = np.zeros(len(CODECS.command.names))
+    values[CODECS.position(CODECS.command, "current_command")] = current
+    values[CODECS.position(CODECS.command, "enable")] = float(enable)
+    return CODECS.command.frame_id, CODECS.command.encode(values)
+
+
+def test_plant_is_eq_5_with_exact_stick_slip() -> None:
+    # 3 N*m of rider torque for 0.1 s, no current: the same as step_exact at 0.1 ms steps
+    rig, _ = _rig(rider=3.0)
+    rig.advance_to(0.1)
+    theta, omega = 0.0, 0.0
+    for _ in range(1000):
+        theta, omega = step_exact(theta, omega, 3.0, HB.J_eq, HB.beta_eq, HB.beta_s, 1e-4)
+    assert rig.x[0] == pytest.approx(theta, rel=1e-12) and rig.x[1] == pytest.approx(omega)
+
+
+def test_current_command_acts_through_n_kt_and_the_drive_limit() -> None:
+    rig, link = _rig()
+    link.inbox.append(_command(100.0))  # beyond the 1 mA DBC range: saturated to 32.767 A
+    rig.advance_to(0.001)
+    assert rig.i_cmd == pytest.approx(32.767) and rig.x[2] == 30.0  # the drive's limit
+
+
+def test_without_commands_the_drive_stops_the_torque() -> None:
+    rig, link = _rig(command_timeout=0.01)
+    link.inbox.append(_command(5.0))
+    rig.advance_to(0.005)
+    assert rig.x[2] == 5.0
+    rig.advance_to(0.03)
+    assert rig.x[2] == 0.0
+
+
+def test_status_frames_quantise_like_the_encoder_and_the_dbc() -> None:
+    rig, link = _rig(rider=3.0)
+    rig.advance_to(0.05)
+    rows = _status(link)
+    angle = rows[:, ST.index("ANGLE")]
+    quantum = 2 * math.pi / 2**14
+    assert rows.shape[0] == 51  # one at t = 0, then every millisecond
+    assert np.all(np.abs(angle / quantum - np.round(angle / quantum)) * quantum <= 5e-6 + 1e-12)
+    assert np.all(np.diff(rows[:, ST.index("COUNTER")]) % 16 == 1)
+
+
+@pytest.mark.parametrize(
+    ("faults", "check"),
+    [
+        (RigFaults(frozen_encoder=0.02), lambda a, i: np.ptp(a[25:]) == 0.0 and np.ptp(a) > 0),
+        (RigFaults(sign_flip=0.02), lambda a, i: np.all(a[25:] < 0) and np.all(a[5:15] > 0)),
+        (
+            RigFaults(current_offset_at=0.02, current_offset=1.5),
+            lambda a, i: np.all(i[:20] == 0.0) and np.allclose(i[25:], 1.5),
+        ),
+    ],
+)
+def test_sensor_faults(faults: RigFaults, check: object) -> None:
+    rig, link = _rig(rider=3.0, faults=faults)
+    rig.advance_to(0.05)
+    rows = _status(link)
+    assert check(rows[:, ST.index("ANGLE")], rows[:, ST.index("CURRENT")])  # type: ignore[operator]
+
+
+def test_frame_faults_bad_checksum_estop_drive_fault() -> None:
+    rig, link = _rig(faults=RigFaults(bad_checksum=0.01, estop=0.02, drive_fault=0.03))
+    rig.advance_to(0.05)
+    status = [d for i, d in link.sent if i == ST.frame_id]
+    bad = [k for k, d in enumerate(status) if not ST.decode(d, np.zeros(len(ST.names)))]
+    assert bad == [10]  # one frame, at 10 ms
+    estops = [d for i, d in link.sent if i == CODECS.estop.frame_id]
+    out = np.zeros(len(CODECS.estop.names))
+    assert len(estops) == 1 and CODECS.estop.decode(estops[0], out)
+    assert out[CODECS.position(CODECS.estop, "estop_signal")] == 1.0
+    flags = _status(link, strict=False)[:, ST.index("DRIVE_FAULT")]
+    assert np.all(flags[:30] == 0.0) and np.all(flags[30:] == 1.0)  # from 30 ms
+
+
+def test_loss_bursts_stale_and_duplicates_are_counted() -> None:
+    rig, link = _rig(loss=0.1, burst_enter=0.02, burst_leave=0.3, stale=0.05, duplicate=0.05)
+    rig.advance_to(2.0)
+    counters = _status(link)[:, ST.index("COUNTER")]
+    steps = np.diff(counters) % 16
+    assert rig.frames_dropped > 200  # 10 % random plus bursts of about 3 frames
+    assert np.sum(steps == 0) > 50  # stale or duplicated: the counter did not move
+    assert len(link.sent) + rig.frames_dropped > 2001
+
+
+def test_latency_delays_delivery() -> None:
+    rig, link = _rig(latency=0.0025)
+    rig.advance_to(0.002)
+    assert link.sent == []
+    rig.advance_to(0.003)
+    assert len(link.sent) == 1
+
+
+def test_bus_off_sends_nothing_for_its_duration() -> None:
+    rig, link = _rig(bus_off_at=0.01, bus_off_duration=0.02)
+    rig.advance_to(0.05)
+    assert len(link.sent) == 51 - 20 and rig.frames_dropped == 20
+
+
+def test_parse_rig_checks_keys_and_types() -> None:
+    base = {"plant_rate": 1e4, "status_rate": 1e3, "encoder_bits": 14, "current_noise": 0.0,
+            "max_current": 30.0}  # fmt: skip
+    s = parse_rig({"loss": 0.01, "faults": {"sign_flip": 2}}, base=base)
+    assert s.loss == 0.01 and s.faults.sign_flip == 2.0
+    with pytest.raises(MotosimError, match="unknown key 'lost'"):
+        parse_rig({"lost": 0.1}, base=base)
+    with pytest.raises(MotosimError, match="expected a probability"):
+        parse_rig({"loss": 1.5}, base=base)
+    with pytest.raises(MotosimError, match="multiple of"):
+        parse_rig({"status_rate": 3000.0}, base=base)

@@ -1,0 +1,193 @@
+"""The safety stage: each protection and each fault observed, time to zero counted in periods."""
+
+import itertools
+import math
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from motosim.errors import MotosimError
+from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
+
+LIMITS = SafetyLimits(
+    max_current=20.0,
+    max_slew=1e6,  # no slew limit unless a test asks for one
+    max_speed=5.0,
+    speed_band=5.0,
+    soft_stop=0.5,
+    hard_stop=0.8,
+    end_stop_gain=40.0,
+    hands_off_torque=0.0,
+    hands_off_time=0.2,
+    hands_off_gain=0.25,
+)
+
+
+class Driver:
+    """Feeds a stage fresh status frames and steps it, as the loop does."""
+
+    def __init__(self, limits: SafetyLimits = LIMITS, rate: float = 1000.0) -> None:
+        self.stage = SafetyStage(limits, dt=1.0 / rate)
+        self.counter = 0
+
+    def period(self, command: float = 10.0, *, frame: bool = True, **kw: float) -> float:
+        if frame:
+            self.counter += 1
+            self.stage.status_frame(checksum_ok=True, counter=self.counter, drive_fault=False)
+        args = {"theta": 0.0, "omega": 0.0, "tau_hat": 5.0} | kw
+        return self.stage.step(command, **args)
+
+    def running(self) -> "Driver":
+        self.stage.enable()
+        while self.stage.state != State.RUNNING:
+            self.period()
+        assert self.period() == 10.0
+        return self
+
+
+def test_fade_in_takes_half_a_second_on_every_enable() -> None:
+    d = Driver(rate=100.0)
+    d.stage.enable()
+    out = [d.period() for _ in range(60)]
+    assert out[0] == pytest.approx(10.0 * 0.02) and out[49] == pytest.approx(10.0)
+    assert all(b >= a for a, b in itertools.pairwise(out))
+    d.stage.request_stop()  # fade-out, then idle
+    out = [d.period() for _ in range(60)]
+    assert out[0] == pytest.approx(9.8) and out[49] == 0.0 and d.stage.state == State.IDLE
+    d.stage.enable()
+    assert d.period() == pytest.approx(0.2)  # fades in again
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_watchdog_trips_within_three_periods(rate: float) -> None:
+    d = Driver(rate=rate).running()
+    out = [d.period(frame=False) for _ in range(3)]
+    assert out[:2] == [10.0, 10.0] and out[2] == 0.0
+    assert d.stage.fault == Fault.WATCHDOG and "3 periods" in d.stage.describe()
+    assert d.period() == 0.0  # latched, even with frames back
+
+
+def test_stale_or_duplicated_frames_do_not_feed_the_watchdog() -> None:
+    d = Driver().running()
+    for _ in range(2):
+        assert not d.stage.status_frame(checksum_ok=True, counter=d.counter, drive_fault=False)
+        assert d.period(frame=False) == 10.0
+    assert not d.stage.status_frame(checksum_ok=True, counter=d.counter, drive_fault=False)
+    assert d.period(frame=False) == 0.0 and d.stage.fault == Fault.WATCHDOG
+    assert d.stage.frames_stale == 3
+
+
+def test_lost_frames_are_counted_not_faults() -> None:
+    d = Driver().running()
+    d.counter += 4  # four frames lost on the bus
+    assert d.period() == 10.0 and d.stage.frames_lost == 4
+
+
+@pytest.mark.parametrize(
+    ("fault", "inject"),
+    [
+        (Fault.CHECKSUM, lambda s: s.status_frame(checksum_ok=False, counter=9, drive_fault=False)),
+        (
+            Fault.DRIVE_FAULT,
+            lambda s: s.status_frame(checksum_ok=True, counter=9, drive_fault=True),
+        ),
+        (Fault.ESTOP_CAN, lambda s: s.estop_frame(checksum_ok=True, pressed=True)),
+        (Fault.CHECKSUM, lambda s: s.estop_frame(checksum_ok=False, pressed=False)),
+        (Fault.ESTOP_KEY, lambda s: s.trip(Fault.ESTOP_KEY)),
+    ],
+)
+def test_a_fault_frame_zeroes_the_command_in_the_same_period(fault: Fault, inject: object) -> None:
+    d = Driver(LIMITS.__class__(**{**_fields(LIMITS), "max_slew": 100.0})).running()
+    inject(d.stage)  # type: ignore[operator]
+    assert d.period(frame=False) == 0.0  # no slew limit on the way down
+    assert d.stage.state == State.FAULT and d.stage.fault == fault
+
+
+@pytest.mark.parametrize(
+    "bad", [{"command": math.nan}, {"theta": math.inf}, {"omega": -math.inf}, {"tau_hat": math.inf}]
+)
+def test_non_finite_values_zero_the_command(bad: dict[str, float]) -> None:
+    d = Driver().running()
+    assert d.period(**bad) == 0.0 and d.stage.fault == Fault.NON_FINITE
+
+
+def test_beyond_the_hard_stop_is_a_fault() -> None:
+    d = Driver().running()
+    assert d.period(theta=-0.81) == 0.0 and d.stage.fault == Fault.END_STOP
+
+
+def test_soft_end_stop_drops_the_outward_push_and_pulls_back() -> None:
+    d = Driver().running()
+    assert d.period(10.0, theta=0.6) == pytest.approx(-40.0 * 0.1)  # 0.1 rad past 0.5
+    assert d.period(-3.0, theta=0.6) == pytest.approx(-3.0 - 4.0)  # inward push kept
+    assert d.period(-10.0, theta=-0.55) == pytest.approx(40.0 * 0.05)
+
+
+@given(
+    command=st.floats(-20.0, 20.0),
+    omega=st.floats(-30.0, 30.0),
+)
+def test_the_speed_limiter_only_ever_reduces_the_command(command: float, omega: float) -> None:
+    d = Driver().running()
+    out = d.period(command, omega=omega)
+    assert abs(out) <= abs(command) and out * command >= 0.0
+    if abs(omega) <= LIMITS.max_speed or command * omega <= 0.0:
+        assert out == command
+    if abs(omega) >= LIMITS.max_speed + LIMITS.speed_band and command * omega > 0.0:
+        assert out == 0.0
+
+
+def test_clamp_and_slew_rate() -> None:
+    d = Driver(LIMITS.__class__(**{**_fields(LIMITS), "max_slew": 1000.0}), rate=1000.0)
+    d.stage.enable()
+    for _ in range(600):
+        d.period(0.0)
+    out = [d.period(100.0) for _ in range(30)]
+    assert out[0] == pytest.approx(1.0) and out[9] == pytest.approx(10.0)  # 1000 A/s
+    assert max(out) == 20.0  # clamped
+
+
+def test_hands_off_reduces_the_gain_until_the_rider_holds_again() -> None:
+    lim = LIMITS.__class__(**{**_fields(LIMITS), "hands_off_torque": 0.5})
+    d = Driver(lim, rate=100.0).running()
+    out = [d.period(tau_hat=0.1) for _ in range(25)]
+    assert out[18] == 10.0 and out[19] == pytest.approx(2.5) and d.stage.hands_off  # 0.2 s
+    assert d.period(tau_hat=2.0) == 10.0 and not d.stage.hands_off
+
+
+def test_clear_then_enable_fades_in_again() -> None:
+    d = Driver().running()
+    d.stage.trip(Fault.ESTOP_KEY)
+    d.stage.enable()  # ignored while latched
+    assert d.period() == 0.0
+    d.stage.clear()
+    d.stage.enable()
+    assert d.period() == pytest.approx(10.0 * 0.002)
+
+
+def test_watchdog_waits_while_idle() -> None:
+    d = Driver()
+    for _ in range(10):
+        assert d.period(frame=False) == 0.0
+    assert d.stage.fault == Fault.NONE
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [
+        ("max_current", 0.0),
+        ("max_slew", math.nan),
+        ("hard_stop", 0.4),
+        ("hands_off_gain", 1.5),
+        ("watchdog_periods", 0),
+        ("end_stop_gain", -1.0),
+    ],
+)
+def test_bad_limits_are_refused(key: str, value: float) -> None:
+    with pytest.raises(MotosimError, match=key):
+        SafetyLimits(**{**_fields(LIMITS), key: value})
+
+
+def _fields(limits: SafetyLimits) -> dict[str, float]:
+    return {name: getattr(limits, name) for name in SafetyLimits.__dataclass_fields__}
