@@ -9,8 +9,9 @@ that the classes of bad input are refused in one place and in one line naming th
 * a syntax error is the parser's own one-line message with its line and column;
 * nesting deeper than :data:`MAX_DEPTH` is refused (a deeply nested array would otherwise
   exhaust Python's recursion limit);
-* integers beyond TOML's 64-bit range, non-finite floats (``nan``, ``inf``) and numbers of
-  magnitude above :data:`MAX_MAGNITUDE` are refused with their key path. No quantity of
+* integers beyond TOML's 64-bit range, non-finite floats (``nan``, ``inf``) and floats of
+  magnitude above :data:`MAX_MAGNITUDE` are refused with their key path (integers, such as
+  a seed, may use the whole 64-bit range). No quantity of
   motosim in SI units comes near that bound (the largest, a tyre stiffness, is about
   1e5 N/rad; 1e15 s is thirty million years), so such a number is a typo or an attack,
   never data. Values inside it are then checked against their own physical range by the
@@ -80,15 +81,10 @@ def _check_tree(data: dict[str, Any], origin: str) -> None:
         elif isinstance(node, bool):
             continue
         elif isinstance(node, int):
-            if abs(node) >= _INT_LIMIT:
+            if abs(node) >= _INT_LIMIT:  # larger integers (seeds) are left to their checks
                 raise MotosimError(
                     f"{origin}: {_key(path)} = {short_repr(node)}; expected an integer of "
                     "magnitude below 2^63 (TOML's 64-bit range)"
-                )
-            if abs(node) > MAX_MAGNITUDE:
-                raise MotosimError(
-                    f"{origin}: {_key(path)} = {node}; expected a number of magnitude "
-                    f"<= {MAX_MAGNITUDE:g}"
                 )
         elif isinstance(node, float):
             if not math.isfinite(node):
@@ -152,7 +148,7 @@ def read_toml(path: Path, *, what: str, max_bytes: int = MAX_FILE_BYTES) -> dict
     Returns
     -------
     dict of str to Any
-        The parsed document; its numbers are finite, of magnitude <= :data:`MAX_MAGNITUDE`.
+        The parsed document; its floats are finite, of magnitude <= :data:`MAX_MAGNITUDE`.
 
     Raises
     ------
