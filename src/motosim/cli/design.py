@@ -10,6 +10,7 @@ import numpy as np
 from motosim import __version__
 from motosim.cli._common import check_output, print_json, write_text
 from motosim.control.torque_feedback import (
+    MAX_ORDER,
     PAPER_CONTROLLER,
     PAPER_DEN,
     PAPER_NUM,
@@ -26,9 +27,6 @@ from motosim.params.checks import check_number, short_repr
 
 __all__ = ["MAX_ORDER", "MAX_STARTS", "register"]
 
-MAX_ORDER = 3
-"""Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
-controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
 
 MAX_STARTS = 32
 """Most random starts of the fixed-order search: each takes a fraction of a second at order 1

@@ -34,6 +34,7 @@ from motosim.model.handlebar import matrices, perturbed
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
+    "MAX_ORDER",
     "PAPER_CONTROLLER",
     "PAPER_DEN",
     "PAPER_NUM",
@@ -50,6 +51,9 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
+MAX_ORDER = 3
+"""Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
+controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
 PAPER_NUM = (-2.355, -613.7)
 """Numerator of eq. (26), highest power first [A/rad]."""
 PAPER_DEN = (1.0, 1445.0)

@@ -49,9 +49,10 @@ from typing import Any, ClassVar, Literal, Union, get_args, get_origin, get_type
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.control.torque_feedback import MAX_ORDER
 from motosim.errors import MotosimError
 from motosim.estimation.registry import ESTIMATORS
-from motosim.params.checks import check_number
+from motosim.params.checks import check_number, short_repr
 from motosim.sim import paths
 from motosim.sim.rider import SPEED_RANGE as RIDER_SPEEDS
 from motosim.timeseries import TimeSeries
@@ -408,11 +409,11 @@ class Rider:
             raise MotosimError('probe is for kind = "virtual"; give a torque rider a profile')
         if self.kind == "virtual" and self.path is None:
             object.__setattr__(self, "path", StraightPath())
-        _check("lateral_tolerance", self.lateral_tolerance, low=0.0, low_open=True, unit="m")
-        _check("course_tolerance", self.course_tolerance, low=0.0, low_open=True, unit="rad")
-        _check("torque_scale", self.torque_scale, low=0.0, low_open=True, unit="N*m")
+        _check("lateral_tolerance", self.lateral_tolerance, low=1e-3, high=100.0, unit="m")
+        _check("course_tolerance", self.course_tolerance, low=1e-4, high=3.0, unit="rad")
+        _check("torque_scale", self.torque_scale, low=1e-2, high=1000.0, unit="N*m")
         _check("preview", self.preview, low=0.0, high=5.0, unit="s")
-        _check("max_torque", self.max_torque, low=0.0, low_open=True, unit="N*m")
+        _check("max_torque", self.max_torque, low=0.0, low_open=True, high=500.0, unit="N*m")
 
 
 @dataclass(frozen=True, slots=True)
@@ -446,9 +447,13 @@ class Estimator:
     def __post_init__(self) -> None:
         if self.name not in ESTIMATORS:
             raise MotosimError(f"name = {self.name!r}; expected one of {', '.join(ESTIMATORS)}")
-        _check("lipschitz", self.lipschitz, low=0.0, low_open=True, unit="rad/s^2")
+        _check("lipschitz", self.lipschitz, low=0.0, low_open=True, high=1e7, unit="rad/s^2")
 
 
+MAX_RECORDED_ROWS = 10_000_000
+"""Most rows a run may record (one per control period, about 200 bytes each in memory)."""
+MAX_PLANT_STEPS = 100_000_000
+"""Most plant sub-steps of a torque profile sampled for a run (8 bytes each)."""
 FEEDFORWARD = ("rider", "reference")
 """Feedforward terms of the stack's command (:func:`motosim.sim.stack.step`)."""
 
@@ -475,10 +480,10 @@ class Controller:
             raise MotosimError(
                 f"feedforward has {unknown[0]!r}; expected some of {', '.join(FEEDFORWARD)}"
             )
-        _check("bandwidth", self.bandwidth, low=0.0, low_open=True, unit="Hz")
-        if self.order < 0:
-            raise MotosimError(f"order = {self.order}; expected an integer >= 0")
-        _check("max_current", self.max_current, low=0.0, low_open=True, unit="A")
+        _check("bandwidth", self.bandwidth, low=0.0, low_open=True, high=1000.0, unit="Hz")
+        if not 0 <= self.order <= MAX_ORDER:
+            raise MotosimError(f"order = {self.order}; expected an integer from 0 to {MAX_ORDER}")
+        _check("max_current", self.max_current, low=0.0, low_open=True, high=1000.0, unit="A")
 
 
 @dataclass(frozen=True, slots=True)
@@ -500,6 +505,19 @@ class Scenario:
 
     def __post_init__(self) -> None:
         _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
+        rows = self.duration * self.rates.control
+        if rows > MAX_RECORDED_ROWS:
+            raise MotosimError(
+                f"duration x control rate = {rows:.3g} recorded rows; expected at most "
+                f"{MAX_RECORDED_ROWS:.0e} (about 2 GB of signals in memory): shorten the run "
+                "or lower [rates] control"
+            )
+        steps = self.duration * self.rates.plant
+        if self.rider.kind == "torque" and steps > MAX_PLANT_STEPS:
+            raise MotosimError(
+                f"duration x plant rate = {steps:.3g} plant steps of the rider's profile; "
+                f"expected at most {MAX_PLANT_STEPS:.0e}: shorten the run or lower [rates] plant"
+            )
         low, high = RIDER_SPEEDS
         if self.rider.kind == "virtual" and not low <= self.motorcycle.speed <= high:
             raise MotosimError(
@@ -550,27 +568,27 @@ def _value(tp: Any, value: Any, key: str, where: str) -> Any:
         return _value(options[0], value, key, where)  # ``str | None``
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise MotosimError(f"{key} = {value!r}; expected a finite number")
+            raise MotosimError(f"{key} = {short_repr(value)}; expected a finite number")
         try:
             return float(value)
         except OverflowError:
-            raise MotosimError(f"{key} = {value}; expected a finite number") from None
+            raise MotosimError(f"{key} = {short_repr(value)}; expected a finite number") from None
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int) or abs(value) > 2**63 - 1:
-            raise MotosimError(f"{key} = {value!r}; expected an integer")
+            raise MotosimError(f"{key} = {short_repr(value)}; expected an integer")
         return value
     if tp is bool or tp is str:
         if not isinstance(value, tp):
-            raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
+            raise MotosimError(f"{key} = {short_repr(value)}; expected {_describe(tp)}")
         return value
     if origin is Literal:
         if value not in get_args(tp):
-            raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
+            raise MotosimError(f"{key} = {short_repr(value)}; expected {_describe(tp)}")
         return value
     if origin is tuple:
         item_type = get_args(tp)[0]
         if not isinstance(value, list) or (item_type is float and not value):
-            raise MotosimError(f"{key} = {value!r}; expected {_describe(tp)}")
+            raise MotosimError(f"{key} = {short_repr(value)}; expected {_describe(tp)}")
         return tuple(_value(item_type, item, f"{key} entry", where) for item in value)
     return _build(tp, value, f"{where}.{key}")
 
@@ -580,17 +598,19 @@ def _tagged(registry: Mapping[str, type], value: Any, key: str, where: str, *, n
     if number and not isinstance(value, Mapping):
         return ConstantProfile(_value(float, value, key, where))
     if not isinstance(value, Mapping):
-        raise MotosimError(f"{key} = {value!r}; expected a table with a kind")
+        raise MotosimError(f"{key} = {short_repr(value)}; expected a table with a kind")
     kind = value.get("kind")
     if not isinstance(kind, str) or kind not in registry:
-        raise MotosimError(f"{where}.{key}: kind = {kind!r}; expected one of {', '.join(registry)}")
+        raise MotosimError(
+            f"{where}.{key}: kind = {short_repr(kind)}; expected one of {', '.join(registry)}"
+        )
     return _build(registry[kind], {k: v for k, v in value.items() if k != "kind"}, f"{where}.{key}")
 
 
 def _build(cls: type, table: Any, where: str) -> Any:
     """Construct the dataclass ``cls`` from a TOML table, checking every key."""
     if not isinstance(table, Mapping):
-        raise MotosimError(f"{where}: expected a table, got {table!r}")
+        raise MotosimError(f"{where}: expected a table, got {short_repr(table)}")
     hints = get_type_hints(cls)
     names = [f.name for f in dataclasses.fields(cls)]
     for key in table:
@@ -641,7 +661,7 @@ def parse_scenario(data: Mapping[str, Any], *, origin: str) -> Scenario:
         raise MotosimError(f"{origin}: missing table [scenario]")
     head = data["scenario"]
     if not isinstance(head, Mapping):
-        raise MotosimError(f"{origin}: scenario = {head!r}; expected a table [scenario]")
+        raise MotosimError(f"{origin}: scenario = {short_repr(head)}; expected a table [scenario]")
     own = [n for n in (f.name for f in dataclasses.fields(Scenario)) if n not in _TABLES]
     for key in head:
         if key not in own:
