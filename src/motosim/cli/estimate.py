@@ -5,10 +5,11 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import print_json
+from motosim.cli._common import check_output, print_json
 from motosim.estimation import ESTIMATORS, estimate
 from motosim.io import parse_columns, read_rig_log, write_log
 from motosim.params import load_parameters
+from motosim.params.checks import check_number
 from motosim.timeseries import TimeSeries
 
 __all__ = ["register"]
@@ -56,11 +57,17 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--out", required=True, help="CSV file to write")
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace the --out file if it exists"
+    )
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Read, estimate, write and summarise."""
+    check_output(args.out, overwrite=args.overwrite)
+    check_number(args.lipschitz, where="--lipschitz", lower=0.0, lower_closed=False, upper=1e7,
+                 unit="rad/s^2")  # fmt: skip
     hb = load_parameters(args.handlebar, "handlebar")
     columns = parse_columns(args.columns) if args.columns else None
     rig = read_rig_log(args.log, required=("theta_h", "i_m"), columns=columns)

@@ -5,11 +5,12 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import print_json
+from motosim.cli._common import check_output, print_json
 from motosim.errors import MotosimError
 from motosim.identification import MeasurementModel, excitation_run, plan_excitation
 from motosim.io import write_log
 from motosim.params import load_parameters
+from motosim.params.checks import check_number, short_repr
 from motosim.timeseries import TimeSeries
 
 __all__ = ["register"]
@@ -48,6 +49,9 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--out", help="CSV log to write (with --plan: the current command)")
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace the --out file if it exists"
+    )
     plan = parser.add_argument_group(
         "planning an identification run on the rig (--plan)",
         "recommend the current chirp that makes J_eq, beta_eq and beta_s identifiable, from "
@@ -101,6 +105,7 @@ def _plan(args: argparse.Namespace) -> int:
         "notes": list(plan.notes),
     }
     if args.out:
+        check_output(args.out, overwrite=args.overwrite)
         t = np.arange(round(plan.duration * args.rate) + 1) / args.rate
         phase = plan.f0 * t + 0.5 * (plan.f1 - plan.f0) / plan.duration * t**2
         command = plan.amplitude * np.sin(2.0 * np.pi * phase)
@@ -120,12 +125,39 @@ def _plan(args: argparse.Namespace) -> int:
     return 0
 
 
+_MAX_SAMPLES = 10_000_000  # samples of one excitation log (a few hundred MB at most)
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse absurd options in one line before any work or allocation."""
+    check_number(args.rate, where="--rate", lower=1.0, upper=1e5, unit="Hz")
+    check_number(args.duration, where="--duration", lower=0.0, lower_closed=False, upper=3600.0,
+                 unit="s")  # fmt: skip
+    if args.duration * args.rate > _MAX_SAMPLES:
+        raise MotosimError(
+            f"--duration x --rate = {args.duration * args.rate:.3g} samples; expected at most "
+            f"{_MAX_SAMPLES:.0e}"
+        )
+    check_number(args.amplitude, where="--amplitude", lower=0.0, lower_closed=False,
+                 upper=100.0, unit="V")  # fmt: skip
+    for option, value in (("--f0", args.f0), ("--f1", args.f1), ("--frequency", args.frequency)):
+        check_number(value, where=option, lower=0.0, upper=args.rate / 2, unit="Hz")
+    check_number(args.counts, where="--counts", lower=1.0, upper=2.0**32)
+    check_number(args.pulley_ratio, where="--pulley-ratio", lower=0.0, lower_closed=False,
+                 upper=1000.0)  # fmt: skip
+    check_number(args.current_noise, where="--current-noise", lower=0.0, upper=100.0, unit="A")
+    if not 0 <= args.seed < 2**63:
+        raise MotosimError(f"--seed {short_repr(args.seed)}; expected an integer 0 to 2^63 - 1")
+
+
 def run(args: argparse.Namespace) -> int:
     """Simulate, measure and write the run (or, with --plan, recommend one)."""
+    _check_options(args)
     if args.plan:
         return _plan(args)
     if not args.out:
         raise MotosimError("excite needs --out RUN.csv; expected the log file to write")
+    check_output(args.out, overwrite=args.overwrite)
     hb = load_parameters(args.handlebar, "handlebar")
     measurement = MeasurementModel(
         sample_rate=args.rate,

@@ -9,7 +9,13 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_figure_path, print_json, save_figure, write_text
+from motosim.cli._common import (
+    check_figure_path,
+    check_output,
+    print_json,
+    save_figure,
+    write_text,
+)
 from motosim.errors import MotosimError
 from motosim.identification import (
     METHODS,
@@ -81,6 +87,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument("--out", metavar="PARAMS.toml", help="write a handlebar parameter file")
     parser.add_argument(
+        "--overwrite", action="store_true", help="replace the --out and --plot files if they exist"
+    )
+    parser.add_argument(
         "--plot", metavar="FIG.png", help="fit, validation, input, residual and parameters"
     )
     parser.set_defaults(func=run)
@@ -114,9 +123,10 @@ _UNITS = {"J_eq": "kg*m^2", "beta_eq": "N*m*s/rad", "beta_s": "N*m"}
 
 def run(args: argparse.Namespace) -> int:
     """Identify, report, and optionally write the parameter file and the figure."""
-    for path in (args.plot,):
-        if path:
-            check_figure_path(path)
+    if args.plot:
+        check_figure_path(args.plot, overwrite=args.overwrite)
+    if args.out:
+        check_output(args.out, overwrite=args.overwrite, suffixes=(".toml",))
     motor = _motor(args)
     hb = motor.values
     assert isinstance(hb, HandlebarParameters)
