@@ -1,11 +1,12 @@
 """Sharp (1971) lateral model against published and independently derived numbers.
 
 Sources:
-- [notes]: shared/reference/sharp1971-model.md, section 6 (M, E0, E1, B_v of the standard
-  machine, computed from Sharp's Appendix 3 parameters and checked against an independent
-  Kane's-method derivation to 1e-13) and section 8 (eigenvalues).
-- [S71]: R.S. Sharp, J. Mech. Eng. Sci. 13(5):316-329, 1971, Tables 1-3, model 1, as
-  transcribed in the notes; speeds converted from ft/s.
+- [notes]: M, E0, E1, B_v of the standard machine from Sharp's Appendix 3 parameters, as an
+  independent Kane's-method derivation of the model gives them (aerotinez/madsym,
+  examples/sharpmotorcycle, sharpMotorcycleSS*.m; agreement 1e-13), and the eigenvalues and
+  stability boundaries of that derivation.
+- [S71]: R.S. Sharp, J. Mech. Eng. Sci. 13(5):316-329, 1971, Tables 1-3, model 1 (as
+  transcribed in 0tmeF/MotoDynamics); speeds converted from ft/s.
 """
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""The one-way data flow of ARCHITECTURE.md, checked on the import statements.
+"""The one-way data flow of the package (README, Development), checked on the imports.
 
 params -> model -> {identification, estimation, control, cueing} -> sim -> io -> {rt, campaign,
 plotting} -> {report, view} -> cli: a module imports only from its own package and from layers
@@ -55,7 +55,7 @@ MODULES = sorted(p for p in SRC.rglob("*.py") if _package(p) != "__init__")
 @pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(SRC)))
 def test_imports_flow_one_way(path: Path) -> None:
     own = _package(path)
-    assert own in RANK, f"{own} has no layer in ARCHITECTURE.md"
+    assert own in RANK, f"{own} has no layer in LAYERS"
     for target in _imports(path) - {own}:
         assert RANK[target] < RANK[own], f"{path.relative_to(SRC)} imports motosim.{target}"
 

@@ -11,7 +11,7 @@ from motosim.params import SharpParameters
 
 def test_longitudinal_equation(sharp: SharpParameters) -> None:
     # consistent eq. (2): (m + J_R/r_D^2) v_x' = (tau_d - tau_b)/r_D + m psi_dot v_y + F_wx,
-    # m + J_R/r_D^2 = 267.14 kg (shared/reference/sharp1971-model.md, section 9)
+    # m + J_R/r_D^2 = 267.14 kg (Sharp 1971, Appendix 3: m_f + m_r, i_fy + i_Ry, R_r)
     acc = model.longitudinal_acceleration(
         sharp, v_y=0.5, psi_dot=0.2, drive_torque=300.0, brake_torque=100.0, wind_force=-50.0
     )

@@ -456,7 +456,8 @@ def longitudinal_acceleration(
     Notes
     -----
     The printed eq. (2) multiplies by the inverse of m_e and only the torque term; the form
-    above is the one whose terms are all forces (see ``sharp1971-model.md`` section 9).
+    above is the one whose terms are all forces (force balance along the body x axis, with
+    the wheels' spin inertia J_R reflected to the contact, a_x = v_x' - psi_dot v_y).
     """
     d = derived_geometry(p)
     force = (drive_torque - brake_torque) / d["r_D"] + d["m"] * psi_dot * v_y + wind_force

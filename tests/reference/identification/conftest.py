@@ -11,7 +11,7 @@ from motosim.model.handlebar import simulate_handlebar
 from motosim.params import HandlebarParameters, load_parameters
 from motosim.timeseries import TimeSeries
 
-SIMULATION_RATE = 10_000.0  # [Hz] fine simulation, then sampled (ARCHITECTURE.md, multi-rate)
+SIMULATION_RATE = 10_000.0  # [Hz] fine simulation (beta/J = 336 1/s), then sampled
 
 
 @pytest.fixture(scope="session")

@@ -75,7 +75,8 @@ def test_gradient_law_frictions_within_5_percent(table1):
 
 
 def test_printed_sign_of_eq9_diverges(table1):
-    # eq. (9) as printed is gradient ascent (algorithms-and-ecosystem.md section 7 item 2)
+    # eq. (9) as printed is gradient ascent on the squared error (its sign flipped gives the
+    # gradient descent law of Ioannou & Sun, Robust Adaptive Control, 1996)
     log = excitation_run(
         table1, "chirp", 20.0, MeasurementModel(current_noise=0.0), np.random.default_rng(4)
     )
