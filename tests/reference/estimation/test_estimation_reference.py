@@ -4,7 +4,8 @@ Sources: an independent scipy computation of the Lyapunov route of Walcott & Zak
 eqs. (13)-(14) of Nehaoua, Arioui & Mammar (2012) state it (poles (-40, -60), Q = I:
 L = [[0, -276.289], [40, 1]], P = diag(0.008333, 0.0125), F = [0, 0.2008]), for Table I
 (J_eq = 0.0415 kg*m^2, beta_eq = 13.956 N*m*s/rad); and, for the differentiator, Levant's
-implicit Euler discretisation (Acary & Brogliato, Systems & Control Letters 59, 2010) run independently
+implicit Euler discretisation (Acary & Brogliato, Systems & Control Letters 59, 2010), run
+independently
 (signal 0.3 sin 2 pi t + 0.1 sin 6 pi t, implicit STD RMS 0.132 rad/s at 100 Hz and
 0.013 rad/s at 1 kHz after 1 s, equal to the backward difference).
 """
