@@ -413,11 +413,15 @@ def plot_spectrum(
     )
     tail = result.t >= result.t[-1] - 2.0
     for ax, (name, values, unit) in zip(axes, series, strict=True):
+        top = 0.0
         for part, label, style in ((slice(None), "whole run", "-"), (tail, "last 2 s", "--")):
             x = values[part]
             amplitude = 2.0 * np.abs(np.fft.rfft(x - np.mean(x))) / max(x.size, 1)
             freqs = np.fft.rfftfreq(x.size, dt)
-            ax.semilogy(freqs[1:], amplitude[1:] + 1e-12, style, lw=1.0, label=label)
+            ax.semilogy(freqs[1:], amplitude[1:], style, lw=1.0, label=label)
+            top = max(top, float(np.max(amplitude[1:], initial=0.0)))
+        if top > 0:  # five decades under the highest peak: a floor of rounding would hide it
+            ax.set_ylim(top * 1e-5, top * 2.0)
         ax.axvline(BUZZ_CUTOFF, color="0.5", ls=":", lw=1.0)
         ax.set_xlim(0.0, min(50.0, 0.5 / dt))
         ax.set_ylabel(f"{name} amplitude [{unit}]")
