@@ -65,7 +65,7 @@ class StackModel(NamedTuple):
     feedback : bool
         Whether the controller commands the motor (False: Fig. 9, 0 A).
     feedforward : ndarray, shape (7,)
-        [rider-torque cancellation gain (0 or 1), reference inverse-dynamics gain (0 or 1),
+        [rider-torque cancellation gain (0 to 1), reference inverse-dynamics gain (0 or 1),
         J_eq [kg*m^2], beta_eq [N*m*s/rad], beta_s [N*m], N k_t [N*m/A], tanh width of the
         friction term [rad/s]] of the nominal handlebar (see :func:`step`).
     max_current : float
@@ -323,7 +323,7 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     ff = model.feedforward
     torque = 0.0
     if ff[0] > 0.0:  # cancel what the rider is estimated to apply
-        torque -= data.held[3]
+        torque -= ff[0] * data.held[3]
     if ff[1] > 0.0:  # J delta'' + beta delta' + beta_s sign(delta'), delta'' from the model
         v = z[8]
         dd = model.Bv[3] * data.held[3]
