@@ -89,6 +89,18 @@ def test_run_refuses_bad_realtime_tables(
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
 
 
+def test_run_refuses_a_view_port_out_of_range(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text(SCENARIO, encoding="utf-8")
+    argv = ["run", str(path), "--bus", "virtual", "--out", str(tmp_path / "o"), "--view"]
+    code = main([*argv, "--view-port", "70000"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--view-port 70000; expected 0..65535" in err
+    assert len(err.strip().splitlines()) == 1
+
+
 def _udp_multicast() -> None:
     from motosim.errors import MotosimError
     from motosim.io.can import open_link

@@ -175,9 +175,10 @@ def _writer_main(
     server: Any = None
     control: _LoopControl | None = None
     url = None
-    live = TelemetryRing(RESULT_SIGNALS, capacity=1 << 15)
+    live = None
     try:
         if view is not None:
+            live = TelemetryRing(RESULT_SIGNALS, capacity=1 << 15)  # 32 s at 1 kHz
             server, control, url = _start_view(view, live)
         writer = ResultWriter(Path(folder), RESULT_SIGNALS, metadata, overwrite=overwrite)
     except MotosimError as err:
@@ -198,7 +199,7 @@ def _writer_main(
             block = result_block(rows, names, torque_per_amp)
             blocks.append(block)
             pending.append(block)
-            if control is not None:
+            if live is not None and control is not None:
                 live.push_block(block)
                 control.current = State(int(rows[-1, col_state])).name.lower()
         if write and pending:
