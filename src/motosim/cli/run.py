@@ -130,8 +130,8 @@ class _LoopControl:
         self._send("stop")
 
     def state(self) -> str:
-        """The safety stage's state in the last row drained (``waiting`` before, then
-        ``idle``, ``fade_in``, ``running``, ``stopping``, ``fault``; ``ended`` at the end)."""
+        """The safety stage's state in the last row drained: ``waiting`` before the first,
+        then ``idle``, ``fade_in``, ``running``, ``stopping`` or ``fault``."""
         return self.current
 
 
@@ -157,7 +157,8 @@ def _writer_main(
     torque_per_amp: float,
     view: _ViewSetup | None = None,
 ) -> None:
-    """The writer process: drain the loop's shared ring into the result files every 0.1 s.
+    """The writer process: drain the loop's shared ring into the result files every 0.1 s
+    (and, with ``view``, into the view's ring every 20 ms).
 
     Writing files takes milliseconds with the interpreter lock held; in its own process it
     cannot delay the loop. Messages on ``conn``: ("ready", view URL or None) or ("error",
