@@ -6,6 +6,7 @@ runs them in two terminals; they check the plumbing (frames both ways, result fi
 Ctrl-C), not the timing, which ``bench/bench_rt.py`` measures.
 """
 
+import itertools
 import json
 import os
 import signal
@@ -86,6 +87,18 @@ def test_run_refuses_bad_realtime_tables(
     code = main(["run", str(path), "--bus", "virtual", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+
+
+def test_run_refuses_a_view_port_out_of_range(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text(SCENARIO, encoding="utf-8")
+    argv = ["run", str(path), "--bus", "virtual", "--out", str(tmp_path / "o"), "--view"]
+    code = main([*argv, "--view-port", "70000"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--view-port 70000; expected 0..65535" in err
+    assert len(err.strip().splitlines()) == 1
 
 
 def _udp_multicast() -> None:
@@ -234,3 +247,77 @@ def test_the_rigs_virtual_rider_steers_by_the_runs_state_stream(
     # one period), so only the lane change under way is asserted here: the lock-step test in
     # test_rt_offline.py checks the trajectory
     assert load_result(out)["y"][-1] > 1.0
+
+
+def _post(url: str, token: str, action: str) -> dict[str, object]:
+    import urllib.request
+
+    request = urllib.request.Request(
+        f"{url}/api/control",
+        data=json.dumps({"action": action}).encode(),
+        headers={"Content-Type": "application/json", "X-Motosim-Token": token},
+        method="POST",
+    )
+    with urllib.request.urlopen(request, timeout=10) as response:
+        answer: dict[str, object] = json.loads(response.read())
+    return answer
+
+
+def test_run_with_the_view_serves_live_rows_and_its_buttons_go_through_the_safety_stage(
+    rig: tuple[Path, object], tmp_path: Path
+) -> None:
+    pytest.importorskip("uvicorn", reason="the view server is in the optional group view")
+    pytest.importorskip("websockets", reason="the WebSocket client is in the optional group view")
+    import re
+    import urllib.request
+
+    from websockets.sync.client import connect
+
+    path, _ = rig
+    out = tmp_path / "run"
+    proc = _motosim(
+        "run", str(path), "--bus", "udp_multicast", "--out", str(out), "--duration", "60",
+        "--no-report", "--view", "--view-port", "0",
+    )  # fmt: skip
+    assert proc.stderr is not None
+    match = None
+    lines: list[str] = []
+    while match is None:
+        line = proc.stderr.readline()
+        assert line, "".join(lines)
+        lines.append(line)
+        match = re.search(r"rider's view (http://127\.0\.0\.1:\d+)/\?token=(\S+)", line)
+    url, token = match.group(1), match.group(2)
+    with urllib.request.urlopen(f"{url}/api/info", timeout=10) as response:
+        info = json.loads(response.read())
+    assert info["replay"] is False and info["status"]["mode"] == "live"
+    assert {"t", "x", "y", "psi", "phi", "delta", "v_x", "i_m"} <= set(info["names"])
+
+    def rows_until(states: set[str], seconds: float, after: float = 0.0) -> list[list[float]]:
+        got: list[list[float]] = []
+        with connect(f"{url.replace('http', 'ws')}/ws/signals") as ws:
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                message = json.loads(ws.recv(timeout=10))
+                got += message["rows"]
+                if got and got[-1][0] >= after and message["status"]["state"] in states:
+                    return got
+        pytest.fail(f"no rows in state {states} within {seconds} s")
+
+    # the torque is off until Arm is pressed: the loop runs, records and feeds the view
+    idle = rows_until({"idle"}, 60.0, after=0.5)
+    assert len(idle) > 50 and all(b[0] > a[0] for a, b in itertools.pairwise(idle))
+    assert _post(url, token, "arm")["ok"] is True
+    rows_until({"running"}, 30.0)
+    time.sleep(1.0)
+    with pytest.raises(urllib.error.HTTPError):
+        _post(url, "wrong-token", "stop")
+    assert _post(url, token, "stop")["ok"] is True  # the path of Ctrl-C
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, "".join(lines) + stderr
+    assert "torque faded out" in stderr
+    result = load_result(out)
+    i = np.abs(result["i_m"])
+    armed = np.flatnonzero(i > 0.0)
+    assert armed.size > 100 and armed[0] > 10  # no current before Arm, some after
+    assert i[-1] == 0.0

@@ -192,3 +192,30 @@ def test_a_stop_request_fades_out_and_ends_the_run(links: tuple[CanLink, CanLink
     assert served == 100 + 50 and rows[-1, 4] == 0.0 and rows[-1, 5] == State.IDLE
     envelope = 1.0 - np.arange(1, 51) / 50.0  # 0.5 s fade-out at 100 Hz
     assert np.allclose(rows[100:, 4], envelope * rows[100:, 3], atol=1e-12)
+
+
+def test_waiting_for_arm_keeps_the_torque_off_until_arm_then_fades_in(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    host, drive = links
+    settings = _settings(100.0)
+    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(100_000, 3.0), np.random.default_rng(2))
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, wait_for_arm=True)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+
+    def period(k: int, t: float) -> bool:
+        if k == 30:
+            runner.arm()  # the view's Arm button, from another thread in motosim run --view
+        return runner.period(k, t)
+
+    RateLoop(100.0, clock).run(period, periods=100)
+    rows = runner.ring.drain()
+    # the stack runs from the first status frame, the command sent stays 0 while IDLE
+    assert np.all(rows[:30, 5] == State.IDLE) and np.all(rows[:30, 4] == 0.0)
+    assert len(runner.stepper.resets) == 1  # type: ignore[attr-defined]
+    # from Arm on, the safety stage's 0.5 s fade-in (50 periods at 100 Hz), then RUNNING
+    assert np.all(rows[30:79, 5] == State.FADE_IN) and np.all(rows[79:, 5] == State.RUNNING)
+    envelope = np.arange(1, 51) / 50.0
+    assert np.allclose(rows[30:80, 4], envelope * rows[30:80, 3], atol=1e-12)
+    assert np.any(rows[30:, 4] != 0.0)

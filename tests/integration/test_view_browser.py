@@ -158,3 +158,29 @@ def test_a_live_simulated_run_drives_the_view_and_the_dashboard(tmp_path: Path) 
             rig.stop()
             rig.join(5.0)
     assert rig.error is None
+
+
+def test_the_render_scale_steps_down_on_a_slow_renderer_unless_fixed(
+    replay: tuple[ReplayFeed, str], tmp_path: Path
+) -> None:
+    _, url = replay
+    slow = "for (let i = 0; i < 8; i++) motosimStats.adapt(10); motosimStats.scale"
+    browser = Browser(f"{url}/?token={TOKEN}", tmp_path / "adaptive")
+    try:
+        browser.wait_for("window.motosimStats && motosimStats.ready")
+        assert browser.evaluate("[motosimStats.antialias, motosimStats.adaptive]") == [False, True]
+        # two slow seconds in a row per step, 1 -> 0.75 -> 0.5, never below 0.5
+        assert browser.evaluate(slow) == 0.5
+        browser.wait_for(
+            "document.querySelector('#scene').width"
+            " === Math.round(document.querySelector('#scene').clientWidth * 0.5)"
+        )
+    finally:
+        browser.close()
+    browser = Browser(f"{url}/?token={TOKEN}&scale=1&antialias=1", tmp_path / "fixed")
+    try:
+        browser.wait_for("window.motosimStats && motosimStats.ready")
+        assert browser.evaluate("[motosimStats.antialias, motosimStats.adaptive]") == [True, False]
+        assert browser.evaluate(slow) == 1
+    finally:
+        browser.close()

@@ -5,6 +5,7 @@ import signal
 import sys
 import threading
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +50,16 @@ def register(sub: Any) -> None:
         help="publish the stack's state each period as UDP datagrams here, or 'off' "
         "(the virtual rig's virtual rider steers by it; default 127.0.0.1:47474)",
     )
+    parser.add_argument(
+        "--view",
+        action="store_true",
+        help="serve the rider's view and the dashboard (fed by the result writer, outside the "
+        "loop); the torque stays off until Arm is pressed there; Stop = Ctrl-C "
+        "(needs pip install 'motosim[view]')",
+    )
+    parser.add_argument(
+        "--view-port", type=int, default=8000, help="TCP port of the view (default 8000; 0: any)"
+    )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument(
         "--overwrite", action="store_true", help="replace a result already in the folder"
@@ -82,6 +93,60 @@ class _EarlyStopError(Exception):
     """The run ended before its duration (stop or fault): the result is kept, incomplete."""
 
 
+@dataclass(frozen=True)
+class _ViewSetup:
+    """What the writer process needs to serve the view (picklable)."""
+
+    token: str
+    port: int
+    road_x: np.ndarray
+    road_y: np.ndarray
+    duration: float
+    title: str
+    control: Any  # the sending end of a pipe to the loop's process
+
+
+class _LoopControl:
+    """The view's arm/stop, sent to the loop's process; the state read from the loop's rows."""
+
+    def __init__(self, conn: Any) -> None:
+        self._conn = conn
+        self._lock = threading.Lock()
+        self.current = "waiting"
+
+    def _send(self, action: str) -> None:
+        with self._lock:
+            try:
+                self._conn.send(action)
+            except OSError:  # the loop has ended
+                pass
+
+    def arm(self) -> None:
+        """Arm: the loop enables the safety stage (a fade-in)."""
+        self._send("arm")
+
+    def stop(self) -> None:
+        """Stop as Ctrl-C does: the torque fades out and the run ends."""
+        self._send("stop")
+
+    def state(self) -> str:
+        """The safety stage's state in the last row drained: ``waiting`` before the first,
+        then ``idle``, ``fade_in``, ``running``, ``stopping`` or ``fault``."""
+        return self.current
+
+
+def _start_view(view: _ViewSetup, ring: Any) -> tuple[Any, _LoopControl, str]:
+    """Serve the view of ``ring`` in this (the writer's) process; returns server, control, URL."""
+    from motosim.view.app import ServerThread, create_app
+    from motosim.view.feeds import LiveFeed, Road
+
+    control = _LoopControl(view.control)
+    feed = LiveFeed(ring, control, view.duration)
+    app = create_app(feed, Road(view.road_x, view.road_y), token=view.token, title=view.title)
+    server = ServerThread(app, "127.0.0.1", view.port).start()
+    return server, control, server.url
+
+
 def _writer_main(
     conn: Any,
     handle: Any,
@@ -90,44 +155,69 @@ def _writer_main(
     metadata: dict[str, Any],
     overwrite: bool,
     torque_per_amp: float,
+    view: _ViewSetup | None = None,
 ) -> None:
-    """The writer process: drain the loop's shared ring into the result files every 0.1 s.
+    """The writer process: drain the loop's shared ring into the result files every 0.1 s
+    (and, with ``view``, into the view's ring every 20 ms).
 
     Writing files takes milliseconds with the interpreter lock held; in its own process it
-    cannot delay the loop. Messages on ``conn``: ("ready",) or ("error", text) first; then,
-    on ("close", complete, extra summary), the last rows are written and ("done", summary)
-    sent back.
+    cannot delay the loop. Messages on ``conn``: ("ready", view URL or None) or ("error",
+    text) first; then, on ("close", complete, extra summary), the last rows are written and
+    ("done", summary) sent back. With ``view``, it also serves the rider's view and the
+    dashboard from a :class:`~motosim.io.telemetry.TelemetryRing` it fills every 20 ms.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the loop's to handle
+    from motosim.io.telemetry import TelemetryRing
     from motosim.rt.ring import SampleRing
+    from motosim.rt.safety import State
     from motosim.rt.stack import RESULT_SIGNALS, result_block
 
     ring = SampleRing.attach(handle)
+    server: Any = None
+    control: _LoopControl | None = None
+    url = None
+    live = None
     try:
+        if view is not None:
+            live = TelemetryRing(RESULT_SIGNALS, capacity=1 << 15)  # 32 s at 1 kHz
+            server, control, url = _start_view(view, live)
         writer = ResultWriter(Path(folder), RESULT_SIGNALS, metadata, overwrite=overwrite)
     except MotosimError as err:
         conn.send(("error", str(err)))
         ring.close()
+        if server is not None:
+            server.stop()
         return
-    conn.send(("ready",))
+    conn.send(("ready", url))
     blocks: list[np.ndarray] = []
+    pending: list[np.ndarray] = []
+    col_state = names.index("state")
+    period = 0.1 if view is None else 0.02  # the view is at most 20 ms behind the writer
 
-    def flush() -> None:
+    def flush(write: bool) -> None:
         rows = ring.drain()
         if rows.shape[0]:
             block = result_block(rows, names, torque_per_amp)
-            writer.append(block)
             blocks.append(block)
+            pending.append(block)
+            if live is not None and control is not None:
+                live.push_block(block)
+                control.current = State(int(rows[-1, col_state])).name.lower()
+        if write and pending:
+            writer.append(np.vstack(pending))
+            pending.clear()
 
     summary: dict[str, Any] = {}
     try:
         with writer:
+            k = 0
             while True:
-                if conn.poll(0.1):
+                if conn.poll(period):
                     _, complete, extra = conn.recv()
                     break
-                flush()
-            flush()
+                k += 1
+                flush(write=k % round(0.1 / period) == 0)
+            flush(write=True)
             rows = np.vstack(blocks) if blocks else np.zeros((0, len(RESULT_SIGNALS)))
             col = {name: j for j, name in enumerate(RESULT_SIGNALS)}
             summary = run_metrics(
@@ -142,6 +232,8 @@ def _writer_main(
         pass
     finally:
         ring.close()
+        if server is not None:
+            server.stop()
     conn.send(("done", summary))
 
 
@@ -173,6 +265,7 @@ def run(args: argparse.Namespace) -> int:
     folder = Path(args.out)
     if (folder / "result.h5").exists() and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
+    view = _view_setup(args, inputs, duration) if args.view else None
     clock = clock_from_args(args)
     rate = sc.rates.control
     periods = round(duration * rate)
@@ -197,13 +290,14 @@ def run(args: argparse.Namespace) -> int:
             capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
             shared_ring=True,
             telemetry=None if sender is None else sender.send,
+            wait_for_arm=view is not None,
         )
         metadata = run_metadata(inputs) | {
             "realtime": {"bus": args.bus, "safety": limits, "duration": duration}
         }
         stats, privileges, summary = _loop(
             args, runner, clock, rate, periods, folder, metadata,
-            inputs.nominal_handlebar.torque_per_amp,
+            inputs.nominal_handlebar.torque_per_amp, view,
         )  # fmt: skip
         counters = runner.counters()
     finally:
@@ -258,6 +352,37 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _view_setup(args: argparse.Namespace, inputs: RunInputs, duration: float) -> _ViewSetup:
+    """Check ``--view-port`` and the optional group; the road along the scenario's path."""
+    from motosim.view.app import _need_starlette, new_token
+    from motosim.view.feeds import road_from_xy
+
+    if not 0 <= args.view_port < 65536:
+        raise MotosimError(f"--view-port {args.view_port}; expected 0..65535")
+    _need_starlette()
+    sc = inputs.scenario
+    length = max(duration * sc.motorcycle.speed, 10.0)
+    if sc.rider.path is not None:
+        built = sc.rider.path.build(length)
+        road = road_from_xy(built.x, built.y)
+    else:
+        road = road_from_xy(np.array([0.0, length]), np.zeros(2))
+    return _ViewSetup(new_token(), args.view_port, road.x, road.y, duration, sc.name, None)
+
+
+def _controls(conn: Any, runner: Any) -> None:
+    """The view's buttons, in the loop's process: blocked on the pipe until one is pressed."""
+    while True:
+        try:
+            action = conn.recv()
+        except (EOFError, OSError):
+            return
+        if action == "stop":
+            runner.request_stop()  # as Ctrl-C: the torque fades out, then the run ends
+        elif action == "arm":
+            runner.arm()
+
+
 def _json(payload: Any) -> str:
     import json
 
@@ -275,8 +400,10 @@ def _loop(
     folder: Path,
     metadata: dict[str, Any],
     torque_per_amp: float,
+    view: _ViewSetup | None = None,
 ) -> tuple[Any, tuple[Any, ...], dict[str, Any]]:
-    """The real-time part: writer process, privileges, signals, keyboard, the loop."""
+    """The real-time part: writer process (and view), privileges, signals, keyboard, the loop."""
+    import dataclasses
     import multiprocessing
 
     from motosim.rt.loop import RateLoop
@@ -296,20 +423,33 @@ def _loop(
     previous = signal.signal(signal.SIGINT, on_sigint)
     ctx = multiprocessing.get_context("spawn")
     ours, theirs = ctx.Pipe()
+    buttons = None
+    if view is not None:
+        buttons, pressed = ctx.Pipe(duplex=False)
+        view = dataclasses.replace(view, control=pressed)
     writer = ctx.Process(
         target=_writer_main,
         args=(theirs, runner.ring.handle, runner.names, str(folder), metadata,
-              bool(args.overwrite), torque_per_amp),
+              bool(args.overwrite), torque_per_amp, view),
         name="motosim-writer",
         daemon=True,
     )  # fmt: skip
     writer.start()
+    if view is not None:
+        view.control.close()  # the writer holds its copy: EOF here once it ends
     try:
         if not ours.poll(120.0):
             raise MotosimError(f"{folder}: the result writer did not start")
         answer = ours.recv()
         if answer[0] == "error":
             raise MotosimError(answer[1])
+        if view is not None:
+            threading.Thread(target=_controls, args=(buttons, runner), daemon=True).start()
+            url = answer[1]
+            err = sys.stderr
+            print(f"motosim run: rider's view {url}/?token={view.token}", file=err)
+            print(f"motosim run: dashboard    {url}/dashboard?token={view.token}", file=err)
+            print("motosim run: the torque is off until Arm is pressed", file=err, flush=True)
         privileges = privileges_from_args(args)
         loop = RateLoop(rate, clock, capacity=max(1, min(periods, 1 << 22)))
         if sys.stdin is not None and sys.stdin.isatty():

@@ -14,7 +14,8 @@ Each period it
    loop.
 
 The stack starts on the first valid status frame (reset at its angle and current) and the
-safety stage is enabled then, so the torque fades in over 0.5 s. A stop request (Ctrl-C)
+safety stage is enabled then (or, with ``wait_for_arm``, when :meth:`RealtimeRunner.arm` is
+called: the view's Arm button), so the torque fades in over 0.5 s. A stop request (Ctrl-C)
 fades the torque out and ends the run once it is zero; a fault zeroes the command at once
 and ends the run ``linger`` seconds later, the zero command still sent meanwhile.
 """
@@ -119,6 +120,9 @@ class RealtimeRunner:
     telemetry : callable, optional
         ``telemetry(k, t, row)`` publishes each period's stack row (a
         :class:`~motosim.rt.telemetry.StateSender`'s ``send``).
+    wait_for_arm : bool
+        Keep the torque off (safety stage IDLE) after the drive's first status frame until
+        :meth:`arm` is called (the view's Arm button); the loop runs and records meanwhile.
     """
 
     def __init__(
@@ -135,6 +139,7 @@ class RealtimeRunner:
         start_timeout: float = 1.0,
         shared_ring: bool = False,
         telemetry: Callable[[int, float, Array], None] | None = None,
+        wait_for_arm: bool = False,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -177,6 +182,8 @@ class RealtimeRunner:
         self._prev_theta = math.nan
         self._started = False
         self._stop = False
+        self._armed = not wait_for_arm
+        self._arm_request = False
         self._after_fault = 0
         self._sent = 0
         self.status_frames = 0
@@ -187,6 +194,14 @@ class RealtimeRunner:
         """Fade the torque out and end the run (safe from a signal handler)."""
         self._stop = True
         self.safety.request_stop()
+
+    def arm(self) -> None:
+        """Start the torque (a fade-in through the safety stage) in the next period.
+
+        Only a request: the loop's own thread enables the safety stage, so this is safe from
+        another thread. Ignored after a stop request or a fault.
+        """
+        self._arm_request = True
 
     @property
     def stop_requested(self) -> bool:
@@ -247,7 +262,12 @@ class RealtimeRunner:
             self._started = True
             self.stepper.reset(self._theta, self._current)
             self._prev_theta = self._theta
-            if not self._stop:
+            if not self._stop and self._armed:
+                safety.enable()
+        if self._arm_request and self._started:
+            self._arm_request = False
+            if not self._armed and not self._stop:
+                self._armed = True
                 safety.enable()
         command = 0.0
         stack_row = None

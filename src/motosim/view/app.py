@@ -258,6 +258,7 @@ class ServerThread:
         import uvicorn
 
         self.host = host
+        self._asked = port
         self._server = uvicorn.Server(
             uvicorn.Config(app, host=host, port=port, log_level="warning", ws_ping_interval=None)
         )
@@ -279,7 +280,10 @@ class ServerThread:
         waited = 0.0
         while not self._server.started:
             if not self._thread.is_alive() or waited > timeout:
-                raise MotosimError(f"the view server on {self.host} did not start")
+                raise MotosimError(
+                    f"the view server on {self.host}:{self._asked} did not start; "
+                    "expected a free port (0: any)"
+                )
             threading.Event().wait(0.02)
             waited += 0.02
         return self

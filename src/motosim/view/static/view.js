@@ -16,13 +16,33 @@ document.title = `${info.title}: the rider's view`;
 
 const canvas = $('scene');
 const params = new URLSearchParams(location.search);
+// Antialiasing is off unless ?antialias=1 (MSAA halves the frame rate of a software
+// renderer). The render scale (pixel ratio) is ?scale= when given; otherwise it starts at the
+// screen's and steps down (x0.75, to 0.5 at the least) after each two measured seconds in a row
+// below MIN_FPS, and never steps back up (no oscillation between two scales).
+const MIN_FPS = 30, MIN_SCALE = 0.5;
+const antialias = params.get('antialias') === '1';
+const fixedScale = Number(params.get('scale')) > 0 ? Number(params.get('scale')) : null;
 const renderer = new THREE.WebGLRenderer({
   canvas,
-  antialias: params.get('antialias') !== '0',
+  antialias,
   preserveDrawingBuffer: params.get('readback') === '1',  // for tests that read pixels back
 });
-// ?scale=0.5 renders at half resolution (for a software renderer); ?antialias=0 drops MSAA
-renderer.setPixelRatio(Number(params.get('scale')) || Math.min(window.devicePixelRatio, 2));
+renderer.setPixelRatio(fixedScale ?? Math.min(window.devicePixelRatio, 2));
+Object.assign(stats, { antialias, scale: renderer.getPixelRatio(), adaptive: fixedScale === null });
+let slowSeconds = 0;
+function adapt(fps) {
+  if (fixedScale !== null) return;
+  slowSeconds = fps < MIN_FPS ? slowSeconds + 1 : 0;
+  const ratio = renderer.getPixelRatio();
+  if (slowSeconds >= 2 && ratio > MIN_SCALE) {
+    const next = ratio * 0.75;  // 1 -> 0.75 -> 0.5 on a plain screen
+    renderer.setPixelRatio(next < MIN_SCALE + 0.1 ? MIN_SCALE : next);
+    stats.scale = renderer.getPixelRatio();
+    slowSeconds = 0;
+  }
+}
+stats.adapt = adapt;  // a test feeds it frame rates
 const scene = new THREE.Scene();
 const sky = new THREE.Color(0x9cc3e6);
 scene.background = sky;
@@ -166,6 +186,7 @@ function frame(now) {
     stats.fps = (1000 * fpsFrames) / (now - fpsSince);
     $('fps').textContent = stats.fps.toFixed(0);
     fpsFrames = 0; fpsSince = now;
+    adapt(stats.fps);
   }
   $('speed').textContent = ((pose.v_x || 0) * 3.6).toFixed(0);
   $('steer').textContent = deg(pose.delta);
