@@ -190,8 +190,22 @@ def design_for(plan: Plan, key: str) -> Design:
     )
 
 
+_NEEDS = {
+    "rms_tau_r_error": ("tau_r_hat", "tau_r"),
+    "rms_tracking_error": ("theta_h", "delta"),
+    "rms_rate_error": ("theta_h_dot_hat", "theta_h_dot"),
+    "max_abs_phi": ("phi",),
+    "max_abs_e_y": ("e_y",),
+}
+"""The signals each metric of :func:`motosim.sim.metrics.run_metrics` that a campaign keeps
+is computed from (each from its own signals only)."""
+
+
 def _metrics(ts: TimeSeries, names: Sequence[str]) -> list[float]:
-    found = run_metrics(ts.t, lambda n: ts[n] if n in ts else None, complete=True)
+    # run_metrics sees only the signals of the kept metrics: the same values, without the
+    # fidelity figures and the spectrum of the current that a campaign does not keep
+    used = {s for n in names for s in _NEEDS.get(n, ())}
+    found = run_metrics(ts.t, lambda n: ts[n] if n in used else None, complete=True)
     extra = {
         "max_abs_tau_r_error": ("tau_r_hat", "tau_r"),
         "max_abs_tracking_error": ("theta_h", "delta"),
