@@ -167,3 +167,50 @@ def test_cli_runs_reports_reruns_and_refuses_bad_files(
     path.write_text(path.read_text().replace("runs = 6", "runs = -1"))
     assert main(["campaign", str(path), "--out", str(out)]) == 2
     assert "runs = -1" in capsys.readouterr().err
+
+
+def test_series_in_zarr_equal_a_plain_simulate_and_resume_skips_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    zarr = pytest.importorskip("zarr", reason="the series store needs zarr (the campaign group)")
+    from motosim.campaign import load_series
+    from motosim.sim import simulate
+
+    names = ["theta_h", "delta", "tau_r", "tau_r_hat", "i_m"]
+    path = _write(tmp_path)
+    text = path.read_text().replace("[factors]", f"series = {names}\nevery = 3\n[factors]")
+    path.write_text(text.replace("'", '"'))
+    campaign = load_campaign(path)
+    out = tmp_path / "out"
+    run_campaign(campaign, out, backend="joblib", jobs=2)  # two processes write the store
+    results = load_results(out)
+    store = zarr.open_group(str(out / "series.zarr"), mode="r")
+    assert sorted(store.group_keys()) == sorted(results["run_id"].tolist())
+    # run 2 read back with zarr equals `motosim simulate` of the run's scenario file
+    plan = plan_campaign(campaign)
+    run_id = str(results["run_id"][2])
+    group = store[run_id]
+    files = export_run(plan, run_id, tmp_path / "rerun" / "run.toml")
+    inputs = load_run(files[0])
+    ts = simulate(inputs, rng=np.random.default_rng(inputs.scenario.seed))
+    assert np.array_equal(group["t"][:], ts.t[::3])
+    for name in names:
+        assert np.array_equal(group[name][:], ts[name][::3]), name
+    assert group["tau_r"].attrs["unit"] == "N*m" and group.attrs["every"] == 3
+    # resume: the runs of a lost part are computed again, the others' series left alone
+    parts = sorted((out / "parts").glob("part-*.parquet"))
+
+    def written(r: str) -> int:
+        return (out / "series.zarr" / r / "t" / "zarr.json").stat().st_mtime_ns
+
+    kept = {r: written(r) for r in store.group_keys()}
+    parts[0].unlink()
+    again = run_campaign(campaign, out, jobs=1)
+    assert again.computed + again.skipped == 6 and again.skipped > 0
+    unchanged = [r for r, m in kept.items() if written(r) == m]
+    assert len(unchanged) == again.skipped
+    assert np.array_equal(load_series(out, run_id)["theta_h"], ts["theta_h"][::3])
+    # --rerun compares the series too
+    argv = ["campaign", str(path), "--out", str(out), "--rerun", run_id, "--json"]
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["identical_to_stored"] is True

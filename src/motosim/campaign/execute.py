@@ -12,7 +12,9 @@ and returns one row per run; the parent writes each task's rows as one Parquet p
 as it arrives (:class:`motosim.campaign.results.ResultStore`). A run that diverges
 (:class:`~motosim.errors.RunFailedError`) or whose combination of values is invalid is a
 row with ``status = "failed"`` and its reason, and so is a run whose metrics exceed the
-campaign's ``limits`` (its metrics kept).
+campaign's ``limits`` (its metrics kept). With ``series``, the worker writes each run's
+signals to ``DIR/series.zarr`` (:mod:`motosim.campaign.series`) before returning its row, so
+a run whose row is in a part has its series too.
 """
 
 import dataclasses
@@ -29,6 +31,7 @@ import numpy as np
 
 from motosim.campaign.plan import Plan, PlannedRun, is_design_factor, plan_campaign, scenario_of
 from motosim.campaign.results import ResultStore
+from motosim.campaign.series import SeriesSpec, open_series_store
 from motosim.campaign.spec import TRUE_HANDLEBAR, Campaign, Factor
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError, RunFailedError
@@ -49,13 +52,14 @@ __all__ = [
     "Task",
     "design_for",
     "rerun",
+    "rerun_series",
     "run_campaign",
     "run_task",
 ]
 
-STEPS_PER_SECOND = 3.0e5
+STEPS_PER_SECOND = 7.0e5
 """Stack periods of a whole run (rig and stack) one core simulates per second, to size tasks
-(measured with bench/bench_campaign.py: 3e5 to 4e5 on this machine)."""
+(measured with bench/bench_campaign.py: 10,000 periods in 10-14 ms of CPU on this machine)."""
 
 Backend = Literal["joblib", "dask"]
 
@@ -104,6 +108,7 @@ class Task:
     runs: tuple[PlannedRun, ...]
     metrics: tuple[str, ...]
     limits: tuple[tuple[str, float], ...] = ()
+    series: SeriesSpec | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,8 +190,22 @@ def design_for(plan: Plan, key: str) -> Design:
     )
 
 
+_NEEDS = {
+    "rms_tau_r_error": ("tau_r_hat", "tau_r"),
+    "rms_tracking_error": ("theta_h", "delta"),
+    "rms_rate_error": ("theta_h_dot_hat", "theta_h_dot"),
+    "max_abs_phi": ("phi",),
+    "max_abs_e_y": ("e_y",),
+}
+"""The signals each metric of :func:`motosim.sim.metrics.run_metrics` that a campaign keeps
+is computed from (each from its own signals only)."""
+
+
 def _metrics(ts: TimeSeries, names: Sequence[str]) -> list[float]:
-    found = run_metrics(ts.t, lambda n: ts[n] if n in ts else None, complete=True)
+    # run_metrics sees only the signals of the kept metrics: the same values, without the
+    # fidelity figures and the spectrum of the current that a campaign does not keep
+    used = {s for n in names for s in _NEEDS.get(n, ())}
+    found = run_metrics(ts.t, lambda n: ts[n] if n in used else None, complete=True)
     extra = {
         "max_abs_tau_r_error": ("tau_r_hat", "tau_r"),
         "max_abs_tracking_error": ("theta_h", "delta"),
@@ -199,8 +218,10 @@ def _metrics(ts: TimeSeries, names: Sequence[str]) -> list[float]:
     return [found.get(n, math.nan) for n in names]
 
 
-def _run_one(task: Task, planned: PlannedRun) -> tuple[str, str, float, list[float]]:
-    """Simulate one run: (status, reason, failure time [s], metrics)."""
+def _run_one(
+    task: Task, planned: PlannedRun
+) -> tuple[str, str, float, list[float], TimeSeries | None]:
+    """Simulate one run: (status, reason, failure time [s], metrics, signals or None)."""
     nan = [math.nan] * len(task.metrics)
     d = task.design
     try:
@@ -218,25 +239,27 @@ def _run_one(task: Task, planned: PlannedRun) -> tuple[str, str, float, list[flo
             tables=d.tables,
         )
     except MotosimError as err:
-        return "failed", f"invalid: {err}", math.nan, nan
+        return "failed", f"invalid: {err}", math.nan, nan, None
     try:
         ts = simulate(
             inputs, rng=np.random.default_rng(scenario.seed), stack=d.stack, chunk=scenario.duration
         )
     except RunFailedError as err:
-        return "failed", str(err), math.nan if err.time is None else err.time, nan
+        return "failed", str(err), math.nan if err.time is None else err.time, nan, None
     values = _metrics(ts, task.metrics)
     found = dict(zip(task.metrics, values, strict=True))
     beyond = [f"{k} = {found[k]:.4g} > {v:g}" for k, v in task.limits if not found[k] <= v]
     if beyond:
-        return "failed", "beyond the limit: " + ", ".join(beyond), math.nan, values
-    return "ok", "", math.nan, values
+        return "failed", "beyond the limit: " + ", ".join(beyond), math.nan, values, ts
+    return "ok", "", math.nan, values, ts
 
 
 def run_task(task: Task) -> tuple[dict[str, list[Any]], float, float]:
     """Run a task's runs; returns their rows as columns, the task's time and CPU time [s].
 
-    The columns are those of :mod:`motosim.campaign.results`.
+    The columns are those of :mod:`motosim.campaign.results`. With ``task.series``, each
+    run that produced signals writes them (:meth:`SeriesSpec.write`) before its row is
+    returned; ``elapsed`` includes that write.
     """
     start, cpu = time.perf_counter(), time.process_time()
     paths = [f.path for f in task.factors]
@@ -248,7 +271,9 @@ def run_task(task: Task) -> tuple[dict[str, list[Any]], float, float]:
     columns.update({m: [] for m in task.metrics})
     for planned in task.runs:
         t0 = time.perf_counter()
-        status, reason, failed_at, values = _run_one(task, planned)
+        status, reason, failed_at, values, ts = _run_one(task, planned)
+        if task.series is not None and ts is not None:
+            task.series.write(planned.run_id, planned.seed, ts)
         columns["elapsed"].append(time.perf_counter() - t0)
         columns["run_id"].append(planned.run_id)
         columns["index"].append(planned.index)
@@ -265,7 +290,11 @@ def run_task(task: Task) -> tuple[dict[str, list[Any]], float, float]:
 
 
 def _batches(
-    plan: Plan, todo: Sequence[PlannedRun], designs: Mapping[str, Design], workers: int
+    plan: Plan,
+    todo: Sequence[PlannedRun],
+    designs: Mapping[str, Design],
+    workers: int,
+    series: SeriesSpec | None = None,
 ) -> list[Task]:
     """Cut the runs into tasks of one design and about ``task_seconds`` each."""
     c = plan.campaign
@@ -281,7 +310,7 @@ def _batches(
     for key, runs in groups.items():
         for i in range(0, len(runs), size):
             tasks.append(Task(designs[key], plan.base, c.factors, tuple(runs[i : i + size]),
-                              c.metrics, c.limits))  # fmt: skip
+                              c.metrics, c.limits, series))  # fmt: skip
     return tasks
 
 
@@ -374,7 +403,8 @@ def run_campaign(
     campaign : Campaign
         The campaign (:func:`motosim.campaign.load_campaign`).
     out : str or Path
-        Result folder: ``parts/part-*.parquet`` and ``manifest.json``.
+        Result folder: ``parts/part-*.parquet``, ``manifest.json`` and, when the campaign
+        keeps ``series``, ``series.zarr`` (on a cluster, a folder every worker can write).
     backend : {"joblib", "dask"}, optional
         joblib's loky processes on this machine (default), or Dask (the default when a
         ``scheduler`` is given).
@@ -416,7 +446,11 @@ def run_campaign(
     skipped = len(plan.runs) - len(todo)
     needed = sorted({r.design for r in todo})
     designs = {key: design_for(plan, key) for key in needed}
-    tasks = _batches(plan, todo, designs, workers)
+    series = None
+    if campaign.series:
+        open_series_store(out, campaign.series, campaign.every)
+        series = SeriesSpec(str(Path(out).resolve()), campaign.series, campaign.every)
+    tasks = _batches(plan, todo, designs, workers, series)
     design_paths = [f.path for f in campaign.factors if is_design_factor(f.path)]
     manifest: dict[str, Any] = {
         "name": campaign.name,
@@ -513,3 +547,38 @@ def rerun(plan: Plan, run_id: str) -> dict[str, Any]:
     )
     columns, _, _ = run_task(task)
     return {k: v[0] for k, v in columns.items() if k != "elapsed"}
+
+
+def rerun_series(plan: Plan, run_id: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Run one run again; its row (as :func:`rerun`) and its kept series (as stored).
+
+    Parameters
+    ----------
+    plan : Plan
+        The plan of a campaign with ``series``.
+    run_id : str
+        The run.
+
+    Returns
+    -------
+    row : dict
+        As :func:`rerun`.
+    series : dict of str to ndarray
+        ``t`` and the campaign's ``series``, decimated by ``every`` (empty when the run
+        failed without signals).
+    """
+    c = plan.campaign
+    planned = plan.run(run_id)
+    task = Task(design_for(plan, planned.design), plan.base, c.factors, (planned,), c.metrics,
+                c.limits)  # fmt: skip
+    status, reason, failed_at, values, ts = _run_one(task, planned)
+    row: dict[str, Any] = {"run_id": planned.run_id, "index": planned.index, "seed": planned.seed,
+                           "design": planned.design, "status": status, "reason": reason,
+                           "failed_at": failed_at}  # fmt: skip
+    row.update(zip([f.path for f in c.factors], planned.values, strict=True))
+    row.update(zip(c.metrics, values, strict=True))
+    kept: dict[str, Any] = {}
+    if ts is not None:
+        step = slice(None, None, c.every)
+        kept = {n: np.asarray(ts.t if n == "t" else ts[n])[step] for n in ("t", *c.series)}
+    return row, kept

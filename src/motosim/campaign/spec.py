@@ -13,6 +13,8 @@ A campaign is TOML with a ``[campaign]`` table and a ``[factors]`` table::
     metrics = ["rms_tau_r_error"]        # default: all of METRICS
     limits = { rms_tracking_error = 0.087 }   # a run beyond a limit is a failure
     task_seconds = 1.0                   # computing time per batch of runs [s]
+    series = ["theta_h", "delta"]        # optional: signals kept per run (DIR/series.zarr)
+    every = 10                           # keep every 10th recorded instant of them
 
     [factors]
     "handlebar.inertia_factor" = { distribution = "uniform", low = 0.5, high = 1.5 }
@@ -27,6 +29,10 @@ either listed ``values`` (any scenario type: numbers, integers, booleans, string
 number, a ``distribution``: ``uniform`` (low, high), ``loguniform`` (low, high > 0) or
 ``normal`` (mean, std, optionally truncated to [low, high]). A grid takes each factor's values,
 or ``levels`` points spread over [low, high] (geometrically for ``loguniform``).
+
+``series`` names recorded signals (:data:`motosim.signals.RECORDED`) that each run keeps as
+time series in a Zarr store (:mod:`motosim.campaign.series`), with their time ``t``,
+decimated to every ``every``-th recorded instant.
 """
 
 import dataclasses
@@ -40,6 +46,7 @@ from typing import Any, Literal
 
 from motosim.errors import MotosimError
 from motosim.params.handlebar import HandlebarParameters
+from motosim.signals import RECORDED
 
 __all__ = [
     "METRICS",
@@ -180,6 +187,10 @@ class Campaign:
     limits : tuple of (str, float)
         Largest acceptable value of some kept metrics (SI units): a run beyond one is a
         failure (its metrics are kept, its reason names the limit).
+    series : tuple of str
+        Recorded signals each run keeps as time series (none by default).
+    every : int
+        Keep every ``every``-th recorded instant of the series (1: all of them).
     source : str
         The campaign file, as given (not part of the campaign's identity).
     """
@@ -195,6 +206,8 @@ class Campaign:
     task_seconds: float = 1.0
     description: str = ""
     limits: tuple[tuple[str, float], ...] = ()
+    series: tuple[str, ...] = ()
+    every: int = 1
     source: str = ""
 
     def __post_init__(self) -> None:
@@ -235,6 +248,16 @@ class Campaign:
                 raise MotosimError(f"limits: {name} = {limit!r}; expected a finite number")
         if not (math.isfinite(self.task_seconds) and 0.01 <= self.task_seconds <= 3600.0):
             raise MotosimError(f"task_seconds = {self.task_seconds!r}; expected 0.01 to 3600 [s]")
+        signals = [n for n in RECORDED if n != "t"]
+        for name in self.series:
+            if name not in signals:
+                raise MotosimError("series: " + _unknown(name, signals, what="signal"))
+        if len(set(self.series)) != len(self.series):
+            raise MotosimError(f"series = {list(self.series)}; expected each signal once")
+        if not 1 <= self.every <= 1_000_000:
+            raise MotosimError(f"every = {self.every}; expected an integer from 1 to 1000000")
+        if self.every != 1 and not self.series:
+            raise MotosimError(f"every = {self.every}: expected series = [...] with it")
 
     def grid_points(self) -> int:
         """Number of points of the full factorial grid."""
@@ -345,7 +368,7 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
     if not isinstance(factors, Mapping):
         raise MotosimError(f"{origin}: missing table [factors]")
     known = ["name", "description", "scenario", "sampling", "runs", "seed", "metrics",
-             "task_seconds", "limits"]  # fmt: skip
+             "task_seconds", "limits", "series", "every"]  # fmt: skip
     where = f"{origin} [campaign]"
     try:
         for key in head:
@@ -359,7 +382,7 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
                 if not isinstance(head[key], str):
                     raise MotosimError(f"{key} = {head[key]!r}; expected a string")
                 kwargs[key] = head[key]
-        for key in ("runs", "seed"):
+        for key in ("runs", "seed", "every"):
             if key in head:
                 kwargs[key] = _integer(head[key], key)
         if "task_seconds" in head:
@@ -369,6 +392,11 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
             if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
                 raise MotosimError(f"metrics = {names!r}; expected a list of metric names")
             kwargs["metrics"] = tuple(names)
+        if "series" in head:
+            names = head["series"]
+            if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+                raise MotosimError(f"series = {names!r}; expected a list of signal names")
+            kwargs["series"] = tuple(names)
         if "limits" in head:
             limits = head["limits"]
             if not isinstance(limits, Mapping):

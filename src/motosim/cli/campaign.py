@@ -21,7 +21,8 @@ def register(sub: Any) -> None:
         help="run many perturbed runs of a scenario (grid, Latin hypercube, random draws)",
         description=(
             "Run a campaign file into DIR: one Parquet part per batch of runs in DIR/parts, "
-            "DIR/manifest.json and DIR/report.html. Running it again resumes: the runs "
+            "DIR/manifest.json, DIR/report.html and, with series = [...] in the campaign, "
+            "each run's time series in DIR/series.zarr. Running it again resumes: the runs "
             "already in DIR are skipped. --rerun RUN_ID runs one run again and compares it "
             "with the stored one."
         ),
@@ -56,12 +57,30 @@ def _progress_bar(enabled: bool) -> Any:
     return tqdm(unit=" runs", file=sys.stderr, leave=False, dynamic_ncols=True)
 
 
+def _same_series(out: str, run_id: str, series: dict[str, Any]) -> bool:
+    """Whether the stored series of a run equal ``series`` bit for bit (none: none stored)."""
+    from motosim.campaign.series import SERIES, load_series
+
+    if not series:
+        return not (Path(out) / SERIES / run_id).is_dir()
+    stored = load_series(out, run_id)
+    return stored.keys() == series.keys() and all(
+        np.array_equal(stored[k], series[k]) for k in series
+    )
+
+
 def _rerun(args: argparse.Namespace) -> int:
     from motosim.campaign import load_campaign, load_results, plan_campaign, rerun
     from motosim.campaign.export import export_run
 
     plan = plan_campaign(load_campaign(args.campaign))
-    row = rerun(plan, args.rerun)
+    series: dict[str, Any] = {}
+    if plan.campaign.series:
+        from motosim.campaign import rerun_series
+
+        row, series = rerun_series(plan, args.rerun)
+    else:
+        row = rerun(plan, args.rerun)
     stored = load_results(args.out) if Path(args.out).is_dir() else {}
     match: bool | None = None
     if stored and args.rerun in set(stored["run_id"].tolist()):
@@ -72,6 +91,7 @@ def _rerun(args: argparse.Namespace) -> int:
                 for m in plan.campaign.metrics
             )
             and row["status"] == stored["status"][j]
+            and _same_series(args.out, args.rerun, series)
         )
     written = export_run(plan, args.rerun, args.write_scenario) if args.write_scenario else []
     if args.json:
@@ -85,7 +105,8 @@ def _rerun(args: argparse.Namespace) -> int:
         print(f"  not in {args.out}: nothing to compare with")
     else:
         print(
-            f"  identical to the stored run (every metric bit for bit): {'yes' if match else 'NO'}"
+            "  identical to the stored run (every metric and kept series bit for bit): "
+            + ("yes" if match else "NO")
         )
     for path in written:
         print(f"wrote {path}")

@@ -418,9 +418,11 @@ def plot_spectrum(
             x = values[part]
             amplitude = 2.0 * np.abs(np.fft.rfft(x - np.mean(x))) / max(x.size, 1)
             freqs = np.fft.rfftfreq(x.size, dt)
-            ax.semilogy(freqs[1:], amplitude[1:], style, lw=1.0, label=label)
+            shown = np.where(amplitude[1:] > 0, amplitude[1:], np.nan)
+            ax.plot(freqs[1:], shown, style, lw=1.0, label=label)
             top = max(top, float(np.max(amplitude[1:], initial=0.0)))
-        if top > 0:  # five decades under the highest peak: a floor of rounding would hide it
+        if top > 0:  # log scale, five decades under the highest peak (rounding stays out)
+            ax.set_yscale("log")
             ax.set_ylim(top * 1e-5, top * 2.0)
         ax.axvline(BUZZ_CUTOFF, color="0.5", ls=":", lw=1.0)
         ax.set_xlim(0.0, min(50.0, 0.5 / dt))

@@ -10,6 +10,7 @@ held. The design happens once, before the run: :func:`build_stack` and :func:`bu
 """
 
 import dataclasses
+import functools
 import math
 import zlib
 from collections import namedtuple
@@ -35,7 +36,7 @@ from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
 from motosim.sim.rider import design_rider, rider_torque
-from motosim.sim.scenario import Scenario, scenario_dict
+from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
 from motosim.sim.stack import StackData, StackModel, design_stack, new_data, reset, step
 from motosim.timeseries import TimeSeries
 
@@ -197,7 +198,8 @@ class RigModel(NamedTuple):
     virtual_rider : bool
         The rider is the path-following virtual rider (else ``rider_profile``).
     rider_profile : ndarray
-        Rider torque at every plant sub-step [N*m].
+        Rider torque at every plant sub-step [N*m]; read-only, one array shared by the
+        runs with the same profile and rates.
     rider_probe : ndarray, shape (n,)
         Torque added to the virtual rider's each period (a chirp to measure the feel) [N*m].
     path : ndarray, shape (4, m)
@@ -241,6 +243,19 @@ class RigData(NamedTuple):
     path_index: NDArray[np.int64]
 
 
+@functools.lru_cache(maxsize=8)
+def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array:
+    """``profile`` at the ``n * n_sub`` plant sub-steps of a run, read-only.
+
+    Cached: the runs of a campaign that share a rider profile and rates share this array
+    instead of sampling it again (about 3 ms for a 10 s run at 10 kHz).
+    """
+    t_fine = (np.arange(n * n_sub) / (n * n_sub)) * (n * h)
+    values = profile.sample(t_fine, {})
+    values.flags.writeable = False
+    return values
+
+
 def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
     """The world of a run: true handlebar, sensors (noise drawn from ``rng``), rider, inputs."""
     sc = inputs.scenario
@@ -251,8 +266,11 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
     rider = sc.rider
     if rider.kind == "torque":
         assert rider.profile is not None
-        t_fine = (np.arange(n * n_sub) / (n * n_sub)) * (n * h)
-        profile = rider.profile.sample(t_fine, inputs.tables)
+        if isinstance(rider.profile, CsvProfile):
+            t_fine = (np.arange(n * n_sub) / (n * n_sub)) * (n * h)
+            profile = rider.profile.sample(t_fine, inputs.tables)
+        else:  # a profile of its own values only: the same array for every such run
+            profile = _plant_rate_profile(rider.profile, n, n_sub, h)
         path_arr, path_ds = np.zeros((4, 2)), 1.0
         gains = design_rider(inputs.sharp, speeds=np.array([1.0, 2.0]))
     else:

@@ -40,6 +40,7 @@ Paths have ``kind``: ``straight``, ``lane_change`` (offset, length, start), ``sl
 
 import dataclasses
 import difflib
+import functools
 import math
 import types
 from collections.abc import Mapping
@@ -607,11 +608,17 @@ def _tagged(registry: Mapping[str, type], value: Any, key: str, where: str, *, n
     return _build(registry[kind], {k: v for k, v in value.items() if k != "kind"}, f"{where}.{key}")
 
 
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    """The type hints of a scenario table's class (cached: a campaign parses thousands)."""
+    return get_type_hints(cls)
+
+
 def _build(cls: type, table: Any, where: str) -> Any:
     """Construct the dataclass ``cls`` from a TOML table, checking every key."""
     if not isinstance(table, Mapping):
         raise MotosimError(f"{where}: expected a table, got {short_repr(table)}")
-    hints = get_type_hints(cls)
+    hints = _hints(cls)
     names = [f.name for f in dataclasses.fields(cls)]
     for key in table:
         if key not in names:
@@ -666,7 +673,7 @@ def parse_scenario(data: Mapping[str, Any], *, origin: str) -> Scenario:
     for key in head:
         if key not in own:
             raise MotosimError(f"{origin} [scenario]: {_unknown(key, own)}")
-    hints = get_type_hints(Scenario)
+    hints = _hints(Scenario)
     where = f"{origin} [scenario]"
     try:
         kwargs = {key: _value(hints[key], value, key, where) for key, value in head.items()}
