@@ -36,7 +36,7 @@ from motosim.campaign.spec import TRUE_HANDLEBAR, Campaign, Factor
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError, RunFailedError
 from motosim.estimation.walcott_zak import ObserverSettings
-from motosim.io.runs import resolve
+from motosim.io.runs import parameter_source, resolve
 from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
@@ -174,10 +174,7 @@ def design_for(plan: Plan, key: str) -> Design:
     scenario, _ = scenario_of(plan.base, plan.campaign.factors, first)
     folder = Path(plan.folder)
     inputs = resolve(scenario, folder)
-    name = scenario.handlebar.nominal
-    candidate = folder / name
-    source = candidate if candidate.suffix == ".toml" and candidate.is_file() else name
-    nominal = load_parameters(source, "handlebar")
+    nominal = load_parameters(parameter_source(scenario.handlebar.nominal, folder), "handlebar")
     return Design(
         key=key,
         stack=build_stack(inputs),

@@ -18,7 +18,6 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -27,7 +26,7 @@ from numpy.typing import NDArray
 from motosim import __version__
 from motosim.campaign.spec import TRUE_HANDLEBAR, Campaign, Factor, FactorValue
 from motosim.errors import MotosimError
-from motosim.io.runs import load_scenario
+from motosim.io.runs import load_scenario, parameter_source
 from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
 from motosim.sim.scenario import Scenario, scenario_dict, scenario_from_dict
@@ -270,12 +269,6 @@ def sample_values(campaign: Campaign) -> list[tuple[FactorValue, ...]]:
     return [tuple(row) for row in zip(*columns, strict=True)]
 
 
-def _relative(name: str, base: Path) -> str | Path:
-    """A packaged name as is, or a file named relative to the scenario's folder."""
-    candidate = base / name
-    return candidate if candidate.suffix == ".toml" and candidate.is_file() else name
-
-
 def run_scenario(plan: Plan, planned: PlannedRun) -> tuple[Scenario, dict[str, float]]:
     """The scenario of one run and the overrides of its true handlebar's parameters."""
     return scenario_of(plan.base, plan.campaign.factors, planned)
@@ -335,10 +328,11 @@ def plan_campaign(campaign: Campaign) -> Plan:
         if factor.path.removeprefix("scenario.") == "handlebar.true":
             true_names |= {str(v) for v in factor.values}
     true_sets = {
-        name: load_parameters(_relative(name, folder), "handlebar") for name in sorted(true_names)
+        name: load_parameters(parameter_source(name, folder), "handlebar")
+        for name in sorted(true_names)
     }
-    nominal = load_parameters(_relative(scenario.handlebar.nominal, folder), "handlebar")
-    sharp = load_parameters(_relative(scenario.motorcycle.params, folder), "sharp")
+    nominal = load_parameters(parameter_source(scenario.handlebar.nominal, folder), "handlebar")
+    sharp = load_parameters(parameter_source(scenario.motorcycle.params, folder), "sharp")
     for factor in campaign.factors:
         _check_factor(factor, base, true_sets[scenario.handlebar.true])
     kinds = [_kind(f, base) for f in campaign.factors]

@@ -35,7 +35,7 @@ from motosim.sim.metrics import run_metrics
 from motosim.sim.scenario import CsvProfile
 from motosim.timeseries import TimeSeries
 
-__all__ = ["load_run", "load_scenario", "resolve", "run_to_folder"]
+__all__ = ["load_run", "load_scenario", "parameter_source", "resolve", "run_to_folder"]
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -48,8 +48,13 @@ def load_scenario(path: str | Path) -> Scenario:
     return parse_scenario(data, origin=str(path))
 
 
-def _relative(name: str, base: Path) -> str | Path:
-    """A packaged name as is, or a file named relative to the scenario's folder."""
+def parameter_source(name: str, base: str | Path) -> str | Path:
+    """Where a scenario's parameter set or design file ``name`` is read from.
+
+    A ``.toml`` file in the scenario's folder ``base`` when there is one, else ``name`` as it
+    is (a packaged set, or a path that :func:`motosim.params.load_parameters` checks).
+    """
+    base = Path(base)
     candidate = base / name
     return candidate if candidate.suffix == ".toml" and candidate.is_file() else name
 
@@ -68,7 +73,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     """
     folder = Path(base)
     hb = scenario.handlebar
-    nominal = load_parameters(_relative(hb.nominal, folder), "handlebar")
+    nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
     profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force, mc.side_wind]
@@ -84,7 +89,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     if c.kind == "paper":
         controller = PAPER_CONTROLLER
     elif c.kind == "ours" and c.design is not None:
-        design = read_design(_relative(c.design, folder))
+        design = read_design(parameter_source(c.design, folder))
         observer = design.observer
         method = c.discretization
         rate = scenario.rates.measurement
@@ -102,8 +107,8 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
         )
     return prepare(
         scenario,
-        sharp=load_parameters(_relative(mc.params, folder), "sharp"),
-        true_handlebar=load_parameters(_relative(hb.true, folder), "handlebar"),
+        sharp=load_parameters(parameter_source(mc.params, folder), "sharp"),
+        true_handlebar=load_parameters(parameter_source(hb.true, folder), "handlebar"),
         nominal_handlebar=nominal,
         controller=controller,
         observer=observer,
