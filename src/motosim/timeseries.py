@@ -50,6 +50,10 @@ class TimeSeries:
         except ValueError:
             raise KeyError(f"no signal {name!r}; have {', '.join(self.names)}") from None
 
+    def get(self, name: str) -> NDArray[np.float64] | None:
+        """The column of the signal ``name``, or None when the series does not have it."""
+        return self[name] if name in self else None
+
     def __contains__(self, name: object) -> bool:
         """Whether the series has the signal ``name`` (``"t"`` included)."""
         return name == "t" or name in self.names

@@ -272,7 +272,7 @@ def test_feedforward_brings_the_handlebar_to_the_steer_angle() -> None:
             run, scenario=dataclasses.replace(run.scenario, controller=controller)
         )
         result = simulate(variant, rng=np.random.default_rng(0))
-        m = run_metrics(result.t, lambda n, r=result: r[n] if n in r else None, complete=True)
+        m = run_metrics(result.t, result.get, complete=True)
         fractions[terms] = m["tracking_rms_fraction"]
     assert fractions[("rider", "reference")] < 0.4 * fractions[()]
     assert fractions[("rider", "reference")] < 0.09
@@ -290,3 +290,20 @@ def test_side_wind_tips_the_motorcycle_and_the_rider_corrects() -> None:
     assert np.max(np.abs(result["tau_r"])) > 5.0  # the rider has something to correct
     assert np.max(np.abs(result["e_y"])) < 0.5  # is blown less than half a metre off the lane
     assert abs(result["e_y"][-1]) < 0.2  # and is back on it when the gust is over
+
+
+def test_a_run_that_falls_is_a_failure_with_its_result_kept(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # Nobody balances the machine (open loop, a constant 20 N*m on the bars at 20 m/s): it
+    # falls within 4 s. The run is written whole, flagged, and ends with exit code 3.
+    path = tmp_path / "fall.toml"
+    path.write_text(
+        '[scenario]\nname = "fall"\nduration = 4.0\narchitecture = "open_loop"\n'
+        '[rider]\nkind = "torque"\nprofile = { kind = "constant", value = 20.0 }\n'
+    )
+    code, out, err = _run(capsys, "simulate", str(path), "--out", str(tmp_path / "r"), "--json")
+    assert code == 3 and out == ""
+    assert err.startswith("motosim: run failed: fall: the motorcycle fell") and err.count("\n") == 1
+    result = load_result(tmp_path / "r")
+    assert result.complete and result.summary["flag_fall"] == 1.0

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER, synthesize_controller
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, RunFailedError
 from motosim.io.design_file import read_design
 from motosim.io.logs import read_log
 from motosim.io.results import ResultWriter
@@ -31,7 +31,7 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
-from motosim.sim.metrics import run_metrics
+from motosim.sim.metrics import failure, run_metrics
 from motosim.sim.scenario import CsvProfile
 from motosim.timeseries import TimeSeries
 
@@ -166,6 +166,9 @@ def run_to_folder(
                 on_rows(block.shape[0])
 
         run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
-        summary = run_metrics(run.t, lambda name: run[name] if name in run else None, complete=True)
+        summary = run_metrics(run.t, run.get, complete=True, max_current=sc.controller.max_current)
         writer.close(summary)
+    reason = failure(summary)
+    if reason is not None:
+        raise RunFailedError(f"{sc.name}: {reason}; the result is in {folder}")
     return summary

@@ -72,9 +72,7 @@ _FLAGS = {
 
 def metrics(result: SimResult) -> dict[str, float]:
     """Summary numbers of a saved run: :func:`motosim.sim.metrics.run_metrics` of its signals."""
-    return run_metrics(
-        result.t, lambda name: result[name] if name in result else None, complete=result.complete
-    )
+    return run_metrics(result.t, result.get, complete=result.complete)
 
 
 _CSS = """
