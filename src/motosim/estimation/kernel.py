@@ -40,7 +40,7 @@ class EstimatorKernel(NamedTuple):
         Input matrix over one sample (inputs held).
     gain : ndarray, shape (4,)
         Output-injection or Kalman gain.
-    p : ndarray, shape (8,)
+    p : ndarray, shape (10,)
         The kernel's scalar settings.
     dt : float
         Sampling step the kernel was discretised for [s].
@@ -70,6 +70,6 @@ def pack(
         _padded(Phi, (4, 4)),
         _padded(Gamma, (4, 4)),
         _padded(gain, (4,)),
-        _padded(p, (8,)),
+        _padded(p, (10,)),
         float(dt),
     )

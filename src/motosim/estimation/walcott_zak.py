@@ -434,11 +434,12 @@ def wz_step(
         angle (held), and the torque input of D.
     g : ndarray, shape (2,)
         F C_a, so that F (y_a - y_a_hat) = g . ([theta_dot, theta] - x_hat).
-    p : ndarray, shape (8,)
+    p : ndarray, shape (10,)
         [eta, epsilon, injection sign, beta_s, dead zone, tanh width, filter coefficient
-        1 - exp(-h / T), rate extrapolation weight w]: the rate used is
-        theta_dot + w (theta_dot - previous theta_dot); w = 1/2 turns a backward difference,
-        the mean rate over the last step, into an estimate at the sample.
+        1 - exp(-h / T), rate extrapolation weight w, N k_t [N*m/A], stick projection
+        (1.0 or 0.0)]: the rate used is theta_dot + w (theta_dot - previous theta_dot);
+        w = 1/2 turns a backward difference, the mean rate over the last step, into an
+        estimate at the sample.
 
     Returns
     -------
@@ -452,12 +453,29 @@ def wz_step(
     Over the step the observer integrates eq. (15) with the consistent sign,
     x_hat' = (A - L C_a) x_hat + B i_m + L y_a + D (tau_p_hat + E), with y_a, i_m, E and
     tau_p_hat held.
+
+    While the handlebar sticks, N k_t i_m + tau_r + tau_p = 0 with any dry friction
+    |tau_p| <= beta_s: the rider's torque is only known to lie in
+    [-N k_t i_m - beta_s, -N k_t i_m + beta_s]. A dead-zoned compensation (tau_p_hat = 0)
+    picks the middle, -N k_t i_m, so a held handlebar reads every change of the motor
+    current as rider torque, and a loop that cancels the estimate with the motor integrates
+    its own current (the stick-slip hunting of a torque-feedback handlebar). With the stick
+    projection on, the friction estimate takes, within its bounds, the value that keeps the
+    rider's torque at its last estimate: tau_p_hat = clip(-(N k_t i_m + tau_r_hat), +-beta_s),
+    blended with the sliding friction -beta_s sign(theta_h') by the smoothed sign's
+    magnitude m, tau_p_hat = -m beta_s sign(theta_h') + (1 - m) clip(...), continuous in the
+    rate. The estimate then stays where it was while the stuck handlebar is consistent with
+    it, and moves by what friction cannot explain.
     """
     eta, eps, sgn, beta_s, dz, width, alpha = p[0], p[1], p[2], p[3], p[4], p[5], p[6]
     rate = theta_dot + p[7] * (theta_dot - state[3])
     s = g[0] * (rate - state[0]) + g[1] * (theta - state[1])  # F (y_a - y_a_hat)
     E = sgn * eta * s / (abs(s) + eps)  # eq. (12), injected as + sgn D E
-    tau_p_hat = -beta_s * smooth_sign(theta_dot, dz, width)
+    slide = smooth_sign(theta_dot, dz, width)
+    tau_p_hat = -beta_s * slide
+    if p[9] > 0.0 and beta_s > 0.0:  # stick: friction holds what the last estimate does not
+        held = -(p[8] * current + state[2])
+        tau_p_hat += (1.0 - abs(slide)) * min(max(held, -beta_s), beta_s)
     torque = tau_p_hat + E
     out = np.empty(4)
     for r in range(2):
@@ -504,6 +522,10 @@ class WalcottZakObserver:
         would read as a torque error of about beta_eq (h/2) theta_h''. With
         "backward_difference" the observer extrapolates it by half a step,
         theta_dot + (theta_dot - previous theta_dot) / 2; "instantaneous" uses it as is.
+    stick_projection : bool
+        While the handlebar sticks, let the dry friction hold what keeps the rider-torque
+        estimate at its last value, within +-beta_s (see :func:`wz_step`); False gives the
+        plain dead-zoned compensation of Remark 5.2.
 
     Raises
     ------
@@ -529,6 +551,7 @@ class WalcottZakObserver:
         dt: float,
         *,
         rate_measurement: Literal["backward_difference", "instantaneous"] = "backward_difference",
+        stick_projection: bool = True,
     ) -> None:
         _check_positive("dt", dt, "s")
         if rate_measurement not in ("backward_difference", "instantaneous"):
@@ -563,6 +586,8 @@ class WalcottZakObserver:
                 gains.friction_width,
                 -math.expm1(-h / gains.filter_time_constant),
                 0.5 if rate_measurement == "backward_difference" else 0.0,
+                gains.handlebar.torque_per_amp,
+                1.0 if stick_projection else 0.0,
             ]
         )
         self.reset()

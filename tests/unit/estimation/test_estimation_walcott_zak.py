@@ -165,3 +165,31 @@ def test_estimate_rejects_bad_input(hb):
         estimate("kalman", t**2, t, t, hb)
     with pytest.raises(MotosimError, match="i_m has shape"):
         estimate("kalman", t, t, t[:-1], hb)
+
+
+@pytest.mark.parametrize("projection", [True, False])
+def test_stuck_handlebar_keeps_the_estimate_within_the_friction_band(hb, projection):
+    """While the handlebar sticks, N k_t i_m + tau_r + tau_p = 0 for any |tau_p| <= beta_s
+    (Coulomb friction, eqs. (6)-(7)): motor-current changes smaller than beta_s / (N k_t)
+    do not tell the rider's torque. With the stick projection the estimate keeps its last
+    value until the current leaves that band, then moves by the excess only; the plain
+    dead-zoned compensation (Remark 5.2) reads every change as rider torque."""
+    h = 1e-3
+    observer = WalcottZakObserver(design(hb), h, stick_projection=projection)
+    nkt, band = hb.torque_per_amp, hb.beta_s
+    steps = round(0.5 / h)
+    inside = 0.8 * band / nkt  # a current change the friction holds [A]
+    beyond = 1.5 * band / nkt  # one it cannot hold alone [A]
+    estimates = {}
+    for name, current in (("rest", 0.0), ("inside", inside), ("beyond", beyond)):
+        for _ in range(steps):
+            _, tau_hat = observer.step(0.0, 0.0, current)
+        estimates[name] = tau_hat
+    assert estimates["rest"] == pytest.approx(0.0, abs=1e-9)
+    if projection:
+        assert estimates["inside"] == pytest.approx(0.0, abs=1e-3 * band)
+        # beyond the band the friction holds beta_s and the rider the rest
+        assert estimates["beyond"] == pytest.approx(-(nkt * beyond - band), rel=1e-3)
+    else:
+        assert estimates["inside"] == pytest.approx(-nkt * inside, rel=1e-3)
+        assert estimates["beyond"] == pytest.approx(-nkt * beyond, rel=1e-3)
