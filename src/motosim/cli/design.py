@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from motosim import __version__
-from motosim.cli._common import check_output, print_json, write_text
+from motosim.cli._common import check_output, parse_float_list, print_json, write_text
 from motosim.control.torque_feedback import (
     MAX_ORDER,
     PAPER_CONTROLLER,
@@ -20,10 +20,23 @@ from motosim.control.torque_feedback import (
     design_torque_feedback,
 )
 from motosim.errors import MotosimError
-from motosim.estimation.walcott_zak import ObserverSettings, design_with
+from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
 from motosim.io.design_file import dump_design
 from motosim.params import load_parameters
 from motosim.params.checks import check_number, short_repr
+from motosim.params.handlebar import HandlebarParameters
+from motosim.sim.loop_analysis import StackLoopAnalysis, analyse_stack, robustness_grid
+from motosim.sim.stack import design_stack
+
+DEFAULT_LIPSCHITZ = 300.0
+"""Bound on |theta_h''| of the differentiator in the analysed stack, a scenario's default
+[rad/s^2] (the linear analysis does not depend on it)."""
+DEFAULT_MAX_CURRENT = 30.0
+"""Current limit of the analysed stack, a scenario's default [A] (not reached when linear)."""
+MAX_SPEEDS = 20
+"""Most speeds of the whole-stack analysis (each takes a 27-point grid)."""
+SPEED_RANGE = (3.0, 60.0)
+"""Speeds of Sharp's tables [m/s], where the analysis is meant."""
 
 __all__ = ["MAX_ORDER", "MAX_STARTS", "register"]
 
@@ -65,6 +78,11 @@ def register(sub: Any) -> None:
         "--starts", type=int, default=8, help=f"starts of the search, 1-{MAX_STARTS} (8)"
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the starts (0)")
+    parser.add_argument(
+        "--speeds",
+        default="10,20,30",
+        help="speeds of the whole-stack analysis [m/s], comma-separated (10,20,30)",
+    )
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument("--out", metavar="DESIGN.toml", help="write the design file")
     parser.add_argument(
@@ -92,6 +110,49 @@ def _analysis(a: LoopAnalysis) -> dict[str, Any]:
     }
 
 
+def _stack(a: StackLoopAnalysis) -> dict[str, Any]:
+    return {
+        "speed": a.speed,
+        "stable": a.stable,
+        "spectral_radius": a.spectral_radius,
+        "gain_margin_db": a.gain_margin_db,
+        "phase_margin_deg": a.phase_margin_deg,
+        "modulus_margin": a.modulus_margin,
+        "feel_error_db": a.feel_magnitude_db,
+        "feel_error_deg": a.feel_phase_deg,
+        "friction_limit_cycles": [
+            {"frequency_hz": c.frequency, "amplitude_rad": c.amplitude} for c in a.limit_cycles
+        ],
+    }
+
+
+def _stack_analysis(
+    hb: HandlebarParameters, settings: ObserverSettings, controller: Any, rate: float,
+    speeds: list[float],
+) -> list[dict[str, Any]]:  # fmt: skip
+    """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid."""
+    kernel = WalcottZakObserver(design_with(hb, settings), 1.0 / rate).kernel
+    sharp = load_parameters("sharp1971", "sharp")
+    out = []
+    for speed in speeds:
+        model = design_stack(
+            sharp, kernel, controller, control_rate=rate, measurement_rate=rate,
+            lipschitz=DEFAULT_LIPSCHITZ, max_current=DEFAULT_MAX_CURRENT, speed=speed,
+            handlebar=hb, rider_feedforward=True, reference_feedforward=True,
+        )  # fmt: skip
+        nominal = _stack(analyse_stack(model, hb, speed))
+        grid = [a for _, a in robustness_grid(model, hb, speed)]
+        nominal["grid"] = {
+            "points": len(grid),
+            "unstable": sum(not a.stable for a in grid),
+            "worst_gain_margin_db": min(a.gain_margin_db for a in grid),
+            "worst_phase_margin_deg": min(a.phase_margin_deg for a in grid),
+            "worst_modulus_margin": min(a.modulus_margin for a in grid),
+        }
+        out.append(nominal)
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     """Design, report and optionally write the design file."""
     if not 0 <= args.order <= MAX_ORDER:
@@ -109,6 +170,11 @@ def run(args: argparse.Namespace) -> int:
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
     check_options(bandwidth=args.bandwidth, rate=args.rate)
+    speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
+    for speed in speeds:
+        check_number(
+            speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
+        )
     if args.out is not None:
         check_output(args.out, overwrite=args.overwrite)
     hb = load_parameters(args.handlebar, "handlebar")
@@ -146,6 +212,7 @@ def run(args: argparse.Namespace) -> int:
             "gamma": paper.four_block_gamma,
             "analysis": _analysis(paper),
         },
+        "stack": _stack_analysis(hb, settings, ctrl.controller_zoh, args.rate, speeds),
         "observer": {
             "poles": list(settings.poles),
             "eta": obs.eta,
@@ -230,5 +297,27 @@ def _print(report: dict[str, Any]) -> None:
         f"stable over +/-50 % J_eq, beta_eq: {a['robust_over_50_percent']}"
     )
     print(f"  paper controller four-block gamma (W = 1): {report['paper_controller']['gamma']:.4f}")
+    print(
+        f"whole stack at {report['rate']:g} Hz (observer, feedforward, motorcycle; sampled, "
+        "linearised without dry friction):"
+    )
+    print(
+        f"  {'speed':>6} {'stable':>7} {'GM [dB]':>8} {'PM [deg]':>9} {'|1+L| min':>10} "
+        f"{'feel dB':>8} {'feel deg':>9}  grid +/-50 % J, beta, +/-30 % N k_t"
+    )
+    for a in report["stack"]:
+        g = a["grid"]
+        print(
+            f"  {a['speed']:6.3g} {a['stable']!s:>7} {a['gain_margin_db']:8.3g} "
+            f"{a['phase_margin_deg']:9.3g} {a['modulus_margin']:10.3g} "
+            f"{a['feel_error_db']:8.2g} {a['feel_error_deg']:9.2g}  "
+            f"{g['points'] - g['unstable']}/{g['points']} stable, worst GM "
+            f"{g['worst_gain_margin_db']:.3g} dB, PM {g['worst_phase_margin_deg']:.3g} deg"
+        )
+        for c in a["friction_limit_cycles"]:
+            print(
+                f"         dry friction can sustain a limit cycle at {c['frequency_hz']:.3g} Hz, "
+                f"{1e3 * c['amplitude_rad']:.2g} mrad"
+            )
     if "out" in report:
         print(f"wrote {report['out']}")

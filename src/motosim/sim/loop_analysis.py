@@ -1,0 +1,376 @@
+"""The sampled haptic loop of Fig. 7, linearised with the observer and the motorcycle inside.
+
+The controller's own analysis (:func:`motosim.control.torque_feedback.analyse_loop`) sees the
+handlebar and the controller only. What the rider holds is the whole stack: the estimator
+feeds the motorcycle, the motorcycle sets the reference, the feedforward cancels the estimate,
+and every part is sampled. :func:`stack_loop` writes that loop, for one designed
+:class:`~motosim.sim.stack.StackModel`, a true handlebar and a speed, as one discrete-time
+linear system at the measurement step, exactly as :func:`motosim.sim.stack.step` computes
+it, with three idealisations:
+
+- the super-twisting differentiator in its sliding mode, where the implicit step returns the
+  backward difference (theta_k - theta_{k-1}) / h exactly;
+- the Walcott-Zak injection inside its boundary layer, E = (eta / epsilon) F (y - y_hat);
+- no dry friction (its effect is judged separately, by a describing function) and no
+  current limit.
+
+:func:`analyse_stack` then gives the margins of the loop broken at the motor current, its
+stability against the motorcycle's own modes, the rendered steering feel against the
+motorcycle's, and the frequencies where the handlebar's dry friction can sustain a limit
+cycle; :func:`robustness_grid` repeats it over perturbed handlebars.
+"""
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim.model.handlebar import matrices
+from motosim.model.linear import zoh
+from motosim.params.handlebar import HandlebarParameters
+from motosim.sim.stack import StackModel
+
+__all__ = [
+    "FEEL_BAND",
+    "LimitCycle",
+    "StackLoop",
+    "StackLoopAnalysis",
+    "analyse_stack",
+    "robustness_grid",
+    "stack_loop",
+]
+
+Array = NDArray[np.float64]
+CArray = NDArray[np.complex128]
+
+FEEL_BAND = (0.1, 3.0)
+"""Band where the rendered steering feel is compared with the motorcycle's [Hz]."""
+_GRID_POINTS = 600  # frequencies of the margin and limit-cycle search
+
+
+@dataclass(frozen=True, slots=True)
+class StackLoop:
+    """The linearised sampled loop: x+ = A x + B [tau_r, u], at the measurement step.
+
+    Attributes
+    ----------
+    A : ndarray, shape (n, n)
+        Closed loop (the motor carries the commanded current, u = 0).
+    B : ndarray, shape (n, 2)
+        Inputs: rider torque tau_r [N*m] on the handlebar, and a current u [A] added to the
+        command at the motor (the loop's break point).
+    current : ndarray, shape (n,)
+        Row giving the commanded current i [A] from the state.
+    rate : ndarray, shape (n,)
+        Row giving the handlebar rate theta_h' [rad/s] (the true one) from the state.
+    angle : ndarray, shape (n,)
+        Row giving the handlebar angle theta_h [rad].
+    dt : float
+        The step h [s].
+    motorcycle : ndarray, shape (8, 8)
+        The motorcycle's own lateral matrix A_v at the speed [1/s].
+    motorcycle_input : ndarray, shape (8,)
+        Its steer-torque input B_v.
+    """
+
+    A: Array
+    B: Array
+    current: Array
+    rate: Array
+    angle: Array
+    dt: float
+    motorcycle: Array
+    motorcycle_input: Array
+
+    def response(self, frequencies: Array, row: Array, column: int) -> CArray:
+        """Response from input ``column`` to the output ``row`` at ``frequencies`` [Hz]."""
+        n = self.A.shape[0]
+        z = np.exp(2j * math.pi * np.asarray(frequencies, dtype=float) * self.dt)
+        return np.array(
+            [row @ np.linalg.solve(zk * np.eye(n) - self.A, self.B[:, column]) for zk in z]
+        )
+
+
+def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) -> StackLoop:
+    """Write the stack of ``model`` around the true ``handlebar`` as one linear sampled loop.
+
+    Parameters
+    ----------
+    model : StackModel
+        The designed stack; its estimator must be the Walcott-Zak observer.
+    handlebar : HandlebarParameters
+        The true handlebar (possibly perturbed from the nominal one the stack was built for).
+    speed : float
+        Forward speed at which the motorcycle is linearised [m/s].
+
+    Returns
+    -------
+    StackLoop
+        States: handlebar [theta_h', theta_h], the previous angle and differentiated rate,
+        the observer [theta_h'_hat, theta_h_hat, filtered injection], the held estimate, the
+        controller and the motorcycle's eight lateral states.
+    """
+    h = model.dt * model.measure_every
+    est = model.estimator
+    Phi, Gamma, g, p = est.Phi[:2, :2], est.Gamma[:2, :4], est.gain[:2], est.p
+    injection = p[2] * p[0] / p[1]
+    alpha, w = p[6], p[7]
+    ff = model.feedforward
+    hb = matrices(handlebar)
+    Ap, Bp = zoh(hb.A, np.column_stack([hb.B, hb.D]), h)
+    Av = model.A0 + speed * model.A1
+    Am, Bm = zoh(Av, model.Bv[:, None], h)
+    nc = model.Ad.shape[0]
+    sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "filtered": 1,
+             "held": 1, "controller": nc, "motorcycle": 8}  # fmt: skip
+    start, n = {}, 0
+    for name, size in sizes.items():
+        start[name] = n
+        n += size
+    eye = np.eye(n)
+
+    def state(name: str, k: int = 0) -> Array:
+        return np.asarray(eye[start[name] + k], dtype=float)
+
+    theta, rate = state("plant", 1), state("plant", 0)
+    delta, delta_rate = state("motorcycle", 5), state("motorcycle", 3)
+    error = theta - delta
+    command = model.Dd[0, 0] * error
+    for j in range(nc):
+        command = command + model.Cd[0, j] * state("controller", j)
+    held = state("held")
+    torque = -ff[0] * held
+    if ff[1] > 0.0:  # the friction term's tanh is left out with the friction itself
+        steer_acc = model.Bv[3] * held + Av[3] @ eye[start["motorcycle"] : start["motorcycle"] + 8]
+        torque = torque + ff[2] * steer_acc + ff[3] * delta_rate
+    if ff[0] > 0.0 or ff[1] > 0.0:
+        command = command + torque / ff[5]
+    z1 = (theta - state("theta_prev")) / h
+    rate_used = z1 + w * (z1 - state("rate_prev"))
+    x0, x1 = state("observer", 0), state("observer", 1)
+    E = injection * (g[0] * (rate_used - x0) + g[1] * (theta - x1))
+    filtered = state("filtered")
+    estimate = filtered + alpha * (E - filtered)
+
+    A = np.zeros((n, n))
+    B = np.zeros((n, 2))
+    for r in range(2):
+        A[start["plant"] + r] = Ap[r, 0] * rate + Ap[r, 1] * theta + Bp[r, 0] * command
+        B[start["plant"] + r] = (Bp[r, 1], Bp[r, 0])
+    A[start["theta_prev"]] = theta
+    A[start["rate_prev"]] = z1
+    for r in range(2):
+        A[start["observer"] + r] = (
+            Phi[r, 0] * x0 + Phi[r, 1] * x1 + Gamma[r, 0] * command + Gamma[r, 1] * rate_used
+            + Gamma[r, 2] * theta + Gamma[r, 3] * E
+        )  # fmt: skip
+        B[start["observer"] + r, 1] = Gamma[r, 0]  # the estimator is told the measured current
+    A[start["filtered"]] = estimate
+    A[start["held"]] = estimate
+    for r in range(nc):
+        row = model.Bd[r, 0] * error
+        for j in range(nc):
+            row = row + model.Ad[r, j] * state("controller", j)
+        A[start["controller"] + r] = row
+    m0 = start["motorcycle"]
+    A[m0 : m0 + 8] = Am @ eye[m0 : m0 + 8] + np.outer(Bm[:, 0], estimate)
+    return StackLoop(A, B, command, rate, theta, h, Av, model.Bv.copy())
+
+
+@dataclass(frozen=True, slots=True)
+class LimitCycle:
+    """A limit cycle of the handlebar's dry friction that a describing function predicts.
+
+    Attributes
+    ----------
+    frequency : float
+        [Hz].
+    amplitude : float
+        Amplitude of the handlebar angle's oscillation [rad].
+    """
+
+    frequency: float
+    amplitude: float
+
+
+@dataclass(frozen=True, slots=True)
+class StackLoopAnalysis:
+    """What :func:`analyse_stack` finds.
+
+    Attributes
+    ----------
+    speed : float
+        [m/s].
+    stable : bool
+        The loop adds no unstable mode to the motorcycle's own (an unstable capsize mode of
+        the motorcycle, which the rider stabilises, is not counted against the loop).
+    spectral_radius : float
+        Largest |eigenvalue| of the closed loop.
+    gain_margin_db, phase_margin_deg : float
+        Of the loop broken at the motor current, the estimator told the measured current
+        (inf when there is no crossing) [dB, deg]. The gain margin is the smallest change of
+        the loop gain, up or down, that reaches the critical point.
+    modulus_margin : float
+        min |1 + L| over frequency, the distance of the loop to the critical point.
+    feel_magnitude_db, feel_phase_deg : float
+        Largest error of the rendered feel (rider torque to handlebar angle) against the
+        motorcycle's own rider torque to steer angle over :data:`FEEL_BAND` [dB, deg].
+    limit_cycles : tuple of LimitCycle
+        Where the rendered handlebar admittance is not passive but the motorcycle's is, and
+        crosses the negative real axis: Coulomb friction of ``handlebar.beta_s`` sustains an
+        oscillation there (first-harmonic balance, 1 + N(a) Y = 0 with N(a) = 4 beta_s /
+        (pi a) for a rate amplitude a).
+    """
+
+    speed: float
+    stable: bool
+    spectral_radius: float
+    gain_margin_db: float
+    phase_margin_deg: float
+    modulus_margin: float
+    feel_magnitude_db: float
+    feel_phase_deg: float
+    limit_cycles: tuple[LimitCycle, ...]
+
+
+def _motorcycle_response(loop: StackLoop, frequencies: Array, state: int) -> CArray:
+    """The motorcycle's own response from steer torque to one of its states (continuous)."""
+    eye = np.eye(8)
+    return np.array(
+        [
+            np.linalg.solve(2j * math.pi * fk * eye - loop.motorcycle, loop.motorcycle_input)[state]
+            for fk in frequencies
+        ]
+    )
+
+
+def _unstable_count(eigenvalues: NDArray[np.generic], tol: float = 1e-9) -> int:
+    return int(np.sum(np.abs(eigenvalues) > 1.0 + tol))
+
+
+def _margins(loop_gain: CArray) -> tuple[float, float, float]:
+    """Gain and phase margins and modulus margin of a negative-feedback loop gain G."""
+    gain_margin, phase_margin = math.inf, math.inf
+    phase = np.angle(loop_gain)
+    magnitude = np.abs(loop_gain)
+    for k in range(loop_gain.size - 1):
+        # phase crossover: G crosses the negative real axis
+        a, b = loop_gain[k], loop_gain[k + 1]
+        if a.imag * b.imag < 0.0:
+            s = a.imag / (a.imag - b.imag)
+            x = a.real + s * (b.real - a.real)
+            if x < 0.0:  # the gain may rise (|x| < 1) or fall (|x| > 1) this much
+                gain_margin = min(gain_margin, abs(20.0 * math.log10(-x)))
+        if (magnitude[k] - 1.0) * (magnitude[k + 1] - 1.0) < 0.0:
+            s = (1.0 - magnitude[k]) / (magnitude[k + 1] - magnitude[k])
+            ph = phase[k] + s * (np.angle(b / a))
+            phase_margin = min(phase_margin, math.degrees(math.pi - abs(ph)))
+    return gain_margin, phase_margin, float(np.min(np.abs(1.0 + loop_gain)))
+
+
+def analyse_stack(
+    model: StackModel, handlebar: HandlebarParameters, speed: float
+) -> StackLoopAnalysis:
+    """Margins, stability, rendered feel and friction limit cycles of the sampled stack.
+
+    Parameters
+    ----------
+    model : StackModel
+        The designed stack (Walcott-Zak estimator).
+    handlebar : HandlebarParameters
+        The true handlebar.
+    speed : float
+        Forward speed [m/s].
+
+    Returns
+    -------
+    StackLoopAnalysis
+    """
+    loop = stack_loop(model, handlebar, speed)
+    nyquist = 0.5 / loop.dt
+    f = np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS)
+    eig = np.linalg.eigvals(loop.A)
+    own = np.linalg.eigvals(zoh(loop.motorcycle, np.zeros((8, 1)), loop.dt)[0])
+    stable = _unstable_count(eig) <= _unstable_count(own)
+    # the motor adds u to the command: the loop gain of a negative-feedback loop is -(i/u)
+    gain_margin, phase_margin, modulus = _margins(-loop.response(f, loop.current, 1))
+
+    band = np.geomspace(FEEL_BAND[0], FEEL_BAND[1], 60)
+    rendered = loop.response(band, loop.angle, 0)
+    steer = np.array(
+        [
+            np.linalg.solve(2j * math.pi * fk * np.eye(8) - loop.motorcycle, loop.motorcycle_input)[
+                5
+            ]
+            for fk in band
+        ]
+    )
+    ratio = rendered / steer
+    feel_db = float(np.max(np.abs(20.0 * np.log10(np.abs(ratio)))))
+    feel_deg = float(np.max(np.abs(np.degrees(np.angle(ratio)))))
+
+    admittance = loop.response(f, loop.rate, 0)
+    own_admittance = np.array(
+        [
+            np.linalg.solve(2j * math.pi * fk * np.eye(8) - loop.motorcycle, loop.motorcycle_input)[
+                3
+            ]
+            for fk in f
+        ]
+    )
+    cycles = []
+    for k in range(f.size - 1):
+        a, b = admittance[k], admittance[k + 1]
+        if a.imag * b.imag < 0.0:
+            s = a.imag / (a.imag - b.imag)
+            x = a.real + s * (b.real - a.real)
+            fk = f[k] + s * (f[k + 1] - f[k])
+            if x < 0.0 and own_admittance[k].real > 0.0:
+                rate_amplitude = 4.0 * handlebar.beta_s * (-x) / math.pi
+                cycles.append(LimitCycle(float(fk), rate_amplitude / (2.0 * math.pi * fk)))
+    return StackLoopAnalysis(
+        speed=float(speed),
+        stable=bool(stable),
+        spectral_radius=float(np.max(np.abs(eig))),
+        gain_margin_db=float(gain_margin),
+        phase_margin_deg=float(phase_margin),
+        modulus_margin=modulus,
+        feel_magnitude_db=feel_db,
+        feel_phase_deg=feel_deg,
+        limit_cycles=tuple(cycles) if handlebar.beta_s > 0.0 else (),
+    )
+
+
+def robustness_grid(
+    model: StackModel,
+    handlebar: HandlebarParameters,
+    speed: float,
+    *,
+    inertia: tuple[float, ...] = (0.5, 1.0, 1.5),
+    damping: tuple[float, ...] = (0.5, 1.0, 1.5),
+    torque_constant: tuple[float, ...] = (0.7, 1.0, 1.3),
+) -> list[tuple[tuple[float, float, float], StackLoopAnalysis]]:
+    """:func:`analyse_stack` with the true handlebar's J_eq, beta_eq and N k_t scaled.
+
+    The stack keeps its nominal design; each true handlebar has J_eq, beta_eq and k_t
+    multiplied by one factor of each tuple.
+
+    Returns
+    -------
+    list of ((J factor, beta factor, N k_t factor), StackLoopAnalysis)
+    """
+    out = []
+    for fj in inertia:
+        for fb in damping:
+            for fk in torque_constant:
+                true = replace(
+                    handlebar,
+                    J_eq=handlebar.J_eq * fj,
+                    beta_eq=handlebar.beta_eq * fb,
+                    k_t=handlebar.k_t * fk,
+                    J_m=0.0,
+                    beta_vm=0.0,
+                )
+                out.append(((fj, fb, fk), analyse_stack(model, true, speed)))
+    return out
