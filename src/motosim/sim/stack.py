@@ -41,8 +41,14 @@ Array = NDArray[np.float64]
 
 MOTORCYCLE_STEP = 1e-3
 """Largest RK4 step of the virtual motorcycle inside a stack period [s]."""
-FEEDFORWARD_FRICTION_WIDTH = 0.02
-"""Rate scale of the tanh in the reference feedforward's dry-friction term [rad/s]."""
+FEEDFORWARD_FRICTION_WIDTH = 0.002
+"""Rate scale of the tanh in the reference feedforward's dry-friction term [rad/s].
+
+The term follows the motorcycle's steer rate, a noise-free model state, so it can be much
+narrower than the observer's compensation, which reads a quantised, differentiated angle:
+the handlebar then follows the slow steering of a lane change (a few mrad/s) instead of
+sticking. (At 0.02 rad/s the crosswind run's tracking error was 9 % of its peak steer angle
+against 3 % at this width.)"""
 
 
 class StackModel(NamedTuple):
