@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import ScalarFormatter
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
@@ -74,6 +75,25 @@ def _present(result: SimResult, names: Sequence[str], figure: str) -> list[str]:
     return have
 
 
+def _legend_above(ax: Axes, *, columns: int = 3, fontsize: float = 8) -> None:
+    """The legend in a row above the axes, off the data."""
+    ax.legend(
+        loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=columns, fontsize=fontsize,
+        frameon=False, borderaxespad=0.2,
+    )  # fmt: skip
+
+
+def _finish(fig: Figure) -> Figure:
+    """Plain tick labels on every linear axis: no offset or power notation to decode."""
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            formatter = axis.get_major_formatter()
+            if isinstance(formatter, ScalarFormatter):
+                formatter.set_useOffset(False)
+                formatter.set_scientific(False)
+    return fig
+
+
 def _time_panel(
     ax: Axes, result: SimResult, names: Sequence[str], ylabel: str, *, legend: bool = True
 ) -> None:
@@ -83,7 +103,15 @@ def _time_panel(
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3)
     if legend:
-        ax.legend(loc="upper right", fontsize=8)
+        _legend_above(ax)
+
+
+def _zoom_window(t: NDArray[np.float64], error: NDArray[np.float64]) -> tuple[float, float]:
+    """A window of a twentieth of the run (at least 0.2 s) around the largest error [s]."""
+    span = max(0.2, 0.05 * float(t[-1] - t[0]))
+    centre = float(t[int(np.argmax(np.abs(error)))])
+    start = min(max(centre - 0.5 * span, float(t[0])), max(float(t[-1]) - span, float(t[0])))
+    return start, start + span
 
 
 def _title(result: SimResult, title: str) -> str:
@@ -104,24 +132,40 @@ def _pair_figure(
     have = _present(result, pair, figure)
     _, unit = _display(have[0], result[have[0]])
     both = len(have) == 2
-    fig = Figure(figsize=(9.0, 5.0 if both else 3.2), layout="constrained")
-    axes = fig.subplots(
-        2 if both else 1,
-        1,
-        sharex=True,
-        squeeze=False,
-        height_ratios=[2, 1] if both else None,
-    )[:, 0]
-    _time_panel(axes[0], result, have, f"[{unit}]")
-    if both:
-        first, _ = _display(pair[0], result[pair[0]])
-        second, _ = _display(pair[1], result[pair[1]])
-        axes[1].plot(result.t, second - first, color="tab:purple", lw=0.8)
-        axes[1].set_ylabel(f"{error_label} [{unit}]")
-        axes[1].grid(True, alpha=0.3)
-    axes[-1].set_xlabel("time [s]")
+    if not both or result.t.size < 8:
+        fig = Figure(figsize=(9.0, 3.4), layout="constrained")
+        ax = fig.subplots()
+        _time_panel(ax, result, have, f"[{unit}]")
+        ax.set_xlabel("time [s]")
+        fig.suptitle(_title(result, title))
+        return _finish(fig)
+    # the whole run on the left, a zoom where the error is largest on the right: chatter and
+    # encoder steps that a whole run's scale hides show there
+    fig = Figure(figsize=(11.0, 5.4), layout="constrained")
+    grid = fig.add_gridspec(2, 2, width_ratios=[2.2, 1.0], height_ratios=[2, 1])
+    main = fig.add_subplot(grid[0, 0])
+    error_ax = fig.add_subplot(grid[1, 0], sharex=main)
+    zoom = fig.add_subplot(grid[:, 1])
+    first, _ = _display(pair[0], result[pair[0]])
+    second, _ = _display(pair[1], result[pair[1]])
+    error = second - first
+    _time_panel(main, result, have, f"[{unit}]")
+    error_ax.plot(result.t, error, color="tab:purple", lw=0.8)
+    error_ax.set_ylabel(f"{error_label} [{unit}]")
+    error_ax.grid(True, alpha=0.3)
+    error_ax.set_xlabel("time [s]")
+    low, high = _zoom_window(result.t, error)
+    inside = (result.t >= low) & (result.t <= high)
+    for name, values in ((pair[0], first), (pair[1], second)):
+        zoom.plot(result.t[inside], values[inside], **_STYLES.get(name, {}))
+    zoom.set_title(f"zoom {low:.2f}-{high:.2f} s", fontsize=9)
+    zoom.set_xlabel("time [s]")
+    zoom.set_ylabel(f"[{unit}]")
+    zoom.grid(True, alpha=0.3)
+    for ax in (main, error_ax):
+        ax.axvspan(low, high, color="0.85", zorder=0)
     fig.suptitle(_title(result, title))
-    return fig
+    return _finish(fig)
 
 
 def plot_torque(result: SimResult, *, title: str = "Rider torque and its estimate") -> Figure:
@@ -256,7 +300,7 @@ def plot_motor_torque(
         axes[-1].grid(True, alpha=0.3)
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(_title(result, title))
-    return fig
+    return _finish(fig)
 
 
 def plot_motorcycle(result: SimResult, *, title: str = "Virtual motorcycle") -> Figure:
@@ -305,15 +349,26 @@ def plot_motorcycle(result: SimResult, *, title: str = "Virtual motorcycle") -> 
         axes[name] = fig.add_subplot(grid[i, -1], sharex=axes[series[0]] if i > 0 else None)
     if has_path:
         ax = axes["path"]
-        ax.plot(result["x"], result["y"], color="k", lw=1.0)
-        ax.plot(result["x"][:1], result["y"][:1], "o", color="tab:green", label="start")
-        ax.plot(result["x"][-1:], result["y"][-1:], "s", color="tab:red", label="end")
-        ax.set_aspect("equal", adjustable="datalim")
+        x, y = result["x"], result["y"]
+        if "e_y" in result:  # the path the rider follows: y less the lateral path error
+            ax.plot(x, y - result["e_y"], color="tab:blue", lw=2.5, alpha=0.4, label="path")
+        ax.plot(x, y, color="k", lw=1.0, label="motorcycle")
+        ax.plot(x[:1], y[:1], "o", color="tab:green", label="start")
+        ax.plot(x[-1:], y[-1:], "s", color="tab:red", label="end")
+        span_x = float(np.ptp(x))
+        span_y = float(np.ptp(y))
+        if span_y >= 0.2 * span_x:  # a turn: true shape
+            ax.set_aspect("equal", adjustable="datalim")
+            view = "path seen from above"
+        else:  # a straight or a lane change: a lateral scale where metres show
+            middle = 0.5 * float(np.max(y) + np.min(y))
+            half = max(1.0, 0.65 * span_y)
+            ax.set_ylim(middle - half, middle + half)
+            view = "path seen from above, lateral axis stretched"
         ax.invert_yaxis()
-        ax.set_xlabel("x [m]")
+        ax.set_xlabel(f"x [m] ({view})")
         ax.set_ylabel("y [m] (right of start heading)")
-        ax.set_title("path seen from above", fontsize=9)
-        ax.legend(loc="best", fontsize=8)
+        _legend_above(ax, columns=4)
         ax.grid(True, alpha=0.3)
     for i, name in enumerate(series):
         ax = axes[name]
@@ -324,7 +379,7 @@ def plot_motorcycle(result: SimResult, *, title: str = "Virtual motorcycle") -> 
         if i == len(series) - 1:
             ax.set_xlabel("time [s]")
     fig.suptitle(_title(result, title))
-    return fig
+    return _finish(fig)
 
 
 def plot_comparison(
@@ -386,10 +441,10 @@ def plot_comparison(
                     )
         ax.set_ylabel(f"{first}, {second} [{unit}]")
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="upper right", fontsize=7, ncols=2)
+        _legend_above(ax, columns=4, fontsize=7)
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(title)
-    return fig
+    return _finish(fig)
 
 
 def plot_spectrum(
