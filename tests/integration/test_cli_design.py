@@ -37,12 +37,24 @@ def test_design_json_and_file(capsys: pytest.CaptureFixture[str], tmp_path: Path
     k_tf = np.polyval(c["num"], s) / np.polyval(c["den"], s)
     assert k_ss == pytest.approx(k_tf, rel=1e-9)
     assert set(design.controller_discrete) == {"zoh", "tustin"}
+    # the whole sampled stack at 10, 20 and 30 m/s: stable, margins, the +/-50 %/+/-30 % grid
+    stack = report["stack"]
+    assert [a["speed"] for a in stack] == [10.0, 20.0, 30.0]
+    for a in stack:
+        assert a["stable"]
+        assert a["gain_margin_db"] >= 6.0 and a["phase_margin_deg"] >= 45.0
+        assert a["grid"]["points"] == 27
 
 
 def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, _ = _run(capsys, "design", "--json", "--starts", "2", "--rate", "100")
+    code, out, _ = _run(
+        capsys, "design", "--json", "--starts", "2", "--rate", "100", "--speeds", "15"
+    )
     assert code == 0
-    assert json.loads(out)["controller"]["analysis"]["discrete_stable"]["zoh"]
+    report = json.loads(out)
+    assert report["controller"]["analysis"]["discrete_stable"]["zoh"]
+    (stack,) = report["stack"]
+    assert stack["speed"] == 15.0 and stack["stable"]
 
 
 @pytest.mark.parametrize(
@@ -50,6 +62,7 @@ def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
     [
         (["design", "--bandwidth", "500"], "at most a fifth of the 1000 Hz control rate"),
         (["design", "--order", "-1"], "--order -1; expected an integer from 0 to 3"),
+        (["design", "--speeds", "100"], "--speeds"),
         (["design", "--handlebar", "sharp1971"], "expected a handlebar parameter set"),
     ],
 )
