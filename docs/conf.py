@@ -1,0 +1,90 @@
+"""Sphinx configuration of motosim's documentation (``make docs``)."""
+
+import os
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).parent
+sys.path.insert(0, str(HERE / "_ext"))
+
+import apigen
+
+import motosim
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+project = "motosim"
+author = "the motosim developers"
+copyright = "the motosim developers, BSD-3-Clause"
+release = motosim.__version__
+version = release
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_parser",
+    "sphinx_gallery.gen_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+root_doc = "index"
+exclude_patterns = ["_build", "auto_examples/*.ipynb", "auto_examples/*.py", "**.codeobj.json"]
+
+# Markdown pages (the user guide): tables, ``$`` maths and anchors for every heading
+myst_enable_extensions = ["dollarmath", "colon_fence"]
+myst_heading_anchors = 3
+
+# API reference: pages written from every public module's __all__ before the build
+apigen.write(HERE / "api")
+autosummary_generate = False
+autodoc_typehints = "none"  # the numpydoc sections carry the types with their units
+autodoc_member_order = "bysource"
+autodoc_class_signature = "mixed"
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_attributes_as_param_list = True
+numpydoc_xref_param_type = False
+
+# Executed examples: every script of examples/ runs at build time and its figures are kept
+sphinx_gallery_conf = {
+    "examples_dirs": "../examples",
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r"/plot_",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "abort_on_example_error": True,
+    "within_subsection_order": "FileNameSortKey",
+    "matplotlib_animations": False,
+    "image_scrapers": ("matplotlib",),
+    "reset_modules": ("matplotlib",),
+    "min_reported_time": 1,
+}
+
+html_theme = "furo"
+html_title = f"motosim {release}"
+html_static_path: list[str] = []
+pygments_style = "sphinx"
+suppress_warnings = ["config.cache"]
+
+_LITERALS = re.compile(r"(``.*?``|`[^`]*`)")
+
+
+def _escape_bars(app: object, what: str, name: str, obj: object, options: object,
+                 lines: list[str]) -> None:  # fmt: skip
+    """Read ``|x|`` in a docstring as the absolute value it means, not a substitution."""
+    for i, line in enumerate(lines):
+        text = line.strip()
+        if "|" not in text or text.startswith("+") or (text[0] == "|" and text[-1] == "|"):
+            continue  # a table's border or row
+        parts = _LITERALS.split(line)
+        lines[i] = "".join(p if k % 2 else p.replace("|", r"\|") for k, p in enumerate(parts))
+
+
+def setup(app: Any) -> None:
+    """Register the docstring hook, after numpydoc's."""
+    app.connect("autodoc-process-docstring", _escape_bars, priority=600)
