@@ -10,6 +10,9 @@ HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE / "_ext"))
 
 import apigen
+import commands_ref
+import scenario_ref
+from gallery_scraper import figure_scraper
 
 import motosim
 
@@ -41,6 +44,15 @@ myst_heading_anchors = 3
 
 # API reference: pages written from every public module's __all__ before the build
 apigen.write(HERE / "api")
+# Pages generated from the code: the scenario file's keys, every command's --help
+(HERE / "generated").mkdir(exist_ok=True)
+for _name, _text in {
+    "scenario": scenario_ref.markdown(),
+    "commands": commands_ref.markdown(),
+}.items():
+    _path = HERE / "generated" / f"{_name}.md"
+    if not _path.exists() or _path.read_text(encoding="utf-8") != _text:
+        _path.write_text(_text, encoding="utf-8")
 autosummary_generate = False
 autodoc_typehints = "none"  # the numpydoc sections carry the types with their units
 autodoc_member_order = "bysource"
@@ -60,7 +72,7 @@ sphinx_gallery_conf = {
     "abort_on_example_error": True,
     "within_subsection_order": "FileNameSortKey",
     "matplotlib_animations": False,
-    "image_scrapers": ("matplotlib",),
+    "image_scrapers": ("matplotlib", figure_scraper),
     "reset_modules": ("matplotlib",),
     "min_reported_time": 1,
 }
