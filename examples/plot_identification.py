@@ -5,10 +5,10 @@ Identify a handlebar from an excitation log
 A synthetic version of the paper's section II.D: the handlebar of Table I, driven in open
 loop through a voltage drive by a 6 V chirp of 0.1-6 Hz sampled at 100 Hz (the paper used
 3 V and 0.1-2 Hz, which leaves the inertia weakly identified: ``identify`` says so and names
-a better chirp), its angle measured by a 14-bit encoder and its current with 0.05 A of noise (:func:`motosim.identification.excitation_run`,
-what ``motosim excite`` writes). :func:`motosim.identification.identify` then fits J_eq,
-beta_eq and beta_s by output error, with 95 % intervals, as ``motosim identify`` does on a
-rig's log.
+a better chirp), its angle measured by a 14-bit encoder and its current with 0.05 A of noise
+(:func:`motosim.identification.excitation_run`, what ``motosim excite`` writes).
+:func:`motosim.identification.identify` then fits J_eq, beta_eq and beta_s by output error,
+with 95 % intervals, as ``motosim identify`` does on a rig's log.
 """
 
 import numpy as np

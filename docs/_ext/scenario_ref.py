@@ -98,7 +98,9 @@ DESCRIPTIONS: dict[str, str] = {
     "controller.design": "A design file of `motosim design --out` (relative to the scenario).",
     "controller.bandwidth": "Tracking bandwidth of the designed controller [Hz].",
     "controller.order": "Order of the tuned K_s (0 to 3).",
-    "controller.discretization": 'Discretisation of a continuous controller: `"zoh"` or `"tustin"`.',
+    "controller.discretization": (
+        'Discretisation of a continuous controller: `"zoh"` or `"tustin"`.'
+    ),
     "controller.max_current": "Limit of the current command [A].",
     "controller.feedforward": (
         'Feedforward terms, a list of `"rider"` (cancel the estimated rider torque) and '
