@@ -19,7 +19,9 @@ import numpy as np
 from motosim.campaign import load_results, parse_campaign, run_campaign
 from motosim.plotting.campaign import plot_metric_vs_factors
 
-base = Path(__file__).resolve().parents[1] / "campaigns" / "paper_robustness_base.toml"
+# the repository's campaigns/, from its root or from examples/
+root = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "campaigns").is_dir())
+base = root / "campaigns" / "paper_robustness_base.toml"
 text = f"""
 [campaign]
 name = "gallery"

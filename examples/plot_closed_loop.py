@@ -19,7 +19,9 @@ from motosim.io.runs import load_run
 from motosim.plotting.closed_loop import plot_torque, plot_tracking
 from motosim.sim import build_stack, simulate
 
-scenarios = Path(__file__).resolve().parents[1] / "scenarios"
+# the repository's scenarios/, from its root or from examples/
+root = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "scenarios").is_dir())
+scenarios = root / "scenarios"
 run = load_run(scenarios / "lane_change_20.toml")  # parameter sets and design resolved
 run = dataclasses.replace(run, scenario=dataclasses.replace(run.scenario, duration=6.0))
 stack = build_stack(run)  # design once ...

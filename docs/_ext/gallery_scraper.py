@@ -2,7 +2,7 @@
 
 motosim's plotting functions build :class:`matplotlib.figure.Figure` objects without pyplot
 (they never show anything), so sphinx-gallery's own matplotlib scraper does not see them.
-This scraper saves every Figure bound to a name of the example that it has not saved yet.
+This scraper saves every such Figure bound to a name of the example that it has not saved yet.
 """
 
 from typing import Any
@@ -19,7 +19,8 @@ def figure_scraper(block: Any, block_vars: dict[str, Any], gallery_conf: dict[st
     seen: set[int] = names.setdefault(_SEEN, set())
     paths = []
     for value in list(names.values()):
-        if isinstance(value, Figure) and id(value) not in seen:
+        if isinstance(value, Figure) and value.canvas.manager is None and id(value) not in seen:
+            # (a pyplot figure has a manager: sphinx-gallery's own scraper saves it)
             seen.add(id(value))
             path = next(block_vars["image_path_iterator"])
             value.savefig(path, dpi=90)
