@@ -61,6 +61,11 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_attributes_as_param_list = True
 numpydoc_xref_param_type = False
+# docstrings kept in step with the signatures: no documented parameter that does not exist
+# (PR02), none out of order (PR03), a summary (SS01), no public object without a docstring
+# (GL08); the build fails on any (warnings are errors)
+numpydoc_validation_checks = {"PR02", "PR03", "SS01", "GL08"}
+numpydoc_validation_exclude = {re.escape(name) + "$" for name in apigen.data_names()}
 
 # Executed examples: every script of examples/ runs at build time and its figures are kept
 sphinx_gallery_conf = {

@@ -151,3 +151,18 @@ def write(folder: Path) -> None:
         path = folder / f"{name}.rst"
         if not path.exists() or path.read_text(encoding="utf-8") != text:
             path.write_text(text, encoding="utf-8")
+
+
+def data_names() -> list[str]:
+    """Full names of the documented data (constants, tables, type aliases), not callables.
+
+    numpydoc's validation reads the docstring of a value's type (a dict's, a tuple's), not
+    the attribute docstring autodoc shows, so ``docs/conf.py`` excludes these from it.
+    """
+    out = []
+    for name in public_modules():
+        module = importlib.import_module(name)
+        for item in page_names(name):
+            if _directive(getattr(module, item)) == "autodata":
+                out.append(f"{name}.{item}")
+    return out

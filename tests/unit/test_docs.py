@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from motosim.cli.main import build_parser
+from motosim.sim.scenario import parse_scenario
 
 ROOT = Path(__file__).parents[2]
 DOCS = ROOT / "docs"
@@ -92,7 +93,9 @@ def test_shell_commands_of_the_guide_parse(where: str, words: list[str]) -> None
 
 @pytest.mark.parametrize(("where", "body"), _blocks("toml"), ids=lambda v: str(v)[:40])
 def test_toml_blocks_parse(where: str, body: str) -> None:
-    tomllib.loads(body)
+    data = tomllib.loads(body)
+    if "name" in data.get("scenario", {}):  # a whole scenario: valid as one
+        parse_scenario(data, origin=where)
 
 
 PYTHON = [(page, body) for page, body in _blocks("python") if "ServerThread" not in body]
