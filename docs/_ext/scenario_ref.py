@@ -87,6 +87,10 @@ DESCRIPTIONS: dict[str, str] = {
     # [estimator]
     "estimator.name": 'Rider-torque estimator: `"walcott_zak"`, `"inverse_dynamics"`, `"kalman"`.',
     "estimator.friction_compensation": "Subtract the nominal dry friction from the estimate.",
+    "estimator.stick_projection": (
+        "Walcott-Zak observer: while the handlebar sticks, let the dry friction hold what keeps "
+        "the estimate at its last value (false: the paper's dead-zoned compensation)."
+    ),
     "estimator.lipschitz": (
         "Bound L on the angle's second derivative for the differentiator [rad/s^2]."
     ),

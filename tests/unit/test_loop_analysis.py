@@ -1,5 +1,7 @@
 """The linearised sampled stack (motosim.sim.loop_analysis) against the compiled simulator."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -75,3 +77,17 @@ def test_grid_scales_the_true_handlebar():
     nominal = analyse_stack(build_stack(inputs), inputs.true_handlebar, 20.0)
     assert grid[1][1] == nominal
     assert grid[0][1] != nominal
+
+
+def test_scenario_switches_the_stick_projection():
+    """``[estimator] stick_projection = false`` gives the paper's dead-zoned compensation."""
+    inputs = _inputs(1000.0)
+    assert build_stack(inputs).estimator.p[9] == 1.0
+    est = inputs.scenario.estimator
+    off = dataclasses.replace(
+        inputs,
+        scenario=dataclasses.replace(
+            inputs.scenario, estimator=dataclasses.replace(est, stick_projection=False)
+        ),
+    )
+    assert build_stack(off).estimator.p[9] == 0.0

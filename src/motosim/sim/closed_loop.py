@@ -156,11 +156,13 @@ def build_stack(inputs: RunInputs) -> StackModel:
     sc = inputs.scenario
     h_meas = 1.0 / sc.rates.measurement
     est = sc.estimator
-    if est.name == "walcott_zak" and inputs.observer is not None:
+    if est.name == "walcott_zak":
         settings = dataclasses.replace(
-            inputs.observer, friction_compensation=est.friction_compensation
+            inputs.observer or ObserverSettings.for_step(h_meas),
+            friction_compensation=est.friction_compensation,
         )
-        kernel = WalcottZakObserver(design_with(inputs.nominal_handlebar, settings), h_meas).kernel
+        gains = design_with(inputs.nominal_handlebar, settings)
+        kernel = WalcottZakObserver(gains, h_meas, stick_projection=est.stick_projection).kernel
     else:
         stepper = ESTIMATORS[est.name](
             inputs.nominal_handlebar, h_meas, friction_compensation=est.friction_compensation

@@ -444,6 +444,7 @@ class Estimator:
     name: str = next(iter(ESTIMATORS))
     friction_compensation: bool = True
     lipschitz: float = 300.0
+    stick_projection: bool = True
 
     def __post_init__(self) -> None:
         if self.name not in ESTIMATORS:
