@@ -11,7 +11,8 @@ it, with three idealisations:
 - the super-twisting differentiator in its sliding mode, where the implicit step returns the
   backward difference (theta_k - theta_{k-1}) / h exactly;
 - the Walcott-Zak injection inside its boundary layer, E = (eta / epsilon) F (y - y_hat);
-- no dry friction (its effect is judged separately, by a describing function) and no
+- no dry friction, and so neither the observer's friction compensation nor its stick
+  projection (the friction's effect is judged separately, by a describing function), and no
   current limit.
 
 :func:`analyse_stack` then gives the margins of the loop broken at the motor current, its
@@ -26,6 +27,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.errors import MotosimError
+from motosim.estimation.kernel import WALCOTT_ZAK
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
@@ -108,9 +111,19 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     -------
     StackLoop
         States: handlebar [theta_h', theta_h], the previous angle and differentiated rate,
-        the observer [theta_h'_hat, theta_h_hat, filtered injection], the held estimate, the
+        the observer [theta_h'_hat, theta_h_hat], its estimate (the filtered injection), the
         controller and the motorcycle's eight lateral states.
+
+    Raises
+    ------
+    MotosimError
+        If the stack's estimator is not the Walcott-Zak observer.
     """
+    if model.estimator.kind != WALCOTT_ZAK:
+        raise MotosimError(
+            f"estimator kind {model.estimator.kind}; the loop analysis needs the Walcott-Zak "
+            "observer"
+        )
     h = model.dt * model.measure_every
     est = model.estimator
     Phi, Gamma, g, p = est.Phi[:2, :2], est.Gamma[:2, :4], est.gain[:2], est.p
@@ -122,8 +135,8 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     Av = model.A0 + speed * model.A1
     Am, Bm = zoh(Av, model.Bv[:, None], h)
     nc = model.Ad.shape[0]
-    sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "filtered": 1,
-             "held": 1, "controller": nc, "motorcycle": 8}  # fmt: skip
+    sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "estimate": 1,
+             "controller": nc, "motorcycle": 8}  # fmt: skip
     start, n = {}, 0
     for name, size in sizes.items():
         start[name] = n
@@ -139,7 +152,7 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     command = model.Dd[0, 0] * error
     for j in range(nc):
         command = command + model.Cd[0, j] * state("controller", j)
-    held = state("held")
+    held = state("estimate")  # the command uses the previous sample's estimate
     torque = -ff[0] * held
     if ff[1] > 0.0:  # the friction term's tanh is left out with the friction itself
         steer_acc = model.Bv[3] * held + Av[3] @ eye[start["motorcycle"] : start["motorcycle"] + 8]
@@ -150,8 +163,7 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     rate_used = z1 + w * (z1 - state("rate_prev"))
     x0, x1 = state("observer", 0), state("observer", 1)
     E = injection * (g[0] * (rate_used - x0) + g[1] * (theta - x1))
-    filtered = state("filtered")
-    estimate = filtered + alpha * (E - filtered)
+    estimate = held + alpha * (E - held)
 
     A = np.zeros((n, n))
     B = np.zeros((n, 2))
@@ -166,8 +178,7 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
             + Gamma[r, 2] * theta + Gamma[r, 3] * E
         )  # fmt: skip
         B[start["observer"] + r, 1] = Gamma[r, 0]  # the estimator is told the measured current
-    A[start["filtered"]] = estimate
-    A[start["held"]] = estimate
+    A[start["estimate"]] = estimate
     for r in range(nc):
         row = model.Bd[r, 0] * error
         for j in range(nc):
