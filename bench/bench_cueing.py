@@ -94,7 +94,9 @@ def run() -> dict[str, float]:
     }
 
 
-TRAINING = ("emergency_braking", "lane_change_20", "obstacle_avoidance_15", "slalom_10")
+TRAINING = (
+    "crosswind_30", "emergency_braking", "lane_change_20", "obstacle_avoidance_15", "slalom_10",
+)  # fmt: skip
 OTHERS = ("turn_30", "straight_50_gust")
 
 

@@ -194,6 +194,10 @@ class MpcTuning:
     pitch_rate : float
         Largest planned pitch rate [rad/s]: below the pitch threshold, so that a tilt is
         not perceived as a rotation (the tilt-coordination rate limit of the washout).
+    prediction_time : float
+        Time constant [s] of the vehicle motion's predicted decay over the horizon: the
+        motorcycle's present angular velocity and specific force are assumed to fade as
+        ``exp(-t / prediction_time)`` (a lean rate does not last: the lean is bounded).
     """
 
     horizon: int
@@ -204,6 +208,7 @@ class MpcTuning:
     rate_weight: float
     accel_weight: float
     pitch_rate: float
+    prediction_time: float
 
     def __post_init__(self) -> None:
         if (
@@ -217,6 +222,7 @@ class MpcTuning:
             _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
         _check("mpc", "accel_weight", self.accel_weight, lower=0.0)
         _check("mpc", "pitch_rate", self.pitch_rate, lower=0.0)
+        _check("mpc", "prediction_time", self.prediction_time, lower=0.0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -270,6 +276,7 @@ _MPC_KEYS = {
     "rate_weight": 1.0,
     "accel_weight": 1.0,
     "pitch_rate_deg_s": _DEG,
+    "prediction_time_s": 1.0,
 }
 
 

@@ -56,3 +56,28 @@ def test_mpc_rests_at_neutral_and_refuses_a_slow_loop() -> None:
     np.testing.assert_allclose(out, 0.0, atol=1e-9)
     with pytest.raises(MotosimError, match="<= the MPC step"):
         design_mpc(cfg, TELBAN_CARDULLO_2005, 0.1)
+
+
+def test_mpc_vehicle_prediction_fades_with_its_time_constant() -> None:
+    from motosim.cueing.mpc import _vehicle_prediction
+
+    # an integrator 1/s driven by w0 exp(-t / tau) reaches w0 tau (1 - exp(-t / tau))
+    tau, h, N = 0.3, 0.05, 20
+    out = _vehicle_prediction(np.zeros((1, 1)), np.ones(1), np.ones(1), h, N, tau)
+    t = h * np.arange(1, N + 1)
+    np.testing.assert_allclose(out[:, 1], tau * (1 - np.exp(-t / tau)), rtol=1e-9)
+    np.testing.assert_allclose(out[:, 0], 1.0)  # the state itself is held by 1/s
+
+
+def test_mpc_rolls_at_full_rate_on_a_roll_onset() -> None:
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+
+    # a 60 deg/s lean rate (beyond the platform's 30 deg/s): the plan uses the rate limit at
+    # once instead of spreading 20 deg of travel over its 1 s horizon
+    cfg = load_platform("simacom_platform")
+    mpc = MpcCueing(design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01))
+    motion = np.array([np.radians(60.0), 0.0, 0.0, 0.0, 0.0])
+    for _ in range(30):
+        mpc.step(motion, np.zeros(3))
+    assert np.degrees(mpc.rates[0]) > 25.0
