@@ -22,7 +22,7 @@ from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits
 from motosim.rt.stack import CompiledStack
 from motosim.rt.telemetry import StateReceiver, StateSender
-from motosim.sim import build_rig, build_stack, simulate
+from motosim.sim import build_rig, build_stack
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")

@@ -16,8 +16,20 @@ Over ``N`` steps of ``h`` (the input held over each) the plan minimises::
     sum_k w_c ((canal_k - r_c) / thr_c)^2 + w_o ((otolith_k - r_o) / thr_o)^2
           + w_a ((angle_k - a_ref) / X)^2 + w_v (rate_k / V)^2 + w_u (u_k / A)^2
 
+          + w_f sum_k ((s_k / thr_c)^2 + s_k / thr_c)
+
 subject to ``|angle_k| <= X``, ``|rate_k| <= V`` (for pitch, the smaller of ``V`` and the
-tuning's ``pitch_rate``), ``|u_k| <= A``. ``r_c`` and ``r_o`` are the vehicle's perceived
+tuning's ``pitch_rate``), ``|u_k| <= A``, and, over the first ``false_cue_steps`` steps, the
+false-cue constraints ``L_k - s_k <= canal_k <= U_k + s_k``, ``s_k >= 0``: the platform's
+perceived rotation stays within 0.9 of the threshold ``thr_c`` unless the motorcycle's
+predicted perception is above threshold, and then it may not be perceived the other way
+(``U_k`` or ``L_k`` is lifted on the motorcycle's side). This is the score's definition of a
+false cue (:mod:`motosim.cueing.vestibular`) as a soft constraint (slack ``s_k``, weight
+``w_f``), so the plan trades a false cue against the tracking errors explicitly rather than
+through their squares only. The weights of the otolith and angle terms are per axis (the
+tuning's ``otolith_weight`` and ``angle_weight`` for roll and yaw, ``surge_weight`` and
+``pitch_angle_weight`` for pitch, whose tilt follows the perceived longitudinal force rather
+than the washout's tilt). ``r_c`` and ``r_o`` are the vehicle's perceived
 rate and specific force predicted by the same vestibular models from their present state,
 with the motorcycle's present motion fading as ``exp(-t / prediction_time)``: the future of
 the ride is unknown, and holding a lean rate over the horizon would have the plan spread the
@@ -58,6 +70,8 @@ __all__ = ["MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "
 Array = NDArray[np.float64]
 
 GRAVITY = 9.81  # [m/s^2]
+BAND_MARGIN = 0.9
+"""The band of the false-cue constraints, as a fraction of the perception threshold."""
 MOTION_INPUTS = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
 """What :meth:`MpcCueing.step` reads, in order."""
 
@@ -105,6 +119,10 @@ class AxisPlan:
     vehicle_otolith: tuple[Array, Array]
     A_con: Array
     H: Array
+    band_M: Array
+    band_E: Array
+    band_thr: Array
+    band_weight: float
     limits: tuple[float, float, float]
 
 
@@ -201,22 +219,29 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
     thr_c, thr_o = model.thresholds[axis], model.thresholds[3 if axis == 1 else 4]
     rows = [
         (C_canal, tuning.canal_weight / thr_c**2, 0),
-        (C_oto, tuning.otolith_weight / thr_o**2 if with_otolith else 0.0, 1),
+        (C_oto, (tuning.surge_weight if axis == 1 else tuning.otolith_weight) / thr_o**2, 1),
     ]
     e_angle, e_rate = np.eye(nx)[0], np.eye(nx)[1]
     P = np.eye(N) * tuning.accel_weight / limits.accel**2
     F = np.zeros((N, nx))
     G: list[Array] = []
     W: list[Array] = []
+    band_M, band_E, band_thr = [], [], []
+    Nb = min(N, tuning.false_cue_steps)
     for C, w, ref in rows:
         M = np.einsum("i,kij->kj", C, Gam)  # (N outputs, N inputs)
         E = np.einsum("i,kij->kj", C, Phi)
+        if ref == 0:
+            band_M.append(M[:Nb])
+            band_E.append(E[:Nb])
+            band_thr.append(np.full(Nb, thr_c if ref == 0 else thr_o))
         P += w * M.T @ M
         F += w * M.T @ E
         Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
         G.append(_vehicle_prediction(Av, Bv, Cv, h, N, tuning.prediction_time))
         W.append(w * M.T)
-    for e, w in ((e_angle, tuning.angle_weight / limits.angle**2),
+    w_angle = (tuning.pitch_angle_weight if axis == 1 else tuning.angle_weight) / limits.angle**2
+    for e, w in ((e_angle, w_angle),
                  (e_rate, tuning.rate_weight / rate**2)):  # fmt: skip
         M = np.einsum("i,kij->kj", e, Gam)
         E = np.einsum("i,kij->kj", e, Phi)
@@ -234,11 +259,15 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         G_otolith=G[1],
         W_canal=W[0],
         W_otolith=W[1],
-        G_angle=tuning.angle_weight / limits.angle**2 * M_a.T @ np.ones(N),
+        G_angle=w_angle * M_a.T @ np.ones(N),
         vehicle_canal=_discrete(Ac, Bc, dt),
         vehicle_otolith=_discrete(Ao, Bo, dt),
         A_con=np.vstack([np.eye(N), M_a, M_v]),
         H=H,
+        band_M=np.vstack(band_M),
+        band_E=np.vstack(band_E),
+        band_thr=np.concatenate(band_thr),
+        band_weight=tuning.false_cue_weight,
         limits=(limits.angle, rate, limits.accel),
     )
 
@@ -302,17 +331,28 @@ class MpcCueing:
         self._canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
         self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
         self.fallbacks = 0
+        """Steps planned without the angle and rate bounds (no admissible plan)."""
         self.rates = np.zeros(3)
         """Planned roll, pitch and yaw rates [rad/s] of the last step's targets."""
-        """Steps planned without the angle and rate bounds (no admissible plan)."""
         for plan in design.axes:
             solver = osqp.OSQP()
             n = plan.P.shape[0]
-            lo, hi = self._bounds(plan, np.zeros(plan.A_loop.shape[0]))
+            nb = plan.band_M.shape[0]
+            P = np.zeros((n + nb, n + nb))
+            P[:n, :n] = plan.P
+            P[n:, n:] = np.diag(plan.band_weight / plan.band_thr**2)
+            A_con = np.zeros((3 * n + 3 * nb, n + nb))
+            A_con[: 3 * n, :n] = plan.A_con
+            A_con[3 * n : 3 * n + nb, :n] = plan.band_M  # p - s <= U
+            A_con[3 * n : 3 * n + nb, n:] = -np.eye(nb)
+            A_con[3 * n + nb : 3 * n + 2 * nb, :n] = plan.band_M  # p + s >= L
+            A_con[3 * n + nb : 3 * n + 2 * nb, n:] = np.eye(nb)
+            A_con[3 * n + 2 * nb :, n:] = np.eye(nb)  # s >= 0
+            lo, hi = self._bounds(plan, np.zeros(plan.A_loop.shape[0]), np.zeros(nb))
             solver.setup(
-                sparse.csc_matrix(np.triu(plan.P)),
-                np.zeros(n),
-                sparse.csc_matrix(plan.A_con),
+                sparse.csc_matrix(np.triu(P)),
+                np.zeros(n + nb),
+                sparse.csc_matrix(A_con),
                 lo,
                 hi,
                 verbose=False,
@@ -323,15 +363,33 @@ class MpcCueing:
                 warm_starting=True,
             )
             self._solvers.append(solver)
-        self._solved = osqp.SolverStatus.OSQP_SOLVED
+        status = osqp.SolverStatus
+        # an iterate of the warm-started ADMM that stopped at its budget is still a usable
+        # plan (the limit manager keeps the limits); only an infeasible problem is replanned
+        self._usable = {
+            status.OSQP_SOLVED,
+            status.OSQP_SOLVED_INACCURATE,
+            status.OSQP_MAX_ITER_REACHED,
+        }
+        self._infeasible = {
+            status.OSQP_PRIMAL_INFEASIBLE,
+            status.OSQP_PRIMAL_INFEASIBLE_INACCURATE,
+        }
 
     @staticmethod
-    def _bounds(plan: AxisPlan, x0: Array) -> tuple[Array, Array]:
+    def _bounds(plan: AxisPlan, x0: Array, felt: Array) -> tuple[Array, Array]:
         X, V, A = plan.limits
         N = plan.P.shape[0]
         pred = plan.H @ x0
-        upper = np.concatenate([np.full(N, A), X - pred[:N], V - pred[N:]])
-        lower = np.concatenate([np.full(N, -A), -X - pred[:N], -V - pred[N:]])
+        free = plan.band_E @ x0
+        thr = BAND_MARGIN * plan.band_thr
+        big = np.full(free.size, 1e9)
+        band_hi = np.where(felt > 0, big, thr - free)  # not perceived the other way
+        band_lo = np.where(felt < 0, -big, -thr - free)
+        upper = np.concatenate([np.full(N, A), X - pred[:N], V - pred[N:], band_hi, big, big])
+        lower = np.concatenate(
+            [np.full(N, -A), -X - pred[:N], -V - pred[N:], -big, band_lo, np.zeros(free.size)]
+        )
         return lower, upper
 
     def reset(self) -> None:
@@ -373,30 +431,34 @@ class MpcCueing:
             xc, xo = self._canal[j], self._otolith[j]
             r_c = plan.G_canal @ np.append(xc, w_c)
             r_o = plan.G_otolith @ np.append(xo, w_o)
-            q = (
+            q_u = (
                 plan.F @ x0
                 - plan.W_canal @ r_c
                 - plan.W_otolith @ r_o
                 - plan.G_angle * reference[j]
             )
+            nb = plan.band_M.shape[0]
+            r_b = r_c[:nb]
+            felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
+            q = np.concatenate([q_u, plan.band_weight / plan.band_thr])
             Ac, Bc = plan.vehicle_canal
             Ao, Bo = plan.vehicle_otolith
             self._canal[j] = Ac @ xc + Bc * w_c
             self._otolith[j] = Ao @ xo + Bo * w_o
-            lo, hi = self._bounds(plan, x0)
+            lo, hi = self._bounds(plan, x0, felt)
             solver = self._solvers[j]
             solver.update(q=q, l=lo, u=hi)
             result = solver.solve(raise_error=False)
-            if result.info.status_val != self._solved:
+            if result.info.status_val in self._infeasible:
                 # the angle and rate bounds of the coarse prediction cannot be met from this
                 # state (near a limit): plan with the input bounds only, the limit manager
                 # keeps the angle and rate limits
                 self.fallbacks += 1
                 n = plan.P.shape[0]
-                lo[n:], hi[n:] = -1e9, 1e9
+                lo[n : 3 * n], hi[n : 3 * n] = -1e9, 1e9
                 solver.update(l=lo, u=hi)
                 result = solver.solve(raise_error=False)
-            if result.info.status_val == self._solved:
+            if result.info.status_val in self._usable and math.isfinite(result.x[0]):
                 u = float(result.x[0])
             else:  # not solved in the iteration budget: brake
                 u = -math.copysign(plan.limits[2], x0[1]) if x0[1] else 0.0
