@@ -161,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
             "datagrams": twin.frames,
             "lost": twin.lost,
             "bad": twin.bad,
+            "watchdog_timeouts": twin.timeouts,
             "achieved_deg": [float(np.degrees(a)) for a in twin.achieved],
         },
         "privileges": [

@@ -341,7 +341,8 @@ class PlatformTwin:
     command never exceeds the platform's limits, as a drive's own limits would ensure) and
     each axis then follows it through its first-order position loop at its bandwidth, both at
     ``dt``. Lost datagrams (sequence gaps) and bad ones are counted; the last good command is
-    held.
+    held for ``watchdog`` seconds, then the platform goes back to neutral (braked by its
+    limits) until datagrams come again, as a platform controller must do when its host stops.
 
     Parameters
     ----------
@@ -351,10 +352,17 @@ class PlatformTwin:
         The twin's step [s].
     address : tuple of (str, int), optional
         Where to listen (UDP); none: feed it with :meth:`receive`.
+    watchdog : float
+        Time without a datagram after which the command is neutral [s].
     """
 
     def __init__(
-        self, platform: Platform, dt: float, address: tuple[str, int] | None = None
+        self,
+        platform: Platform,
+        dt: float,
+        address: tuple[str, int] | None = None,
+        *,
+        watchdog: float = 0.1,
     ) -> None:
         self._limits = design_limits(platform, dt).coefficients()
         self._alpha = np.array([math.exp(-axis.bandwidth * dt) for axis in platform.axes])
@@ -365,6 +373,10 @@ class PlatformTwin:
         self.achieved = np.zeros(3)
         """The platform's angles [rad]."""
         self.t = 0.0
+        self.watchdog = watchdog
+        self.timeouts = 0
+        """Times the watchdog sent the platform to neutral."""
+        self._received = -math.inf
         self.frames = 0
         self.lost = 0
         self.bad = 0
@@ -397,6 +409,7 @@ class PlatformTwin:
         if self.last is not None:
             self.lost += max(0, (frame.sequence - self.last.sequence - 1) & 0xFFFFFFFF)
         self.frames += 1
+        self._received = self.t
         self.last = frame
         self.command[:] = frame.angles if frame.live else (0.0, 0.0, 0.0)
 
@@ -413,6 +426,10 @@ class PlatformTwin:
     def step(self) -> Array:
         """Read waiting datagrams, advance one ``dt``; the achieved angles [rad]."""
         self._poll()
+        if self.last is not None and self.t - self._received > self.watchdog:
+            if np.any(self.command):
+                self.timeouts += 1
+            self.command[:] = 0.0
         for j in range(3):
             target = limit_step(self._limits[j], self._states[j], float(self.command[j]), 0.0)
             a = self._alpha[j]

@@ -122,7 +122,7 @@ def test_twin_follows_the_datagrams_over_udp_on_localhost(config: CueingConfig) 
 
 
 def test_twin_goes_to_neutral_when_not_live(config: CueingConfig) -> None:
-    twin = PlatformTwin(config.platform, 0.01)
+    twin = PlatformTwin(config.platform, 0.01, watchdog=10.0)
     values = np.array([0.3, 0.1, 0.2, 0.0, 0.0, 0.0, 0.0])
     twin.receive(encode_platform(0, 0.0, State.RUNNING, 0, True, values))
     for _ in range(300):
@@ -144,3 +144,16 @@ def test_sender_never_raises_on_an_unreachable_port() -> None:
     for _ in range(5):
         sender.send(b"x" * 48)
     sender.close()
+
+
+def test_twin_goes_to_neutral_when_the_datagrams_stop(config: CueingConfig) -> None:
+    twin = PlatformTwin(config.platform, 0.01, watchdog=0.1)
+    values = np.array([0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    twin.receive(encode_platform(0, 0.0, State.RUNNING, 0, True, values))
+    for _ in range(5):  # within the watchdog: the command is held
+        twin.step()
+    assert twin.command[0] == pytest.approx(0.2)
+    for _ in range(300):  # silence: back to neutral
+        twin.step()
+    np.testing.assert_allclose(twin.achieved, 0.0, atol=1e-3)
+    assert twin.timeouts == 1
