@@ -10,7 +10,11 @@ follow, before
 - neutral, when the target and the axis are on the same side of it (so a command that
   returns to neutral is never carried across it),
 
-and it is clipped to the rate limit ``V`` and to ``v_prev +/- A dt``. The stopping
+and it is clipped to the rate limit ``V`` and to ``v_prev +/- A dt``. A target that comes
+with its own planned rate (the MPC's, ``target_rate``) is followed at that rate plus the
+braking speed towards what is left of the offset, so a trajectory already within the limits
+passes without the lag of braking towards each sample; the bounds, and so the guarantee
+below, are the same. The stopping
 distance of the discrete braking from speed ``v = (n + f) A dt`` (``n`` integer, ``0 <= f
 < 1``) after moving ``v dt`` this step is exactly ``A dt^2 (n + 1)(n / 2 + f)``, which is
 inverted in closed form. By induction the admissible speed interval is never empty, so
