@@ -45,6 +45,19 @@ def register(sub: Any) -> None:
         metavar="HOST:PORT",
         help="where a virtual rider reads the run's state stream (default 127.0.0.1:47474)",
     )
+    parser.add_argument(
+        "--platform-udp",
+        default="off",
+        metavar="HOST:PORT",
+        help="also be the motion platform: listen for motosim run's platform datagrams here "
+        "and apply the platform's limits and actuator bandwidth (default off)",
+    )
+    parser.add_argument(
+        "--platform",
+        default="simacom_platform",
+        metavar="NAME|FILE",
+        help="platform file of the twin (default simacom_platform)",
+    )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_privilege_options(parser)
     parser.set_defaults(func=run)
@@ -88,6 +101,15 @@ def run(args: argparse.Namespace) -> int:
         rider = VirtualRider(build_rig(inputs, rng=np.random.default_rng(sc.seed)), receiver)
     clock = clock_from_args(args)
     codecs = handlebar_codecs()
+    twin = None
+    if args.platform_udp != "off":
+        from motosim.cli.run import _platform_address
+        from motosim.cueing import load_platform
+        from motosim.rt.platform import PlatformTwin
+
+        twin = PlatformTwin(
+            load_platform(args.platform).platform, 0.001, _platform_address(args.platform_udp)
+        )
     link = open_link(args.bus)
     try:
         rig = VirtualRig(
@@ -107,6 +129,8 @@ def run(args: argparse.Namespace) -> int:
             if t0[0] != t0[0]:
                 t0[0] = t
             rig.advance_to(t - t0[0])
+            if twin is not None:
+                twin.advance_to(t - t0[0])
             return True
 
         previous = signal.signal(signal.SIGINT, lambda signum, frame: loop.stop())
@@ -120,6 +144,8 @@ def run(args: argparse.Namespace) -> int:
         link.close()
         if receiver is not None:
             receiver.close()
+        if twin is not None:
+            twin.close()
     stats = loop.stats()
     summary = {
         "time": rig.t,
@@ -129,6 +155,15 @@ def run(args: argparse.Namespace) -> int:
         "bad_commands": rig.bad_commands,
         "bus_errors": link.errors,
         "timing": stats.as_dict(),
+        "platform": None
+        if twin is None
+        else {
+            "datagrams": twin.frames,
+            "lost": twin.lost,
+            "bad": twin.bad,
+            "watchdog_timeouts": twin.timeouts,
+            "achieved_deg": [float(np.degrees(a)) for a in twin.achieved],
+        },
         "privileges": [
             {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
         ],

@@ -51,6 +51,20 @@ def register(sub: Any) -> None:
         "(the virtual rig's virtual rider steers by it; default 127.0.0.1:47474)",
     )
     parser.add_argument(
+        "--platform-udp",
+        default="off",
+        metavar="HOST:PORT",
+        help="send the motion platform's roll, pitch, yaw commands (washout cueing, faded with "
+        "the handlebar's safety stage) as 48-byte UDP datagrams at 100 Hz here, or 'off' "
+        "(default)",
+    )
+    parser.add_argument(
+        "--platform",
+        default="simacom_platform",
+        metavar="NAME|FILE",
+        help="platform file for --platform-udp (default simacom_platform)",
+    )
+    parser.add_argument(
         "--view",
         action="store_true",
         help="serve the rider's view and the dashboard (fed by the result writer, outside the "
@@ -69,6 +83,17 @@ def register(sub: Any) -> None:
     )
     add_privilege_options(parser)
     parser.set_defaults(func=run)
+
+
+def _platform_address(text: str) -> tuple[str, int]:
+    from motosim.rt.telemetry import parse_address
+
+    try:
+        return parse_address(text)
+    except MotosimError:
+        raise MotosimError(
+            f"--platform-udp {text!r}; expected HOST:PORT such as 127.0.0.1:47480, or off"
+        ) from None
 
 
 def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
@@ -278,6 +303,18 @@ def run(args: argparse.Namespace) -> int:
         from motosim.rt.telemetry import StateSender, parse_address
 
         sender = StateSender(parse_address(args.telemetry), width=len(stack.names))
+    platform = None
+    if args.platform_udp != "off":
+        from motosim.cueing import load_platform
+        from motosim.rt.platform import PlatformOutput, PlatformSender
+
+        platform = PlatformOutput(
+            load_platform(args.platform),
+            1.0 / rate,
+            tuple(stack.names),
+            sender=PlatformSender(_platform_address(args.platform_udp)),
+            send_every=max(1, round(rate / 100.0)),
+        )
     link = open_link(args.bus)
     try:
         runner = RealtimeRunner(
@@ -291,6 +328,7 @@ def run(args: argparse.Namespace) -> int:
             shared_ring=True,
             telemetry=None if sender is None else sender.send,
             wait_for_arm=view is not None,
+            platform=platform,
         )
         metadata = run_metadata(inputs) | {
             "realtime": {"bus": args.bus, "safety": limits, "duration": duration}
@@ -304,6 +342,8 @@ def run(args: argparse.Namespace) -> int:
         link.close()
         if sender is not None:
             sender.close()
+        if platform is not None and platform.sender is not None:
+            platform.sender.close()
     timing = stats.as_dict()
     report = {
         "timing": timing,
@@ -318,6 +358,7 @@ def run(args: argparse.Namespace) -> int:
             "send_errors": counters.send_errors,
             "bus_errors": link.errors,
             "ring_dropped": int(summary.get("ring_dropped", 0)),
+            "platform_datagrams": 0 if platform is None else platform.sequence,
         },
         "state": counters.state,
         "fault": counters.fault,

@@ -10,7 +10,11 @@ follow, before
 - neutral, when the target and the axis are on the same side of it (so a command that
   returns to neutral is never carried across it),
 
-and it is clipped to the rate limit ``V`` and to ``v_prev +/- A dt``. The stopping
+and it is clipped to the rate limit ``V`` and to ``v_prev +/- A dt``. A target that comes
+with its own planned rate (the MPC's, ``target_rate``) is followed at that rate plus the
+braking speed towards what is left of the offset, so a trajectory already within the limits
+passes without the lag of braking towards each sample; the bounds, and so the guarantee
+below, are the same. The stopping
 distance of the discrete braking from speed ``v = (n + f) A dt`` (``n`` integer, ``0 <= f
 < 1``) after moving ``v dt`` this step is exactly ``A dt^2 (n + 1)(n / 2 + f)``, which is
 inverted in closed form. By induction the admissible speed interval is never empty, so
@@ -101,7 +105,7 @@ def _brake_speed(distance: float, c: float, h: float) -> float:
 
 
 @njit(cache=True)
-def limit_step(lim: Array, state: Array, target: float) -> float:
+def limit_step(lim: Array, state: Array, target: float, target_rate: float = 0.0) -> float:
     """One loop step of the limit manager on one axis.
 
     Parameters
@@ -113,6 +117,9 @@ def limit_step(lim: Array, state: Array, target: float) -> float:
         Last output [rad] and its rate [rad/s], updated in place (zeros at neutral rest).
     target : float
         The commanded angle [rad].
+    target_rate : float, optional
+        The command's own rate [rad/s] when it is a planned trajectory (the MPC's), followed
+        without the lag of braking towards each sample; 0 for a command without one.
 
     Returns
     -------
@@ -124,10 +131,11 @@ def limit_step(lim: Array, state: Array, target: float) -> float:
     c = A * dt
     h = c * dt
     u = min(X, max(-X, target))
-    e = u - x
+    e = u - x - target_rate * dt  # the offset left once the target's own motion is followed
     wanted = _brake_speed(abs(e), c, h)
     if e < 0.0:
         wanted = -wanted
+    wanted += target_rate
     hi = min(v + c, V, _brake_speed(X - x, c, h))
     lo = max(v - c, -V, -_brake_speed(X + x, c, h))
     floor, ceiling = -X, X
@@ -150,16 +158,16 @@ def limit_step(lim: Array, state: Array, target: float) -> float:
 
 
 @njit(cache=True)
-def _limit_run(lim: Array, targets: Array, out: Array) -> None:
+def _limit_run(lim: Array, targets: Array, rates: Array, out: Array) -> None:
     state = np.zeros(2)
     for j in range(targets.shape[1]):
         state[0] = 0.0
         state[1] = 0.0
         for k in range(targets.shape[0]):
-            out[k, j] = limit_step(lim[j], state, targets[k, j])
+            out[k, j] = limit_step(lim[j], state, targets[k, j], rates[k, j])
 
 
-def apply_limits(design: LimitDesign, targets: Array) -> Array:
+def apply_limits(design: LimitDesign, targets: Array, rates: Array | None = None) -> Array:
     """Run the limit manager over a whole series, from neutral rest.
 
     Parameters
@@ -168,6 +176,8 @@ def apply_limits(design: LimitDesign, targets: Array) -> Array:
         From :func:`design_limits`, at the series' sample period.
     targets : ndarray, shape (n, 3)
         Roll, pitch and yaw commands [rad].
+    rates : ndarray, shape (n, 3), optional
+        Their planned rates [rad/s] (``target_rate`` of :func:`limit_step`); default zeros.
 
     Returns
     -------
@@ -190,8 +200,11 @@ def apply_limits(design: LimitDesign, targets: Array) -> Array:
     x = np.ascontiguousarray(targets, dtype=np.float64)
     if x.ndim != 2 or x.shape[1] != 3 or not np.all(np.isfinite(x)):
         raise MotosimError(f"platform targets of shape {x.shape}; expected finite (n, 3)")
+    v = np.zeros_like(x) if rates is None else np.ascontiguousarray(rates, dtype=np.float64)
+    if v.shape != x.shape or not np.all(np.isfinite(v)):
+        raise MotosimError(f"platform target rates of shape {v.shape}; expected finite {x.shape}")
     out = np.empty_like(x)
-    _limit_run(design.coefficients(), x, out)
+    _limit_run(design.coefficients(), x, v, out)
     return out
 
 

@@ -1,11 +1,14 @@
 """Model-predictive cueing on the vestibular states, solved with OSQP.
 
 Each platform axis is planned on its own as a linear MPC. The prediction model is the
-platform axis as a double integrator (input: angular acceleration ``u``) driving the
-semicircular-canal model with its rate and, for roll and pitch, the otolith model with the
-specific force the tilt and the head's offset give (linearised: ``f_y = -g phi - z_h
-phi''`` for roll, ``f_x = g theta + z_h theta''`` for pitch, ``z_h`` the head's z in the
-platform frame, negative above the centre of rotation). The vestibular models are those of
+commanded axis as a double integrator (input: angular acceleration ``u``), the actuator's
+first-order position loop at its bandwidth ``w_b`` (achieved angle ``y' = w_b (x - y)``, the
+platform twin of :func:`motosim.cueing.limits.actuator_response`, so the plan is judged on
+the motion the rider gets, as :func:`motosim.cueing.pipeline.cue` scores it), the
+semicircular-canal model driven by the achieved rate and, for roll and pitch, the otolith
+model with the specific force the tilt and the head's offset give (linearised: ``f_y = -g y
+- z_h y''`` for roll, ``f_x = g y + z_h y''`` for pitch, ``z_h`` the head's z in the platform
+frame, negative above the centre of rotation). The vestibular models are those of
 :mod:`motosim.cueing.vestibular`.
 
 Over ``N`` steps of ``h`` (the input held over each) the plan minimises::
@@ -13,17 +16,38 @@ Over ``N`` steps of ``h`` (the input held over each) the plan minimises::
     sum_k w_c ((canal_k - r_c) / thr_c)^2 + w_o ((otolith_k - r_o) / thr_o)^2
           + w_a ((angle_k - a_ref) / X)^2 + w_v (rate_k / V)^2 + w_u (u_k / A)^2
 
+          + w_f sum_k ((s_k / thr_c)^2 + s_k / thr_c)
+
 subject to ``|angle_k| <= X``, ``|rate_k| <= V`` (for pitch, the smaller of ``V`` and the
-tuning's ``pitch_rate``, below the pitch threshold), ``|u_k| <= A``, where ``r_c`` and ``r_o``
-are the vehicle's perceived rate and specific force predicted by the same vestibular models
-from their present state with the motorcycle's present motion held over the horizon (the
-future of the ride is unknown). The condensed QP (``N`` variables) has a constant Hessian and
-constraint matrix; each step updates its linear term and bounds and warm-starts OSQP
-(Stellato et al., *OSQP: an operator splitting solver for quadratic programs*, Math. Prog.
-Comp. 12, 2020). The first acceleration is applied over the loop period; the commands then
-go through the limit manager like the washout's. Near a limit the coarse prediction may have
-no admissible plan; that step is planned with the acceleration bounds only (the limit
-manager keeps the angle and rate limits) and counted in :attr:`MpcCueing.fallbacks`.
+tuning's ``pitch_rate``), ``|u_k| <= A``, and, over the first ``false_cue_steps`` steps, the
+false-cue constraints ``L_k - s_k <= canal_k <= U_k + s_k``, ``s_k >= 0``: the platform's
+perceived rotation stays within 0.9 of the threshold ``thr_c`` unless the motorcycle's
+predicted perception is above threshold, and then it may not be perceived the other way
+(``U_k`` or ``L_k`` is lifted on the motorcycle's side). This is the score's definition of a
+false cue (:mod:`motosim.cueing.vestibular`) as a soft constraint (slack ``s_k``, weight
+``w_f``), so the plan trades a false cue against the tracking errors explicitly rather than
+through their squares only. The weights of the otolith and angle terms are per axis (the
+tuning's ``otolith_weight`` and ``angle_weight`` for roll and yaw, ``surge_weight`` and
+``pitch_angle_weight`` for pitch, whose tilt follows the perceived longitudinal force rather
+than the washout's tilt). ``r_c`` and ``r_o`` are the vehicle's perceived
+rate and specific force predicted by the same vestibular models from their present state,
+with the motorcycle's present motion fading as ``exp(-t / prediction_time)``: the future of
+the ride is unknown, and holding a lean rate over the horizon would have the plan spread the
+platform's travel evenly over it (the least-squares optimum of a held rate against an angle
+limit), rolling at ``X / (N h)`` instead of reproducing the onset. The vehicle's angular
+velocity is turned into the rate each axis must give with the head-frame kinematics of
+:mod:`motosim.cueing.head` and the other axes' present state: ``q = theta_dot cos(phi) +
+psi_dot sin(phi) cos(theta)`` means a rolled platform that yaws already gives pitch rate,
+which the pitch plan does not add again (and likewise for roll and yaw).
+
+The condensed QP (``N`` variables) has a constant Hessian and constraint matrix; each step
+updates its linear term and bounds and warm-starts OSQP (Stellato et al., *OSQP: an operator
+splitting solver for quadratic programs*, Math. Prog. Comp. 12, 2020). The first
+acceleration is applied over the loop period; the planned angle and its rate
+(:attr:`MpcCueing.rates`) go to the limit manager, which follows a planned trajectory
+without braking towards each sample. Near a limit the coarse prediction may have no
+admissible plan; that step is planned with the acceleration bounds only (the limit manager
+keeps the angle and rate limits) and counted in :attr:`MpcCueing.fallbacks`.
 
 ``osqp`` is an optional dependency (the ``cueing`` extra), imported when a controller is
 built.
@@ -46,6 +70,8 @@ __all__ = ["MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "
 Array = NDArray[np.float64]
 
 GRAVITY = 9.81  # [m/s^2]
+BAND_MARGIN = 0.9
+"""The band of the false-cue constraints, as a fraction of the perception threshold."""
 MOTION_INPUTS = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
 """What :meth:`MpcCueing.step` reads, in order."""
 
@@ -57,14 +83,17 @@ class AxisPlan:
     Attributes
     ----------
     A_loop, B_loop : ndarray
-        Augmented model (platform angle, rate, canal and otolith states) at the loop period.
+        Augmented model (commanded angle and rate, achieved angle, canal and otolith states)
+        at the loop period.
     P : ndarray, shape (N, N)
         QP Hessian.
     F : ndarray, shape (N, nx)
         Linear term per unit initial state.
     G_canal, G_otolith : ndarray, shape (N, n + 1)
-        Linear term per unit vehicle vestibular state and held vehicle input (the vehicle's
-        predicted perception), with the minus sign.
+        The vehicle's predicted perception at steps 1..N per unit vestibular state and
+        present input (fading over the horizon).
+    W_canal, W_otolith : ndarray, shape (N, N)
+        Linear term per unit predicted perception, with the minus sign.
     G_angle : ndarray, shape (N,)
         Linear term per unit angle reference, with the minus sign.
     vehicle_canal, vehicle_otolith : tuple of ndarray
@@ -83,11 +112,17 @@ class AxisPlan:
     F: Array
     G_canal: Array
     G_otolith: Array
+    W_canal: Array
+    W_otolith: Array
     G_angle: Array
     vehicle_canal: tuple[Array, Array]
     vehicle_otolith: tuple[Array, Array]
     A_con: Array
     H: Array
+    band_M: Array
+    band_E: Array
+    band_thr: Array
+    band_weight: float
     limits: tuple[float, float, float]
 
 
@@ -119,19 +154,22 @@ def _discrete(A: Array, B: Array, dt: float) -> tuple[Array, Array]:
     return E[:n, :n], E[:n, n]
 
 
-def _held_prediction(A: Array, B: Array, C: Array, h: float, N: int) -> Array:
-    """Outputs at steps 1..N of a model from state x with its input w held: (N, n + 1) map
-    of ``[x, w]``."""
-    Ad, Bd = _discrete(A, B, h)
+def _vehicle_prediction(A: Array, B: Array, C: Array, h: float, N: int, tau: float) -> Array:
+    """Outputs at steps 1..N of a model from state x driven by ``w(t) = w0 exp(-t / tau)``:
+    (N, n + 1) map of ``[x, w0]``."""
+    from scipy.linalg import expm
+
     n = A.shape[0]
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n] = A
+    M[:n, n] = B
+    M[n, n] = -1.0 / tau
+    E = expm(M * h)
     out = np.zeros((N, n + 1))
-    power = np.eye(n)
-    forced = np.zeros(n)
+    power = np.eye(n + 1)
     for k in range(N):
-        forced = Ad @ forced + Bd
-        power = Ad @ power
-        out[k, :n] = C @ power
-        out[k, n] = C @ forced
+        power = E @ power
+        out[k] = C @ power[:n]
     return out
 
 
@@ -144,23 +182,27 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
     with_otolith = axis < 2
     Ao, Bo, Co = _ss(*otolith_tf(model))
     nc, no = Ac.shape[0], Ao.shape[0] if with_otolith else 0
-    nx = 2 + nc + no
+    nx = 3 + nc + no
+    wb = limits.bandwidth
     A = np.zeros((nx, nx))
     B = np.zeros(nx)
-    A[0, 1] = 1.0
+    A[0, 1] = 1.0  # commanded angle and rate: a double integrator
     B[1] = 1.0
-    A[2 : 2 + nc, 2 : 2 + nc] = Ac
-    A[2 : 2 + nc, 1] = Bc  # canal driven by the platform rate
+    A[2, 0], A[2, 2] = wb, -wb  # achieved angle: the actuator's first-order position loop
+    achieved_rate = A[2].copy()
+    achieved_accel = wb * np.eye(nx)[1] - wb * achieved_rate
+    c0, o0 = 3, 3 + nc
+    A[c0:o0, c0:o0] = Ac
+    A[c0:o0] += np.outer(Bc, achieved_rate)  # canal driven by the achieved rate
     if with_otolith:
-        sign = -1.0 if axis == 0 else 1.0  # f_y = -g phi, f_x = +g theta
-        A[2 + nc :, 2 + nc :] = Ao
-        A[2 + nc :, 0] = Bo * sign * GRAVITY
-        B[2 + nc :] = Bo * (sign * z_h)
+        sign = -1.0 if axis == 0 else 1.0  # f_y = -g phi + ..., f_x = +g theta + ...
+        A[o0:, o0:] = Ao
+        A[o0:] += np.outer(Bo, sign * (GRAVITY * np.eye(nx)[2] + z_h * achieved_accel))
     C_canal = np.zeros(nx)
-    C_canal[2 : 2 + nc] = Cc
+    C_canal[c0:o0] = Cc
     C_oto = np.zeros(nx)
     if with_otolith:
-        C_oto[2 + nc :] = Co
+        C_oto[o0:] = Co
     N, h = tuning.horizon, tuning.step
     Ad, Bd = _discrete(A, B, h)
     A_loop, B_loop = _discrete(A, B, dt)
@@ -177,20 +219,29 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
     thr_c, thr_o = model.thresholds[axis], model.thresholds[3 if axis == 1 else 4]
     rows = [
         (C_canal, tuning.canal_weight / thr_c**2, 0),
-        (C_oto, tuning.otolith_weight / thr_o**2 if with_otolith else 0.0, 1),
+        (C_oto, (tuning.surge_weight if axis == 1 else tuning.otolith_weight) / thr_o**2, 1),
     ]
     e_angle, e_rate = np.eye(nx)[0], np.eye(nx)[1]
     P = np.eye(N) * tuning.accel_weight / limits.accel**2
     F = np.zeros((N, nx))
-    G = []
+    G: list[Array] = []
+    W: list[Array] = []
+    band_M, band_E, band_thr = [], [], []
+    Nb = min(N, tuning.false_cue_steps)
     for C, w, ref in rows:
         M = np.einsum("i,kij->kj", C, Gam)  # (N outputs, N inputs)
         E = np.einsum("i,kij->kj", C, Phi)
+        if ref == 0:
+            band_M.append(M[:Nb])
+            band_E.append(E[:Nb])
+            band_thr.append(np.full(Nb, thr_c if ref == 0 else thr_o))
         P += w * M.T @ M
         F += w * M.T @ E
         Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
-        G.append(w * M.T @ _held_prediction(Av, Bv, Cv, h, N))
-    for e, w in ((e_angle, tuning.angle_weight / limits.angle**2),
+        G.append(_vehicle_prediction(Av, Bv, Cv, h, N, tuning.prediction_time))
+        W.append(w * M.T)
+    w_angle = (tuning.pitch_angle_weight if axis == 1 else tuning.angle_weight) / limits.angle**2
+    for e, w in ((e_angle, w_angle),
                  (e_rate, tuning.rate_weight / rate**2)):  # fmt: skip
         M = np.einsum("i,kij->kj", e, Gam)
         E = np.einsum("i,kij->kj", e, Phi)
@@ -206,11 +257,17 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         F=F,
         G_canal=G[0],
         G_otolith=G[1],
-        G_angle=tuning.angle_weight / limits.angle**2 * M_a.T @ np.ones(N),
+        W_canal=W[0],
+        W_otolith=W[1],
+        G_angle=w_angle * M_a.T @ np.ones(N),
         vehicle_canal=_discrete(Ac, Bc, dt),
         vehicle_otolith=_discrete(Ao, Bo, dt),
         A_con=np.vstack([np.eye(N), M_a, M_v]),
         H=H,
+        band_M=np.vstack(band_M),
+        band_E=np.vstack(band_E),
+        band_thr=np.concatenate(band_thr),
+        band_weight=tuning.false_cue_weight,
         limits=(limits.angle, rate, limits.accel),
     )
 
@@ -275,14 +332,27 @@ class MpcCueing:
         self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
         self.fallbacks = 0
         """Steps planned without the angle and rate bounds (no admissible plan)."""
+        self.rates = np.zeros(3)
+        """Planned roll, pitch and yaw rates [rad/s] of the last step's targets."""
         for plan in design.axes:
             solver = osqp.OSQP()
             n = plan.P.shape[0]
-            lo, hi = self._bounds(plan, np.zeros(plan.A_loop.shape[0]))
+            nb = plan.band_M.shape[0]
+            P = np.zeros((n + nb, n + nb))
+            P[:n, :n] = plan.P
+            P[n:, n:] = np.diag(plan.band_weight / plan.band_thr**2)
+            A_con = np.zeros((3 * n + 3 * nb, n + nb))
+            A_con[: 3 * n, :n] = plan.A_con
+            A_con[3 * n : 3 * n + nb, :n] = plan.band_M  # p - s <= U
+            A_con[3 * n : 3 * n + nb, n:] = -np.eye(nb)
+            A_con[3 * n + nb : 3 * n + 2 * nb, :n] = plan.band_M  # p + s >= L
+            A_con[3 * n + nb : 3 * n + 2 * nb, n:] = np.eye(nb)
+            A_con[3 * n + 2 * nb :, n:] = np.eye(nb)  # s >= 0
+            lo, hi = self._bounds(plan, np.zeros(plan.A_loop.shape[0]), np.zeros(nb))
             solver.setup(
-                sparse.csc_matrix(np.triu(plan.P)),
-                np.zeros(n),
-                sparse.csc_matrix(plan.A_con),
+                sparse.csc_matrix(np.triu(P)),
+                np.zeros(n + nb),
+                sparse.csc_matrix(A_con),
                 lo,
                 hi,
                 verbose=False,
@@ -293,15 +363,33 @@ class MpcCueing:
                 warm_starting=True,
             )
             self._solvers.append(solver)
-        self._solved = osqp.SolverStatus.OSQP_SOLVED
+        status = osqp.SolverStatus
+        # an iterate of the warm-started ADMM that stopped at its budget is still a usable
+        # plan (the limit manager keeps the limits); only an infeasible problem is replanned
+        self._usable = {
+            status.OSQP_SOLVED,
+            status.OSQP_SOLVED_INACCURATE,
+            status.OSQP_MAX_ITER_REACHED,
+        }
+        self._infeasible = {
+            status.OSQP_PRIMAL_INFEASIBLE,
+            status.OSQP_PRIMAL_INFEASIBLE_INACCURATE,
+        }
 
     @staticmethod
-    def _bounds(plan: AxisPlan, x0: Array) -> tuple[Array, Array]:
+    def _bounds(plan: AxisPlan, x0: Array, felt: Array) -> tuple[Array, Array]:
         X, V, A = plan.limits
         N = plan.P.shape[0]
         pred = plan.H @ x0
-        upper = np.concatenate([np.full(N, A), X - pred[:N], V - pred[N:]])
-        lower = np.concatenate([np.full(N, -A), -X - pred[:N], -V - pred[N:]])
+        free = plan.band_E @ x0
+        thr = BAND_MARGIN * plan.band_thr
+        big = np.full(free.size, 1e9)
+        band_hi = np.where(felt > 0, big, thr - free)  # not perceived the other way
+        band_lo = np.where(felt < 0, -big, -thr - free)
+        upper = np.concatenate([np.full(N, A), X - pred[:N], V - pred[N:], band_hi, big, big])
+        lower = np.concatenate(
+            [np.full(N, -A), -X - pred[:N], -V - pred[N:], -big, band_lo, np.zeros(free.size)]
+        )
         return lower, upper
 
     def reset(self) -> None:
@@ -316,7 +404,8 @@ class MpcCueing:
         ----------
         motion : ndarray, shape (5,)
             The motorcycle's motion at the rider's head now: ``omega_x``, ``omega_y``,
-            ``omega_z`` [rad/s], ``f_x``, ``f_y`` [m/s^2] (held over the horizon).
+            ``omega_z`` [rad/s], ``f_x``, ``f_y`` [m/s^2] (predicted to fade over the
+            horizon with the tuning's ``prediction_time``).
         reference : ndarray, shape (3,)
             Roll, pitch and yaw angles [rad] the plan is drawn to by the angle weight (the
             washout's commands, or zeros for neutral).
@@ -327,45 +416,60 @@ class MpcCueing:
             Platform roll, pitch and yaw targets [rad] for the limit manager.
         """
         out = np.empty(3)
-        inputs = ((motion[0], motion[4]), (motion[1], motion[3]), (motion[2], 0.0))
+        (roll, _), (pitch, pitch_dot), (_, yaw_dot) = (x[:2] for x in self._state)
+        # the rate each axis must give so that the head's angular velocity (module
+        # docstring of motosim.cueing.head) matches, the other axes' present rates held
+        sr, cr, sp, cp = math.sin(roll), math.cos(roll), math.sin(pitch), math.cos(pitch)
+        inputs = (
+            (motion[0] + yaw_dot * sp, motion[4]),
+            ((motion[1] - yaw_dot * sr * cp) / cr, motion[3]),
+            ((motion[2] + pitch_dot * sr) / (cr * cp), 0.0),
+        )
         for j, plan in enumerate(self.design.axes):
             x0 = self._state[j]
             w_c, w_o = inputs[j]
             xc, xo = self._canal[j], self._otolith[j]
-            q = (
+            r_c = plan.G_canal @ np.append(xc, w_c)
+            r_o = plan.G_otolith @ np.append(xo, w_o)
+            q_u = (
                 plan.F @ x0
-                - plan.G_canal @ np.append(xc, w_c)
-                - plan.G_otolith @ np.append(xo, w_o)
+                - plan.W_canal @ r_c
+                - plan.W_otolith @ r_o
                 - plan.G_angle * reference[j]
             )
+            nb = plan.band_M.shape[0]
+            r_b = r_c[:nb]
+            felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
+            q = np.concatenate([q_u, plan.band_weight / plan.band_thr])
             Ac, Bc = plan.vehicle_canal
             Ao, Bo = plan.vehicle_otolith
             self._canal[j] = Ac @ xc + Bc * w_c
             self._otolith[j] = Ao @ xo + Bo * w_o
-            lo, hi = self._bounds(plan, x0)
+            lo, hi = self._bounds(plan, x0, felt)
             solver = self._solvers[j]
             solver.update(q=q, l=lo, u=hi)
             result = solver.solve(raise_error=False)
-            if result.info.status_val != self._solved:
+            if result.info.status_val in self._infeasible:
                 # the angle and rate bounds of the coarse prediction cannot be met from this
                 # state (near a limit): plan with the input bounds only, the limit manager
                 # keeps the angle and rate limits
                 self.fallbacks += 1
                 n = plan.P.shape[0]
-                lo[n:], hi[n:] = -1e9, 1e9
+                lo[n : 3 * n], hi[n : 3 * n] = -1e9, 1e9
                 solver.update(l=lo, u=hi)
                 result = solver.solve(raise_error=False)
-            if result.info.status_val == self._solved:
+            if result.info.status_val in self._usable and math.isfinite(result.x[0]):
                 u = float(result.x[0])
             else:  # not solved in the iteration budget: brake
                 u = -math.copysign(plan.limits[2], x0[1]) if x0[1] else 0.0
             u = min(plan.limits[2], max(-plan.limits[2], u))
             self._state[j] = plan.A_loop @ x0 + plan.B_loop * u
             out[j] = self._state[j][0]
+            self.rates[j] = self._state[j][1]
         return out
 
 
-def apply_mpc(design: MpcDesign, vehicle: TimeSeries, reference: Array) -> Array:
+def apply_mpc(design: MpcDesign, vehicle: TimeSeries, reference: Array) -> tuple[Array, Array]:
     """Run the MPC cueing over a whole series from rest.
 
     Parameters
@@ -380,10 +484,14 @@ def apply_mpc(design: MpcDesign, vehicle: TimeSeries, reference: Array) -> Array
 
     Returns
     -------
-    ndarray, shape (n, 3)
-        Platform roll, pitch, yaw targets [rad].
+    targets, rates : ndarray, shape (n, 3)
+        Platform roll, pitch, yaw targets [rad] and their planned rates [rad/s].
     """
     mpc = MpcCueing(design)
     motion = np.column_stack([vehicle[name] for name in MOTION_INPUTS])
     ref = np.asarray(reference, dtype=np.float64)
-    return np.array([mpc.step(motion[k], ref[k]) for k in range(motion.shape[0])])
+    targets, rates = np.empty((motion.shape[0], 3)), np.empty((motion.shape[0], 3))
+    for k in range(motion.shape[0]):
+        targets[k] = mpc.step(motion[k], ref[k])
+        rates[k] = mpc.rates
+    return targets, rates

@@ -119,11 +119,12 @@ def cue(
     inputs = np.column_stack([run["phi"], vehicle["theta"], vehicle["a_x"], run["psi_dot"]])
     horizon_gain = config.washout.horizon_gain
     targets = apply_washout(design_washout(config.washout, dt), inputs)[:, :3]
+    rates = None
     if algorithm == "mpc":  # the washout's commands are the MPC's angle reference
         from motosim.cueing.mpc import apply_mpc, design_mpc
 
-        targets = apply_mpc(design_mpc(config, model, dt), vehicle, targets)
-    limited = apply_limits(design_limits(config.platform, dt), targets)
+        targets, rates = apply_mpc(design_mpc(config, model, dt), vehicle, targets)
+    limited = apply_limits(design_limits(config.platform, dt), targets, rates)
     horizon = horizon_gain * run["phi"] - limited[:, 0]
     commands = TimeSeries(run.t, np.column_stack([limited, horizon]), COMMAND_SIGNALS)
     achieved = actuator_response(config.platform, dt, limited)

@@ -194,6 +194,20 @@ class MpcTuning:
     pitch_rate : float
         Largest planned pitch rate [rad/s]: below the pitch threshold, so that a tilt is
         not perceived as a rotation (the tilt-coordination rate limit of the washout).
+    prediction_time : float
+        Time constant [s] of the vehicle motion's predicted decay over the horizon: the
+        motorcycle's present angular velocity and specific force are assumed to fade as
+        ``exp(-t / prediction_time)`` (a lean rate does not last: the lean is bounded).
+    surge_weight : float
+        The otolith weight of the pitch axis (longitudinal specific force, the cue of tilt
+        coordination); ``otolith_weight`` is that of the roll axis (lateral force).
+    pitch_angle_weight : float
+        The angle weight of the pitch axis; ``angle_weight`` is that of roll and yaw.
+    false_cue_weight : float
+        Weight of the slack of the false-cue constraints (each divided by its threshold).
+    false_cue_steps : int
+        Prediction steps over which the perceived platform rotation is kept from being a
+        false cue (see :mod:`motosim.cueing.mpc`); 0 for none.
     """
 
     horizon: int
@@ -204,6 +218,11 @@ class MpcTuning:
     rate_weight: float
     accel_weight: float
     pitch_rate: float
+    prediction_time: float
+    surge_weight: float
+    pitch_angle_weight: float
+    false_cue_weight: float
+    false_cue_steps: int
 
     def __post_init__(self) -> None:
         if (
@@ -217,6 +236,12 @@ class MpcTuning:
             _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
         _check("mpc", "accel_weight", self.accel_weight, lower=0.0)
         _check("mpc", "pitch_rate", self.pitch_rate, lower=0.0)
+        _check("mpc", "prediction_time", self.prediction_time, lower=0.0)
+        for name in ("surge_weight", "pitch_angle_weight", "false_cue_weight"):
+            _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
+        steps = self.false_cue_steps
+        if isinstance(steps, bool) or not isinstance(steps, int) or not 0 <= steps <= 200:
+            raise MotosimError(f"mpc: false_cue_steps = {steps!r}; expected an integer 0..200")
 
 
 @dataclass(frozen=True, slots=True)
@@ -270,6 +295,10 @@ _MPC_KEYS = {
     "rate_weight": 1.0,
     "accel_weight": 1.0,
     "pitch_rate_deg_s": _DEG,
+    "prediction_time_s": 1.0,
+    "surge_weight": 1.0,
+    "pitch_angle_weight": 1.0,
+    "false_cue_weight": 1.0,
 }
 
 
@@ -367,7 +396,15 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
         if "horizon" not in mpc_table:
             raise MotosimError(f"{origin}: missing key 'horizon' in [mpc]")
         horizon = mpc_table.pop("horizon")
-        mpc = MpcTuning(horizon, *_numbers(mpc_table, _MPC_KEYS, "mpc", origin))
+        if "false_cue_steps" not in mpc_table:
+            raise MotosimError(f"{origin}: missing key 'false_cue_steps' in [mpc]")
+        steps = mpc_table.pop("false_cue_steps")
+        (step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge, pitch_angle,
+         false_cue) = _numbers(mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
+        mpc = MpcTuning(
+            horizon, step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge,
+            pitch_angle, false_cue, steps,
+        )  # fmt: skip
     except MotosimError as err:
         message = str(err)
         raise MotosimError(

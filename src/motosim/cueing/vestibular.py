@@ -8,6 +8,14 @@ Approaches*, NASA CR-2005-213747 (2005)::
     otolith:  f_hat / f = K (tau_a s + 1) / ((tau_L s + 1)(tau_S s + 1))
 
 both of unit gain in their mid band, with the perception thresholds of the same report.
+The numbers (:data:`TELBAN_CARDULLO_2005`): canal ``tau_L`` = 5.73 s (cupula long time
+constant), ``tau_S`` = 0.005 s, ``tau_a`` = 80 s (adaptation); otolith ``K`` = 0.4, ``tau_a``
+= 13.2 s, ``tau_L`` = 5.33 s, ``tau_S`` = 0.66 s, the otolith form being that of Young &
+Meiry, *A revised dynamic otolith model*, Aerospace Medicine 39(6), 1968; thresholds roll
+3.0, pitch 3.6, yaw 2.6 deg/s and 0.17 m/s^2 in x and y. The same canal long and adaptation
+time constants (5.7 s, 80 s) are those of the observer model in J. Neurophysiol. 102(4),
+2232-2244, 2009 (doi:10.1152/jn.00116.2009, table 4). tests/reference/cueing checks the
+poles, zeros, gains and step responses these constants give.
 :func:`score` passes the motion at the rider's head on the motorcycle and on the platform
 through the same models and compares them channel by channel: roll, pitch and yaw rates
 (canals) and the longitudinal and lateral specific forces (otoliths).

@@ -23,7 +23,7 @@ and ends the run ``linger`` seconds later, the zero command still sent meanwhile
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +32,9 @@ from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
 from motosim.rt.ring import SampleRing
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
+
+if TYPE_CHECKING:
+    from motosim.rt.platform import PlatformOutput
 
 __all__ = ["LOOP_SIGNALS", "FrameLink", "RealtimeRunner", "RunCounters", "StackStepper"]
 
@@ -123,6 +126,9 @@ class RealtimeRunner:
     wait_for_arm : bool
         Keep the torque off (safety stage IDLE) after the drive's first status frame until
         :meth:`arm` is called (the view's Arm button); the loop runs and records meanwhile.
+    platform : PlatformOutput, optional
+        The motion platform's stage (:mod:`motosim.rt.platform`), stepped every period after
+        the safety stage with its state and envelope.
     """
 
     def __init__(
@@ -140,11 +146,13 @@ class RealtimeRunner:
         shared_ring: bool = False,
         telemetry: Callable[[int, float, Array], None] | None = None,
         wait_for_arm: bool = False,
+        platform: "PlatformOutput | None" = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
         self.stepper = stepper
         self.telemetry = telemetry
+        self.platform = platform
         self.link = link
         self.codecs = codecs
         self.dt = 1.0 / rate
@@ -286,6 +294,8 @@ class RealtimeRunner:
         out = safety.step(command, theta=theta, omega=omega, tau_hat=tau_hat, now=t - self._t0)
         state = safety.state
         self._send(out, state, k)
+        if self.platform is not None:
+            self.platform.step(k, t - self._t0, stack_row, state, safety.fault, safety.envelope)
         row = self._row
         row[0] = t - self._t0
         row[1] = self._theta

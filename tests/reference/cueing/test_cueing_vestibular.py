@@ -81,3 +81,40 @@ def test_false_missing_and_lag_definitions() -> None:
     assert s.channels["pitch"].missing_cue_share == pytest.approx(above, abs=1e-12)
     assert s.channels["pitch"].false_cue_share == 0.0
     assert math.isnan(s.channels["pitch"].correlation)
+
+
+def test_canal_poles_and_zeros_are_the_published_time_constants() -> None:
+    # Telban & Cardullo (2005), canal model: poles at -1/tau_L, -1/tau_S, -1/tau_a with
+    # tau_L = 5.73 s (cupula long time constant), tau_S = 0.005 s, tau_a = 80 s (adaptation);
+    # a double zero at s = 0 (no response to a constant angular velocity)
+    num, den = canal_tf(VM)
+    zeros, poles, _ = signal.tf2zpk(num, den)
+    np.testing.assert_allclose(np.sort(poles.real), np.sort([-1 / 5.73, -1 / 0.005, -1 / 80.0]))
+    np.testing.assert_allclose(poles.imag, 0.0)
+    np.testing.assert_allclose(zeros, 0.0, atol=1e-12)
+
+
+def test_canal_step_response_decays_with_the_cupula_time_constant() -> None:
+    # a step of angular velocity: the perceived rate jumps to ~1 and decays as
+    # tau_a / (tau_a - tau_L) exp(-t / tau_L) - tau_L / (tau_a - tau_L) exp(-t / tau_a)
+    # (partial fractions of the canal model, tau_S neglected): 1/e of it near t = tau_L
+    t = np.arange(0.0, 30.0, 0.001)
+    _, y = signal.step(canal_tf(VM), T=t)
+    ta, tl = 80.0, 5.73
+    expected = ta / (ta - tl) * np.exp(-t / tl) - tl / (ta - tl) * np.exp(-t / ta)
+    late = t > 0.05  # after the 5 ms short time constant
+    np.testing.assert_allclose(y[late], expected[late], atol=2e-3)
+
+
+def test_otolith_poles_zero_and_gains_are_the_published_ones() -> None:
+    # Telban & Cardullo (2005), otolith model (the form of Young & Meiry, 1968):
+    # K (tau_a s + 1) / ((tau_L s + 1)(tau_S s + 1)), K = 0.4, zero at -1/13.2 s^-1, poles at
+    # -1/5.33 and -1/0.66 s^-1; DC gain K = 0.4, mid-band gain K tau_a / tau_L = 0.99
+    num, den = otolith_tf(VM)
+    zeros, poles, _ = signal.tf2zpk(num, den)
+    np.testing.assert_allclose(zeros, [-1 / 13.2])
+    np.testing.assert_allclose(np.sort(poles.real), np.sort([-1 / 0.66, -1 / 5.33]))
+    _, dc = signal.freqs(num, den, worN=[1e-6])
+    assert abs(dc[0]) == pytest.approx(0.4, rel=1e-6)
+    _, mid = signal.freqs(num, den, worN=[math.sqrt(1 / 5.33 * 1 / 0.66)])
+    assert abs(mid[0]) == pytest.approx(0.4 * 13.2 / 5.33, rel=0.25)

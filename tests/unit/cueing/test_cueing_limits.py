@@ -83,3 +83,31 @@ def test_never_moves_away_from_a_held_neutral(platform: Platform) -> None:
     out = apply_limits(design, targets)
     tail = out[300:, 0]
     assert np.all(np.diff(tail) <= 1e-15) and tail[-1] == 0.0
+
+
+def test_zero_violations_with_wild_target_rates(platform: Platform) -> None:
+    # the feed-forward rate is a hint: whatever it says, the limits hold
+    design = design_limits(platform, DT)
+    rng = np.random.default_rng(7)
+    total = 0
+    for signal in _corpus():
+        targets = np.column_stack([signal, signal, signal])
+        rates = rng.normal(0.0, 5.0, targets.shape)
+        out = apply_limits(design, targets, rates)
+        for j, axis in enumerate(platform.axes):
+            total += _violations(out[:, j], axis.angle, axis.rate, axis.accel)
+    assert total == 0
+
+
+def test_a_planned_ramp_is_followed_without_lag(platform: Platform) -> None:
+    # a ramp at 10 deg/s from rest, within the rate and acceleration limits, with its rate
+    design = design_limits(platform, DT)
+    t = np.arange(150) * DT  # 12.5 deg at the end, within the 20 deg roll limit
+    speed = np.radians(10.0) * np.minimum(t / 0.5, 1.0)  # reached at 20 deg/s^2
+    ramp = np.cumsum(speed) * DT
+    targets = np.column_stack([ramp, 0 * t, 0 * t])
+    rates = np.column_stack([speed, 0 * t, 0 * t])
+    followed = apply_limits(design, targets, rates)[:, 0]
+    braked = apply_limits(design, targets)[:, 0]
+    assert np.max(np.abs(followed - ramp)) < np.radians(0.05)
+    assert np.max(np.abs(braked - ramp)) > np.radians(0.2)  # braking towards each sample lags

@@ -1,0 +1,448 @@
+"""Platform output of the real-time loop: washout cueing, safety envelope, UDP datagrams.
+
+Each control period :class:`PlatformOutput` takes the virtual motorcycle's states from the
+stack's row (``v_x``, ``v_y``, ``psi_dot``, ``phi``) and runs one compiled step
+(:func:`platform_step`) of
+
+1. the longitudinal acceleration ``a_x = v_x' - v_y psi_dot`` (backward difference) and the
+   suspension pitch of :func:`motosim.cueing.head.suspension_pitch`;
+2. the classical washout of :mod:`motosim.cueing.washout` (platform roll, pitch, yaw and the
+   visual-horizon roll);
+3. the handlebar safety stage's envelope (:attr:`motosim.rt.safety.SafetyStage.envelope`):
+   the commands are scaled by it, so the platform fades in and out with the handlebar's
+   torque and goes back to neutral on a fault or a stop;
+4. the limit manager of :mod:`motosim.cueing.limits` last, so that the angle, rate and
+   acceleration limits hold whatever the envelope does (scaling a 20 deg roll down in 0.5 s
+   alone would ask for 40 deg/s), and the return to neutral after a fault is a braked,
+   rate-limited one rather than a jump.
+
+The MPC cueing is not run here: its step (about 1 ms) does not fit a 1 kHz period.
+
+Every ``send_every`` periods one datagram of :data:`PLATFORM_FRAME` goes to the platform
+(:class:`PlatformSender`, a non-blocking UDP socket). The layout, little-endian, 48 bytes
+(``struct`` format ``<4sBBBBIdfffffff``):
+
+====== ======= ========================================================================
+offset type    field
+====== ======= ========================================================================
+0      4 bytes magic ``b"MSPF"``
+4      uint8   version (1)
+5      uint8   state of the safety stage (:class:`~motosim.rt.safety.State`)
+6      uint8   fault (:class:`~motosim.rt.safety.Fault`)
+7      uint8   flags: bit 0 set while the platform may move (fade-in, running, stopping)
+8      uint32  sequence counter, +1 per datagram, wrapping at 2^32
+12     float64 time since the first period [s]
+20     float32 roll command [rad] (right side down positive)
+24     float32 pitch command [rad] (nose up positive)
+28     float32 yaw command [rad] (nose right positive)
+32     float32 roll rate [rad/s]
+36     float32 pitch rate [rad/s]
+40     float32 yaw rate [rad/s]
+44     float32 visual-horizon roll [rad] (for the image generator)
+====== ======= ========================================================================
+
+:class:`PlatformTwin` is the platform's side: it reads these datagrams, checks them and
+applies each axis' limits and first-order actuator bandwidth
+(:func:`motosim.cueing.limits.actuator_response`), so that a test or ``motosim rig`` sees
+what the platform would do.
+"""
+
+import math
+import socket
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from motosim.cueing.filters import biquad_step, lowpass2
+from motosim.cueing.limits import design_limits, limit_step
+from motosim.cueing.platform import CueingConfig, Platform
+from motosim.cueing.washout import WASHOUT_STATE_SIZE, design_washout, washout_step
+from motosim.errors import MotosimError
+from motosim.rt.safety import State
+
+__all__ = [
+    "PLATFORM_FRAME",
+    "PLATFORM_MAGIC",
+    "PLATFORM_VERSION",
+    "PlatformFrame",
+    "PlatformOutput",
+    "PlatformSender",
+    "PlatformTwin",
+    "decode_platform",
+    "encode_platform",
+    "platform_step",
+]
+
+Array = NDArray[np.float64]
+
+PLATFORM_FRAME = struct.Struct("<4sBBBBIdfffffff")
+"""The datagram's layout (module docstring), 48 bytes."""
+PLATFORM_MAGIC = b"MSPF"
+PLATFORM_VERSION = 1
+_LIVE = (State.FADE_IN, State.RUNNING, State.STOPPING)
+
+
+@dataclass(frozen=True, slots=True)
+class PlatformFrame:
+    """One decoded platform datagram (fields of the module docstring's table).
+
+    Attributes
+    ----------
+    sequence : int
+        Datagram counter.
+    t : float
+        Time since the first period [s].
+    state, fault : int
+        Safety stage state and fault codes.
+    live : bool
+        Whether the platform may move.
+    angles : tuple of float
+        Roll, pitch, yaw commands [rad].
+    rates : tuple of float
+        Their rates [rad/s].
+    horizon : float
+        Visual-horizon roll [rad].
+    """
+
+    sequence: int
+    t: float
+    state: int
+    fault: int
+    live: bool
+    angles: tuple[float, float, float]
+    rates: tuple[float, float, float]
+    horizon: float
+
+
+def encode_platform(
+    sequence: int, t: float, state: int, fault: int, live: bool, values: Array
+) -> bytes:
+    """Pack one datagram.
+
+    Parameters
+    ----------
+    sequence : int
+        Datagram counter (taken modulo 2^32).
+    t : float
+        Time [s].
+    state, fault : int
+        Safety stage codes (0..255).
+    live : bool
+        Whether the platform may move.
+    values : ndarray, shape (7,)
+        Roll, pitch, yaw [rad], their rates [rad/s] and the horizon roll [rad].
+
+    Examples
+    --------
+    >>> frame = encode_platform(7, 1.5, 2, 0, True, np.array([0.1, 0, 0, 0.2, 0, 0, 0.3]))
+    >>> len(frame), decode_platform(frame).sequence
+    (48, 7)
+    """
+    return PLATFORM_FRAME.pack(
+        PLATFORM_MAGIC, PLATFORM_VERSION, state, fault, 1 if live else 0,
+        sequence & 0xFFFFFFFF, t, *(float(v) for v in values[:7]),
+    )  # fmt: skip
+
+
+def decode_platform(data: bytes) -> PlatformFrame:
+    """Unpack one datagram.
+
+    Raises
+    ------
+    MotosimError
+        If its size, magic or version is not the layout's.
+    """
+    if len(data) != PLATFORM_FRAME.size:
+        raise MotosimError(
+            f"platform datagram of {len(data)} bytes; expected {PLATFORM_FRAME.size}"
+        )
+    magic, version, state, fault, flags, seq, t, *v = PLATFORM_FRAME.unpack(data)
+    if magic != PLATFORM_MAGIC or version != PLATFORM_VERSION:
+        raise MotosimError(
+            f"platform datagram magic {magic!r} version {version}; expected "
+            f"{PLATFORM_MAGIC!r} version {PLATFORM_VERSION}"
+        )
+    return PlatformFrame(
+        seq, t, state, fault, bool(flags & 1), (v[0], v[1], v[2]), (v[3], v[4], v[5]), v[6]
+    )
+
+
+@njit(cache=True)
+def platform_step(
+    pitch_coef: Array,
+    washout_coef: Array,
+    limits: Array,
+    state: Array,
+    v_x: float,
+    v_y: float,
+    psi_dot: float,
+    phi: float,
+    envelope: float,
+    out: Array,
+) -> None:
+    """One period of the platform cueing (module docstring, steps 1 to 4).
+
+    Parameters
+    ----------
+    pitch_coef : ndarray, shape (5,)
+        Suspension pitch section (``lowpass2`` of the rider's pitch model).
+    washout_coef : ndarray, shape (26,)
+        :meth:`motosim.cueing.washout.WashoutDesign.coefficients`.
+    limits : ndarray, shape (3, 4)
+        :meth:`motosim.cueing.limits.LimitDesign.coefficients`.
+    state : ndarray, shape (19,)
+        ``[previous v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]``,
+        updated in place; zeros at rest.
+    v_x, v_y : float
+        Motorcycle forward and lateral speed [m/s].
+    psi_dot : float
+        Yaw rate [rad/s].
+    phi : float
+        Lean [rad].
+    envelope : float
+        The safety stage's envelope in [0, 1].
+    out : ndarray, shape (7,)
+        Written: roll, pitch, yaw [rad], their rates [rad/s], horizon roll [rad].
+    """
+    dt = limits[0, 3]
+    a_x = (v_x - state[0]) / dt - v_y * psi_dot if state[1] > 0.0 else 0.0
+    state[0] = v_x
+    state[1] = 1.0
+    theta = biquad_step(pitch_coef, 0, state, 2, a_x)
+    cmd = np.empty(4)
+    washout_step(washout_coef, state[4 : 4 + WASHOUT_STATE_SIZE], phi, theta, a_x, psi_dot, cmd)
+    scale = min(1.0, max(0.0, envelope))
+    for j in range(3):
+        s = 4 + WASHOUT_STATE_SIZE + 2 * j
+        out[j] = limit_step(limits[j], state[s : s + 2], scale * cmd[j], 0.0)
+        out[3 + j] = state[s + 1]
+    out[6] = cmd[3] + cmd[0] - out[0]  # the horizon completes the roll the platform gives
+
+
+_STATE_SIZE = 4 + WASHOUT_STATE_SIZE + 6
+
+
+class PlatformSender:
+    """Send platform datagrams to ``address`` over UDP; never blocks (a full buffer drops)."""
+
+    def __init__(self, address: tuple[str, int]) -> None:
+        self._address = address
+        self._socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self._socket.setblocking(False)
+        self.dropped = 0
+
+    def send(self, data: bytes) -> None:
+        """Send one datagram."""
+        try:
+            self._socket.sendto(data, self._address)
+        except OSError:  # buffer full, no route: the next one follows in a period
+            self.dropped += 1
+
+    def close(self) -> None:
+        """Close the socket."""
+        self._socket.close()
+
+
+class PlatformOutput:
+    """The platform stage of the real-time loop (module docstring).
+
+    Parameters
+    ----------
+    config : CueingConfig
+        Platform, rider's head model and washout tuning.
+    dt : float
+        Control period [s].
+    names : tuple of str
+        Names of the stack row's values; must hold ``v_x``, ``v_y``, ``psi_dot``, ``phi``.
+    sender : PlatformSender, optional
+        Where datagrams go; none: commands are computed and kept only.
+    send_every : int
+        Periods per datagram (10 at 1 kHz: a 100 Hz platform stream).
+
+    Raises
+    ------
+    MotosimError
+        If a state is missing from ``names``, ``send_every`` < 1 or a washout corner is above
+        0.2 of the Nyquist frequency.
+    """
+
+    def __init__(
+        self,
+        config: CueingConfig,
+        dt: float,
+        names: tuple[str, ...],
+        *,
+        sender: PlatformSender | None = None,
+        send_every: int = 1,
+    ) -> None:
+        try:
+            self._cols = tuple(names.index(n) for n in ("v_x", "v_y", "psi_dot", "phi"))
+        except ValueError:
+            raise MotosimError(
+                f"platform output: stack row {names}; expected v_x, v_y, psi_dot and phi"
+            ) from None
+        if not (isinstance(send_every, int) and send_every >= 1):
+            raise MotosimError(f"platform send_every = {send_every!r}; expected an integer >= 1")
+        rider = config.rider
+        self._pitch = lowpass2(rider.pitch_gain, rider.pitch_frequency, rider.pitch_damping, dt)
+        self._washout = design_washout(config.washout, dt).coefficients()
+        self._limits = design_limits(config.platform, dt).coefficients()
+        self._state = np.zeros(_STATE_SIZE)
+        self.values = np.zeros(7)
+        """The last roll, pitch, yaw [rad], rates [rad/s] and horizon roll [rad]."""
+        self.sender = sender
+        self.send_every = send_every
+        self.sequence = 0
+        platform_step(self._pitch, self._washout, self._limits, np.zeros(_STATE_SIZE),
+                      0.0, 0.0, 0.0, 0.0, 0.0, np.zeros(7))  # fmt: skip  # compile now
+
+    def step(self, k: int, t: float, row: Array | None, state: State, fault: int,
+             envelope: float) -> None:  # fmt: skip
+        """One period: the cueing from the stack row (or neutral without one) and, every
+        ``send_every`` periods, a datagram.
+
+        Parameters
+        ----------
+        k : int
+            Period index.
+        t : float
+            Time since the first period [s].
+        row : ndarray or None
+            The stack's row this period (None before the drive's first status frame).
+        state : State
+            The safety stage's state.
+        fault : int
+            Its fault code.
+        envelope : float
+            Its envelope in [0, 1].
+        """
+        if row is None:
+            v_x = v_y = psi_dot = phi = 0.0
+            envelope = 0.0
+        else:
+            c = self._cols
+            v_x, v_y, psi_dot, phi = row[c[0]], row[c[1]], row[c[2]], row[c[3]]
+        values = self.values
+        platform_step(self._pitch, self._washout, self._limits, self._state,
+                      v_x, v_y, psi_dot, phi, envelope, values)  # fmt: skip
+        if self.sender is not None and k % self.send_every == 0:
+            live = state in _LIVE
+            self.sender.send(encode_platform(self.sequence, t, state, fault, live, values))
+            self.sequence += 1
+
+
+class PlatformTwin:
+    """The platform's side of the datagrams: limits and actuator bandwidth, as hardware.
+
+    Each datagram's command passes through the limit manager of the platform (so a wrong
+    command never exceeds the platform's limits, as a drive's own limits would ensure) and
+    each axis then follows it through its first-order position loop at its bandwidth, both at
+    ``dt``. Lost datagrams (sequence gaps) and bad ones are counted; the last good command is
+    held for ``watchdog`` seconds, then the platform goes back to neutral (braked by its
+    limits) until datagrams come again, as a platform controller must do when its host stops.
+
+    Parameters
+    ----------
+    platform : Platform
+        Limits and bandwidths.
+    dt : float
+        The twin's step [s].
+    address : tuple of (str, int), optional
+        Where to listen (UDP); none: feed it with :meth:`receive`.
+    watchdog : float
+        Time without a datagram after which the command is neutral [s].
+    """
+
+    def __init__(
+        self,
+        platform: Platform,
+        dt: float,
+        address: tuple[str, int] | None = None,
+        *,
+        watchdog: float = 0.1,
+    ) -> None:
+        self._limits = design_limits(platform, dt).coefficients()
+        self._alpha = np.array([math.exp(-axis.bandwidth * dt) for axis in platform.axes])
+        self._states = np.zeros((3, 2))
+        self.dt = dt
+        self.command = np.zeros(3)
+        """The last received roll, pitch, yaw command [rad]."""
+        self.achieved = np.zeros(3)
+        """The platform's angles [rad]."""
+        self.t = 0.0
+        self.watchdog = watchdog
+        self.timeouts = 0
+        """Times the watchdog sent the platform to neutral."""
+        self._received = -math.inf
+        self.frames = 0
+        self.lost = 0
+        self.bad = 0
+        self.last: PlatformFrame | None = None
+        self._socket: socket.socket | None = None
+        if address is not None:
+            self._socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            self._socket.bind(address)
+            self._socket.setblocking(False)
+
+    @property
+    def address(self) -> tuple[str, int] | None:
+        """The bound (host, port), or None."""
+        if self._socket is None:
+            return None
+        host, port = self._socket.getsockname()[:2]
+        return str(host), int(port)
+
+    def receive(self, data: bytes) -> None:
+        """Take one datagram."""
+        try:
+            frame = decode_platform(data)
+        except MotosimError:
+            self.bad += 1
+            return
+        values = (*frame.angles, *frame.rates, frame.horizon)
+        if not all(math.isfinite(v) for v in values):
+            self.bad += 1
+            return
+        if self.last is not None:
+            self.lost += max(0, (frame.sequence - self.last.sequence - 1) & 0xFFFFFFFF)
+        self.frames += 1
+        self._received = self.t
+        self.last = frame
+        self.command[:] = frame.angles if frame.live else (0.0, 0.0, 0.0)
+
+    def _poll(self) -> None:
+        if self._socket is None:
+            return
+        for _ in range(256):
+            try:
+                data = self._socket.recv(256)
+            except BlockingIOError:
+                return
+            self.receive(data)
+
+    def step(self) -> Array:
+        """Read waiting datagrams, advance one ``dt``; the achieved angles [rad]."""
+        self._poll()
+        if self.last is not None and self.t - self._received > self.watchdog:
+            if np.any(self.command):
+                self.timeouts += 1
+            self.command[:] = 0.0
+        for j in range(3):
+            target = limit_step(self._limits[j], self._states[j], float(self.command[j]), 0.0)
+            a = self._alpha[j]
+            self.achieved[j] = a * self.achieved[j] + (1.0 - a) * target
+        self.t += self.dt
+        return self.achieved
+
+    def advance_to(self, t: float) -> None:
+        """Step until the twin's time reaches ``t`` [s]."""
+        while self.t + 0.5 * self.dt <= t:
+            self.step()
+
+    def close(self) -> None:
+        """Close the socket."""
+        if self._socket is not None:
+            self._socket.close()

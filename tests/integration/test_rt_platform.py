@@ -1,0 +1,112 @@
+"""The platform output of the real-time loop, lock-step against the rig and the platform twin.
+
+lane_change_20 (the repository's scenario), shortened, runs through the real-time loop with
+the virtual rider at the rig (as in test_rt_offline.py) and a platform stage sending UDP
+datagrams on localhost to a :class:`PlatformTwin`. The platform's roll command must be the
+offline washout's (:func:`motosim.cueing.cue`) of the same ride, and what the twin does must
+keep the platform's limits.
+"""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
+from motosim.rt.clock import SimulatedClock
+from motosim.rt.loop import RateLoop
+from motosim.rt.platform import PlatformOutput, PlatformSender, PlatformTwin
+from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
+from motosim.rt.run import RealtimeRunner
+from motosim.rt.safety import SafetyLimits
+from motosim.rt.stack import CompiledStack
+from motosim.rt.telemetry import StateReceiver, StateSender
+from motosim.sim import build_rig, build_stack
+
+pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
+pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
+
+from motosim.io.can import handlebar_codecs, open_link
+
+
+def test_platform_commands_reach_the_twin_within_the_limits() -> None:
+    from motosim.io.runs import load_run
+
+    full = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
+    inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, duration=5.0))
+    sc = inputs.scenario
+    model = build_stack(inputs)
+    world = build_rig(inputs, rng=np.random.default_rng(0))
+    rate = sc.rates.control
+    settings = RigSettings(
+        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
+        encoder_bits=sc.measurement.encoder_bits, current_noise=0.0,
+        max_current=sc.controller.max_current,
+    )  # fmt: skip
+    limits = SafetyLimits(
+        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
+        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
+        hands_off_gain=1.0, fade_in=1.0 / rate,
+    )  # fmt: skip
+    config = load_platform("simacom_platform")
+    twin = PlatformTwin(config.platform, 1.0 / rate, ("127.0.0.1", 0))
+    assert twin.address is not None
+    codecs = handlebar_codecs()
+    receiver = StateReceiver(("127.0.0.1", 0))
+    sender = StateSender(receiver.address)
+    rider = VirtualRider(world, receiver)
+    stack = CompiledStack(model, force=world.force, side_force=world.side_force)
+    platform = PlatformOutput(
+        config, 1.0 / rate, tuple(stack.names), sender=PlatformSender(twin.address),
+        send_every=10,
+    )  # fmt: skip
+    achieved = []
+
+    def listen(t: float) -> None:
+        rig.advance_to(t)
+        twin.advance_to(t)
+        achieved.append(twin.achieved.copy())
+
+    with open_link("virtual:rt_platform") as host, open_link("virtual:rt_platform") as drive:
+        rig = VirtualRig(
+            inputs.true_handlebar, settings, codecs, drive, rider, np.random.default_rng(0),
+            rider_on_enable=False,
+        )  # fmt: skip
+        runner = RealtimeRunner(
+            stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
+            telemetry=sender.send, platform=platform,
+        )  # fmt: skip
+        clock = SimulatedClock(-1.0 / rate)
+        clock.listen(listen)
+        RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
+    sender.close()
+    receiver.close()
+    twin.close()
+    assert platform.sender is not None
+    platform.sender.close()
+    assert runner.counters().fault == "NONE"
+    assert twin.frames == platform.sequence == round(sc.duration * 100) and twin.lost == 0
+    # the loop's roll command is the offline washout of the same ride, within 0.05 deg (the
+    # loop's backward difference for v_x' against the offline central one does not touch roll)
+    rows = runner.ring.drain()
+    from motosim.timeseries import TimeSeries
+
+    names = ("v_x", "v_y", "psi_dot", "phi_dot", "phi")
+    ride = TimeSeries(
+        rows[:, 0], np.column_stack([rows[:, runner.names.index(n)] for n in names]), names
+    )
+    offline = cue(config, ride, TELBAN_CARDULLO_2005, algorithm="washout")
+    last = round(sc.duration * rate) - 1
+    roll_rt = twin.last.angles[0] if twin.last is not None else np.nan
+    roll_offline = offline.commands["phi_s"][last - (last % 10)]
+    assert abs(roll_rt - roll_offline) < np.radians(0.05)
+    # the platform moved (a lane change leans the motorcycle ~10 deg) within its limits
+    angles = np.array(achieved)
+    assert np.max(np.abs(angles[:, 0])) > np.radians(2.0)
+    dt = 1.0 / rate
+    for j, axis in enumerate(config.platform.axes):
+        v = np.diff(angles[:, j]) / dt
+        assert np.max(np.abs(angles[:, j])) <= axis.angle
+        assert np.max(np.abs(v)) <= axis.rate * (1 + 1e-9)
+        assert np.max(np.abs(np.diff(v) / dt)) <= axis.accel * (1 + 1e-9) + 1e-6
