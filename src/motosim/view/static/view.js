@@ -7,7 +7,8 @@ import * as THREE from 'three';
 const EYE = 1.2;          // m, eye height above the road when upright
 const token = new URLSearchParams(location.search).get('token') || '';
 const $ = (id) => document.getElementById(id);
-const stats = { frames: 0, fps: 0, poses: 0, lastPose: null, status: null, ready: false };
+const stats = { frames: 0, fps: 0, poses: 0, lastPose: null, status: null, ready: false,
+  offset: null, rtt: null, lags: [], reported: 0 };
 window.motosimStats = stats;
 for (const a of document.querySelectorAll('a')) a.href += location.search;
 
@@ -143,23 +144,55 @@ instances(new THREE.BoxGeometry(0.13, 0.12, 0.13), 0xd02020, tops);
 instances(new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, trunks);
 instances(new THREE.ConeGeometry(1.6, 5.0, 8), 0x2f6a2a, crowns);
 
-// --- pose ------------------------------------------------------------------------------
+// --- pose, and the lag of each frame behind the loop --------------------------------------
+// A pose stamped with the loop's clock (`clock`, the machine's monotonic clock [s]) lets the
+// page measure how far behind the loop each frame is: the server answers pings with its
+// monotonic time, and the offset of the ping with the shortest round trip maps
+// performance.now() onto that clock. Each drawn frame is reported as [sample, drawn] (both
+// on the loop's clock [s]) once a second over the same socket (GET /api/lag sums them up),
+// and kept in motosimStats.lags for tests and the bench.
 let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
   phi: 0, delta: 0, v_x: 0, theta_h: 0 };
-let status = info.status;
+let poseClock = null, status = info.status, socket = null, pending = [];
+function ping() {
+  if (socket && socket.readyState === WebSocket.OPEN) {
+    socket.send(JSON.stringify({ ping: performance.now() }));
+  }
+}
 function connect() {
   const ws = new WebSocket(`ws://${location.host}/ws/pose`);
+  socket = ws;
+  ws.onopen = () => { for (let k = 0; k < 5; k++) setTimeout(ping, 50 * k); };
   ws.onmessage = (event) => {
     const message = JSON.parse(event.data);
+    if (message.pong !== undefined) {
+      const back = performance.now(), rtt = back - message.pong;
+      if (stats.rtt === null || rtt <= stats.rtt) {
+        stats.rtt = rtt; stats.offset = message.server - (message.pong + back) / 2000;
+      }
+      return;
+    }
     if (message.pose) { pose = message.pose; stats.lastPose = pose; }
+    poseClock = message.clock ?? null;
     status = message.status; stats.status = status; stats.poses++;
   };
-  ws.onclose = () => { $('state').textContent = 'disconnected'; setTimeout(connect, 1000); };
+  ws.onclose = () => {
+    socket = null; stats.rtt = null;
+    show('state', 'disconnected'); setTimeout(connect, 1000);
+  };
 }
 connect();
+setInterval(() => {
+  ping();
+  if (pending.length && socket && socket.readyState === WebSocket.OPEN) {
+    socket.send(JSON.stringify({ frames: pending }));
+    stats.reported += pending.length;
+  }
+  pending = [];
+}, 1000);
 
 function place() {
-  const roll = $('roll-toggle').checked ? (pose.phi || 0) : 0;
+  const roll = rollToggle.checked ? (pose.phi || 0) : 0;
   const psi = pose.psi || 0, phi = pose.phi || 0;
   // the eye leans with the motorcycle about the contact line
   const right = EYE * Math.sin(phi), up = EYE * Math.cos(phi);
@@ -177,30 +210,44 @@ function resize() {
 }
 
 const deg = (r) => (r == null ? 0 : (r * 180) / Math.PI).toFixed(1);
+// the page's text changes only when its value does (no style or layout work otherwise)
+const shown = new Map();
+function show(id, text) {
+  if (shown.get(id) !== text) { shown.set(id, text); $(id).textContent = text; }
+}
+const bar = $('bar'), rollToggle = $('roll-toggle'), seek = $('seek');
+let barAngle = null;
 let fpsFrames = 0, fpsSince = performance.now();
 function frame(now) {
   resize(); place();
   renderer.render(scene, camera);
+  if (poseClock !== null && stats.offset !== null) {
+    const drawn = performance.now() / 1000 + stats.offset;
+    pending.push([poseClock, drawn]);
+    if (stats.lags.length < 100000) stats.lags.push([poseClock, drawn]);
+  }
   stats.frames++; fpsFrames++; stats.ready = true;
   if (now - fpsSince >= 1000) {
     stats.fps = (1000 * fpsFrames) / (now - fpsSince);
-    $('fps').textContent = stats.fps.toFixed(0);
+    show('fps', stats.fps.toFixed(0));
     fpsFrames = 0; fpsSince = now;
     adapt(stats.fps);
   }
-  $('speed').textContent = ((pose.v_x || 0) * 3.6).toFixed(0);
-  $('steer').textContent = deg(pose.delta);
-  $('handlebar').textContent = deg(pose.theta_h);
-  $('roll').textContent = deg(pose.phi);
-  $('bar').style.transform = `rotate(${deg(pose.theta_h)}deg)`;
+  show('speed', ((pose.v_x || 0) * 3.6).toFixed(0));
+  show('steer', deg(pose.delta));
+  show('handlebar', deg(pose.theta_h));
+  show('roll', deg(pose.phi));
+  const angle = deg(pose.theta_h);
+  if (angle !== barAngle) { barAngle = angle; bar.style.transform = `rotate(${angle}deg)`; }
   if (status) {
-    $('state').textContent = status.state;
-    $('clock').textContent = `${(status.t || 0).toFixed(1)} s`;
-    $('play').textContent = status.state === 'playing' || status.state === 'running'
-      ? (info.replay ? 'Pause' : 'Stop') : (info.replay ? 'Play' : 'Arm');
-    if (status.duration && !seeking) {
-      $('seek').max = status.duration; $('seek').value = status.t;
+    show('state', status.state);
+    show('clock', `${(status.t || 0).toFixed(1)} s`);
+    show('play', status.state === 'playing' || status.state === 'running'
+      ? (info.replay ? 'Pause' : 'Stop') : (info.replay ? 'Play' : 'Arm'));
+    if (status.duration && !seeking && seek.max !== String(status.duration)) {
+      seek.max = status.duration;
     }
+    if (status.duration && !seeking) seek.value = status.t;
   }
   requestAnimationFrame(frame);
 }
@@ -213,7 +260,7 @@ async function command(body) {
     body: JSON.stringify(body),
   });
   const answer = await response.json();
-  if (!response.ok) $('state').textContent = answer.error;
+  if (!response.ok) show('state', answer.error);
   return answer;
 }
 let seeking = false;
