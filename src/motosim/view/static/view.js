@@ -149,8 +149,9 @@ instances(new THREE.ConeGeometry(1.6, 5.0, 8), 0x2f6a2a, crowns);
 // page measure how far behind the loop each frame is: the server answers pings with its
 // monotonic time, and the offset of the ping with the shortest round trip maps
 // performance.now() onto that clock. Each drawn frame is reported as [sample, drawn] (both
-// on the loop's clock [s]) once a second over the same socket (GET /api/lag sums them up),
-// and kept in motosimStats.lags for tests and the bench.
+// on the loop's clock [s], with the best offset known when sent) once a second over the same
+// socket (GET /api/lag sums them up); motosimStats.lags keeps [sample [s], drawn
+// (performance.now() [ms])] for tests and the bench, motosimStats.offset maps them.
 let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
   phi: 0, delta: 0, v_x: 0, theta_h: 0 };
 let poseClock = null, status = info.status, socket = null, pending = [];
@@ -184,8 +185,9 @@ function connect() {
 connect();
 setInterval(() => {
   ping();
-  if (pending.length && socket && socket.readyState === WebSocket.OPEN) {
-    socket.send(JSON.stringify({ frames: pending }));
+  if (pending.length && stats.offset !== null && socket && socket.readyState === WebSocket.OPEN) {
+    const offset = stats.offset;
+    socket.send(JSON.stringify({ frames: pending.map(([c, d]) => [c, d / 1000 + offset]) }));
     stats.reported += pending.length;
   }
   pending = [];
@@ -221,8 +223,8 @@ let fpsFrames = 0, fpsSince = performance.now();
 function frame(now) {
   resize(); place();
   renderer.render(scene, camera);
-  if (poseClock !== null && stats.offset !== null) {
-    const drawn = performance.now() / 1000 + stats.offset;
+  if (poseClock !== null) {
+    const drawn = performance.now();
     pending.push([poseClock, drawn]);
     if (stats.lags.length < 100000) stats.lags.push([poseClock, drawn]);
   }
