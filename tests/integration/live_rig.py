@@ -7,6 +7,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -87,10 +88,10 @@ def _end(process: subprocess.Popen[str], timeout: float = 30.0) -> None:
     if process.poll() is None:
         process.send_signal(signal.SIGINT)
     try:
-        process.communicate(timeout=timeout)
+        process.wait(timeout=timeout)
     except subprocess.TimeoutExpired:
         process.kill()
-        process.communicate()
+        process.wait()
 
 
 @contextmanager
@@ -121,6 +122,8 @@ def live_run(folder: Path, duration: float = 60.0) -> Iterator[LiveRun]:
                 raise RuntimeError("motosim run ended before serving the view:\n" + "".join(log))
             log.append(line)
             match = re.search(r"rider's view (http://127\.0\.0\.1:\d+)/\?token=(\S+)", line)
+        # keep reading its messages (a full pipe would block the writer process)
+        threading.Thread(target=lambda: log.extend(run.stderr), daemon=True).start()
         yield LiveRun(match.group(1), match.group(2), run, log)
     finally:
         if run is not None:

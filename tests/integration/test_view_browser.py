@@ -24,8 +24,8 @@ from browser import CANVAS_PIXELS, CHROMIUM, Browser
 
 from motosim.io.results import SimResult, load_result
 from motosim.io.runs import load_run, run_to_folder
-from motosim.view.app import ServerThread, create_app
 from motosim.timeseries import TimeSeries
+from motosim.view.app import ServerThread, create_app
 from motosim.view.feeds import ReplayFeed, merge_signals, road_from_xy
 from motosim.view.live import SimulatedRig
 
@@ -141,7 +141,8 @@ def test_the_dashboard_plots_and_its_buttons_act(
         # a simulated run has no real-time loop: its panels say so instead of plotting
         for panel in ("timing", "missed", "safety"):
             assert after[panel]["lines"] == [] and after[panel]["points"] == 0
-        assert "no safety stage" in browser.evaluate("document.getElementById('safety').textContent")
+        safety = browser.evaluate("document.getElementById('safety').textContent")
+        assert "no safety stage" in safety
         pixels = browser.evaluate(f"{CANVAS_PIXELS}('#plots canvas[data-panel=platform]')")
         assert pixels["colours"] >= 3 and pixels["top"] < 0.99, pixels
         _save(browser, tmp_path, "dashboard.png")

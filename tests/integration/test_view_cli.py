@@ -95,9 +95,9 @@ def test_view_serves_the_result_until_interrupted(folder: Path, tmp_path: Path) 
     timing = {"timing": {"served": 51, "missed": 0}, "state": "IDLE", "fault": "NONE",
               "fault_reason": "no fault"}  # fmt: skip
     (folder / "timing.json").write_text(json.dumps(timing), encoding="utf-8")
+    argv = ["view", str(folder), "--port", "0", "--cueing", str(cueing)]
     with subprocess.Popen(
-        [sys.executable, "-m", "motosim.cli.main", "view", str(folder), "--port", "0",
-         "--cueing", str(cueing)],  # fmt: skip
+        [sys.executable, "-m", "motosim.cli.main", *argv],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

@@ -48,7 +48,8 @@ class LoopRows:
     Examples
     --------
     >>> rows = LoopRows(("t", "state", "fault", "t_clock", "wake", "compute", "missed"), ("t",))
-    >>> loop = np.array([[0.001, 2, 0, 10.001, 1e-5, 2e-5, 0], [0.002, 2, 0, 10.002, 3e-5, 2e-5, 0]])
+    >>> loop = np.array([[0.001, 2, 0, 10.001, 1e-5, 2e-5, 0],
+    ...                  [0.002, 2, 0, 10.002, 3e-5, 2e-5, 0]])
     >>> rows.rows(loop, loop[:, :1])[:, -2].round(6).tolist()
     [nan, 0.00102]
     """

@@ -49,7 +49,7 @@ def test_lag_log_sums_up_the_reported_frames() -> None:
     lag = np.full(61, 0.010)
     lag[30] = 0.040
     frames = np.column_stack([drawn - lag, drawn]).tolist()
-    assert log.add(frames + [[1.0, math.nan], "x", [1.0]]) == 61  # bad items dropped
+    assert log.add([*frames, [1.0, math.nan], "x", [1.0]]) == 61  # bad items dropped
     s = log.summary()
     assert s["frames"] == 61 and s["fps"] == pytest.approx(60.0)
     assert s["p50_ms"] == pytest.approx(10.0) and s["max_ms"] == pytest.approx(40.0)
