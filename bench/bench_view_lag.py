@@ -10,8 +10,10 @@ animation frame, the loop-clock time of the sample it drew and when it drew it
 clock, the page maps ``performance.now()`` onto that clock by the ping with the shortest round
 trip over ``/ws/pose``.
 
-- ``lag_ms_p50/p99/max``: drawn minus sampled, the frames of ``WINDOW`` seconds after a
-  warm-up (target: at most one frame plus 20 ms, ``target_ms`` at the measured frame rate);
+- ``lag_ms_p50/p99/max``: drawn minus the time the loop wrote the sample (its deadline plus
+  its wake-up latency and compute time), the frames of ``WINDOW`` seconds after a warm-up
+  (target: at most one frame plus 20 ms, ``target_ms`` at the measured frame rate);
+  ``lag_from_deadline_ms_*``: drawn minus the sample's deadline (adds the loop's own lateness);
 - ``server_age_ms_p50/p99``: the part of it before the server sends the pose (loop -> shared
   ring -> writer process every 5 ms -> view ring -> ``/ws/pose``);
 - ``fps``: requestAnimationFrame callbacks over the same wall-clock window;
@@ -78,7 +80,9 @@ def run() -> dict[str, float]:
                 view.close()
     out["load1_after"] = os.getloadavg()[0]
     fps = 1e3 * (f1 - f0) / (p1 - p0)
-    lag = 1e3 * (lags[:, 1] / 1e3 + offset - lags[:, 0])
+    drawn = lags[:, 1] / 1e3 + offset
+    lag = 1e3 * (drawn - lags[:, 0])
+    behind_deadline = 1e3 * (drawn - lags[:, 2])
     age = 1e3 * ages
     out |= {
         "fps": fps,
@@ -88,6 +92,8 @@ def run() -> dict[str, float]:
         "lag_ms_p99": float(np.percentile(lag, 99)),
         "lag_ms_max": float(lag.max()),
         "target_ms": 1e3 / fps + 20.0,
+        "lag_from_deadline_ms_p50": float(np.percentile(behind_deadline, 50)),
+        "lag_from_deadline_ms_p99": float(np.percentile(behind_deadline, 99)),
         "server_age_ms_p50": float(np.percentile(age, 50)),
         "server_age_ms_p99": float(np.percentile(age, 99)),
         "ping_rtt_ms": float(rtt),

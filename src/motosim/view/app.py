@@ -7,8 +7,9 @@ One Starlette application (https://www.starlette.io) per feed, served by uvicorn
   the internet), ``GET /dashboard`` the live plots;
 - ``GET /api/info`` signal names and units, the road, the status;
 - ``WS /ws/pose`` the newest pose, speed and steer as soon as the feed has a new row (at most
-  ``pose_rate``, 120 Hz), JSON; with the loop's clock time of the row (``clock``) when the
-  feed has it. The page sends ``{"ping": ms}`` (answered ``{"pong": ms, "server": s}``, the
+  ``pose_rate``, 120 Hz), JSON; when the feed has the loop's clock (``t_clock``), the time
+  the loop wrote the row (``clock``: the deadline plus the wake-up latency and compute time)
+  and its deadline (``deadline``) on that clock [s]. The page sends ``{"ping": ms}`` (answered ``{"pong": ms, "server": s}``, the
   server's monotonic clock) and ``{"frames": [[sample, drawn], ...]}``: for each animation
   frame, the loop-clock time of the sample it drew and when it drew it, on the same clock [s];
 - ``GET /api/lag`` those frames summarised: the view's lag behind the loop and its frame rate;
@@ -221,6 +222,8 @@ def create_app(
     lag_log = LagLog() if lags is None else lags
     names = feed.names
     clock_col = names.index("t_clock") if "t_clock" in names else -1
+    # the time the loop wrote the row: its deadline plus its wake-up latency and compute time
+    late_cols = [names.index(n) for n in ("wake", "compute") if n in names]
     pose_cols = [names.index(n) for n in _POSE if n in names]
     pose_names = [n for n in _POSE if n in names]
     dash_names = [n for n in DASHBOARD_SIGNALS if n in names]
@@ -327,7 +330,10 @@ def create_app(
                             zip(pose_names, _finite(row[pose_cols]), strict=True)
                         )
                         if clock_col >= 0 and math.isfinite(row[clock_col]):
-                            message["clock"] = float(row[clock_col])
+                            deadline = float(row[clock_col])
+                            late = float(np.sum(row[late_cols])) if late_cols else 0.0
+                            written = deadline + late if math.isfinite(late) else deadline
+                            message["clock"], message["deadline"] = written, deadline
                     message["sent"] = time.monotonic()
                     await send(message)
                     last_t, last_sent = t, now

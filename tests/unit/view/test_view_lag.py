@@ -98,7 +98,10 @@ def test_the_page_pings_and_reports_frames_and_api_lag_sums_them() -> None:
     assert info["units"]["compute"] == "s"
     with client.websocket_connect("/ws/pose") as ws:
         pose = ws.receive_json()
-        assert pose["clock"] == pytest.approx(500.009) and pose["pose"]["t"] == 0.009
+        # written at the deadline plus the wake-up latency and the compute time
+        assert pose["deadline"] == pytest.approx(500.009, abs=1e-9)
+        assert pose["clock"] == pytest.approx(500.009 + 2e-5 + 3e-5, abs=1e-9)
+        assert pose["pose"]["t"] == 0.009
         assert pose["status"]["safety"]["fault"] == "NONE"
         ws.send_json({"ping": 1234.5})
         while "pong" not in (answer := ws.receive_json()):

@@ -174,11 +174,12 @@ instances(parts([new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, 1.0], 
 // performance.now() onto that clock. Each drawn frame is reported as [sample, drawn] (both
 // on the loop's clock [s], with the best offset known when sent) once a second over the same
 // socket (GET /api/lag sums them up); motosimStats.lags keeps [sample [s], drawn
-// (performance.now() [ms])] for tests and the bench, motosimStats.offset maps them, and
+// (performance.now() [ms]), the sample's deadline [s]] for tests and the bench,
+// motosimStats.offset maps them, and
 // motosimStats.ages the age of each pose when the server sent it [s].
 let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
   phi: 0, delta: 0, v_x: 0, theta_h: 0 };
-let poseClock = null, status = info.status, socket = null, pending = [];
+let poseClock = null, poseDeadline = null, status = info.status, socket = null, pending = [];
 function ping() {
   if (socket && socket.readyState === WebSocket.OPEN) {
     socket.send(JSON.stringify({ ping: performance.now() }));
@@ -199,6 +200,7 @@ function connect() {
     }
     if (message.pose) { pose = message.pose; stats.lastPose = pose; }
     poseClock = message.clock ?? null;
+    poseDeadline = message.deadline ?? poseClock;
     if (poseClock !== null && stats.ages.length < 100000) stats.ages.push(message.sent - poseClock);
     status = message.status; stats.status = status; stats.poses++;
   };
@@ -252,7 +254,7 @@ function frame(now) {
   if (poseClock !== null) {
     const drawn = performance.now();
     pending.push([poseClock, drawn]);
-    if (stats.lags.length < 100000) stats.lags.push([poseClock, drawn]);
+    if (stats.lags.length < 100000) stats.lags.push([poseClock, drawn, poseDeadline]);
   }
   stats.frames++; fpsFrames++; stats.ready = true;
   if (now - fpsSince >= 1000) {
