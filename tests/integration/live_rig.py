@@ -21,12 +21,12 @@ BUS = "udp_multicast:239.74.163.14"
 SCENARIO = """
 [scenario]
 name = "live_view"
-description = "the virtual rider changes lane at 20 m/s; the paper's K(s)"
+description = "a gentle square rider torque at the handlebar; the paper's K(s)"
 duration = {duration}
 
 [rider]
-kind = "virtual"
-path = {{ kind = "lane_change", offset = 3.5, length = 60.0, start = 40.0 }}
+kind = "torque"
+profile = {{ kind = "square", low = -1.0, high = 1.0, period = 2.0, start = 0.5 }}
 
 [controller]
 kind = "paper"
@@ -84,14 +84,20 @@ def _wait_for_status(seconds: float) -> None:
     raise TimeoutError("the rig sent no status frame")
 
 
-def _end(process: subprocess.Popen[str], timeout: float = 30.0) -> None:
+def _end(process: subprocess.Popen[str], reader: threading.Thread | None = None) -> None:
+    """Ctrl-C, wait (kill after 30 s), and close its pipes."""
     if process.poll() is None:
         process.send_signal(signal.SIGINT)
     try:
-        process.wait(timeout=timeout)
+        process.wait(timeout=30.0)
     except subprocess.TimeoutExpired:
         process.kill()
         process.wait()
+    if reader is not None:
+        reader.join(10.0)
+    for pipe in (process.stdout, process.stderr):
+        if pipe is not None:
+            pipe.close()
 
 
 @contextmanager
@@ -106,7 +112,7 @@ def live_run(folder: Path, duration: float = 60.0) -> Iterator[LiveRun]:
     telemetry = f"127.0.0.1:{_free_udp_port()}"
     rig = _motosim("rig", str(path), "--bus", BUS, "--duration", str(duration + 60),
                    "--telemetry", telemetry)  # fmt: skip
-    run = None
+    run = reader = None
     try:
         _wait_for_status(60.0)
         run = _motosim(
@@ -123,9 +129,11 @@ def live_run(folder: Path, duration: float = 60.0) -> Iterator[LiveRun]:
             log.append(line)
             match = re.search(r"rider's view (http://127\.0\.0\.1:\d+)/\?token=(\S+)", line)
         # keep reading its messages (a full pipe would block the writer process)
-        threading.Thread(target=lambda: log.extend(run.stderr), daemon=True).start()
+        stream = run.stderr
+        reader = threading.Thread(target=lambda: log.extend(stream), daemon=True)
+        reader.start()
         yield LiveRun(match.group(1), match.group(2), run, log)
     finally:
         if run is not None:
-            _end(run)
+            _end(run, reader)
         _end(rig)
