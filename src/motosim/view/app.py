@@ -124,7 +124,7 @@ class LagLog:
         lag = 1e3 * (frames[:, 1] - frames[:, 0])
         span = frames[-1, 1] - frames[0, 1]
         return out | {
-            "fps": (n - 1) / span if span > 0 else None,
+            "fps": float((n - 1) / span) if span > 0 else None,
             "p50_ms": float(np.percentile(lag, 50)),
             "p99_ms": float(np.percentile(lag, 99)),
             "max_ms": float(lag.max()),
