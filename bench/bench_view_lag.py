@@ -15,7 +15,9 @@ trip over ``/ws/pose``.
   (target: at most one frame plus 20 ms, ``target_ms`` at the measured frame rate);
   ``lag_from_deadline_ms_*``: drawn minus the sample's deadline (adds the loop's own lateness);
 - ``server_age_ms_p50/p99``: the part of it before the server sends the pose (loop -> shared
-  ring -> writer process every 5 ms -> view ring -> ``/ws/pose``);
+  ring -> writer process every 5 ms -> view ring -> ``/ws/pose``); ``delivery_ms_p50/p99``:
+  from the server's send to the page's handling of the message (the rest, up to the frame
+  drawn, is the wait for the next animation frame and the frame itself);
 - ``fps``: requestAnimationFrame callbacks over the same wall-clock window;
 - ``scale``: the render scale the view settled on; ``load1_before/after``: the load average.
 
@@ -83,7 +85,8 @@ def run() -> dict[str, float]:
     drawn = lags[:, 1] / 1e3 + offset
     lag = 1e3 * (drawn - lags[:, 0])
     behind_deadline = 1e3 * (drawn - lags[:, 2])
-    age = 1e3 * ages
+    age = 1e3 * (ages[:, 1] - ages[:, 0])  # written by the loop -> sent by the server
+    delivery = 1e3 * (ages[:, 2] / 1e3 + offset - ages[:, 1])  # sent -> handled by the page
     out |= {
         "fps": fps,
         "scale": float(scale),
@@ -96,6 +99,8 @@ def run() -> dict[str, float]:
         "lag_from_deadline_ms_p99": float(np.percentile(behind_deadline, 99)),
         "server_age_ms_p50": float(np.percentile(age, 50)),
         "server_age_ms_p99": float(np.percentile(age, 99)),
+        "delivery_ms_p50": float(np.percentile(delivery, 50)),
+        "delivery_ms_p99": float(np.percentile(delivery, 99)),
         "ping_rtt_ms": float(rtt),
         "reported_lag_ms_p50": float(reported["p50_ms"]),
         "reported_lag_ms_p99": float(reported["p99_ms"]),

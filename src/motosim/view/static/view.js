@@ -176,7 +176,7 @@ instances(parts([new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, 1.0], 
 // socket (GET /api/lag sums them up); motosimStats.lags keeps [sample [s], drawn
 // (performance.now() [ms]), the sample's deadline [s]] for tests and the bench,
 // motosimStats.offset maps them, and
-// motosimStats.ages the age of each pose when the server sent it [s].
+// motosimStats.ages, for each pose, [written, sent [s], received (performance.now() [ms])].
 let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
   phi: 0, delta: 0, v_x: 0, theta_h: 0 };
 let poseClock = null, poseDeadline = null, status = info.status, socket = null, pending = [];
@@ -201,7 +201,9 @@ function connect() {
     if (message.pose) { pose = message.pose; stats.lastPose = pose; }
     poseClock = message.clock ?? null;
     poseDeadline = message.deadline ?? poseClock;
-    if (poseClock !== null && stats.ages.length < 100000) stats.ages.push(message.sent - poseClock);
+    if (poseClock !== null && stats.ages.length < 100000) {
+      stats.ages.push([poseClock, message.sent, performance.now()]);
+    }
     status = message.status; stats.status = status; stats.poses++;
   };
   ws.onclose = () => {
