@@ -9,9 +9,10 @@ One Starlette application (https://www.starlette.io) per feed, served by uvicorn
 - ``WS /ws/pose`` the newest pose, speed and steer as soon as the feed has a new row (at most
   ``pose_rate``, 120 Hz), JSON; when the feed has the loop's clock (``t_clock``), the time
   the loop wrote the row (``clock``: the deadline plus the wake-up latency and compute time)
-  and its deadline (``deadline``) on that clock [s]. The page sends ``{"ping": ms}`` (answered ``{"pong": ms, "server": s}``, the
-  server's monotonic clock) and ``{"frames": [[sample, drawn], ...]}``: for each animation
-  frame, the loop-clock time of the sample it drew and when it drew it, on the same clock [s];
+  and its deadline (``deadline``) on that clock [s]. The page sends ``{"ping": ms}``
+  (answered ``{"pong": ms, "server": s}``, the server's monotonic clock) and
+  ``{"frames": [[sample, drawn], ...]}``: for each animation frame, the loop-clock time of
+  the sample it drew and when it drew it, on the same clock [s];
 - ``GET /api/lag`` those frames summarised: the view's lag behind the loop and its frame rate;
 - ``WS /ws/signals`` new rows of the dashboard's signals at ``signal_rate`` (30 Hz), JSON;
 - ``POST /api/control`` arm, stop (and for a replay: seek, rate), only with the run's token
@@ -19,7 +20,10 @@ One Starlette application (https://www.starlette.io) per feed, served by uvicorn
   browser sends it cross-origin only after a CORS preflight, which this server never grants).
 
 The server binds to 127.0.0.1 unless told otherwise; reading is open to whoever can reach
-it, changing the run needs the token.
+it, changing the run needs the token. Every response says ``Cross-Origin-Opener-Policy:
+same-origin`` and ``Cross-Origin-Embedder-Policy: require-corp``: the pages are then
+cross-origin isolated, which lets the rider's view read the newest pose from a worker's
+shared memory (https://web.dev/articles/coop-coep).
 """
 
 from __future__ import annotations
@@ -131,6 +135,31 @@ class LagLog:
         }
 
 
+_ISOLATION: Final = [
+    (b"cross-origin-opener-policy", b"same-origin"),
+    (b"cross-origin-embedder-policy", b"require-corp"),
+]
+
+
+class _Isolated:
+    """ASGI middleware: the cross-origin isolation headers on every HTTP response."""
+
+    def __init__(self, app: Any) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+
+        async def send_isolated(message: Any) -> None:
+            if message["type"] == "http.response.start":
+                message["headers"] = [*message.get("headers", []), *_ISOLATION]
+            await send(message)
+
+        await self.app(scope, receive, send_isolated)
+
+
 def _decimate(rows: Any, first: int, stride: int, peaks: list[int]) -> Any:
     """Every ``stride``-th row of the feed (row ``first`` of ``rows`` is the feed's row
     ``first``); the ``peaks`` columns keep the maximum of the rows each one stands for."""
@@ -208,6 +237,7 @@ def create_app(
     """
     _need_starlette()
     from starlette.applications import Starlette
+    from starlette.middleware import Middleware
     from starlette.responses import FileResponse, JSONResponse
     from starlette.routing import Mount, Route, WebSocketRoute
     from starlette.staticfiles import StaticFiles
@@ -385,7 +415,8 @@ def create_app(
             WebSocketRoute("/ws/pose", pose),
             WebSocketRoute("/ws/signals", signals),
             Mount("/static", StaticFiles(directory=STATIC), name="static"),
-        ]
+        ],
+        middleware=[Middleware(_Isolated)],
     )
 
 

@@ -3,6 +3,7 @@
 // three.js (X = x, Y = up, Z = y), a proper rotation; yaw psi is -psi - pi/2 about Y for a
 // camera looking down its -Z axis; roll phi (right side down) is -phi about the view axis.
 import * as THREE from 'three';
+import { poseSlots, poseSocket } from './pose.js';
 
 const EYE = 1.2;          // m, eye height above the road when upright
 const token = new URLSearchParams(location.search).get('token') || '';
@@ -168,56 +169,58 @@ instances(parts([new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, 1.0], 
   [new THREE.ConeGeometry(1.6, 5.0, 8), 0x2f6a2a, 4.0]), trees);                // crown
 
 // --- pose, and the lag of each frame behind the loop --------------------------------------
-// A pose stamped with the loop's clock (`clock`, the machine's monotonic clock [s]) lets the
-// page measure how far behind the loop each frame is: the server answers pings with its
-// monotonic time, and the offset of the ping with the shortest round trip maps
-// performance.now() onto that clock. Each drawn frame is reported as [sample, drawn] (both
-// on the loop's clock [s], with the best offset known when sent) once a second over the same
-// socket (GET /api/lag sums them up); motosimStats.lags keeps [sample [s], drawn
-// (performance.now() [ms]), the sample's deadline [s]] for tests and the bench,
-// motosimStats.offset maps them, and
-// motosimStats.ages, for each pose, [written, sent [s], received (performance.now() [ms])].
+// A pose stamped with the loop's clock (`clock`: when the loop wrote it, the machine's
+// monotonic clock [s]) lets the page measure how far behind the loop each frame is: the
+// server answers pings with its monotonic time, and the ping with the shortest round trip
+// gives the offset from absolute page time (performance.timeOrigin + now() [ms]) to that
+// clock. Each drawn frame is reported as [sample, drawn] (both on the loop's clock [s]) once
+// a second over the pose socket (GET /api/lag sums them up). For tests and the bench,
+// motosimStats.lags keeps [sample [s], drawn [absolute ms], the sample's deadline [s]],
+// motosimStats.offset maps them, and motosimStats.ages has, for each pose, [written, sent [s],
+// received [absolute ms]]. The socket lives in a worker when the page is cross-origin
+// isolated (the server says so): a frame then draws the newest pose even if the page's
+// thread was busy when it came (motosimStats.worker).
+const absolute = () => performance.timeOrigin + performance.now();
 let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
-  phi: 0, delta: 0, v_x: 0, theta_h: 0 };
-let poseClock = null, poseDeadline = null, status = info.status, socket = null, pending = [];
-function ping() {
-  if (socket && socket.readyState === WebSocket.OPEN) {
-    socket.send(JSON.stringify({ ping: performance.now() }));
-  }
+  phi: 0, delta: 0, v_x: 0, theta_h: 0, clock: null, deadline: null };
+let status = info.status, pending = [], report, readPose = () => {};
+const url = `ws://${location.host}/ws/pose`;
+function got(e) {  // what the socket reports, in the page or from the worker
+  if (e.offset !== undefined) { stats.offset = e.offset; stats.rtt = e.rtt; }
+  if (e.closed) { stats.rtt = null; show('state', 'disconnected'); }
+  if (e.status) { status = e.status; stats.status = status; }
+  if (e.poses) stats.poses += e.poses;
+  if (e.ages && stats.ages.length < 100000) stats.ages.push(...e.ages);
+  if (e.reported) stats.reported += e.reported;
 }
-function connect() {
-  const ws = new WebSocket(`ws://${location.host}/ws/pose`);
-  socket = ws;
-  ws.onopen = () => { for (let k = 0; k < 5; k++) setTimeout(ping, 50 * k); };
-  ws.onmessage = (event) => {
-    const message = JSON.parse(event.data);
-    if (message.pong !== undefined) {
-      const back = performance.now(), rtt = back - message.pong;
-      if (stats.rtt === null || rtt <= stats.rtt) {
-        stats.rtt = rtt; stats.offset = message.server - (message.pong + back) / 2000;
-      }
-      return;
-    }
-    if (message.pose) { pose = message.pose; stats.lastPose = pose; }
-    poseClock = message.clock ?? null;
-    poseDeadline = message.deadline ?? poseClock;
-    if (poseClock !== null && stats.ages.length < 100000) {
-      stats.ages.push([poseClock, message.sent, performance.now()]);
-    }
-    status = message.status; stats.status = status; stats.poses++;
+stats.worker = window.crossOriginIsolated === true && typeof SharedArrayBuffer !== 'undefined';
+if (stats.worker) {
+  const buffer = new SharedArrayBuffer(8 + 8 * 16), slots = poseSlots(buffer);
+  const worker = new Worker('/static/pose_worker.js', { type: 'module' });
+  worker.onmessage = (event) => got(event.data);
+  worker.postMessage({ buffer, url });
+  report = (frames) => worker.postMessage({ frames });
+  let seq = -1;
+  readPose = () => {
+    const next = slots.read(seq);
+    if (next) { seq = next.seq; pose = next.pose; stats.lastPose = pose; }
   };
-  ws.onclose = () => {
-    socket = null; stats.rtt = null;
-    show('state', 'disconnected'); setTimeout(connect, 1000);
-  };
+} else {
+  const send = poseSocket(url, (e) => {
+    if (e.message) {
+      const m = e.message;
+      if (m.pose) { pose = { ...m.pose, clock: m.clock ?? null, deadline: m.deadline ?? null }; stats.lastPose = pose; }
+      got({ status: m.status, poses: 1, ages: m.clock != null ? [[m.clock, m.sent, e.received]] : [] });
+    } else {
+      got(e);
+    }
+  });
+  report = (frames) => got({ reported: send(frames) ? frames.length : 0 });
 }
-connect();
 setInterval(() => {
-  ping();
-  if (pending.length && stats.offset !== null && socket && socket.readyState === WebSocket.OPEN) {
+  if (pending.length && stats.offset !== null) {
     const offset = stats.offset;
-    socket.send(JSON.stringify({ frames: pending.map(([c, d]) => [c, d / 1000 + offset]) }));
-    stats.reported += pending.length;
+    report(pending.map(([c, d]) => [c, d / 1000 + offset]));
   }
   pending = [];
 }, 1000);
@@ -250,13 +253,13 @@ const bar = $('bar'), rollToggle = $('roll-toggle'), seek = $('seek');
 let barAngle = null;
 let fpsFrames = 0, fpsSince = performance.now();
 function frame(now) {
-  resize(); place();
+  readPose(); resize(); place();
   renderer.render(scene, camera);
   if (sync) gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
-  if (poseClock !== null) {
-    const drawn = performance.now();
-    pending.push([poseClock, drawn]);
-    if (stats.lags.length < 100000) stats.lags.push([poseClock, drawn, poseDeadline]);
+  if (pose.clock != null) {
+    const drawn = absolute();
+    pending.push([pose.clock, drawn]);
+    if (stats.lags.length < 100000) stats.lags.push([pose.clock, drawn, pose.deadline]);
   }
   stats.frames++; fpsFrames++; stats.ready = true;
   if (now - fpsSince >= 1000) {
