@@ -76,6 +76,8 @@ def test_the_view_renders_the_road_and_rides_the_replay(
     browser = Browser(f"{url}/?token={TOKEN}&readback=1", tmp_path / "profile")
     try:
         browser.wait_for("window.motosimStats && motosimStats.ready && motosimStats.poses > 3")
+        # the page is cross-origin isolated: the pose socket runs in a worker
+        assert browser.evaluate("[crossOriginIsolated, motosimStats.worker]") == [True, True]
         pixels = browser.evaluate(f"{CANVAS_PIXELS}('#scene')")
         # sky, grass, asphalt, lines, posts, trees: many colours, none covering most of it
         assert pixels["colours"] >= 8 and pixels["top"] < 0.6, pixels
