@@ -7,14 +7,17 @@
 - ``pose_latency_ms``: a thread writes rows stamped with the clock into a ring at 1 kHz (the
   loop); a WebSocket client of ``/ws/pose`` measures how old each pose is when it arrives
   (the server sends the newest row at 60 Hz, so about half a period on average).
-- ``view_fps``: requestAnimationFrame count of the rider's view in headless Chromium
-  (SwiftShader, software WebGL, on this machine's 2 shared cores), when chromium is there:
-  fixed settings (``?antialias=1&scale=1`` was the default before the scale adapted,
-  ``scale=1``, ``scale=0.5``) and the default, measured once it has adapted (``_adaptive``,
-  with the scale it settled on, ``_adaptive_scale``).
+- ``view_fps``: requestAnimationFrame count of the rider's view over a wall-clock window
+  (``performance.now()``) in headless Chromium (SwiftShader, software WebGL, on this
+  machine's 2 shared cores), when chromium is there: fixed scales (``scale=1``,
+  ``scale=0.5``), each also with ``sync=1`` (one pixel read back after each frame, so only
+  finished frames count: close to the plain figure, the count is honest), and the default,
+  measured once it has adapted (``_adaptive``, with the scale it settled on,
+  ``_adaptive_scale``); ``load1``: the load average meanwhile.
 """
 
 import json
+import os
 import socket
 import sys
 import threading
@@ -154,9 +157,10 @@ def _fps() -> dict[str, float]:
     with ServerThread(app) as server, tempfile.TemporaryDirectory() as profile:
         feed.arm()
         for width, height, query in (
-            (1280, 720, "antialias=1&scale=1"),  # the fixed settings of before
             (1280, 720, "scale=1"),
+            (1280, 720, "scale=1&sync=1"),  # each frame waited for: finished frames only
             (1280, 720, "scale=0.5"),
+            (1280, 720, "scale=0.5&sync=1"),
             (1280, 720, ""),  # the default: no antialiasing, the scale adapts
         ):
             url = f"{server.url}/?{query}"
@@ -171,6 +175,7 @@ def _fps() -> dict[str, float]:
                 out[key] = 1e3 * (f1 - f0) / (t1 - t0)
                 if not query:
                     out[f"{key}_scale"] = float(browser.evaluate("motosimStats.scale"))
+                    out["load1"] = os.getloadavg()[0]
             finally:
                 browser.close()
     return out

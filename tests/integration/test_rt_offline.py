@@ -91,6 +91,7 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
             np.random.default_rng(0),
             rider_on_enable=False,
         )
+        clock = SimulatedClock(-1.0 / rate)  # the first deadline at t = 0, as offline
         runner = RealtimeRunner(
             CompiledStack(model, force=world.force, side_force=world.side_force),
             host,
@@ -98,8 +99,8 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
             limits,
             rate=rate,
             periods_per_frame=model.measure_every,
+            now=clock.now,
         )
-        clock = SimulatedClock(-1.0 / rate)  # the first deadline at t = 0, as offline
         clock.listen(rig.advance_to)
         n = round(sc.duration * rate)
         RateLoop(rate, clock).run(runner.period, periods=n)
@@ -107,6 +108,10 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     col = {name: j for j, name in enumerate(runner.names)}
     assert rows.shape[0] == n and runner.counters().fault == "NONE"
     assert np.allclose(rows[:, col["t"]], offline.t, atol=1e-9)
+    # the loop's own stamps: the deadline on its clock, and on a simulated clock no time
+    # passes between the deadline, the wake-up and the row; no deadline was missed
+    assert np.allclose(rows[:, col["t_clock"]], offline.t, atol=1e-9)
+    assert not np.any(rows[:, [col["wake"], col["compute"], col["missed"]]])
     tau_rt, tau_off, tau = rows[:, col["tau_r_hat"]], offline["tau_r_hat"], offline["tau_r"]
     track_rt = rows[:, col["theta_h_meas"]] - rows[:, col["delta"]]
     track_off = offline["theta_h_meas"] - offline["delta"]

@@ -6,9 +6,12 @@ temporary files (also to ``$MOTOSIM_SCREENSHOTS`` when set).
 """
 
 import dataclasses
+import json
+import math
 import os
 import shutil
 import time
+import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -21,8 +24,9 @@ from browser import CANVAS_PIXELS, CHROMIUM, Browser
 
 from motosim.io.results import SimResult, load_result
 from motosim.io.runs import load_run, run_to_folder
+from motosim.timeseries import TimeSeries
 from motosim.view.app import ServerThread, create_app
-from motosim.view.feeds import ReplayFeed, road_from_xy
+from motosim.view.feeds import ReplayFeed, merge_signals, road_from_xy
 from motosim.view.live import SimulatedRig
 
 pytestmark = pytest.mark.skipif(
@@ -72,6 +76,8 @@ def test_the_view_renders_the_road_and_rides_the_replay(
     browser = Browser(f"{url}/?token={TOKEN}&readback=1", tmp_path / "profile")
     try:
         browser.wait_for("window.motosimStats && motosimStats.ready && motosimStats.poses > 3")
+        # the page is cross-origin isolated: the pose socket runs in a worker
+        assert browser.evaluate("[crossOriginIsolated, motosimStats.worker]") == [True, True]
         pixels = browser.evaluate(f"{CANVAS_PIXELS}('#scene')")
         # sky, grass, asphalt, lines, posts, trees: many colours, none covering most of it
         assert pixels["colours"] >= 8 and pixels["top"] < 0.6, pixels
@@ -93,21 +99,53 @@ def test_the_view_renders_the_road_and_rides_the_replay(
         browser.close()
 
 
+@pytest.fixture
+def cued(result: SimResult) -> Iterator[tuple[ReplayFeed, str]]:
+    """The replay with the platform commands of the washout at 100 Hz (motosim cueing)."""
+    from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
+
+    series = TimeSeries(result.t, result.data, result.names)
+    commands = cue(load_platform("simacom_platform"), series, TELBAN_CARDULLO_2005, rate=100.0)
+    feed = ReplayFeed(merge_signals(result, commands.commands))
+    road = road_from_xy(result["x"], result["y"])
+    with ServerThread(create_app(feed, road, token=TOKEN, title="lane change")) as server:
+        yield feed, server.url
+
+
+def _panels(browser: Browser) -> dict[str, dict[str, object]]:
+    panels: dict[str, dict[str, object]] = browser.evaluate("motosimDash.panels")
+    return panels
+
+
 def test_the_dashboard_plots_and_its_buttons_act(
-    replay: tuple[ReplayFeed, str], tmp_path: Path
+    cued: tuple[ReplayFeed, str], tmp_path: Path
 ) -> None:
-    feed, url = replay
+    feed, url = cued
     browser = Browser(f"{url}/dashboard?token={TOKEN}", tmp_path / "profile")
     try:
         browser.wait_for("window.motosimDash && motosimDash.messages > 2")
-        assert browser.evaluate("document.querySelectorAll('#plots canvas').length") >= 5
+        assert browser.evaluate("document.querySelectorAll('#plots canvas').length") >= 8
         browser.evaluate("document.getElementById('arm').click()")
         browser.wait_for("motosimDash.lastControl && motosimDash.lastControl.status === 200")
         assert feed.state() == "playing"
         rows = browser.wait_for("motosimDash.rows > 200 && motosimDash.rows")
-        time.sleep(0.5)
+        before = _panels(browser)
+        time.sleep(1.0)
         assert browser.evaluate("motosimDash.rows") > rows  # still growing
-        pixels = browser.evaluate(f"{CANVAS_PIXELS}('#plots canvas')")
+        after = _panels(browser)
+        # each key signal has its plot, drawn and scrolling
+        drawn = ("torque", "steer", "roll", "speed", "platform")
+        for panel in drawn:
+            assert after[panel]["points"] > 100, (panel, after[panel])
+            assert after[panel]["lastT"] > before[panel]["lastT"], panel
+        assert after["torque"]["lines"] == ["tau_r", "tau_r_hat"]
+        assert after["platform"]["lines"] == ["phi_s", "theta_s", "psi_s", "phi_vis"]
+        # a simulated run has no real-time loop: its panels say so instead of plotting
+        for panel in ("timing", "missed", "safety"):
+            assert after[panel]["lines"] == [] and after[panel]["points"] == 0
+        safety = browser.evaluate("document.getElementById('safety').textContent")
+        assert "no safety stage" in safety
+        pixels = browser.evaluate(f"{CANVAS_PIXELS}('#plots canvas[data-panel=platform]')")
         assert pixels["colours"] >= 3 and pixels["top"] < 0.99, pixels
         _save(browser, tmp_path, "dashboard.png")
         browser.evaluate("document.getElementById('stop').click()")
@@ -148,6 +186,11 @@ def test_a_live_simulated_run_drives_the_view_and_the_dashboard(tmp_path: Path) 
             dash.wait_for("motosimDash.rows > 100")
             _save(view, tmp_path, "live_view.png")
             _save(dash, tmp_path, "live_dashboard.png")
+            # the lag report path: the rig stamps its rows with the monotonic clock, the page
+            # reports the frames it drew (the figures are bench/bench_view_lag.py's)
+            view.wait_for("motosimStats.offset !== null && motosimStats.reported > 10")
+            lag = json.loads(urllib.request.urlopen(f"{server.url}/api/lag").read())
+            assert lag["frames"] > 10 and math.isfinite(lag["p50_ms"]) and lag["fps"] > 0
             dash.wait_for("motosimDash.state === 'done'", timeout=40.0)
             # the view's last pose is the run's last row (6 s at 1 kHz)
             assert view.wait_for("motosimStats.lastPose.t >= 5.99 && motosimStats.lastPose.t")

@@ -84,10 +84,20 @@ def test_bad_input_is_one_line_and_exit_2(
     assert code == 2 and message in err and err.count("\n") == 1
 
 
-def test_view_serves_the_result_until_interrupted(folder: Path) -> None:
+def test_view_serves_the_result_until_interrupted(folder: Path, tmp_path: Path) -> None:
     pytest.importorskip("uvicorn", reason="the view server is in the optional group view")
+    # the platform commands of motosim cueing (at 50 Hz) and what motosim run records
+    cueing = tmp_path / "cueing"
+    t = np.arange(26) * 0.02
+    with ResultWriter(cueing, ("t", "phi_s", "theta_s", "psi_s", "phi_vis"), {}) as writer:
+        writer.append(np.column_stack([t, 0.1 * t, 0 * t, 0 * t, 0 * t]))
+        writer.close({})
+    timing = {"timing": {"served": 51, "missed": 0}, "state": "IDLE", "fault": "NONE",
+              "fault_reason": "no fault"}  # fmt: skip
+    (folder / "timing.json").write_text(json.dumps(timing), encoding="utf-8")
+    argv = ["view", str(folder), "--port", "0", "--cueing", str(cueing)]
     with subprocess.Popen(
-        [sys.executable, "-m", "motosim.cli.main", "view", str(folder), "--port", "0"],
+        [sys.executable, "-m", "motosim.cli.main", *argv],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -100,6 +110,8 @@ def test_view_serves_the_result_until_interrupted(folder: Path) -> None:
             with urllib.request.urlopen(f"{base}/api/info") as answer:
                 info = json.load(answer)
             assert info["title"] == "straight" and info["status"]["state"] == "paused"
+            assert {"phi_s", "theta_s", "psi_s", "phi_vis"} <= set(info["dashboard"])
+            assert info["recorded"] == timing
             request = urllib.request.Request(
                 f"{base}/api/control",
                 data=b'{"action": "arm"}',

@@ -129,6 +129,7 @@ class _ViewSetup:
     duration: float
     title: str
     control: Any  # the sending end of a pipe to the loop's process
+    watchdog_periods: int = 3
 
 
 class _LoopControl:
@@ -166,7 +167,7 @@ def _start_view(view: _ViewSetup, ring: Any) -> tuple[Any, _LoopControl, str]:
     from motosim.view.feeds import LiveFeed, Road
 
     control = _LoopControl(view.control)
-    feed = LiveFeed(ring, control, view.duration)
+    feed = LiveFeed(ring, control, view.duration, view.watchdog_periods)
     app = create_app(feed, Road(view.road_x, view.road_y), token=view.token, title=view.title)
     server = ServerThread(app, "127.0.0.1", view.port).start()
     return server, control, server.url
@@ -183,13 +184,14 @@ def _writer_main(
     view: _ViewSetup | None = None,
 ) -> None:
     """The writer process: drain the loop's shared ring into the result files every 0.1 s
-    (and, with ``view``, into the view's ring every 20 ms).
+    (and, with ``view``, into the view's ring every 5 ms).
 
     Writing files takes milliseconds with the interpreter lock held; in its own process it
     cannot delay the loop. Messages on ``conn``: ("ready", view URL or None) or ("error",
     text) first; then, on ("close", complete, extra summary), the last rows are written and
     ("done", summary) sent back. With ``view``, it also serves the rider's view and the
-    dashboard from a :class:`~motosim.io.telemetry.TelemetryRing` it fills every 20 ms.
+    dashboard from a :class:`~motosim.io.telemetry.TelemetryRing` it fills every 5 ms, with
+    the loop's timing and safety columns (:class:`~motosim.view.live.LoopRows`).
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the loop's to handle
     from motosim.io.telemetry import TelemetryRing
@@ -202,9 +204,13 @@ def _writer_main(
     control: _LoopControl | None = None
     url = None
     live = None
+    loop_rows: Any = None
     try:
         if view is not None:
-            live = TelemetryRing(RESULT_SIGNALS, capacity=1 << 15)  # 32 s at 1 kHz
+            from motosim.view.live import LoopRows
+
+            loop_rows = LoopRows(names, RESULT_SIGNALS)
+            live = TelemetryRing(loop_rows.names, capacity=1 << 15)  # 32 s at 1 kHz
             server, control, url = _start_view(view, live)
         writer = ResultWriter(Path(folder), RESULT_SIGNALS, metadata, overwrite=overwrite)
     except MotosimError as err:
@@ -217,7 +223,7 @@ def _writer_main(
     blocks: list[np.ndarray] = []
     pending: list[np.ndarray] = []
     col_state = names.index("state")
-    period = 0.1 if view is None else 0.02  # the view is at most 20 ms behind the writer
+    period = 0.1 if view is None else 0.005  # the view is at most 5 ms behind the writer
 
     def flush(write: bool) -> None:
         rows = ring.drain()
@@ -226,7 +232,7 @@ def _writer_main(
             blocks.append(block)
             pending.append(block)
             if live is not None and control is not None:
-                live.push_block(block)
+                live.push_block(loop_rows.rows(rows, block))
                 control.current = State(int(rows[-1, col_state])).name.lower()
         if write and pending:
             writer.append(np.vstack(pending))
@@ -290,7 +296,7 @@ def run(args: argparse.Namespace) -> int:
     folder = Path(args.out)
     if (folder / "result.h5").exists() and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
-    view = _view_setup(args, inputs, duration) if args.view else None
+    view = _view_setup(args, inputs, duration, limits) if args.view else None
     clock = clock_from_args(args)
     rate = sc.rates.control
     periods = round(duration * rate)
@@ -329,6 +335,7 @@ def run(args: argparse.Namespace) -> int:
             telemetry=None if sender is None else sender.send,
             wait_for_arm=view is not None,
             platform=platform,
+            now=clock.now,
         )
         metadata = run_metadata(inputs) | {
             "realtime": {"bus": args.bus, "safety": limits, "duration": duration}
@@ -393,7 +400,9 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _view_setup(args: argparse.Namespace, inputs: RunInputs, duration: float) -> _ViewSetup:
+def _view_setup(
+    args: argparse.Namespace, inputs: RunInputs, duration: float, limits: Any
+) -> _ViewSetup:
     """Check ``--view-port`` and the optional group; the road along the scenario's path."""
     from motosim.view.app import _need_starlette, new_token
     from motosim.view.feeds import road_from_xy
@@ -408,7 +417,8 @@ def _view_setup(args: argparse.Namespace, inputs: RunInputs, duration: float) ->
         road = road_from_xy(built.x, built.y)
     else:
         road = road_from_xy(np.array([0.0, length]), np.zeros(2))
-    return _ViewSetup(new_token(), args.view_port, road.x, road.y, duration, sc.name, None)
+    return _ViewSetup(new_token(), args.view_port, road.x, road.y, duration, sc.name, None,
+                      limits.watchdog_periods)  # fmt: skip
 
 
 def _controls(conn: Any, runner: Any) -> None:

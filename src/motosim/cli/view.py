@@ -38,6 +38,11 @@ def register(sub: Any) -> None:
     view.add_argument("--port", type=int, default=8000, help="TCP port (default 8000; 0: any)")
     view.add_argument("--rate", type=float, default=1.0, help="replay speed (1: real time)")
     view.add_argument("--loop", action="store_true", help="start over at the end")
+    view.add_argument(
+        "--cueing",
+        metavar="DIR",
+        help="a folder written by motosim cueing for this result: plot its platform commands",
+    )
     view.set_defaults(func=run_view)
 
     telemetry = sub.add_parser(
@@ -63,18 +68,29 @@ def register(sub: Any) -> None:
 
 def run_view(args: argparse.Namespace) -> int:
     """Serve the view of a result until interrupted."""
+    import json
+    from pathlib import Path
+
     from motosim.io.results import load_result
     from motosim.view.app import ServerThread, create_app, new_token
-    from motosim.view.feeds import ReplayFeed, road_from_xy
+    from motosim.view.feeds import ReplayFeed, merge_signals, road_from_xy
 
     if not 0 <= args.port < 65536:
         raise MotosimError(f"--port {args.port}; expected 0..65535")
     result = load_result(args.folder)
-    feed = ReplayFeed(result, rate=args.rate, loop=args.loop)
+    series = result if args.cueing is None else merge_signals(result, load_result(args.cueing))
+    feed = ReplayFeed(series, rate=args.rate, loop=args.loop)
     road = road_from_xy(result["x"], result["y"])
     token = new_token()
     title = str(result.metadata.get("scenario", {}).get("name", args.folder))
-    app = create_app(feed, road, token=token, title=title)
+    recorded = None
+    timing = Path(args.folder) / "timing.json"  # written by motosim run
+    if timing.is_file():
+        try:
+            recorded = json.loads(timing.read_text(encoding="utf-8"))
+        except (ValueError, UnicodeDecodeError):
+            raise MotosimError(f"{timing}: not valid JSON; expected motosim run's") from None
+    app = create_app(feed, road, token=token, title=title, recorded=recorded)
     try:
         local = ipaddress.ip_address(args.host).is_loopback
     except ValueError:

@@ -40,10 +40,15 @@ __all__ = ["LOOP_SIGNALS", "FrameLink", "RealtimeRunner", "RunCounters", "StackS
 
 Array = NDArray[np.float64]
 
-LOOP_SIGNALS = ("t", "theta_h_meas", "i_m_meas", "i_cmd", "i_safe", "state", "fault")
+LOOP_SIGNALS = (
+    "t", "theta_h_meas", "i_m_meas", "i_cmd", "i_safe", "state", "fault",
+    "t_clock", "wake", "compute", "missed",
+)  # fmt: skip
 """The loop's own columns, before the stack's: time [s], the measured angle [rad] and current
 [A] used this period, the stack's command and the one sent [A], the safety state and fault
-codes (:class:`~motosim.rt.safety.State`, :class:`~motosim.rt.safety.Fault`)."""
+codes (:class:`~motosim.rt.safety.State`, :class:`~motosim.rt.safety.Fault`); the period's
+deadline on the loop's clock [s], its wake-up latency and compute time until the row is
+written [s] (NaN without ``now``), and the deadlines missed before it."""
 
 
 class StackStepper(Protocol):
@@ -129,6 +134,9 @@ class RealtimeRunner:
     platform : PlatformOutput, optional
         The motion platform's stage (:mod:`motosim.rt.platform`), stepped every period after
         the safety stage with its state and envelope.
+    now : callable, optional
+        The loop's clock (``Clock.now``) [s], read twice per period for the ``wake`` and
+        ``compute`` columns; without it they are NaN.
     """
 
     def __init__(
@@ -147,10 +155,13 @@ class RealtimeRunner:
         telemetry: Callable[[int, float, Array], None] | None = None,
         wait_for_arm: bool = False,
         platform: "PlatformOutput | None" = None,
+        now: Callable[[], float] | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
         self.stepper = stepper
+        self._now = now
+        self._calls = 0
         self.telemetry = telemetry
         self.platform = platform
         self.link = link
@@ -260,6 +271,7 @@ class RealtimeRunner:
 
         The recorded time is ``t`` minus the first period's deadline.
         """
+        woke = self._now() if self._now is not None else math.nan
         safety = self.safety
         if self._t0 != self._t0:
             self._t0 = t
@@ -304,8 +316,13 @@ class RealtimeRunner:
         row[4] = out
         row[5] = state
         row[6] = safety.fault
+        row[7] = t
+        row[8] = woke - t
+        row[10] = k - self._calls  # deadlines skipped before this one
+        self._calls += 1
         if stack_row is not None:
             row[self._n_loop :] = stack_row
+        row[9] = (self._now() - woke) if self._now is not None else math.nan
         self.ring.push(row)
         if state == State.FAULT:
             self._after_fault += 1

@@ -33,7 +33,7 @@ from enum import IntEnum
 
 from motosim.errors import MotosimError
 
-__all__ = ["Fault", "SafetyLimits", "SafetyStage", "State"]
+__all__ = ["Fault", "SafetyLimits", "SafetyStage", "State", "fault_reason"]
 
 
 class State(IntEnum):
@@ -71,6 +71,17 @@ _REASONS = {
     Fault.END_STOP: "handlebar angle beyond the hard end stop",
     Fault.NO_DRIVE: "no valid status frame from the drive since the start",
 }
+
+
+def fault_reason(fault: int, *, watchdog_periods: int) -> str:
+    """A fault code's reason, in words.
+
+    Examples
+    --------
+    >>> fault_reason(Fault.WATCHDOG, watchdog_periods=3)
+    'communication watchdog: no valid status frame for 3 periods'
+    """
+    return _REASONS[Fault(fault)].format(n=watchdog_periods)
 
 
 @dataclass(frozen=True, slots=True)
@@ -257,7 +268,7 @@ class SafetyStage:
         """The latched fault's reason and time, in words."""
         if self._fault == Fault.NONE:
             return "no fault"
-        reason = _REASONS[self._fault].format(n=self.limits.watchdog_periods)
+        reason = fault_reason(self._fault, watchdog_periods=self.limits.watchdog_periods)
         return f"{reason} (t = {self._fault_time:.3f} s)"
 
     # --- operator ----------------------------------------------------------------------

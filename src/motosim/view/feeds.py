@@ -20,9 +20,12 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.telemetry import POSE_SIGNALS, TelemetryRing
+from motosim.rt.safety import Fault, State, fault_reason
 from motosim.timeseries import TimeSeries
 
-__all__ = ["Feed", "LiveFeed", "ReplayFeed", "Road", "RunControl", "road_from_xy"]
+__all__ = [
+    "Feed", "LiveFeed", "ReplayFeed", "Road", "RunControl", "merge_signals", "road_from_xy",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 
@@ -308,11 +311,14 @@ class LiveFeed:
         The loop's arm/stop.
     duration : float
         Planned run length [s] (NaN if open-ended).
+    watchdog_periods : int
+        The safety stage's watchdog (for the reason of a watchdog fault).
     """
 
     ring: TelemetryRing
     control: RunControl
     duration: float = math.nan
+    watchdog_periods: int = 3
     names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -336,7 +342,7 @@ class LiveFeed:
     def status(self) -> dict[str, Any]:
         """The loop's state, the last row's time and the planned duration [s]."""
         row = self.ring.latest()
-        return {
+        status: dict[str, Any] = {
             "mode": "live",
             "state": self.control.state(),
             "t": float(row[0]) if row is not None else 0.0,
@@ -344,6 +350,41 @@ class LiveFeed:
             "rate": 1.0,
             "epoch": 0,
         }
+        names = self.names
+        if row is not None and "state" in names and "fault" in names:
+            state, fault = row[names.index("state")], row[names.index("fault")]
+            if math.isfinite(state) and math.isfinite(fault):
+                status["safety"] = {
+                    "state": State(int(state)).name.lower(),
+                    "fault": Fault(int(fault)).name,
+                    "reason": fault_reason(int(fault), watchdog_periods=self.watchdog_periods),
+                }
+        if row is not None and "missed" in names:
+            missed = row[names.index("missed")]
+            status["missed"] = int(missed) if math.isfinite(missed) else None
+        return status
+
+
+def merge_signals(result: TimeSeries, other: TimeSeries) -> TimeSeries:
+    """``result`` with the signals of ``other`` it lacks, linearly interpolated onto its time.
+
+    Outside ``other``'s time span the added signals are NaN (for example platform commands
+    of :mod:`motosim.cueing`, computed at a lower rate, added to the run they came from).
+
+    Examples
+    --------
+    >>> run = TimeSeries(np.arange(4.0), np.zeros((4, 1)), ("phi",))
+    >>> cue = TimeSeries(np.array([0.0, 2.0]), np.array([[0.0], [1.0]]), ("phi_s",))
+    >>> merge_signals(run, cue)["phi_s"]
+    array([0. , 0.5, 1. , nan])
+    """
+    new = [n for n in other.names if n not in result.names]
+    if not new:
+        return result
+    added = np.column_stack(
+        [np.interp(result.t, other.t, other[n], left=np.nan, right=np.nan) for n in new]
+    )
+    return TimeSeries(result.t, np.column_stack([result.data, added]), (*result.names, *new))
 
 
 def names_index(names: Sequence[str]) -> dict[str, int]:

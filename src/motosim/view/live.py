@@ -22,7 +22,56 @@ from motosim.io.telemetry import TelemetryRing
 from motosim.sim import SIGNALS, RunInputs, simulate
 from motosim.view.feeds import LiveFeed, Road, road_from_xy
 
-__all__ = ["SimulatedRig"]
+__all__ = ["LOOP_VIEW_SIGNALS", "LoopRows", "SimulatedRig"]
+
+LOOP_VIEW_SIGNALS = ("state", "fault", "t_clock", "wake", "compute", "period", "missed")
+"""The real-time loop's columns the view adds to a run's: safety state and fault codes, the
+period's deadline on the loop's clock [s], its wake-up latency, compute time and the time
+since the previous wake-up [s], and the deadlines missed so far."""
+
+
+class LoopRows:
+    """The real-time loop's rows as the view's: the result's columns plus the loop's own.
+
+    Parameters
+    ----------
+    loop_names : tuple of str
+        Columns of the loop's rows (:attr:`motosim.rt.run.RealtimeRunner.names`).
+    result_names : tuple of str
+        Columns of the result block made from the same rows (``"t"`` first).
+
+    Attributes
+    ----------
+    names : tuple of str
+        ``result_names`` then :data:`LOOP_VIEW_SIGNALS`: the columns of :meth:`rows`.
+
+    Examples
+    --------
+    >>> rows = LoopRows(("t", "state", "fault", "t_clock", "wake", "compute", "missed"), ("t",))
+    >>> loop = np.array([[0.001, 2, 0, 10.001, 1e-5, 2e-5, 0],
+    ...                  [0.002, 2, 0, 10.002, 3e-5, 2e-5, 0]])
+    >>> rows.rows(loop, loop[:, :1])[:, -2].round(6).tolist()
+    [nan, 0.00102]
+    """
+
+    def __init__(self, loop_names: tuple[str, ...], result_names: tuple[str, ...]) -> None:
+        missing = [n for n in LOOP_VIEW_SIGNALS if n != "period" and n not in loop_names]
+        if missing:
+            raise MotosimError(f"loop rows without {', '.join(missing)}; expected the loop's")
+        self.names = (*result_names, *LOOP_VIEW_SIGNALS)
+        self._cols = [loop_names.index(n) for n in LOOP_VIEW_SIGNALS if n != "period"]
+        self._clock = loop_names.index("t_clock")
+        self._wake = loop_names.index("wake")
+        self._last = math.nan  # the previous row's wake-up time on the loop's clock [s]
+
+    def rows(self, loop: np.ndarray, block: np.ndarray) -> np.ndarray:
+        """``block`` (rows of ``result_names``) with the loop's columns of ``loop`` appended."""
+        woke = loop[:, self._clock] + loop[:, self._wake]
+        period = np.diff(woke, prepend=self._last)
+        if woke.size:
+            self._last = float(woke[-1])
+        extra = loop[:, self._cols]
+        return np.column_stack([block, extra[:, :5], period, extra[:, 5:]])
 
 
 class _StoppedError(Exception):
@@ -46,7 +95,9 @@ class SimulatedRig:
     Attributes
     ----------
     ring : TelemetryRing
-        Every row of :data:`motosim.sim.SIGNALS`, as the run goes.
+        Every row of :data:`motosim.sim.SIGNALS`, as the run goes, and ``t_clock``: the
+        monotonic clock time [s] at which the row is due (``time.monotonic``, the clock of
+        the real-time loop).
     error : BaseException or None
         Why the run failed, if it did.
     """
@@ -59,7 +110,7 @@ class SimulatedRig:
         if not (math.isfinite(chunk) and chunk > 0.0):
             raise MotosimError(f"SimulatedRig chunk = {chunk!r} s; expected a finite number > 0")
         self.inputs = inputs
-        self.ring = TelemetryRing(SIGNALS, capacity)
+        self.ring = TelemetryRing((*SIGNALS, "t_clock"), capacity)
         self.error: BaseException | None = None
         self._rate = rate
         self._chunk = chunk
@@ -111,7 +162,7 @@ class SimulatedRig:
         start = time.monotonic()
 
         def on_block(block: np.ndarray) -> None:
-            self.ring.push_block(block)
+            self.ring.push_block(np.column_stack([block, start + block[:, 0] / self._rate]))
             if self._stop.is_set():
                 raise _StoppedError
             ahead = start + float(block[-1, 0]) / self._rate - time.monotonic()

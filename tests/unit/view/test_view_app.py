@@ -36,6 +36,10 @@ def test_pages_and_vendored_three_are_served(client: TestClient) -> None:
     three = client.get("/static/three.module.js")
     assert three.status_code == 200 and "three.core.js" in three.text
     assert "MIT" in client.get("/static/three.LICENSE").text
+    # cross-origin isolated pages (shared memory between the view and its pose worker)
+    for response in (view, three, client.get("/static/pose_worker.js")):
+        assert response.headers["cross-origin-opener-policy"] == "same-origin"
+        assert response.headers["cross-origin-embedder-policy"] == "require-corp"
 
 
 def test_info_lists_signals_units_and_road(client: TestClient) -> None:

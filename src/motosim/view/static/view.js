@@ -3,11 +3,13 @@
 // three.js (X = x, Y = up, Z = y), a proper rotation; yaw psi is -psi - pi/2 about Y for a
 // camera looking down its -Z axis; roll phi (right side down) is -phi about the view axis.
 import * as THREE from 'three';
+import { poseSlots, poseSocket } from './pose.js';
 
 const EYE = 1.2;          // m, eye height above the road when upright
 const token = new URLSearchParams(location.search).get('token') || '';
 const $ = (id) => document.getElementById(id);
-const stats = { frames: 0, fps: 0, poses: 0, lastPose: null, status: null, ready: false };
+const stats = { frames: 0, fps: 0, poses: 0, lastPose: null, status: null, ready: false,
+  offset: null, rtt: null, lags: [], ages: [], reported: 0 };
 window.motosimStats = stats;
 for (const a of document.querySelectorAll('a')) a.href += location.search;
 
@@ -30,6 +32,9 @@ const renderer = new THREE.WebGLRenderer({
 });
 renderer.setPixelRatio(fixedScale ?? Math.min(window.devicePixelRatio, 2));
 Object.assign(stats, { antialias, scale: renderer.getPixelRatio(), adaptive: fixedScale === null });
+// ?sync=1 reads one pixel back after each frame, which waits until the frame is rendered: the
+// frame rate is then that of finished frames, not of frames handed to the GPU (for the bench)
+const sync = params.get('sync') === '1', gl = renderer.getContext(), pixel = new Uint8Array(4);
 let slowSeconds = 0;
 function adapt(fps) {
   if (fixedScale !== null) return;
@@ -69,64 +74,84 @@ const at = (i, offset, height) =>
 // The world is flat and the eye above it, so the flat layers (ground, shoulders, asphalt,
 // lines) are painted in order without the depth buffer (no z-fighting between coplanar
 // layers, whatever the GPU's depth precision) and the upright objects drawn after them.
-let layer = -10;
-function flat(mesh) {
-  mesh.material.depthTest = false; mesh.material.depthWrite = false;
-  mesh.renderOrder = layer++;
-  return mesh;
+// Each kind of thing is one draw call: the flat layers are one mesh of coloured triangles
+// (drawn in the order they were appended), posts and trees are two instanced meshes.
+const flatPos = [], flatCol = [];
+function paint(color, ...corners) {  // a quad a b c d (a-b and c-d across), one colour
+  const c = new THREE.Color(color);  // linear components, as three.js shades them
+  const [a, b, cc, d] = corners;
+  for (const p of [a, b, cc, b, d, cc]) { flatPos.push(...p); flatCol.push(c.r, c.g, c.b); }
 }
-
 function ribbon(left, right, height, color, keep = () => true) {
-  const pos = [];
   for (let i = 0; i + 1 < n; i++) {
-    if (!keep(i)) continue;
-    const a = at(i, left, height), b = at(i, right, height);
-    const c = at(i + 1, left, height), d = at(i + 1, right, height);
-    pos.push(...a, ...b, ...c, ...b, ...d, ...c);
+    if (keep(i)) {
+      paint(color, at(i, left, height), at(i, right, height), at(i + 1, left, height),
+        at(i + 1, right, height));
+    }
   }
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute('position', new THREE.Float32BufferAttribute(pos, 3));
-  const material = new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide });
-  return flat(new THREE.Mesh(geometry, material));
 }
 
 let cx = 0, cy = 0;
 for (let i = 0; i < n; i++) { cx += road.x[i] / n; cy += road.y[i] / n; }
-const ground = flat(new THREE.Mesh(new THREE.PlaneGeometry(12000, 12000),
-  new THREE.MeshBasicMaterial({ color: 0x5d8a3a })));
-ground.rotation.x = -Math.PI / 2;
-ground.position.set(cx, -0.02, cy);
-scene.add(ground);
-
+const G = 6000;  // m, half the ground's side
+paint(0x5d8a3a, [cx - G, -0.02, cy - G], [cx + G, -0.02, cy - G], [cx - G, -0.02, cy + G],
+  [cx + G, -0.02, cy + G]);                                    // ground
 const w = road.width / 2;
-scene.add(ribbon(-w - 1.5, w + 1.5, 0.0, 0x8a8a7a));          // shoulders
-scene.add(ribbon(-w, w, 0.01, 0x3c3c40));                      // asphalt
-scene.add(ribbon(-w + 0.25, -w + 0.4, 0.02, 0xf4f4f4));        // left edge line
-scene.add(ribbon(w - 0.4, w - 0.25, 0.02, 0xf4f4f4));          // right edge line
-scene.add(ribbon(-0.075, 0.075, 0.02, 0xf4f4f4,                // dashed centre line: 3 m in 9 m
-  (i) => (s[i] % 9) < 3));
-
+ribbon(-w - 1.5, w + 1.5, 0.0, 0x8a8a7a);                      // shoulders
+ribbon(-w, w, 0.01, 0x3c3c40);                                 // asphalt
+ribbon(-w + 0.25, -w + 0.4, 0.02, 0xf4f4f4);                   // left edge line
+ribbon(w - 0.4, w - 0.25, 0.02, 0xf4f4f4);                     // right edge line
+ribbon(-0.075, 0.075, 0.02, 0xf4f4f4, (i) => (s[i] % 9) < 3);  // dashed centre line: 3 m in 9 m
+{
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.Float32BufferAttribute(flatPos, 3));
+  geometry.setAttribute('color', new THREE.Float32BufferAttribute(flatCol, 3));
+  const material = new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide,
+    depthTest: false, depthWrite: false });
+  const mesh = new THREE.Mesh(geometry, material);
+  mesh.renderOrder = -1;
+  mesh.frustumCulled = false;  // it surrounds the eye
+  scene.add(mesh);
+}
 
 // --- speed and distance cues: posts every 25 m, trees at seeded random places ------------
 let seed = 12345;
 const random = () => ((seed = (seed * 16807) % 2147483647) / 2147483647);
+// one geometry of several coloured parts, each raised by its height [m]
+function parts(...list) {
+  const pos = [], col = [];
+  for (const [geometry, color, dy] of list) {
+    const flatGeometry = geometry.toNonIndexed();
+    flatGeometry.translate(0, dy, 0);
+    const c = new THREE.Color(color);
+    const p = flatGeometry.getAttribute('position');
+    for (let k = 0; k < p.count; k++) {
+      pos.push(p.getX(k), p.getY(k), p.getZ(k)); col.push(c.r, c.g, c.b);
+    }
+  }
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.Float32BufferAttribute(pos, 3));
+  geometry.setAttribute('color', new THREE.Float32BufferAttribute(col, 3));
+  return geometry;
+}
 const dummy = new THREE.Object3D();
-function instances(geometry, color, places) {
-  const mesh = new THREE.InstancedMesh(geometry, new THREE.MeshBasicMaterial({ color }),
-    places.length);
+function instances(geometry, places) {
+  const mesh = new THREE.InstancedMesh(geometry,
+    new THREE.MeshBasicMaterial({ vertexColors: true }), places.length);
   places.forEach(([x, y, z, scale], k) => {
     dummy.position.set(x, y, z); dummy.scale.setScalar(scale); dummy.updateMatrix();
     mesh.setMatrixAt(k, dummy.matrix);
   });
+  mesh.frustumCulled = false;  // along the whole road
   scene.add(mesh);
 }
-const posts = [], tops = [], trunks = [], crowns = [];
+const posts = [], trees = [];
 let next = 0, nextTree = 0;
 for (let i = 0; i < n; i++) {
   if (s[i] >= next) {
     for (const side of [-1, 1]) {
       const [x, , z] = at(i, side * (w + 1.0), 0);
-      posts.push([x, 0.5, z, 1]); tops.push([x, 1.05, z, 1]);
+      posts.push([x, 0.5, z, 1]);
     }
     next += 25;
   }
@@ -134,32 +159,74 @@ for (let i = 0; i < n; i++) {
     const side = random() < 0.5 ? -1 : 1;
     const scale = 0.7 + 0.8 * random();
     const [x, , z] = at(i, side * (w + 6 + 30 * random()), 0);
-    trunks.push([x, 1.0 * scale, z, scale]); crowns.push([x, 4.0 * scale, z, scale]);
+    trees.push([x, 0, z, scale]);
     nextTree += 12 + 20 * random();
   }
 }
-instances(new THREE.BoxGeometry(0.12, 1.0, 0.12), 0xf0f0f0, posts);
-instances(new THREE.BoxGeometry(0.13, 0.12, 0.13), 0xd02020, tops);
-instances(new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, trunks);
-instances(new THREE.ConeGeometry(1.6, 5.0, 8), 0x2f6a2a, crowns);
+instances(parts([new THREE.BoxGeometry(0.12, 1.0, 0.12), 0xf0f0f0, 0],        // white post
+  [new THREE.BoxGeometry(0.13, 0.12, 0.13), 0xd02020, 0.55]), posts);         // red top
+instances(parts([new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, 1.0],  // trunk
+  [new THREE.ConeGeometry(1.6, 5.0, 8), 0x2f6a2a, 4.0]), trees);                // crown
 
-// --- pose ------------------------------------------------------------------------------
+// --- pose, and the lag of each frame behind the loop --------------------------------------
+// A pose stamped with the loop's clock (`clock`: when the loop wrote it, the machine's
+// monotonic clock [s]) lets the page measure how far behind the loop each frame is: the
+// server answers pings with its monotonic time, and the ping with the shortest round trip
+// gives the offset from absolute page time (performance.timeOrigin + now() [ms]) to that
+// clock. Each drawn frame is reported as [sample, drawn] (both on the loop's clock [s]) once
+// a second over the pose socket (GET /api/lag sums them up). For tests and the bench,
+// motosimStats.lags keeps [sample [s], drawn [absolute ms], the sample's deadline [s]],
+// motosimStats.offset maps them, and motosimStats.ages has, for each pose, [written, sent [s],
+// received [absolute ms]]. The socket lives in a worker when the page is cross-origin
+// isolated (the server says so): a frame then draws the newest pose even if the page's
+// thread was busy when it came (motosimStats.worker).
+const absolute = () => performance.timeOrigin + performance.now();
 let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
-  phi: 0, delta: 0, v_x: 0, theta_h: 0 };
-let status = info.status;
-function connect() {
-  const ws = new WebSocket(`ws://${location.host}/ws/pose`);
-  ws.onmessage = (event) => {
-    const message = JSON.parse(event.data);
-    if (message.pose) { pose = message.pose; stats.lastPose = pose; }
-    status = message.status; stats.status = status; stats.poses++;
-  };
-  ws.onclose = () => { $('state').textContent = 'disconnected'; setTimeout(connect, 1000); };
+  phi: 0, delta: 0, v_x: 0, theta_h: 0, clock: null, deadline: null };
+let status = info.status, pending = [], report, readPose = () => {};
+const url = `ws://${location.host}/ws/pose`;
+function got(e) {  // what the socket reports, in the page or from the worker
+  if (e.offset !== undefined) { stats.offset = e.offset; stats.rtt = e.rtt; }
+  if (e.closed) { stats.rtt = null; show('state', 'disconnected'); }
+  if (e.status) { status = e.status; stats.status = status; }
+  if (e.poses) stats.poses += e.poses;
+  if (e.ages && stats.ages.length < 100000) stats.ages.push(...e.ages);
+  if (e.reported) stats.reported += e.reported;
 }
-connect();
+stats.worker = window.crossOriginIsolated === true && typeof SharedArrayBuffer !== 'undefined';
+if (stats.worker) {
+  const buffer = new SharedArrayBuffer(8 + 8 * 16), slots = poseSlots(buffer);
+  const worker = new Worker('/static/pose_worker.js', { type: 'module' });
+  worker.onmessage = (event) => got(event.data);
+  worker.postMessage({ buffer, url });
+  report = (frames) => worker.postMessage({ frames });
+  let seq = -1;
+  readPose = () => {
+    const next = slots.read(seq);
+    if (next) { seq = next.seq; pose = next.pose; stats.lastPose = pose; }
+  };
+} else {
+  const send = poseSocket(url, (e) => {
+    if (e.message) {
+      const m = e.message;
+      if (m.pose) { pose = { ...m.pose, clock: m.clock ?? null, deadline: m.deadline ?? null }; stats.lastPose = pose; }
+      got({ status: m.status, poses: 1, ages: m.clock != null ? [[m.clock, m.sent, e.received]] : [] });
+    } else {
+      got(e);
+    }
+  });
+  report = (frames) => got({ reported: send(frames) ? frames.length : 0 });
+}
+setInterval(() => {
+  if (pending.length && stats.offset !== null) {
+    const offset = stats.offset;
+    report(pending.map(([c, d]) => [c, d / 1000 + offset]));
+  }
+  pending = [];
+}, 1000);
 
 function place() {
-  const roll = $('roll-toggle').checked ? (pose.phi || 0) : 0;
+  const roll = rollToggle.checked ? (pose.phi || 0) : 0;
   const psi = pose.psi || 0, phi = pose.phi || 0;
   // the eye leans with the motorcycle about the contact line
   const right = EYE * Math.sin(phi), up = EYE * Math.cos(phi);
@@ -177,30 +244,45 @@ function resize() {
 }
 
 const deg = (r) => (r == null ? 0 : (r * 180) / Math.PI).toFixed(1);
+// the page's text changes only when its value does (no style or layout work otherwise)
+const shown = new Map();
+function show(id, text) {
+  if (shown.get(id) !== text) { shown.set(id, text); $(id).textContent = text; }
+}
+const bar = $('bar'), rollToggle = $('roll-toggle'), seek = $('seek');
+let barAngle = null;
 let fpsFrames = 0, fpsSince = performance.now();
 function frame(now) {
-  resize(); place();
+  readPose(); resize(); place();
   renderer.render(scene, camera);
+  if (sync) gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+  if (pose.clock != null) {
+    const drawn = absolute();
+    pending.push([pose.clock, drawn]);
+    if (stats.lags.length < 100000) stats.lags.push([pose.clock, drawn, pose.deadline]);
+  }
   stats.frames++; fpsFrames++; stats.ready = true;
   if (now - fpsSince >= 1000) {
     stats.fps = (1000 * fpsFrames) / (now - fpsSince);
-    $('fps').textContent = stats.fps.toFixed(0);
+    show('fps', stats.fps.toFixed(0));
     fpsFrames = 0; fpsSince = now;
     adapt(stats.fps);
   }
-  $('speed').textContent = ((pose.v_x || 0) * 3.6).toFixed(0);
-  $('steer').textContent = deg(pose.delta);
-  $('handlebar').textContent = deg(pose.theta_h);
-  $('roll').textContent = deg(pose.phi);
-  $('bar').style.transform = `rotate(${deg(pose.theta_h)}deg)`;
+  show('speed', ((pose.v_x || 0) * 3.6).toFixed(0));
+  show('steer', deg(pose.delta));
+  show('handlebar', deg(pose.theta_h));
+  show('roll', deg(pose.phi));
+  const angle = deg(pose.theta_h);
+  if (angle !== barAngle) { barAngle = angle; bar.style.transform = `rotate(${angle}deg)`; }
   if (status) {
-    $('state').textContent = status.state;
-    $('clock').textContent = `${(status.t || 0).toFixed(1)} s`;
-    $('play').textContent = status.state === 'playing' || status.state === 'running'
-      ? (info.replay ? 'Pause' : 'Stop') : (info.replay ? 'Play' : 'Arm');
-    if (status.duration && !seeking) {
-      $('seek').max = status.duration; $('seek').value = status.t;
+    show('state', status.state);
+    show('clock', `${(status.t || 0).toFixed(1)} s`);
+    show('play', status.state === 'playing' || status.state === 'running'
+      ? (info.replay ? 'Pause' : 'Stop') : (info.replay ? 'Play' : 'Arm'));
+    if (status.duration && !seeking && seek.max !== String(status.duration)) {
+      seek.max = status.duration;
     }
+    if (status.duration && !seeking) seek.value = status.t;
   }
   requestAnimationFrame(frame);
 }
@@ -213,7 +295,7 @@ async function command(body) {
     body: JSON.stringify(body),
   });
   const answer = await response.json();
-  if (!response.ok) $('state').textContent = answer.error;
+  if (!response.ok) show('state', answer.error);
   return answer;
 }
 let seeking = false;
