@@ -34,6 +34,13 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--duration", type=float, help="stop after this long [s]")
     parser.add_argument(
+        "--link",
+        choices=("fast", "python-can"),
+        default="fast",
+        help="on udp_multicast, send and read python-can's frames on its socket without a "
+        "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
+    )
+    parser.add_argument(
         "--rate",
         type=float,
         default=1000.0,
@@ -88,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         rider = VirtualRider(build_rig(inputs, rng=np.random.default_rng(sc.seed)), receiver)
     clock = clock_from_args(args)
     codecs = handlebar_codecs()
-    link = open_link(args.bus)
+    link = open_link(args.bus, fast=args.link == "fast")
     try:
         rig = VirtualRig(
             inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed)

@@ -42,7 +42,22 @@ def register(sub: Any) -> None:
         help="python-can INTERFACE[:CHANNEL]: socketcan:can0, virtual, udp_multicast, ...",
     )
     parser.add_argument("--out", required=True, help="folder for the result")
+    parser.add_argument(
+        "--link",
+        choices=("fast", "python-can"),
+        default="fast",
+        help="on udp_multicast, send and read python-can's frames on its socket without a "
+        "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
+    )
     parser.add_argument("--duration", type=float, help="run for this long [s] (the scenario's)")
+    parser.add_argument(
+        "--pace",
+        choices=("clock", "bus"),
+        default="clock",
+        help="what starts each control period: this PC's clock (absolute deadlines, default) "
+        "or the drive's status frame (one period per frame; needs the control rate equal to "
+        "the measurement rate; the watchdog still trips if the frames stop)",
+    )
     parser.add_argument(
         "--telemetry",
         default="127.0.0.1:47474",
@@ -270,6 +285,11 @@ def run(args: argparse.Namespace) -> int:
     rate = sc.rates.control
     periods = round(duration * rate)
     model = build_stack(inputs)
+    if args.pace == "bus" and model.measure_every != 1:
+        raise MotosimError(
+            f"--pace bus with control = {rate:g} Hz and measurement = "
+            f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"
+        )
     world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
     codecs = handlebar_codecs()
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
@@ -278,7 +298,7 @@ def run(args: argparse.Namespace) -> int:
         from motosim.rt.telemetry import StateSender, parse_address
 
         sender = StateSender(parse_address(args.telemetry), width=len(stack.names))
-    link = open_link(args.bus)
+    link = open_link(args.bus, fast=args.link == "fast")
     try:
         runner = RealtimeRunner(
             stack,
@@ -291,9 +311,15 @@ def run(args: argparse.Namespace) -> int:
             shared_ring=True,
             telemetry=None if sender is None else sender.send,
             wait_for_arm=view is not None,
+            clock=clock,
         )
         metadata = run_metadata(inputs) | {
-            "realtime": {"bus": args.bus, "safety": limits, "duration": duration}
+            "realtime": {
+                "bus": args.bus,
+                "pace": args.pace,
+                "safety": limits,
+                "duration": duration,
+            }
         }
         stats, privileges, summary = _loop(
             args, runner, clock, rate, periods, folder, metadata,
@@ -306,6 +332,7 @@ def run(args: argparse.Namespace) -> int:
             sender.close()
     timing = stats.as_dict()
     report = {
+        "pace": args.pace,
         "timing": timing,
         "units": "s",
         "privileges": [
@@ -334,8 +361,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         us = 1e6
         print(f"{sc.name}: {stats.served} periods at {rate:g} Hz, result in {folder}")
+        wake = "wake-up" if args.pace == "clock" else "frame interval jitter"
         print(
-            f"  wake-up p99 {stats.wake_p99 * us:.0f} us, compute p99 "
+            f"  {wake} p99 {stats.wake_p99 * us:.0f} us, compute p99 "
             f"{stats.compute_p99 * us:.0f} us, missed {stats.missed} of {stats.periods}"
         )
         for p in privileges:
@@ -406,7 +434,7 @@ def _loop(
     import dataclasses
     import multiprocessing
 
-    from motosim.rt.loop import RateLoop
+    from motosim.rt.loop import FramePacedLoop, RateLoop
     from motosim.rt.privileges import freeze_gc, thaw_gc
 
     presses = [0]
@@ -451,7 +479,15 @@ def _loop(
             print(f"motosim run: dashboard    {url}/dashboard?token={view.token}", file=err)
             print("motosim run: the torque is off until Arm is pressed", file=err, flush=True)
         privileges = privileges_from_args(args)
-        loop = RateLoop(rate, clock, capacity=max(1, min(periods, 1 << 22)))
+        capacity = max(1, min(periods, 1 << 22))
+        loop: RateLoop | FramePacedLoop
+        if args.pace == "bus":
+            loop = FramePacedLoop(
+                rate, clock, runner.wait_status, timeout=runner.watchdog_time,
+                first_timeout=runner.first_timeout, capacity=capacity,
+            )  # fmt: skip
+        else:
+            loop = RateLoop(rate, clock, capacity=capacity)
         if sys.stdin is not None and sys.stdin.isatty():
             threading.Thread(target=_keyboard, args=(runner,), daemon=True).start()
             print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=sys.stderr)

@@ -36,13 +36,14 @@ from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
 from motosim.model.handlebar import step_exact
 from motosim.params.handlebar import HandlebarParameters
+from motosim.rt.clock import SimulatedClock
 from motosim.rt.run import FrameLink
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
 from motosim.sim.rider import rider_torque
 
-__all__ = ["RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
+__all__ = ["LockstepLink", "RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
 
 Array = NDArray[np.float64]
 _NEVER = math.inf
@@ -333,7 +334,7 @@ class VirtualRig:
             )  # fmt: skip
             self.k += n
             self._sample()
-            self._deliver(self.t)
+            self._deliver(min(self.t, t))  # the plant may run ahead of t; the bus may not
         self._deliver(t)
 
     def _sample(self) -> None:
@@ -455,3 +456,46 @@ class VirtualRider:
             )  # fmt: skip
             self.torque = float(tau)
         return self.torque
+
+
+class LockstepLink:
+    """A link whose blocking receive lets simulated time pass (bus pacing in lock-step).
+
+    ``receive(timeout)`` with a positive ``timeout`` polls ``link`` and, while nothing has
+    come, advances ``clock`` by ``tick`` [s] at a time (a rig listening on the clock runs and
+    sends meanwhile) until a frame comes or ``timeout`` has passed: what a blocking receive
+    on a real bus does, deterministically. ``send`` and a zero-timeout ``receive`` go
+    straight to ``link``.
+
+    Parameters
+    ----------
+    link : FrameLink
+        The host's end of the bus.
+    clock : SimulatedClock
+        The clock the rig listens on.
+    tick : float
+        The time step of the wait [s], > 0 (the rig's plant step: frames are due on it).
+    """
+
+    def __init__(self, link: FrameLink, clock: SimulatedClock, tick: float) -> None:
+        if not (math.isfinite(tick) and tick > 0.0):
+            raise MotosimError(f"tick = {tick!r} s: expected a positive time")
+        self.link = link
+        self.clock = clock
+        self.tick = float(tick)
+
+    def send(self, frame_id: int, data: bytes) -> bool:
+        """Send one frame on ``link``."""
+        return self.link.send(frame_id, data)
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        """The next frame, letting simulated time pass for up to ``timeout`` [s]."""
+        frame = self.link.receive()
+        if frame is not None or timeout <= 0.0:
+            return frame
+        clock = self.clock
+        end = clock.now() + timeout
+        while frame is None and clock.now() < end:
+            clock.sleep_until(min(clock.now() + self.tick, end))
+            frame = self.link.receive()
+        return frame

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
+from motosim.rt.clock import Clock
 from motosim.rt.ring import SampleRing
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
 
@@ -123,6 +124,8 @@ class RealtimeRunner:
     wait_for_arm : bool
         Keep the torque off (safety stage IDLE) after the drive's first status frame until
         :meth:`arm` is called (the view's Arm button); the loop runs and records meanwhile.
+    clock : Clock, optional
+        The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
     """
 
     def __init__(
@@ -140,10 +143,12 @@ class RealtimeRunner:
         shared_ring: bool = False,
         telemetry: Callable[[int, float, Array], None] | None = None,
         wait_for_arm: bool = False,
+        clock: Clock | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
         self.stepper = stepper
+        self.clock = clock
         self.telemetry = telemetry
         self.link = link
         self.codecs = codecs
@@ -181,6 +186,7 @@ class RealtimeRunner:
         self._current = math.nan
         self._prev_theta = math.nan
         self._started = False
+        self._fresh = False
         self._stop = False
         self._armed = not wait_for_arm
         self._arm_request = False
@@ -188,6 +194,17 @@ class RealtimeRunner:
         self._sent = 0
         self.status_frames = 0
         self.send_errors = 0
+
+    @property
+    def first_timeout(self) -> float:
+        """How long a bus-paced loop waits for the drive's first frame [s]: one period past
+        ``start_timeout``, so that the ``NO_DRIVE`` fault trips on that wait's timeout."""
+        return (self._start_timeout + 1) * self.dt
+
+    @property
+    def watchdog_time(self) -> float:
+        """The watchdog's time [s]: ``watchdog_periods`` status frame periods."""
+        return self.safety.watchdog_periods * self.dt
 
     # --- operator ----------------------------------------------------------------------
     def request_stop(self) -> None:
@@ -220,32 +237,61 @@ class RealtimeRunner:
         return dropped
 
     # --- the period --------------------------------------------------------------------
-    def _read_bus(self) -> bool:
-        link, safety = self.link, self.safety
+    def _frame(self, frame_id: int, data: bytes) -> bool:
+        """Handle one received frame; True if it is a status frame (valid or not)."""
         status_id, estop_id = self._ids
-        st, es = self.codecs.status, self.codecs.estop
-        fresh = False
+        if frame_id == status_id:
+            self.status_frames += 1
+            values = self._status
+            ok = self.codecs.status.decode(data, values)
+            if self.safety.status_frame(
+                checksum_ok=ok,
+                counter=values[self._i_counter],
+                drive_fault=values[self._i_drive_fault] > 0.5,
+            ):
+                self._theta = float(values[self._i_angle])
+                self._current = float(values[self._i_current])
+                self._fresh = True
+            return True
+        if frame_id == estop_id:
+            ok = self.codecs.estop.decode(data, self._estop)
+            self.safety.estop_frame(checksum_ok=ok, pressed=self._estop[self._i_estop] > 0.5)
+        return False
+
+    def _read_bus(self) -> bool:
+        receive = self.link.receive
         for _ in range(64):  # bounded: a flooded bus cannot hold the loop
-            frame = link.receive()
+            frame = receive()
             if frame is None:
                 break
-            frame_id, data = frame
-            if frame_id == status_id:
-                self.status_frames += 1
-                ok = st.decode(data, self._status)
-                values = self._status
-                if safety.status_frame(
-                    checksum_ok=ok,
-                    counter=values[self._i_counter],
-                    drive_fault=values[self._i_drive_fault] > 0.5,
-                ):
-                    self._theta = float(values[self._i_angle])
-                    self._current = float(values[self._i_current])
-                    fresh = True
-            elif frame_id == estop_id:
-                ok = es.decode(data, self._estop)
-                safety.estop_frame(checksum_ok=ok, pressed=self._estop[self._i_estop] > 0.5)
+            self._frame(frame[0], frame[1])
+        fresh = self._fresh
+        self._fresh = False
         return fresh
+
+    def wait_status(self, until: float) -> bool:
+        """Block on the bus until a status frame arrives or ``clock`` reaches ``until`` [s].
+
+        The wait of a bus-paced loop (:class:`~motosim.rt.loop.FramePacedLoop`): every frame
+        received meanwhile is handled as in a period (E-stop frames included); the frames
+        behind the status frame are read by the next :meth:`period`. On a timeout the
+        safety stage's watchdog trips (:meth:`~motosim.rt.safety.SafetyStage.silent`): the
+        timeout is the watchdog's time. Needs the runner's ``clock``.
+        """
+        clock = self.clock
+        if clock is None:
+            raise MotosimError("wait_status needs the runner's clock (clock=...)")
+        receive = self.link.receive
+        now = clock.now
+        while True:
+            remaining = until - now()
+            if remaining <= 0.0:
+                if self._started:
+                    self.safety.silent()
+                return False
+            frame = receive(remaining)
+            if frame is not None and self._frame(frame[0], frame[1]):
+                return True
 
     def period(self, k: int, t: float) -> bool:
         """Run one control period ``k`` (deadline ``t`` [s]); False when the run should end.
