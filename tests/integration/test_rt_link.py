@@ -141,3 +141,22 @@ def test_run_against_the_rig_over_socketcan_vcan(tmp_path: Path) -> None:
     payload = json.loads(run.stdout)
     assert payload["fault"] == "NONE" and payload["counters"]["status_frames"] >= 150
     assert load_result(out).complete
+
+
+def test_the_fast_link_hears_only_its_own_group() -> None:
+    # a socket bound to the port gets every group joined on the machine unless
+    # IP(V6)_MULTICAST_ALL is off (Linux ip(7), ipv6(7)); the fast link turns it off
+    fast, slow = _links()
+    fast.close()
+    try:
+        other = open_link("udp_multicast:ff15:7079:7468:6f6e:6465:6d6f:6d63:7777", fast=False)
+        ours = open_link("udp_multicast")
+    except MotosimError as err:
+        pytest.skip(f"a second multicast group is not available here: {err}")
+    try:
+        other.send(0x7FE, b"\x01")
+        slow.send(0x7FD, b"\x02")
+        assert _frames(ours, {0x7FD, 0x7FE}, 2) == [(0x7FD, b"\x02")]
+    finally:
+        for link in (other, ours, slow):
+            link.close()

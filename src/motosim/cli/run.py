@@ -1,6 +1,8 @@
 """``motosim run``: the stack in real time against the handlebar drive over CAN."""
 
 import argparse
+import logging
+import math
 import signal
 import sys
 import threading
@@ -31,7 +33,8 @@ def register(sub: Any) -> None:
             "Run the scenario's stack in real time: read the drive's status frames, step the "
             "compiled stack at the control rate, pass the command through the safety stage and "
             "send it. Writes DIR/result.h5 and DIR/result.csv (as simulate does, one row per "
-            "control period) and DIR/timing.json. Ctrl-C fades the torque out and stops; a "
+            "control period) and DIR/timing.json. At the end of the duration, and on Ctrl-C, "
+            "the torque fades out; a "
             "second Ctrl-C, or Enter on the terminal, is an emergency stop."
         ),
     )
@@ -241,6 +244,11 @@ def _writer_main(
             summary |= extra
             summary["ring_dropped"] = float(ring.dropped)
             if not complete:  # stopped or faulted: files closed, marked incomplete
+                # the writer's "run interrupted" warning would name this exception and the
+                # staging folder; motosim run says itself where the partial result is
+                logging.getLogger("motosim.io.results").addFilter(
+                    lambda record: not record.getMessage().startswith("run interrupted by")
+                )
                 raise _EarlyStopError
             writer.close(summary)
     except _EarlyStopError:
@@ -249,7 +257,7 @@ def _writer_main(
         ring.close()
         if server is not None:
             server.stop()
-    conn.send(("done", summary))
+    conn.send(("done", summary, str(writer.location)))
 
 
 def _keyboard(runner: Any) -> None:
@@ -321,7 +329,9 @@ def run(args: argparse.Namespace) -> int:
                 "duration": duration,
             }
         }
-        stats, privileges, summary = _loop(
+        # a partial result is kept beside a complete one already there (--overwrite):
+        # the timing and the report go where the rows went
+        stats, privileges, summary, folder = _loop(
             args, runner, clock, rate, periods, folder, metadata,
             inputs.nominal_handlebar.torque_per_amp, view,
         )  # fmt: skip
@@ -369,6 +379,12 @@ def run(args: argparse.Namespace) -> int:
         for p in privileges:
             print(f"  {p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
         print(f"  state {counters.state}; {counters.fault_reason}")
+        if stats.miss_ratio > 0.01:
+            print(
+                f"  {100.0 * stats.miss_ratio:.1f} % of the deadlines were missed: the virtual "
+                "motorcycle fell behind the wall clock; check this PC with motosim rt-check "
+                "and give --fifo 80 --cpu 1 --mlock (see the README's lab set-up)"
+            )
     if counters.fault == "NONE" and runner.stop_requested:
         print(f"motosim run: stopped, torque faded out; result in {folder}", file=sys.stderr)
         return 130
@@ -429,7 +445,7 @@ def _loop(
     metadata: dict[str, Any],
     torque_per_amp: float,
     view: _ViewSetup | None = None,
-) -> tuple[Any, tuple[Any, ...], dict[str, Any]]:
+) -> tuple[Any, tuple[Any, ...], dict[str, Any], Path]:
     """The real-time part: writer process (and view), privileges, signals, keyboard, the loop."""
     import dataclasses
     import multiprocessing
@@ -479,7 +495,8 @@ def _loop(
             print(f"motosim run: dashboard    {url}/dashboard?token={view.token}", file=err)
             print("motosim run: the torque is off until Arm is pressed", file=err, flush=True)
         privileges = privileges_from_args(args)
-        capacity = max(1, min(periods, 1 << 22))
+        margin = math.ceil(runner.safety.limits.fade_in * rate) + 4  # the fade-out at the end
+        capacity = max(1, min(periods + margin, 1 << 22))
         loop: RateLoop | FramePacedLoop
         if args.pace == "bus":
             loop = FramePacedLoop(
@@ -491,23 +508,34 @@ def _loop(
         if sys.stdin is not None and sys.stdin.isatty():
             threading.Thread(target=_keyboard, args=(runner,), daemon=True).start()
             print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=sys.stderr)
+        print(
+            f"motosim run: {rate:g} Hz on {args.bus}, paced by the "
+            f"{'clock' if args.pace == 'clock' else 'status frames'}, {periods / rate:g} s",
+            file=sys.stderr,
+            flush=True,
+        )
         freeze_gc()
         runner.discard_pending()  # frames queued while the writer started are stale
         try:
             loop.run(runner.period, periods=periods)
+            complete = runner.safety.fault.name == "NONE" and loop.stats().periods >= periods
+            fade = runner.finish() if complete else 0
+            if fade:  # the duration is over: the torque fades out, never a step to zero;
+                # the run ends when it is out (missed deadlines do not shorten the fade)
+                loop.run(runner.period, periods=10 * fade)
         finally:
             thaw_gc()
         stats = loop.stats()
-        complete = runner.safety.fault.name == "NONE" and stats.periods >= periods
+        complete = complete and runner.safety.fault.name == "NONE"
         extra = {f"rt_{key}": float(value) for key, value in stats.as_dict().items()}
         ours.send(("close", complete, extra))
         if not ours.poll(120.0):
             raise MotosimError(f"{folder}: the result writer did not finish")
-        summary: dict[str, Any] = ours.recv()[1]
+        _, summary, location = ours.recv()
     finally:
         writer.join(timeout=10.0)
         if writer.is_alive():
             writer.kill()
         runner.ring.close()
         signal.signal(signal.SIGINT, previous)
-    return stats, privileges, summary
+    return stats, privileges, summary, Path(location)

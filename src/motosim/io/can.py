@@ -428,7 +428,11 @@ class UdpMulticastLink:
     link keeps the bus (for its socket's set-up and for :meth:`close`), sends through a copy
     of its socket the bytes python-can's ``pack_message`` gives for the frame (built once per
     frame id and length, only the data bytes changing), and reads datagrams with a
-    non-blocking ``recv`` decoded by msgpack's C unpacker. Made by :func:`open_link`.
+    non-blocking ``recv`` decoded by msgpack's C unpacker. On Linux the socket takes only
+    its own group's datagrams (``IP_MULTICAST_ALL`` and ``IPV6_MULTICAST_ALL`` off; by
+    default a socket bound to the port gets every group joined on the machine), so two
+    rigs on one PC on different groups (``udp_multicast:GROUP``) do not hear each other.
+    Made by :func:`open_link`.
 
     Parameters
     ----------
@@ -456,6 +460,11 @@ class UdpMulticastLink:
         self._bus = bus
         self._sock = socket.socket(fileno=os.dup(bus.fileno()))
         self._sock.setblocking(False)
+        for level, option in ((socket.IPPROTO_IP, 49), (socket.IPPROTO_IPV6, 29)):
+            try:  # IP_MULTICAST_ALL, IPV6_MULTICAST_ALL (Linux): only this group's frames
+                self._sock.setsockopt(level, option, 0)
+            except OSError:
+                pass
         self._dest = (group, port)
         self._poll = select.poll()
         self._poll.register(self._sock.fileno(), select.POLLIN)

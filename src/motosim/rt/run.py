@@ -16,7 +16,8 @@ Each period it
 The stack starts on the first valid status frame (reset at its angle and current) and the
 safety stage is enabled then (or, with ``wait_for_arm``, when :meth:`RealtimeRunner.arm` is
 called: the view's Arm button), so the torque fades in over 0.5 s. A stop request (Ctrl-C)
-fades the torque out and ends the run once it is zero; a fault zeroes the command at once
+fades the torque out and ends the run once it is zero (so does :meth:`RealtimeRunner.finish`
+at the end of the run's duration); a fault zeroes the command at once
 and ends the run ``linger`` seconds later, the zero command still sent meanwhile.
 """
 
@@ -188,6 +189,7 @@ class RealtimeRunner:
         self._started = False
         self._fresh = False
         self._stop = False
+        self._finishing = False
         self._armed = not wait_for_arm
         self._arm_request = False
         self._after_fault = 0
@@ -224,6 +226,16 @@ class RealtimeRunner:
     def stop_requested(self) -> bool:
         """Whether :meth:`request_stop` was called."""
         return self._stop
+
+    def finish(self) -> int:
+        """End a run that reached its duration: fade the torque out like a stop request
+        (without counting as one); the number of periods the fade-out needs (0 when the
+        torque is already off); :meth:`period` returns False once the torque is off."""
+        if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
+            self._finishing = True
+            self.safety.request_stop()
+            return math.ceil(self.safety.envelope * self.safety.limits.fade_in / self.dt) + 2
+        return 0
 
     def emergency_stop(self) -> None:
         """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
@@ -346,7 +358,7 @@ class RealtimeRunner:
         if state == State.FAULT:
             self._after_fault += 1
             return self._after_fault < self._linger
-        return not (self._stop and state == State.IDLE)
+        return not ((self._stop or self._finishing) and state == State.IDLE)
 
     def _send(self, current: float, state: State, k: int) -> None:
         cmd = self._command
