@@ -379,6 +379,12 @@ def run(args: argparse.Namespace) -> int:
         for p in privileges:
             print(f"  {p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
         print(f"  state {counters.state}; {counters.fault_reason}")
+        if counters.frames_lost > max(10, counters.status_frames // 10):
+            print(
+                f"  {counters.frames_lost} status frames lost for {counters.status_frames} "
+                "received: is a second rig or drive on this bus? (udp_multicast: give each "
+                "rig and run pair a group of its own, --bus udp_multicast:239.74.163.50)"
+            )
         if stats.miss_ratio > 0.01:
             print(
                 f"  {100.0 * stats.miss_ratio:.1f} % of the deadlines were missed: the virtual "

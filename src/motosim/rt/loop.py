@@ -351,6 +351,10 @@ class FramePacedLoop:
             if not arrived:
                 timeouts += 1
             skip = gap - 1
+            if k + skip >= periods:  # the run's last periods passed without a frame
+                missed += periods - k
+                k = periods
+                break
             missed += skip
             k += skip
             slot = served % cap

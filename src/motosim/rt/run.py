@@ -1,7 +1,8 @@
 """One control period over the bus: read the drive, step the stack, guard, send, record.
 
-:class:`RealtimeRunner` is what ``motosim run`` drives with a :class:`~motosim.rt.loop.RateLoop`.
-Each period it
+:class:`RealtimeRunner` is what ``motosim run`` drives with a :class:`~motosim.rt.loop.RateLoop`
+(paced by the clock) or a :class:`~motosim.rt.loop.FramePacedLoop` (paced by the drive's
+status frame, which :meth:`RealtimeRunner.wait_status` waits for). Each period it
 
 1. reads every frame waiting on the bus (non-blocking): status frames are decoded with the
    precompiled codec and checked by the safety stage (checksum, alive counter, drive fault);
@@ -17,8 +18,8 @@ The stack starts on the first valid status frame (reset at its angle and current
 safety stage is enabled then (or, with ``wait_for_arm``, when :meth:`RealtimeRunner.arm` is
 called: the view's Arm button), so the torque fades in over 0.5 s. A stop request (Ctrl-C)
 fades the torque out and ends the run once it is zero (so does :meth:`RealtimeRunner.finish`
-at the end of the run's duration); a fault zeroes the command at once
-and ends the run ``linger`` seconds later, the zero command still sent meanwhile.
+at the end of the run's duration); a fault zeroes the command at once and ends the run
+``linger`` seconds later, the zero command still sent meanwhile.
 """
 
 import math
