@@ -123,7 +123,8 @@ def _compiled(kernel: Any, model: StackModel, data: Any) -> Any:
         return kernel
     import numba
 
-    types = tuple(numba.typeof(a) for a in (model, data, 0.0, 0.0, 0.0, 0.0, 0.0))
+    typeof: Any = numba.typeof
+    types = tuple(typeof(a) for a in (model, data, 0.0, 0.0, 0.0, 0.0, 0.0))
     found = overloads.get(types)
     return kernel if found is None else found.entry_point
 
