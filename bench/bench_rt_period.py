@@ -30,6 +30,8 @@ from motosim.rt.stack import CompiledStack
 from motosim.rt.telemetry import StateSender
 from motosim.sim import build_stack, parse_scenario, prepare
 
+BUS = "udp_multicast:239.74.163.141"  # a group of its own (other users of the machine)
+
 LIMITS = SafetyLimits(
     max_current=10.0, max_slew=2000.0, max_speed=6.0, speed_band=4.0, soft_stop=0.6,
     hard_stop=0.8, end_stop_gain=50.0, hands_off_torque=0.3, hands_off_time=1.0,
@@ -75,7 +77,7 @@ def _us(values: np.ndarray) -> str:
 
 def _measure(fast: bool, n: int) -> dict[str, np.ndarray]:
     codecs = handlebar_codecs()
-    host, drive = open_link("udp_multicast", fast=fast), open_link("udp_multicast", fast=fast)
+    host, drive = open_link(BUS, fast=fast), open_link(BUS, fast=fast)
     st = codecs.status
     values = np.zeros(len(st.names))
     counter = [0]
