@@ -29,6 +29,8 @@ from motosim.rt.safety import SafetyLimits, SafetyStage
 from motosim.rt.stack import CompiledStack
 from motosim.rt.telemetry import StateSender
 from motosim.sim import build_stack, parse_scenario, prepare
+from motosim.sim.stack import new_data, reset
+from motosim.sim.stack import step as sim_step
 
 BUS = "udp_multicast:239.74.163.141"  # a group of its own (other users of the machine)
 
@@ -120,6 +122,10 @@ def _pieces(n: int) -> dict[str, np.ndarray]:
     codecs = handlebar_codecs()
     stack = _stack()
     stack.reset(0.0, 0.0)
+    model, fast_step = stack.model, stack._step  # the same kernel, two ways to call it
+    data, data2 = new_data(model), new_data(model)  # each from the same start
+    reset(model, data, 0.0, 0.0)
+    reset(model, data2, 0.0, 0.0)
     safety = SafetyStage(LIMITS, dt=1e-3)
     safety.enable()
     cmd = np.zeros(len(codecs.command.names))
@@ -132,7 +138,15 @@ def _pieces(n: int) -> dict[str, np.ndarray]:
         return {
             "codec: encode the command": _times(lambda: codecs.command.encode(cmd), n),
             "codec: decode the status": _times(lambda: codecs.status.decode(frame, buf), n),
-            "stack step (compiled, from Python)": _times(lambda: stack.step(0.01, 0.0), n),
+            "stack step (CompiledStack.step, from Python)": _times(
+                lambda: stack.step(0.01, 0.0), n
+            ),
+            "stack kernel through numba's dispatcher (before)": _times(
+                lambda: sim_step(model, data, 0.01, 0.0, 0.0, 0.0, 0.0), n
+            ),
+            "stack kernel, compiled entry point (after)": _times(
+                lambda: fast_step(model, data2, 0.01, 0.0, 0.0, 0.0, 0.0), n
+            ),
             "safety stage step": _times(
                 lambda: safety.step(1.0, theta=0.0, omega=0.0, tau_hat=1.0), n
             ),
