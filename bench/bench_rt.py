@@ -8,8 +8,11 @@ mlockall: applied as root, refused otherwise, and reported):
    Python) against its offline speed (``motosim simulate``: the whole closed loop compiled,
    plant included, per period) -- the loop must not make the step slower;
 3. ``motosim run`` at 1 kHz (status frames at 1 kHz) against ``motosim rig`` in another
-   process over python-can's ``udp_multicast`` for 60 s, and the same at 100 Hz (control
-   and status), reading each run's ``timing.json``.
+   process over ``udp_multicast`` for 60 s, and at 100 Hz (control and status) for 20 s,
+   each with python-can's link (``--link python-can``: the "before") and with the fast link
+   (``--link fast``, the default: the "after"), in the same run, and at 1 kHz paced by the
+   rig's status frames (``--pace bus``), reading each run's ``timing.json``; the load
+   average at each run's start is printed with its figures.
 
 Run alone: ``python bench/bench_rt.py [--seconds 60]``; the machine's other load shows in the
 figures (a 2-core VM shared with other work misses deadlines that a quiet lab PC does not).
@@ -118,17 +121,23 @@ def _motosim(*argv: str) -> subprocess.Popen[str]:
     )  # fmt: skip
 
 
-def _run_against_rig(control: float, seconds: float) -> dict[str, object]:
+BUS = "udp_multicast:239.74.163.131"  # a group of its own (other users of the machine)
+
+
+def _run_against_rig(
+    control: float, seconds: float, *, link: str = "fast", pace: str = "clock"
+) -> dict[str, object]:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench_rt.toml"
         # the watchdog is lenient here so that a VM stall shows up in the figures rather
         # than ending the run; the tests check the 3-period watchdog itself
         path.write_text(SCENARIO.format(duration=seconds, control=control, watchdog=1000))
-        rig = _motosim("rig", str(path), "--bus", "udp_multicast", "--duration", "36000",
-                       "--rate", f"{control:g}", *RIG)  # fmt: skip
+        rig = _motosim("rig", str(path), "--bus", BUS, "--duration", "36000",
+                       "--rate", f"{control:g}", "--link", link, *RIG)  # fmt: skip
         time.sleep(5.0)
-        run = _motosim("run", str(path), "--bus", "udp_multicast", "--out", f"{tmp}/out",
-                       "--json", "--no-report", *RT)  # fmt: skip
+        load = os.getloadavg()
+        run = _motosim("run", str(path), "--bus", BUS, "--out", f"{tmp}/out", "--json",
+                       "--no-report", "--link", link, "--pace", pace, *RT)  # fmt: skip
         out, err = run.communicate()
         rig.send_signal(signal.SIGINT)
         rig.communicate(timeout=30)
@@ -143,11 +152,13 @@ def _run_against_rig(control: float, seconds: float) -> dict[str, object]:
         "wake_max_us": _us(t["wake_max"]),
         "compute_p50_us": _us(t["compute_p50"]),
         "compute_p99_us": _us(t["compute_p99"]),
+        "compute_p999_us": _us(t["compute_p999"]),
         "compute_max_us": _us(t["compute_max"]),
         "missed": t["missed"],
         "periods": t["periods"],
         "missed_percent": round(100.0 * t["miss_ratio"], 3),
         "frames_lost": payload["counters"]["frames_lost"],
+        "load average (1, 5, 15 min) at the start": " ".join(f"{x:.1f}" for x in load),
         "privileges": ", ".join(
             f"{p['name']} {'applied' if p['applied'] else 'refused'}" for p in payload["privileges"]
         ),
@@ -172,9 +183,21 @@ def run(seconds: float = 60.0) -> dict[str, object]:
         "rt-check 1 kHz missed": check["missed"],
     }
     out |= {f"stack {k}": v for k, v in _stack_speed().items()}
+    cases = [  # (rate, seconds, link, pace): python-can's link before, the fast link after
+        (1000.0, seconds, "python-can", "clock"),
+        (1000.0, seconds, "fast", "clock"),
+        (1000.0, seconds, "fast", "bus"),
+        (100.0, seconds / 3, "python-can", "clock"),
+        (100.0, seconds / 3, "fast", "clock"),
+    ]
+    for control, length, link, pace in cases:
+        figures = _run_against_rig(control, length, link=link, pace=pace)
+        out |= {f"run {control:g} Hz {link} {pace} {k}": v for k, v in figures.items()}
     for control in (1000.0, 100.0):
-        figures = _run_against_rig(control, seconds if control == 1000.0 else seconds / 3)
-        out |= {f"run {control:g} Hz {k}": v for k, v in figures.items()}
+        before, after = (out.get(f"run {control:g} Hz {x} clock compute_p50_us") for x in
+                         ("python-can", "fast"))  # fmt: skip
+        if isinstance(before, float) and isinstance(after, float):
+            out[f"run {control:g} Hz compute p50 fast/python-can"] = round(after / before, 2)
     return out
 
 

@@ -13,8 +13,8 @@ import pytest
 
 from motosim.params import load_parameters
 from motosim.rt.clock import SimulatedClock
-from motosim.rt.loop import RateLoop
-from motosim.rt.rig import RigFaults, RigSettings, VirtualRig
+from motosim.rt.loop import FramePacedLoop, RateLoop
+from motosim.rt.rig import LockstepLink, RigFaults, RigSettings, VirtualRig
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import Fault, SafetyLimits, State
 
@@ -219,3 +219,84 @@ def test_waiting_for_arm_keeps_the_torque_off_until_arm_then_fades_in(
     envelope = np.arange(1, 51) / 50.0
     assert np.allclose(rows[30:80, 4], envelope * rows[30:80, 3], atol=1e-12)
     assert np.any(rows[30:, 4] != 0.0)
+
+
+def _paced(
+    links: tuple[CanLink, CanLink],
+    rate: float,
+    seconds: float,
+    *,
+    rider: float = 3.0,
+    rig_until: float = math.inf,
+    **rig: object,
+) -> tuple[RealtimeRunner, FramePacedLoop, np.ndarray, list[int]]:
+    """The loop paced by the rig's status frames; the rig stops at ``rig_until`` [s]."""
+    host, drive = links
+    settings = _settings(rate, **rig)
+    tau = np.full(round(seconds * settings.plant_rate) + 1, rider)
+    vrig = VirtualRig(HB, settings, CODECS, drive, tau, np.random.default_rng(0))
+    clock = SimulatedClock()
+    clock.listen(lambda t: vrig.advance_to(t) if t < rig_until else None)
+    link = LockstepLink(host, clock, 1.0 / settings.plant_rate)
+    runner = RealtimeRunner(SpringStack(20.0), link, CODECS, LIMITS, rate=rate, clock=clock)
+    frames: list[int] = []  # status frames handled by each period (its wait included)
+
+    def period(k: int, t: float) -> bool:
+        before = runner.status_frames
+        carry_on = runner.period(k, t)
+        frames.append(runner.status_frames - before)
+        return carry_on
+
+    def counted(until: float) -> bool:
+        before = runner.status_frames
+        got = runner.wait_status(until)
+        frames.append(runner.status_frames - before)
+        return got
+
+    loop = FramePacedLoop(
+        rate, clock, counted, timeout=runner.watchdog_time, first_timeout=runner.first_timeout
+    )
+    loop.run(period, periods=round(seconds * rate))
+    per_period = [a + b for a, b in zip(frames[0::2], frames[1::2], strict=False)]
+    return runner, loop, runner.ring.drain(), per_period
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_paced_by_the_bus_each_period_starts_on_a_status_frame(
+    links: tuple[CanLink, CanLink], rate: float
+) -> None:
+    # latency and jitter on the frames: a clock-paced loop sees 0 or 2 frames in some
+    # periods, a bus-paced loop exactly one, whenever it comes
+    runner, loop, rows, per_period = _paced(links, rate, 1.0, latency=3e-4, jitter=1e-4)
+    assert runner.counters().fault == "NONE" and rows[-1, 5] == State.RUNNING
+    assert per_period[1:] == [1] * (len(per_period) - 1)  # the first wait reads power-on's too
+    assert loop.stats().missed == 0 and loop.timeouts == 0
+    interval = np.diff(rows[:, 0])
+    assert np.mean(interval) == pytest.approx(1.0 / rate, rel=1e-2)
+    assert np.ptp(interval) > 0.0  # the loop follows the frames' jitter, not a clock
+    # and the same spring holds the rider's 3 N*m where eq. (5) balances them (see above)
+    stiffness = 20.0 * HB.torque_per_amp
+    assert abs(rows[-1, 1] - 3.0 / stiffness) <= HB.beta_s / stiffness + 2 * math.pi / 2**14
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_paced_by_the_bus_a_stopped_rig_trips_the_watchdog_within_its_periods(
+    links: tuple[CanLink, CanLink], rate: float
+) -> None:
+    runner, loop, rows, _ = _paced(links, rate, 1.2, rig_until=0.8)
+    k = int(np.argmax(rows[:, 6] > 0))
+    assert runner.counters().fault == "WATCHDOG" and loop.timeouts >= 1
+    # the wait for the next frame times out watchdog_periods (3) periods after the last
+    # frame, and that period sends zero
+    assert rows[k, 0] - rows[k - 1, 0] <= 3.0 / rate + 1e-9
+    assert rows[k - 1, 4] != 0.0 and np.all(rows[k:, 4] == 0.0)
+    # the run goes on sending zero at the watchdog's pace until its linger ends
+    assert rows.shape[0] - k < 0.2 * rate
+
+
+def test_paced_by_the_bus_without_a_drive_trips_no_drive_after_the_start_timeout(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    runner, loop, rows, _ = _paced(links, 100.0, 3.0, rig_until=0.0)
+    assert runner.counters().fault == "NO_DRIVE" and np.all(rows[:, 4] == 0.0)
+    assert rows[0, 0] == 0.0 and loop.stats().missed >= 100  # 1 s of frame periods

@@ -34,6 +34,13 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--duration", type=float, help="stop after this long [s]")
     parser.add_argument(
+        "--link",
+        choices=("fast", "python-can"),
+        default="fast",
+        help="on udp_multicast, send and read python-can's frames on its socket without a "
+        "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
+    )
+    parser.add_argument(
         "--rate",
         type=float,
         default=1000.0,
@@ -110,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
         twin = PlatformTwin(
             load_platform(args.platform).platform, 0.001, _platform_address(args.platform_udp)
         )
-    link = open_link(args.bus)
+    link = open_link(args.bus, fast=args.link == "fast")
     try:
         rig = VirtualRig(
             inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed)

@@ -1,6 +1,8 @@
 """``motosim run``: the stack in real time against the handlebar drive over CAN."""
 
 import argparse
+import logging
+import math
 import signal
 import sys
 import threading
@@ -31,7 +33,8 @@ def register(sub: Any) -> None:
             "Run the scenario's stack in real time: read the drive's status frames, step the "
             "compiled stack at the control rate, pass the command through the safety stage and "
             "send it. Writes DIR/result.h5 and DIR/result.csv (as simulate does, one row per "
-            "control period) and DIR/timing.json. Ctrl-C fades the torque out and stops; a "
+            "control period) and DIR/timing.json. At the end of the duration, and on Ctrl-C, "
+            "the torque fades out; a "
             "second Ctrl-C, or Enter on the terminal, is an emergency stop."
         ),
     )
@@ -42,7 +45,22 @@ def register(sub: Any) -> None:
         help="python-can INTERFACE[:CHANNEL]: socketcan:can0, virtual, udp_multicast, ...",
     )
     parser.add_argument("--out", required=True, help="folder for the result")
+    parser.add_argument(
+        "--link",
+        choices=("fast", "python-can"),
+        default="fast",
+        help="on udp_multicast, send and read python-can's frames on its socket without a "
+        "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
+    )
     parser.add_argument("--duration", type=float, help="run for this long [s] (the scenario's)")
+    parser.add_argument(
+        "--pace",
+        choices=("clock", "bus"),
+        default="clock",
+        help="what starts each control period: this PC's clock (absolute deadlines, default) "
+        "or the drive's status frame (one period per frame; needs the control rate equal to "
+        "the measurement rate; the watchdog still trips if the frames stop)",
+    )
     parser.add_argument(
         "--telemetry",
         default="127.0.0.1:47474",
@@ -257,6 +275,11 @@ def _writer_main(
             summary |= extra
             summary["ring_dropped"] = float(ring.dropped)
             if not complete:  # stopped or faulted: files closed, marked incomplete
+                # the writer's "run interrupted" warning would name this exception and the
+                # staging folder; motosim run says itself where the partial result is
+                logging.getLogger("motosim.io.results").addFilter(
+                    lambda record: not record.getMessage().startswith("run interrupted by")
+                )
                 raise _EarlyStopError
             writer.close(summary)
     except _EarlyStopError:
@@ -265,7 +288,7 @@ def _writer_main(
         ring.close()
         if server is not None:
             server.stop()
-    conn.send(("done", summary))
+    conn.send(("done", summary, str(writer.location)))
 
 
 def _keyboard(runner: Any) -> None:
@@ -301,6 +324,11 @@ def run(args: argparse.Namespace) -> int:
     rate = sc.rates.control
     periods = round(duration * rate)
     model = build_stack(inputs)
+    if args.pace == "bus" and model.measure_every != 1:
+        raise MotosimError(
+            f"--pace bus with control = {rate:g} Hz and measurement = "
+            f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"
+        )
     world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
     codecs = handlebar_codecs()
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
@@ -321,7 +349,7 @@ def run(args: argparse.Namespace) -> int:
             sender=PlatformSender(_platform_address(args.platform_udp)),
             send_every=max(1, round(rate / 100.0)),
         )
-    link = open_link(args.bus)
+    link = open_link(args.bus, fast=args.link == "fast")
     try:
         runner = RealtimeRunner(
             stack,
@@ -336,11 +364,19 @@ def run(args: argparse.Namespace) -> int:
             wait_for_arm=view is not None,
             platform=platform,
             now=clock.now,
+            clock=clock,
         )
         metadata = run_metadata(inputs) | {
-            "realtime": {"bus": args.bus, "safety": limits, "duration": duration}
+            "realtime": {
+                "bus": args.bus,
+                "pace": args.pace,
+                "safety": limits,
+                "duration": duration,
+            }
         }
-        stats, privileges, summary = _loop(
+        # a partial result is kept beside a complete one already there (--overwrite):
+        # the timing and the report go where the rows went
+        stats, privileges, summary, folder = _loop(
             args, runner, clock, rate, periods, folder, metadata,
             inputs.nominal_handlebar.torque_per_amp, view,
         )  # fmt: skip
@@ -353,6 +389,7 @@ def run(args: argparse.Namespace) -> int:
             platform.sender.close()
     timing = stats.as_dict()
     report = {
+        "pace": args.pace,
         "timing": timing,
         "units": "s",
         "privileges": [
@@ -382,13 +419,26 @@ def run(args: argparse.Namespace) -> int:
     else:
         us = 1e6
         print(f"{sc.name}: {stats.served} periods at {rate:g} Hz, result in {folder}")
+        wake = "wake-up" if args.pace == "clock" else "frame interval jitter"
         print(
-            f"  wake-up p99 {stats.wake_p99 * us:.0f} us, compute p99 "
+            f"  {wake} p99 {stats.wake_p99 * us:.0f} us, compute p99 "
             f"{stats.compute_p99 * us:.0f} us, missed {stats.missed} of {stats.periods}"
         )
         for p in privileges:
             print(f"  {p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
         print(f"  state {counters.state}; {counters.fault_reason}")
+        if counters.frames_lost > max(10, counters.status_frames // 10):
+            print(
+                f"  {counters.frames_lost} status frames lost for {counters.status_frames} "
+                "received: is a second rig or drive on this bus? (udp_multicast: give each "
+                "rig and run pair a group of its own, --bus udp_multicast:239.74.163.50)"
+            )
+        if stats.miss_ratio > 0.01:
+            print(
+                f"  {100.0 * stats.miss_ratio:.1f} % of the deadlines were missed: the virtual "
+                "motorcycle fell behind the wall clock; check this PC with motosim rt-check "
+                "and give --fifo 80 --cpu 1 --mlock (see the README's lab set-up)"
+            )
     if counters.fault == "NONE" and runner.stop_requested:
         print(f"motosim run: stopped, torque faded out; result in {folder}", file=sys.stderr)
         return 130
@@ -452,12 +502,12 @@ def _loop(
     metadata: dict[str, Any],
     torque_per_amp: float,
     view: _ViewSetup | None = None,
-) -> tuple[Any, tuple[Any, ...], dict[str, Any]]:
+) -> tuple[Any, tuple[Any, ...], dict[str, Any], Path]:
     """The real-time part: writer process (and view), privileges, signals, keyboard, the loop."""
     import dataclasses
     import multiprocessing
 
-    from motosim.rt.loop import RateLoop
+    from motosim.rt.loop import FramePacedLoop, RateLoop
     from motosim.rt.privileges import freeze_gc, thaw_gc
 
     presses = [0]
@@ -502,27 +552,47 @@ def _loop(
             print(f"motosim run: dashboard    {url}/dashboard?token={view.token}", file=err)
             print("motosim run: the torque is off until Arm is pressed", file=err, flush=True)
         privileges = privileges_from_args(args)
-        loop = RateLoop(rate, clock, capacity=max(1, min(periods, 1 << 22)))
+        margin = math.ceil(runner.safety.limits.fade_in * rate) + 4  # the fade-out at the end
+        capacity = max(1, min(periods + margin, 1 << 22))
+        loop: RateLoop | FramePacedLoop
+        if args.pace == "bus":
+            loop = FramePacedLoop(
+                rate, clock, runner.wait_status, timeout=runner.watchdog_time,
+                first_timeout=runner.first_timeout, capacity=capacity,
+            )  # fmt: skip
+        else:
+            loop = RateLoop(rate, clock, capacity=capacity)
         if sys.stdin is not None and sys.stdin.isatty():
             threading.Thread(target=_keyboard, args=(runner,), daemon=True).start()
             print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=sys.stderr)
+        print(
+            f"motosim run: {rate:g} Hz on {args.bus}, paced by the "
+            f"{'clock' if args.pace == 'clock' else 'status frames'}, {periods / rate:g} s",
+            file=sys.stderr,
+            flush=True,
+        )
         freeze_gc()
         runner.discard_pending()  # frames queued while the writer started are stale
         try:
             loop.run(runner.period, periods=periods)
+            complete = runner.safety.fault.name == "NONE" and loop.stats().periods >= periods
+            fade = runner.finish() if complete else 0
+            if fade:  # the duration is over: the torque fades out, never a step to zero;
+                # the run ends when it is out (missed deadlines do not shorten the fade)
+                loop.run(runner.period, periods=10 * fade)
         finally:
             thaw_gc()
         stats = loop.stats()
-        complete = runner.safety.fault.name == "NONE" and stats.periods >= periods
+        complete = complete and runner.safety.fault.name == "NONE"
         extra = {f"rt_{key}": float(value) for key, value in stats.as_dict().items()}
         ours.send(("close", complete, extra))
         if not ours.poll(120.0):
             raise MotosimError(f"{folder}: the result writer did not finish")
-        summary: dict[str, Any] = ours.recv()[1]
+        _, summary, location = ours.recv()
     finally:
         writer.join(timeout=10.0)
         if writer.is_alive():
             writer.kill()
         runner.ring.close()
         signal.signal(signal.SIGINT, previous)
-    return stats, privileges, summary
+    return stats, privileges, summary, Path(location)

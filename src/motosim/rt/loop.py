@@ -7,6 +7,12 @@ send several commands to the drive at once): the deadlines that have passed are 
 counted as misses, and the loop resumes on the next deadline still ahead. This is the
 "Ratekeeper" pattern of openpilot's ``common/realtime.py``.
 
+:class:`FramePacedLoop` is the other way to pace the loop: by the drive's own status frame.
+It blocks on the bus until the frame comes (a ``wait`` given by the caller, with a timeout)
+and runs one step per frame, so that the stack's period is the drive's, without a second
+clock beating against it. A wait that times out still runs a step (the caller's safety stage
+trips its watchdog then), so a drive that stops sending cannot hold the loop.
+
 The wake-up latency (time of wake-up minus deadline [s]) and the compute time of each step
 [s] go into arrays preallocated before the first deadline; nothing inside the loop allocates
 beyond Python's small floats, and nothing logs. :meth:`RateLoop.stats` summarises them once
@@ -21,7 +27,7 @@ import numpy as np
 from motosim.errors import MotosimError
 from motosim.rt.clock import Clock
 
-__all__ = ["RateLoop", "TimingStats", "timing_stats"]
+__all__ = ["FramePacedLoop", "RateLoop", "TimingStats", "timing_stats"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -210,6 +216,169 @@ class RateLoop:
 
     def stats(self) -> TimingStats:
         """The timing of every run so far (the last ``capacity`` steps for the percentiles)."""
+        n = min(self._served, self._wake.size)
+        return timing_stats(
+            self._rate,
+            self._wake[:n],
+            self._compute[:n],
+            periods=self._periods,
+            missed=self._missed,
+        )
+
+
+class FramePacedLoop:
+    """Run a step each time the drive's status frame arrives (pacing by the bus).
+
+    Each period the loop calls ``wait(until)``, which blocks until a status frame has arrived
+    (True) or the clock reaches ``until`` [s] (False), then ``step(k, t)`` with ``t`` the time
+    the wait returned. ``until`` is the last wake-up plus ``timeout`` (the watchdog's time),
+    or plus ``first_timeout`` before the first frame. A timeout still runs the step: the
+    frames due meanwhile are counted as missed and ``k`` jumps over them.
+
+    The timing is kept as :class:`TimingStats` with these meanings: ``wake`` is the interval
+    between two frames minus the nominal period (the drive's pace as the loop sees it: its
+    jitter, negative for a frame early), ``compute`` the step's time, ``missed`` the frame
+    periods without a frame (a gap of ``n`` periods counts ``n - 1``).
+
+    Parameters
+    ----------
+    rate : float
+        The drive's status frame rate [Hz], > 0.
+    clock : Clock
+        The time.
+    wait : callable
+        ``wait(until) -> bool``, see above (``RealtimeRunner.wait_status``).
+    timeout, first_timeout : float
+        The longest wait for a frame [s], > 0, and for the first one.
+    capacity : int
+        Steps whose timing is kept.
+
+    Examples
+    --------
+    >>> from motosim.rt.clock import SimulatedClock
+    >>> clock = SimulatedClock()
+    >>> frames = iter([0.01, 0.02, 0.04, 0.05])  # a 100 Hz drive that lost its 3rd frame
+    >>> def wait(until):
+    ...     due = next(frames)
+    ...     clock.sleep_until(min(due, until))
+    ...     return due <= until
+    >>> loop = FramePacedLoop(100.0, clock, wait, timeout=0.03)
+    >>> ks = []
+    >>> loop.run(lambda k, t: ks.append(k) is None, periods=5)
+    4
+    >>> ks, loop.stats().missed
+    ([0, 1, 3, 4], 1)
+    """
+
+    def __init__(
+        self,
+        rate: float,
+        clock: Clock,
+        wait: Callable[[float], bool],
+        *,
+        timeout: float,
+        first_timeout: float | None = None,
+        capacity: int = 1 << 17,
+    ) -> None:
+        if not (np.isfinite(rate) and rate > 0.0):
+            raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
+        first = timeout if first_timeout is None else first_timeout
+        if not (np.isfinite(timeout) and timeout > 0.0 and np.isfinite(first) and first > 0.0):
+            raise MotosimError(
+                f"timeout = {timeout!r} s, first_timeout = {first!r} s: expected positive times"
+            )
+        if capacity < 1:
+            raise MotosimError(f"capacity = {capacity!r}: expected at least 1 step")
+        self._rate = float(rate)
+        self._period = 1.0 / self._rate
+        self._clock = clock
+        self._wait = wait
+        self._timeout = float(timeout)
+        self._first_timeout = float(first)
+        self._wake = np.zeros(capacity)
+        self._compute = np.zeros(capacity)
+        self._served = 0
+        self._missed = 0
+        self._periods = 0
+        self._timeouts = 0
+        self._stop = False
+
+    @property
+    def period(self) -> float:
+        """The drive's nominal frame period [s]."""
+        return self._period
+
+    @property
+    def timeouts(self) -> int:
+        """Waits that ended without a frame."""
+        return self._timeouts
+
+    def stop(self) -> None:
+        """Ask the loop to end after the current step (safe from a signal handler)."""
+        self._stop = True
+
+    def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
+        """Call ``step(k, t)`` once per frame until it returns False or ``periods`` pass.
+
+        Returns
+        -------
+        int
+            The number of steps run.
+        """
+        if periods < 0:
+            raise MotosimError(f"periods = {periods!r}: expected a non-negative count")
+        now = self._clock.now
+        wait = self._wait
+        wake, compute = self._wake, self._compute
+        cap = wake.size
+        period = self._period
+        served = self._served
+        missed = 0
+        timeouts = 0
+        self._stop = False
+        k = 0
+        last = now()
+        limit = self._first_timeout
+        first = True
+        while k < periods and not self._stop:
+            arrived = wait(last + limit)
+            woke = now()
+            if first and arrived:  # the first frame's arrival is not a period after anything
+                gap, jitter, first = 1, 0.0, False
+            else:
+                gap = max(1, round((woke - last) / period))
+                jitter = woke - last - gap * period
+            if not arrived:
+                timeouts += 1
+            skip = gap - 1
+            if k + skip >= periods:  # the run's last periods passed without a frame
+                missed += periods - k
+                k = periods
+                break
+            missed += skip
+            k += skip
+            slot = served % cap
+            wake[slot] = jitter
+            carry_on = step(k, woke)
+            compute[slot] = now() - woke
+            served += 1
+            k += 1
+            last = woke
+            limit = self._timeout
+            if not carry_on:
+                break
+        if k > periods:
+            missed -= k - periods
+            k = periods
+        self._missed += missed
+        self._periods += k
+        self._timeouts += timeouts
+        ran = served - self._served
+        self._served = served
+        return ran
+
+    def stats(self) -> TimingStats:
+        """The timing of every run so far (see the class docstring for the meanings)."""
         n = min(self._served, self._wake.size)
         return timing_stats(
             self._rate,

@@ -14,8 +14,9 @@
 - the bus: a latency with jitter (truncated normal), random frame loss (Bernoulli) and
   bursts (a two-state Gilbert-Elliott channel), stale frames (the previous frame sent again,
   counter unchanged) and duplicated frames, a bus-off window (nothing sent);
-- injected faults from a given time: frozen encoder, sign flip of the angle, an offset on the
-  current sensor, a frame with a wrong checksum, an E-stop frame, the drive's fault flag.
+- injected faults from a given time after the run's first enabled command: frozen encoder,
+  sign flip of the angle, an offset on the current sensor, a frame with a wrong checksum, an
+  E-stop frame, the drive's fault flag.
 
 The rig is stepped with :meth:`VirtualRig.advance_to`: in one process on a
 :class:`~motosim.rt.clock.SimulatedClock` (lock-step tests, each deadline advances the rig
@@ -36,21 +37,29 @@ from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
 from motosim.model.handlebar import step_exact
 from motosim.params.handlebar import HandlebarParameters
+from motosim.rt.clock import SimulatedClock
 from motosim.rt.run import FrameLink
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
 from motosim.sim.rider import rider_torque
 
-__all__ = ["RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
+__all__ = ["LockstepLink", "RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
 
 Array = NDArray[np.float64]
 _NEVER = math.inf
+_RUN_GONE = 1.0
+"""Silence on the bus [s] after which the rig takes the run as gone (its process stopped)."""
 
 
 @dataclass(frozen=True, slots=True)
 class RigFaults:
-    """Times [s] from which each fault is injected (inf: never) and the current offset [A]."""
+    """Times [s] from which each fault is injected (inf: never) and the current offset [A].
+
+    The times, like ``bus_off_at``, count from the run's first enabled command (the rig
+    may run long before ``motosim run`` starts; each run gets its faults again), or from
+    the rig's start when it is made with ``rider_on_enable=False``.
+    """
 
     frozen_encoder: float = _NEVER
     sign_flip: float = _NEVER
@@ -86,7 +95,8 @@ class RigSettings:
         Probabilities of sending the previous frame again instead of a new one, and of sending
         a new frame twice.
     bus_off_at, bus_off_duration : float
-        A window [s] in which the rig sends nothing.
+        A window [s] in which the rig sends nothing (from the run's first enabled command,
+        as the faults' times).
     faults : RigFaults
         Injected faults.
     """
@@ -225,7 +235,10 @@ class VirtualRig:
         Initial angle [rad].
     rider_on_enable : bool
         Start the rider's profile when the first command with ENABLE arrives (a person takes
-        the handlebar when the simulator starts); else at the rig's t = 0.
+        the handlebar when the simulator starts) and let go when the run ends (ENABLE 0, or
+        no command for 1 s: its process has gone), the profile starting again with the next
+        enable; else the profile runs from the rig's t = 0 whatever the
+        drive does.
     """
 
     def __init__(
@@ -277,6 +290,8 @@ class VirtualRig:
         self._c_current = codecs.position(codecs.command, "current_command")
         self._c_enable = codecs.position(codecs.command, "enable")
         self._k_rider = -1 if rider_on_enable else 0
+        self._let_go = rider_on_enable
+        self._t_run = math.inf if rider_on_enable else 0.0  # where fault times count from
         self._idle = np.zeros(1)
         self._held = np.zeros(1)
         self._started = False
@@ -309,6 +324,15 @@ class VirtualRig:
             self._last_command = self.t
             if self.enabled and self._k_rider < 0:
                 self._k_rider = self.k
+                self._start_run()
+
+    def _start_run(self) -> None:
+        """A run starts (the first enabled command after the rider let go): the injected
+        faults and the bus-off window count from now, each once per run."""
+        self._t_run = self.t
+        self._frozen = math.nan
+        self._estop_sent = False
+        self._bad_sent = False
 
     def advance_to(self, t: float) -> None:
         """Take the commands received, run the plant to time ``t`` [s], send what is due."""
@@ -319,7 +343,10 @@ class VirtualRig:
             self._started = True
             self._sample()
         while self.k * self.h < t - 1e-12:
-            live = self.enabled and self.t - self._last_command <= s.command_timeout
+            silent = self.t - self._last_command
+            live = self.enabled and silent <= s.command_timeout
+            if self._let_go and (not self.enabled or silent > _RUN_GONE):
+                self._k_rider = -1  # the run has ended: the rider lets go
             n = self._sub - self.k % self._sub  # up to the next status sample
             rider, k0 = self.rider_torque, self.k - self._k_rider
             if self._k_rider < 0:
@@ -333,12 +360,12 @@ class VirtualRig:
             )  # fmt: skip
             self.k += n
             self._sample()
-            self._deliver(self.t)
+            self._deliver(min(self.t, t))  # the plant may run ahead of t; the bus may not
         self._deliver(t)
 
     def _sample(self) -> None:
         s, f = self.settings, self.settings.faults
-        t = self.t
+        t = self.t - self._t_run  # the faults' time: since the run's first enable
         theta, i = float(self.x[0]), float(self.x[2])
         if s.encoder_bits > 0:
             q = 2.0 * math.pi / (1 << s.encoder_bits)
@@ -358,7 +385,7 @@ class VirtualRig:
             es = self.codecs.estop
             values = np.zeros(len(es.names))
             values[self.codecs.position(es, "estop_signal")] = 1.0
-            self._push(t, es.encode(values), es.frame_id)
+            self._push(self.t, es.encode(values), es.frame_id)
         v = self._values
         v[self._p["angle"]] = theta
         v[self._p["current"]] = i
@@ -386,9 +413,9 @@ class VirtualRig:
         if s.bus_off_at <= t < s.bus_off_at + s.bus_off_duration:
             self.frames_dropped += 1
             return
-        self._push(t, frame)
+        self._push(self.t, frame)
         if s.duplicate > 0.0 and rng.random() < s.duplicate:
-            self._push(t, frame)
+            self._push(self.t, frame)
 
     def _push(self, t: float, frame: bytes, frame_id: int | None = None) -> None:
         s = self.settings
@@ -455,3 +482,46 @@ class VirtualRider:
             )  # fmt: skip
             self.torque = float(tau)
         return self.torque
+
+
+class LockstepLink:
+    """A link whose blocking receive lets simulated time pass (bus pacing in lock-step).
+
+    ``receive(timeout)`` with a positive ``timeout`` polls ``link`` and, while nothing has
+    come, advances ``clock`` by ``tick`` [s] at a time (a rig listening on the clock runs and
+    sends meanwhile) until a frame comes or ``timeout`` has passed: what a blocking receive
+    on a real bus does, deterministically. ``send`` and a zero-timeout ``receive`` go
+    straight to ``link``.
+
+    Parameters
+    ----------
+    link : FrameLink
+        The host's end of the bus.
+    clock : SimulatedClock
+        The clock the rig listens on.
+    tick : float
+        The time step of the wait [s], > 0 (the rig's plant step: frames are due on it).
+    """
+
+    def __init__(self, link: FrameLink, clock: SimulatedClock, tick: float) -> None:
+        if not (math.isfinite(tick) and tick > 0.0):
+            raise MotosimError(f"tick = {tick!r} s: expected a positive time")
+        self.link = link
+        self.clock = clock
+        self.tick = float(tick)
+
+    def send(self, frame_id: int, data: bytes) -> bool:
+        """Send one frame on ``link``."""
+        return self.link.send(frame_id, data)
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        """The next frame, letting simulated time pass for up to ``timeout`` [s]."""
+        frame = self.link.receive()
+        if frame is not None or timeout <= 0.0:
+            return frame
+        clock = self.clock
+        end = clock.now() + timeout
+        while frame is None and clock.now() < end:
+            clock.sleep_until(min(clock.now() + self.tick, end))
+            frame = self.link.receive()
+        return frame

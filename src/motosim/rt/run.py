@@ -1,7 +1,8 @@
 """One control period over the bus: read the drive, step the stack, guard, send, record.
 
-:class:`RealtimeRunner` is what ``motosim run`` drives with a :class:`~motosim.rt.loop.RateLoop`.
-Each period it
+:class:`RealtimeRunner` is what ``motosim run`` drives with a :class:`~motosim.rt.loop.RateLoop`
+(paced by the clock) or a :class:`~motosim.rt.loop.FramePacedLoop` (paced by the drive's
+status frame, which :meth:`RealtimeRunner.wait_status` waits for). Each period it
 
 1. reads every frame waiting on the bus (non-blocking): status frames are decoded with the
    precompiled codec and checked by the safety stage (checksum, alive counter, drive fault);
@@ -16,8 +17,9 @@ Each period it
 The stack starts on the first valid status frame (reset at its angle and current) and the
 safety stage is enabled then (or, with ``wait_for_arm``, when :meth:`RealtimeRunner.arm` is
 called: the view's Arm button), so the torque fades in over 0.5 s. A stop request (Ctrl-C)
-fades the torque out and ends the run once it is zero; a fault zeroes the command at once
-and ends the run ``linger`` seconds later, the zero command still sent meanwhile.
+fades the torque out and ends the run once it is zero (so does :meth:`RealtimeRunner.finish`
+at the end of the run's duration); a fault zeroes the command at once and ends the run
+``linger`` seconds later, the zero command still sent meanwhile.
 """
 
 import math
@@ -30,6 +32,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
+from motosim.rt.clock import Clock
 from motosim.rt.ring import SampleRing
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
 
@@ -137,6 +140,8 @@ class RealtimeRunner:
     now : callable, optional
         The loop's clock (``Clock.now``) [s], read twice per period for the ``wake`` and
         ``compute`` columns; without it they are NaN.
+    clock : Clock, optional
+        The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
     """
 
     def __init__(
@@ -156,12 +161,14 @@ class RealtimeRunner:
         wait_for_arm: bool = False,
         platform: "PlatformOutput | None" = None,
         now: Callable[[], float] | None = None,
+        clock: Clock | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
         self.stepper = stepper
         self._now = now
         self._calls = 0
+        self.clock = clock
         self.telemetry = telemetry
         self.platform = platform
         self.link = link
@@ -200,13 +207,26 @@ class RealtimeRunner:
         self._current = math.nan
         self._prev_theta = math.nan
         self._started = False
+        self._fresh = False
         self._stop = False
+        self._finishing = False
         self._armed = not wait_for_arm
         self._arm_request = False
         self._after_fault = 0
         self._sent = 0
         self.status_frames = 0
         self.send_errors = 0
+
+    @property
+    def first_timeout(self) -> float:
+        """How long a bus-paced loop waits for the drive's first frame [s]: one period past
+        ``start_timeout``, so that the ``NO_DRIVE`` fault trips on that wait's timeout."""
+        return (self._start_timeout + 1) * self.dt
+
+    @property
+    def watchdog_time(self) -> float:
+        """The watchdog's time [s]: ``watchdog_periods`` status frame periods."""
+        return self.safety.watchdog_periods * self.dt
 
     # --- operator ----------------------------------------------------------------------
     def request_stop(self) -> None:
@@ -227,6 +247,16 @@ class RealtimeRunner:
         """Whether :meth:`request_stop` was called."""
         return self._stop
 
+    def finish(self) -> int:
+        """End a run that reached its duration: fade the torque out like a stop request
+        (without counting as one); the number of periods the fade-out needs (0 when the
+        torque is already off); :meth:`period` returns False once the torque is off."""
+        if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
+            self._finishing = True
+            self.safety.request_stop()
+            return math.ceil(self.safety.envelope * self.safety.limits.fade_in / self.dt) + 2
+        return 0
+
     def emergency_stop(self) -> None:
         """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
         self.safety.trip(Fault.ESTOP_KEY)
@@ -239,32 +269,61 @@ class RealtimeRunner:
         return dropped
 
     # --- the period --------------------------------------------------------------------
-    def _read_bus(self) -> bool:
-        link, safety = self.link, self.safety
+    def _frame(self, frame_id: int, data: bytes) -> bool:
+        """Handle one received frame; True if it is a status frame (valid or not)."""
         status_id, estop_id = self._ids
-        st, es = self.codecs.status, self.codecs.estop
-        fresh = False
+        if frame_id == status_id:
+            self.status_frames += 1
+            values = self._status
+            ok = self.codecs.status.decode(data, values)
+            if self.safety.status_frame(
+                checksum_ok=ok,
+                counter=values[self._i_counter],
+                drive_fault=values[self._i_drive_fault] > 0.5,
+            ):
+                self._theta = float(values[self._i_angle])
+                self._current = float(values[self._i_current])
+                self._fresh = True
+            return True
+        if frame_id == estop_id:
+            ok = self.codecs.estop.decode(data, self._estop)
+            self.safety.estop_frame(checksum_ok=ok, pressed=self._estop[self._i_estop] > 0.5)
+        return False
+
+    def _read_bus(self) -> bool:
+        receive = self.link.receive
         for _ in range(64):  # bounded: a flooded bus cannot hold the loop
-            frame = link.receive()
+            frame = receive()
             if frame is None:
                 break
-            frame_id, data = frame
-            if frame_id == status_id:
-                self.status_frames += 1
-                ok = st.decode(data, self._status)
-                values = self._status
-                if safety.status_frame(
-                    checksum_ok=ok,
-                    counter=values[self._i_counter],
-                    drive_fault=values[self._i_drive_fault] > 0.5,
-                ):
-                    self._theta = float(values[self._i_angle])
-                    self._current = float(values[self._i_current])
-                    fresh = True
-            elif frame_id == estop_id:
-                ok = es.decode(data, self._estop)
-                safety.estop_frame(checksum_ok=ok, pressed=self._estop[self._i_estop] > 0.5)
+            self._frame(frame[0], frame[1])
+        fresh = self._fresh
+        self._fresh = False
         return fresh
+
+    def wait_status(self, until: float) -> bool:
+        """Block on the bus until a status frame arrives or ``clock`` reaches ``until`` [s].
+
+        The wait of a bus-paced loop (:class:`~motosim.rt.loop.FramePacedLoop`): every frame
+        received meanwhile is handled as in a period (E-stop frames included); the frames
+        behind the status frame are read by the next :meth:`period`. On a timeout the
+        safety stage's watchdog trips (:meth:`~motosim.rt.safety.SafetyStage.silent`): the
+        timeout is the watchdog's time. Needs the runner's ``clock``.
+        """
+        clock = self.clock
+        if clock is None:
+            raise MotosimError("wait_status needs the runner's clock (clock=...)")
+        receive = self.link.receive
+        now = clock.now
+        while True:
+            remaining = until - now()
+            if remaining <= 0.0:
+                if self._started:
+                    self.safety.silent()
+                return False
+            frame = receive(remaining)
+            if frame is not None and self._frame(frame[0], frame[1]):
+                return True
 
     def period(self, k: int, t: float) -> bool:
         """Run one control period ``k`` (deadline ``t`` [s]); False when the run should end.
@@ -327,7 +386,7 @@ class RealtimeRunner:
         if state == State.FAULT:
             self._after_fault += 1
             return self._after_fault < self._linger
-        return not (self._stop and state == State.IDLE)
+        return not ((self._stop or self._finishing) and state == State.IDLE)
 
     def _send(self, current: float, state: State, k: int) -> None:
         cmd = self._command

@@ -238,6 +238,11 @@ class SafetyStage:
         self.frames_lost = 0
         self.frames_stale = 0
 
+    @property
+    def watchdog_periods(self) -> int:
+        """Control periods without a valid status frame that trip the watchdog."""
+        return self._watchdog
+
     # --- state -------------------------------------------------------------------------
     @property
     def state(self) -> State:
@@ -323,6 +328,13 @@ class SafetyStage:
             self.trip(Fault.DRIVE_FAULT)
         self._fresh = True
         return True
+
+    def silent(self) -> None:
+        """The watchdog's whole time passed without a valid status frame (a bus-paced loop's
+        wait timed out): trip the watchdog now, unless IDLE (as :meth:`step` would after
+        ``watchdog_periods`` periods)."""
+        if self._state != State.IDLE:
+            self.trip(Fault.WATCHDOG)
 
     def estop_frame(self, *, checksum_ok: bool, pressed: bool) -> None:
         """An E-stop frame: pressed (or unreadable) trips the emergency stop."""

@@ -17,6 +17,8 @@ bookkeeping of the real-time loop:
 ``motosim simulate`` writes, so that ``motosim report`` reads a real-time run as it is.
 """
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -56,7 +58,8 @@ class CompiledStack:
     Notes
     -----
     The constructor runs one step on scratch data so that every compiled kernel is ready
-    before the loop's first deadline.
+    before the loop's first deadline, and keeps the compiled step for the model's types
+    to call it without numba's per-call type dispatch (the same machine code).
     """
 
     names = STACK_SIGNALS
@@ -74,6 +77,7 @@ class CompiledStack:
         scratch = new_data(model)  # warm-up: compile (or load) every kernel now
         reset(model, scratch, 0.0, 0.0)
         step(model, scratch, 0.0, 0.0, 0.0, 0.0, 0.0)
+        self._step = _compiled(step, model, self.data)
 
     def reset(self, theta: float, current: float) -> None:
         """Start the stack at the measured angle [rad] and current [A]."""
@@ -87,7 +91,9 @@ class CompiledStack:
         force, side = self._force, self._side
         f = force[k] if k < force.size else force[-1]
         fy = side[k] if k < side.size else side[-1]
-        command: float = step(self.model, self.data, theta_meas, i_meas - self._last, 0.0, f, fy)
+        command: float = self._step(
+            self.model, self.data, theta_meas, i_meas - self._last, 0.0, f, fy
+        )
         self._last = command
         self._k += 1
         held, z, row = self.data.held, self.data.motorcycle, self._row
@@ -100,6 +106,27 @@ class CompiledStack:
     def row(self) -> Array:
         """The values of :data:`STACK_SIGNALS` after the last step."""
         return self._row
+
+
+def _compiled(kernel: Any, model: StackModel, data: Any) -> Any:
+    """The compiled ``kernel`` for the stack's argument types, called without numba's dispatch.
+
+    A numba dispatcher works out the types of its arguments on every call: for the stack's
+    model and data structures that costs about three times the step itself (measured in
+    ``bench/bench_rt_period.py``). The compiled overload's ``entry_point`` (in the
+    dispatcher's ``overloads``, keyed by the argument types) unboxes the same arguments and
+    runs the same machine code. Without numba's JIT (``NUMBA_DISABLE_JIT=1``) the plain
+    function is returned.
+    """
+    overloads = getattr(kernel, "overloads", None)
+    if not overloads:
+        return kernel
+    import numba
+
+    typeof: Any = numba.typeof
+    types = tuple(typeof(a) for a in (model, data, 0.0, 0.0, 0.0, 0.0, 0.0))
+    found = overloads.get(types)
+    return kernel if found is None else found.entry_point
 
 
 def _series(values: Array | None, name: str) -> Array:

@@ -1,6 +1,7 @@
 """The clocks, the fixed-period loop, the sample ring and the privileges (lock-step, untimed)."""
 
 import gc
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock, SimulatedClock
-from motosim.rt.loop import RateLoop
+from motosim.rt.loop import FramePacedLoop, RateLoop
 from motosim.rt.privileges import apply_privileges, freeze_gc, pin_cpus, thaw_gc
 from motosim.rt.ring import SampleRing
 
@@ -107,3 +108,47 @@ def test_privileges_are_reported_not_raised() -> None:
     finally:
         thaw_gc()
     assert gc.isenabled()
+
+
+def _drive(clock: SimulatedClock, times: list[float]) -> Callable[[float], bool]:
+    """A drive whose status frames come at ``times`` [s]: the wait of a bus-paced loop."""
+    pending = iter(times)
+    due = [next(pending)]
+
+    def wait(until: float) -> bool:
+        if due[0] <= until:
+            clock.sleep_until(due[0])
+            due[0] = next(pending, float("inf"))
+            return True
+        clock.sleep_until(until)
+        return False
+
+    return wait
+
+
+def test_a_bus_paced_loop_steps_once_per_frame_whenever_it_comes() -> None:
+    clock = SimulatedClock()
+    frames = [0.010, 0.0203, 0.0299, 0.040]  # 100 Hz with 0.3 ms of jitter
+    loop = FramePacedLoop(100.0, clock, _drive(clock, frames), timeout=0.03)
+    seen: list[tuple[int, float]] = []
+    assert loop.run(lambda k, t: seen.append((k, t)) is None, periods=4) == 4
+    assert seen == list(enumerate(frames))
+    stats = loop.stats()
+    assert stats.missed == 0 and stats.wake_max == pytest.approx(0.3e-3)
+
+
+def test_a_bus_paced_loop_still_steps_when_the_frames_stop() -> None:
+    # the wait times out after the watchdog's time (3 frame periods): the step runs (the
+    # caller's safety stage trips then) and the frame periods without a frame are missed
+    clock = SimulatedClock()
+    loop = FramePacedLoop(100.0, clock, _drive(clock, [0.01, 0.02]), timeout=0.03)
+    seen: list[tuple[int, float]] = []
+    loop.run(lambda k, t: seen.append((k, round(t, 9))) is None, periods=10)
+    assert seen == [(0, 0.01), (1, 0.02), (4, 0.05), (7, 0.08)]  # none past the run
+    assert loop.timeouts == 3 and loop.stats().missed == 10 - len(seen)
+
+
+@pytest.mark.parametrize(("rate", "timeout"), [(0.0, 0.03), (100.0, 0.0), (100.0, float("nan"))])
+def test_bus_paced_loop_refuses_bad_settings(rate: float, timeout: float) -> None:
+    with pytest.raises(MotosimError):
+        FramePacedLoop(rate, SimulatedClock(), lambda until: True, timeout=timeout)
