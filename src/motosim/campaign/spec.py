@@ -38,7 +38,6 @@ decimated to every ``every``-th recorded instant.
 import dataclasses
 import difflib
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +45,7 @@ from typing import Any, Literal
 
 from motosim.errors import MotosimError
 from motosim.params.handlebar import HandlebarParameters
+from motosim.params.toml import read_toml
 from motosim.signals import RECORDED
 
 __all__ = [
@@ -246,6 +246,11 @@ class Campaign:
                 raise MotosimError(f"limits: {name!r} is not a kept metric; expected one of {kept}")
             if not math.isfinite(limit):
                 raise MotosimError(f"limits: {name} = {limit!r}; expected a finite number")
+            if name.startswith(("rms_", "max_abs_", "peak_")) and not limit > 0.0:
+                raise MotosimError(
+                    f"limits: {name} = {limit!r}; expected a limit > 0 (the metric is a "
+                    "magnitude, so no run could pass)"
+                )
         if not (math.isfinite(self.task_seconds) and 0.01 <= self.task_seconds <= 3600.0):
             raise MotosimError(f"task_seconds = {self.task_seconds!r}; expected 0.01 to 3600 [s]")
         signals = [n for n in RECORDED if n != "t"]
@@ -421,11 +426,6 @@ def load_campaign(path: str | Path) -> Campaign:
     source = Path(path)
     if not source.is_file():
         raise MotosimError(f"{path}: no such campaign file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
-    except UnicodeDecodeError:
-        raise MotosimError(f"{path}: not UTF-8 text; expected a TOML campaign file") from None
+    data = read_toml(source, what="campaign file")
     campaign = parse_campaign(data, origin=str(path), folder=source.parent)
     return dataclasses.replace(campaign, source=str(path))

@@ -4,10 +4,9 @@ import argparse
 import signal
 import sys
 import threading
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -16,8 +15,19 @@ from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileg
 from motosim.errors import MotosimError, RunFailedError
 from motosim.io.results import ResultWriter
 from motosim.io.runs import resolve
-from motosim.sim import RunInputs, build_rig, build_stack, parse_scenario, run_metadata
+from motosim.params.toml import read_toml
+from motosim.sim import (
+    RunInputs,
+    Scenario,
+    build_rig,
+    build_stack,
+    parse_scenario,
+    run_metadata,
+)
 from motosim.sim.metrics import run_metrics
+
+if TYPE_CHECKING:
+    from motosim.rt.rig import RigSettings
 
 __all__ = ["load_realtime", "register"]
 
@@ -73,20 +83,37 @@ def register(sub: Any) -> None:
 
 def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
     """Read a scenario file: its resolved run and its ``[realtime]`` table."""
-    from motosim.rt.config import split_realtime
+    from motosim.rt.config import parse_safety, split_realtime
 
     source = Path(path)
     if not source.is_file():
         raise MotosimError(f"{path}: no such scenario file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
-    except UnicodeDecodeError:
-        raise MotosimError(f"{path}: not UTF-8 text; expected a TOML scenario file") from None
+    data = read_toml(source, what="scenario file")
     rest, realtime = split_realtime(data, origin=str(path))
     scenario = parse_scenario(rest, origin=str(path))
+    # both tables are checked whichever command reads the file: a typo in the table the
+    # other command uses is refused now, not when that command runs
+    if "safety" in realtime:
+        parse_safety(realtime["safety"], origin=str(path))
+    rig_settings(scenario, realtime, origin=str(path))
     return resolve(scenario, source.parent), realtime
+
+
+def rig_settings(scenario: Scenario, realtime: dict[str, Any], *, origin: str) -> "RigSettings":
+    """The virtual rig's settings: the ``[realtime.rig]`` table over the scenario's values."""
+    from motosim.rt.rig import parse_rig
+
+    return parse_rig(
+        realtime.get("rig", {}),
+        base={
+            "plant_rate": scenario.rates.plant,
+            "status_rate": scenario.rates.measurement,
+            "encoder_bits": scenario.measurement.encoder_bits,
+            "current_noise": scenario.measurement.current_noise,
+            "max_current": scenario.controller.max_current,
+        },
+        where=f"{origin}: [realtime.rig]",
+    )
 
 
 class _EarlyStopError(Exception):

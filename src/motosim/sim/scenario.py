@@ -90,9 +90,20 @@ __all__ = [
 Array = NDArray[np.float64]
 
 
+SMALLEST = 1e-6
+"""Smallest positive length [m], time [s], rate [Hz], gain or factor a scenario accepts: a
+micrometre, a microsecond or a millionth is no lane change, period or handlebar, only a typo
+or a unit slip (and 1e-300 would reach the integrator as a division by zero)."""
+
+
 def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
            low_open: bool = False, unit: str = "") -> None:  # fmt: skip
-    """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error)."""
+    """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error).
+
+    A positive quantity (``low = 0`` open) must be at least :data:`SMALLEST`.
+    """
+    if low == 0.0 and low_open:
+        low, low_open = SMALLEST, False
     check_number(value, where=name, lower=low, upper=high, lower_closed=not low_open, unit=unit)
 
 
@@ -506,6 +517,11 @@ class Scenario:
 
     def __post_init__(self) -> None:
         _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
+        if self.duration * self.rates.control < 2.0:
+            raise MotosimError(
+                f"duration = {self.duration!r} s; expected at least two control periods "
+                f"({2.0 / self.rates.control:g} s at [rates] control = {self.rates.control:g} Hz)"
+            )
         rows = self.duration * self.rates.control
         if rows > MAX_RECORDED_ROWS:
             raise MotosimError(
