@@ -401,3 +401,263 @@ def test_a_ten_million_row_log_is_refused_at_once(tmp_path: Path) -> None:
     outcome = run_cli(["identify", str(log)])
     assert is_refusal(outcome), outcome
     assert "bytes; expected at most" in outcome[2] and time.monotonic() - start < 2.0
+
+
+# --- every option of every command at its edges ------------------------------------------
+
+_EDGES = ("nan", "inf", "-inf", "-1", "0", "1e300", "-1e300", _BIG, "x", "")
+STOP_RT = (
+    "motosim.io.can.open_link",
+    "motosim.cli.rtcheck.apply_privileges",
+    "motosim.cli.rtcheck.check_timing",
+    "motosim.cli.run.load_realtime",
+)
+STOP_VIEW = (
+    "motosim.view.app.ServerThread",
+    "motosim.io.telemetry.write_mcap",
+    "motosim.io.telemetry.PlotJugglerUdp",
+    "motosim.io.telemetry.EsminiUdp",
+)
+
+LEGAL: set[tuple[str, str, str]] = {
+    ("excite", "--seed", "0"),
+    ("excite", "--current-noise", "0"),  # a noiseless current
+    ("excite", "--f0", "0"),  # a chirp from DC
+    ("excite-plan", "--dry-friction", "0"),  # no dry friction
+    ("rt-check", "--spin", "0"),  # sleep to each deadline without polling
+    ("run", "--spin", "0"),
+    ("rig", "--spin", "0"),
+    ("rt-check", "--cpu", "0"),  # the first CPU
+    ("run", "--cpu", "0"),
+    ("rig", "--cpu", "0"),
+    ("run", "--view-port", "0"),  # any free port
+    ("view", "--port", "0"),
+    ("identify", "--current-delay", "0"),
+}
+"""(command, option, value) at an edge that is a legal value, each with its meaning."""
+
+
+def _edges(kind: str, tmp: Path) -> tuple[str, ...]:
+    """The values tried for an option of a kind: a number, an input file or folder, an output
+    file or folder, a network address, a free text."""
+    folder, missing = str(tmp / "folder"), str(tmp / "no" / "such.file")
+    existing = str(tmp / "exists.txt")
+    return {
+        "number": (*_EDGES, "1.5e-300"),
+        "int": (*_EDGES, "1.5"),
+        "in": ("", missing, folder, _BIG),
+        "in_dir": ("", missing, existing, _BIG),
+        "out": ("", folder, missing, existing, _BIG),
+        "out_dir": ("", existing, missing, _BIG),
+        "address": ("", "a b", "host:99999", "host:-1", "host:x", "-1", _BIG, folder),
+        "text": ("", "x", ",", "a=b=c", _BIG),
+    }[kind]
+
+
+Command = tuple[list[str], tuple[str, ...], dict[str, str]]
+
+
+def _commands(tmp: Path, result: Path) -> dict[str, Command]:
+    """command -> (the shortest valid call, where it stops, its options and their kinds)."""
+    scenario = str(ROOT / "scenarios" / "paper" / "fig11_nominal.toml")
+    realtime = str(ROOT / "scenarios" / "realtime_square.toml")
+    log = tmp / "log.csv"
+    log.write_text(_log_text(), encoding="utf-8")
+    campaign = str(ROOT / "campaigns" / "paper_robustness.toml")
+    rt = {"--fifo": "int", "--cpu": "text", "--spin": "number"}
+    return {
+        "simulate": (
+            ["simulate", scenario, "--out", str(tmp / "s")],
+            STOP_SIMULATE,
+            {"(positional)": "in", "--out": "out_dir"},
+        ),
+        "excite": (
+            ["excite", "--duration", "2", "--out", str(tmp / "x.csv")],
+            ("motosim.cli.excite.write_log",),
+            {
+                "--signal": "text",
+                "--duration": "number",
+                "--rate": "number",
+                "--amplitude": "number",
+                "--frequency": "number",
+                "--f0": "number",
+                "--f1": "number",
+                "--counts": "number",
+                "--pulley-ratio": "number",
+                "--current-noise": "number",
+                "--seed": "int",
+                "--handlebar": "in",
+                "--out": "out",
+            },
+        ),
+        "excite-plan": (
+            [
+                "excite",
+                "--plan",
+                "--max-current",
+                "6",
+                "--inertia",
+                "0.05",
+                "--damping",
+                "10",
+                "--dry-friction",
+                "1",
+                "--out",
+                str(tmp / "p.csv"),
+            ],
+            ("motosim.cli.excite.write_log",),
+            {
+                "--max-current": "number",
+                "--inertia": "number",
+                "--damping": "number",
+                "--dry-friction": "number",
+                "--ratio": "number",
+                "--torque-constant": "number",
+                "--angle-limit": "number",
+                "--rate": "number",
+                "--out": "out",
+            },
+        ),
+        "identify": (
+            ["identify", str(log)],
+            ("motosim.cli.identify.identify",),
+            {
+                "(positional)": "in",
+                "--ratio": "number",
+                "--torque-constant": "number",
+                "--columns": "text",
+                "--method": "text",
+                "--drive": "text",
+                "--current-delay": "number",
+                "--validate": "in",
+                "--out": "out",
+                "--plot": "out",
+                "--handlebar": "in",
+            },
+        ),
+        "estimate": (
+            ["estimate", str(log), "--out", str(tmp / "e.csv")],
+            ("motosim.cli.estimate.estimate",),
+            {
+                "(positional)": "in",
+                "--handlebar": "in",
+                "--estimator": "text",
+                "--lipschitz": "number",
+                "--columns": "text",
+                "--out": "out",
+            },
+        ),
+        "fidelity": (
+            ["fidelity"],
+            ("motosim.io.runs.resolve",),
+            {
+                "--speed": "number",
+                "--amplitude": "number",
+                "--band": "text",
+                "--duration": "number",
+                "--plot": "out",
+            },
+        ),
+        "cueing": (
+            ["cueing", str(result), "--out", str(tmp / "c")],
+            STOP_CUEING,
+            {
+                "(positional)": "in_dir",
+                "--platform": "in",
+                "--algorithm": "text",
+                "--rate": "number",
+                "--out": "out_dir",
+            },
+        ),
+        "campaign": (
+            ["campaign", campaign, "--out", str(tmp / "k")],
+            STOP_CAMPAIGN,
+            {
+                "(positional)": "in",
+                "--out": "out_dir",
+                "--backend": "text",
+                "--scheduler": "address",
+                "--jobs": "int",
+            },
+        ),
+        "campaign-rerun": (
+            ["campaign", campaign, "--out", str(tmp / "k"), "--rerun", "run-0001"],
+            ("motosim.campaign.load_results",),
+            {"--rerun": "text", "--write-scenario": "out"},
+        ),
+        "run": (
+            ["run", realtime, "--bus", "virtual", "--out", str(tmp / "r")],
+            STOP_RT,
+            {
+                "--bus": "address",
+                "--duration": "number",
+                "--telemetry": "address",
+                "--view-port": "int",
+                **rt,
+            },
+        ),
+        "rig": (
+            ["rig", realtime, "--bus", "virtual"],
+            STOP_RT,
+            {
+                "--bus": "address",
+                "--duration": "number",
+                "--rate": "number",
+                "--telemetry": "address",
+                **rt,
+            },
+        ),
+        "rt-check": (["rt-check"], STOP_RT, {"--rate": "number", "--duration": "number", **rt}),
+        "view": (
+            ["view", str(result)],
+            STOP_VIEW,
+            {"(positional)": "in_dir", "--host": "address", "--port": "int", "--rate": "number"},
+        ),
+        "telemetry": (
+            ["telemetry", str(result), "--mcap", str(tmp / "t.mcap")],
+            STOP_VIEW,
+            {
+                "(positional)": "in_dir",
+                "--mcap": "out",
+                "--every": "int",
+                "--plotjuggler": "address",
+                "--esmini": "address",
+                "--rate": "number",
+            },
+        ),
+    }
+
+
+OptionCase = tuple[str, str, str, list[str], tuple[str, ...]]
+
+
+def _option_cases(tmp: Path, result: Path) -> Iterator[OptionCase]:
+    (tmp / "folder").mkdir(exist_ok=True)
+    (tmp / "exists.txt").write_text("keep", encoding="utf-8")
+    for key, (base, stop, options) in _commands(tmp, result).items():
+        for option, kind in options.items():
+            for value in _edges(kind, tmp):
+                if (key, option, value) in LEGAL:
+                    continue
+                argv = [*base]
+                if option == "(positional)":
+                    argv[1] = value
+                elif option in argv:
+                    argv[argv.index(option) + 1] = value
+                else:
+                    argv += [option, value]
+                yield key, option, value, argv, stop
+
+
+def test_every_option_at_its_edges(tmp_path: Path, result: Path) -> None:
+    """Each option of each command at its edges: refused in one line (or listed in LEGAL)."""
+    cases = list(_option_cases(tmp_path, result))
+    assert len(cases) > 500
+    failures = []
+    for key, option, value, argv, stop in cases:
+        if value == "1.5e-300" and (key, option, "0") in LEGAL:
+            continue  # 1e-300 where 0 is legal: as legal
+        problem = check(run_cli(argv, stop), "refuse")
+        if problem:
+            failures.append(f"{key} {option} {value[:20]!r}: {problem[:160]}")
+    assert not failures, f"{len(failures)} of {len(cases)}:\n" + "\n".join(failures)

@@ -130,6 +130,12 @@ class Factor:
                     f"{self.path}: low = {self.low!r}, high = {self.high!r}; expected finite "
                     "numbers with low < high"
                 )
+            if self.high - self.low < 1e-9 * max(abs(self.low), abs(self.high), 1.0):
+                raise MotosimError(
+                    f"{self.path}: low = {self.low!r}, high = {self.high!r}; expected a range "
+                    "wider than 1e-9 of the values (a narrower one is a constant: set it in the "
+                    "base scenario)"
+                )
             if self.distribution == "loguniform" and self.low <= 0.0:
                 raise MotosimError(f"{self.path}: low = {self.low!r}; expected > 0 (loguniform)")
         if self.distribution == "normal":
@@ -246,10 +252,10 @@ class Campaign:
                 raise MotosimError(f"limits: {name!r} is not a kept metric; expected one of {kept}")
             if not math.isfinite(limit):
                 raise MotosimError(f"limits: {name} = {limit!r}; expected a finite number")
-            if name.startswith(("rms_", "max_abs_", "peak_")) and not limit > 0.0:
+            if name.startswith(("rms_", "max_abs_", "peak_")) and not limit >= 1e-9:
                 raise MotosimError(
-                    f"limits: {name} = {limit!r}; expected a limit > 0 (the metric is a "
-                    "magnitude, so no run could pass)"
+                    f"limits: {name} = {limit!r}; expected a limit >= 1e-9 (the metric is a "
+                    "magnitude: below that no run could pass)"
                 )
         if not (math.isfinite(self.task_seconds) and 0.01 <= self.task_seconds <= 3600.0):
             raise MotosimError(f"task_seconds = {self.task_seconds!r}; expected 0.01 to 3600 [s]")

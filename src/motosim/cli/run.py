@@ -1,6 +1,7 @@
 """``motosim run``: the stack in real time against the handlebar drive over CAN."""
 
 import argparse
+import math
 import signal
 import sys
 import threading
@@ -11,10 +12,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from motosim.cli._common import print_json, write_text
-from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
-from motosim.errors import MotosimError, RunFailedError
+from motosim.cli.rtcheck import (
+    add_privilege_options,
+    check_privilege_options,
+    clock_from_args,
+    privileges_from_args,
+)
+from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.io.results import ResultWriter
 from motosim.io.runs import resolve
+from motosim.params.checks import short_repr
 from motosim.params.toml import read_toml
 from motosim.sim import (
     RunInputs,
@@ -25,6 +32,7 @@ from motosim.sim import (
     run_metadata,
 )
 from motosim.sim.metrics import run_metrics
+from motosim.sim.scenario import implausible
 
 if TYPE_CHECKING:
     from motosim.rt.rig import RigSettings
@@ -81,6 +89,24 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=run)
 
 
+def check_rt_options(args: argparse.Namespace) -> None:
+    """Refuse the options of run and rig before any work: --bus, --duration, --telemetry,
+    --fifo, --cpu, --spin (one line each)."""
+    from motosim.io.can import check_bus
+    from motosim.rt.telemetry import parse_address
+
+    check_bus(args.bus)
+    if args.duration is not None and not (
+        math.isfinite(args.duration) and 1e-3 <= args.duration <= 86_400.0
+    ):
+        raise MotosimError(
+            f"--duration {short_repr(args.duration)}; expected seconds from 0.001 to 86400"
+        )
+    if args.telemetry != "off":
+        parse_address(args.telemetry)
+    check_privilege_options(args)
+
+
 def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
     """Read a scenario file: its resolved run and its ``[realtime]`` table."""
     from motosim.rt.config import parse_safety, split_realtime
@@ -91,6 +117,8 @@ def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
     data = read_toml(source, what="scenario file")
     rest, realtime = split_realtime(data, origin=str(path))
     scenario = parse_scenario(rest, origin=str(path))
+    for line in implausible(scenario):
+        warn(f"{path}: {line}")
     # both tables are checked whichever command reads the file: a typo in the table the
     # other command uses is refused now, not when that command runs
     if "safety" in realtime:
@@ -278,6 +306,9 @@ def run(args: argparse.Namespace) -> int:
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
 
+    check_rt_options(args)
+    if not 0 <= args.view_port < 65536:
+        raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0 to 65535")
     inputs, realtime = load_realtime(args.scenario)
     sc = inputs.scenario
     if sc.motorcycle.input == "true":

@@ -58,8 +58,15 @@ def run_scenario(
 
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
-    scenario = load_scenario(args.scenario)
     folder = Path(args.out)
+    if folder.exists() and not folder.is_dir():
+        raise MotosimError(f"--out {folder} is a file; expected a result folder")
+    if not folder.parent.is_dir():
+        raise MotosimError(
+            f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
+            "folder (create it first)"
+        )
+    scenario = load_scenario(args.scenario)
     if is_complete_result(folder) and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
     inputs = resolve(scenario, Path(args.scenario).parent)

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER, synthesize_controller
-from motosim.errors import MotosimError, RunFailedError
+from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.io.design_file import read_design
 from motosim.io.logs import read_log
 from motosim.io.results import ResultWriter
@@ -32,7 +32,7 @@ from motosim.sim import (
     simulate,
 )
 from motosim.sim.metrics import failure, run_metrics
-from motosim.sim.scenario import CsvProfile
+from motosim.sim.scenario import CsvProfile, implausible
 from motosim.timeseries import TimeSeries
 
 __all__ = ["load_run", "load_scenario", "parameter_source", "resolve", "run_to_folder"]
@@ -45,7 +45,10 @@ def load_scenario(path: str | Path) -> Scenario:
         raise MotosimError(f"{path}: no such scenario file")
     data = dict(read_toml(source, what="scenario file"))
     data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
-    return parse_scenario(data, origin=str(path))
+    scenario = parse_scenario(data, origin=str(path))
+    for line in implausible(scenario):
+        warn(f"{path}: {line}")
+    return scenario
 
 
 def parameter_source(name: str, base: str | Path) -> str | Path:
