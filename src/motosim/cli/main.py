@@ -11,6 +11,7 @@ one line ``motosim: error: ...`` with exit code 2, without a traceback.
 
 import argparse
 import importlib
+import logging
 import sys
 import warnings
 from collections.abc import Sequence
@@ -166,6 +167,22 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
         print(f"motosim: warning: {text}", file=sys.stderr)
 
 
+class _OneLine(logging.Handler):
+    """Print the library's log warnings as ``motosim: warning: ...``, one line each."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = " ".join(record.getMessage().split())
+        print(f"motosim: warning: {text}", file=sys.stderr)
+
+
+def _log_in_one_line() -> None:
+    logger = logging.getLogger("motosim")
+    if not any(isinstance(h, _OneLine) for h in logger.handlers):
+        handler = _OneLine(logging.WARNING)
+        logger.addHandler(handler)
+        logger.propagate = False
+
+
 def _refuse_empty(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """Refuse an empty string given for any option or argument (``--out ''``).
 
@@ -198,6 +215,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return stop.code if isinstance(stop.code, int) else 2
         _refuse_empty(parser, args)
         _SHOWN.clear()
+        _log_in_one_line()
         with warnings.catch_warnings():
             warnings.simplefilter("always", MotosimWarning)
             warnings.showwarning = _show_warning

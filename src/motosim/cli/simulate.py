@@ -7,7 +7,7 @@ from typing import Any
 
 from motosim.cli._common import print_json, show_progress
 from motosim.errors import MotosimError
-from motosim.io.results import is_complete_result
+from motosim.io.results import is_complete_result, partial_folder
 from motosim.io.runs import load_scenario, resolve, run_to_folder
 from motosim.sim import RunInputs
 from motosim.sim.metrics import warnings
@@ -75,7 +75,9 @@ def run(args: argparse.Namespace) -> int:
             inputs, folder, progress=show_progress(args.json), overwrite=args.overwrite
         )
     except KeyboardInterrupt:
-        print(f"motosim: interrupted; the partial result is in {folder}", file=sys.stderr)
+        staged = partial_folder(folder)
+        kept = staged if staged.is_dir() else folder
+        print(f"motosim: interrupted; the partial result is in {kept}", file=sys.stderr)
         return 130
     for line in warnings(summary):
         print(f"motosim: warning: {line}", file=sys.stderr)

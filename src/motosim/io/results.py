@@ -59,7 +59,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from motosim import __version__
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, RunFailedError
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -527,7 +527,10 @@ class ResultWriter:
             if exc_type is None:
                 self.close()
             elif not self._closed:
-                _log.warning(
+                # a run that failed or was interrupted says where its rows are itself
+                expected = issubclass(exc_type, RunFailedError | KeyboardInterrupt)
+                _log.log(
+                    logging.INFO if expected else logging.WARNING,
                     "run interrupted by %s: %d rows kept in %s, marked partial",
                     exc_type.__name__,
                     self._rows,

@@ -9,6 +9,7 @@ design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`
 it to :func:`motosim.sim.simulate`.
 """
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -31,7 +32,7 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
-from motosim.sim.metrics import failure, run_metrics
+from motosim.sim.metrics import FALL_ROLL, failure, run_metrics
 from motosim.sim.scenario import CsvProfile, implausible
 from motosim.timeseries import TimeSeries
 
@@ -159,19 +160,41 @@ def run_to_folder(
     sc = inputs.scenario
     metadata = run_metadata(inputs)
     rows = round(sc.duration * sc.rates.control)
-    with ResultWriter(
-        Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows
-    ) as writer:
+    phi = SIGNALS.index("phi")
+    fell: list[float] = []  # the time the roll first passed FALL_ROLL
+    writer = ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows)
+    try:
+        with writer:
 
-        def on_block(block: np.ndarray) -> None:
-            writer.append(block)
-            if on_rows is not None:
-                on_rows(block.shape[0])
+            def on_block(block: np.ndarray) -> None:
+                writer.append(block)
+                if not fell:
+                    over = np.flatnonzero(~(np.abs(block[:, phi]) <= FALL_ROLL))
+                    if over.size:
+                        fell.append(float(block[over[0], 0]))
+                if on_rows is not None:
+                    on_rows(block.shape[0])
 
-        run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
-        summary = run_metrics(run.t, run.get, complete=True, max_current=sc.controller.max_current)
-        writer.close(summary)
+            run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
+            summary = run_metrics(
+                run.t, run.get, complete=True, max_current=sc.controller.max_current
+            )
+            writer.close(summary)
+    except RunFailedError as err:
+        before = (
+            f"the motorcycle fell at t = {fell[0]:.3g} s (roll beyond "
+            f"{math.degrees(FALL_ROLL):.0f} deg, where the linear model no longer holds), then "
+            if fell
+            else ""
+        )
+        raise RunFailedError(
+            f"{sc.name}: {before}{err}; the {writer.rows} rows computed are kept in "
+            f"{writer.location}, marked partial",
+            time=fell[0] if fell else err.time,
+        ) from None
     reason = failure(summary)
+    if reason is not None and fell:
+        reason = reason.replace("fell:", f"fell at t = {fell[0]:.3g} s:", 1)
     if reason is not None:
         raise RunFailedError(f"{sc.name}: {reason}; the result is in {folder}")
     return summary

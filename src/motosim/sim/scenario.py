@@ -552,10 +552,11 @@ class Scenario:
 
 # --- plausibility: legal values that no real ride has ---------------------------------------
 
-VALIDATED_SPEEDS = (3.0, 40.0)
-"""Speeds [m/s] at which Sharp's (1971) model is checked against his Tables 1-3 (10 to 130 ft/s);
-below, the linearisation about forward running loses its meaning (the machine falls at walking
-pace); above, wobble is unstable beyond 55 m/s and the tyre model is extrapolated."""
+VALIDATED_SPEEDS = (3.0, 55.0)
+"""Speeds [m/s] of a ride the model represents: from 3 m/s, the lowest of Sharp's (1971)
+Tables 1-3 (10 ft/s; below, the linearisation about forward running loses its meaning and the
+machine falls at walking pace), to 55 m/s, below the 55.4 m/s where wobble turns unstable with
+Sharp's steering damper."""
 
 TYPICAL_DURATION = 600.0
 """Longest typical run [s]: the paper's runs last 8 to 20 s, a simulator exercise minutes."""
@@ -591,8 +592,8 @@ def implausible(scenario: "Scenario") -> list[str]:
     if not low <= speed <= high:
         lines.append(
             f"[motorcycle] speed = {speed:g} m/s is legal but outside the {low:g} to {high:g} m/s "
-            "where Sharp's model is validated (Sharp 1971, Tables 1-3); expect a fall or a "
-            "wobble rather than a ride"
+            "of a ride the model represents (Sharp 1971: the machine falls below, wobble is "
+            "unstable above); expect a fall or a wobble"
         )
     if scenario.duration > TYPICAL_DURATION:
         lines.append(
