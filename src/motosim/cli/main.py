@@ -237,8 +237,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as err:  # a path the system refuses (too long, no permission, disk full)
         from motosim.params.checks import short_repr
 
-        name = f" {short_repr(str(err.filename))}" if err.filename else ""
-        print(f"motosim: error: cannot use{name}: {err.strerror or err}", file=sys.stderr)
+        name = f" ({short_repr(str(err.filename))})" if err.filename else ""
+        print(f"motosim: error: {err.strerror or err}{name}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as err:  # a bug of ours: one line, exit 1, the traceback on request
         if "--debug" in words:

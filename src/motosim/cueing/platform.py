@@ -149,7 +149,7 @@ class RiderHead:
 
     def __post_init__(self) -> None:
         _check("rider", "x", self.x, lower=-10.0, closed=True, upper=10.0)
-        _check("rider", "height", self.height, lower=0.0)
+        _check("rider", "height", self.height, lower=0.0, closed=True)  # 0: at the contact
         _check("rider", "pitch_gain", self.pitch_gain, lower=0.0, closed=True)
         _check("rider", "pitch_frequency", self.pitch_frequency, lower=0.0)
         _check("rider", "pitch_damping", self.pitch_damping, lower=0.0)
