@@ -14,7 +14,8 @@ import importlib
 import logging
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import NoReturn, TextIO
 
 from motosim import __version__
@@ -175,12 +176,19 @@ class _OneLine(logging.Handler):
         print(f"motosim: warning: {text}", file=sys.stderr)
 
 
-def _log_in_one_line() -> None:
+@contextmanager
+def _log_in_one_line() -> Iterator[None]:
+    """Within the block, the ``motosim`` loggers print through :class:`_OneLine` only."""
     logger = logging.getLogger("motosim")
-    if not any(isinstance(h, _OneLine) for h in logger.handlers):
-        handler = _OneLine(logging.WARNING)
-        logger.addHandler(handler)
-        logger.propagate = False
+    handler = _OneLine(logging.WARNING)
+    propagate = logger.propagate
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = propagate
 
 
 def _refuse_empty(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
@@ -215,8 +223,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return stop.code if isinstance(stop.code, int) else 2
         _refuse_empty(parser, args)
         _SHOWN.clear()
-        _log_in_one_line()
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _log_in_one_line():
             warnings.simplefilter("always", MotosimWarning)
             warnings.showwarning = _show_warning
             code: int = args.func(args)

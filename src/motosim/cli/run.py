@@ -308,7 +308,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_rt_options(args)
     if not 0 <= args.view_port < 65536:
-        raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0 to 65535")
+        raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
     inputs, realtime = load_realtime(args.scenario)
     sc = inputs.scenario
     if sc.motorcycle.input == "true":
