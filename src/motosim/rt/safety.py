@@ -75,12 +75,12 @@ _REASONS = {
 
 
 SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
-    "max_current": (0.01, 200.0, "A"),
-    "max_slew": (0.1, 1e6, "A/s"),
-    "max_speed": (0.01, 100.0, "rad/s"),
-    "speed_band": (0.01, 100.0, "rad/s"),
-    "soft_stop": (0.01, math.pi, "rad"),
-    "hard_stop": (0.01, math.pi, "rad"),
+    "max_current": (0.01, 1000.0, "A"),
+    "max_slew": (0.1, 1e9, "A/s"),
+    "max_speed": (0.01, 1e4, "rad/s"),
+    "speed_band": (0.01, 1e4, "rad/s"),
+    "soft_stop": (0.01, 100.0, "rad"),
+    "hard_stop": (0.01, 100.0, "rad"),
     "end_stop_gain": (0.0, 1e4, "A/rad"),
     "hands_off_torque": (0.0, 100.0, "N*m"),
     "hands_off_time": (0.001, 3600.0, "s"),
@@ -90,8 +90,9 @@ SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
 }
 """Admitted interval (low, high, SI unit) of each safety limit. The lower bounds are far
 below any usable limit (10 mA, 0.1 A/s, 10 mrad/s, 1 ms): a smaller positive value is a typo
-or a unit slip and would make the stage trip or stall at once; the upper bounds are beyond
-any handlebar drive (200 A, 100 rad/s, half a turn either way, an hour)."""
+or a unit slip and would make the stage trip or stall at once; the upper bounds are far beyond
+any handlebar drive, so that a test may set a limit out of reach (1000 A, an end stop beyond a
+full turn), and refuse only what is no number of a drive (1e300, an hour of fade)."""
 
 
 @dataclass(frozen=True, slots=True)

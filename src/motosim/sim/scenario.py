@@ -584,7 +584,7 @@ def implausible(scenario: "Scenario") -> list[str]:
     Examples
     --------
     >>> implausible(Scenario(name="x", motorcycle=Motorcycle(speed=90.0)))[0][:40]
-    '[motorcycle] speed = 90 m/s is legal but '
+    '[motorcycle] speed = 90 m/s is legal but'
     """
     lines = []
     low, high = VALIDATED_SPEEDS
