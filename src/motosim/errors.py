@@ -5,12 +5,26 @@ Two kinds of failure, kept apart because a user acts differently on each:
 - :class:`MotosimError`: invalid input, a parameter, an option, a file or a signal that the
   model cannot accept. Its message is one line that names the offending value and what was
   expected; the command line prints it and exits with code 2.
+- :class:`MotosimWarning`: legal but implausible input (a handlebar inertia far from any real
+  handlebar's, a speed outside the model's validated range, noise larger than the signal).
+  The library emits it with :func:`warn` (the :mod:`warnings` machinery, so a script may
+  filter or record it); the command line prints each as one line ``motosim: warning: ...``
+  and goes on.
 - :class:`RunFailedError`: the input was valid but the run did not succeed: the simulation
   diverged, the motorcycle fell, the loop faulted. The command line prints its one-line
   reason and exits with code 3; what the run computed until then is kept.
 """
 
-__all__ = ["EXIT_BAD_INPUT", "EXIT_RUN_FAILED", "MotosimError", "RunFailedError"]
+import warnings
+
+__all__ = [
+    "EXIT_BAD_INPUT",
+    "EXIT_RUN_FAILED",
+    "MotosimError",
+    "MotosimWarning",
+    "RunFailedError",
+    "warn",
+]
 
 EXIT_BAD_INPUT = 2
 """Exit code of the command line for a :class:`MotosimError`."""
@@ -34,3 +48,13 @@ class RunFailedError(RuntimeError):
     def __init__(self, reason: str, *, time: float | None = None) -> None:
         super().__init__(reason)
         self.time = time
+
+
+class MotosimWarning(UserWarning):
+    """Legal but implausible input: accepted, with a one-line warning naming the value, the
+    typical range and why."""
+
+
+def warn(message: str) -> None:
+    """Emit a :class:`MotosimWarning` (one line) through :func:`warnings.warn`."""
+    warnings.warn(" ".join(message.split()), MotosimWarning, stacklevel=3)

@@ -38,7 +38,6 @@ decimated to every ``every``-th recorded instant.
 import dataclasses
 import difflib
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +45,7 @@ from typing import Any, Literal
 
 from motosim.errors import MotosimError
 from motosim.params.handlebar import HandlebarParameters
+from motosim.params.toml import read_toml
 from motosim.signals import RECORDED
 
 __all__ = [
@@ -129,6 +129,12 @@ class Factor:
                 raise MotosimError(
                     f"{self.path}: low = {self.low!r}, high = {self.high!r}; expected finite "
                     "numbers with low < high"
+                )
+            if self.high - self.low < 1e-9 * max(abs(self.low), abs(self.high), 1.0):
+                raise MotosimError(
+                    f"{self.path}: low = {self.low!r}, high = {self.high!r}; expected a range "
+                    "wider than 1e-9 of the values (a narrower one is a constant: set it in the "
+                    "base scenario)"
                 )
             if self.distribution == "loguniform" and self.low <= 0.0:
                 raise MotosimError(f"{self.path}: low = {self.low!r}; expected > 0 (loguniform)")
@@ -246,6 +252,11 @@ class Campaign:
                 raise MotosimError(f"limits: {name!r} is not a kept metric; expected one of {kept}")
             if not math.isfinite(limit):
                 raise MotosimError(f"limits: {name} = {limit!r}; expected a finite number")
+            if name.startswith(("rms_", "max_abs_", "peak_")) and not limit >= 1e-9:
+                raise MotosimError(
+                    f"limits: {name} = {limit!r}; expected a limit >= 1e-9 (the metric is a "
+                    "magnitude: below that no run could pass)"
+                )
         if not (math.isfinite(self.task_seconds) and 0.01 <= self.task_seconds <= 3600.0):
             raise MotosimError(f"task_seconds = {self.task_seconds!r}; expected 0.01 to 3600 [s]")
         signals = [n for n in RECORDED if n != "t"]
@@ -421,11 +432,6 @@ def load_campaign(path: str | Path) -> Campaign:
     source = Path(path)
     if not source.is_file():
         raise MotosimError(f"{path}: no such campaign file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
-    except UnicodeDecodeError:
-        raise MotosimError(f"{path}: not UTF-8 text; expected a TOML campaign file") from None
+    data = read_toml(source, what="campaign file")
     campaign = parse_campaign(data, origin=str(path), folder=source.parent)
     return dataclasses.replace(campaign, source=str(path))

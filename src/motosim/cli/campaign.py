@@ -2,6 +2,7 @@
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -10,6 +11,7 @@ import numpy as np
 
 from motosim.cli._common import print_json
 from motosim.errors import MotosimError
+from motosim.params.checks import short_repr
 
 __all__ = ["register"]
 
@@ -113,10 +115,34 @@ def _rerun(args: argparse.Namespace) -> int:
     return 0 if match is not False else 1
 
 
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse absurd options before the campaign is planned."""
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise MotosimError(f"--out {out} is a file; expected a result folder")
+    if not out.parent.is_dir():
+        raise MotosimError(
+            f"--out {out}: the folder {out.parent} does not exist; expected an existing folder "
+            "(create it first)"
+        )
+    if args.jobs is not None and not 1 <= args.jobs <= 4096:
+        raise MotosimError(f"--jobs {short_repr(args.jobs)}; expected 1 to 4096 worker processes")
+    address = re.fullmatch(
+        r"(?:(?:tcp|tls|ucx|ws|wss)://)?([\w.\-]+|\[[0-9a-fA-F:]+\]):(\d{1,5})",
+        args.scheduler or "",
+    )
+    if args.scheduler is not None and not (address and 0 < int(address.group(2)) < 65536):
+        raise MotosimError(
+            f"--scheduler {short_repr(args.scheduler)}; expected a Dask scheduler address such "
+            "as tcp://host:8786"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run (or resume) the campaign, then write its report."""
     if args.write_scenario and not args.rerun:
         raise MotosimError("--write-scenario is for --rerun RUN_ID")
+    _check_options(args)
     if args.rerun:
         return _rerun(args)
     from motosim.campaign import load_campaign, run_campaign

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import print_json, save_figure
+from motosim.cli._common import check_output_folder, print_json, save_figure
 from motosim.cueing import (
     ALGORITHMS,
     COMMAND_SIGNALS,
@@ -78,8 +78,9 @@ def _write(run: CueingRun, folder: Path, metadata: dict[str, Any], overwrite: bo
 
 def run(args: argparse.Namespace) -> int:
     """Cue, write, plot and summarise."""
-    if not (math.isfinite(args.rate) and args.rate > 0):
-        raise MotosimError(f"--rate {args.rate}; expected a loop rate > 0 [Hz]")
+    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
+        raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
+    check_output_folder(args.out, overwrite=args.overwrite)
     config = load_platform(args.platform)
     result = load_result(args.result)
     series = TimeSeries(result.t, result.data, result.names)

@@ -1,6 +1,7 @@
 """``motosim excite``: simulate an identification run of the handlebar and log it as CSV."""
 
 import argparse
+import math
 from typing import Any
 
 import numpy as np
@@ -9,7 +10,7 @@ from motosim.cli._common import check_output, print_json
 from motosim.errors import MotosimError
 from motosim.identification import MeasurementModel, excitation_run, plan_excitation
 from motosim.io import write_log
-from motosim.params import load_parameters
+from motosim.params import HandlebarParameters, load_parameters
 from motosim.params.checks import check_number, short_repr
 from motosim.timeseries import TimeSeries
 
@@ -83,6 +84,16 @@ def _plan(args: argparse.Namespace) -> int:
         "N": args.ratio,
         "k_t": args.torque_constant,
     }
+    options = {"J_eq": "--inertia", "beta_eq": "--damping", "beta_s": "--dry-friction",
+               "N": "--ratio", "k_t": "--torque-constant"}  # fmt: skip
+    for name, value in given.items():
+        if value is not None:
+            spec = HandlebarParameters.SPECS[name]
+            check_number(value, where=options[name], lower=spec.lower, upper=spec.upper,
+                         lower_closed=spec.lower_closed, upper_closed=spec.upper_closed,
+                         unit=spec.unit)  # fmt: skip
+    check_number(args.max_current, where="--max-current", lower=0.01, upper=1000.0, unit="A")
+    check_number(args.angle_limit, where="--angle-limit", lower=1e-3, upper=math.pi, unit="rad")
     rough = {name: getattr(hb, name) if value is None else value for name, value in given.items()}
     plan = plan_excitation(
         J_eq=rough["J_eq"],
@@ -138,13 +149,12 @@ def _check_options(args: argparse.Namespace) -> None:
             f"--duration x --rate = {args.duration * args.rate:.3g} samples; expected at most "
             f"{_MAX_SAMPLES:.0e}"
         )
-    check_number(args.amplitude, where="--amplitude", lower=0.0, lower_closed=False,
-                 upper=100.0, unit="V")  # fmt: skip
-    for option, value in (("--f0", args.f0), ("--f1", args.f1), ("--frequency", args.frequency)):
-        check_number(value, where=option, lower=0.0, upper=args.rate / 2, unit="Hz")
+    check_number(args.amplitude, where="--amplitude", lower=1e-3, upper=100.0, unit="V")
+    check_number(args.f0, where="--f0", lower=0.0, upper=args.rate / 2, unit="Hz")
+    check_number(args.f1, where="--f1", lower=1e-3, upper=args.rate / 2, unit="Hz")
+    check_number(args.frequency, where="--frequency", lower=1e-3, upper=args.rate / 2, unit="Hz")
     check_number(args.counts, where="--counts", lower=1.0, upper=2.0**32)
-    check_number(args.pulley_ratio, where="--pulley-ratio", lower=0.0, lower_closed=False,
-                 upper=1000.0)  # fmt: skip
+    check_number(args.pulley_ratio, where="--pulley-ratio", lower=1e-3, upper=1000.0)
     check_number(args.current_noise, where="--current-noise", lower=0.0, upper=100.0, unit="A")
     if not 0 <= args.seed < 2**63:
         raise MotosimError(f"--seed {short_repr(args.seed)}; expected an integer 0 to 2^63 - 1")

@@ -67,6 +67,10 @@ def run(args: argparse.Namespace) -> int:
         )
     if not (math.isfinite(args.duration) and 10.0 <= args.duration <= 600.0):
         raise MotosimError(f"--duration {args.duration!r}; expected 10 to 600 s")
+    if not (math.isfinite(args.amplitude) and 0.01 <= args.amplitude <= 200.0):
+        raise MotosimError(
+            f"--amplitude {args.amplitude!r}; expected a chirp torque of 0.01 to 200 N*m"
+        )
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     band = _band(args.band)

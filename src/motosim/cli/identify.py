@@ -28,6 +28,7 @@ from motosim.identification import (
 from motosim.identification.output_error import DRIVES
 from motosim.io import parse_columns, read_rig_log
 from motosim.params import ParameterSet, dump_parameter_set, load_parameter_set
+from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 
 __all__ = ["register"]
@@ -138,6 +139,9 @@ def run(args: argparse.Namespace) -> int:
         else None
     )
     log = rig.series
+    span = float(log.t[-1] - log.t[0])
+    check_number(args.current_delay, where="--current-delay", lower=0.0, upper=min(1.0, span / 10),
+                 unit="s")  # fmt: skip
     drive = args.drive if args.drive != "auto" else drive_from_columns(log.names)[0]
     est = identify(
         log,

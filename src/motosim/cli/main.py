@@ -11,12 +11,21 @@ one line ``motosim: error: ...`` with exit code 2, without a traceback.
 
 import argparse
 import importlib
+import logging
 import sys
-from collections.abc import Sequence
-from typing import NoReturn
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import NoReturn, TextIO
 
 from motosim import __version__
-from motosim.errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, MotosimError, RunFailedError
+from motosim.errors import (
+    EXIT_BAD_INPUT,
+    EXIT_RUN_FAILED,
+    MotosimError,
+    MotosimWarning,
+    RunFailedError,
+)
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
@@ -143,6 +152,62 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+_SHOWN: set[str] = set()
+_SHOW_OTHERS = warnings.showwarning
+
+
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: TextIO | None = None, line: str | None = None) -> None:  # fmt: skip
+    """Print a :class:`MotosimWarning` as one line ``motosim: warning: ...``, once."""
+    if not issubclass(category, MotosimWarning):
+        _SHOW_OTHERS(message, category, filename, lineno, file, line)
+        return
+    text = " ".join(str(message).split())
+    if text not in _SHOWN:
+        _SHOWN.add(text)
+        print(f"motosim: warning: {text}", file=sys.stderr)
+
+
+class _OneLine(logging.Handler):
+    """Print the library's log warnings as ``motosim: warning: ...``, one line each."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = " ".join(record.getMessage().split())
+        print(f"motosim: warning: {text}", file=sys.stderr)
+
+
+@contextmanager
+def _log_in_one_line() -> Iterator[None]:
+    """Within the block, the ``motosim`` loggers print through :class:`_OneLine` only."""
+    logger = logging.getLogger("motosim")
+    handler = _OneLine(logging.WARNING)
+    propagate = logger.propagate
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = propagate
+
+
+def _refuse_empty(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse an empty string given for any option or argument (``--out ''``).
+
+    An empty value would otherwise read as "not given" and the default would be used.
+    """
+    actions = list(parser._actions)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            chosen = action.choices.get(getattr(args, "command", ""))
+            actions += list(chosen._actions) if chosen is not None else []
+    for action in actions:
+        value = getattr(args, action.dest, None)
+        if isinstance(value, str) and not value.strip() and action.default != value:
+            name = action.option_strings[0] if action.option_strings else action.dest
+            raise MotosimError(f"{name} is empty; expected a value (see motosim --help)")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code.
 
@@ -152,10 +217,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     try:
         try:
-            args = build_parser(_chosen(words)).parse_args(words)
+            parser = build_parser(_chosen(words))
+            args = parser.parse_args(words)
         except SystemExit as stop:  # --help, --version and usage errors: already printed
             return stop.code if isinstance(stop.code, int) else 2
-        code: int = args.func(args)
+        _refuse_empty(parser, args)
+        _SHOWN.clear()
+        with warnings.catch_warnings(), _log_in_one_line():
+            warnings.simplefilter("always", MotosimWarning)
+            warnings.showwarning = _show_warning
+            code: int = args.func(args)
     except MotosimError as err:
         message = " ".join(str(err).split())
         print(f"motosim: error: {message}", file=sys.stderr)
@@ -170,6 +241,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away (e.g. `| head`): not an error of ours
         sys.stderr.close()
         return 0
+    except OSError as err:  # a path the system refuses (too long, no permission, disk full)
+        from motosim.params.checks import short_repr
+
+        name = f" ({short_repr(str(err.filename))})" if err.filename else ""
+        print(f"motosim: error: {err.strerror or err}{name}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except Exception as err:  # a bug of ours: one line, exit 1, the traceback on request
         if "--debug" in words:
             raise

@@ -72,25 +72,18 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
-    from motosim.cli.run import load_realtime
+    from motosim.cli.run import check_rt_options, load_realtime, rig_settings
     from motosim.io.can import handlebar_codecs, open_link
     from motosim.rt.loop import RateLoop
     from motosim.rt.privileges import freeze_gc, thaw_gc
-    from motosim.rt.rig import VirtualRig, parse_rig
+    from motosim.rt.rig import VirtualRig
 
+    check_rt_options(args)
+    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
+        raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     inputs, realtime = load_realtime(args.scenario)
     sc = inputs.scenario
-    settings = parse_rig(
-        realtime.get("rig", {}),
-        base={
-            "plant_rate": sc.rates.plant,
-            "status_rate": sc.rates.measurement,
-            "encoder_bits": sc.measurement.encoder_bits,
-            "current_noise": sc.measurement.current_noise,
-            "max_current": sc.controller.max_current,
-        },
-        where=f"{args.scenario}: [realtime.rig]",
-    )
+    settings = rig_settings(sc, realtime, origin=args.scenario)
     duration = math.inf if args.duration is None else args.duration
     if not (duration > 0.0):
         raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")

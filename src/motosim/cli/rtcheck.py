@@ -2,16 +2,23 @@
 
 import argparse
 import math
+import os
 from typing import Any
 
 from motosim.cli._common import parse_float_list, print_json
 from motosim.errors import MotosimError
+from motosim.params.checks import short_repr
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
 from motosim.rt.loop import TimingStats
 from motosim.rt.privileges import Privilege, apply_privileges
 
-__all__ = ["add_privilege_options", "privileges_from_args", "register"]
+__all__ = [
+    "add_privilege_options",
+    "check_privilege_options",
+    "privileges_from_args",
+    "register",
+]
 
 
 def add_privilege_options(parser: argparse.ArgumentParser) -> None:
@@ -35,15 +42,31 @@ def add_privilege_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _cpus(args: argparse.Namespace) -> list[int] | None:
+    if args.cpu is None:
+        return None
+    values = parse_float_list("--cpu", args.cpu, max_items=4096)
+    count = os.cpu_count() or 1
+    if not all(0 <= v < count and v == int(v) for v in values):
+        raise MotosimError(
+            f"--cpu {short_repr(args.cpu)}; expected CPU numbers from 0 to {count - 1} such as 1 "
+            "or 0,1"
+        )
+    return [int(v) for v in values]
+
+
+def check_privilege_options(args: argparse.Namespace) -> None:
+    """Refuse --fifo, --cpu and --spin values before any work (one line each)."""
+    if args.fifo is not None and not 1 <= args.fifo <= 99:
+        raise MotosimError(f"--fifo {short_repr(args.fifo)}; expected a priority from 1 to 99")
+    _cpus(args)
+    clock_from_args(args)
+
+
 def privileges_from_args(args: argparse.Namespace) -> tuple[Privilege, ...]:
     """Apply the privileges asked for on the command line; each reported, none fatal."""
-    cpus = None
-    if args.cpu is not None:
-        values = parse_float_list("--cpu", args.cpu)
-        if not all(v >= 0 and v == int(v) for v in values):
-            raise MotosimError(f"--cpu {args.cpu!r}; expected CPU numbers such as 1 or 0,1")
-        cpus = [int(v) for v in values]
-    return apply_privileges(priority=args.fifo, cpus=cpus, mlock=args.mlock)
+    check_privilege_options(args)
+    return apply_privileges(priority=args.fifo, cpus=_cpus(args), mlock=args.mlock)
 
 
 def clock_from_args(args: argparse.Namespace) -> MonotonicClock:
@@ -89,10 +112,11 @@ def _table(stats: TimingStats, privileges: tuple[Privilege, ...]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Measure and print; exit 0."""
-    if not (math.isfinite(args.rate) and 0.0 < args.rate <= 100_000.0):
-        raise MotosimError(f"--rate {args.rate!r}; expected a rate in (0, 100000] Hz")
-    if not (math.isfinite(args.duration) and 0.0 < args.duration <= 86_400.0):
-        raise MotosimError(f"--duration {args.duration!r}; expected seconds in (0, 86400]")
+    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
+        raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
+    if not (math.isfinite(args.duration) and 1e-3 <= args.duration <= 86_400.0):
+        raise MotosimError(f"--duration {args.duration!r}; expected seconds from 0.001 to 86400")
+    check_privilege_options(args)
     clock = clock_from_args(args)
     privileges = privileges_from_args(args)
     stats = check_timing(args.rate, args.duration, clock=clock)

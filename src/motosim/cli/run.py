@@ -6,20 +6,37 @@ import math
 import signal
 import sys
 import threading
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from motosim.cli._common import print_json, write_text
-from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
-from motosim.errors import MotosimError, RunFailedError
+from motosim.cli.rtcheck import (
+    add_privilege_options,
+    check_privilege_options,
+    clock_from_args,
+    privileges_from_args,
+)
+from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.io.results import ResultWriter
 from motosim.io.runs import resolve
-from motosim.sim import RunInputs, build_rig, build_stack, parse_scenario, run_metadata
+from motosim.params.checks import short_repr
+from motosim.params.toml import read_toml
+from motosim.sim import (
+    RunInputs,
+    Scenario,
+    build_rig,
+    build_stack,
+    parse_scenario,
+    run_metadata,
+)
 from motosim.sim.metrics import run_metrics
+from motosim.sim.scenario import implausible
+
+if TYPE_CHECKING:
+    from motosim.rt.rig import RigSettings
 
 __all__ = ["load_realtime", "register"]
 
@@ -114,22 +131,59 @@ def _platform_address(text: str) -> tuple[str, int]:
         ) from None
 
 
+def check_rt_options(args: argparse.Namespace) -> None:
+    """Refuse the options of run and rig before any work: --bus, --duration, --telemetry,
+    --fifo, --cpu, --spin (one line each)."""
+    from motosim.io.can import check_bus
+    from motosim.rt.telemetry import parse_address
+
+    check_bus(args.bus)
+    if args.duration is not None and not (
+        math.isfinite(args.duration) and 1e-3 <= args.duration <= 86_400.0
+    ):
+        raise MotosimError(
+            f"--duration {short_repr(args.duration)}; expected seconds from 0.001 to 86400"
+        )
+    if args.telemetry != "off":
+        parse_address(args.telemetry)
+    check_privilege_options(args)
+
+
 def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
     """Read a scenario file: its resolved run and its ``[realtime]`` table."""
-    from motosim.rt.config import split_realtime
+    from motosim.rt.config import parse_safety, split_realtime
 
     source = Path(path)
     if not source.is_file():
         raise MotosimError(f"{path}: no such scenario file")
-    try:
-        data = tomllib.loads(source.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{path}: not valid TOML: {err}") from None
-    except UnicodeDecodeError:
-        raise MotosimError(f"{path}: not UTF-8 text; expected a TOML scenario file") from None
+    data = read_toml(source, what="scenario file")
     rest, realtime = split_realtime(data, origin=str(path))
     scenario = parse_scenario(rest, origin=str(path))
+    for line in implausible(scenario):
+        warn(f"{path}: {line}")
+    # both tables are checked whichever command reads the file: a typo in the table the
+    # other command uses is refused now, not when that command runs
+    if "safety" in realtime:
+        parse_safety(realtime["safety"], origin=str(path))
+    rig_settings(scenario, realtime, origin=str(path))
     return resolve(scenario, source.parent), realtime
+
+
+def rig_settings(scenario: Scenario, realtime: dict[str, Any], *, origin: str) -> "RigSettings":
+    """The virtual rig's settings: the ``[realtime.rig]`` table over the scenario's values."""
+    from motosim.rt.rig import parse_rig
+
+    return parse_rig(
+        realtime.get("rig", {}),
+        base={
+            "plant_rate": scenario.rates.plant,
+            "status_rate": scenario.rates.measurement,
+            "encoder_bits": scenario.measurement.encoder_bits,
+            "current_noise": scenario.measurement.current_noise,
+            "max_current": scenario.controller.max_current,
+        },
+        where=f"{origin}: [realtime.rig]",
+    )
 
 
 class _EarlyStopError(Exception):
@@ -305,6 +359,9 @@ def run(args: argparse.Namespace) -> int:
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
 
+    check_rt_options(args)
+    if not 0 <= args.view_port < 65536:
+        raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
     inputs, realtime = load_realtime(args.scenario)
     sc = inputs.scenario
     if sc.motorcycle.input == "true":

@@ -7,7 +7,7 @@ from typing import Any
 
 from motosim.cli._common import print_json, show_progress
 from motosim.errors import MotosimError
-from motosim.io.results import is_complete_result
+from motosim.io.results import is_complete_result, partial_folder
 from motosim.io.runs import load_scenario, resolve, run_to_folder
 from motosim.sim import RunInputs
 from motosim.sim.metrics import warnings
@@ -58,8 +58,15 @@ def run_scenario(
 
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
-    scenario = load_scenario(args.scenario)
     folder = Path(args.out)
+    if folder.exists() and not folder.is_dir():
+        raise MotosimError(f"--out {folder} is a file; expected a result folder")
+    if not folder.parent.is_dir():
+        raise MotosimError(
+            f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
+            "folder (create it first)"
+        )
+    scenario = load_scenario(args.scenario)
     if is_complete_result(folder) and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
     inputs = resolve(scenario, Path(args.scenario).parent)
@@ -68,7 +75,9 @@ def run(args: argparse.Namespace) -> int:
             inputs, folder, progress=show_progress(args.json), overwrite=args.overwrite
         )
     except KeyboardInterrupt:
-        print(f"motosim: interrupted; the partial result is in {folder}", file=sys.stderr)
+        staged = partial_folder(folder)
+        kept = staged if staged.is_dir() else folder
+        print(f"motosim: interrupted; the partial result is in {kept}", file=sys.stderr)
         return 130
     for line in warnings(summary):
         print(f"motosim: warning: {line}", file=sys.stderr)

@@ -2,23 +2,33 @@
 
 import argparse
 import ipaddress
+import math
 import sys
 import time
 from typing import Any
 
+from motosim.cli._common import check_output
 from motosim.errors import MotosimError
+from motosim.params.checks import short_repr
 
 __all__ = ["register"]
 
 
 def _address(option: str, text: str, default_port: int) -> tuple[str, int]:
+    from motosim.rt.telemetry import is_host
+
     host, _, port = text.partition(":")
-    if not host:
-        raise MotosimError(f"{option} {text!r}; expected HOST or HOST:PORT")
-    try:
-        return host, int(port) if port else default_port
-    except ValueError:
-        raise MotosimError(f"{option} port {port!r}; expected an integer") from None
+    if not is_host(host) or (port and not (port.isdigit() and len(port) <= 5)):
+        raise MotosimError(f"{option} {short_repr(text)}; expected HOST or HOST:PORT")
+    number = int(port) if port else default_port
+    if not 0 < number < 65536:
+        raise MotosimError(f"{option} port {number}; expected 1 to 65535")
+    return host, number
+
+
+def _check_rate(rate: float) -> None:
+    if not (math.isfinite(rate) and 0.01 <= rate <= 1000.0):
+        raise MotosimError(f"--rate {rate!r}; expected a replay speed from 0.01 to 1000")
 
 
 def register(sub: Any) -> None:
@@ -72,11 +82,15 @@ def run_view(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from motosim.io.results import load_result
+    from motosim.rt.telemetry import is_host
     from motosim.view.app import ServerThread, create_app, new_token
     from motosim.view.feeds import ReplayFeed, merge_signals, road_from_xy
 
     if not 0 <= args.port < 65536:
-        raise MotosimError(f"--port {args.port}; expected 0..65535")
+        raise MotosimError(f"--port {short_repr(args.port)}; expected 0..65535")
+    if not is_host(args.host):
+        raise MotosimError(f"--host {short_repr(args.host)}; expected an IP address or host name")
+    _check_rate(args.rate)
     result = load_result(args.folder)
     series = result if args.cueing is None else merge_signals(result, load_result(args.cueing))
     feed = ReplayFeed(series, rate=args.rate, loop=args.loop)
@@ -124,17 +138,24 @@ def run_telemetry(args: argparse.Namespace) -> int:
 
     if not (args.mcap or args.plotjuggler or args.esmini):
         raise MotosimError("nothing to do; expected --mcap, --plotjuggler or --esmini")
-    if not args.rate > 0.0:
-        raise MotosimError(f"--rate {args.rate}; expected a number > 0")
+    _check_rate(args.rate)
+    if not 1 <= args.every <= 1_000_000:
+        raise MotosimError(f"--every {short_repr(args.every)}; expected 1 to 1000000")
+    if args.mcap:
+        check_output(args.mcap, overwrite=False, option="--mcap", suffixes=(".mcap",))
+    addresses = [
+        _address("--plotjuggler", args.plotjuggler, PLOTJUGGLER_PORT) if args.plotjuggler else None,
+        _address("--esmini", args.esmini, ESMINI_PORT) if args.esmini else None,
+    ]
     result = load_result(args.folder)
     if args.mcap:
         count = write_mcap(result, args.mcap, every=args.every)
         print(f"{args.mcap}: {count} messages")
     sinks: list[PlotJugglerUdp | EsminiUdp] = []
-    if args.plotjuggler:
-        sinks.append(PlotJugglerUdp(*_address("--plotjuggler", args.plotjuggler, PLOTJUGGLER_PORT)))
-    if args.esmini:
-        host, port = _address("--esmini", args.esmini, ESMINI_PORT)
+    if addresses[0] is not None:
+        sinks.append(PlotJugglerUdp(*addresses[0]))
+    if addresses[1] is not None:
+        host, port = addresses[1]
         sinks.append(EsminiUdp(host, port=port))
     if sinks:
         names = ("t", *result.names)

@@ -14,7 +14,6 @@ Mechatronics 15(5), 2010, and states every other value as an assumption.
 """
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
@@ -22,6 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from motosim.errors import MotosimError
+from motosim.params.checks import check_text
+from motosim.params.toml import parse_toml, read_toml
 
 __all__ = [
     "AxisLimits",
@@ -38,13 +39,24 @@ __all__ = [
 G = 9.81  # standard gravity used to express the pitch gain per g [m/s^2]
 
 
-def _check(context: str, name: str, value: float, *, lower: float, upper: float = math.inf,
+SMALLEST = 1e-6
+"""Smallest value of a quantity that must be positive (an angle, rate, acceleration,
+frequency, damping, step or weight, in SI units): a millionth of a radian or of a second is
+no platform and no tuning, only a unit slip or a typo, and smaller values make the filters
+singular."""
+
+MAX_SIZE = 1e4
+"""Largest magnitude of any platform or tuning number in SI units (rad/s^2, rad/s, m, Hz)."""
+
+
+def _check(context: str, name: str, value: float, *, lower: float, upper: float = MAX_SIZE,
            closed: bool = False) -> None:  # fmt: skip
+    if not closed and lower == 0.0:  # positive: at least SMALLEST
+        lower, closed = SMALLEST, True
     ok = math.isfinite(value) and (value >= lower if closed else value > lower) and value <= upper
     if not ok:
         bound = f"{'>=' if closed else '>'} {lower:g}"
-        if upper < math.inf:
-            bound += f" and <= {upper:g}"
+        bound += f" and <= {upper:g}"
         raise MotosimError(f"{context}: {name} = {value!r}; expected a finite number {bound}")
 
 
@@ -99,8 +111,11 @@ class Platform:
     head: tuple[float, float, float]
 
     def __post_init__(self) -> None:
-        if len(self.head) != 3 or not all(math.isfinite(x) for x in self.head):
-            raise MotosimError(f"platform head = {self.head!r}; expected three finite numbers [m]")
+        if len(self.head) != 3 or not all(math.isfinite(x) and abs(x) <= 10.0 for x in self.head):
+            raise MotosimError(
+                f"platform head = {self.head!r}; expected three numbers within +/-10 m of the "
+                "centre of rotation"
+            )
 
     @property
     def axes(self) -> tuple[AxisLimits, AxisLimits, AxisLimits]:
@@ -133,8 +148,8 @@ class RiderHead:
     pitch_damping: float
 
     def __post_init__(self) -> None:
-        _check("rider", "x", self.x, lower=-math.inf)
-        _check("rider", "height", self.height, lower=0.0)
+        _check("rider", "x", self.x, lower=-10.0, closed=True, upper=10.0)
+        _check("rider", "height", self.height, lower=0.0, closed=True)  # 0: at the contact
         _check("rider", "pitch_gain", self.pitch_gain, lower=0.0, closed=True)
         _check("rider", "pitch_frequency", self.pitch_frequency, lower=0.0)
         _check("rider", "pitch_damping", self.pitch_damping, lower=0.0)
@@ -362,6 +377,9 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
             f"{origin}: [platform] needs a string name (and optional title, source); "
             f"got keys {sorted(head)}"
         )
+    for key in ("name", "title", "source"):
+        if key in head:
+            check_text(head[key], where=f"{origin}: [platform] {key}", one_line=key == "name")
     axes_table = _table(data, "axes", origin)
     extra = set(axes_table) - {"roll", "pitch", "yaw"}
     if extra:
@@ -451,6 +469,7 @@ def load_platform(name_or_path: str | Path) -> CueingConfig:
     origin = str(name_or_path)
     if isinstance(name_or_path, str) and name_or_path in list_platforms():
         text = (_packaged_dir() / f"{name_or_path}.toml").read_text(encoding="utf-8")
+        data = parse_toml(text, origin=origin)
     else:
         path = Path(name_or_path)
         if not path.is_file():
@@ -458,9 +477,5 @@ def load_platform(name_or_path: str | Path) -> CueingConfig:
                 f"{origin}: no such platform file or packaged platform; packaged platforms are "
                 f"{', '.join(list_platforms())}"
             )
-        text = path.read_text(encoding="utf-8")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise MotosimError(f"{origin}: not valid TOML: {err}") from None
+        data = read_toml(path, what="platform file")
     return parse_platform(data, origin=origin)

@@ -44,6 +44,7 @@ __all__ = [
     "HandlebarMapping",
     "SignalLayout",
     "UdpMulticastLink",
+    "check_bus",
     "crc8_sae_j1850",
     "handlebar_codecs",
     "load_dbc",
@@ -547,6 +548,30 @@ class UdpMulticastLink:
 _DEFAULT_CHANNELS = {"virtual": "motosim", "udp_multicast": None}
 
 
+def check_bus(spec: str) -> tuple[str, str]:
+    """``INTERFACE[:CHANNEL]`` split and checked against python-can's interfaces.
+
+    Raises
+    ------
+    MotosimError
+        If the interface is not one python-can knows, or python-can is not installed.
+    """
+    interface, _, channel = spec.partition(":")
+    try:
+        from can.interfaces import VALID_INTERFACES
+    except ImportError:
+        raise MotosimError(
+            "python-can is not installed; install motosim's rt group: pip install 'motosim[rt]'"
+        ) from None
+    if interface not in VALID_INTERFACES:
+        shown = spec if len(spec) <= 40 else spec[:37] + "..."
+        raise MotosimError(
+            f"--bus {shown!r}; expected INTERFACE[:CHANNEL] with a python-can interface such as "
+            "socketcan:can0, virtual or udp_multicast"
+        )
+    return interface, channel
+
+
 def open_link(spec: str, *, fast: bool = True) -> CanLink | UdpMulticastLink:
     """Open a python-can bus from ``INTERFACE[:CHANNEL]``.
 
@@ -556,15 +581,9 @@ def open_link(spec: str, *, fast: bool = True) -> CanLink | UdpMulticastLink:
     :class:`UdpMulticastLink` (the same frames on the wire); else every bus is a
     :class:`CanLink`.
     """
-    interface, _, channel = spec.partition(":")
-    if not interface:
-        raise MotosimError(f"--bus {spec!r}; expected INTERFACE[:CHANNEL] such as socketcan:can0")
-    try:
-        import can
-    except ImportError:
-        raise MotosimError(
-            "python-can is not installed; install motosim's rt group: pip install 'motosim[rt]'"
-        ) from None
+    interface, channel = check_bus(spec)
+    import can
+
     kwargs: dict[str, Any] = {"interface": interface}
     chosen = channel or _DEFAULT_CHANNELS.get(interface)
     if chosen is not None:

@@ -37,6 +37,9 @@ from motosim.errors import MotosimError
 from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "MAX_LINE",
+    "MAX_LOG_BYTES",
+    "MAX_LOG_ROWS",
     "ColumnSpec",
     "LogTiming",
     "RigLog",
@@ -160,9 +163,40 @@ def parse_columns(text: str) -> dict[str, ColumnSpec]:
     return mapping
 
 
+MAX_LOG_BYTES = 64_000_000
+"""Largest log file read [bytes]: checked before reading (about 2 million rows of three
+columns as motosim writes them)."""
+
+MAX_LINE = 10_000
+"""Longest line of a log [characters]: a row of numbers is a few dozen."""
+
+MAX_LOG_ROWS = 1_000_000
+"""Most rows in a log: 17 min at 1 kHz, 2.8 h at 100 Hz, far more than an identification or an
+estimation needs (a 60 s chirp at 1 kHz is 60 000 rows); checked before any row is parsed."""
+
+
 def _decode(source: Path, label: str) -> list[tuple[int, str]]:
     """The file's non-comment, non-blank lines with their line numbers."""
-    raw = source.read_bytes()
+    try:
+        size = source.stat().st_size
+        if size > MAX_LOG_BYTES:
+            raise MotosimError(
+                f"{label}: the log is {size} bytes; expected at most {MAX_LOG_BYTES} bytes "
+                f"(at most {MAX_LOG_ROWS} rows: cut or decimate it)"
+            )
+        raw = source.read_bytes()
+    except OSError as err:
+        raise MotosimError(f"{label}: cannot read the log: {err.strerror or err}") from None
+    rows = raw.count(b"\n")
+    if rows > MAX_LOG_ROWS + 100:  # the header and a few comment lines besides the rows
+        raise MotosimError(
+            f"{label}: the log has {rows} lines; expected at most {MAX_LOG_ROWS} rows (cut or "
+            "decimate it: identification and estimation need minutes, not hours)"
+        )
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise MotosimError(
+            f"{label}: the log is UTF-16 text; expected UTF-8 (save it again as UTF-8)"
+        )
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as err:
@@ -235,6 +269,12 @@ def read_log(
     header_text = lines[0][1]
     delimiter = _delimiter(header_text)
     decimal_comma = delimiter != ","
+    if max(len(text) for _, text in lines) > MAX_LINE:
+        number, _ = max(lines, key=lambda item: len(item[1]))
+        raise MotosimError(
+            f"{path}: line {number} is longer than {MAX_LINE} characters; expected a CSV "
+            "row of numbers"
+        )
     cells = next(csv.reader([header_text], delimiter=delimiter))
     parsed = [_split_header(cell) for cell in cells]
     names = [name for name, _ in parsed]

@@ -59,7 +59,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from motosim import __version__
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, RunFailedError
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -163,6 +163,15 @@ class _FolderLock:
     def __init__(self, folder: Path) -> None:
         self.path = lock_file(folder)
         self._fd: int | None = None
+        try:
+            self._acquire(folder)
+        except OSError as err:
+            raise MotosimError(
+                f"{folder}: cannot create the lock {self.path}: {err.strerror or err}; nothing "
+                "was written"
+            ) from None
+
+    def _acquire(self, folder: Path) -> None:
         for _ in range(10):  # retry if a finishing run unlinked the file we opened
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
             try:
@@ -179,8 +188,13 @@ class _FolderLock:
             except FileNotFoundError:
                 same = False
             if same:
-                os.ftruncate(fd, 0)
-                os.write(fd, f"pid {os.getpid()}\n".encode())
+                try:
+                    os.ftruncate(fd, 0)
+                    os.write(fd, f"pid {os.getpid()}\n".encode())
+                except OSError:
+                    self.path.unlink(missing_ok=True)
+                    os.close(fd)
+                    raise
                 self._fd = fd
                 return
             os.close(fd)
@@ -527,7 +541,10 @@ class ResultWriter:
             if exc_type is None:
                 self.close()
             elif not self._closed:
-                _log.warning(
+                # a run that failed or was interrupted says where its rows are itself
+                expected = issubclass(exc_type, RunFailedError | KeyboardInterrupt)
+                _log.log(
+                    logging.INFO if expected else logging.WARNING,
                     "run interrupted by %s: %d rows kept in %s, marked partial",
                     exc_type.__name__,
                     self._rows,

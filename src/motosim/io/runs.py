@@ -9,6 +9,7 @@ design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`
 it to :func:`motosim.sim.simulate`.
 """
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER, synthesize_controller
-from motosim.errors import MotosimError, RunFailedError
+from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.io.design_file import read_design
 from motosim.io.logs import read_log
 from motosim.io.results import ResultWriter
@@ -31,8 +32,8 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
-from motosim.sim.metrics import failure, run_metrics
-from motosim.sim.scenario import CsvProfile
+from motosim.sim.metrics import FALL_ROLL, failure, run_metrics
+from motosim.sim.scenario import CsvProfile, implausible
 from motosim.timeseries import TimeSeries
 
 __all__ = ["load_run", "load_scenario", "parameter_source", "resolve", "run_to_folder"]
@@ -45,7 +46,10 @@ def load_scenario(path: str | Path) -> Scenario:
         raise MotosimError(f"{path}: no such scenario file")
     data = dict(read_toml(source, what="scenario file"))
     data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
-    return parse_scenario(data, origin=str(path))
+    scenario = parse_scenario(data, origin=str(path))
+    for line in implausible(scenario):
+        warn(f"{path}: {line}")
+    return scenario
 
 
 def parameter_source(name: str, base: str | Path) -> str | Path:
@@ -156,19 +160,41 @@ def run_to_folder(
     sc = inputs.scenario
     metadata = run_metadata(inputs)
     rows = round(sc.duration * sc.rates.control)
-    with ResultWriter(
-        Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows
-    ) as writer:
+    phi = SIGNALS.index("phi")
+    fell: list[float] = []  # the time the roll first passed FALL_ROLL
+    writer = ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows)
+    try:
+        with writer:
 
-        def on_block(block: np.ndarray) -> None:
-            writer.append(block)
-            if on_rows is not None:
-                on_rows(block.shape[0])
+            def on_block(block: np.ndarray) -> None:
+                writer.append(block)
+                if not fell:
+                    over = np.flatnonzero(~(np.abs(block[:, phi]) <= FALL_ROLL))
+                    if over.size:
+                        fell.append(float(block[over[0], 0]))
+                if on_rows is not None:
+                    on_rows(block.shape[0])
 
-        run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
-        summary = run_metrics(run.t, run.get, complete=True, max_current=sc.controller.max_current)
-        writer.close(summary)
+            run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
+            summary = run_metrics(
+                run.t, run.get, complete=True, max_current=sc.controller.max_current
+            )
+            writer.close(summary)
+    except RunFailedError as err:
+        before = (
+            f"the motorcycle fell at t = {fell[0]:.3g} s (roll beyond "
+            f"{math.degrees(FALL_ROLL):.0f} deg, where the linear model no longer holds), then "
+            if fell
+            else ""
+        )
+        raise RunFailedError(
+            f"{sc.name}: {before}{err}; the {writer.rows} rows computed are kept in "
+            f"{writer.location}, marked partial",
+            time=fell[0] if fell else err.time,
+        ) from None
     reason = failure(summary)
+    if reason is not None and fell:
+        reason = reason.replace("fell:", f"fell at t = {fell[0]:.3g} s:", 1)
     if reason is not None:
         raise RunFailedError(f"{sc.name}: {reason}; the result is in {folder}")
     return summary

@@ -24,8 +24,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, TypeAlias, overload
 
-from motosim.errors import MotosimError
-from motosim.params._spec import Spec
+from motosim.errors import MotosimError, warn
+from motosim.params._spec import Spec, atypical_fields
 from motosim.params.checks import (
     check_keys,
     check_number,
@@ -229,7 +229,10 @@ def load_parameter_set(name_or_path: str | Path) -> ParameterSet:
                 f"(packaged sets are {', '.join(sets)})"
             )
         data = read_toml(path, what="parameter file")
-    return parse_parameter_set(data, origin=origin)
+    pset = parse_parameter_set(data, origin=origin)
+    for line in atypical_fields(pset.values, context=origin):
+        warn(line)
+    return pset
 
 
 @overload

@@ -11,7 +11,7 @@ from typing import ClassVar, Protocol
 
 from motosim.params.checks import check_number, describe_range
 
-__all__ = ["Spec", "validate_fields"]
+__all__ = ["Spec", "atypical_fields", "validate_fields"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,6 +88,11 @@ class _HasSpecs(Protocol):
     SPECS: ClassVar[dict[str, Spec]]
 
 
+class _HasTypical(Protocol):
+    SPECS: ClassVar[dict[str, Spec]]
+    TYPICAL: ClassVar[dict[str, tuple[float, float, str]]]
+
+
 def validate_fields(obj: _HasSpecs, *, context: str) -> None:
     """Check every dataclass field of ``obj`` against its :class:`Spec`.
 
@@ -114,3 +119,31 @@ def validate_fields(obj: _HasSpecs, *, context: str) -> None:
             upper_closed=spec.upper_closed,
             unit=spec.unit,
         )
+
+
+def atypical_fields(obj: _HasTypical, *, context: str) -> list[str]:
+    """One line for each field of ``obj`` that is legal but outside its typical range.
+
+    Parameters
+    ----------
+    obj : dataclass instance with ``SPECS`` and ``TYPICAL`` class attributes
+        The validated parameters; ``TYPICAL`` maps a field to (low, high, what has values
+        in that range).
+    context : str
+        What the parameters are, for the message.
+
+    Returns
+    -------
+    list of str
+        The warnings, empty when every value is typical.
+    """
+    lines = []
+    for name, (low, high, why) in obj.TYPICAL.items():
+        value = float(getattr(obj, name))
+        if not low <= value <= high:
+            unit = obj.SPECS[name].unit
+            lines.append(
+                f"{context}: {name} = {value:g} {unit} is legal but outside the typical "
+                f"{low:g} to {high:g} {unit} ({why}); check the value and its unit"
+            )
+    return lines

@@ -109,6 +109,19 @@ class HandlebarParameters:
         ),
     }
 
+    TYPICAL: ClassVar[dict[str, tuple[float, float, str]]] = {
+        "J_eq": (0.01, 1.0, "a handlebar with its motor; Table I: 0.0415"),
+        "beta_eq": (0.1, 100.0, "bearings, belt and a motor's drag; Table I: 13.956"),
+        "beta_s": (0.0, 10.0, "dry friction a rider overcomes unnoticed; Table I: 1.734"),
+        "N": (1.0, 30.0, "a direct drive to a one-stage belt; the paper's belt: 12"),
+        "k_t": (0.01, 2.0, "servo motors of 50 W to 2 kW; the paper's motor: 0.25"),
+        "R": (0.05, 20.0, "armatures of such motors"),
+        "L": (0.0, 0.05, "millihenries (Remark 2.2 of the paper: very low)"),
+        "k_e": (0.01, 2.0, "equal to k_t in SI units for a DC motor"),
+    }
+    """Typical range of the main parameters (low, high, why): a value outside is legal (see
+    :attr:`SPECS`) but far from any motorised handlebar, and is accepted with a warning."""
+
     def __post_init__(self) -> None:
         validate_fields(self, context="handlebar parameters")
         if self.N**2 * self.J_m >= self.J_eq:

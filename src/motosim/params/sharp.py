@@ -256,6 +256,24 @@ class SharpParameters:
         ),
     }
 
+    TYPICAL: ClassVar[dict[str, tuple[float, float, str]]] = {
+        "m_f": (10.0, 60.0, "a motorcycle's front wheel, fork and handlebar; Sharp: 30.6"),
+        "m_r": (80.0, 500.0, "a motorcycle's rear frame with its rider; Sharp: 217"),
+        "I_rx": (5.0, 150.0, "a motorcycle with its rider; Sharp: 31"),
+        "I_rz": (5.0, 150.0, "a motorcycle with its rider; Sharp: 21"),
+        "i_fy": (0.2, 2.0, "a motorcycle's front wheel; Sharp: 0.72"),
+        "i_Ry": (0.2, 5.0, "a motorcycle's rear wheel and engine; Sharp: 1.05"),
+        "h": (0.3, 1.2, "a motorcycle's centre of mass with its rider; Sharp: 0.62 m"),
+        "R_f": (0.2, 0.4, "motorcycle front wheels, 12 to 21 inch rims; Sharp: 0.30 m"),
+        "R_r": (0.2, 0.4, "motorcycle rear wheels; Sharp: 0.30 m"),
+        "t": (0.0, 0.2, "road and off-road motorcycles; Sharp: 0.116 m"),
+        "epsilon": (0.3, 0.65, "17 to 37 deg of caster on motorcycles; Sharp: 27 deg"),
+        "sigma": (0.05, 0.6, "motorcycle tyres; Sharp: 0.24 m"),
+    }
+    """Typical range of the main parameters (low, high, why): a value outside is legal (see
+    :attr:`SPECS`: bicycles and studies are admitted) but far from a motorcycle, and is
+    accepted with a warning."""
+
     def __post_init__(self) -> None:
         validate_fields(self, context="Sharp parameters")
         weight = (self.m_f + self.m_r) * self.g

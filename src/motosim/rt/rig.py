@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
 from motosim.model.handlebar import step_exact
+from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.run import FrameLink
@@ -120,20 +121,26 @@ class RigSettings:
     faults: RigFaults = field(default_factory=RigFaults)
 
     def __post_init__(self) -> None:
-        for name in ("plant_rate", "status_rate", "max_current", "command_timeout"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise MotosimError(f"rig {name} = {value!r}: expected a positive number")
+        for name, low, high, unit in (
+            ("plant_rate", 1.0, 1e6, "Hz"),
+            ("status_rate", 1.0, 1e5, "Hz"),
+            ("max_current", 0.01, 200.0, "A"),
+            ("command_timeout", 1e-4, 60.0, "s"),
+        ):
+            check_number(getattr(self, name), where=f"rig {name}", lower=low, upper=high, unit=unit)
         ratio = self.plant_rate / self.status_rate
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise MotosimError(
                 f"rig plant_rate = {self.plant_rate!r} Hz: expected a multiple of "
                 f"status_rate = {self.status_rate!r} Hz"
             )
-        for name in ("current_noise", "current_time_constant", "latency", "jitter"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise MotosimError(f"rig {name} = {value!r}: expected a number >= 0")
+        for name, high, unit in (
+            ("current_noise", 100.0, "A"),
+            ("current_time_constant", 1.0, "s"),
+            ("latency", 1.0, "s"),
+            ("jitter", 1.0, "s"),
+        ):
+            check_number(getattr(self, name), where=f"rig {name}", lower=0.0, upper=high, unit=unit)
         for name in ("loss", "burst_enter", "burst_leave", "stale", "duplicate"):
             value = getattr(self, name)
             if not 0.0 <= value <= 1.0:

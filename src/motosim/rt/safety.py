@@ -32,8 +32,9 @@ from dataclasses import dataclass
 from enum import IntEnum
 
 from motosim.errors import MotosimError
+from motosim.params.checks import check_number, short_repr
 
-__all__ = ["Fault", "SafetyLimits", "SafetyStage", "State", "fault_reason"]
+__all__ = ["SAFETY_RANGES", "Fault", "SafetyLimits", "SafetyStage", "State", "fault_reason"]
 
 
 class State(IntEnum):
@@ -84,6 +85,27 @@ def fault_reason(fault: int, *, watchdog_periods: int) -> str:
     return _REASONS[Fault(fault)].format(n=watchdog_periods)
 
 
+SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
+    "max_current": (0.01, 1000.0, "A"),
+    "max_slew": (0.1, 1e9, "A/s"),
+    "max_speed": (0.01, 1e4, "rad/s"),
+    "speed_band": (0.01, 1e4, "rad/s"),
+    "soft_stop": (0.01, 100.0, "rad"),
+    "hard_stop": (0.01, 100.0, "rad"),
+    "end_stop_gain": (0.0, 1e4, "A/rad"),
+    "hands_off_torque": (0.0, 100.0, "N*m"),
+    "hands_off_time": (0.001, 3600.0, "s"),
+    "hands_off_gain": (0.0, 1.0, ""),
+    "fade_in": (0.001, 60.0, "s"),
+    "watchdog_periods": (1, 10_000, ""),
+}
+"""Admitted interval (low, high, SI unit) of each safety limit. The lower bounds are far
+below any usable limit (10 mA, 0.1 A/s, 10 mrad/s, 1 ms): a smaller positive value is a typo
+or a unit slip and would make the stage trip or stall at once; the upper bounds are far beyond
+any handlebar drive, so that a test may set a limit out of reach (1000 A, an end stop beyond a
+full turn), and refuse only what is no number of a drive (1e300, an hour of fade)."""
+
+
 @dataclass(frozen=True, slots=True)
 class SafetyLimits:
     """The limits of the safety stage (see the module docstring for each one's role).
@@ -124,36 +146,20 @@ class SafetyLimits:
     watchdog_periods: int = 3
 
     def __post_init__(self) -> None:
-        positive = {
-            "max_current": self.max_current,
-            "max_slew": self.max_slew,
-            "max_speed": self.max_speed,
-            "speed_band": self.speed_band,
-            "soft_stop": self.soft_stop,
-            "hands_off_time": self.hands_off_time,
-            "fade_in": self.fade_in,
-        }
-        for name, value in positive.items():
-            if not (math.isfinite(value) and value > 0.0):
-                raise MotosimError(f"safety {name} = {value!r}: expected a positive number")
-        for name, value in (
-            ("end_stop_gain", self.end_stop_gain),
-            ("hands_off_torque", self.hands_off_torque),
-        ):
-            if not (math.isfinite(value) and value >= 0.0):
-                raise MotosimError(f"safety {name} = {value!r}: expected a number >= 0")
-        if not (math.isfinite(self.hard_stop) and self.hard_stop > self.soft_stop):
+        for name, (low, high, unit) in SAFETY_RANGES.items():
+            value = getattr(self, name)
+            if name == "watchdog_periods":
+                if not (isinstance(value, int) and low <= value <= high):
+                    raise MotosimError(
+                        f"safety watchdog_periods = {short_repr(value)}; expected an integer "
+                        f"from {low:g} to {high:g}"
+                    )
+                continue
+            check_number(value, where=f"safety {name}", lower=low, upper=high, unit=unit)
+        if not self.hard_stop > self.soft_stop:
             raise MotosimError(
-                f"safety hard_stop = {self.hard_stop!r} rad: expected more than soft_stop "
+                f"safety hard_stop = {self.hard_stop!r} rad; expected more than soft_stop "
                 f"= {self.soft_stop!r} rad"
-            )
-        if not 0.0 <= self.hands_off_gain <= 1.0:
-            raise MotosimError(
-                f"safety hands_off_gain = {self.hands_off_gain!r}: expected a scale in [0, 1]"
-            )
-        if not (isinstance(self.watchdog_periods, int) and self.watchdog_periods >= 1):
-            raise MotosimError(
-                f"safety watchdog_periods = {self.watchdog_periods!r}: expected an integer >= 1"
             )
 
 

@@ -9,6 +9,8 @@ visual. Sending is one non-blocking ``sendto`` (a few microseconds); a datagram 
 be sent is dropped and counted, never waited for.
 """
 
+import ipaddress
+import re
 import socket
 import struct
 
@@ -17,7 +19,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 
-__all__ = ["DEFAULT_ADDRESS", "StateReceiver", "StateSender", "parse_address"]
+__all__ = ["DEFAULT_ADDRESS", "StateReceiver", "StateSender", "is_host", "parse_address"]
 
 DEFAULT_ADDRESS = ("127.0.0.1", 47474)
 """Where the state stream goes when nothing else is asked."""
@@ -29,6 +31,27 @@ def _format(width: int) -> struct.Struct:
     return struct.Struct(f"<Qd{width}d")
 
 
+_HOSTNAME = re.compile(
+    r"(?=.{1,253}$)[A-Za-z0-9_]([A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?"
+    r"(\.[A-Za-z0-9_]([A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?)*\.?"
+)
+
+
+def is_host(text: str) -> bool:
+    """Whether ``text`` is an IP address or a syntactically valid host name (no lookup).
+
+    Examples
+    --------
+    >>> is_host("127.0.0.1"), is_host("lab-pc.local"), is_host("a b"), is_host("")
+    (True, True, False, False)
+    """
+    try:
+        ipaddress.ip_address(text.strip("[]"))
+    except ValueError:
+        return _HOSTNAME.fullmatch(text) is not None
+    return True
+
+
 def parse_address(text: str) -> tuple[str, int]:
     """``HOST:PORT`` as a (host, port) pair.
 
@@ -38,7 +61,7 @@ def parse_address(text: str) -> tuple[str, int]:
     ('127.0.0.1', 47474)
     """
     host, _, port = text.rpartition(":")
-    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+    if not is_host(host) or not port.isdigit() or len(port) > 5 or not 0 < int(port) < 65536:
         raise MotosimError(f"--telemetry {text!r}; expected HOST:PORT such as 127.0.0.1:47474")
     return host, int(port)
 

@@ -62,6 +62,7 @@ __all__ = [
     "FEEDFORWARD",
     "PATHS",
     "PROFILES",
+    "VALIDATED_SPEEDS",
     "AvoidancePath",
     "ChirpProfile",
     "ConstantProfile",
@@ -82,6 +83,7 @@ __all__ = [
     "StepsProfile",
     "StraightPath",
     "TurnPath",
+    "implausible",
     "parse_scenario",
     "scenario_dict",
     "scenario_from_dict",
@@ -90,9 +92,20 @@ __all__ = [
 Array = NDArray[np.float64]
 
 
+SMALLEST = 1e-6
+"""Smallest positive length [m], time [s], rate [Hz], gain or factor a scenario accepts: a
+micrometre, a microsecond or a millionth is no lane change, period or handlebar, only a typo
+or a unit slip (and 1e-300 would reach the integrator as a division by zero)."""
+
+
 def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
            low_open: bool = False, unit: str = "") -> None:  # fmt: skip
-    """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error)."""
+    """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error).
+
+    A positive quantity (``low = 0`` open) must be at least :data:`SMALLEST`.
+    """
+    if low == 0.0 and low_open:
+        low, low_open = SMALLEST, False
     check_number(value, where=name, lower=low, upper=high, lower_closed=not low_open, unit=unit)
 
 
@@ -285,8 +298,11 @@ class TurnPath:
 
     def __post_init__(self) -> None:
         _check("radius", self.radius, unit="m")
-        if self.radius == 0.0:
-            raise MotosimError("radius = 0; expected a non-zero radius [m]")
+        if abs(self.radius) < 1.0:
+            raise MotosimError(
+                f"radius = {self.radius!r} m; expected a radius of at least 1 m either way "
+                "(negative: left), beyond a motorcycle's wheelbase"
+            )
         _check("angle", self.angle, unit="rad")
         _check("start", self.start, unit="m")
         _check("transition", self.transition, low=0.0, low_open=True, unit="m")
@@ -507,6 +523,11 @@ class Scenario:
 
     def __post_init__(self) -> None:
         _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
+        if self.duration * self.rates.control < 2.0:
+            raise MotosimError(
+                f"duration = {self.duration!r} s; expected at least two control periods "
+                f"({2.0 / self.rates.control:g} s at [rates] control = {self.rates.control:g} Hz)"
+            )
         rows = self.duration * self.rates.control
         if rows > MAX_RECORDED_ROWS:
             raise MotosimError(
@@ -528,6 +549,81 @@ class Scenario:
             )
         if self.seed < 0:
             raise MotosimError(f"seed = {self.seed}; expected an integer >= 0")
+
+
+# --- plausibility: legal values that no real ride has ---------------------------------------
+
+VALIDATED_SPEEDS = (3.0, 55.0)
+"""Speeds [m/s] of a ride the model represents: from 3 m/s, the lowest of Sharp's (1971)
+Tables 1-3 (10 ft/s; below, the linearisation about forward running loses its meaning and the
+machine falls at walking pace), to 55 m/s, below the 55.4 m/s where wobble turns unstable with
+Sharp's steering damper."""
+
+TYPICAL_DURATION = 600.0
+"""Longest typical run [s]: the paper's runs last 8 to 20 s, a simulator exercise minutes."""
+
+TYPICAL_RIDER_TORQUE = 100.0
+"""Largest steering torque [N*m] a rider applies: tens of N*m in an emergency manoeuvre."""
+
+
+def _profile_peak(profile: Any) -> float:
+    """Largest magnitude a profile takes (0 when it is read from a file)."""
+    if isinstance(profile, ConstantProfile):
+        return abs(profile.value)
+    if isinstance(profile, SquareProfile):
+        return max(abs(profile.low), abs(profile.high))
+    if isinstance(profile, ChirpProfile):
+        return abs(profile.amplitude) + abs(profile.offset)
+    if isinstance(profile, StepsProfile):
+        return max((abs(v) for v in profile.values), default=0.0)
+    return 0.0
+
+
+def implausible(scenario: "Scenario") -> list[str]:
+    """One line for each legal but implausible value of a scenario (empty when none).
+
+    Examples
+    --------
+    >>> implausible(Scenario(name="x", motorcycle=Motorcycle(speed=90.0)))[0][:40]
+    '[motorcycle] speed = 90 m/s is legal but'
+    """
+    lines = []
+    low, high = VALIDATED_SPEEDS
+    speed = scenario.motorcycle.speed
+    if not low <= speed <= high:
+        lines.append(
+            f"[motorcycle] speed = {speed:g} m/s is legal but outside the {low:g} to {high:g} m/s "
+            "of a ride the model represents (Sharp 1971: the machine falls below, wobble is "
+            "unstable above); expect a fall or a wobble"
+        )
+    if scenario.duration > TYPICAL_DURATION:
+        lines.append(
+            f"[scenario] duration = {scenario.duration:g} s is legal but longer than "
+            f"{TYPICAL_DURATION:g} s; an unattended motorcycle (a torque profile, no rider) "
+            "falls within a minute"
+        )
+    noise = scenario.measurement.current_noise
+    limit = scenario.controller.max_current
+    if noise > 0.1 * limit:
+        lines.append(
+            f"[measurement] current_noise = {noise:g} A is legal but more than 10 % of the "
+            f"current range ([controller] max_current = {limit:g} A): the noise swamps the "
+            "signal the estimator reads"
+        )
+    bits = scenario.measurement.encoder_bits
+    if 0 < bits < 10:
+        lines.append(
+            f"[measurement] encoder_bits = {bits} is legal but coarser than any handlebar "
+            f"encoder ({360 / 2**bits:.2g} deg a count; the paper's has 14 bits)"
+        )
+    if scenario.rider.profile is not None:
+        peak = _profile_peak(scenario.rider.profile)
+        if peak > TYPICAL_RIDER_TORQUE:
+            lines.append(
+                f"[rider] profile reaches {peak:g} N*m, legal but beyond the "
+                f"{TYPICAL_RIDER_TORQUE:g} N*m a rider applies to a handlebar"
+            )
+    return lines
 
 
 # --- the parser: TOML onto the constructors -----------------------------------------------

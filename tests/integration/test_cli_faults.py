@@ -1,0 +1,155 @@
+"""The faults of issue 16 re-run through the command line.
+
+SIGTERM during ``motosim simulate``, a second ``--overwrite`` run on a folder being written, a
+full disk, a run that falls and then diverges, a lane change outside the virtual rider's
+speeds. Each ends with its exit code and one line; no result is lost or left unreadable.
+"""
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+import unittest.mock
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+import pytest
+
+from motosim.cli.main import main
+from motosim.errors import RunFailedError
+from motosim.io.results import load_result, partial_folder
+from motosim.sim import SIGNALS
+
+ROOT = Path(__file__).parents[2]
+
+
+def _long_scenario(tmp_path: Path, duration: float = 200.0) -> Path:
+    text = (ROOT / "scenarios" / "paper" / "fig11_nominal.toml").read_text(encoding="utf-8")
+    path = tmp_path / "long.toml"
+    path.write_text(text.replace("duration = 8.0", f"duration = {duration}"), encoding="utf-8")
+    return path
+
+
+def _start(scenario: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
+    """``motosim simulate`` in a child process, returned once its first rows are written."""
+    child = subprocess.Popen(
+        [sys.executable, "-m", "motosim", "simulate", str(scenario), "--out", str(out),
+         "--no-report", *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )  # fmt: skip
+    deadline = time.monotonic() + 120.0
+    rows = partial_folder(out) / "result.partial.csv"
+    while time.monotonic() < deadline and child.poll() is None:
+        if rows.exists() and rows.stat().st_size > 50_000:
+            return child
+        time.sleep(0.1)
+    child.kill()
+    raise AssertionError(f"the run did not start: {child.communicate()}")
+
+
+def test_sigterm_during_simulate_keeps_a_plainly_readable_partial_result(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    child = _start(_long_scenario(tmp_path), out)
+    child.send_signal(signal.SIGTERM)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == 130, err
+    assert err.count("\n") == 1 and err.startswith("motosim: interrupted; the partial result is")
+    with h5py.File(out / "result.h5", "r") as h5:  # plain h5py, no SWMR
+        rows = h5["signals"].shape[0]
+        assert rows > 0 and not h5.attrs["complete"]
+    with (out / "result.partial.csv").open(newline="") as handle:  # the name says partial
+        table = list(csv.reader(handle))
+    assert table[0] == list(SIGNALS) and len(table) - 1 == rows
+    assert load_result(out).t.size == rows
+    # nothing blocks a rerun
+    assert main(["simulate", str(_long_scenario(tmp_path, 0.5)), "--out", str(out),
+                 "--no-report", "--overwrite"]) == 0  # fmt: skip
+
+
+def test_a_second_overwrite_run_on_a_folder_being_written_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "run"
+    scenario = tmp_path / "still.toml"  # upright for 600 s: the first run writes for minutes
+    scenario.write_text(
+        '[scenario]\nname = "still"\nduration = 600.0\n[rates]\ncontrol = 100.0\n'
+        'measurement = 100.0\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 0.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    child = _start(scenario, out)
+    try:
+        code = main(["simulate", str(scenario), "--out", str(out), "--overwrite", "--no-report"])
+        err = capsys.readouterr().err
+    finally:
+        child.send_signal(signal.SIGTERM)
+        child.communicate(timeout=60)
+    assert code == 2 and err.count("\n") == 1
+    assert f"another run (pid {child.pid}) is writing this result" in err
+    assert load_result(out).t.size > 0  # the first run's rows, not interleaved
+
+
+def test_a_full_disk_is_one_line_and_keeps_the_rows(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import shutil
+
+    real = shutil.disk_usage
+    calls = {"n": 0}
+
+    def filling(path: Any) -> Any:  # plenty of space at the start, 1 MB after a few blocks
+        calls["n"] += 1
+        usage = real(path)
+        return usage if calls["n"] < 4 else usage._replace(free=1_000_000)
+
+    monkeypatch.setattr(shutil, "disk_usage", filling)
+    out = tmp_path / "run"
+    code = main(["simulate", str(_long_scenario(tmp_path, 20.0)), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "the disk is full" in err, err
+    assert "rows (t <= " in err and f"kept in {out}" in err
+    assert load_result(out).t.size > 0 and not load_result(out).complete
+
+
+def _falling_then_diverging(inputs: Any, *, rng: Any, on_block: Callable[..., None]) -> Any:
+    """Stands in for the simulation: the roll passes 45 deg at t = 0.07 s, then NaN."""
+    t = np.arange(100) * 1e-3
+    block = np.zeros((t.size, len(SIGNALS)))
+    block[:, 0] = t
+    block[:, SIGNALS.index("phi")] = np.where(t >= 0.07, 1.0, 0.1)
+    on_block(block)
+    raise RunFailedError("the simulation diverged at t = 0.1 s (phi not finite)", time=0.1)
+
+
+def test_a_fall_then_a_divergence_is_exit_3_naming_the_fall(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "run"
+    with unittest.mock.patch("motosim.io.runs.simulate", _falling_then_diverging):
+        code = main(["simulate", str(_long_scenario(tmp_path, 1.0)), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 3 and err.count("\n") == 1, err
+    assert err.startswith("motosim: run failed: fig11_nominal: the motorcycle fell at t = 0.07 s")
+    assert "then the simulation diverged at t = 0.1 s" in err
+    assert f"the 100 rows computed are kept in {out}, marked partial" in err
+    assert load_result(out).t.size == 100
+
+
+@pytest.mark.parametrize("speed", ["1.0", "100.0"])
+def test_a_lane_change_outside_the_riders_speeds_is_refused(
+    speed: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = (ROOT / "scenarios" / "lane_change_20.toml").read_text(encoding="utf-8")
+    path = tmp_path / "lc.toml"
+    path.write_text(text.replace("speed = 20.0", f"speed = {speed}"), encoding="utf-8")
+    assert main(["simulate", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "expected 3 to 60 m/s with the virtual rider" in err
+    assert not os.path.exists(tmp_path / "out")
