@@ -77,9 +77,10 @@ def test_mpc_rolls_faster_with_a_fading_prediction_than_with_a_held_one() -> Non
 
     # a 60 deg/s lean rate (beyond the platform's 30 deg/s): held over the 1 s horizon, the
     # plan spreads the platform's 20 deg of travel over it (about 20 deg/s); faded with the
-    # 0.15 s of the platform file, it rolls at the onset as fast as it can
+    # 0.15 s of the platform file, it rolls at the onset as fast as it can (1e4 s, the longest
+    # prediction time a platform file admits, is a held motion over a 1 s horizon)
     cfg = load_platform("simacom_platform")
-    held = dataclasses.replace(cfg, mpc=dataclasses.replace(cfg.mpc, prediction_time=1e6))
+    held = dataclasses.replace(cfg, mpc=dataclasses.replace(cfg.mpc, prediction_time=1e4))
     motion = np.array([np.radians(60.0), 0.0, 0.0, 0.0, 0.0])
     peaks = []
     for config in (cfg, held):
