@@ -9,6 +9,7 @@ import numpy as np
 
 from motosim import __version__
 from motosim.cli._common import check_output, parse_float_list, print_json, write_text
+from motosim.control.statespace import StateSpace
 from motosim.control.torque_feedback import (
     MAX_ORDER,
     PAPER_CONTROLLER,
@@ -25,14 +26,8 @@ from motosim.io.design_file import dump_design
 from motosim.params import load_parameters
 from motosim.params.checks import check_number, short_repr
 from motosim.params.handlebar import HandlebarParameters
-from motosim.sim.loop_analysis import StackLoopAnalysis, analyse_stack, robustness_grid
-from motosim.sim.stack import design_stack
+from motosim.sim.loop_analysis import StackLoopAnalysis, analyse_design
 
-DEFAULT_LIPSCHITZ = 300.0
-"""Bound on |theta_h''| of the differentiator in the analysed stack, a scenario's default
-[rad/s^2] (the linear analysis does not depend on it)."""
-DEFAULT_MAX_CURRENT = 30.0
-"""Current limit of the analysed stack, a scenario's default [A] (not reached when linear)."""
 MAX_SPEEDS = 20
 """Most speeds of the whole-stack analysis (each takes a 27-point grid)."""
 SPEED_RANGE = (3.0, 60.0)
@@ -127,29 +122,23 @@ def _stack(a: StackLoopAnalysis) -> dict[str, Any]:
 
 
 def _stack_analysis(
-    hb: HandlebarParameters, settings: ObserverSettings, controller: Any, rate: float,
+    hb: HandlebarParameters, settings: ObserverSettings, controller: StateSpace, rate: float,
     speeds: list[float],
 ) -> list[dict[str, Any]]:  # fmt: skip
     """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid."""
     kernel = WalcottZakObserver(design_with(hb, settings), 1.0 / rate).kernel
     sharp = load_parameters("sharp1971", "sharp")
     out = []
-    for speed in speeds:
-        model = design_stack(
-            sharp, kernel, controller, control_rate=rate, measurement_rate=rate,
-            lipschitz=DEFAULT_LIPSCHITZ, max_current=DEFAULT_MAX_CURRENT, speed=speed,
-            handlebar=hb, rider_feedforward=True, reference_feedforward=True,
-        )  # fmt: skip
-        nominal = _stack(analyse_stack(model, hb, speed))
-        grid = [a for _, a in robustness_grid(model, hb, speed)]
-        nominal["grid"] = {
-            "points": len(grid),
-            "unstable": sum(not a.stable for a in grid),
-            "worst_gain_margin_db": min(a.gain_margin_db for a in grid),
-            "worst_phase_margin_deg": min(a.phase_margin_deg for a in grid),
-            "worst_modulus_margin": min(a.modulus_margin for a in grid),
+    for nominal, grid in analyse_design(sharp, kernel, controller, hb, rate=rate, speeds=speeds):
+        entry = _stack(nominal)
+        entry["grid"] = {
+            "points": grid.points,
+            "unstable": grid.unstable,
+            "worst_gain_margin_db": grid.gain_margin_db,
+            "worst_phase_margin_deg": grid.phase_margin_deg,
+            "worst_modulus_margin": grid.modulus_margin,
         }
-        out.append(nominal)
+        out.append(entry)
     return out
 
 

@@ -27,18 +27,22 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError
-from motosim.estimation.kernel import WALCOTT_ZAK
+from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
-from motosim.sim.stack import StackModel
+from motosim.params.sharp import SharpParameters
+from motosim.sim.stack import StackModel, design_stack
 
 __all__ = [
     "FEEL_BAND",
+    "GridSummary",
     "LimitCycle",
     "StackLoop",
     "StackLoopAnalysis",
+    "analyse_design",
     "analyse_stack",
     "robustness_grid",
     "stack_loop",
@@ -384,4 +388,57 @@ def robustness_grid(
                     beta_vm=0.0,
                 )
                 out.append(((fj, fb, fk), analyse_stack(model, true, speed)))
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class GridSummary:
+    """The worst of :func:`robustness_grid`.
+
+    Attributes
+    ----------
+    points, unstable : int
+        Perturbed handlebars analysed, and how many of them the loop does not stabilise.
+    gain_margin_db, phase_margin_deg, modulus_margin : float
+        Smallest over the grid [dB, deg, -].
+    """
+
+    points: int
+    unstable: int
+    gain_margin_db: float
+    phase_margin_deg: float
+    modulus_margin: float
+
+
+def analyse_design(
+    sharp: SharpParameters,
+    estimator: EstimatorKernel,
+    controller: StateSpace,
+    handlebar: HandlebarParameters,
+    *,
+    rate: float,
+    speeds: list[float],
+) -> list[tuple[StackLoopAnalysis, GridSummary]]:
+    """A designed observer and controller as the rider would hold them, at each speed.
+
+    The stack of a scenario's defaults (both feedforward terms on, control and measurement at
+    ``rate`` [Hz]) around the nominal ``handlebar``, analysed by :func:`analyse_stack`, and
+    the worst of its :func:`robustness_grid`.
+    """
+    out = []
+    for speed in speeds:
+        model = design_stack(
+            sharp, estimator, controller, control_rate=rate, measurement_rate=rate,
+            lipschitz=300.0, max_current=30.0, speed=speed, handlebar=handlebar,
+            rider_feedforward=True, reference_feedforward=True,
+        )  # fmt: skip
+        grid = [a for _, a in robustness_grid(model, handlebar, speed)]
+        summary = GridSummary(
+            points=len(grid),
+            unstable=sum(not a.stable for a in grid),
+            gain_margin_db=min(a.gain_margin_db for a in grid),
+            phase_margin_deg=min(a.phase_margin_deg for a in grid),
+            modulus_margin=min(a.modulus_margin for a in grid),
+        )
+        out.append((analyse_stack(model, handlebar, speed), summary))
     return out
