@@ -1,4 +1,4 @@
-"""The one-way data flow of the package (README, Development), checked on the imports.
+"""The one-way data flow of the package (docs/organisation.md), checked on the imports.
 
 params -> model -> {identification, estimation, control, cueing} -> sim -> io -> {rt, campaign,
 plotting} -> {report, view} -> cli: a module imports only from its own package and from layers
