@@ -205,6 +205,10 @@ class RateLoop:
                 k += skip
             if not carry_on:
                 break
+        return self._close(k, periods, missed, served)
+
+    def _close(self, k: int, periods: int, missed: int, served: int) -> int:
+        """Add a run's periods, misses and steps to the totals; return its steps."""
         if k > periods:  # skipped deadlines past the end of the run are not misses
             missed -= k - periods
             k = periods
@@ -226,7 +230,7 @@ class RateLoop:
         )
 
 
-class FramePacedLoop:
+class FramePacedLoop(RateLoop):
     """Run a step each time the drive's status frame arrives (pacing by the bus).
 
     Each period the loop calls ``wait(until)``, which blocks until a status frame has arrived
@@ -235,7 +239,7 @@ class FramePacedLoop:
     or plus ``first_timeout`` before the first frame. A timeout still runs the step: the
     frames due meanwhile are counted as missed and ``k`` jumps over them.
 
-    The timing is kept as :class:`TimingStats` with these meanings: ``wake`` is the interval
+    Its :meth:`stats` are :class:`TimingStats` with these meanings: ``wake`` is the interval
     between two frames minus the nominal period (the drive's pace as the loop sees it: its
     jitter, negative for a frame early), ``compute`` the step's time, ``missed`` the frame
     periods without a frame (a gap of ``n`` periods counts ``n - 1``).
@@ -280,42 +284,21 @@ class FramePacedLoop:
         first_timeout: float | None = None,
         capacity: int = 1 << 17,
     ) -> None:
-        if not (np.isfinite(rate) and rate > 0.0):
-            raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
+        super().__init__(rate, clock, capacity=capacity)
         first = timeout if first_timeout is None else first_timeout
         if not (np.isfinite(timeout) and timeout > 0.0 and np.isfinite(first) and first > 0.0):
             raise MotosimError(
                 f"timeout = {timeout!r} s, first_timeout = {first!r} s: expected positive times"
             )
-        if capacity < 1:
-            raise MotosimError(f"capacity = {capacity!r}: expected at least 1 step")
-        self._rate = float(rate)
-        self._period = 1.0 / self._rate
-        self._clock = clock
         self._wait = wait
         self._timeout = float(timeout)
         self._first_timeout = float(first)
-        self._wake = np.zeros(capacity)
-        self._compute = np.zeros(capacity)
-        self._served = 0
-        self._missed = 0
-        self._periods = 0
         self._timeouts = 0
-        self._stop = False
-
-    @property
-    def period(self) -> float:
-        """The drive's nominal frame period [s]."""
-        return self._period
 
     @property
     def timeouts(self) -> int:
         """Waits that ended without a frame."""
         return self._timeouts
-
-    def stop(self) -> None:
-        """Ask the loop to end after the current step (safe from a signal handler)."""
-        self._stop = True
 
     def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
         """Call ``step(k, t)`` once per frame until it returns False or ``periods`` pass.
@@ -367,23 +350,5 @@ class FramePacedLoop:
             limit = self._timeout
             if not carry_on:
                 break
-        if k > periods:
-            missed -= k - periods
-            k = periods
-        self._missed += missed
-        self._periods += k
         self._timeouts += timeouts
-        ran = served - self._served
-        self._served = served
-        return ran
-
-    def stats(self) -> TimingStats:
-        """The timing of every run so far (see the class docstring for the meanings)."""
-        n = min(self._served, self._wake.size)
-        return timing_stats(
-            self._rate,
-            self._wake[:n],
-            self._compute[:n],
-            periods=self._periods,
-            missed=self._missed,
-        )
+        return self._close(k, periods, missed, served)
