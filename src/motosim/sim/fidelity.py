@@ -29,6 +29,12 @@ __all__ = ["FeelResponse", "feel_scenario", "rendered_feel"]
 Array = NDArray[np.float64]
 
 
+def _within(f: Array, low: float, high: float) -> NDArray[np.bool_]:
+    """``low <= f <= high`` up to rounding: Welch's bins k df may fall a hair short of k df."""
+    tol = 1e-9 * max(abs(low), abs(high))
+    return np.asarray((f >= low - tol) & (f <= high + tol), dtype=np.bool_)
+
+
 @dataclass(frozen=True, slots=True)
 class FeelResponse:
     """Rendered and ideal steering feel over frequency.
@@ -65,7 +71,7 @@ class FeelResponse:
 
     def worst(self, low: float, high: float) -> tuple[float, float]:
         """Largest |magnitude error| [dB] and |phase error| [deg] over ``low``-``high`` [Hz]."""
-        band = (self.frequency >= low) & (self.frequency <= high)
+        band = _within(self.frequency, low, high)
         if not band.any():
             raise MotosimError(f"no frequency of the response within {low:g}-{high:g} Hz")
         return (
@@ -141,7 +147,7 @@ def rendered_feel(
     _, s_th = csd(rider_torque, handlebar_angle, fs=1.0 / dt, nperseg=per)
     _, s_td = csd(rider_torque, steer_angle, fs=1.0 / dt, nperseg=per)
     _, s_hh = welch(handlebar_angle, fs=1.0 / dt, nperseg=per)
-    keep = (f >= band[0]) & (f <= band[1]) & (s_tt > 0)
+    keep = _within(f, band[0], band[1]) & (s_tt > 0)
     f = f[keep]
     lin = sharp_model.linearize(sharp, speed)
     row = sharp_model.STATE_NAMES.index("delta")
