@@ -14,14 +14,15 @@ import json
 import math
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, warn
 from motosim.params.checks import short_repr
 
 __all__ = [
+    "TYPICAL_OPTIONS",
     "check_figure_path",
     "check_output",
     "check_output_folder",
@@ -30,6 +31,7 @@ __all__ = [
     "print_json",
     "save_figure",
     "show_progress",
+    "warn_atypical",
     "write_text",
 ]
 
@@ -37,6 +39,85 @@ MAX_LIST_ITEMS = 10_000
 """Most values accepted in one comma-separated option."""
 
 _FIGURE_FORMATS = (".png", ".svg", ".pdf")
+
+
+class Typical(NamedTuple):
+    """The typical range of a numeric option: legal values outside it are warned about."""
+
+    low: float
+    high: float
+    unit: str
+    why: str
+
+
+_SPEEDS = Typical(
+    3.0, 55.0, "m/s", "of a ride the model represents (Sharp 1971: the machine falls below 3, "
+    "wobble is unstable above 55)"
+)  # fmt: skip
+_LOOP_RATE = Typical(100.0, 10_000.0, "Hz", "of a handlebar loop (100 Hz over the paper's CAN "
+                     "link, up to a drive's 10 kHz)")  # fmt: skip
+_REPLAY = Typical(0.1, 10.0, "", "replay speeds a person follows")
+
+TYPICAL_OPTIONS: dict[tuple[str, str], Typical] = {
+    ("excite", "--duration"): Typical(10.0, 600.0, "s", "of an identification run (tens of s)"),
+    ("excite", "--rate"): _LOOP_RATE,
+    ("excite", "--current-noise"): Typical(
+        0.0, 1.0, "A", "of a current sensor's noise (tens of mA)"
+    ),
+    ("excite", "--amplitude"): Typical(0.1, 48.0, "V", "of a handlebar motor's supply"),
+    ("modes", "--speeds"): _SPEEDS,
+    ("modes", "--range"): _SPEEDS,
+    ("design", "--speeds"): _SPEEDS,
+    ("design", "--rate"): _LOOP_RATE,
+    ("design", "--bandwidth"): Typical(
+        1.0, 50.0, "Hz", "of a steering feel (the rider's steering is below 5 Hz)"
+    ),
+    ("fidelity", "--speed"): _SPEEDS,
+    ("fidelity", "--duration"): Typical(
+        20.0, 300.0, "s", "of a feel measurement (a chirp over 0.1-5 Hz)"
+    ),
+    ("fidelity", "--amplitude"): Typical(0.5, 50.0, "N*m", "of a rider's steering torque"),
+    ("rt-check", "--rate"): _LOOP_RATE,
+    ("rt-check", "--duration"): Typical(1.0, 3600.0, "s", "of a latency check"),
+    ("rig", "--rate"): _LOOP_RATE,
+    ("rig", "--duration"): Typical(1.0, 14_400.0, "s", "of a session on the rig"),
+    ("run", "--duration"): Typical(1.0, 3600.0, "s", "of a ride on the simulator"),
+    ("cueing", "--rate"): Typical(50.0, 1000.0, "Hz", "of a motion platform's loop"),
+    ("view", "--rate"): _REPLAY,
+    ("telemetry", "--rate"): _REPLAY,
+}
+"""Typical range of each numeric option, by (command, option). A legal value outside it is
+accepted with one line ``motosim: warning: ...`` (:func:`warn_atypical`); values outside the
+legal range are refused by the command."""
+
+
+def warn_atypical(command: str, option: str, values: float | Iterable[float] | None) -> None:
+    """Warn once, in one line, when a legal ``option`` value is outside its typical range.
+
+    Parameters
+    ----------
+    command : str
+        The subcommand, e.g. ``"excite"``.
+    option : str
+        The option, a key of :data:`TYPICAL_OPTIONS` with ``command``.
+    values : float, iterable of float or None
+        The option's value (or values of a list option), already checked legal; None (the
+        option not given) warns nothing.
+    """
+    if values is None:
+        return
+    typical = TYPICAL_OPTIONS[(command, option)]
+    numbers = [float(values)] if isinstance(values, int | float) else [float(v) for v in values]
+    odd = sorted({v for v in numbers if not typical.low <= v <= typical.high})
+    if not odd:
+        return
+    shown = ", ".join(f"{v:g}" for v in odd[:5]) + (", ..." if len(odd) > 5 else "")
+    unit = f" {typical.unit}" if typical.unit else ""
+    verb = "is" if len(odd) == 1 else "are"
+    warn(
+        f"{option} {shown}{unit} {verb} legal but outside the typical {typical.low:g} to "
+        f"{typical.high:g}{unit} {typical.why}; check the value and its unit"
+    )
 
 
 def parse_float_list(option: str, text: str, *, max_items: int = MAX_LIST_ITEMS) -> list[float]:

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_output_folder, print_json, save_figure
+from motosim.cli._common import check_output_folder, print_json, save_figure, warn_atypical
 from motosim.cueing import (
     ALGORITHMS,
     COMMAND_SIGNALS,
@@ -80,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     """Cue, write, plot and summarise."""
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
         raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
+    warn_atypical("cueing", "--rate", args.rate)
     check_output_folder(args.out, overwrite=args.overwrite)
     config = load_platform(args.platform)
     result = load_result(args.result)

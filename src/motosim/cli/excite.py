@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_output, print_json
+from motosim.cli._common import check_output, print_json, warn_atypical
 from motosim.errors import MotosimError
 from motosim.identification import MeasurementModel, excitation_run, plan_excitation
 from motosim.io import write_log
@@ -158,6 +158,8 @@ def _check_options(args: argparse.Namespace) -> None:
     check_number(args.current_noise, where="--current-noise", lower=0.0, upper=100.0, unit="A")
     if not 0 <= args.seed < 2**63:
         raise MotosimError(f"--seed {short_repr(args.seed)}; expected an integer 0 to 2^63 - 1")
+    for option in ("--duration", "--rate", "--current-noise", "--amplitude"):
+        warn_atypical("excite", option, getattr(args, option[2:].replace("-", "_")))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_figure_path, print_json, save_figure
+from motosim.cli._common import check_figure_path, print_json, save_figure, warn_atypical
 from motosim.errors import MotosimError
 
 __all__ = ["register"]
@@ -71,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
         raise MotosimError(
             f"--amplitude {args.amplitude!r}; expected a chirp torque of 0.01 to 200 N*m"
         )
+    for option in ("--speed", "--duration", "--amplitude"):
+        warn_atypical("fidelity", option, getattr(args, option[2:]))
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     band = _band(args.band)

@@ -11,6 +11,7 @@ from motosim.cli._common import (
     parse_range,
     print_json,
     save_figure,
+    warn_atypical,
 )
 from motosim.model.sharp import MODE_NAMES, ModeTable, modes
 from motosim.params import load_parameters
@@ -96,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
             max_points=_MAX_SPEEDS,
         )
     )
+    warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     params = load_parameters(args.params, "sharp")

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import print_json
+from motosim.cli._common import print_json, warn_atypical
 from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
 from motosim.errors import MotosimError
 
@@ -87,6 +87,8 @@ def run(args: argparse.Namespace) -> int:
     duration = math.inf if args.duration is None else args.duration
     if not (duration > 0.0):
         raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
+    warn_atypical("rig", "--rate", args.rate)
+    warn_atypical("rig", "--duration", args.duration)
     receiver = None
     rider: Any
     if sc.rider.profile is not None:

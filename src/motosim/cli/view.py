@@ -7,7 +7,7 @@ import sys
 import time
 from typing import Any
 
-from motosim.cli._common import check_output
+from motosim.cli._common import check_output, warn_atypical
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -141,6 +141,7 @@ def run_telemetry(args: argparse.Namespace) -> int:
     _check_rate(args.rate)
     if not 1 <= args.every <= 1_000_000:
         raise MotosimError(f"--every {short_repr(args.every)}; expected 1 to 1000000")
+    warn_atypical("telemetry", "--rate", args.rate)
     if args.mcap:
         check_output(args.mcap, overwrite=False, option="--mcap", suffixes=(".mcap",))
     addresses = [
