@@ -50,7 +50,7 @@ def test_every_speed_duration_rate_noise_option_has_a_typical_range(command: str
     module = importlib.import_module(COMMANDS[command][0])
     source = inspect.getsource(module)
     for option in typed:
-        assert f'"{option}"' in source and "warn_atypical(" in source, (command, option)
+        assert f'"{option}"' in source and f'warn_atypical("{command}"' in source, option
 
 
 @pytest.mark.parametrize(

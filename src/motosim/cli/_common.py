@@ -29,6 +29,7 @@ __all__ = [
     "parse_float_list",
     "parse_range",
     "print_json",
+    "refuse_special",
     "save_figure",
     "show_progress",
     "warn_atypical",
@@ -160,11 +161,13 @@ def parse_range(option: str, text: str, *, max_points: int = 100_000) -> list[fl
             f"{option} {short_repr(text)}; expected finite start <= stop and a step > 0, "
             "e.g. 2:60:0.5"
         )
-    count = math.floor((stop - start) / step + 1e-9) + 1
-    if count > max_points:
+    span = (stop - start) / step  # inf for a subnormal step
+    if not span < max_points:
         raise MotosimError(
-            f"{option} {short_repr(text)} gives {count} points; expected at most {max_points}"
+            f"{option} {short_repr(text)} gives {span + 1:.3g} points; expected at most "
+            f"{max_points}"
         )
+    count = math.floor(span + 1e-9) + 1
     return [start + step * k for k in range(count)]
 
 
@@ -189,6 +192,23 @@ def show_progress(quiet: bool = False) -> bool:
     A bar redrawn with carriage returns is junk in a log file or a pipe.
     """
     return not quiet and sys.stderr.isatty()
+
+
+def refuse_special(target: Path, option: str, expected: str) -> None:
+    """Refuse an output path that is a broken or looping link, or a device, pipe or socket.
+
+    Writing beside such a path and renaming over it would replace the link or the device
+    node (``/dev/null``) itself; writing through it would hang (a pipe) or fail late.
+    """
+    if os.path.lexists(target) and not target.exists():
+        raise MotosimError(
+            f"{option} {target} is a symbolic link that leads nowhere or to itself; expected "
+            f"{expected}"
+        )
+    if target.exists() and not (target.is_file() or target.is_dir()):
+        raise MotosimError(
+            f"{option} {target} is a device, a pipe or a socket; expected {expected}"
+        )
 
 
 def _refuse_missing_parent(target: Path, option: str) -> None:
@@ -240,6 +260,7 @@ def check_output(
         )
     if target.is_dir():
         raise MotosimError(f"{option} {target} is a folder; expected a file name")
+    refuse_special(target, option, "a file name")
     _refuse_missing_parent(target, option)
     if target.exists() and not overwrite:
         raise MotosimError(f"{option} {target} exists; give --overwrite to replace it")
@@ -272,6 +293,7 @@ def check_output_folder(path: str | Path, *, overwrite: bool, option: str = "--o
     if not str(path).strip():
         raise MotosimError(f"{option} is empty; expected a folder name")
     target = Path(path)
+    refuse_special(target, option, "a folder")
     if target.exists() and not target.is_dir():
         raise MotosimError(f"{option} {target} is a file; expected a folder")
     _refuse_missing_parent(target, option)

@@ -80,12 +80,12 @@ def run(args: argparse.Namespace) -> int:
     """Cue, write, plot and summarise."""
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
         raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
-    warn_atypical("cueing", "--rate", args.rate)
     check_output_folder(args.out, overwrite=args.overwrite)
     config = load_platform(args.platform)
     result = load_result(args.result)
     series = TimeSeries(result.t, result.data, result.names)
     model = TELBAN_CARDULLO_2005
+    warn_atypical("cueing", "--rate", args.rate)
     outcome = cue(config, series, model, algorithm=args.algorithm, rate=args.rate)
     folder = Path(args.out)
     metadata = {

@@ -170,12 +170,12 @@ def run(args: argparse.Namespace) -> int:
         check_number(
             speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
         )
-    warn_atypical("design", "--speeds", speeds)
-    warn_atypical("design", "--rate", args.rate)
-    warn_atypical("design", "--bandwidth", args.bandwidth)
     if args.out is not None:
         check_output(args.out, overwrite=args.overwrite)
     hb = load_parameters(args.handlebar, "handlebar")
+    warn_atypical("design", "--speeds", speeds)
+    warn_atypical("design", "--rate", args.rate)
+    warn_atypical("design", "--bandwidth", args.bandwidth)
     if not args.json:
         print(f"designing for {args.handlebar} ({args.starts} starts) ...", file=sys.stderr)
     ctrl = design_torque_feedback(

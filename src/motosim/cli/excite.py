@@ -121,6 +121,7 @@ def _plan(args: argparse.Namespace) -> int:
         phase = plan.f0 * t + 0.5 * (plan.f1 - plan.f0) / plan.duration * t**2
         command = plan.amplitude * np.sin(2.0 * np.pi * phase)
         summary["out"] = str(write_log(args.out, TimeSeries(t, command[:, None], ("i_cmd",))))
+    warn_atypical("excite", "--rate", args.rate)
     if args.json:
         print_json(summary)
         return 0
@@ -158,8 +159,6 @@ def _check_options(args: argparse.Namespace) -> None:
     check_number(args.current_noise, where="--current-noise", lower=0.0, upper=100.0, unit="A")
     if not 0 <= args.seed < 2**63:
         raise MotosimError(f"--seed {short_repr(args.seed)}; expected an integer 0 to 2^63 - 1")
-    for option in ("--duration", "--rate", "--current-noise", "--amplitude"):
-        warn_atypical("excite", option, getattr(args, option[2:].replace("-", "_")))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -177,6 +176,8 @@ def run(args: argparse.Namespace) -> int:
         pulley_ratio=args.pulley_ratio,
         current_noise=args.current_noise,
     )
+    for option in ("--duration", "--rate", "--current-noise", "--amplitude"):
+        warn_atypical("excite", option, getattr(args, option[2:].replace("-", "_")))
     log = excitation_run(
         hb,
         args.signal,

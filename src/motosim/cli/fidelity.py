@@ -71,8 +71,6 @@ def run(args: argparse.Namespace) -> int:
         raise MotosimError(
             f"--amplitude {args.amplitude!r}; expected a chirp torque of 0.01 to 200 N*m"
         )
-    for option in ("--speed", "--duration", "--amplitude"):
-        warn_atypical("fidelity", option, getattr(args, option[2:]))
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     band = _band(args.band)
@@ -81,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
     scenario = feel_scenario(
         base, speed=args.speed, amplitude=args.amplitude, band=band, duration=args.duration
     )
+    for option in ("--speed", "--duration", "--amplitude"):
+        warn_atypical("fidelity", option, getattr(args, option[2:]))
     inputs = resolve(scenario, folder)
     result = simulate(inputs, rng=np.random.default_rng(scenario.seed), keep=True)
     feel = rendered_feel(

@@ -97,11 +97,12 @@ def run(args: argparse.Namespace) -> int:
             max_points=_MAX_SPEEDS,
         )
     )
-    warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     params = load_parameters(args.params, "sharp")
     table = modes(params, speeds)
+    if args.speeds is not None or args.speed_range is not None:  # the default spans 2-60 m/s
+        warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)
     if args.json:
         print_json(_payload(table, args.params))
     else:

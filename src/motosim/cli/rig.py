@@ -87,8 +87,6 @@ def run(args: argparse.Namespace) -> int:
     duration = math.inf if args.duration is None else args.duration
     if not (duration > 0.0):
         raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
-    warn_atypical("rig", "--rate", args.rate)
-    warn_atypical("rig", "--duration", args.duration)
     receiver = None
     rider: Any
     if sc.rider.profile is not None:
@@ -122,6 +120,8 @@ def run(args: argparse.Namespace) -> int:
             raise MotosimError(
                 f"--rate {rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz"
             )
+        warn_atypical("rig", "--rate", args.rate)
+        warn_atypical("rig", "--duration", args.duration)
         periods = 2**62 if math.isinf(duration) else round(duration * rate)
         loop = RateLoop(rate, clock, capacity=min(periods, 1 << 20))
         privileges = privileges_from_args(args)

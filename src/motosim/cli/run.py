@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from motosim.cli._common import print_json, warn_atypical, write_text
+from motosim.cli._common import print_json, refuse_special, warn_atypical, write_text
 from motosim.cli.rtcheck import (
     add_privilege_options,
     check_privilege_options,
@@ -373,10 +373,11 @@ def run(args: argparse.Namespace) -> int:
     duration = sc.duration if args.duration is None else args.duration
     if not (np.isfinite(duration) and 0.0 < duration <= 86_400.0):
         raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
-    warn_atypical("run", "--duration", args.duration)
     folder = Path(args.out)
+    refuse_special(folder, "--out", "a result folder")
     if (folder / "result.h5").exists() and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
+    warn_atypical("run", "--duration", args.duration)
     view = _view_setup(args, inputs, duration, limits) if args.view else None
     clock = clock_from_args(args)
     rate = sc.rates.control

@@ -5,7 +5,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from motosim.cli._common import print_json, show_progress
+from motosim.cli._common import print_json, refuse_special, show_progress
 from motosim.errors import MotosimError, RunFailedError
 from motosim.io.results import is_complete_result, partial_folder
 from motosim.io.runs import load_scenario, resolve, run_to_folder
@@ -59,6 +59,7 @@ def run_scenario(
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     folder = Path(args.out)
+    refuse_special(folder, "--out", "a result folder")
     if folder.exists() and not folder.is_dir():
         raise MotosimError(f"--out {folder} is a file; expected a result folder")
     if not folder.parent.is_dir():

@@ -93,6 +93,7 @@ def run_view(args: argparse.Namespace) -> int:
     _check_rate(args.rate)
     result = load_result(args.folder)
     series = result if args.cueing is None else merge_signals(result, load_result(args.cueing))
+    warn_atypical("view", "--rate", args.rate)
     feed = ReplayFeed(series, rate=args.rate, loop=args.loop)
     road = road_from_xy(result["x"], result["y"])
     token = new_token()
@@ -141,7 +142,6 @@ def run_telemetry(args: argparse.Namespace) -> int:
     _check_rate(args.rate)
     if not 1 <= args.every <= 1_000_000:
         raise MotosimError(f"--every {short_repr(args.every)}; expected 1 to 1000000")
-    warn_atypical("telemetry", "--rate", args.rate)
     if args.mcap:
         check_output(args.mcap, overwrite=False, option="--mcap", suffixes=(".mcap",))
     addresses = [
@@ -149,6 +149,7 @@ def run_telemetry(args: argparse.Namespace) -> int:
         _address("--esmini", args.esmini, ESMINI_PORT) if args.esmini else None,
     ]
     result = load_result(args.folder)
+    warn_atypical("telemetry", "--rate", args.rate)
     if args.mcap:
         count = write_mcap(result, args.mcap, every=args.every)
         print(f"{args.mcap}: {count} messages")
