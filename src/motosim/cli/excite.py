@@ -151,7 +151,7 @@ def _check_options(args: argparse.Namespace) -> None:
             f"{_MAX_SAMPLES:.0e}"
         )
     check_number(args.amplitude, where="--amplitude", lower=1e-3, upper=100.0, unit="V")
-    check_number(args.f0, where="--f0", lower=0.0, upper=args.rate / 2, unit="Hz")
+    check_number(args.f0, where="--f0", lower=1e-3, upper=args.rate / 2, unit="Hz")
     check_number(args.f1, where="--f1", lower=1e-3, upper=args.rate / 2, unit="Hz")
     check_number(args.frequency, where="--frequency", lower=1e-3, upper=args.rate / 2, unit="Hz")
     check_number(args.counts, where="--counts", lower=1.0, upper=2.0**32)
@@ -176,8 +176,6 @@ def run(args: argparse.Namespace) -> int:
         pulley_ratio=args.pulley_ratio,
         current_noise=args.current_noise,
     )
-    for option in ("--duration", "--rate", "--current-noise", "--amplitude"):
-        warn_atypical("excite", option, getattr(args, option[2:].replace("-", "_")))
     log = excitation_run(
         hb,
         args.signal,
@@ -189,6 +187,8 @@ def run(args: argparse.Namespace) -> int:
         f1=args.f1,
         frequency=args.frequency,
     )
+    for option in ("--duration", "--rate", "--current-noise", "--amplitude"):
+        warn_atypical("excite", option, getattr(args, option[2:].replace("-", "_")))
     columns = ("theta_h", "i_m", "u")
     log = type(log)(log.t, np.column_stack([log[c] for c in columns]), columns)
     path = write_log(args.out, log)
