@@ -401,7 +401,7 @@ def _run_chunk(
                 )
         if abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
             return row + 1
-    return out.shape[0]
+    return len(out)
 
 
 def _check_block(out: Array) -> None:
