@@ -54,9 +54,21 @@ def _start(scenario: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
     raise AssertionError(f"the run did not start: {child.communicate()}")
 
 
+def _upright(tmp_path: Path, control: float = 1000.0) -> Path:
+    """Upright for 600 s (no torque, the paper's controller): a run that writes for minutes."""
+    path = tmp_path / "still.toml"
+    path.write_text(
+        f'[scenario]\nname = "still"\nduration = 600.0\n[rates]\ncontrol = {control}\n'
+        f'measurement = {control}\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 0.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    return path
+
+
 def test_sigterm_during_simulate_keeps_a_plainly_readable_partial_result(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    child = _start(_long_scenario(tmp_path), out)
+    child = _start(_upright(tmp_path), out)
     child.send_signal(signal.SIGTERM)
     _, err = child.communicate(timeout=60)
     assert child.returncode == 130, err
@@ -77,13 +89,7 @@ def test_a_second_overwrite_run_on_a_folder_being_written_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "run"
-    scenario = tmp_path / "still.toml"  # upright for 600 s: the first run writes for minutes
-    scenario.write_text(
-        '[scenario]\nname = "still"\nduration = 600.0\n[rates]\ncontrol = 100.0\n'
-        'measurement = 100.0\n[rider]\nkind = "torque"\n'
-        'profile = { kind = "constant", value = 0.0 }\n[controller]\nkind = "paper"\n',
-        encoding="utf-8",
-    )
+    scenario = _upright(tmp_path)
     child = _start(scenario, out)
     try:
         code = main(["simulate", str(scenario), "--out", str(out), "--overwrite", "--no-report"])
@@ -206,12 +212,13 @@ def test_a_run_that_leaves_the_models_speeds_stops_with_exit_3(
 def test_a_motor_saturated_most_of_the_run_is_exit_3(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # a 0.2 A current limit against the +-10 N*m square: the motor at its limit most of the time
-    path = _variant(
-        tmp_path,
-        "paper_controller_square.toml",
-        'kind = "paper"',
-        'kind = "paper"\nmax_current = 0.2',
+    # a 0.2 A current limit against a +-20 N*m square: the motor at its limit most of the time
+    path = tmp_path / "saturated.toml"
+    path.write_text(
+        '[scenario]\nname = "saturated"\nduration = 4.0\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "square", low = -20.0, high = 20.0, period = 2.0 }\n'
+        '[controller]\nkind = "paper"\nmax_current = 0.2\n',
+        encoding="utf-8",
     )
     out = tmp_path / "run"
     code = main(["simulate", str(path), "--out", str(out), "--no-report"])
@@ -220,6 +227,7 @@ def test_a_motor_saturated_most_of_the_run_is_exit_3(
     assert "the motor current was at its limit" in err and "% of the time" in err
     result = load_result(out)
     assert result.complete and result.summary["flag_saturation"] == 1.0
+    assert result.t.size == 4000  # saturation does not stop a run: it is judged at the end
 
 
 @pytest.mark.parametrize("speed", ["1.0", "100.0"])
