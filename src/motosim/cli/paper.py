@@ -145,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as err:
         raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
     from motosim.report import build_report  # matplotlib: seconds, only once the output is fine
+
     summaries: dict[str, dict[str, Any]] = {}
     runs: dict[str, SimResult] = {}
     scenarios = paper_scenarios()
