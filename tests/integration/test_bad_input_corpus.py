@@ -153,10 +153,12 @@ def _design_keys(text: str) -> Iterator[tuple[str, str]]:
             yield table, line.split(" = ")[0]
 
 
-def _design_cases() -> Iterator[Any]:
-    text = DESIGN.read_text(encoding="utf-8")
+def _design_mutants(
+    text: str, mutations: tuple[str, ...] = ("missing", *MUTATIONS)
+) -> Iterator[tuple[str, str, str, str]]:
+    """(mutated text, table, key, mutation) for every value line of a design file."""
     for table, key in _design_keys(text):
-        for mutation in ("missing", *MUTATIONS):
+        for mutation in mutations:
             start = text.index(f"[{table}]\n")
             line = re.compile(rf"^{key} = .*$", re.MULTILINE)
             found = line.search(text, start)
@@ -168,10 +170,12 @@ def _design_cases() -> Iterator[Any]:
             same_kind = any(
                 old.startswith(kind) and value.startswith(kind) for kind in ('"', "[", "true")
             ) or (old == "false" and value == "true")
-            yield pytest.param(
-                bad, table, key, mutation if not same_kind else "same-kind",
-                id=f"{table}.{key}-{mutation}",
-            )  # fmt: skip
+            yield bad, table, key, mutation if not same_kind else "same-kind"
+
+
+def _design_cases() -> Iterator[Any]:
+    for bad, table, key, mutation in _design_mutants(DESIGN.read_text(encoding="utf-8")):
+        yield pytest.param(bad, table, key, mutation, id=f"{table}.{key}-{mutation}")
 
 
 _MAY_PASS = {"minus_one", "zero", "tiny", "missing", "same-kind"}
@@ -179,9 +183,7 @@ _MAY_PASS = {"minus_one", "zero", "tiny", "missing", "same-kind"}
 string for a string, a list for a list, a boolean for a boolean)."""
 
 
-@pytest.mark.parametrize(("text", "table", "key", "mutation"), list(_design_cases()))
-def test_design_files(text: str, table: str, key: str, mutation: str, tmp_path: Path) -> None:
-    path = tmp_path / "design.toml"
+def _check_design(text: str, table: str, key: str, mutation: str, path: Path) -> None:
     path.write_text(text, encoding="utf-8")
     start = time.monotonic()
     message = ""
@@ -194,6 +196,38 @@ def test_design_files(text: str, table: str, key: str, mutation: str, tmp_path: 
         assert "\n" not in message and str(path) in message
     else:
         assert mutation in _MAY_PASS, f"[{table}] {key} = {mutation} was accepted"
+
+
+@pytest.mark.parametrize(("text", "table", "key", "mutation"), list(_design_cases()))
+def test_design_files(text: str, table: str, key: str, mutation: str, tmp_path: Path) -> None:
+    _check_design(text, table, key, mutation, tmp_path / "design.toml")
+
+
+@pytest.fixture(scope="module")
+def fresh_design(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """A design file written now by ``motosim design --out`` (first order, one start)."""
+    path = tmp_path_factory.mktemp("design") / "fresh.toml"
+    argv = ["design", "--order", "1", "--starts", "1", "--speeds", "20", "--json"]
+    assert main([*argv, "--out", str(path)]) == 0
+    return path.read_text(encoding="utf-8")
+
+
+def test_the_design_fixture_has_the_keys_motosim_design_writes(fresh_design: str) -> None:
+    # the packaged fixture above stands for what `motosim design` writes today
+    assert list(_design_keys(fresh_design)) == list(_design_keys(DESIGN.read_text("utf-8")))
+
+
+@pytest.mark.parametrize("mutation", ["missing", *MUTATIONS])
+def test_a_design_file_written_by_motosim_design_mutated(
+    mutation: str, fresh_design: str, tmp_path: Path
+) -> None:
+    path = tmp_path / "as_written.toml"
+    path.write_text(fresh_design, encoding="utf-8")
+    read_design(path)  # as written: accepted
+    cases = list(_design_mutants(fresh_design, (mutation,)))
+    assert len(cases) > 30
+    for text, table, key, kind in cases:
+        _check_design(text, table, key, kind, tmp_path / "design.toml")
 
 
 _BIG = "1" + "0" * 399

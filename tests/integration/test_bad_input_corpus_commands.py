@@ -29,6 +29,8 @@ import copy
 import io
 import json
 import math
+import os
+import re
 import signal
 import time
 import unittest.mock
@@ -59,6 +61,15 @@ MUTATIONS: dict[str, Any] = {
     "string": "text",
     "list": [1.0, "a"],
     "table": {"x": 1},
+    # kinds found by a fresh corpus after the first: signed zero, subnormals, booleans, empty
+    # and nested containers, NaN spelt as a string
+    "minus_zero": -0.0,
+    "subnormal": 1e-320,
+    "boolean": True,
+    "empty_table": {},
+    "empty_list": [],
+    "nested_list": [[1.0, [2.0]]],
+    "string_nan": "nan",
 }
 _BIG = "1" + "0" * 399
 
@@ -147,7 +158,7 @@ def _rule(old: Any, mutation: str) -> str:
     if _number(old):
         if mutation in ("minus_one", "zero"):
             return "may_pass"
-        if mutation == "tiny":
+        if mutation in ("tiny", "subnormal", "minus_zero"):  # a float where 0 may be legal
             return "refuse" if isinstance(old, int) else "like_zero"
         return "refuse"
     if type(old) is type(new) or (isinstance(old, list) and isinstance(new, list)):
@@ -323,6 +334,17 @@ def _damaged(text: str) -> Iterator[tuple[str, bytes]]:
     yield "5000-digits", b"x = " + b"9" * 5000
     yield "huge-string", b'x = "' + b"y" * 900_000 + b'"'
     yield "misspelled-table", text.replace("\n[", "\n[x", 1).encode()
+    first = re.search(r"^(\w+) = .*$", text, re.MULTILINE)
+    if first is not None:
+        line, key = first.group(0), first.group(1)
+        yield "duplicate-key", text.replace(line, f"{line}\n{line}", 1).encode()
+        look_alike = key.translate(str.maketrans("aeopc", "\u0430\u0435\u043e\u0440\u0441"))
+        if look_alike != key:  # Cyrillic letters that look like the Latin ones
+            yield "look-alike-key", text.replace(line, line.replace(key, look_alike, 1), 1).encode()
+        yield "100k-key", text.replace(line, f"{line}\n{'k' * 100_000} = 1", 1).encode()
+        yield "date-value", text.replace(line, f"{key} = 1979-05-27T07:32:00Z", 1).encode()
+        yield "lone-surrogate", text.replace(line, f'{line}\nq = "\\ud800"', 1).encode()
+    yield "nul-in-middle", text.replace("\n", "\n\x00", 1).encode()
 
 
 def _damaged_cases() -> Iterator[Any]:
@@ -342,7 +364,29 @@ def test_damaged_files(
                             lambda: request.getfixturevalue("result")):  # fmt: skip
         outcome = run_cli(argv, stop)
         assert is_refusal(outcome), (argv[0], outcome)
-        assert str(written) in outcome[2]
+        assert str(written) in outcome[2] and len(outcome[2]) < 2_000
+
+
+def _harmless(text: str) -> Iterator[tuple[str, bytes]]:
+    """The same content in another legal form: read as the original."""
+    yield "utf-8-bom", ("\ufeff" + text).encode("utf-8")
+    yield "crlf", text.replace("\n", "\r\n").encode()
+    yield "tab-indented", text.replace("\n", "\n\t").encode()
+
+
+@pytest.mark.parametrize("file", [SCENARIOS[0], SCENARIOS[-1], CAMPAIGNS[-1], PLATFORM])
+def test_a_bom_crlf_or_indented_file_reads_as_the_original(
+    file: Path, tmp_path: Path, request: pytest.FixtureRequest
+) -> None:
+    text = file.read_text(encoding="utf-8")
+    written = _write_beside(file, text, tmp_path)
+    path = ("realtime",) if "realtime" in file.name else ("scenario",)
+    calls = _argv(file, path, written, tmp_path, lambda: request.getfixturevalue("result"))
+    original = [run_cli(argv, stop)[:2] for argv, stop in calls]
+    assert all(state == "accepted" for state, _ in original), original
+    for name, content in _harmless(text):
+        written.write_bytes(content)
+        assert [run_cli(argv, stop)[:2] for argv, stop in calls] == original, name
 
 
 # --- logs read by identify and estimate ----------------------------------------------------
@@ -376,6 +420,15 @@ def _log_cases() -> Iterator[Any]:
     yield pytest.param(("t,theta_h,i_m\n" + "0,0,0\n" * 50).encode(), id="log-time-repeats")
     reversed_rows = [lines[0], *reversed(lines[1:])]
     yield pytest.param(("\n".join(reversed_rows) + "\n").encode(), id="log-time-reversed")
+    for k, value in enumerate(("1e309", "[[1,2]]", "0x10", "NaN", "infinity", "-nan", "true")):
+        bad = [*lines]
+        bad[5] = f"{bad[5].split(',')[0]},{value},0.5"
+        yield pytest.param(("\n".join(bad) + "\n").encode(), id=f"log-angle-more-{k}")
+    header = "t,theta_h,i_m"
+    yield pytest.param(good.replace(header, "t,theta_h,theta_h", 1).encode(), id="log-dup-column")
+    yield pytest.param(good.replace(header, "t,thet\u0430_h,i_m", 1).encode(), id="log-look-alike")
+    subnormal = "".join(f"{k * 1e-320!r},0.1,0.2\n" for k in range(400))
+    yield pytest.param((header + "\n" + subnormal).encode(), id="log-subnormal-period")
 
 
 @pytest.mark.parametrize("content", list(_log_cases()))
@@ -387,6 +440,17 @@ def test_damaged_logs(command: str, content: bytes, tmp_path: Path) -> None:
                                   else [])  # fmt: skip
     outcome = run_cli(argv, ("motosim.cli.identify.identify", "motosim.cli.estimate.estimate"))
     assert is_refusal(outcome), outcome
+
+
+@pytest.mark.parametrize("command", ["identify", "estimate"])
+def test_a_bom_or_crlf_log_reads_as_the_original(command: str, tmp_path: Path) -> None:
+    log = tmp_path / "run é.csv"
+    argv = [command, str(log)] + (["--out", str(tmp_path / "e.csv")] if command == "estimate"
+                                  else [])  # fmt: skip
+    stop = ("motosim.cli.identify.identify", "motosim.cli.estimate.estimate")
+    for content in (_log_text().encode("utf-8-sig"), _log_text().replace("\n", "\r\n").encode()):
+        log.write_bytes(content)
+        assert run_cli(argv, stop)[0] == "accepted"
 
 
 def test_a_ten_million_row_log_is_refused_at_once(tmp_path: Path) -> None:
@@ -422,7 +486,6 @@ STOP_VIEW = (
 LEGAL: set[tuple[str, str, str]] = {
     ("excite", "--seed", "0"),
     ("excite", "--current-noise", "0"),  # a noiseless current
-    ("excite", "--f0", "0"),  # a chirp from DC
     ("excite-plan", "--dry-friction", "0"),  # no dry friction
     ("rt-check", "--spin", "0"),  # sleep to each deadline without polling
     ("run", "--spin", "0"),
@@ -661,3 +724,127 @@ def test_every_option_at_its_edges(tmp_path: Path, result: Path) -> None:
         if problem:
             failures.append(f"{key} {option} {value[:20]!r}: {problem[:160]}")
     assert not failures, f"{len(failures)} of {len(cases)}:\n" + "\n".join(failures)
+
+
+# --- kinds a fresh corpus found after the first: special paths, more option spellings -------
+
+_MORE_EDGES = ("1e309", "-1e309", "0x10", "Infinity", "+inf", "-nan", "1e400000", "1.0.0", "--",
+               "9" * 5000)  # fmt: skip
+
+
+def _with(base: list[str], option: str, value: str) -> list[str]:
+    argv = [*base]
+    if option in argv:
+        del argv[argv.index(option) : argv.index(option) + 2]
+    return [*argv, f"{option}={value}"]
+
+
+def test_every_number_option_at_more_edges(tmp_path: Path, result: Path) -> None:
+    """Overflowing, hexadecimal, spelt-out and missing values (``--rate=--``); a signed zero
+    or a subnormal only where 0 is accepted."""
+    (tmp_path / "folder").mkdir(exist_ok=True)
+    failures, count = [], 0
+    for key, (base, stop, options) in _commands(tmp_path, result).items():
+        for option, kind in options.items():
+            if kind not in ("number", "int"):
+                continue
+            for value in _MORE_EDGES:
+                count += 1
+                outcome = run_cli(_with(base, option, value), stop)
+                problem = check(outcome, "refuse")
+                if problem is None and len(outcome[2]) > 2_000:
+                    problem = f"a message of {len(outcome[2])} characters"
+                if problem:
+                    failures.append(f"{key} {option}={value[:12]}: {problem[:160]}")
+            zero = run_cli(_with(base, option, "0"), stop)
+            for value in ("-0", "1e-320", "5e-324"):
+                count += 1
+                problem = check(run_cli(_with(base, option, value), stop), "like_zero", zero)
+                if problem:
+                    failures.append(f"{key} {option}={value}: {problem[:160]}")
+    assert count > 400
+    assert not failures, f"{len(failures)} of {count}:\n" + "\n".join(failures)
+
+
+@pytest.mark.parametrize(
+    "value", ["1,,2", "1,2,", ",1", "1;2", "1 2", "1e309", "-0", "1e-320,3", "nan,3", "0x10", "--"]
+)
+@pytest.mark.parametrize("command", ["modes", "design"])
+def test_speed_lists_at_more_edges(command: str, value: str) -> None:
+    stop = ("motosim.cli.design.load_parameters",)
+    assert is_refusal(run_cli([command, f"--speeds={value}"], stop))
+
+
+@pytest.mark.parametrize("value", ["1:2:1e-320", "1::2", "1:2:3:4", "-0:2:1", "1e-320:2:1"])
+def test_speed_ranges_at_more_edges(value: str) -> None:
+    assert is_refusal(run_cli(["modes", f"--range={value}"]))
+
+
+def _special_paths(tmp: Path) -> dict[str, str]:
+    """Paths that are not plain files: a pipe, a link to itself, a folder, a device, too long."""
+    folder = tmp / "special"
+    folder.mkdir()
+    fifo, loop, directory = folder / "fifo.toml", folder / "loop.toml", folder / "dir.toml"
+    os.mkfifo(fifo)
+    os.symlink(loop, loop)
+    directory.mkdir()
+    return {
+        "fifo": str(fifo),
+        "symlink-loop": str(loop),
+        "directory": str(directory),
+        "dev-zero": "/dev/zero",
+        "long-path": "/" + "a" * 5000 + ".toml",
+        "long-name": str(folder / ("b" * 300 + ".toml")),
+    }
+
+
+def test_special_paths_as_inputs_are_refused(tmp_path: Path, result: Path) -> None:
+    log = tmp_path / "log.csv"
+    log.write_text(_log_text(), encoding="utf-8")
+    stop_rt = ("motosim.io.can.open_link", "motosim.cli.rtcheck.check_timing")
+    stop_est, stop_id = ("motosim.cli.estimate.estimate",), ("motosim.cli.identify.identify",)
+    stop_excite = ("motosim.cli.excite.write_log",)
+    out = str(tmp_path / "out")
+    failures = []
+    for kind, path in _special_paths(tmp_path).items():
+        for argv, stop in [
+            (["simulate", path, "--out", str(tmp_path / "o")], STOP_SIMULATE),
+            (["params", "show", path], ()),
+            (["modes", "--params", path], ()),
+            (["identify", path], stop_id),
+            (["identify", str(log), "--validate", path], stop_id),
+            (["estimate", path, "--out", out + ".csv"], stop_est),
+            (["campaign", path, "--out", str(tmp_path / "k")], STOP_CAMPAIGN),
+            (["cueing", path, "--out", str(tmp_path / "c")], STOP_CUEING),
+            (["cueing", str(result), "--platform", path, "--out", out], STOP_CUEING),
+            (["report", path], ()),
+            (["view", path], STOP_VIEW),
+            (["excite", "--handlebar", path, "--out", out + ".csv"], stop_excite),
+            (["design", "--handlebar", path], ("motosim.cli.design.design_torque_feedback",)),
+            (["run", path, "--bus", "virtual", "--out", str(tmp_path / "r")], stop_rt),
+            (["rig", path, "--bus", "virtual"], stop_rt),
+        ]:  # fmt: skip
+            outcome = run_cli(argv, stop)
+            if not is_refusal(outcome) or len(outcome[2]) > 2_000:
+                failures.append(f"{kind} {argv[:2]}: {outcome[0]} {outcome[2][-200:]!r}")
+    assert not failures, "\n".join(failures)
+
+
+def test_special_paths_as_outputs_are_refused(tmp_path: Path, result: Path) -> None:
+    # writing beside a device and renaming over it would replace the device node itself
+    scenario = str(ROOT / "scenarios" / "paper" / "fig11_nominal.toml")
+    paths = _special_paths(tmp_path)
+    failures = []
+    for kind in ("fifo", "symlink-loop", "dev-null"):
+        path = "/dev/null" if kind == "dev-null" else paths[kind]
+        for argv, stop in [
+            (["simulate", scenario, "--out", path], STOP_SIMULATE),
+            (["excite", "--duration", "20", "--out", path], ("motosim.cli.excite.write_log",)),
+            (["design", "--out", path], ("motosim.cli.design.design_torque_feedback",)),
+            (["cueing", str(result), "--out", path], STOP_CUEING),
+            (["campaign", str(CAMPAIGNS[-1]), "--out", path], STOP_CAMPAIGN),
+        ]:
+            outcome = run_cli([*argv, "--overwrite"], stop)
+            if not is_refusal(outcome):
+                failures.append(f"{kind} {argv[0]}: {outcome[0]} {outcome[2][-200:]!r}")
+    assert not failures, "\n".join(failures)

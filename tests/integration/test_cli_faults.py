@@ -54,9 +54,21 @@ def _start(scenario: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
     raise AssertionError(f"the run did not start: {child.communicate()}")
 
 
+def _upright(tmp_path: Path, control: float = 1000.0) -> Path:
+    """Upright for 600 s (no torque, the paper's controller): a run that writes for minutes."""
+    path = tmp_path / "still.toml"
+    path.write_text(
+        f'[scenario]\nname = "still"\nduration = 600.0\n[rates]\ncontrol = {control}\n'
+        f'measurement = {control}\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 0.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    return path
+
+
 def test_sigterm_during_simulate_keeps_a_plainly_readable_partial_result(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    child = _start(_long_scenario(tmp_path), out)
+    child = _start(_upright(tmp_path), out)
     child.send_signal(signal.SIGTERM)
     _, err = child.communicate(timeout=60)
     assert child.returncode == 130, err
@@ -77,13 +89,7 @@ def test_a_second_overwrite_run_on_a_folder_being_written_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "run"
-    scenario = tmp_path / "still.toml"  # upright for 600 s: the first run writes for minutes
-    scenario.write_text(
-        '[scenario]\nname = "still"\nduration = 600.0\n[rates]\ncontrol = 100.0\n'
-        'measurement = 100.0\n[rider]\nkind = "torque"\n'
-        'profile = { kind = "constant", value = 0.0 }\n[controller]\nkind = "paper"\n',
-        encoding="utf-8",
-    )
+    scenario = _upright(tmp_path)
     child = _start(scenario, out)
     try:
         code = main(["simulate", str(scenario), "--out", str(out), "--overwrite", "--no-report"])
@@ -118,28 +124,110 @@ def test_a_full_disk_is_one_line_and_keeps_the_rows(
     assert load_result(out).t.size > 0 and not load_result(out).complete
 
 
-def _falling_then_diverging(inputs: Any, *, rng: Any, on_block: Callable[..., None]) -> Any:
-    """Stands in for the simulation: the roll passes 45 deg at t = 0.07 s, then NaN."""
-    t = np.arange(100) * 1e-3
-    block = np.zeros((t.size, len(SIGNALS)))
-    block[:, 0] = t
-    block[:, SIGNALS.index("phi")] = np.where(t >= 0.07, 1.0, 0.1)
+def test_the_paper_run_lengthened_to_600_s_stops_at_the_fall(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The issue's case: fig11_nominal's square rider torque with nobody balancing the machine
+    # passes 45 deg of roll near 53 s; the run stops there instead of integrating on to a
+    # divergence, keeps its rows, closes its files with the flag, and its report says so.
+    out = tmp_path / "run"
+    code = main(["simulate", str(_long_scenario(tmp_path, 600.0)), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 3 and err.count("\n") == 1, err
+    assert err.startswith("motosim: run failed: fig11_nominal: the motorcycle fell at t = ")
+    assert "deg, beyond 45 deg" in err and "the run stopped there" in err
+    result = load_result(out)
+    fell = float(err.split("fell at t = ")[1].split(" s")[0])
+    assert 20.0 < fell < 100.0 and result.t[-1] == pytest.approx(fell, abs=1e-3)
+    assert abs(result["phi"][-1]) > np.radians(45.0) > np.max(np.abs(result["phi"][:-1]))
+    assert result.summary["flag_fall"] == 1.0 and result.summary["complete"] == 0.0
+    assert "fell at t" in result.summary["failure"]
+    with h5py.File(out / "result.h5", "r") as h5:  # closed: plain h5py reads it
+        assert h5["signals"].shape[0] == result.t.size
+    assert "run failed: the motorcycle fell" in (out / "report.html").read_text(encoding="utf-8")
+
+
+def _diverging(inputs: Any, *, rng: Any, on_block: Callable[..., None], **_: Any) -> Any:
+    """Stands in for the simulation: 100 rows, then a divergence at t = 0.1 s."""
+    block = np.zeros((100, len(SIGNALS)))
+    block[:, 0] = np.arange(100) * 1e-3
     on_block(block)
     raise RunFailedError("the simulation diverged at t = 0.1 s (phi not finite)", time=0.1)
 
 
-def test_a_fall_then_a_divergence_is_exit_3_naming_the_fall(
+def test_a_divergence_is_exit_3_naming_the_time_with_the_rows_kept(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "run"
-    with unittest.mock.patch("motosim.io.runs.simulate", _falling_then_diverging):
+    with unittest.mock.patch("motosim.io.runs.simulate", _diverging):
         code = main(["simulate", str(_long_scenario(tmp_path, 1.0)), "--out", str(out)])
     err = capsys.readouterr().err
     assert code == 3 and err.count("\n") == 1, err
-    assert err.startswith("motosim: run failed: fig11_nominal: the motorcycle fell at t = 0.07 s")
-    assert "then the simulation diverged at t = 0.1 s" in err
+    assert err.startswith("motosim: run failed: fig11_nominal: the simulation diverged at t = 0.1")
     assert f"the 100 rows computed are kept in {out}, marked partial" in err
-    assert load_result(out).t.size == 100
+    assert load_result(out).t.size == 100 and not load_result(out).complete
+
+
+def _variant(tmp_path: Path, name: str, old: str, new: str) -> Path:
+    text = (ROOT / "scenarios" / name).read_text(encoding="utf-8")
+    assert old in text
+    path = tmp_path / name
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("name", "old", "new", "expected"),
+    [
+        # braking at 0.5 g from 25 m/s for 10 s: below 3 m/s after about 4.5 s of braking
+        ("emergency_braking.toml", "duration = 6.0", "duration = 12.0", "2.99"),
+        # a drive torque that takes the virtual rider above 60 m/s, its highest scheduled speed
+        (
+            "straight_50_gust.toml",
+            'drive_torque = { kind = "steps", times = [5.0], values = [150.0] }',
+            'drive_torque = { kind = "constant", value = 1500.0 }',
+            "60.0",
+        ),
+    ],
+)
+def test_a_run_that_leaves_the_models_speeds_stops_with_exit_3(
+    name: str,
+    old: str,
+    new: str,
+    expected: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    out = tmp_path / "run"
+    code = main(["simulate", str(_variant(tmp_path, name, old, new)), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 3 and err.count("\n") == 1, err
+    assert "the speed left the model's range at t = " in err
+    assert f": {expected}" in err and "outside 3 to 60 m/s" in err
+    result = load_result(out)
+    assert result.summary["flag_out_of_range"] == 1.0 and result.t.size < 7000  # of 8000 or 12000
+    assert "run failed: the speed left" in (out / "report.html").read_text(encoding="utf-8")
+
+
+def test_a_motor_saturated_most_of_the_run_is_exit_3(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a 0.2 A current limit against a +-20 N*m square: the motor at its limit most of the time
+    path = tmp_path / "saturated.toml"
+    path.write_text(
+        '[scenario]\nname = "saturated"\nduration = 4.0\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "square", low = -20.0, high = 20.0, period = 2.0 }\n'
+        '[controller]\nkind = "paper"\nmax_current = 0.2\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "run"
+    code = main(["simulate", str(path), "--out", str(out), "--no-report"])
+    err = capsys.readouterr().err
+    assert code == 3 and err.count("\n") == 1, err
+    assert "the motor current was at its limit" in err and "% of the time" in err
+    result = load_result(out)
+    assert result.complete and result.summary["flag_saturation"] == 1.0
+    assert result.t.size == 4000  # saturation does not stop a run: it is judged at the end
 
 
 @pytest.mark.parametrize("speed", ["1.0", "100.0"])

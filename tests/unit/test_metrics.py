@@ -33,7 +33,9 @@ def test_fall_saturation_and_speed_flags() -> None:
     saturated = _metrics(i_m=np.full(1, 30.0))
     assert saturated["flag_saturation"] == 1.0 and "limit" in (failure(saturated) or "")
     stopped = _metrics(v_x=np.linspace(10.0, 1.0, 4000))
-    assert stopped["flag_out_of_range"] == 1.0 and failure(stopped) is None
+    assert stopped["flag_out_of_range"] == 1.0 and "speed left" in (failure(stopped) or "")
+    slow_start = _metrics(v_x=np.full(1, 1.0))  # accepted outside 3-60 m/s, stays where it was
+    assert slow_start["flag_out_of_range"] == 0.0
     fine = _metrics(phi=np.full(1, 0.2), i_m=np.full(1, 2.0), v_x=np.full(1, 20.0))
     assert failure(fine) is None and warnings(fine) == []
 

@@ -76,7 +76,7 @@ def test_sigkill_leaves_a_plainly_readable_partial_result(tmp_path: Path) -> Non
     child.kill()
     child.communicate(timeout=30)
     assert not folder.exists()
-    with pytest.raises(MotosimError, match=r"a stopped run left its rows in .*run\.partial"):
+    with pytest.raises(MotosimError, match=r"stopped, has its rows in .*run\.partial"):
         load_result(folder)
     rows = _plainly_readable(partial_folder(folder))
     assert rows >= 50 and load_result(partial_folder(folder)).t.size == rows

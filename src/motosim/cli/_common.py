@@ -14,22 +14,25 @@ import json
 import math
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, warn
 from motosim.params.checks import short_repr
 
 __all__ = [
+    "TYPICAL_OPTIONS",
     "check_figure_path",
     "check_output",
     "check_output_folder",
     "parse_float_list",
     "parse_range",
     "print_json",
+    "refuse_special",
     "save_figure",
     "show_progress",
+    "warn_atypical",
     "write_text",
 ]
 
@@ -37,6 +40,85 @@ MAX_LIST_ITEMS = 10_000
 """Most values accepted in one comma-separated option."""
 
 _FIGURE_FORMATS = (".png", ".svg", ".pdf")
+
+
+class Typical(NamedTuple):
+    """The typical range of a numeric option: legal values outside it are warned about."""
+
+    low: float
+    high: float
+    unit: str
+    why: str
+
+
+_SPEEDS = Typical(
+    3.0, 55.0, "m/s", "of a ride the model represents (Sharp 1971: the machine falls below 3, "
+    "wobble is unstable above 55)"
+)  # fmt: skip
+_LOOP_RATE = Typical(100.0, 10_000.0, "Hz", "of a handlebar loop (100 Hz over the paper's CAN "
+                     "link, up to a drive's 10 kHz)")  # fmt: skip
+_REPLAY = Typical(0.1, 10.0, "", "replay speeds a person follows")
+
+TYPICAL_OPTIONS: dict[tuple[str, str], Typical] = {
+    ("excite", "--duration"): Typical(10.0, 600.0, "s", "of an identification run (tens of s)"),
+    ("excite", "--rate"): _LOOP_RATE,
+    ("excite", "--current-noise"): Typical(
+        0.0, 1.0, "A", "of a current sensor's noise (tens of mA)"
+    ),
+    ("excite", "--amplitude"): Typical(0.1, 48.0, "V", "of a handlebar motor's supply"),
+    ("modes", "--speeds"): _SPEEDS,
+    ("modes", "--range"): _SPEEDS,
+    ("design", "--speeds"): _SPEEDS,
+    ("design", "--rate"): _LOOP_RATE,
+    ("design", "--bandwidth"): Typical(
+        1.0, 50.0, "Hz", "of a steering feel (the rider's steering is below 5 Hz)"
+    ),
+    ("fidelity", "--speed"): _SPEEDS,
+    ("fidelity", "--duration"): Typical(
+        20.0, 300.0, "s", "of a feel measurement (a chirp over 0.1-5 Hz)"
+    ),
+    ("fidelity", "--amplitude"): Typical(0.5, 50.0, "N*m", "of a rider's steering torque"),
+    ("rt-check", "--rate"): _LOOP_RATE,
+    ("rt-check", "--duration"): Typical(1.0, 3600.0, "s", "of a latency check"),
+    ("rig", "--rate"): _LOOP_RATE,
+    ("rig", "--duration"): Typical(1.0, 14_400.0, "s", "of a session on the rig"),
+    ("run", "--duration"): Typical(1.0, 3600.0, "s", "of a ride on the simulator"),
+    ("cueing", "--rate"): Typical(50.0, 1000.0, "Hz", "of a motion platform's loop"),
+    ("view", "--rate"): _REPLAY,
+    ("telemetry", "--rate"): _REPLAY,
+}
+"""Typical range of each numeric option, by (command, option). A legal value outside it is
+accepted with one line ``motosim: warning: ...`` (:func:`warn_atypical`); values outside the
+legal range are refused by the command."""
+
+
+def warn_atypical(command: str, option: str, values: float | Iterable[float] | None) -> None:
+    """Warn once, in one line, when a legal ``option`` value is outside its typical range.
+
+    Parameters
+    ----------
+    command : str
+        The subcommand, e.g. ``"excite"``.
+    option : str
+        The option, a key of :data:`TYPICAL_OPTIONS` with ``command``.
+    values : float, iterable of float or None
+        The option's value (or values of a list option), already checked legal; None (the
+        option not given) warns nothing.
+    """
+    if values is None:
+        return
+    typical = TYPICAL_OPTIONS[(command, option)]
+    numbers = [float(values)] if isinstance(values, int | float) else [float(v) for v in values]
+    odd = sorted({v for v in numbers if not typical.low <= v <= typical.high})
+    if not odd:
+        return
+    shown = ", ".join(f"{v:g}" for v in odd[:5]) + (", ..." if len(odd) > 5 else "")
+    unit = f" {typical.unit}" if typical.unit else ""
+    verb = "is" if len(odd) == 1 else "are"
+    warn(
+        f"{option} {shown}{unit} {verb} legal but outside the typical {typical.low:g} to "
+        f"{typical.high:g}{unit} {typical.why}; check the value and its unit"
+    )
 
 
 def parse_float_list(option: str, text: str, *, max_items: int = MAX_LIST_ITEMS) -> list[float]:
@@ -79,11 +161,13 @@ def parse_range(option: str, text: str, *, max_points: int = 100_000) -> list[fl
             f"{option} {short_repr(text)}; expected finite start <= stop and a step > 0, "
             "e.g. 2:60:0.5"
         )
-    count = math.floor((stop - start) / step + 1e-9) + 1
-    if count > max_points:
+    span = (stop - start) / step  # inf for a subnormal step
+    if not span < max_points:
         raise MotosimError(
-            f"{option} {short_repr(text)} gives {count} points; expected at most {max_points}"
+            f"{option} {short_repr(text)} gives {span + 1:.3g} points; expected at most "
+            f"{max_points}"
         )
+    count = math.floor(span + 1e-9) + 1
     return [start + step * k for k in range(count)]
 
 
@@ -108,6 +192,23 @@ def show_progress(quiet: bool = False) -> bool:
     A bar redrawn with carriage returns is junk in a log file or a pipe.
     """
     return not quiet and sys.stderr.isatty()
+
+
+def refuse_special(target: Path, option: str, expected: str) -> None:
+    """Refuse an output path that is a broken or looping link, or a device, pipe or socket.
+
+    Writing beside such a path and renaming over it would replace the link or the device
+    node (``/dev/null``) itself; writing through it would hang (a pipe) or fail late.
+    """
+    if os.path.lexists(target) and not target.exists():
+        raise MotosimError(
+            f"{option} {target} is a symbolic link that leads nowhere or to itself; expected "
+            f"{expected}"
+        )
+    if target.exists() and not (target.is_file() or target.is_dir()):
+        raise MotosimError(
+            f"{option} {target} is a device, a pipe or a socket; expected {expected}"
+        )
 
 
 def _refuse_missing_parent(target: Path, option: str) -> None:
@@ -159,6 +260,7 @@ def check_output(
         )
     if target.is_dir():
         raise MotosimError(f"{option} {target} is a folder; expected a file name")
+    refuse_special(target, option, "a file name")
     _refuse_missing_parent(target, option)
     if target.exists() and not overwrite:
         raise MotosimError(f"{option} {target} exists; give --overwrite to replace it")
@@ -191,6 +293,7 @@ def check_output_folder(path: str | Path, *, overwrite: bool, option: str = "--o
     if not str(path).strip():
         raise MotosimError(f"{option} is empty; expected a folder name")
     target = Path(path)
+    refuse_special(target, option, "a folder")
     if target.exists() and not target.is_dir():
         raise MotosimError(f"{option} {target} is a file; expected a folder")
     _refuse_missing_parent(target, option)

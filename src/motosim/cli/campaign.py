@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import print_json
+from motosim.cli._common import print_json, refuse_special
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -118,6 +118,7 @@ def _rerun(args: argparse.Namespace) -> int:
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse absurd options before the campaign is planned."""
     out = Path(args.out)
+    refuse_special(out, "--out", "a result folder")
     if out.exists() and not out.is_dir():
         raise MotosimError(f"--out {out} is a file; expected a result folder")
     if not out.parent.is_dir():

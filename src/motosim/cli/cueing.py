@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_output_folder, print_json, save_figure
+from motosim.cli._common import check_output_folder, print_json, save_figure, warn_atypical
 from motosim.cueing import (
     ALGORITHMS,
     COMMAND_SIGNALS,
@@ -85,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
     result = load_result(args.result)
     series = TimeSeries(result.t, result.data, result.names)
     model = TELBAN_CARDULLO_2005
+    warn_atypical("cueing", "--rate", args.rate)
     outcome = cue(config, series, model, algorithm=args.algorithm, rate=args.rate)
     folder = Path(args.out)
     metadata = {

@@ -8,7 +8,13 @@ from typing import Any
 import numpy as np
 
 from motosim import __version__
-from motosim.cli._common import check_output, parse_float_list, print_json, write_text
+from motosim.cli._common import (
+    check_output,
+    parse_float_list,
+    print_json,
+    warn_atypical,
+    write_text,
+)
 from motosim.control.statespace import StateSpace
 from motosim.control.torque_feedback import (
     MAX_ORDER,
@@ -167,6 +173,9 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_output(args.out, overwrite=args.overwrite)
     hb = load_parameters(args.handlebar, "handlebar")
+    warn_atypical("design", "--speeds", speeds)
+    warn_atypical("design", "--rate", args.rate)
+    warn_atypical("design", "--bandwidth", args.bandwidth)
     if not args.json:
         print(f"designing for {args.handlebar} ({args.starts} starts) ...", file=sys.stderr)
     ctrl = design_torque_feedback(

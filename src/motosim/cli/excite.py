@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_output, print_json
+from motosim.cli._common import check_output, print_json, warn_atypical
 from motosim.errors import MotosimError
 from motosim.identification import MeasurementModel, excitation_run, plan_excitation
 from motosim.io import write_log
@@ -121,6 +121,7 @@ def _plan(args: argparse.Namespace) -> int:
         phase = plan.f0 * t + 0.5 * (plan.f1 - plan.f0) / plan.duration * t**2
         command = plan.amplitude * np.sin(2.0 * np.pi * phase)
         summary["out"] = str(write_log(args.out, TimeSeries(t, command[:, None], ("i_cmd",))))
+    warn_atypical("excite", "--rate", args.rate)
     if args.json:
         print_json(summary)
         return 0
@@ -150,7 +151,7 @@ def _check_options(args: argparse.Namespace) -> None:
             f"{_MAX_SAMPLES:.0e}"
         )
     check_number(args.amplitude, where="--amplitude", lower=1e-3, upper=100.0, unit="V")
-    check_number(args.f0, where="--f0", lower=0.0, upper=args.rate / 2, unit="Hz")
+    check_number(args.f0, where="--f0", lower=1e-3, upper=args.rate / 2, unit="Hz")
     check_number(args.f1, where="--f1", lower=1e-3, upper=args.rate / 2, unit="Hz")
     check_number(args.frequency, where="--frequency", lower=1e-3, upper=args.rate / 2, unit="Hz")
     check_number(args.counts, where="--counts", lower=1.0, upper=2.0**32)
@@ -186,6 +187,8 @@ def run(args: argparse.Namespace) -> int:
         f1=args.f1,
         frequency=args.frequency,
     )
+    for option in ("--duration", "--rate", "--current-noise", "--amplitude"):
+        warn_atypical("excite", option, getattr(args, option[2:].replace("-", "_")))
     columns = ("theta_h", "i_m", "u")
     log = type(log)(log.t, np.column_stack([log[c] for c in columns]), columns)
     path = write_log(args.out, log)

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import check_figure_path, print_json, save_figure
+from motosim.cli._common import check_figure_path, print_json, save_figure, warn_atypical
 from motosim.errors import MotosimError
 
 __all__ = ["register"]
@@ -79,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
     scenario = feel_scenario(
         base, speed=args.speed, amplitude=args.amplitude, band=band, duration=args.duration
     )
+    for option in ("--speed", "--duration", "--amplitude"):
+        warn_atypical("fidelity", option, getattr(args, option[2:]))
     inputs = resolve(scenario, folder)
     result = simulate(inputs, rng=np.random.default_rng(scenario.seed), keep=True)
     feel = rendered_feel(

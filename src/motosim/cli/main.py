@@ -12,6 +12,7 @@ one line ``motosim: error: ...`` with exit code 2, without a traceback.
 import argparse
 import importlib
 import logging
+import re
 import sys
 import warnings
 from collections.abc import Iterator, Sequence
@@ -91,7 +92,7 @@ class _Parser(argparse.ArgumentParser):
     """An argument parser whose usage errors are one line, exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        message = " ".join(message.split())
+        message = _one_line(message)
         self.exit(2, f"motosim: error: {message} (see {self.prog} --help)\n")
 
 
@@ -162,7 +163,7 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
     if not issubclass(category, MotosimWarning):
         _SHOW_OTHERS(message, category, filename, lineno, file, line)
         return
-    text = " ".join(str(message).split())
+    text = _one_line(str(message))
     if text not in _SHOWN:
         _SHOWN.add(text)
         print(f"motosim: warning: {text}", file=sys.stderr)
@@ -172,7 +173,7 @@ class _OneLine(logging.Handler):
     """Print the library's log warnings as ``motosim: warning: ...``, one line each."""
 
     def emit(self, record: logging.LogRecord) -> None:
-        text = " ".join(record.getMessage().split())
+        text = _one_line(record.getMessage())
         print(f"motosim: warning: {text}", file=sys.stderr)
 
 
@@ -203,9 +204,26 @@ def _refuse_empty(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
             actions += list(chosen._actions) if chosen is not None else []
     for action in actions:
         value = getattr(args, action.dest, None)
+        name = action.option_strings[0] if action.option_strings else action.dest
         if isinstance(value, str) and not value.strip() and action.default != value:
-            name = action.option_strings[0] if action.option_strings else action.dest
             raise MotosimError(f"{name} is empty; expected a value (see motosim --help)")
+        if (
+            isinstance(value, list)
+            and action.nargs is None
+            and type(action) is argparse._StoreAction
+        ):
+            # argparse reads "--rate=--" as no value at all: a list, not a number
+            raise MotosimError(f"{name} has no value; expected one (see motosim --help)")
+
+
+_LONG_WORD = re.compile(r"\S{201,}")
+
+
+def _one_line(message: str) -> str:
+    """``message`` on one line, each word over 200 characters cut (a value, a key, a path)."""
+    return _LONG_WORD.sub(
+        lambda m: f"{m.group()[:80]}... ({len(m.group())} characters)", " ".join(message.split())
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -228,11 +246,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.showwarning = _show_warning
             code: int = args.func(args)
     except MotosimError as err:
-        message = " ".join(str(err).split())
+        message = _one_line(str(err))
         print(f"motosim: error: {message}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except RunFailedError as err:
-        message = " ".join(str(err).split())
+        message = _one_line(str(err))
         print(f"motosim: run failed: {message}", file=sys.stderr)
         return EXIT_RUN_FAILED
     except KeyboardInterrupt:

@@ -11,6 +11,7 @@ from motosim.cli._common import (
     parse_range,
     print_json,
     save_figure,
+    warn_atypical,
 )
 from motosim.model.sharp import MODE_NAMES, ModeTable, modes
 from motosim.params import load_parameters
@@ -100,6 +101,8 @@ def run(args: argparse.Namespace) -> int:
         check_figure_path(args.plot, overwrite=args.overwrite)
     params = load_parameters(args.params, "sharp")
     table = modes(params, speeds)
+    if args.speeds is not None or args.speed_range is not None:  # the default spans 2-60 m/s
+        warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)
     if args.json:
         print_json(_payload(table, args.params))
     else:

@@ -139,13 +139,13 @@ td:first-child{{text-align:left}}img{{max-width:100%}}figure{{margin:2em 0}}</st
 
 def run(args: argparse.Namespace) -> int:
     """Simulate every run of section V, then the figures and the index."""
-    from motosim.report import build_report
-
     out = check_output_folder(args.out, overwrite=args.overwrite)
     try:
         out.mkdir(exist_ok=True)
     except OSError as err:
         raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
+    from motosim.report import build_report  # matplotlib: seconds, only once the output is fine
+
     summaries: dict[str, dict[str, Any]] = {}
     runs: dict[str, SimResult] = {}
     scenarios = paper_scenarios()

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from motosim.cli._common import print_json
+from motosim.cli._common import print_json, warn_atypical
 from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
 from motosim.errors import MotosimError
 
@@ -120,6 +120,8 @@ def run(args: argparse.Namespace) -> int:
             raise MotosimError(
                 f"--rate {rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz"
             )
+        warn_atypical("rig", "--rate", args.rate)
+        warn_atypical("rig", "--duration", args.duration)
         periods = 2**62 if math.isinf(duration) else round(duration * rate)
         loop = RateLoop(rate, clock, capacity=min(periods, 1 << 20))
         privileges = privileges_from_args(args)

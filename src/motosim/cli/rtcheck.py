@@ -5,7 +5,7 @@ import math
 import os
 from typing import Any
 
-from motosim.cli._common import parse_float_list, print_json
+from motosim.cli._common import parse_float_list, print_json, warn_atypical
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 from motosim.rt.check import check_timing
@@ -116,6 +116,8 @@ def run(args: argparse.Namespace) -> int:
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     if not (math.isfinite(args.duration) and 1e-3 <= args.duration <= 86_400.0):
         raise MotosimError(f"--duration {args.duration!r}; expected seconds from 0.001 to 86400")
+    warn_atypical("rt-check", "--rate", args.rate)
+    warn_atypical("rt-check", "--duration", args.duration)
     check_privilege_options(args)
     clock = clock_from_args(args)
     privileges = privileges_from_args(args)

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from motosim.cli._common import print_json, write_text
+from motosim.cli._common import print_json, refuse_special, warn_atypical, write_text
 from motosim.cli.rtcheck import (
     add_privilege_options,
     check_privilege_options,
@@ -149,8 +149,12 @@ def check_rt_options(args: argparse.Namespace) -> None:
     check_privilege_options(args)
 
 
-def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
-    """Read a scenario file: its resolved run and its ``[realtime]`` table."""
+def load_realtime(path: str, *, safety: bool = False) -> tuple[RunInputs, dict[str, Any]]:
+    """Read a scenario file: its resolved run and its ``[realtime]`` table.
+
+    With ``safety``, a missing ``[realtime.safety]`` table is refused before the run is
+    resolved (which designs its controller: seconds).
+    """
     from motosim.rt.config import parse_safety, split_realtime
 
     source = Path(path)
@@ -163,8 +167,8 @@ def load_realtime(path: str) -> tuple[RunInputs, dict[str, Any]]:
         warn(f"{path}: {line}")
     # both tables are checked whichever command reads the file: a typo in the table the
     # other command uses is refused now, not when that command runs
-    if "safety" in realtime:
-        parse_safety(realtime["safety"], origin=str(path))
+    if "safety" in realtime or safety:
+        parse_safety(realtime.get("safety"), origin=str(path))
     rig_settings(scenario, realtime, origin=str(path))
     return resolve(scenario, source.parent), realtime
 
@@ -362,7 +366,7 @@ def run(args: argparse.Namespace) -> int:
     check_rt_options(args)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
-    inputs, realtime = load_realtime(args.scenario)
+    inputs, realtime = load_realtime(args.scenario, safety=True)
     sc = inputs.scenario
     if sc.motorcycle.input == "true":
         raise MotosimError(
@@ -374,8 +378,10 @@ def run(args: argparse.Namespace) -> int:
     if not (np.isfinite(duration) and 0.0 < duration <= 86_400.0):
         raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
     folder = Path(args.out)
+    refuse_special(folder, "--out", "a result folder")
     if (folder / "result.h5").exists() and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
+    warn_atypical("run", "--duration", args.duration)
     view = _view_setup(args, inputs, duration, limits) if args.view else None
     clock = clock_from_args(args)
     rate = sc.rates.control

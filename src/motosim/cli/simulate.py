@@ -5,8 +5,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from motosim.cli._common import print_json, show_progress
-from motosim.errors import MotosimError
+from motosim.cli._common import print_json, refuse_special, show_progress
+from motosim.errors import MotosimError, RunFailedError
 from motosim.io.results import is_complete_result, partial_folder
 from motosim.io.runs import load_scenario, resolve, run_to_folder
 from motosim.sim import RunInputs
@@ -59,6 +59,7 @@ def run_scenario(
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     folder = Path(args.out)
+    refuse_special(folder, "--out", "a result folder")
     if folder.exists() and not folder.is_dir():
         raise MotosimError(f"--out {folder} is a file; expected a result folder")
     if not folder.parent.is_dir():
@@ -79,6 +80,12 @@ def run(args: argparse.Namespace) -> int:
         kept = staged if staged.is_dir() else folder
         print(f"motosim: interrupted; the partial result is in {kept}", file=sys.stderr)
         return 130
+    except RunFailedError:
+        if args.report and is_complete_result(folder):  # written whole, flagged: its report
+            from motosim.report import build_report
+
+            build_report(folder)
+        raise
     for line in warnings(summary):
         print(f"motosim: warning: {line}", file=sys.stderr)
     report = None

@@ -7,7 +7,7 @@ import sys
 import time
 from typing import Any
 
-from motosim.cli._common import check_output
+from motosim.cli._common import check_output, warn_atypical
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -93,6 +93,7 @@ def run_view(args: argparse.Namespace) -> int:
     _check_rate(args.rate)
     result = load_result(args.folder)
     series = result if args.cueing is None else merge_signals(result, load_result(args.cueing))
+    warn_atypical("view", "--rate", args.rate)
     feed = ReplayFeed(series, rate=args.rate, loop=args.loop)
     road = road_from_xy(result["x"], result["y"])
     token = new_token()
@@ -148,6 +149,7 @@ def run_telemetry(args: argparse.Namespace) -> int:
         _address("--esmini", args.esmini, ESMINI_PORT) if args.esmini else None,
     ]
     result = load_result(args.folder)
+    warn_atypical("telemetry", "--rate", args.rate)
     if args.mcap:
         count = write_mcap(result, args.mcap, every=args.every)
         print(f"{args.mcap}: {count} messages")

@@ -40,6 +40,7 @@ __all__ = [
     "MAX_LINE",
     "MAX_LOG_BYTES",
     "MAX_LOG_ROWS",
+    "MIN_PERIOD",
     "ColumnSpec",
     "LogTiming",
     "RigLog",
@@ -90,6 +91,8 @@ _HEADER = re.compile(r"^\s*(?P<name>[^\[\(]*?)\s*(?:[\[\(]\s*(?P<unit>[^\]\)]*?)
 
 MAX_GAP_PERIODS = 5
 """Longest gap (in sample periods) :func:`read_rig_log` fills by interpolation."""
+MIN_PERIOD = 1e-6
+"""Shortest median sample period of a rig log [s] (1 MHz: no handlebar drive logs faster)."""
 
 JITTER_TOLERANCE = 0.01
 """Largest deviation of a sample period from the median, as a fraction, left unresampled."""
@@ -505,6 +508,12 @@ def read_rig_log(
             f"{path}: median sample period {timing.period:g} s ({1 / timing.period:.3g} Hz); "
             "this looks like a time in milliseconds or microseconds: give its unit in the "
             "header (t [ms]) or with --columns t=NAME:ms"
+        )
+    if timing.period < MIN_PERIOD:
+        raise MotosimError(
+            f"{path}: median sample period {timing.period:.3g} s ({1 / timing.period:.3g} Hz); "
+            f"expected at least {MIN_PERIOD:g} s (a handlebar log is sampled at 1 MHz at most): "
+            "check the time column and its unit"
         )
     for name in ("theta_h", "delta"):
         if name in series.names:

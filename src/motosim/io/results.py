@@ -671,7 +671,11 @@ def load_result(folder: str | Path) -> SimResult:
     path = Path(folder)
     if not path.exists():
         stopped = partial_folder(path)
-        hint = f"; a stopped run left its rows in {stopped}" if stopped.is_dir() else ""
+        hint = (
+            f"; a run writing it, or one that was stopped, has its rows in {stopped}"
+            if stopped.is_dir()
+            else ""
+        )
         raise MotosimError(f"{folder}: no such result folder{hint}")
     file = path / _H5_NAME if path.is_dir() else path
     if not file.is_file():

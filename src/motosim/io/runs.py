@@ -32,7 +32,7 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
-from motosim.sim.metrics import FALL_ROLL, failure, run_metrics
+from motosim.sim.metrics import failure, run_metrics, validity_limits
 from motosim.sim.scenario import CsvProfile, implausible
 from motosim.timeseries import TimeSeries
 
@@ -153,48 +153,63 @@ def run_to_folder(
     Raises
     ------
     RunFailedError
-        If the run diverged (the rows computed until then stay in the folder), or completed
-        but failed (:func:`motosim.sim.metrics.failure`: it fell, or saturated the motor most
-        of the time; the whole result is written, with its flags).
+        If the run diverged (the rows computed until then stay in the folder, marked
+        partial); if it left the model's range of validity (it fell, or its speed left
+        :func:`motosim.sim.metrics.validity_limits`), which stops it at that instant; or if
+        it completed but saturated the motor most of the time. A run that left the range or
+        saturated is written and closed with its flags and the reason (summary ``failure``);
+        its one-line reason names the time and the value.
     """
     sc = inputs.scenario
     metadata = run_metadata(inputs)
     rows = round(sc.duration * sc.rates.control)
-    phi = SIGNALS.index("phi")
-    fell: list[float] = []  # the time the roll first passed FALL_ROLL
+    limits = validity_limits(sc.motorcycle.speed)
     writer = ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows)
     try:
         with writer:
 
             def on_block(block: np.ndarray) -> None:
                 writer.append(block)
-                if not fell:
-                    over = np.flatnonzero(~(np.abs(block[:, phi]) <= FALL_ROLL))
-                    if over.size:
-                        fell.append(float(block[over[0], 0]))
                 if on_rows is not None:
                     on_rows(block.shape[0])
 
-            run = simulate(inputs, rng=np.random.default_rng(sc.seed), on_block=on_block)
-            summary = run_metrics(
-                run.t, run.get, complete=True, max_current=sc.controller.max_current
+            run = simulate(
+                inputs, rng=np.random.default_rng(sc.seed), on_block=on_block, stop_outside=limits
             )
+            stopped = run.t.size < rows
+            summary: dict[str, Any] = run_metrics(
+                run.t, run.get, complete=not stopped, max_current=sc.controller.max_current
+            )
+            reason = _stop_reason(run, limits) if stopped else failure(summary)
+            if reason is not None:
+                summary["failure"] = reason
             writer.close(summary)
     except RunFailedError as err:
-        before = (
-            f"the motorcycle fell at t = {fell[0]:.3g} s (roll beyond "
-            f"{math.degrees(FALL_ROLL):.0f} deg, where the linear model no longer holds), then "
-            if fell
-            else ""
-        )
         raise RunFailedError(
-            f"{sc.name}: {before}{err}; the {writer.rows} rows computed are kept in "
+            f"{sc.name}: {err}; the {writer.rows} rows computed are kept in "
             f"{writer.location}, marked partial",
-            time=fell[0] if fell else err.time,
+            time=err.time,
         ) from None
-    reason = failure(summary)
-    if reason is not None and fell:
-        reason = reason.replace("fell:", f"fell at t = {fell[0]:.3g} s:", 1)
     if reason is not None:
-        raise RunFailedError(f"{sc.name}: {reason}; the result is in {folder}")
+        raise RunFailedError(
+            f"{sc.name}: {reason}; the result is in {folder}, flagged",
+            time=float(run.t[-1]) if stopped else None,
+        )
     return summary
+
+
+def _stop_reason(run: TimeSeries, limits: tuple[float, float, float]) -> str:
+    """Why a run stopped at its last row: the roll or the speed beyond ``limits``, and when."""
+    t, phi, speed = float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1])
+    roll, low, high = limits
+    if abs(phi) > roll:
+        return (
+            f"the motorcycle fell at t = {t:.3f} s: roll {math.degrees(phi):.1f} deg, beyond "
+            f"{math.degrees(roll):.0f} deg where the linear model no longer holds; the run "
+            "stopped there"
+        )
+    return (
+        f"the speed left the model's range at t = {t:.3f} s: {speed:.5g} m/s, outside "
+        f"{low:g} to {high:g} m/s (the virtual rider's schedule and the linearisation about "
+        "forward running); the run stopped there"
+    )

@@ -67,6 +67,7 @@ _FLAGS = {
     "flag_oscillation": "sustained oscillation: the motor current buzzes above 3 Hz",
     "flag_saturation": "the motor current was at its limit more than half the time",
     "flag_fall": "the motorcycle fell (roll beyond 45 deg)",
+    "flag_out_of_range": "the speed left the model's range (3 to 60 m/s)",
 }
 
 
@@ -219,18 +220,21 @@ def build_report(folder: str | Path) -> Path:
     run_rows = _run_rows(result, source)
     scenario = next((v for k, v in run_rows if k == "scenario"), source.name or str(source))
     title = f"motosim run: {scenario}"
-    status = (
-        '<span class="status complete">complete</span>'
-        if result.complete
-        else '<span class="status interrupted">interrupted: partial result</span>'
-    )
+    failed = result.summary.get("failure")
+    if failed:
+        status = f'<span class="status interrupted">run failed: {_esc(str(failed))}</span>'
+    elif result.complete:
+        status = '<span class="status complete">complete</span>'
+    else:
+        status = '<span class="status interrupted">interrupted: partial result</span>'
+
     metric_rows, note = _metric_rows(result)
     values = {**metrics(result), **result.summary}
     raised = [text for key, text in _FLAGS.items() if values.get(key)]
     flags = (
         "".join(f'<p class="status interrupted">warning: {_esc(text)}</p>' for text in raised)
         if raised
-        else '<p class="note">No flag: no buzz, no saturation, no fall.</p>'
+        else '<p class="note">No flag: no buzz, no saturation, no fall, speed within range.</p>'
     )
     parts = [
         "<!DOCTYPE html>",

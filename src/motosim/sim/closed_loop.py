@@ -324,8 +324,13 @@ def _run_chunk(
     data: StackData,
     rig: RigModel,
     world: RigData,
-) -> None:
-    """Advance ``out.shape[0]`` stack periods from period ``k0``, recording a row each."""
+    limits: Array,
+) -> int:
+    """Advance ``out.shape[0]`` stack periods from period ``k0``, recording a row each.
+
+    Stops after the first row whose roll exceeds ``limits[0]`` [rad] or whose speed leaves
+    ``limits[1]`` to ``limits[2]`` [m/s]; returns the number of rows recorded.
+    """
     J, beta, beta_s, nkt = rig.handlebar[0], rig.handlebar[1], rig.handlebar[2], rig.handlebar[3]
     n_sub = rig.plant_substeps
     h = stack.dt
@@ -394,6 +399,9 @@ def _run_chunk(
                 hb[0], hb[1] = step_exact(
                     hb[0], hb[1], tr + nkt * i_cmd, J, beta, beta_s, h / n_sub
                 )
+        if abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+            return row + 1
+    return len(out)
 
 
 def _check_block(out: Array) -> None:
@@ -421,6 +429,7 @@ def simulate(
     on_block: Callable[[Array], None] | None = None,
     chunk: float = 1.0,
     keep: bool = True,
+    stop_outside: tuple[float, float, float] | None = None,
 ) -> TimeSeries:
     """Simulate a scenario, block by block.
 
@@ -440,11 +449,16 @@ def simulate(
         Simulated time per block [s].
     keep : bool
         Keep and return every row (else the result holds only the last block).
+    stop_outside : tuple of float, optional
+        (largest roll [rad], lowest speed [m/s], highest speed [m/s]): stop at the first
+        instant beyond them, that instant the last row (the model's range of validity,
+        :func:`motosim.sim.metrics.validity_limits`). By default the run goes to its end.
 
     Returns
     -------
     TimeSeries
-        The recorded signals (without ``t``, which is the time axis).
+        The recorded signals (without ``t``, which is the time axis); shorter than the
+        scenario when the run stopped outside ``stop_outside``.
 
     Raises
     ------
@@ -463,15 +477,19 @@ def simulate(
     reset(model, data, 0.0, 0.0)
     n = rig.current_noise.size
     rows = max(1, round(chunk * sc.rates.control))
+    limits = np.array(stop_outside or (math.inf, -math.inf, math.inf), dtype=np.float64)
     blocks = []
     for k0 in range(0, n, rows):
         out = np.full((min(rows, n - k0), len(SIGNALS)), np.nan)
-        _run_chunk(k0, out, model, data, rig, world)
+        done = _run_chunk(k0, out, model, data, rig, world, limits)
+        out = out[:done]
         _check_block(out)
         if on_block is not None:
             on_block(out)
-        if keep or k0 + rows >= n:
+        if keep or k0 + rows >= n or done < rows:
             blocks.append(out)
+        if done < rows and k0 + done < n:
+            break
     out = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
     return TimeSeries(out[:, 0], out[:, 1:], SIGNALS[1:])  # views: no copy of the run
 

@@ -2,10 +2,10 @@
 
 Free of plotting and of files: the simulator, the report, the real-time loop and campaigns
 all summarise runs with :func:`run_metrics`, and :func:`failure` says whether a run that
-completed numerically still failed (the motorcycle fell, the motor saturated most of the
-time). The fidelity numbers are those a rider feels: how far the handlebar is from the
-virtual steer angle, how wrong the torque estimate driving the motorcycle is, and whether the
-motor buzzes once the rider holds still.
+completed numerically still failed (the motorcycle fell, its speed left the model's range,
+the motor saturated most of the time). The fidelity numbers are those a rider feels: how far
+the handlebar is from the virtual steer angle, how wrong the torque estimate driving the
+motorcycle is, and whether the motor buzzes once the rider holds still.
 """
 
 import math
@@ -25,6 +25,7 @@ __all__ = [
     "failure",
     "highpass",
     "run_metrics",
+    "validity_limits",
     "warnings",
 ]
 
@@ -51,6 +52,33 @@ def _rms(values: Array) -> float:
 def _fraction(value: float, scale: float) -> float:
     """value / scale; NaN (undefined, null in JSON) when the scale is 0."""
     return value / scale if scale > 0 else math.nan
+
+
+def validity_limits(start_speed: float) -> tuple[float, float, float]:
+    """The model's range of validity for a run that starts at ``start_speed``.
+
+    Parameters
+    ----------
+    start_speed : float
+        The run's initial speed [m/s].
+
+    Returns
+    -------
+    tuple of float
+        (largest roll [rad], lowest speed [m/s], highest speed [m/s]): :data:`FALL_ROLL`, and
+        :data:`motosim.sim.rider.SPEED_RANGE` (3-60 m/s, where the virtual rider is scheduled
+        and the linearisation about forward running holds), widened to include the start of
+        a run that was accepted outside it with a warning.
+
+    Examples
+    --------
+    >>> [round(v, 3) for v in validity_limits(20.0)]
+    [0.785, 3.0, 60.0]
+    >>> validity_limits(1.0)[1:]
+    (1.0, 60.0)
+    """
+    low, high = SPEED_RANGE
+    return FALL_ROLL, min(low, start_speed), max(high, start_speed)
 
 
 def highpass(t: Array, values: Array, cutoff: float) -> Array:
@@ -127,8 +155,8 @@ def run_metrics(
           rider's torque stays within :data:`QUIET_TORQUE` over those two seconds),
           ``flag_saturation`` (saturated more than half the time), ``flag_fall`` (roll beyond
           :data:`FALL_ROLL`), ``flag_out_of_range`` (the speed left 3-60 m/s, where the
-          virtual rider is scheduled and the linear model is meant for; below 1 m/s the
-          longitudinal equation holds the speed);
+          virtual rider is scheduled and the linear model is meant for, or went further out
+          than a start outside them: :func:`validity_limits`);
         - ``min_speed``, ``max_speed`` [m/s].
 
     Examples
@@ -163,7 +191,7 @@ def run_metrics(
     speed = signal("v_x")
     if speed is not None:
         out["min_speed"], out["max_speed"] = float(np.min(speed)), float(np.max(speed))
-        low, high = SPEED_RANGE
+        _, low, high = validity_limits(float(speed[0]))
         out["flag_out_of_range"] = float(out["min_speed"] < low or out["max_speed"] > high)
 
     theta, delta = signal("theta_h"), signal("delta")
@@ -205,12 +233,20 @@ def failure(metrics: dict[str, float]) -> str | None:
     """Why a run that completed numerically failed, in one line, or None.
 
     A run fails when the motorcycle fell (roll beyond :data:`FALL_ROLL`, where the linear
-    model no longer holds) or the motor was saturated more than half the time.
+    model no longer holds), its speed left the model's range (:func:`validity_limits`) or
+    the motor was saturated more than half the time.
     """
     if metrics.get("flag_fall"):
         return (
             f"the motorcycle fell: roll reached {math.degrees(metrics['max_abs_phi']):.0f} deg "
             f"(beyond {math.degrees(FALL_ROLL):.0f} deg the linear model does not hold)"
+        )
+    if metrics.get("flag_out_of_range"):
+        low, high = SPEED_RANGE
+        return (
+            f"the speed left the model's range: it went from {metrics['min_speed']:.3g} to "
+            f"{metrics['max_speed']:.3g} m/s (the virtual rider is scheduled and the linear "
+            f"model meant for {low:g} to {high:g} m/s)"
         )
     if metrics.get("flag_saturation"):
         return (
@@ -227,10 +263,5 @@ def warnings(metrics: dict[str, float]) -> list[str]:
         out.append(
             f"the motor current buzzes: {metrics['buzz_current_p2p']:.2g} A peak to peak at "
             f"{metrics['buzz_frequency']:.3g} Hz while the rider holds still"
-        )
-    if metrics.get("flag_out_of_range"):
-        out.append(
-            f"the speed went from {metrics['min_speed']:.3g} to {metrics['max_speed']:.3g} "
-            "m/s, outside 3-60 m/s where the rider's gains and the model are meant for"
         )
     return out
