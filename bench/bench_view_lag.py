@@ -18,8 +18,13 @@ trip over ``/ws/pose``.
   ring -> writer process every 5 ms -> view ring -> ``/ws/pose``); ``delivery_ms_p50/p99``:
   from the server's send to the page's handling of the message (the rest, up to the frame
   drawn, is the wait for the next animation frame and the frame itself);
-- ``fps``: requestAnimationFrame callbacks over the same wall-clock window;
-- ``scale``: the render scale the view settled on; ``load1_before/after``: the load average.
+- ``fps``: requestAnimationFrame callbacks over the same wall-clock window (each shows the
+  newest pose; ``rendered_fps``: those that rendered, the others had no new pose to show;
+  ``poses_per_s``: the poses the page received);
+- ``scale``: the render scale the view settled on; ``load1_before/after``: the load average;
+- ``cpu_ms_per_frame_gpu/renderer/browser``: the CPU time Chromium's GPU process (SwiftShader
+  and the display compositor), the page's renderer process and the browser process spent
+  per frame over the window (from ``/proc``), the profile of what a frame costs.
 
 Run: ``python bench/run.py view_lag`` (about a minute); skipped without chromium or
 python-can. The machine's 2 cores are shared by the loop, the rig, the writer, the browser
@@ -36,6 +41,35 @@ import numpy as np
 
 WARM_UP = 8.0  # s after the page is up: the render scale settled
 WINDOW = 15.0  # s measured
+
+
+def _chromium_cpu(root: int) -> dict[str, float]:
+    """CPU time [ms] of the processes under ``root`` by Chromium process type (Linux /proc)."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    parent = int(f.read().rsplit(")", 1)[1].split()[1])
+            except OSError:
+                continue
+            children.setdefault(parent, []).append(int(entry))
+    tick = 1e3 / os.sysconf("SC_CLK_TCK")
+    out: dict[str, float] = {}
+    todo = [root]
+    while todo:
+        pid = todo.pop()
+        todo += children.get(pid, [])
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            with open(f"/proc/{pid}/cmdline") as f:
+                words = f.read().replace("\0", " ").split()  # Chromium rewrites its titles
+        except OSError:
+            continue
+        kind = next((w.split("=", 1)[1] for w in words if w.startswith("--type=")), "browser")
+        out[kind] = out.get(kind, 0.0) + (int(fields[11]) + int(fields[12])) * tick
+    return out
 
 
 def run() -> dict[str, float]:
@@ -64,11 +98,15 @@ def run() -> dict[str, float]:
                     "[motosimStats.frames, performance.now(), motosimStats.lags.length,"
                     " motosimStats.ages.length]"
                 )
+                cpu0 = _chromium_cpu(view.process.pid)
+                r0 = view.evaluate("motosimStats.rendered")
                 time.sleep(WINDOW)
                 f1, p1, n1, a1 = view.evaluate(
                     "[motosimStats.frames, performance.now(), motosimStats.lags.length,"
                     " motosimStats.ages.length]"
                 )
+                cpu1 = _chromium_cpu(view.process.pid)
+                r1 = view.evaluate("motosimStats.rendered")
                 if live.process.poll() is not None:
                     raise RuntimeError("the run ended early:\n" + "".join(live.log))
                 lags = np.array(view.evaluate(f"motosimStats.lags.slice({n0}, {n1})"))
@@ -89,6 +127,8 @@ def run() -> dict[str, float]:
     delivery = 1e3 * (ages[:, 2] / 1e3 + offset - ages[:, 1])  # sent -> handled by the page
     out |= {
         "fps": fps,
+        "rendered_fps": 1e3 * (r1 - r0) / (p1 - p0),
+        "poses_per_s": 1e3 * (a1 - a0) / (p1 - p0),
         "scale": float(scale),
         "frames": float(lags.shape[0]),
         "lag_ms_p50": float(np.percentile(lag, 50)),
@@ -105,6 +145,9 @@ def run() -> dict[str, float]:
         "reported_lag_ms_p50": float(reported["p50_ms"]),
         "reported_lag_ms_p99": float(reported["p99_ms"]),
     }
+    for kind, name in (("gpu-process", "gpu"), ("renderer", "renderer"), ("browser", "browser")):
+        spent = cpu1.get(kind, 0.0) - cpu0.get(kind, 0.0)
+        out[f"cpu_ms_per_frame_{name}"] = spent / max(f1 - f0, 1)
     return out
 
 

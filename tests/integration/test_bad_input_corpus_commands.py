@@ -290,6 +290,10 @@ def _write_beside(file: Path, text: str, tmp: Path) -> Path:
     """Write ``text`` in ``tmp`` with copies of the files beside ``file`` it may name."""
     for sibling in file.parent.glob("*.toml"):
         (tmp / sibling.name).write_bytes(sibling.read_bytes())
+    for road in file.parent.rglob("*.xodr"):  # the OpenDRIVE roads a scenario names
+        target = tmp / road.relative_to(file.parent)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(road.read_bytes())
     written = tmp / file.name
     written.write_text(text, encoding="utf-8")
     return written
@@ -387,6 +391,54 @@ def test_a_bom_crlf_or_indented_file_reads_as_the_original(
     for name, content in _harmless(text):
         written.write_bytes(content)
         assert [run_cli(argv, stop)[:2] for argv, stop in calls] == original, name
+
+
+ROAD_SCENARIO = ROOT / "scenarios" / "opendrive_curve.toml"
+ROAD = ROOT / "scenarios" / "roads" / "curve.xodr"
+
+
+def _damaged_roads(text: str) -> Iterator[tuple[str, bytes]]:
+    """The damaged files above, and OpenDRIVE's own: entities, polynomials, gaps, numbers."""
+    yield from ((n, c) for n, c in _damaged(text) if n != "misspelled-table")  # no tables
+    yield "deep-xml", b"<OpenDRIVE>" + b"<a>" * 100_000 + b"</a>" * 100_000 + b"</OpenDRIVE>"
+    laughs = '<!DOCTYPE r [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
+    yield "entities", text.replace("<OpenDRIVE>", laughs + "<OpenDRIVE>&b;", 1).encode()
+    yield (
+        "external-entity",
+        text.replace(
+            "<OpenDRIVE>", '<!DOCTYPE r [<!ENTITY e SYSTEM "file:///etc/passwd">]><OpenDRIVE>', 1
+        ).encode(),
+    )
+    yield (
+        "paramPoly3",
+        text.replace(
+            "<line/>", '<paramPoly3 aU="0" bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/>', 1
+        ).encode(),
+    )
+    yield "poly3", text.replace("<line/>", '<poly3 a="0" b="0" c="0" d="0"/>', 1).encode()
+    yield "gap", text.replace('x="214.64', 'x="215.64', 1).encode()
+    yield "nan-curvature", text.replace('curvature="0.005"', 'curvature="nan"', 1).encode()
+    yield "huge-curvature", text.replace('curvature="0.005"', 'curvature="1e300"', 1).encode()
+    yield "negative-length", text.replace('length="120.000000000"', 'length="-1"', 1).encode()
+    yield "no-attribute", text.replace(' hdg="0.300000000000"', "", 1).encode()
+    yield "two-roads", text.replace("</OpenDRIVE>", '<road id="2"/></OpenDRIVE>', 1).encode()
+    yield "no-road", text.replace("<road ", "<street ", 1).replace("</road>", "</street>").encode()
+    yield "not-xml", text[: len(text) // 2].encode()
+    yield "20-MB", text.encode() + b"<!-- " + b"x" * 20_000_000 + b" -->"
+
+
+@pytest.mark.parametrize(
+    "content",
+    [pytest.param(c, id=n) for n, c in _damaged_roads(ROAD.read_text(encoding="utf-8"))],
+)
+def test_damaged_roads(content: bytes, tmp_path: Path) -> None:
+    _write_beside(ROAD_SCENARIO, ROAD_SCENARIO.read_text(encoding="utf-8"), tmp_path)
+    road = tmp_path / "roads" / ROAD.name
+    road.write_bytes(content)
+    argv = ["simulate", str(tmp_path / ROAD_SCENARIO.name), "--out", str(tmp_path / "s")]
+    outcome = run_cli(argv, STOP_SIMULATE)
+    assert is_refusal(outcome), outcome
+    assert str(road) in outcome[2]
 
 
 # --- logs read by identify and estimate ----------------------------------------------------

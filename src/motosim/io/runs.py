@@ -2,13 +2,15 @@
 
 The command line and any script build and run a scenario through these functions:
 :func:`load_scenario` reads and validates a file, :func:`resolve` loads what it names
-(parameter sets, a design file, CSV profiles; relative to the scenario's folder) and designs
+(parameter sets, a design file, CSV profiles, an OpenDRIVE road; relative to the scenario's
+folder) and designs
 what it asks for, :func:`load_run` does both, and :func:`run_to_folder` simulates into a
 result folder as the run goes. Nothing is cached between calls: a campaign that runs one
 design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`) and passes
 it to :func:`motosim.sim.simulate`.
 """
 
+import dataclasses
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -20,6 +22,7 @@ from motosim.control.torque_feedback import PAPER_CONTROLLER, synthesize_control
 from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.io.design_file import read_design
 from motosim.io.logs import read_log
+from motosim.io.opendrive import read_opendrive
 from motosim.io.results import ResultWriter
 from motosim.params import load_parameters
 from motosim.params.toml import read_toml
@@ -33,10 +36,17 @@ from motosim.sim import (
     simulate,
 )
 from motosim.sim.metrics import failure, run_metrics, validity_limits
-from motosim.sim.scenario import CsvProfile, implausible
+from motosim.sim.scenario import CsvProfile, OpenDrivePath, implausible
 from motosim.timeseries import TimeSeries
 
-__all__ = ["load_run", "load_scenario", "parameter_source", "resolve", "run_to_folder"]
+__all__ = [
+    "load_run",
+    "load_scenario",
+    "parameter_source",
+    "read_road",
+    "resolve",
+    "run_to_folder",
+]
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -46,10 +56,29 @@ def load_scenario(path: str | Path) -> Scenario:
         raise MotosimError(f"{path}: no such scenario file")
     data = dict(read_toml(source, what="scenario file"))
     data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
-    scenario = parse_scenario(data, origin=str(path))
+    scenario = read_road(parse_scenario(data, origin=str(path)), source.parent)
     for line in implausible(scenario):
         warn(f"{path}: {line}")
     return scenario
+
+
+def read_road(scenario: Scenario, base: str | Path) -> Scenario:
+    """The scenario with its OpenDRIVE path's ``geometry`` read from its file, if it has one.
+
+    The file is relative to the folder ``base``; a path whose ``geometry`` is already there
+    (a scenario read back from a result or a campaign) is left as it is.
+
+    Raises
+    ------
+    MotosimError
+        What :func:`motosim.io.opendrive.read_opendrive` refuses.
+    """
+    path = scenario.rider.path
+    if not isinstance(path, OpenDrivePath) or path.geometry:
+        return scenario
+    geometry = read_opendrive(Path(base) / path.file, road=path.road)
+    rider = dataclasses.replace(scenario.rider, path=dataclasses.replace(path, geometry=geometry))
+    return dataclasses.replace(scenario, rider=rider)
 
 
 def parameter_source(name: str, base: str | Path) -> str | Path:
@@ -76,6 +105,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
         On a missing or invalid file, or an impossible design.
     """
     folder = Path(base)
+    scenario = read_road(scenario, folder)
     hb = scenario.handlebar
     nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}

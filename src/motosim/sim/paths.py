@@ -3,10 +3,17 @@
 A path is the ground track of the rear-frame ground point: position (x, y) [m] with x along
 the initial heading and y to its right (SAE axes seen from above), heading psi [rad] (positive
 turning right) and curvature kappa [1/m] (positive for a right turn), every ``ds`` metres.
+
+Besides the built-in shapes, :func:`reference_line` samples the reference line of an
+OpenDRIVE road: its ``<planView>`` geometries (:class:`RoadGeometry`: lines, arcs and spirals,
+the spirals clothoids whose curvature changes linearly with arc length), as the ASAM
+OpenDRIVE 1.6 standard (section 7.4, "Geometry") defines them. Reading the ``.xodr`` file is
+:func:`motosim.io.opendrive.read_opendrive`'s part.
 """
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -14,10 +21,14 @@ from numpy.typing import NDArray
 from motosim.errors import MotosimError
 
 __all__ = [
+    "MAX_ROAD_LENGTH",
     "Path",
+    "RoadGeometry",
     "constant_radius_turn",
     "lane_change",
     "obstacle_avoidance",
+    "reference_line",
+    "road_poses",
     "slalom",
     "straight",
 ]
@@ -143,3 +154,231 @@ def constant_radius_turn(
     x = np.concatenate([[0.0], np.cumsum(0.5 * (np.cos(psi[1:]) + np.cos(psi[:-1])) * _DS)])
     y = np.concatenate([[0.0], np.cumsum(0.5 * (np.sin(psi[1:]) + np.sin(psi[:-1])) * _DS)])
     return Path(ds=_DS, x=x, y=y, psi=psi, kappa=kappa)
+
+
+# --- OpenDRIVE reference lines --------------------------------------------------------------
+
+MAX_ROAD_LENGTH = 50_000.0
+"""Longest reference line accepted [m]: 50 km, a million samples of a path (32 MB)."""
+MAX_CURVATURE = 1.0
+"""Largest curvature of a road accepted [1/m]: a radius under 1 m is no road a motorcycle
+rides (and the scenario's turns refuse it too)."""
+MAX_COORDINATE = 1e7
+"""Largest start coordinate accepted [m] (projected map coordinates reach millions)."""
+GAP = 0.01
+"""Largest distance [m] between where one geometry ends and where the next starts."""
+GAP_HEADING = 1e-3
+"""Largest heading jump [rad] between one geometry's end and the next one's start."""
+_STEP = 0.25  # m, longest interval of the Gauss-Legendre integration
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(5)
+
+
+@dataclass(frozen=True, slots=True)
+class RoadGeometry:
+    """One ``<geometry>`` of an OpenDRIVE ``<planView>``, in the file's frame and units.
+
+    Attributes
+    ----------
+    kind : {"line", "arc", "spiral"}
+        The element inside ``<geometry>``.
+    s : float
+        Start position along the reference line [m].
+    x, y : float
+        Start position [m] (OpenDRIVE's inertial frame: x east, y north, y to the left of a
+        road heading along x).
+    hdg : float
+        Start heading [rad], counter-clockwise from x.
+    length : float
+        Length [m], > 0.
+    curv_start, curv_end : float
+        Curvature at the start and at the end [1/m], positive turning left (counter-clockwise):
+        both 0 for a line, both the arc's ``curvature`` for an arc, ``curvStart`` and
+        ``curvEnd`` for a spiral.
+    """
+
+    kind: Literal["line", "arc", "spiral"]
+    s: float
+    x: float
+    y: float
+    hdg: float
+    length: float
+    curv_start: float = 0.0
+    curv_end: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("line", "arc", "spiral"):
+            raise MotosimError(f"kind = {self.kind!r}; expected 'line', 'arc' or 'spiral'")
+        for name, value, bound in (
+            ("s", self.s, MAX_ROAD_LENGTH),
+            ("x", self.x, MAX_COORDINATE),
+            ("y", self.y, MAX_COORDINATE),
+            ("hdg", self.hdg, 1e3),
+            ("curv_start", self.curv_start, MAX_CURVATURE),
+            ("curv_end", self.curv_end, MAX_CURVATURE),
+        ):
+            if not (isinstance(value, int | float) and math.isfinite(value)
+                    and abs(value) <= bound):  # fmt: skip
+                raise MotosimError(f"{name} = {value!r}; expected a finite number within "
+                                   f"+-{bound:g}")  # fmt: skip
+        if not (math.isfinite(self.length) and 0.0 < self.length <= MAX_ROAD_LENGTH):
+            raise MotosimError(
+                f"length = {self.length!r}; expected a finite length > 0 and at most "
+                f"{MAX_ROAD_LENGTH:g} m"
+            )
+        if self.kind == "line" and (self.curv_start != 0.0 or self.curv_end != 0.0):
+            raise MotosimError(
+                f"a line with curvature {self.curv_start!r}, {self.curv_end!r}; expected 0"
+            )
+        if self.kind == "arc" and self.curv_start != self.curv_end:
+            raise MotosimError(
+                f"an arc with curvature {self.curv_start!r} to {self.curv_end!r}; expected one "
+                "constant curvature"
+            )
+
+    def heading(self, u: Array) -> Array:
+        """Heading [rad] (file frame) at the distances ``u`` [m] from the start."""
+        rate = (self.curv_end - self.curv_start) / self.length
+        return self.hdg + self.curv_start * u + 0.5 * rate * u**2
+
+    def curvature(self, u: Array) -> Array:
+        """Curvature [1/m] (positive left) at the distances ``u`` [m] from the start."""
+        rate = (self.curv_end - self.curv_start) / self.length
+        return self.curv_start + rate * u
+
+    def positions(self, u: Array) -> tuple[Array, Array]:
+        """Position (x, y) [m] (file frame) at the sorted distances ``u`` [m] from the start.
+
+        The integral of (cos, sin) of :meth:`heading` from 0 to each ``u``, by five-point
+        Gauss-Legendre quadrature on intervals of at most 0.25 m: exact to rounding for a line
+        and an arc, and to far below a micrometre for a clothoid of curvature up to 1/m.
+        """
+        u = np.asarray(u, dtype=np.float64)
+        n = max(1, math.ceil(self.length / _STEP))
+        grid = np.union1d(np.concatenate([[0.0], np.clip(u, 0.0, None)]),
+                          np.linspace(0.0, self.length, n + 1))  # fmt: skip
+        a, b = grid[:-1], grid[1:]
+        half = 0.5 * (b - a)
+        nodes = 0.5 * (a + b)[:, None] + half[:, None] * _NODES[None, :]
+        psi = self.heading(nodes)
+        dx = half * (np.cos(psi) @ _WEIGHTS)
+        dy = half * (np.sin(psi) @ _WEIGHTS)
+        cx = np.concatenate([[0.0], np.cumsum(dx)])
+        cy = np.concatenate([[0.0], np.cumsum(dy)])
+        idx = np.searchsorted(grid, u)
+        return self.x + cx[idx], self.y + cy[idx]
+
+    def end(self) -> tuple[float, float, float]:
+        """Where the geometry ends: x, y [m] and heading [rad], file frame."""
+        x, y = self.positions(np.array([self.length]))
+        return float(x[0]), float(y[0]), float(self.heading(np.array([self.length]))[0])
+
+
+def road_poses(geometry: tuple[RoadGeometry, ...], s: Array) -> tuple[Array, Array, Array, Array]:
+    """Pose of a road's reference line at the sorted arc lengths ``s`` [m] from its start.
+
+    In the file's frame: x, y [m], heading [rad] (counter-clockwise, continuous across the
+    geometries) and curvature [1/m] (positive left). Past the last geometry the line goes
+    straight on.
+
+    Raises
+    ------
+    MotosimError
+        When the geometries are not one continuous line: a geometry's ``s`` is not where the
+        previous one ends, or it starts more than :data:`GAP` m or :data:`GAP_HEADING` rad away
+        from the previous one's end.
+    """
+    s = np.asarray(s, dtype=np.float64)
+    if not geometry:
+        raise MotosimError("a road without geometry; expected at least one line, arc or spiral")
+    _check_continuous(geometry)
+    x, y, psi, kappa = (np.empty(s.size) for _ in range(4))
+    starts = np.array([g.s for g in geometry]) - geometry[0].s
+    which = np.clip(np.searchsorted(starts, s, side="right") - 1, 0, len(geometry) - 1)
+    turn = 0.0  # multiple of 2 pi added to the file's headings to keep the line continuous
+    for k, g in enumerate(geometry):
+        if k > 0:
+            previous = geometry[k - 1].end()[2] + turn
+            turn += 2.0 * math.pi * round((previous - g.hdg - turn) / (2.0 * math.pi))
+        sel = which == k
+        u = np.minimum(s[sel] - starts[k], g.length)
+        gx, gy = g.positions(u)
+        x[sel], y[sel], psi[sel], kappa[sel] = gx, gy, g.heading(u) + turn, g.curvature(u)
+        if k == len(geometry) - 1:  # straight on past the end
+            beyond = np.maximum(s[sel] - starts[k] - g.length, 0.0)
+            end_psi = float(g.heading(np.array([g.length]))[0]) + turn
+            x[sel] += beyond * math.cos(end_psi)
+            y[sel] += beyond * math.sin(end_psi)
+            psi[sel] = np.where(beyond > 0.0, end_psi, psi[sel])
+            kappa[sel] = np.where(beyond > 0.0, 0.0, kappa[sel])
+    return x, y, psi, kappa
+
+
+def _check_continuous(geometry: tuple[RoadGeometry, ...]) -> None:
+    """Refuse geometries that do not follow each other (one-line error naming the first)."""
+    total = sum(g.length for g in geometry)
+    if total > MAX_ROAD_LENGTH:
+        raise MotosimError(
+            f"a reference line of {total:.6g} m; expected at most {MAX_ROAD_LENGTH:g} m"
+        )
+    for k in range(1, len(geometry)):
+        before, g = geometry[k - 1], geometry[k]
+        x, y, hdg = before.end()
+        where = f"geometry {k + 1} (s = {g.s:g} m)"
+        if abs(g.s - (before.s + before.length)) > GAP:
+            raise MotosimError(
+                f"{where} starts at s = {g.s:g} m; expected {before.s + before.length:g} m, "
+                "where the previous one ends"
+            )
+        gap = math.hypot(g.x - x, g.y - y)
+        jump = abs(math.remainder(g.hdg - hdg, 2.0 * math.pi))
+        if gap > GAP or jump > GAP_HEADING:
+            raise MotosimError(
+                f"{where} starts {gap:.3g} m and {jump:.3g} rad from where geometry {k} ends; "
+                f"expected a continuous reference line (within {GAP:g} m and {GAP_HEADING:g} rad)"
+            )
+
+
+def reference_line(geometry: tuple[RoadGeometry, ...], total: float) -> Path:
+    """The reference line of an OpenDRIVE road as a motosim path of at least ``total`` m.
+
+    The line is moved so that it starts at the origin heading along x, and mirrored into
+    motosim's frame (y to the right, heading and curvature positive turning right; OpenDRIVE's
+    y is to the left). Past its end the path goes straight on, up to ``total`` [m].
+
+    Parameters
+    ----------
+    geometry : tuple of RoadGeometry
+        The road's ``<planView>``, in order.
+    total : float
+        Shortest length of the path [m].
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    MotosimError
+        When the geometries are not one continuous line (:func:`road_poses`).
+
+    Examples
+    --------
+    >>> road = (RoadGeometry("line", 0.0, 5.0, 5.0, math.pi / 2, 10.0),
+    ...         RoadGeometry("arc", 10.0, 5.0, 15.0, math.pi / 2, math.pi * 5.0, 0.1, 0.1))
+    >>> path = reference_line(road, 100.0)  # 10 m, a quarter turn left of radius 10 m, on
+    >>> round(float(path.x[-1]), 6), round(float(path.psi[-1]), 6)
+    (20.0, -1.570796)
+    """
+    road = sum(g.length for g in geometry)
+    s = np.arange(0.0, max(_positive("total", total), road) + 0.5 * _DS, _DS)
+    x, y, psi, kappa = road_poses(geometry, s)
+    g0 = geometry[0]
+    dx, dy = x - g0.x, y - g0.y
+    c, si = math.cos(g0.hdg), math.sin(g0.hdg)
+    return Path(
+        ds=_DS,
+        x=c * dx + si * dy,
+        y=-(-si * dx + c * dy),
+        psi=-(psi - g0.hdg),
+        kappa=-kappa,
+    )

@@ -35,7 +35,9 @@ Profiles (rider torque, drive, brake, wind) are tables with ``kind``: ``constant
 ``chirp`` (amplitude, f0, f1, start, offset) or ``csv`` (file, column; sampled and held).
 Paths have ``kind``: ``straight``, ``lane_change`` (offset, length, start), ``slalom``
 (amplitude, wavelength, cycles, start), ``turn`` (radius, angle, start, transition),
-``avoidance`` (offset, length, hold, start); the path is long enough for the run.
+``avoidance`` (offset, length, hold, start), ``opendrive`` (file, road: the reference line
+of a road of an OpenDRIVE file, which :func:`motosim.io.runs.load_scenario` reads into
+``geometry``); the path is long enough for the run.
 """
 
 import dataclasses
@@ -73,6 +75,7 @@ __all__ = [
     "LaneChangePath",
     "Measurement",
     "Motorcycle",
+    "OpenDrivePath",
     "PathSpec",
     "Profile",
     "Rates",
@@ -338,10 +341,45 @@ class AvoidancePath:
         )
 
 
-PathSpec = StraightPath | LaneChangePath | SlalomPath | TurnPath | AvoidancePath
+@dataclass(frozen=True, slots=True)
+class OpenDrivePath:
+    """The reference line of road ``road`` of the OpenDRIVE file ``file`` (see below).
+
+    ``file`` is relative to the scenario file; :func:`motosim.io.runs.load_scenario` (and
+    :func:`motosim.io.runs.resolve`) read its ``<planView>`` into ``geometry`` (lines, arcs and
+    spirals, :class:`motosim.sim.paths.RoadGeometry`), which a saved result keeps, so that a
+    run is replayed without the file. The line is moved to start at the origin heading along
+    x (:func:`motosim.sim.paths.reference_line`) and goes straight on past its end.
+    """
+
+    file: str
+    road: str = ""
+    geometry: tuple[paths.RoadGeometry, ...] = ()
+    kind: ClassVar[str] = "opendrive"
+
+    def __post_init__(self) -> None:
+        if not self.file or len(self.file) > 4096 or "\n" in self.file:
+            raise MotosimError(f"file = {short_repr(self.file)}; expected an OpenDRIVE file name")
+        if len(self.road) > 256:
+            raise MotosimError(f"road = {short_repr(self.road)}; expected a road id")
+        if self.geometry:
+            paths.road_poses(self.geometry, np.zeros(1))  # one continuous line, or refused
+
+    def build(self, total: float) -> paths.Path:
+        """The path, at least ``total`` [m] long."""
+        if not self.geometry:
+            raise MotosimError(
+                f"{self.file}: the OpenDRIVE file was not read; load the scenario with "
+                "motosim.io.runs.load_scenario or resolve, which read it"
+            )
+        return paths.reference_line(self.geometry, total)
+
+
+PathSpec = StraightPath | LaneChangePath | SlalomPath | TurnPath | AvoidancePath | OpenDrivePath
 """A reference path of the virtual rider, tagged by its ``kind``."""
 PATHS: dict[str, type[PathSpec]] = {
-    cls.kind: cls for cls in (StraightPath, LaneChangePath, SlalomPath, TurnPath, AvoidancePath)
+    cls.kind: cls
+    for cls in (StraightPath, LaneChangePath, SlalomPath, TurnPath, AvoidancePath, OpenDrivePath)
 }
 """Path types by ``kind``."""
 
@@ -644,7 +682,8 @@ def _describe(tp: Any) -> str:
     if get_origin(tp) is Literal:
         return "one of " + ", ".join(repr(a) for a in get_args(tp))
     if get_origin(tp) is tuple:
-        return "a list of numbers" if get_args(tp)[0] is float else "a list of strings"
+        item = get_args(tp)[0]
+        return f"a list of {'numbers' if item is float else 'strings' if item is str else 'tables'}"
     return "a table"
 
 

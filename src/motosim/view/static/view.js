@@ -8,7 +8,7 @@ import { poseSlots, poseSocket } from './pose.js';
 const EYE = 1.2;          // m, eye height above the road when upright
 const token = new URLSearchParams(location.search).get('token') || '';
 const $ = (id) => document.getElementById(id);
-const stats = { frames: 0, fps: 0, poses: 0, lastPose: null, status: null, ready: false,
+const stats = { frames: 0, rendered: 0, fps: 0, poses: 0, lastPose: null, status: null, ready: false,
   offset: null, rtt: null, lags: [], ages: [], reported: 0 };
 window.motosimStats = stats;
 for (const a of document.querySelectorAll('a')) a.href += location.search;
@@ -31,6 +31,11 @@ const renderer = new THREE.WebGLRenderer({
   preserveDrawingBuffer: params.get('readback') === '1',  // for tests that read pixels back
 });
 renderer.setPixelRatio(fixedScale ?? Math.min(window.devicePixelRatio, 2));
+// Colours are given as the sRGB values to show and written as they are (no conversion from
+// linear light in each pixel's shader: its pow() is most of a software renderer's per-pixel
+// cost); `srgb(hex)` makes such a colour.
+renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
+const srgb = (hex) => new THREE.Color().setHex(hex, THREE.LinearSRGBColorSpace);
 Object.assign(stats, { antialias, scale: renderer.getPixelRatio(), adaptive: fixedScale === null });
 // ?sync=1 reads one pixel back after each frame, which waits until the frame is rendered: the
 // frame rate is then that of finished frames, not of frames handed to the GPU (for the bench)
@@ -49,10 +54,13 @@ function adapt(fps) {
 }
 stats.adapt = adapt;  // a test feeds it frame rates
 const scene = new THREE.Scene();
-const sky = new THREE.Color(0x9cc3e6);
+const sky = srgb(0x9cc3e6);
 scene.background = sky;
-scene.fog = new THREE.Fog(sky, 150, 1500);
-const camera = new THREE.PerspectiveCamera(70, 1, 0.3, 3000);
+// Nothing is drawn beyond FAR metres: the fog reaches the sky's colour there, so the cut does
+// not show, and the road's chunks farther away (or behind the eye) are culled whole.
+const FAR = 600;
+scene.fog = new THREE.Fog(sky, 120, FAR);
+const camera = new THREE.PerspectiveCamera(70, 1, 0.3, FAR);
 camera.rotation.order = 'YXZ';
 Object.assign(stats, { camera, renderer, scene });
 
@@ -74,84 +82,96 @@ const at = (i, offset, height) =>
 // The world is flat and the eye above it, so the flat layers (ground, shoulders, asphalt,
 // lines) are painted in order without the depth buffer (no z-fighting between coplanar
 // layers, whatever the GPU's depth precision) and the upright objects drawn after them.
-// Each kind of thing is one draw call: the flat layers are one mesh of coloured triangles
-// (drawn in the order they were appended), posts and trees are two instanced meshes.
-const flatPos = [], flatCol = [];
-function paint(color, ...corners) {  // a quad a b c d (a-b and c-d across), one colour
-  const c = new THREE.Color(color);  // linear components, as three.js shades them
-  const [a, b, cc, d] = corners;
-  for (const p of [a, b, cc, b, d, cc]) { flatPos.push(...p); flatCol.push(c.r, c.g, c.b); }
+// The road is cut into chunks of CHUNK segments; each chunk is two draw calls (its flat
+// layers as one mesh of coloured triangles drawn in the order they were appended, its posts
+// and trees as one mesh), and three.js skips the chunks outside the view (behind the eye or
+// beyond FAR): a frame costs the road in sight, not the whole road (a software renderer's
+// time goes mostly to the triangles it sets up).
+const CHUNK = 75;
+const chunks = Math.max(1, Math.ceil((n - 1) / CHUNK));
+const chunkOf = (i) => Math.min(Math.floor(i / CHUNK), chunks - 1);
+function coloured(pos, col) {
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.Float32BufferAttribute(pos, 3));
+  geometry.setAttribute('color', new THREE.Float32BufferAttribute(col, 3));
+  return geometry;
 }
-function ribbon(left, right, height, color, keep = () => true) {
-  for (let i = 0; i + 1 < n; i++) {
-    if (keep(i)) {
-      paint(color, at(i, left, height), at(i, right, height), at(i + 1, left, height),
-        at(i + 1, right, height));
-    }
-  }
+function quad(pos, col, color, a, b, c, d) {  // a quad a b c d (a-b and c-d across)
+  for (const p of [a, b, c, b, d, c]) { pos.push(...p); col.push(color.r, color.g, color.b); }
 }
-
+const flatMaterial = new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide,
+  depthTest: false, depthWrite: false });
 let cx = 0, cy = 0;
 for (let i = 0; i < n; i++) { cx += road.x[i] / n; cy += road.y[i] / n; }
-const G = 6000;  // m, half the ground's side
-paint(0x5d8a3a, [cx - G, -0.02, cy - G], [cx + G, -0.02, cy - G], [cx - G, -0.02, cy + G],
-  [cx + G, -0.02, cy + G]);                                    // ground
-const w = road.width / 2;
-ribbon(-w - 1.5, w + 1.5, 0.0, 0x8a8a7a);                      // shoulders
-ribbon(-w, w, 0.01, 0x3c3c40);                                 // asphalt
-ribbon(-w + 0.25, -w + 0.4, 0.02, 0xf4f4f4);                   // left edge line
-ribbon(w - 0.4, w - 0.25, 0.02, 0xf4f4f4);                     // right edge line
-ribbon(-0.075, 0.075, 0.02, 0xf4f4f4, (i) => (s[i] % 9) < 3);  // dashed centre line: 3 m in 9 m
 {
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute('position', new THREE.Float32BufferAttribute(flatPos, 3));
-  geometry.setAttribute('color', new THREE.Float32BufferAttribute(flatCol, 3));
-  const material = new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide,
-    depthTest: false, depthWrite: false });
-  const mesh = new THREE.Mesh(geometry, material);
-  mesh.renderOrder = -1;
-  mesh.frustumCulled = false;  // it surrounds the eye
+  const G = 6000, pos = [], col = [];  // m, half the ground's side
+  quad(pos, col, srgb(0x5d8a3a), [cx - G, -0.02, cy - G], [cx + G, -0.02, cy - G],
+    [cx - G, -0.02, cy + G], [cx + G, -0.02, cy + G]);
+  const ground = new THREE.Mesh(coloured(pos, col), flatMaterial);
+  ground.renderOrder = -2;
+  ground.frustumCulled = false;  // it surrounds the eye
+  scene.add(ground);
+}
+const w = road.width / 2;
+const layers = [  // left and right offsets [m], height [m], colour
+  [-w - 1.5, w + 1.5, 0.0, 0x8a8a7a],                    // shoulders
+  [-w, w, 0.01, 0x3c3c40],                               // asphalt
+  [-w + 0.25, -w + 0.4, 0.02, 0xf4f4f4],                 // left edge line
+  [w - 0.4, w - 0.25, 0.02, 0xf4f4f4],                   // right edge line
+  [-0.075, 0.075, 0.02, 0xf4f4f4, (i) => (s[i] % 9) < 3],  // dashed centre line: 3 m in 9 m
+].map(([left, right, height, color, keep]) =>
+  [left, right, height, srgb(color), keep || (() => true)]);
+for (let c = 0; c < chunks; c++) {
+  const pos = [], col = [];
+  const last = Math.min((c + 1) * CHUNK, n - 1);
+  for (const [left, right, height, color, keep] of layers) {
+    for (let i = c * CHUNK; i < last; i++) {
+      if (keep(i)) {
+        quad(pos, col, color, at(i, left, height), at(i, right, height), at(i + 1, left, height),
+          at(i + 1, right, height));
+      }
+    }
+  }
+  const mesh = new THREE.Mesh(coloured(pos, col), flatMaterial);
+  mesh.renderOrder = -1;  // after the ground; the chunks do not overlap
   scene.add(mesh);
 }
 
 // --- speed and distance cues: posts every 25 m, trees at seeded random places ------------
 let seed = 12345;
 const random = () => ((seed = (seed * 16807) % 2147483647) / 2147483647);
-// one geometry of several coloured parts, each raised by its height [m]
+// the vertices and colours of several coloured parts, each raised by its height [m]
 function parts(...list) {
   const pos = [], col = [];
   for (const [geometry, color, dy] of list) {
     const flatGeometry = geometry.toNonIndexed();
     flatGeometry.translate(0, dy, 0);
-    const c = new THREE.Color(color);
+    const c = srgb(color);
     const p = flatGeometry.getAttribute('position');
     for (let k = 0; k < p.count; k++) {
       pos.push(p.getX(k), p.getY(k), p.getZ(k)); col.push(c.r, c.g, c.b);
     }
   }
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute('position', new THREE.Float32BufferAttribute(pos, 3));
-  geometry.setAttribute('color', new THREE.Float32BufferAttribute(col, 3));
-  return geometry;
+  return { pos, col };
 }
-const dummy = new THREE.Object3D();
-function instances(geometry, places) {
-  const mesh = new THREE.InstancedMesh(geometry,
-    new THREE.MeshBasicMaterial({ vertexColors: true }), places.length);
-  places.forEach(([x, y, z, scale], k) => {
-    dummy.position.set(x, y, z); dummy.scale.setScalar(scale); dummy.updateMatrix();
-    mesh.setMatrixAt(k, dummy.matrix);
-  });
-  mesh.frustumCulled = false;  // along the whole road
-  scene.add(mesh);
+const post = parts([new THREE.BoxGeometry(0.12, 1.0, 0.12), 0xf0f0f0, 0.5],   // white post
+  [new THREE.BoxGeometry(0.13, 0.12, 0.13), 0xd02020, 1.05]);                 // red top
+const tree = parts([new THREE.CylinderGeometry(0.15, 0.2, 2.0, 5), 0x6b4a2b, 1.0],  // trunk
+  [new THREE.ConeGeometry(1.6, 5.0, 7), 0x2f6a2a, 4.0]);                           // crown
+const objects = Array.from({ length: chunks }, () => ({ pos: [], col: [] }));
+function place(kind, i, x, z, scale) {  // a copy of kind's vertices, scaled, at (x, 0, z)
+  const { pos, col } = objects[chunkOf(i)];
+  for (let k = 0; k < kind.pos.length; k += 3) {
+    pos.push(x + scale * kind.pos[k], scale * kind.pos[k + 1], z + scale * kind.pos[k + 2]);
+  }
+  col.push(...kind.col);
 }
-const posts = [], trees = [];
 let next = 0, nextTree = 0;
 for (let i = 0; i < n; i++) {
   if (s[i] >= next) {
     for (const side of [-1, 1]) {
       const [x, , z] = at(i, side * (w + 1.0), 0);
-      posts.push([x, 0.5, z, 1]);
+      place(post, i, x, z, 1);
     }
     next += 25;
   }
@@ -159,14 +179,14 @@ for (let i = 0; i < n; i++) {
     const side = random() < 0.5 ? -1 : 1;
     const scale = 0.7 + 0.8 * random();
     const [x, , z] = at(i, side * (w + 6 + 30 * random()), 0);
-    trees.push([x, 0, z, scale]);
+    place(tree, i, x, z, scale);
     nextTree += 12 + 20 * random();
   }
 }
-instances(parts([new THREE.BoxGeometry(0.12, 1.0, 0.12), 0xf0f0f0, 0],        // white post
-  [new THREE.BoxGeometry(0.13, 0.12, 0.13), 0xd02020, 0.55]), posts);         // red top
-instances(parts([new THREE.CylinderGeometry(0.15, 0.2, 2.0, 6), 0x6b4a2b, 1.0],  // trunk
-  [new THREE.ConeGeometry(1.6, 5.0, 8), 0x2f6a2a, 4.0]), trees);                // crown
+const objectMaterial = new THREE.MeshBasicMaterial({ vertexColors: true });
+for (const { pos, col } of objects) {
+  if (pos.length) scene.add(new THREE.Mesh(coloured(pos, col), objectMaterial));
+}
 
 // --- pose, and the lag of each frame behind the loop --------------------------------------
 // A pose stamped with the loop's clock (`clock`: when the loop wrote it, the machine's
@@ -225,7 +245,7 @@ setInterval(() => {
   pending = [];
 }, 1000);
 
-function place() {
+function aim() {
   const roll = rollToggle.checked ? (pose.phi || 0) : 0;
   const psi = pose.psi || 0, phi = pose.phi || 0;
   // the eye leans with the motorcycle about the contact line
@@ -252,10 +272,20 @@ function show(id, text) {
 const bar = $('bar'), rollToggle = $('roll-toggle'), seek = $('seek');
 let barAngle = null;
 let fpsFrames = 0, fpsSince = performance.now();
+// A frame is rendered only when what it shows changed (a new pose, the size, the horizon
+// toggle): a paused replay or an idle run costs the machine nothing. Every frame still
+// counts in the lag (the screen shows the last rendered pose) and in the frame rate.
+let shownKey = '';
 function frame(now) {
-  readPose(); resize(); place();
-  renderer.render(scene, camera);
-  if (sync) gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+  readPose(); resize();
+  const key = `${pose.t} ${pose.x} ${pose.y} ${pose.psi} ${pose.phi} ${rollToggle.checked} ${canvas.width} ${canvas.height}`;
+  if (key !== shownKey) {
+    shownKey = key;
+    aim();
+    renderer.render(scene, camera);
+    if (sync) gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    stats.rendered++;
+  }
   if (pose.clock != null) {
     const drawn = absolute();
     pending.push([pose.clock, drawn]);

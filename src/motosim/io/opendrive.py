@@ -1,0 +1,208 @@
+"""OpenDRIVE roads: the reference line of one road of an ``.xodr`` file.
+
+A scenario's path ``{ kind = "opendrive", file = "road.xodr" }`` names a file of the ASAM
+OpenDRIVE format (an XML document); :func:`read_opendrive` reads the ``<planView>`` of one of
+its roads into :class:`motosim.sim.paths.RoadGeometry` records, which
+:func:`motosim.sim.paths.reference_line` samples. Only the plan view is read (lines, arcs and
+spirals, ASAM OpenDRIVE 1.6 section 7.4): lanes, elevation, superelevation and junctions are
+ignored, and the polynomial geometries (``poly3``, ``paramPoly3``) are refused.
+
+The file is untrusted input: its size is checked before it is read, a document type
+declaration (``<!DOCTYPE``, hence any entity) is refused, and it is parsed by
+``defusedxml`` when that is installed, else by the standard library's
+:mod:`xml.etree.ElementTree`; every number must be finite and in range. Each failure is one
+line naming the file and what was expected.
+"""
+
+import importlib
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motosim.errors import MotosimError
+from motosim.sim.paths import RoadGeometry, road_poses
+
+__all__ = ["MAX_GEOMETRIES", "MAX_XODR_BYTES", "parse_opendrive", "read_opendrive"]
+
+MAX_XODR_BYTES = 20_000_000
+"""Largest ``.xodr`` file read [bytes] (a city's map is a few MB)."""
+MAX_GEOMETRIES = 100_000
+"""Most ``<geometry>`` elements of the chosen road."""
+_REFUSED = ("poly3", "paramPoly3")
+
+
+def _parse_xml(raw: bytes, origin: str) -> Any:
+    """The document's root element (defusedxml when installed)."""
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        raise MotosimError(
+            f"{origin}: byte {err.start} is not UTF-8; expected an OpenDRIVE file in UTF-8"
+        ) from None
+    if "<!doctype" in text.lower():
+        raise MotosimError(f"{origin}: a document type declaration; expected an OpenDRIVE file "
+                           "without one (<!DOCTYPE> and entities are refused)")  # fmt: skip
+    try:
+        fromstring = importlib.import_module("defusedxml.ElementTree").fromstring
+    except ImportError:  # no declaration (refused above), so no entity can expand
+        fromstring = ET.fromstring
+    try:
+        root = fromstring(raw)
+    except ET.ParseError as err:
+        raise MotosimError(f"{origin}: not well-formed XML ({err}); expected an OpenDRIVE "
+                           "file") from None  # fmt: skip
+    except ValueError as err:  # defusedxml's refusals
+        raise MotosimError(f"{origin}: {err}; expected a plain OpenDRIVE file") from None
+    for element in root.iter():  # OpenDRIVE 1.8 files may carry a namespace: drop it
+        if isinstance(element.tag, str) and element.tag.startswith("{"):
+            element.tag = element.tag.split("}", 1)[1]
+    return root
+
+
+def _number(element: Any, name: str, where: str) -> float:
+    text = element.get(name)
+    if text is None:
+        raise MotosimError(f"{where}: missing attribute {name!r}; expected a number")
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise MotosimError(f"{where}: {name} = {text[:40]!r}; expected a finite number")
+    return value
+
+
+def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeometry, ...]:
+    """The plan view of one road of an OpenDRIVE document.
+
+    Parameters
+    ----------
+    raw : bytes
+        The document.
+    origin : str
+        Its name, the prefix of error messages.
+    road : str
+        The ``id`` of the road; ``""`` for the document's only road.
+
+    Returns
+    -------
+    tuple of RoadGeometry
+        The road's ``<geometry>`` elements in order of ``s`` (zero-length ones dropped).
+
+    Raises
+    ------
+    MotosimError
+        One line: not XML, a DTD, no ``<OpenDRIVE>`` root, no such road (or several and no
+        ``road`` given), a missing or non-finite number, a value out of range, a ``poly3`` or
+        ``paramPoly3`` geometry, or geometries that are not one continuous line.
+
+    Examples
+    --------
+    >>> doc = b'''<OpenDRIVE><road id="7" length="10"><planView>
+    ...   <geometry s="0" x="0" y="0" hdg="0" length="10"><line/></geometry>
+    ... </planView></road></OpenDRIVE>'''
+    >>> parse_opendrive(doc, origin="road.xodr")[0].kind
+    'line'
+    """
+    root = _parse_xml(raw, origin)
+    if root.tag != "OpenDRIVE":
+        raise MotosimError(f"{origin}: root element <{root.tag[:40]}>; expected <OpenDRIVE>")
+    roads = root.findall("road")
+    ids = [str(r.get("id", "")) for r in roads]
+    if not roads:
+        raise MotosimError(f"{origin}: no <road>; expected at least one")
+    if road:
+        if road not in ids:
+            listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
+            raise MotosimError(f"{origin}: no road with id {road[:40]!r}; have {listed}")
+        chosen = roads[ids.index(road)]
+    elif len(roads) > 1:
+        listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
+        raise MotosimError(
+            f'{origin}: {len(roads)} roads ({listed}); choose one with road = "ID" in the path'
+        )
+    else:
+        chosen = roads[0]
+    label = f"{origin}: road {chosen.get('id', '')!r}"
+    elements = chosen.findall("planView/geometry")
+    if not elements:
+        raise MotosimError(f"{label}: no <planView><geometry>; expected at least one")
+    if len(elements) > MAX_GEOMETRIES:
+        raise MotosimError(
+            f"{label}: {len(elements)} geometries; expected at most {MAX_GEOMETRIES}"
+        )
+    out = []
+    for k, element in enumerate(elements, start=1):
+        where = f"{label} geometry {k}"
+        shapes = [child for child in element if child.tag != "userData"]
+        if len(shapes) != 1:
+            names = ", ".join(f"<{c.tag}>" for c in shapes) or "none"
+            raise MotosimError(f"{where}: {names}; expected one of <line>, <arc>, <spiral>")
+        shape = shapes[0]
+        if shape.tag in _REFUSED:
+            raise MotosimError(
+                f"{where}: <{shape.tag}> is not supported; expected <line>, <arc> or <spiral> "
+                "(poly3 and paramPoly3 are not read)"
+            )
+        if shape.tag == "line":
+            curv = (0.0, 0.0)
+        elif shape.tag == "arc":
+            c = _number(shape, "curvature", where)
+            curv = (c, c)
+        elif shape.tag == "spiral":
+            curv = (_number(shape, "curvStart", where), _number(shape, "curvEnd", where))
+        else:
+            raise MotosimError(
+                f"{where}: <{shape.tag[:40]}>; expected one of <line>, <arc>, <spiral>"
+            )
+        start = [_number(element, name, where) for name in ("s", "x", "y", "hdg", "length")]
+        if start[4] == 0.0:
+            continue  # a zero-length geometry (exporters write them) draws nothing
+        try:
+            s, x, y, hdg, length = start
+            kind: Any = shape.tag
+            out.append(RoadGeometry(kind, s, x, y, hdg, length, *curv))
+        except MotosimError as err:
+            raise MotosimError(f"{where}: {err}") from None
+    out.sort(key=lambda g: g.s)
+    geometry = tuple(out)
+    if not geometry:
+        raise MotosimError(f"{label}: only zero-length geometries; expected a road")
+    try:
+        road_poses(geometry, np.zeros(1))
+    except MotosimError as err:
+        raise MotosimError(f"{label}: {err}") from None
+    return geometry
+
+
+def read_opendrive(path: str | Path, *, road: str = "") -> tuple[RoadGeometry, ...]:
+    """Read the plan view of one road of the OpenDRIVE file ``path``.
+
+    See :func:`parse_opendrive`; the file is at most :data:`MAX_XODR_BYTES` long.
+
+    Raises
+    ------
+    MotosimError
+        One line: no such file, too large, unreadable, or what :func:`parse_opendrive` refuses.
+    """
+    source = Path(path)
+    origin = str(path)
+    try:
+        if not source.is_file():
+            raise MotosimError(f"{origin}: no such OpenDRIVE file")
+        size = source.stat().st_size
+        if size > MAX_XODR_BYTES:
+            raise MotosimError(
+                f"{origin}: the OpenDRIVE file is {size} bytes; expected at most "
+                f"{MAX_XODR_BYTES} bytes"
+            )
+        with source.open("rb") as handle:
+            raw = handle.read(MAX_XODR_BYTES + 1)
+    except OSError as err:
+        raise MotosimError(f"{origin}: cannot read the OpenDRIVE file: {err.strerror}") from None
+    if len(raw) > MAX_XODR_BYTES:
+        raise MotosimError(f"{origin}: the OpenDRIVE file is over {MAX_XODR_BYTES} bytes")
+    return parse_opendrive(raw, origin=origin, road=road)
