@@ -87,6 +87,8 @@ __all__ = ["MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "
 Array = NDArray[np.float64]
 
 GRAVITY = 9.81  # [m/s^2]
+FORCE_BAND_STRIDE = 1
+"""The specific-force band holds at every this many prediction steps (the otolith is slow)."""
 BAND_MARGIN = 0.9
 """The band of the false-cue constraints, as a fraction of the perception threshold."""
 MOTION_INPUTS = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
@@ -119,6 +121,13 @@ class AxisPlan:
         Constraint matrix: inputs, angles, rates.
     H : ndarray, shape (2N, nx)
         Angle and rate predictions per unit initial state.
+    band_M, band_E : ndarray
+        The perceived rotation, then the perceived specific force, at the banded steps per
+        unit input and per unit initial state (the false-cue constraints).
+    band_thr, band_quad, band_lin : ndarray
+        Their thresholds and the quadratic and linear weights of their slacks.
+    band_steps : tuple of ndarray
+        The banded prediction steps of the rotation and of the force (roll and pitch).
     limits : tuple of float
         ``(X, V, A)``.
     """
@@ -141,7 +150,7 @@ class AxisPlan:
     band_thr: Array
     band_quad: Array
     band_lin: Array
-    band_steps: tuple[int, ...]
+    band_steps: tuple[NDArray[np.intp], ...]
     limits: tuple[float, float, float]
 
 
@@ -253,16 +262,21 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         E = np.einsum("i,kij->kj", C, Phi)
         if ref == 0 or with_otolith:
             thr = thr_c if ref == 0 else thr_o
-            # the otolith's 0.66 s lag: a tilt's force is felt after the rotation's band
-            nk = Nb if ref == 0 else (N if Nb else 0)
-            band_steps.append(nk)
-            band_M.append(M[:nk])
-            band_E.append(E[:nk])
+            # the otolith's 0.66 s lag: a tilt's force is felt after the rotation's band, so
+            # it is banded over the whole horizon, every FORCE_BAND_STRIDE-th step
+            idx = np.arange(Nb) if ref == 0 else np.arange(FORCE_BAND_STRIDE - 1, N if Nb else 0,
+                                                           FORCE_BAND_STRIDE)  # fmt: skip
+            nk = idx.size
+            band_steps.append(idx)
+            band_M.append(M[idx])
+            band_E.append(E[idx])
             band_thr.append(np.full(nk, thr))
             # rotation: (s / thr)^2 + s / thr; specific force: s / thr only, the convex
             # envelope of a count of false cues (a tilt's sustained force is not squared)
             quad = tuning.false_cue_weight / thr**2 if ref == 0 else 0.0
-            lin = (tuning.false_cue_weight if ref == 0 else tuning.force_false_cue_weight) / thr
+            # (a banded force step stands for FORCE_BAND_STRIDE steps of the horizon)
+            lin = (tuning.false_cue_weight if ref == 0
+                   else FORCE_BAND_STRIDE * tuning.force_false_cue_weight) / thr  # fmt: skip
             band_quad.append(np.full(nk, quad))
             band_lin.append(np.full(nk, lin))
         P += w * M.T @ M
@@ -364,6 +378,7 @@ class MpcCueing:
         self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
         self._feed = np.zeros(3)
         self._feed_canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
+        self._maps = [self._stack(plan) for plan in design.axes]
         self.fallbacks = 0
         """Steps planned without the angle and rate bounds (no admissible plan)."""
         self.rates = np.zeros(3)
@@ -382,7 +397,7 @@ class MpcCueing:
             A_con[3 * n + nb : 3 * n + 2 * nb, :n] = plan.band_M  # p + s >= L
             A_con[3 * n + nb : 3 * n + 2 * nb, n:] = np.eye(nb)
             A_con[3 * n + 2 * nb :, n:] = np.eye(nb)  # s >= 0
-            lo, hi = self._bounds(plan, np.zeros(plan.A_loop.shape[0]), np.zeros(nb))
+            lo, hi = self._bounds(plan, np.zeros(2 * n), np.zeros(nb), np.zeros(nb))
             solver.setup(
                 sparse.csc_matrix(np.triu(P)),
                 np.zeros(n + nb),
@@ -411,15 +426,38 @@ class MpcCueing:
         }
 
     @staticmethod
-    def _bounds(
-        plan: AxisPlan, x0: Array, felt: Array, offset: Array | None = None
-    ) -> tuple[Array, Array]:
+    def _stack(plan: AxisPlan) -> tuple[Array, Array, int, int]:
+        """One matrix from ``v = [x0, xc, w_c, xo, w_o, xf, w_f, ref]`` (plan state, vehicle
+        canal and otolith states and inputs, fed-through onset's canal state and rate,
+        angle reference) to ``[q_u, r_b, pred, free]``, and one to the next ``[xc, xo, xf]``."""
+        N = plan.P.shape[0]
+        nx = plan.A_loop.shape[0]
+        nc = plan.vehicle_canal[0].shape[0]
+        no = plan.vehicle_otolith[0].shape[0]
+        c, o, f, r = nx, nx + nc + 1, nx + nc + no + 2, nx + 2 * nc + no + 3
+        rows_c, rows_o = (*plan.band_steps, np.arange(0))[:2]
+        nb, nr = plan.band_M.shape[0], rows_c.size
+        K = np.zeros((N + nb + 2 * N + nb, r + 1))
+        K[:N, :nx] = plan.F
+        K[:N, c:o] = -plan.W_canal @ plan.G_canal
+        K[:N, o:f] = -plan.W_otolith @ plan.G_otolith
+        K[:N, r] = -plan.G_angle
+        K[N : N + nr, c:o] = plan.G_canal[rows_c]
+        K[N + nr : N + nb, o:f] = plan.G_otolith[rows_o]
+        K[N + nb : 3 * N + nb, :nx] = plan.H
+        K[3 * N + nb :, :nx] = plan.band_E
+        K[3 * N + nb : 3 * N + nb + nr, f:r] = plan.G_canal[rows_c]
+        (Ac, Bc), (Ao, Bo) = plan.vehicle_canal, plan.vehicle_otolith
+        U = np.zeros((2 * nc + no, r + 1))
+        U[:nc, c : c + nc], U[:nc, c + nc] = Ac, Bc
+        U[nc : nc + no, o : o + no], U[nc : nc + no, o + no] = Ao, Bo
+        U[nc + no :, f : f + nc], U[nc + no :, f + nc] = Ac, Bc
+        return K, U, nc, no
+
+    @staticmethod
+    def _bounds(plan: AxisPlan, pred: Array, free: Array, felt: Array) -> tuple[Array, Array]:
         X, V, A = plan.limits
         N = plan.P.shape[0]
-        pred = plan.H @ x0
-        free = plan.band_E @ x0
-        if offset is not None:
-            free = free + offset
         thr = BAND_MARGIN * plan.band_thr
         big = np.full(free.size, 1e9)
         band_hi = np.where(felt > 0, big, thr - free)  # not perceived the other way
@@ -477,31 +515,21 @@ class MpcCueing:
             # band below keeps the onset's perceived rotation with the plan's within it
             if onset is not None:
                 w_c -= float(onset[1, j])
-            xc, xo = self._canal[j], self._otolith[j]
-            r_c = plan.G_canal @ np.append(xc, w_c)
-            r_o = plan.G_otolith @ np.append(xo, w_o)
-            q_u = (
-                plan.F @ x0
-                - plan.W_canal @ r_c
-                - plan.W_otolith @ r_o
-                - plan.G_angle * (reference[j] - feed)
-            )
+            K, U, nc, no = self._maps[j]
+            v = np.concatenate(
+                [x0, self._canal[j], (w_c,), self._otolith[j], (w_o,), self._feed_canal[j],
+                 (feed_rate,), (reference[j] - feed,)]
+            )  # fmt: skip
+            y = K @ v
+            N = plan.P.shape[0]
             nb = plan.band_M.shape[0]
-            r_b = np.concatenate([r[:k] for r, k in zip((r_c, r_o), plan.band_steps, strict=False)])
+            r_b = y[N : N + nb]
             felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
-            q = np.concatenate([q_u, plan.band_lin])
-            Ac, Bc = plan.vehicle_canal
-            Ao, Bo = plan.vehicle_otolith
-            self._canal[j] = Ac @ xc + Bc * w_c
-            self._otolith[j] = Ao @ xo + Bo * w_o
-            # the fed-through onset's perceived rotation over the band's steps
-            xf = self._feed_canal[j]
-            offset = np.zeros(nb)
-            offset[: plan.band_steps[0]] = (plan.G_canal @ np.append(xf, feed_rate))[
-                : plan.band_steps[0]
-            ]
-            self._feed_canal[j] = Ac @ xf + Bc * feed_rate
-            lo, hi = self._bounds(plan, x0, felt, offset)
+            q = np.concatenate([y[:N], plan.band_lin])
+            lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], y[3 * N + nb :], felt)
+            nxt = U @ v
+            self._canal[j], self._otolith[j] = nxt[:nc], nxt[nc : nc + no]
+            self._feed_canal[j] = nxt[nc + no :]
             solver = self._solvers[j]
             solver.update(q=q, l=lo, u=hi)
             result = solver.solve(raise_error=False)
