@@ -11,6 +11,7 @@ import numpy as np
 from numba import njit
 
 from motosim.cueing import (
+    BENSON_1986_1989,
     TELBAN_CARDULLO_2005,
     design_limits,
     design_washout,
@@ -132,11 +133,12 @@ TRAINING = (
 OTHERS = ("turn_30", "straight_50_gust")
 
 
-def table(runs: str) -> str:
+def table(runs: str, thresholds: str = "telban") -> str:
     """Markdown table washout vs MPC on result folders ``runs/NAME`` of `motosim simulate`.
 
     Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario,
-    then ``python bench/bench_cueing.py RUNS``.
+    then ``python bench/bench_cueing.py RUNS`` (``RUNS benson`` to score with the thresholds
+    of Benson et al. 1986, 1989; the MPC still plans with the default model's).
     """
     from pathlib import Path
 
@@ -157,7 +159,11 @@ def table(runs: str) -> str:
         r = load_result(folder)
         series = TimeSeries(r.t, r.data, r.names)
         for algorithm in ("washout", "mpc"):
-            s = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0).score  # type: ignore[arg-type]
+            run = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0)  # type: ignore[arg-type]
+            s = run.score
+            if thresholds == "benson":
+                s = score(BENSON_1986_1989, run.vehicle, run.platform, cfg.platform,
+                          run.commands.data[:, :3])  # fmt: skip
             ch = s.channels
             false = 100 * np.mean([c.false_cue_share for c in ch.values()])
             missing = 100 * np.mean([c.missing_cue_share for c in ch.values()])
@@ -173,4 +179,4 @@ def table(runs: str) -> str:
 if __name__ == "__main__":
     import sys
 
-    print(table(sys.argv[1]) if len(sys.argv) > 1 else run())
+    print(table(*sys.argv[1:3]) if len(sys.argv) > 1 else run())

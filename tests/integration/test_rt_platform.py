@@ -2,7 +2,8 @@
 
 lane_change_20 (the repository's scenario), shortened, runs through the real-time loop with
 the virtual rider at the rig (as in test_rt_offline.py) and a platform stage sending UDP
-datagrams on localhost to a :class:`PlatformTwin`. The platform's roll command must be the
+datagrams on localhost, or PF_COMMAND frames on the run's bus that the rig hands over, to a
+:class:`PlatformTwin`. The platform's roll command must be the
 offline washout's (:func:`motosim.cueing.cue`) of the same ride, and what the twin does must
 keep the platform's limits.
 """
@@ -16,7 +17,7 @@ import pytest
 from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
-from motosim.rt.platform import PlatformOutput, PlatformSender, PlatformTwin
+from motosim.rt.platform import PlatformCanSender, PlatformOutput, PlatformSender, PlatformTwin
 from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits
@@ -27,10 +28,11 @@ from motosim.sim import build_rig, build_stack
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
-from motosim.io.can import handlebar_codecs, open_link
+from motosim.io.can import handlebar_codecs, open_link, platform_codecs
 
 
-def test_platform_commands_reach_the_twin_within_the_limits() -> None:
+@pytest.mark.parametrize("medium", ["udp", "can"])
+def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None:
     from motosim.io.runs import load_run
 
     full = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
@@ -50,17 +52,17 @@ def test_platform_commands_reach_the_twin_within_the_limits() -> None:
         hands_off_gain=1.0, fade_in=1.0 / rate,
     )  # fmt: skip
     config = load_platform("simacom_platform")
-    twin = PlatformTwin(config.platform, 1.0 / rate, ("127.0.0.1", 0))
-    assert twin.address is not None
+    can = medium == "can"  # PF_COMMAND frames on the run's bus, or UDP datagrams
+    twin = PlatformTwin(
+        config.platform, 1.0 / rate, None if can else ("127.0.0.1", 0),
+        codecs=platform_codecs() if can else None,
+    )  # fmt: skip
     codecs = handlebar_codecs()
     receiver = StateReceiver(("127.0.0.1", 0))
     sender = StateSender(receiver.address)
     rider = VirtualRider(world, receiver)
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-    platform = PlatformOutput(
-        config, 1.0 / rate, tuple(stack.names), sender=PlatformSender(twin.address),
-        send_every=10,
-    )  # fmt: skip
+    platform = PlatformOutput(config, 1.0 / rate, tuple(stack.names), send_every=10)
     achieved = []
 
     def listen(t: float) -> None:
@@ -73,6 +75,12 @@ def test_platform_commands_reach_the_twin_within_the_limits() -> None:
             inputs.true_handlebar, settings, codecs, drive, rider, np.random.default_rng(0),
             rider_on_enable=False,
         )  # fmt: skip
+        if can:
+            platform.sender = PlatformCanSender(host, platform_codecs())
+            rig.on_frame = twin.receive_frame
+        else:
+            assert twin.address is not None
+            platform.sender = PlatformSender(twin.address)
         runner = RealtimeRunner(
             stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
             telemetry=sender.send, platform=platform,
@@ -98,7 +106,10 @@ def test_platform_commands_reach_the_twin_within_the_limits() -> None:
     )
     offline = cue(config, ride, TELBAN_CARDULLO_2005, algorithm="washout")
     last = round(sc.duration * rate) - 1
-    roll_rt = twin.last.angles[0] if twin.last is not None else np.nan
+    if can:  # the last frame's command, quantised at 1e-4 rad
+        roll_rt = twin.command[0]
+    else:
+        roll_rt = twin.last.angles[0] if twin.last is not None else np.nan
     roll_offline = offline.commands["phi_s"][last - (last % 10)]
     assert abs(roll_rt - roll_offline) < np.radians(0.05)
     # the platform moved (a lane change leans the motorcycle ~10 deg) within its limits

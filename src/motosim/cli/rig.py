@@ -60,6 +60,12 @@ def register(sub: Any) -> None:
         "and apply the platform's limits and actuator bandwidth (default off)",
     )
     parser.add_argument(
+        "--platform-can",
+        action="store_true",
+        help="also be the motion platform on the bus: take motosim run's PF_COMMAND frames "
+        "(--platform-can there) and answer with PF_STATUS frames at 100 Hz",
+    )
+    parser.add_argument(
         "--platform",
         default="simacom_platform",
         metavar="NAME|FILE",
@@ -102,19 +108,26 @@ def run(args: argparse.Namespace) -> int:
     clock = clock_from_args(args)
     codecs = handlebar_codecs()
     twin = None
-    if args.platform_udp != "off":
+    if args.platform_udp != "off" or args.platform_can:
         from motosim.cli.run import _platform_address
         from motosim.cueing import load_platform
+        from motosim.io.can import platform_codecs
         from motosim.rt.platform import PlatformTwin
 
         twin = PlatformTwin(
-            load_platform(args.platform).platform, 0.001, _platform_address(args.platform_udp)
+            load_platform(args.platform).platform,
+            0.001,
+            None if args.platform_udp == "off" else _platform_address(args.platform_udp),
+            codecs=platform_codecs() if args.platform_can else None,
         )
     link = open_link(args.bus, fast=args.link == "fast")
     try:
         rig = VirtualRig(
             inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed)
         )
+        if twin is not None and args.platform_can:
+            rig.on_frame = twin.receive_frame
+        status_due = [0.0]
         rate = args.rate
         if not (math.isfinite(rate) and 0.0 < rate <= settings.plant_rate):
             raise MotosimError(
@@ -133,6 +146,9 @@ def run(args: argparse.Namespace) -> int:
             rig.advance_to(t - t0[0])
             if twin is not None:
                 twin.advance_to(t - t0[0])
+                if args.platform_can and twin.t >= status_due[0]:
+                    status_due[0] += 0.01  # PF_STATUS at 100 Hz
+                    link.send(*twin.status_frame())
             return True
 
         previous = signal.signal(signal.SIGINT, lambda signum, frame: loop.stop())
@@ -161,6 +177,7 @@ def run(args: argparse.Namespace) -> int:
         if twin is None
         else {
             "datagrams": twin.frames,
+            "can": bool(args.platform_can),
             "lost": twin.lost,
             "bad": twin.bad,
             "watchdog_timeouts": twin.timeouts,

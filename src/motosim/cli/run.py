@@ -94,10 +94,16 @@ def register(sub: Any) -> None:
         "(default)",
     )
     parser.add_argument(
+        "--platform-can",
+        action="store_true",
+        help="send the same platform commands as PF_COMMAND frames of the shipped DBC on the "
+        "run's --bus at 100 Hz (instead of or beside --platform-udp)",
+    )
+    parser.add_argument(
         "--platform",
         default="simacom_platform",
         metavar="NAME|FILE",
-        help="platform file for --platform-udp (default simacom_platform)",
+        help="platform file for --platform-udp and --platform-can (default simacom_platform)",
     )
     parser.add_argument(
         "--view",
@@ -401,18 +407,27 @@ def run(args: argparse.Namespace) -> int:
 
         sender = StateSender(parse_address(args.telemetry), width=len(stack.names))
     platform = None
-    if args.platform_udp != "off":
+    udp_sender = None
+    if args.platform_udp != "off" or args.platform_can:
         from motosim.cueing import load_platform
         from motosim.rt.platform import PlatformOutput, PlatformSender
 
+        if args.platform_udp != "off":
+            udp_sender = PlatformSender(_platform_address(args.platform_udp))
         platform = PlatformOutput(
             load_platform(args.platform),
             1.0 / rate,
             tuple(stack.names),
-            sender=PlatformSender(_platform_address(args.platform_udp)),
+            sender=udp_sender,
             send_every=max(1, round(rate / 100.0)),
         )
     link = open_link(args.bus, fast=args.link == "fast")
+    if platform is not None and args.platform_can:
+        from motosim.io.can import platform_codecs
+        from motosim.rt.platform import PlatformCanSender, PlatformTee
+
+        can_sender = PlatformCanSender(link, platform_codecs())
+        platform.sender = can_sender if udp_sender is None else PlatformTee(udp_sender, can_sender)
     try:
         runner = RealtimeRunner(
             stack,
@@ -450,6 +465,8 @@ def run(args: argparse.Namespace) -> int:
             sender.close()
         if platform is not None and platform.sender is not None:
             platform.sender.close()
+        elif udp_sender is not None:
+            udp_sender.close()
     timing = stats.as_dict()
     report = {
         "pace": args.pace,
@@ -466,6 +483,7 @@ def run(args: argparse.Namespace) -> int:
             "bus_errors": link.errors,
             "ring_dropped": int(summary.get("ring_dropped", 0)),
             "platform_datagrams": 0 if platform is None else platform.sequence,
+            "platform_can": bool(args.platform_can),
         },
         "state": counters.state,
         "fault": counters.fault,

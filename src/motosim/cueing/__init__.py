@@ -21,6 +21,7 @@ from motosim.cueing.limits import (
 from motosim.cueing.pipeline import ALGORITHMS, COMMAND_SIGNALS, CueingRun, cue, decimate
 from motosim.cueing.platform import CueingConfig, Platform, list_platforms, load_platform
 from motosim.cueing.vestibular import (
+    BENSON_1986_1989,
     CHANNELS,
     TELBAN_CARDULLO_2005,
     CueingScore,
@@ -32,6 +33,7 @@ from motosim.cueing.washout import WashoutDesign, apply_washout, design_washout,
 
 __all__ = [
     "ALGORITHMS",
+    "BENSON_1986_1989",
     "CHANNELS",
     "COMMAND_SIGNALS",
     "HEAD_SIGNALS",

@@ -10,6 +10,7 @@ from typing import Literal
 
 import numpy as np
 
+from motosim.cueing.filters import run_section
 from motosim.cueing.head import check_rate, platform_motion, vehicle_motion
 from motosim.cueing.limits import actuator_response, apply_limits, design_limits
 from motosim.cueing.platform import CueingConfig
@@ -118,12 +119,18 @@ def cue(
     vehicle = vehicle_motion(run, config.rider, params=params)
     inputs = np.column_stack([run["phi"], vehicle["theta"], vehicle["a_x"], run["psi_dot"]])
     horizon_gain = config.washout.horizon_gain
-    targets = apply_washout(design_washout(config.washout, dt), inputs)[:, :3]
+    washout = design_washout(config.washout, dt)
+    targets = apply_washout(washout, inputs)[:, :3]
     rates = None
     if algorithm == "mpc":  # the washout's commands are the MPC's angle reference
         from motosim.cueing.mpc import apply_mpc, design_mpc
 
-        targets, rates = apply_mpc(design_mpc(config, model, dt), vehicle, targets)
+        # the suspension pitch's onset is fed through (the washout's high-passed pitch):
+        # [angle fed through, the vehicle's head-frame pitch rate it renders]
+        onset = np.zeros((targets.shape[0], 2, 3))
+        onset[:, 0, 1] = run_section(np.asarray(washout.pitch_onset), vehicle["theta"])
+        onset[:, 1, 1] = vehicle["theta_dot"] * np.cos(run["phi"])
+        targets, rates = apply_mpc(design_mpc(config, model, dt), vehicle, targets, onset)
     limited = apply_limits(design_limits(config.platform, dt), targets, rates)
     horizon = horizon_gain * run["phi"] - limited[:, 0]
     commands = TimeSeries(run.t, np.column_stack([limited, horizon]), COMMAND_SIGNALS)

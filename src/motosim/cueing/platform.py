@@ -222,7 +222,10 @@ class MpcTuning:
         Weight of the slack of the false-cue constraints (each divided by its threshold).
     false_cue_steps : int
         Prediction steps over which the perceived platform rotation is kept from being a
-        false cue (see :mod:`motosim.cueing.mpc`); 0 for none.
+        false cue (see :mod:`motosim.cueing.mpc`); 0 for none (and no force band either).
+    force_false_cue_weight : float
+        Weight of the slack of the specific-force false-cue constraints (linear, divided by
+        the threshold), over the whole horizon.
     """
 
     horizon: int
@@ -238,6 +241,7 @@ class MpcTuning:
     pitch_angle_weight: float
     false_cue_weight: float
     false_cue_steps: int
+    force_false_cue_weight: float
 
     def __post_init__(self) -> None:
         if (
@@ -252,7 +256,12 @@ class MpcTuning:
         _check("mpc", "accel_weight", self.accel_weight, lower=0.0)
         _check("mpc", "pitch_rate", self.pitch_rate, lower=0.0)
         _check("mpc", "prediction_time", self.prediction_time, lower=0.0)
-        for name in ("surge_weight", "pitch_angle_weight", "false_cue_weight"):
+        for name in (
+            "surge_weight",
+            "pitch_angle_weight",
+            "false_cue_weight",
+            "force_false_cue_weight",
+        ):
             _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
         steps = self.false_cue_steps
         if isinstance(steps, bool) or not isinstance(steps, int) or not 0 <= steps <= 200:
@@ -314,6 +323,7 @@ _MPC_KEYS = {
     "surge_weight": 1.0,
     "pitch_angle_weight": 1.0,
     "false_cue_weight": 1.0,
+    "force_false_cue_weight": 1.0,
 }
 
 
@@ -418,10 +428,10 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
             raise MotosimError(f"{origin}: missing key 'false_cue_steps' in [mpc]")
         steps = mpc_table.pop("false_cue_steps")
         (step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge, pitch_angle,
-         false_cue) = _numbers(mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
+         false_cue, force_false_cue) = _numbers(mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
         mpc = MpcTuning(
             horizon, step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge,
-            pitch_angle, false_cue, steps,
+            pitch_angle, false_cue, steps, force_false_cue,
         )  # fmt: skip
     except MotosimError as err:
         message = str(err)

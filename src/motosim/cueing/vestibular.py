@@ -12,10 +12,14 @@ The numbers (:data:`TELBAN_CARDULLO_2005`): canal ``tau_L`` = 5.73 s (cupula lon
 constant), ``tau_S`` = 0.005 s, ``tau_a`` = 80 s (adaptation); otolith ``K`` = 0.4, ``tau_a``
 = 13.2 s, ``tau_L`` = 5.33 s, ``tau_S`` = 0.66 s, the otolith form being that of Young &
 Meiry, *A revised dynamic otolith model*, Aerospace Medicine 39(6), 1968; thresholds roll
-3.0, pitch 3.6, yaw 2.6 deg/s and 0.17 m/s^2 in x and y. The same canal long and adaptation
-time constants (5.7 s, 80 s) are those of the observer model in J. Neurophysiol. 102(4),
-2232-2244, 2009 (doi:10.1152/jn.00116.2009, table 4). tests/reference/cueing checks the
-poles, zeros, gains and step responses these constants give.
+3.0, pitch 3.6, yaw 2.6 deg/s and 0.17 m/s^2 in x and y, the task-level values Telban &
+Cardullo tabulate after Reid & Nahon (1985). The primary laboratory measurements are lower:
+Benson, Hutt & Brown (1989) roll 2.04, pitch 2.07, yaw 1.5 deg/s; Benson, Spencer & Stott
+(1986) 0.063 and 0.057 m/s^2 (:data:`BENSON_1986_1989`); each constant cites its source.
+The same canal long and adaptation time constants (5.7 s, 80 s) are those of the observer
+model in J. Neurophysiol. 102(4), 2232-2244, 2009 (doi:10.1152/jn.00116.2009, table 4).
+tests/reference/cueing checks the poles, zeros, gains and step responses these constants
+give.
 :func:`score` passes the motion at the rider's head on the motorcycle and on the platform
 through the same models and compares them channel by channel: roll, pitch and yaw rates
 (canals) and the longitudinal and lateral specific forces (otoliths).
@@ -38,8 +42,19 @@ from motosim.errors import MotosimError
 from motosim.timeseries import TimeSeries
 
 __all__ = [
+    "BENSON_1986_1989",
+    "BENSON_PITCH",
+    "BENSON_ROLL",
+    "BENSON_SURGE",
+    "BENSON_SWAY",
+    "BENSON_YAW",
     "CHANNELS",
     "TELBAN_CARDULLO_2005",
+    "THRESHOLD_PITCH",
+    "THRESHOLD_ROLL",
+    "THRESHOLD_SURGE",
+    "THRESHOLD_SWAY",
+    "THRESHOLD_YAW",
     "ChannelScore",
     "CueingScore",
     "VestibularModel",
@@ -97,6 +112,38 @@ class VestibularModel:
 
 
 _D = math.pi / 180.0
+
+# Perception thresholds, each beside its source. Rotation thresholds are on the angular
+# velocity [rad/s], specific-force thresholds on the force [m/s^2].
+THRESHOLD_ROLL = 3.0 * _D
+"""Roll rate [rad/s]: Telban & Cardullo (2005), table of vestibular thresholds, after Reid &
+Nahon (1985), UTIAS Report 296 (a task-level value; not checked against either text here)."""
+THRESHOLD_PITCH = 3.6 * _D
+"""Pitch rate [rad/s]: same table as :data:`THRESHOLD_ROLL`."""
+THRESHOLD_YAW = 2.6 * _D
+"""Yaw rate [rad/s]: same table as :data:`THRESHOLD_ROLL`."""
+THRESHOLD_SURGE = 0.17
+"""Longitudinal specific force [m/s^2]: same table as :data:`THRESHOLD_ROLL`."""
+THRESHOLD_SWAY = 0.17
+"""Lateral specific force [m/s^2]: same table as :data:`THRESHOLD_ROLL`."""
+
+BENSON_ROLL = 2.04 * _D
+"""Roll (x-axis) direction-recognition threshold [rad/s], peak velocity of a 3.3 s
+cosine-bell rotation in the dark, mean of 20 subjects: Benson, Hutt & Brown, *Thresholds for
+the perception of whole body angular movement about a vertical axis*, Aviat. Space Environ.
+Med. 60(3):205-213, 1989 (abstract)."""
+BENSON_PITCH = 2.07 * _D
+"""Pitch (y-axis) threshold [rad/s]: Benson, Hutt & Brown (1989), as :data:`BENSON_ROLL`."""
+BENSON_YAW = 1.5 * _D
+"""Yaw (z-axis) threshold [rad/s], mean of 30 subjects: Benson, Hutt & Brown (1989)."""
+BENSON_SURGE = 0.063
+"""Longitudinal (x-axis) direction-detection threshold [m/s^2], peak acceleration of a 3 s
+cosine-bell velocity in the dark, mean of 24 subjects: Benson, Spencer & Stott, *Thresholds
+for the detection of the direction of whole-body, linear movement in the horizontal plane*,
+Aviat. Space Environ. Med. 57(11):1088-1096, 1986 (abstract)."""
+BENSON_SWAY = 0.057
+"""Lateral (y-axis) threshold [m/s^2]: Benson, Spencer & Stott (1986)."""
+
 TELBAN_CARDULLO_2005 = VestibularModel(
     canal_tau_L=5.73,
     canal_tau_S=0.005,
@@ -105,10 +152,26 @@ TELBAN_CARDULLO_2005 = VestibularModel(
     otolith_tau_a=13.2,
     otolith_tau_L=5.33,
     otolith_tau_S=0.66,
-    thresholds=(3.0 * _D, 3.6 * _D, 2.6 * _D, 0.17, 0.17),
+    thresholds=(THRESHOLD_ROLL, THRESHOLD_PITCH, THRESHOLD_YAW, THRESHOLD_SURGE, THRESHOLD_SWAY),
 )
-"""Telban & Cardullo (2005), NASA CR-2005-213747: canal and otolith models and thresholds
-(roll 3.0, pitch 3.6, yaw 2.6 deg/s; 0.17 m/s^2 in x and y)."""
+"""Telban & Cardullo (2005), NASA CR-2005-213747: canal and otolith models and their
+thresholds (roll 3.0, pitch 3.6, yaw 2.6 deg/s; 0.17 m/s^2 in x and y). The default of the
+score and of the MPC's scaling."""
+
+BENSON_1986_1989 = VestibularModel(
+    canal_tau_L=5.73,
+    canal_tau_S=0.005,
+    canal_tau_a=80.0,
+    otolith_K=0.4,
+    otolith_tau_a=13.2,
+    otolith_tau_L=5.33,
+    otolith_tau_S=0.66,
+    thresholds=(BENSON_ROLL, BENSON_PITCH, BENSON_YAW, BENSON_SURGE, BENSON_SWAY),
+)
+"""The same models with the laboratory thresholds of Benson et al. (1986, 1989): roll 2.04,
+pitch 2.07, yaw 1.5 deg/s; 0.063 and 0.057 m/s^2. Direction recognition of passive motion
+in the dark, 1.5 to 3 times below the task-level values of :data:`TELBAN_CARDULLO_2005`: a
+stricter score of false cues (the washout's 3 deg/s tilt rate is above them)."""
 
 
 def canal_tf(model: VestibularModel) -> tuple[Array, Array]:

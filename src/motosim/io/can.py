@@ -3,7 +3,9 @@
 The frames are described in a DBC file shipped with the package (``io/data/handlebar.dbc``):
 ``HB_STATUS`` (drive -> host: handlebar angle [rad], motor current [A], enabled and fault
 flags), ``HB_COMMAND`` (host -> drive: current command [A], enable), ``HB_HEARTBEAT`` (host
-state and fault reason) and ``HB_ESTOP`` (a button box's emergency stop). Every frame
+state and fault reason) and ``HB_ESTOP`` (a button box's emergency stop), and the motion
+platform's ``PF_COMMAND`` (host -> platform: roll, pitch, yaw [rad], a live flag) and
+``PF_STATUS`` (the platform's achieved angles, a watchdog flag). Every frame
 carries a 4-bit alive counter and a CRC-8/SAE-J1850 checksum (polynomial 0x1D, initial value
 0xFF, final XOR 0xFF; check value 0x4B on ``b"123456789"``, as in the AUTOSAR E2E profile 1
 and the SAE J1850 standard) computed over the frame id's two bytes (little-endian) followed
@@ -42,6 +44,7 @@ __all__ = [
     "FrameCodec",
     "HandlebarCodecs",
     "HandlebarMapping",
+    "PlatformCodecs",
     "SignalLayout",
     "UdpMulticastLink",
     "check_bus",
@@ -50,6 +53,7 @@ __all__ = [
     "load_dbc",
     "open_link",
     "packaged_dbc",
+    "platform_codecs",
 ]
 
 
@@ -359,6 +363,56 @@ def handlebar_codecs(
         for part in parts:
             codecs.position(frame, part)  # every signal the loop needs is there
     return codecs
+
+
+@dataclass(frozen=True, slots=True)
+class PlatformCodecs:
+    """The motion platform's frames: ``PF_COMMAND`` (host -> platform) and ``PF_STATUS``.
+
+    Both carry ``ROLL``, ``PITCH``, ``YAW`` [rad], a 4-bit ``COUNTER`` and the ``CHECKSUM``
+    of the handlebar frames; the command has a ``LIVE`` flag (0: go to neutral), the status a
+    ``WATCHDOG`` flag. ``angles`` are the positions of roll, pitch and yaw in each.
+    """
+
+    command: FrameCodec
+    status: FrameCodec
+    command_angles: tuple[int, int, int]
+    status_angles: tuple[int, int, int]
+    live: int
+    watchdog: int
+
+
+def platform_codecs(path: str | Path | None = None) -> PlatformCodecs:
+    """Codecs of the platform frames from a DBC (the packaged one by default).
+
+    Raises
+    ------
+    MotosimError
+        If the DBC lacks ``PF_COMMAND`` or ``PF_STATUS`` or one of their signals.
+
+    Examples
+    --------
+    >>> codecs = platform_codecs()
+    >>> hex(codecs.command.frame_id), codecs.command.names[codecs.command_angles[1]]
+    ('0x200', 'PITCH')
+    """
+    mapping = HandlebarMapping()
+    db = load_dbc(path)
+    command = _codec(db, "PF_COMMAND", mapping)
+    status = _codec(db, "PF_STATUS", mapping)
+    angles = ("ROLL", "PITCH", "YAW")
+    for frame in (command, status):
+        if frame.checksum_index < 0 or frame.counter_index < 0:
+            raise MotosimError(
+                f"frame 0x{frame.frame_id:x}: expected the {mapping.checksum} and "
+                f"{mapping.counter} signals"
+            )
+    c = tuple(command.index(a) for a in angles)
+    st = tuple(status.index(a) for a in angles)
+    return PlatformCodecs(
+        command, status, (c[0], c[1], c[2]), (st[0], st[1], st[2]),
+        command.index("LIVE"), status.index("WATCHDOG"),
+    )  # fmt: skip
 
 
 class CanLink:

@@ -18,9 +18,12 @@ stack's row (``v_x``, ``v_y``, ``psi_dot``, ``phi``) and runs one compiled step
 
 The MPC cueing is not run here: its step (about 1 ms) does not fit a 1 kHz period.
 
-Every ``send_every`` periods one datagram of :data:`PLATFORM_FRAME` goes to the platform
-(:class:`PlatformSender`, a non-blocking UDP socket). The layout, little-endian, 48 bytes
-(``struct`` format ``<4sBBBBIdfffffff``):
+Every ``send_every`` periods one command goes to the platform: a datagram of
+:data:`PLATFORM_FRAME` (:class:`PlatformSender`, a non-blocking UDP socket) or a
+``PF_COMMAND`` CAN frame of the shipped DBC on the run's bus (:class:`PlatformCanSender`:
+roll, pitch, yaw at 1e-4 rad, the live flag, the alive counter and the CRC-8 of the
+handlebar frames; see :func:`motosim.io.can.platform_codecs`). The datagram's layout,
+little-endian, 48 bytes (``struct`` format ``<4sBBBBIdfffffff``):
 
 ====== ======= ========================================================================
 offset type    field
@@ -41,7 +44,8 @@ offset type    field
 44     float32 visual-horizon roll [rad] (for the image generator)
 ====== ======= ========================================================================
 
-:class:`PlatformTwin` is the platform's side: it reads these datagrams, checks them and
+:class:`PlatformTwin` is the platform's side: it reads these datagrams (or the CAN frames,
+:meth:`PlatformTwin.receive_frame`, answering with ``PF_STATUS``), checks them and
 applies each axis' limits and first-order actuator bandwidth
 (:func:`motosim.cueing.limits.actuator_response`), so that a test or ``motosim rig`` sees
 what the platform would do.
@@ -51,6 +55,7 @@ import math
 import socket
 import struct
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numba import njit
@@ -61,15 +66,19 @@ from motosim.cueing.limits import design_limits, limit_step
 from motosim.cueing.platform import CueingConfig, Platform
 from motosim.cueing.washout import WASHOUT_STATE_SIZE, design_washout, washout_step
 from motosim.errors import MotosimError
+from motosim.io.can import PlatformCodecs
 from motosim.rt.safety import State
 
 __all__ = [
     "PLATFORM_FRAME",
     "PLATFORM_MAGIC",
     "PLATFORM_VERSION",
+    "PlatformCanSender",
     "PlatformFrame",
+    "PlatformLink",
     "PlatformOutput",
     "PlatformSender",
+    "PlatformTee",
     "PlatformTwin",
     "decode_platform",
     "encode_platform",
@@ -225,6 +234,18 @@ def platform_step(
 _STATE_SIZE = 4 + WASHOUT_STATE_SIZE + 6
 
 
+class PlatformLink(Protocol):
+    """Where :class:`PlatformOutput` sends its commands."""
+
+    def send_command(
+        self, sequence: int, t: float, state: int, fault: int, live: bool, values: Array
+    ) -> None:
+        """Send one command (arguments of :func:`encode_platform`)."""
+
+    def close(self) -> None:
+        """Release what the link holds."""
+
+
 class PlatformSender:
     """Send platform datagrams to ``address`` over UDP; never blocks (a full buffer drops)."""
 
@@ -241,9 +262,72 @@ class PlatformSender:
         except OSError:  # buffer full, no route: the next one follows in a period
             self.dropped += 1
 
+    def send_command(
+        self, sequence: int, t: float, state: int, fault: int, live: bool, values: Array
+    ) -> None:
+        """Send one command as a datagram (:func:`encode_platform`)."""
+        self.send(encode_platform(sequence, t, state, fault, live, values))
+
     def close(self) -> None:
         """Close the socket."""
         self._socket.close()
+
+
+class _FrameSender(Protocol):
+    def send(self, frame_id: int, data: bytes) -> bool: ...
+
+
+class PlatformCanSender:
+    """Send platform commands as ``PF_COMMAND`` frames on a CAN link (the run's bus).
+
+    Parameters
+    ----------
+    link : object with ``send(frame_id, data) -> bool``
+        The link the run uses (:func:`motosim.io.can.open_link`); not closed by :meth:`close`.
+    codecs : PlatformCodecs
+        From :func:`motosim.io.can.platform_codecs`.
+    """
+
+    def __init__(self, link: _FrameSender, codecs: PlatformCodecs) -> None:
+        self._link = link
+        self.codecs = codecs
+        self._values = np.zeros(len(codecs.command.names))
+        self.dropped = 0
+
+    def send_command(
+        self, sequence: int, t: float, state: int, fault: int, live: bool, values: Array
+    ) -> None:
+        """Send one ``PF_COMMAND`` frame: the angles, the live flag and ``sequence`` mod 16."""
+        c = self.codecs
+        v = self._values
+        v[c.command.counter_index] = sequence & 0xF
+        v[c.live] = 1.0 if live else 0.0
+        for j, i in enumerate(c.command_angles):
+            v[i] = values[j]
+        if not self._link.send(c.command.frame_id, c.command.encode(v)):
+            self.dropped += 1
+
+    def close(self) -> None:
+        """Nothing to release (the run closes its link)."""
+
+
+class PlatformTee:
+    """Send each platform command through several links (UDP and CAN)."""
+
+    def __init__(self, *links: PlatformLink) -> None:
+        self.links = links
+
+    def send_command(
+        self, sequence: int, t: float, state: int, fault: int, live: bool, values: Array
+    ) -> None:
+        """Send one command through every link."""
+        for link in self.links:
+            link.send_command(sequence, t, state, fault, live, values)
+
+    def close(self) -> None:
+        """Close every link."""
+        for link in self.links:
+            link.close()
 
 
 class PlatformOutput:
@@ -257,8 +341,8 @@ class PlatformOutput:
         Control period [s].
     names : tuple of str
         Names of the stack row's values; must hold ``v_x``, ``v_y``, ``psi_dot``, ``phi``.
-    sender : PlatformSender, optional
-        Where datagrams go; none: commands are computed and kept only.
+    sender : PlatformSender or PlatformCanSender, optional
+        Where the commands go; none: they are computed and kept only.
     send_every : int
         Periods per datagram (10 at 1 kHz: a 100 Hz platform stream).
 
@@ -275,7 +359,7 @@ class PlatformOutput:
         dt: float,
         names: tuple[str, ...],
         *,
-        sender: PlatformSender | None = None,
+        sender: PlatformLink | None = None,
         send_every: int = 1,
     ) -> None:
         try:
@@ -293,7 +377,7 @@ class PlatformOutput:
         self._state = np.zeros(_STATE_SIZE)
         self.values = np.zeros(7)
         """The last roll, pitch, yaw [rad], rates [rad/s] and horizon roll [rad]."""
-        self.sender = sender
+        self.sender: PlatformLink | None = sender
         self.send_every = send_every
         self.sequence = 0
         platform_step(self._pitch, self._washout, self._limits, np.zeros(_STATE_SIZE),
@@ -330,7 +414,7 @@ class PlatformOutput:
                       v_x, v_y, psi_dot, phi, envelope, values)  # fmt: skip
         if self.sender is not None and k % self.send_every == 0:
             live = state in _LIVE
-            self.sender.send(encode_platform(self.sequence, t, state, fault, live, values))
+            self.sender.send_command(self.sequence, t, state, fault, live, values)
             self.sequence += 1
 
 
@@ -354,6 +438,9 @@ class PlatformTwin:
         Where to listen (UDP); none: feed it with :meth:`receive`.
     watchdog : float
         Time without a datagram after which the command is neutral [s].
+    codecs : PlatformCodecs, optional
+        The CAN frames (:func:`motosim.io.can.platform_codecs`), for :meth:`receive_frame`
+        and :meth:`status_frame`.
     """
 
     def __init__(
@@ -363,7 +450,13 @@ class PlatformTwin:
         address: tuple[str, int] | None = None,
         *,
         watchdog: float = 0.1,
+        codecs: PlatformCodecs | None = None,
     ) -> None:
+        self.codecs = codecs
+        self._frame = np.zeros(0 if codecs is None else len(codecs.command.names))
+        self._status = np.zeros(0 if codecs is None else len(codecs.status.names))
+        self._counter = -1
+        self._status_counter = 0
         self._limits = design_limits(platform, dt).coefficients()
         self._alpha = np.array([math.exp(-axis.bandwidth * dt) for axis in platform.axes])
         self._states = np.zeros((3, 2))
@@ -413,6 +506,50 @@ class PlatformTwin:
         self.last = frame
         self.command[:] = frame.angles if frame.live else (0.0, 0.0, 0.0)
 
+    def receive_frame(self, frame_id: int, data: bytes) -> bool:
+        """Take one CAN frame; False if it is not a ``PF_COMMAND`` (or there are no codecs).
+
+        A frame with a wrong length or checksum, or non-finite angles, counts as bad; a
+        counter gap counts the frames lost (modulo 16).
+        """
+        if self.codecs is None or frame_id != self.codecs.command.frame_id:
+            return False
+        c = self.codecs
+        v = self._frame
+        if not c.command.decode(data, v) or not np.all(np.isfinite(v)):
+            self.bad += 1
+            return True
+        counter = int(v[c.command.counter_index])
+        if self._counter >= 0:
+            self.lost += (counter - self._counter - 1) & 0xF
+        self._counter = counter
+        self.frames += 1
+        self._received = self.t
+        live = v[c.live] > 0.5
+        for j, i in enumerate(c.command_angles):
+            self.command[j] = v[i] if live else 0.0
+        return True
+
+    def status_frame(self) -> tuple[int, bytes]:
+        """``(frame_id, data)`` of a ``PF_STATUS`` frame with the achieved angles.
+
+        Raises
+        ------
+        MotosimError
+            If the twin has no codecs.
+        """
+        if self.codecs is None:
+            raise MotosimError("platform twin without CAN codecs; expected platform_codecs()")
+        c = self.codecs
+        v = self._status
+        v[c.status.counter_index] = self._status_counter
+        self._status_counter = (self._status_counter + 1) & 0xF
+        v[c.watchdog] = 1.0 if self._received > -math.inf and (
+            self.t - self._received > self.watchdog) else 0.0  # fmt: skip
+        for j, i in enumerate(c.status_angles):
+            v[i] = self.achieved[j]
+        return c.status.frame_id, c.status.encode(v)
+
     def _poll(self) -> None:
         if self._socket is None:
             return
@@ -426,7 +563,7 @@ class PlatformTwin:
     def step(self) -> Array:
         """Read waiting datagrams, advance one ``dt``; the achieved angles [rad]."""
         self._poll()
-        if self.last is not None and self.t - self._received > self.watchdog:
+        if self._received > -math.inf and self.t - self._received > self.watchdog:
             if np.any(self.command):
                 self.timeouts += 1
             self.command[:] = 0.0

@@ -307,6 +307,8 @@ class VirtualRig:
         self.frames_dropped = 0
         self.commands = 0
         self.bad_commands = 0
+        self.on_frame: Callable[[int, bytes], object] | None = None
+        """Called with every other frame the rig reads (the platform twin's CAN frames)."""
 
     @property
     def t(self) -> float:
@@ -321,6 +323,8 @@ class VirtualRig:
                 return
             frame_id, data = frame
             if frame_id != cmd.frame_id:
+                if self.on_frame is not None:
+                    self.on_frame(frame_id, data)
                 continue
             if not cmd.decode(data, self._command):
                 self.bad_commands += 1

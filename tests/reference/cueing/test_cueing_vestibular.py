@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
+from motosim.cueing import vestibular
 from motosim.cueing.head import HEAD_SIGNALS
 from motosim.cueing.platform import load_platform
 from motosim.cueing.vestibular import (
@@ -46,6 +47,51 @@ def test_published_constants() -> None:
     )
     assert np.allclose(np.degrees(VM.thresholds[:3]), [3.0, 3.6, 2.6])
     assert VM.thresholds[3:] == (0.17, 0.17)
+
+
+def test_threshold_roll_telban_cardullo() -> None:
+    # Telban & Cardullo (2005), table of vestibular thresholds (after Reid & Nahon 1985,
+    # UTIAS Report 296): roll 3.0 deg/s
+    assert math.degrees(vestibular.THRESHOLD_ROLL) == pytest.approx(3.0)
+
+
+def test_threshold_pitch_telban_cardullo() -> None:
+    # Telban & Cardullo (2005), same table: pitch 3.6 deg/s
+    assert math.degrees(vestibular.THRESHOLD_PITCH) == pytest.approx(3.6)
+
+
+def test_threshold_yaw_telban_cardullo() -> None:
+    # Telban & Cardullo (2005), same table: yaw 2.6 deg/s
+    assert math.degrees(vestibular.THRESHOLD_YAW) == pytest.approx(2.6)
+
+
+def test_threshold_forces_telban_cardullo() -> None:
+    # Telban & Cardullo (2005), same table: 0.17 m/s^2 in x (surge) and y (sway)
+    assert (vestibular.THRESHOLD_SURGE, vestibular.THRESHOLD_SWAY) == (0.17, 0.17)
+
+
+def test_threshold_rotations_benson_1989() -> None:
+    # Benson, Hutt & Brown, Aviat. Space Environ. Med. 60(3):205-213 (1989), abstract: 3.3 s
+    # cosine-bell rotations, direction recognised at p = 0.75; x axis 2.04 deg/s, y axis
+    # 2.07 deg/s (20 subjects), z axis 1.5 deg/s (30 subjects)
+    rates = (vestibular.BENSON_ROLL, vestibular.BENSON_PITCH, vestibular.BENSON_YAW)
+    assert np.allclose(np.degrees(rates), [2.04, 2.07, 1.5])
+    assert vestibular.BENSON_1986_1989.thresholds[:3] == rates
+
+
+def test_threshold_forces_benson_1986() -> None:
+    # Benson, Spencer & Stott, Aviat. Space Environ. Med. 57(11):1088-1096 (1986), abstract:
+    # 3 s cosine-bell linear motions, direction detected at p = 0.67; x axis 0.063 m/s^2,
+    # y axis 0.057 m/s^2 (24 subjects)
+    assert (vestibular.BENSON_SURGE, vestibular.BENSON_SWAY) == (0.063, 0.057)
+    assert vestibular.BENSON_1986_1989.thresholds[3:] == (0.063, 0.057)
+
+
+def test_the_laboratory_thresholds_are_below_the_task_level_ones() -> None:
+    # the primary laboratory measurements (Benson 1986, 1989) are 1.5-3 times below the
+    # task-level table: the default score is the more lenient of the two
+    ratio = np.array(VM.thresholds) / np.array(vestibular.BENSON_1986_1989.thresholds)
+    assert np.all(ratio > 1.4) and np.all(ratio < 3.1)
 
 
 def test_perception_matches_lsim_of_the_continuous_models() -> None:

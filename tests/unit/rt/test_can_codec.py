@@ -13,13 +13,19 @@ from motosim.io.can import (
     handlebar_codecs,
     load_dbc,
     open_link,
+    platform_codecs,
 )
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
 CODECS = handlebar_codecs()
 DB = load_dbc()
-FRAMES = {c.frame_id: c for c in (CODECS.status, CODECS.command, CODECS.estop, CODECS.heartbeat)}
+PLATFORM = platform_codecs()
+FRAMES = {
+    c.frame_id: c
+    for c in (CODECS.status, CODECS.command, CODECS.estop, CODECS.heartbeat, PLATFORM.command,
+              PLATFORM.status)
+}  # fmt: skip
 
 
 def test_crc8_check_values() -> None:
@@ -55,6 +61,20 @@ def test_codec_agrees_with_cantools_both_ways(data: st.DataObject) -> None:
     theirs = message.decode(ours, decode_choices=False)
     for name, value in zip(codec.names, out, strict=True):
         assert value == pytest.approx(theirs[name], rel=1e-12, abs=1e-12)
+
+
+def test_every_frame_of_the_dbc_has_a_codec() -> None:
+    # the handlebar's four frames and the platform's PF_COMMAND (0x200) and PF_STATUS (0x201)
+    assert {m.frame_id for m in DB.messages} == set(FRAMES) == {16, 128, 256, 257, 512, 513}
+
+
+def test_platform_angles_are_quantised_at_1e4_rad() -> None:
+    codec = PLATFORM.command
+    values = np.zeros(len(codec.names))
+    values[list(PLATFORM.command_angles)] = (0.123456, -0.2, 4.0)  # 4 rad saturates at 3.2767
+    out = np.zeros_like(values)
+    assert codec.decode(codec.encode(values), out)
+    assert out[list(PLATFORM.command_angles)] == pytest.approx([0.1235, -0.2, 3.2767])
 
 
 def test_quantisation_and_saturation_follow_the_dbc_scaling() -> None:
