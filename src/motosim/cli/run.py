@@ -422,6 +422,7 @@ def run(args: argparse.Namespace) -> int:
             platform=platform,
             now=clock.now,
             clock=clock,
+            handlebar=inputs.nominal_handlebar,
         )
         metadata = run_metadata(inputs) | {
             "realtime": {

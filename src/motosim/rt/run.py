@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
+from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import Clock
 from motosim.rt.ring import SampleRing
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
@@ -142,6 +143,8 @@ class RealtimeRunner:
         ``compute`` columns; without it they are NaN.
     clock : Clock, optional
         The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
+    handlebar : HandlebarParameters, optional
+        The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
     """
 
     def __init__(
@@ -162,6 +165,7 @@ class RealtimeRunner:
         platform: "PlatformOutput | None" = None,
         now: Callable[[], float] | None = None,
         clock: Clock | None = None,
+        handlebar: HandlebarParameters | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -174,7 +178,9 @@ class RealtimeRunner:
         self.link = link
         self.codecs = codecs
         self.dt = 1.0 / rate
-        self.safety = SafetyStage(limits, dt=self.dt, periods_per_frame=periods_per_frame)
+        self.safety = SafetyStage(
+            limits, dt=self.dt, periods_per_frame=periods_per_frame, handlebar=handlebar
+        )
         self.names = LOOP_SIGNALS + tuple(stepper.names)
         self.ring = SampleRing(capacity, len(self.names), shared=shared_ring)
         self._row = np.zeros(len(self.names))
