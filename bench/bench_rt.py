@@ -39,6 +39,9 @@ from motosim.rt.privileges import apply_privileges
 from motosim.rt.stack import CompiledStack
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
 
+sys.path.insert(0, str(Path(__file__).parents[1] / "tests" / "integration"))
+from rt_tables import safety_table
+
 SCENARIO = """
 [scenario]
 name = "bench_rt"
@@ -56,19 +59,6 @@ profile = {{ kind = "square", low = -5.0, high = 5.0, period = 4.0, start = 1.0 
 [controller]
 kind = "paper"
 
-[realtime.safety]
-max_current = 10.0
-max_slew = 2000.0
-max_speed = 6.0
-speed_band = 4.0
-soft_stop = 0.6
-hard_stop = 0.8
-end_stop_gain = 50.0
-hands_off_torque = 0.0
-hands_off_time = 1.0
-hands_off_gain = 0.3
-watchdog_periods = {watchdog}
-
 [realtime.rig]
 latency = 0.0003
 jitter = 0.0001
@@ -83,7 +73,7 @@ def _us(seconds: float) -> float:
 
 
 def _stack_speed() -> dict[str, float]:
-    text = SCENARIO.format(duration=10.0, control=1000.0, watchdog=3)
+    text = SCENARIO.format(duration=10.0, control=1000.0) + safety_table(3)
     data = {k: v for k, v in tomllib.loads(text).items() if k != "realtime"}
     sc = parse_scenario(data, origin="bench")
     hb = load_parameters("simacom_handlebar", "handlebar")
@@ -131,7 +121,7 @@ def _run_against_rig(
         path = Path(tmp) / "bench_rt.toml"
         # the watchdog is lenient here so that a VM stall shows up in the figures rather
         # than ending the run; the tests check the 3-period watchdog itself
-        path.write_text(SCENARIO.format(duration=seconds, control=control, watchdog=1000))
+        path.write_text(SCENARIO.format(duration=seconds, control=control) + safety_table(1000))
         rig = _motosim("rig", str(path), "--bus", BUS, "--duration", "36000",
                        "--rate", f"{control:g}", "--link", link, *RIG)  # fmt: skip
         time.sleep(5.0)

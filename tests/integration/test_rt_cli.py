@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rt_tables import safety_table
 
 from motosim.cli.main import main
 from motosim.io.results import load_result
@@ -39,20 +40,7 @@ profile = { kind = "square", low = -3.0, high = 3.0, period = 1.0, start = 0.2 }
 
 [controller]
 kind = "paper"
-
-[realtime.safety]
-max_current = 10.0
-max_slew = 2000.0
-max_speed = 6.0
-speed_band = 4.0
-soft_stop = 0.6
-hard_stop = 0.8
-end_stop_gain = 50.0
-hands_off_torque = 0.0
-hands_off_time = 1.0
-hands_off_gain = 0.3
-watchdog_periods = 100  # 1 s: these tests run on a busy machine without SCHED_FIFO
-"""
+""" + safety_table(100)  # 1 s: these tests run on a busy machine without SCHED_FIFO
 
 
 # a group of our own: the fast link hears only its group, so tests of other checkouts on
