@@ -205,6 +205,8 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="1 kHz run length [s]")
     parser.add_argument("--quick", action="store_true", help="only the fast link at 1 kHz")
+    parser.add_argument("--bus", default=BUS, help=f"the bus of the runs (default {BUS})")
     args = parser.parse_args()
+    BUS = args.bus
     for key, value in run(args.seconds, quick=args.quick).items():
         print(f"  {key:<52} {value}")
