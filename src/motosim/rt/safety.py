@@ -215,7 +215,9 @@ class SafetyStage:
 
     and trips ``FROZEN_SENSOR`` when ``theta_free`` exceeds ``frozen_angle``. The current is
     the one sent the period before (what the drive held meanwhile). Any change of the
-    measured angle starts it afresh. The free handlebar is an upper bound of the turn of a
+    measured angle starts it afresh, and so does a stop's fade-out (the torque is going to
+    zero: a frozen sensor can do no harm then, and a rider easing off as it fades need not
+    move the handlebar). The free handlebar is an upper bound of the turn of a
     held one: a rider holding still against a change ``d`` needs a stiffness of ``d`` per
     encoder count (9000 N*m/rad for 3.5 N*m and a 14-bit encoder). A measured angle
     moving the wrong way (a sign flip) is not detected: a rider overpowering the motor
@@ -503,7 +505,7 @@ class SafetyStage:
         """The frozen-sensor monitor of one period (see Notes); trips FROZEN_SENSOR."""
         torque_per_amp, band, beta = hb
         torque = torque_per_amp * self._last
-        if theta != self._ref_theta or self._state == State.IDLE:
+        if theta != self._ref_theta or self._state in (State.IDLE, State.STOPPING):
             self._ref_theta = theta
             self._ref_torque = torque
             self._free = 0.0

@@ -229,3 +229,13 @@ def test_frozen_sensor_monitor_accepts_changes_within_friction_and_a_moving_angl
     for k in range(5000):
         assert d.period(16.0, theta=0.1 + count * (k // 20)) == 16.0
     assert d.stage.fault == Fault.NONE and d.stage.free_turn < 0.05
+
+
+def test_frozen_sensor_monitor_rests_during_a_stops_fade_out() -> None:
+    # a steady turn held at 10 A (30 N*m), then a stop: the command fades to zero over
+    # 0.5 s with the angle still, which would be a 0.4 rad turn of a free handlebar
+    d = Driver(handlebar=True).running()
+    assert all(d.period(10.0, theta=0.1) == 10.0 for _ in range(1000))
+    d.stage.request_stop()
+    out = [d.period(10.0, theta=0.1) for _ in range(600)]
+    assert out[-1] == 0.0 and d.stage.state == State.IDLE and d.stage.fault == Fault.NONE
