@@ -14,8 +14,12 @@ mlockall: applied as root, refused otherwise, and reported):
    rig's status frames (``--pace bus``), reading each run's ``timing.json``; the load
    average at each run's start is printed with its figures.
 
-Run alone: ``python bench/bench_rt.py [--seconds 60]``; the machine's other load shows in the
-figures (a 2-core VM shared with other work misses deadlines that a quiet lab PC does not).
+Each run's ``timing.json`` also says where the compute time went (the loop's time stamps
+in the ring: the bus read, the stack and safety stage, the send, the rest), printed as p50/p99.
+
+Run alone: ``python bench/bench_rt.py [--seconds 60] [--quick]``; the machine's other load
+shows in the figures (a 2-core VM shared with other work misses deadlines that a quiet lab
+PC does not).
 """
 
 import argparse
@@ -39,6 +43,9 @@ from motosim.rt.privileges import apply_privileges
 from motosim.rt.stack import CompiledStack
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
 
+sys.path.insert(0, str(Path(__file__).parents[1] / "tests" / "integration"))
+from rt_tables import safety_table
+
 SCENARIO = """
 [scenario]
 name = "bench_rt"
@@ -56,19 +63,6 @@ profile = {{ kind = "square", low = -5.0, high = 5.0, period = 4.0, start = 1.0 
 [controller]
 kind = "paper"
 
-[realtime.safety]
-max_current = 10.0
-max_slew = 2000.0
-max_speed = 6.0
-speed_band = 4.0
-soft_stop = 0.6
-hard_stop = 0.8
-end_stop_gain = 50.0
-hands_off_torque = 0.0
-hands_off_time = 1.0
-hands_off_gain = 0.3
-watchdog_periods = {watchdog}
-
 [realtime.rig]
 latency = 0.0003
 jitter = 0.0001
@@ -83,7 +77,7 @@ def _us(seconds: float) -> float:
 
 
 def _stack_speed() -> dict[str, float]:
-    text = SCENARIO.format(duration=10.0, control=1000.0, watchdog=3)
+    text = SCENARIO.format(duration=10.0, control=1000.0) + safety_table(3)
     data = {k: v for k, v in tomllib.loads(text).items() if k != "realtime"}
     sc = parse_scenario(data, origin="bench")
     hb = load_parameters("simacom_handlebar", "handlebar")
@@ -131,7 +125,7 @@ def _run_against_rig(
         path = Path(tmp) / "bench_rt.toml"
         # the watchdog is lenient here so that a VM stall shows up in the figures rather
         # than ending the run; the tests check the 3-period watchdog itself
-        path.write_text(SCENARIO.format(duration=seconds, control=control, watchdog=1000))
+        path.write_text(SCENARIO.format(duration=seconds, control=control) + safety_table(1000))
         rig = _motosim("rig", str(path), "--bus", BUS, "--duration", "36000",
                        "--rate", f"{control:g}", "--link", link, *RIG)  # fmt: skip
         time.sleep(5.0)
@@ -158,6 +152,9 @@ def _run_against_rig(
         "periods": t["periods"],
         "missed_percent": round(100.0 * t["miss_ratio"], 3),
         "frames_lost": payload["counters"]["frames_lost"],
+        "where the compute time went, p50/p99 us": ", ".join(
+            f"{stage} {_us(v['p50'])}/{_us(v['p99'])}" for stage, v in payload["profile"].items()
+        ),
         "load average (1, 5, 15 min) at the start": " ".join(f"{x:.1f}" for x in load),
         "privileges": ", ".join(
             f"{p['name']} {'applied' if p['applied'] else 'refused'}" for p in payload["privileges"]
@@ -165,8 +162,9 @@ def _run_against_rig(
     }
 
 
-def run(seconds: float = 60.0) -> dict[str, object]:
-    """Measure; return the figures (times in microseconds)."""
+def run(seconds: float = 60.0, *, quick: bool = False) -> dict[str, object]:
+    """Measure; return the figures (times in microseconds); ``quick``: only the 1 kHz runs
+    with the fast link."""
     out: dict[str, object] = {}
     pid = os.fork()
     if pid == 0:  # rt-check under the privileges, in a child that exits afterwards
@@ -190,6 +188,8 @@ def run(seconds: float = 60.0) -> dict[str, object]:
         (100.0, seconds / 3, "python-can", "clock"),
         (100.0, seconds / 3, "fast", "clock"),
     ]
+    if quick:
+        cases = [case for case in cases if case[0] == 1000.0 and case[2] == "fast"]
     for control, length, link, pace in cases:
         figures = _run_against_rig(control, length, link=link, pace=pace)
         out |= {f"run {control:g} Hz {link} {pace} {k}": v for k, v in figures.items()}
@@ -204,6 +204,9 @@ def run(seconds: float = 60.0) -> dict[str, object]:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="1 kHz run length [s]")
+    parser.add_argument("--quick", action="store_true", help="only the fast link at 1 kHz")
+    parser.add_argument("--bus", default=BUS, help=f"the bus of the runs (default {BUS})")
     args = parser.parse_args()
-    for key, value in run(args.seconds).items():
+    BUS = args.bus
+    for key, value in run(args.seconds, quick=args.quick).items():
         print(f"  {key:<52} {value}")

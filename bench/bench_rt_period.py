@@ -15,13 +15,14 @@ with the figures (on a shared machine the absolute numbers move with it, the rat
 
 import argparse
 import os
+import socket
 import time
 from collections.abc import Callable
 
 import numpy as np
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER
-from motosim.io.can import handlebar_codecs, open_link
+from motosim.io.can import UdpMulticastLink, handlebar_codecs, open_link
 from motosim.params import load_parameters
 from motosim.rt.ring import SampleRing
 from motosim.rt.run import RealtimeRunner
@@ -32,6 +33,7 @@ from motosim.sim import build_stack, parse_scenario, prepare
 from motosim.sim.stack import new_data, reset
 from motosim.sim.stack import step as sim_step
 
+HB = load_parameters("simacom_handlebar", "handlebar")
 BUS = "udp_multicast:239.74.163.141"  # a group of its own (other users of the machine)
 
 LIMITS = SafetyLimits(
@@ -77,9 +79,13 @@ def _us(values: np.ndarray) -> str:
     return f"p50 {p50 * 1e6:6.1f} us, p99 {p99 * 1e6:6.1f} us"
 
 
-def _measure(fast: bool, n: int) -> dict[str, np.ndarray]:
+def _measure(fast: bool, n: int, *, own_filter: bool = True) -> dict[str, np.ndarray]:
     codecs = handlebar_codecs()
     host, drive = open_link(BUS, fast=fast), open_link(BUS, fast=fast)
+    if not own_filter:  # each end reads its own frames back, as before the BPF filter
+        for link in (host, drive):
+            if isinstance(link, UdpMulticastLink):
+                link._sock.setsockopt(socket.SOL_SOCKET, 27, 0)  # SO_DETACH_FILTER
     st = codecs.status
     values = np.zeros(len(st.names))
     counter = [0]
@@ -104,7 +110,7 @@ def _measure(fast: bool, n: int) -> dict[str, np.ndarray]:
         drain()
         out["receive, nothing waiting"] = _times(host.receive, n)
         stack = _stack()
-        runner = RealtimeRunner(stack, host, codecs, LIMITS, rate=1000.0)
+        runner = RealtimeRunner(stack, host, codecs, LIMITS, rate=1000.0, handlebar=HB)
         runner.discard_pending()
         out["period (whole)"] = _times(
             lambda: runner.period(counter[0], counter[0] * 1e-3), n, between=status
@@ -165,12 +171,20 @@ def run(periods: int = 3000) -> dict[str, object]:
     for name, values in _pieces(periods).items():
         out[name] = _us(values)
     before = _measure(False, periods)
+    unfiltered = _measure(True, periods, own_filter=False)
     after = _measure(True, periods)
     for name in before:
         out[f"{name}: python-can"] = _us(before[name])
         out[f"{name}: UdpMulticastLink"] = _us(after[name])
         ratio = np.percentile(after[name], 50) / np.percentile(before[name], 50)
         out[f"{name}: after/before p50"] = round(float(ratio), 2)
+    # the fast link without its BPF filter (reading its own frames back) and with it
+    for name in ("send a frame", "period (whole)"):
+        out[f"{name}: fast link, own frames read back"] = _us(unfiltered[name])
+        out[f"{name}: fast link, own frames dropped by BPF"] = _us(after[name])
+        for q in (50, 99):
+            ratio = np.percentile(after[name], q) / np.percentile(unfiltered[name], q)
+            out[f"{name}: BPF filter on/off p{q}"] = round(float(ratio), 2)
     out["load average after"] = os.getloadavg()
     return out
 

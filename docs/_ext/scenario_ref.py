@@ -130,6 +130,10 @@ DESCRIPTIONS: dict[str, str] = {
     "realtime.safety.watchdog_periods": (
         "Status-frame periods without a valid frame that trip the watchdog."
     ),
+    "realtime.safety.frozen_angle": (
+        "Turn of a free handlebar [rad], predicted from the change of motor torque while the "
+        "angle stands still, that trips the frozen-sensor fault."
+    ),
     # [realtime.rig]
     "realtime.rig.plant_rate": "The rig's plant sub-step rate [Hz] (default: the scenario's).",
     "realtime.rig.status_rate": "Rate of the status frames [Hz] (default: the measurement rate).",

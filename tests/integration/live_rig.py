@@ -14,6 +14,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+from rt_tables import safety_table
+
 # the bus: a multicast group of this module's own, away from python-can's default one that
 # other runs on the machine may use
 BUS = "udp_multicast:239.74.163.14"
@@ -31,19 +33,7 @@ profile = {{ kind = "square", low = -1.0, high = 1.0, period = 2.0, start = 0.5 
 [controller]
 kind = "paper"
 
-[realtime.safety]
-max_current = 10.0
-max_slew = 2000.0
-max_speed = 6.0
-speed_band = 4.0
-soft_stop = 0.6
-hard_stop = 0.8
-end_stop_gain = 50.0
-hands_off_torque = 0.0
-hands_off_time = 1.0
-hands_off_gain = 0.3
-watchdog_periods = 100  # 0.1 s: a busy machine without SCHED_FIFO
-"""
+""" + safety_table(100)  # 0.1 s: a busy machine without SCHED_FIFO
 
 
 @dataclass

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rt_tables import safety_table
 
 from motosim.cli.main import main
 from motosim.io.results import load_result
@@ -39,20 +40,7 @@ profile = { kind = "square", low = -3.0, high = 3.0, period = 1.0, start = 0.2 }
 
 [controller]
 kind = "paper"
-
-[realtime.safety]
-max_current = 10.0
-max_slew = 2000.0
-max_speed = 6.0
-speed_band = 4.0
-soft_stop = 0.6
-hard_stop = 0.8
-end_stop_gain = 50.0
-hands_off_torque = 0.0
-hands_off_time = 1.0
-hands_off_gain = 0.3
-watchdog_periods = 100  # 1 s: these tests run on a busy machine without SCHED_FIFO
-"""
+""" + safety_table(100)  # 1 s: these tests run on a busy machine without SCHED_FIFO
 
 
 # a group of our own: the fast link hears only its group, so tests of other checkouts on
@@ -182,9 +170,15 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     payload = json.loads(stdout)
     assert payload["fault"] == "NONE" and payload["counters"]["status_frames"] >= 150
     result = load_result(out)
-    timing = json.loads((out / "timing.json").read_text())["timing"]
+    report = json.loads((out / "timing.json").read_text())
+    timing = report["timing"]
     # one row per 1 kHz control period served (a missed deadline is skipped and counted)
     assert result.complete and result.t.size == timing["served"]
+    # where the compute time went: four stages whose medians add up to about the compute
+    profile = report["profile"]
+    assert list(profile) == ["read", "control", "send", "rest"]
+    assert all(0.0 <= stage["p50"] <= stage["p99"] <= stage["max"] for stage in profile.values())
+    assert sum(stage["max"] for stage in profile.values()) >= timing["compute_p50"]
     # 2 s at 1 kHz, then the torque fades out over the 0.5 s fade_in (never a step to zero)
     assert timing["periods"] > 2000 and 2.4 < result.t[-1]
     assert result["i_m"][-1] == 0.0 and payload["state"] == "IDLE"

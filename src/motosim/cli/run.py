@@ -278,6 +278,7 @@ def _writer_main(
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the loop's to handle
     from motosim.io.telemetry import TelemetryRing
     from motosim.rt.ring import SampleRing
+    from motosim.rt.run import profile_stats
     from motosim.rt.safety import State
     from motosim.rt.stack import RESULT_SIGNALS, result_block
 
@@ -304,6 +305,9 @@ def _writer_main(
     conn.send(("ready", url))
     blocks: list[np.ndarray] = []
     pending: list[np.ndarray] = []
+    stamps: list[np.ndarray] = []  # the loop's profile columns, for timing.json
+    stamp_names = ("compute", "done_read", "done_control", "done_send")
+    stamp_cols = [names.index(n) for n in stamp_names] if set(stamp_names) <= set(names) else []
     col_state = names.index("state")
     period = 0.1 if view is None else 0.005  # the view is at most 5 ms behind the writer
 
@@ -312,6 +316,8 @@ def _writer_main(
         if rows.shape[0]:
             block = result_block(rows, names, torque_per_amp)
             blocks.append(block)
+            if stamp_cols:
+                stamps.append(rows[:, stamp_cols])
             pending.append(block)
             if live is not None and control is not None:
                 live.push_block(loop_rows.rows(rows, block))
@@ -352,7 +358,8 @@ def _writer_main(
         ring.close()
         if server is not None:
             server.stop()
-    conn.send(("done", summary, str(writer.location)))
+    profile = profile_stats(np.vstack(stamps), stamp_names) if stamps else {}
+    conn.send(("done", summary, str(writer.location), profile))
 
 
 def _keyboard(runner: Any) -> None:
@@ -443,6 +450,7 @@ def run(args: argparse.Namespace) -> int:
             platform=platform,
             now=clock.now,
             clock=clock,
+            handlebar=inputs.nominal_handlebar,
         )
         metadata = run_metadata(inputs) | {
             "realtime": {
@@ -471,6 +479,7 @@ def run(args: argparse.Namespace) -> int:
     report = {
         "pace": args.pace,
         "timing": timing,
+        "profile": summary.get("profile", {}),
         "units": "s",
         "privileges": [
             {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
@@ -669,7 +678,8 @@ def _loop(
         ours.send(("close", complete, extra))
         if not ours.poll(120.0):
             raise MotosimError(f"{folder}: the result writer did not finish")
-        _, summary, location = ours.recv()
+        _, summary, location, profile = ours.recv()
+        summary = summary | {"profile": profile}
     finally:
         writer.join(timeout=10.0)
         if writer.is_alive():

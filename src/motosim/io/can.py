@@ -489,6 +489,16 @@ class UdpMulticastLink:
     rigs on one PC on different groups (``udp_multicast:GROUP``) do not hear each other.
     Made by :func:`open_link`.
 
+    Multicast on one PC loops every datagram back to every socket of the group, the
+    sender's own included, and python-can's sockets all send from the group's port: each
+    end would read back, and unpack, every frame it sends (the run its commands, the rig its
+    status frames). So this link sends from a socket of its own (an ephemeral port, the
+    bus's hop limit and interface) and, on Linux, gives its receiving socket a classic BPF
+    filter (``SO_ATTACH_FILTER``, the kernel's ``Documentation/networking/filter.rst``) that
+    drops the datagrams whose UDP source port is that one: in the kernel, before they are
+    queued. :attr:`own_filtered` says whether the filter is on (elsewhere the frames are
+    read back and ignored, as before).
+
     Parameters
     ----------
     bus : can.interfaces.udp_multicast.UdpMulticastBus
@@ -502,7 +512,8 @@ class UdpMulticastLink:
     """
 
     __slots__ = (
-        "_bus", "_dest", "_poll", "_select", "_sock", "_templates", "_unpack", "errors", "spec",
+        "_bus", "_dest", "_out", "_poll", "_select", "_sock", "_templates", "_unpack", "errors",
+        "own_filtered", "spec",
     )  # fmt: skip
 
     def __init__(self, bus: Any, group: str, port: int, spec: str) -> None:
@@ -521,6 +532,8 @@ class UdpMulticastLink:
             except OSError:
                 pass
         self._dest = (group, port)
+        self._out = _sender_like(self._sock)
+        self.own_filtered = _drop_source_port(self._sock, self._out.getsockname()[1])
         self._poll = select.poll()
         self._poll.register(self._sock.fileno(), select.POLLIN)
         self._select = select.select
@@ -552,7 +565,7 @@ class UdpMulticastLink:
         if template is None:
             template = self._templates[key] = self._template(frame_id, len(data))
         try:
-            self._sock.sendto(template[0] + data + template[1], self._dest)
+            self._out.sendto(template[0] + data + template[1], self._dest)
         except OSError:
             self.errors += 1
             return False
@@ -588,7 +601,8 @@ class UdpMulticastLink:
             return None
 
     def close(self) -> None:
-        """Close the socket's copy and shut the bus down."""
+        """Close the sockets and shut the bus down."""
+        self._out.close()
         self._sock.close()
         self._bus.shutdown()
 
@@ -597,6 +611,59 @@ class UdpMulticastLink:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _sender_like(sock: Any) -> Any:
+    """A non-blocking UDP socket on an ephemeral port that sends to the multicast group as
+    ``sock`` does (its hop limit and interface)."""
+    import socket
+
+    out = socket.socket(sock.family, socket.SOCK_DGRAM)
+    if sock.family == socket.AF_INET6:
+        level, options = socket.IPPROTO_IPV6, (socket.IPV6_MULTICAST_HOPS,)
+        out.bind(("::", 0))
+    else:
+        level, options = socket.IPPROTO_IP, (socket.IP_MULTICAST_TTL,)
+        out.bind(("0.0.0.0", 0))
+    for option in options:
+        out.setsockopt(level, option, sock.getsockopt(level, option))
+    try:  # the interface, where the bus chose one
+        if sock.family == socket.AF_INET6:
+            interface = sock.getsockopt(level, socket.IPV6_MULTICAST_IF)
+            out.setsockopt(level, socket.IPV6_MULTICAST_IF, interface)
+        else:
+            interface = sock.getsockopt(level, socket.IP_MULTICAST_IF, 4)
+            out.setsockopt(level, socket.IP_MULTICAST_IF, interface)
+    except OSError:
+        pass
+    out.setblocking(False)
+    return out
+
+
+def _drop_source_port(sock: Any, port: int) -> bool:
+    """Attach to ``sock`` a classic BPF filter that drops UDP datagrams from ``port``; False
+    where the system has no such filter (not Linux).
+
+    The program (``struct sock_filter`` instructions, BPF_LD|BPF_H|BPF_ABS and so on) sees
+    a UDP socket's datagram from its UDP header, whose first 16 bits are the source port.
+    """
+    import ctypes
+    import socket
+    import struct
+
+    program = (
+        (0x28, 0, 0, 0),  # ldh [0]: the source port
+        (0x15, 0, 1, port),  # jeq #port, next, skip one
+        (0x06, 0, 0, 0),  # ret #0: drop
+        (0x06, 0, 0, 0xFFFFFFFF),  # ret #-1: keep the whole datagram
+    )
+    code = ctypes.create_string_buffer(b"".join(struct.pack("HBBI", *i) for i in program))
+    fprog = struct.pack("HL", len(program), ctypes.addressof(code))
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, getattr(socket, "SO_ATTACH_FILTER", 26), fprog)
+    except OSError:
+        return False
+    return True
 
 
 _DEFAULT_CHANNELS = {"virtual": "motosim", "udp_multicast": None}

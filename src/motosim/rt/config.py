@@ -6,14 +6,16 @@ A scenario file that ``motosim run`` and ``motosim rig`` take is a scenario of
     [realtime.safety]   max_current [A], max_slew [A/s], max_speed [rad/s],
                         speed_band [rad/s], soft_stop [rad], hard_stop [rad],
                         end_stop_gain [A/rad], hands_off_torque [N*m], hands_off_time [s],
-                        hands_off_gain, fade_in = 0.5 [s], watchdog_periods = 3
+                        hands_off_gain, fade_in = 0.5 [s], watchdog_periods = 3,
+                        frozen_angle = 0.05 [rad]
     [realtime.rig]      the fields of :class:`~motosim.rt.rig.RigSettings` (each optional:
                         the plant, status rate, encoder and current noise default to the
                         scenario's rates and measurement, the current limit to its
                         controller's), with a sub-table ``faults``
                         (:class:`~motosim.rt.rig.RigFaults`)
 
-The safety limits have no defaults but the fade-in and the watchdog: they belong to the
+The safety limits have no defaults but the fade-in, the watchdog and the frozen-sensor
+monitor's angle: they belong to the
 handlebar on the bench and must be written down for it.
 """
 
@@ -60,7 +62,7 @@ def parse_safety(table: Any, *, origin: str) -> SafetyLimits:
     if not isinstance(table, Mapping):
         raise MotosimError(f"{where} must be a table")
     names = [f.name for f in fields(SafetyLimits)]
-    optional = {"fade_in", "watchdog_periods"}
+    optional = {"fade_in", "watchdog_periods", "frozen_angle"}
     for key in table:
         if key not in names:
             raise MotosimError(f"{where}: unknown key {key!r}; expected one of {', '.join(names)}")

@@ -11,8 +11,9 @@ status frame, which :meth:`RealtimeRunner.wait_status` waits for). Each period i
    :mod:`motosim.sim` in ``motosim run``) with the last valid angle [rad] and current [A];
 3. passes its command through the :class:`~motosim.rt.safety.SafetyStage`;
 4. encodes and sends the command frame (and a heartbeat frame at about 10 Hz);
-5. copies one row of signals into a :class:`~motosim.rt.ring.SampleRing`, read outside the
-   loop.
+5. publishes the stack's row (``telemetry``) and steps the motion platform's stage;
+6. copies one row of signals into a :class:`~motosim.rt.ring.SampleRing`, read outside the
+   loop, with the times at which steps 1, 3 and 4 ended (:func:`profile_stats`).
 
 The stack starts on the first valid status frame (reset at its angle and current) and the
 safety stage is enabled then (or, with ``wait_for_arm``, when :meth:`RealtimeRunner.arm` is
@@ -32,6 +33,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs
+from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import Clock
 from motosim.rt.ring import SampleRing
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
@@ -39,19 +41,30 @@ from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
 if TYPE_CHECKING:
     from motosim.rt.platform import PlatformOutput
 
-__all__ = ["LOOP_SIGNALS", "FrameLink", "RealtimeRunner", "RunCounters", "StackStepper"]
+__all__ = [
+    "LOOP_SIGNALS",
+    "FrameLink",
+    "RealtimeRunner",
+    "RunCounters",
+    "StackStepper",
+    "profile_stats",
+]
 
 Array = NDArray[np.float64]
 
 LOOP_SIGNALS = (
     "t", "theta_h_meas", "i_m_meas", "i_cmd", "i_safe", "state", "fault",
-    "t_clock", "wake", "compute", "missed",
+    "t_clock", "wake", "compute", "missed", "done_read", "done_control", "done_send",
 )  # fmt: skip
 """The loop's own columns, before the stack's: time [s], the measured angle [rad] and current
 [A] used this period, the stack's command and the one sent [A], the safety state and fault
 codes (:class:`~motosim.rt.safety.State`, :class:`~motosim.rt.safety.Fault`); the period's
 deadline on the loop's clock [s], its wake-up latency and compute time until the row is
-written [s] (NaN without ``now``), and the deadlines missed before it."""
+written [s] (NaN without ``now``), and the deadlines missed before it; then where the compute
+time went: the times [s] after the wake-up at which the bus was read, the stack and the
+safety stage had run and the command frame was sent (NaN without ``now``;
+:func:`profile_stats` summarises them; the rest, up to ``compute``, is the telemetry
+datagram, the platform's stage and the row)."""
 
 
 class StackStepper(Protocol):
@@ -142,6 +155,8 @@ class RealtimeRunner:
         ``compute`` columns; without it they are NaN.
     clock : Clock, optional
         The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
+    handlebar : HandlebarParameters, optional
+        The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
     """
 
     def __init__(
@@ -162,6 +177,7 @@ class RealtimeRunner:
         platform: "PlatformOutput | None" = None,
         now: Callable[[], float] | None = None,
         clock: Clock | None = None,
+        handlebar: HandlebarParameters | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -174,7 +190,9 @@ class RealtimeRunner:
         self.link = link
         self.codecs = codecs
         self.dt = 1.0 / rate
-        self.safety = SafetyStage(limits, dt=self.dt, periods_per_frame=periods_per_frame)
+        self.safety = SafetyStage(
+            limits, dt=self.dt, periods_per_frame=periods_per_frame, handlebar=handlebar
+        )
         self.names = LOOP_SIGNALS + tuple(stepper.names)
         self.ring = SampleRing(capacity, len(self.names), shared=shared_ring)
         self._row = np.zeros(len(self.names))
@@ -335,6 +353,7 @@ class RealtimeRunner:
         if self._t0 != self._t0:
             self._t0 = t
         fresh = self._read_bus()
+        done_read = self._now() if self._now is not None else math.nan
         if not self._started and k >= self._start_timeout:
             safety.trip(Fault.NO_DRIVE)
         if fresh and not self._started:
@@ -353,8 +372,6 @@ class RealtimeRunner:
         if self._started:
             command = self.stepper.step(self._theta, self._current)
             stack_row = self.stepper.row()
-        if stack_row is not None and self.telemetry is not None:
-            self.telemetry(k, t - self._t0, stack_row)
         if stack_row is not None and self._s_rate >= 0:
             omega = stack_row[self._s_rate]
         else:
@@ -364,7 +381,11 @@ class RealtimeRunner:
         theta = self._theta if self._started else 0.0
         out = safety.step(command, theta=theta, omega=omega, tau_hat=tau_hat, now=t - self._t0)
         state = safety.state
+        done_control = self._now() if self._now is not None else math.nan
         self._send(out, state, k)
+        done_send = self._now() if self._now is not None else math.nan
+        if stack_row is not None and self.telemetry is not None:  # after the command, which
+            self.telemetry(k, t - self._t0, stack_row)  # thus leaves a datagram sooner
         if self.platform is not None:
             self.platform.step(k, t - self._t0, stack_row, state, safety.fault, safety.envelope)
         row = self._row
@@ -378,6 +399,9 @@ class RealtimeRunner:
         row[7] = t
         row[8] = woke - t
         row[10] = k - self._calls  # deadlines skipped before this one
+        row[11] = done_read - woke
+        row[12] = done_control - woke
+        row[13] = done_send - woke
         self._calls += 1
         if stack_row is not None:
             row[self._n_loop :] = stack_row
@@ -419,3 +443,33 @@ class RealtimeRunner:
             fault_reason=s.describe(),
             fault_time=s.fault_time,
         )
+
+
+PROFILE_STAGES = ("read", "control", "send", "rest")
+
+
+def profile_stats(rows: Array, names: tuple[str, ...]) -> dict[str, dict[str, float]]:
+    """Where the compute time of the periods in ``rows`` went: p50, p99 and max [s] of each
+    stage (the bus read, the stack and safety stage, the send, the rest up to the row).
+
+    Rows without the stamps (NaN, a loop without ``now``) are left out.
+
+    Examples
+    --------
+    >>> names = ("compute", "done_read", "done_control", "done_send")
+    >>> rows = np.array([[10e-6, 2e-6, 5e-6, 9e-6]] * 3)
+    >>> {k: round(v["p50"] * 1e6, 3) for k, v in profile_stats(rows, names).items()}
+    {'read': 2.0, 'control': 3.0, 'send': 4.0, 'rest': 1.0}
+    """
+    col = [names.index(n) for n in ("done_read", "done_control", "done_send", "compute")]
+    stamps = rows[:, col]
+    stamps = stamps[np.all(np.isfinite(stamps), axis=1)]
+    if stamps.shape[0] == 0:
+        return {}
+    spans = np.diff(stamps, axis=1, prepend=0.0)
+    q = np.percentile(spans, (50.0, 99.0), axis=0)
+    top = spans.max(axis=0)
+    return {
+        stage: {"p50": float(q[0, j]), "p99": float(q[1, j]), "max": float(top[j])}
+        for j, stage in enumerate(PROFILE_STAGES)
+    }

@@ -20,7 +20,11 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
 - hands-off detection: while the estimated rider torque stays below ``hands_off_torque``
-  [N*m] for ``hands_off_time`` [s], the command is scaled by ``hands_off_gain``.
+  [N*m] for ``hands_off_time`` [s], the command is scaled by ``hands_off_gain``;
+- a frozen-sensor monitor (given the handlebar's parameters): the angle has not changed
+  while the motor torque has moved so far from its value at the angle's last change that a
+  free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault
+  (see :class:`SafetyStage`, Notes).
 
 A fault gives a zero command in the same period it is detected, without slew limiting, and
 stays latched until :meth:`SafetyStage.clear`; enabling again starts a new fade-in. The stage
@@ -33,6 +37,7 @@ from enum import IntEnum
 
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
+from motosim.params.handlebar import HandlebarParameters
 
 __all__ = ["SAFETY_RANGES", "Fault", "SafetyLimits", "SafetyStage", "State", "fault_reason"]
 
@@ -59,6 +64,7 @@ class Fault(IntEnum):
     DRIVE_FAULT = 6
     END_STOP = 7
     NO_DRIVE = 8
+    FROZEN_SENSOR = 9
 
 
 _REASONS = {
@@ -71,6 +77,8 @@ _REASONS = {
     Fault.DRIVE_FAULT: "the drive reports a fault",
     Fault.END_STOP: "handlebar angle beyond the hard end stop",
     Fault.NO_DRIVE: "no valid status frame from the drive since the start",
+    Fault.FROZEN_SENSOR: "frozen angle sensor: the angle stood still while the motor torque "
+    "would have turned a free handlebar",
 }
 
 
@@ -98,6 +106,7 @@ SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
     "hands_off_gain": (0.0, 1.0, ""),
     "fade_in": (0.001, 60.0, "s"),
     "watchdog_periods": (1, 10_000, ""),
+    "frozen_angle": (0.001, 10.0, "rad"),
 }
 """Admitted interval (low, high, SI unit) of each safety limit. The lower bounds are far
 below any usable limit (10 mA, 0.1 A/s, 10 mrad/s, 1 ms): a smaller positive value is a typo
@@ -130,6 +139,10 @@ class SafetyLimits:
         Ramp of the command on enable and on stop [s], > 0.
     watchdog_periods : int
         Periods without a valid status frame that trip the watchdog, >= 1.
+    frozen_angle : float
+        The turn of a free handlebar [rad], predicted from the change of the motor torque
+        since the measured angle last changed, that trips ``FROZEN_SENSOR`` while the angle
+        stands still (0.05 rad, about 130 counts of a 14-bit encoder), > 0.
     """
 
     max_current: float
@@ -144,6 +157,7 @@ class SafetyLimits:
     hands_off_gain: float
     fade_in: float = 0.5
     watchdog_periods: int = 3
+    frozen_angle: float = 0.05
 
     def __post_init__(self) -> None:
         for name, (low, high, unit) in SAFETY_RANGES.items():
@@ -179,6 +193,35 @@ class SafetyStage:
     periods_per_frame : int
         Control periods per status frame (the loop may run faster than the drive reports):
         the watchdog waits ``watchdog_periods`` frame periods.
+    handlebar : HandlebarParameters, optional
+        The (nominal) handlebar, for the frozen-sensor monitor; without it the monitor is off.
+
+    Notes
+    -----
+    The frozen-sensor monitor tells a frozen angle sensor from a rider who holds the
+    handlebar still against the motor, which is legitimate (a steady turn: the rider's torque
+    balances the motor's and the angle stands still for seconds). Only the angle and the
+    motor current are measured, so a still angle under a large *steady* current proves
+    nothing. What a rider cannot do is hold the handlebar to one encoder count while the
+    motor torque *changes* a lot: an arm is a spring of at most a few hundred N*m/rad, so a
+    change of a few N*m moves the handlebar by milliradians, tens of counts. The monitor
+    keeps the motor torque ``tau_0 = N k_t i`` of the period the measured angle last changed
+    and, while it stands still, integrates the turn of a *free* handlebar of eq. (5) driven
+    by the change of torque since then, quasi-statically (the inertia's lag,
+    ``J_eq / beta_eq`` = 3 ms for Table I, is neglected), with twice the dry friction as a
+    dead band (the still handlebar may sit anywhere in the friction band)::
+
+        d = |N k_t i - tau_0|,   theta_free += max(0, d - 2 beta_s) / beta_eq * dt
+
+    and trips ``FROZEN_SENSOR`` when ``theta_free`` exceeds ``frozen_angle``. The current is
+    the one sent the period before (what the drive held meanwhile). Any change of the
+    measured angle starts it afresh, and so does a stop's fade-out (the torque is going to
+    zero: a frozen sensor can do no harm then, and a rider easing off as it fades need not
+    move the handlebar). The free handlebar is an upper bound of the turn of a
+    held one: a rider holding still against a change ``d`` needs a stiffness of ``d`` per
+    encoder count (9000 N*m/rad for 3.5 N*m and a 14-bit encoder). A measured angle
+    moving the wrong way (a sign flip) is not detected: a rider overpowering the motor
+    legitimately turns the handlebar against its torque.
 
     Examples
     --------
@@ -206,11 +249,15 @@ class SafetyStage:
         "_envelope",
         "_fault",
         "_fault_time",
+        "_free",
         "_fresh",
         "_hands_off",
+        "_hb",
         "_last",
         "_missing",
         "_quiet",
+        "_ref_theta",
+        "_ref_torque",
         "_state",
         "_t",
         "_watchdog",
@@ -220,7 +267,14 @@ class SafetyStage:
         "limits",
     )
 
-    def __init__(self, limits: SafetyLimits, *, dt: float, periods_per_frame: int = 1) -> None:
+    def __init__(
+        self,
+        limits: SafetyLimits,
+        *,
+        dt: float,
+        periods_per_frame: int = 1,
+        handlebar: HandlebarParameters | None = None,
+    ) -> None:
         if not (math.isfinite(dt) and dt > 0.0):
             raise MotosimError(f"dt = {dt!r} s: expected a positive period")
         if periods_per_frame < 1:
@@ -241,6 +295,12 @@ class SafetyStage:
         self._missing = 0
         self._quiet = 0.0
         self._hands_off = False
+        self._hb: tuple[float, float, float] | None = None if handlebar is None else (
+            handlebar.torque_per_amp, 2.0 * handlebar.beta_s, handlebar.beta_eq
+        )  # fmt: skip
+        self._ref_theta = math.nan
+        self._ref_torque = 0.0
+        self._free = 0.0
         self.frames_lost = 0
         self.frames_stale = 0
 
@@ -269,6 +329,12 @@ class SafetyStage:
     def hands_off(self) -> bool:
         """Whether nobody seems to hold the handlebar."""
         return self._hands_off
+
+    @property
+    def free_turn(self) -> float:
+        """The frozen-sensor monitor's turn of a free handlebar since the angle last changed
+        [rad] (see Notes)."""
+        return self._free
 
     @property
     def envelope(self) -> float:
@@ -389,6 +455,8 @@ class SafetyStage:
             self.trip(Fault.NON_FINITE)
         elif abs(theta) > lim.hard_stop:
             self.trip(Fault.END_STOP)
+        elif self._hb is not None:
+            self._frozen_monitor(theta, self._hb)
         state = self._state
         if state == State.FAULT or state == State.IDLE:
             self._last = 0.0
@@ -432,3 +500,18 @@ class SafetyStage:
         i = min(max(i, self._last - step), self._last + step)
         self._last = i
         return i
+
+    def _frozen_monitor(self, theta: float, hb: tuple[float, float, float]) -> None:
+        """The frozen-sensor monitor of one period (see Notes); trips FROZEN_SENSOR."""
+        torque_per_amp, band, beta = hb
+        torque = torque_per_amp * self._last
+        if theta != self._ref_theta or self._state in (State.IDLE, State.STOPPING):
+            self._ref_theta = theta
+            self._ref_torque = torque
+            self._free = 0.0
+            return
+        drive = abs(torque - self._ref_torque) - band
+        if drive > 0.0:
+            self._free += drive / beta * self.dt
+            if self._free > self.limits.frozen_angle:
+                self.trip(Fault.FROZEN_SENSOR)

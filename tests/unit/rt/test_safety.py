@@ -8,7 +8,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from motosim.errors import MotosimError
+from motosim.params import load_parameters
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
+
+HB = load_parameters("simacom_handlebar", "handlebar")
 
 LIMITS = SafetyLimits(
     max_current=20.0,
@@ -27,8 +30,10 @@ LIMITS = SafetyLimits(
 class Driver:
     """Feeds a stage fresh status frames and steps it, as the loop does."""
 
-    def __init__(self, limits: SafetyLimits = LIMITS, rate: float = 1000.0) -> None:
-        self.stage = SafetyStage(limits, dt=1.0 / rate)
+    def __init__(
+        self, limits: SafetyLimits = LIMITS, rate: float = 1000.0, *, handlebar: bool = False
+    ) -> None:
+        self.stage = SafetyStage(limits, dt=1.0 / rate, handlebar=HB if handlebar else None)
         self.counter = 0
 
     def period(self, command: float = 10.0, *, frame: bool = True, **kw: float) -> float:
@@ -40,8 +45,10 @@ class Driver:
 
     def running(self) -> "Driver":
         self.stage.enable()
-        while self.stage.state != State.RUNNING:
-            self.period()
+        k = 0
+        while self.stage.state != State.RUNNING:  # the angle moves: no frozen sensor
+            k += 1
+            self.period(theta=1e-3 * (k % 2))
         assert self.period() == 10.0
         return self
 
@@ -191,3 +198,44 @@ def test_bad_limits_are_refused(key: str, value: float) -> None:
 
 def _fields(limits: SafetyLimits) -> dict[str, float]:
     return {name: getattr(limits, name) for name in SafetyLimits.__dataclass_fields__}
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_frozen_sensor_trips_when_a_free_handlebar_would_have_turned(rate: float) -> None:
+    d = Driver(rate=rate, handlebar=True).running()
+    # a rider holding the handlebar still against a steady 10 A (30 N*m) is legitimate
+    assert all(d.period(10.0, theta=0.1) == 10.0 for _ in range(round(5 * rate)))
+    # the command moves by 3 A (9 N*m) and the angle stands still: a free handlebar of
+    # Table I (beta_eq = 13.956 N*m*s/rad, beta_s = 1.734 N*m, N k_t = 3 N*m/A) turns at
+    # (9 - 2 beta_s) / beta_eq = 0.396 rad/s beyond the dead band, so 0.05 rad after
+    # 0.126 s; the monitor uses the current sent the period before: one period later
+    speed = (3.0 * HB.torque_per_amp - 2.0 * HB.beta_s) / HB.beta_eq
+    expected = math.floor(0.05 / (speed / rate)) + 2
+    out = [d.period(13.0, theta=0.1) for _ in range(expected + 5)]
+    first_zero = out.index(0.0) + 1
+    assert first_zero == expected and d.stage.fault == Fault.FROZEN_SENSOR
+    assert all(v == 13.0 for v in out[: first_zero - 1]) and not any(out[first_zero - 1 :])
+    assert "frozen angle sensor" in d.stage.describe()
+
+
+def test_frozen_sensor_monitor_accepts_changes_within_friction_and_a_moving_angle() -> None:
+    d = Driver(handlebar=True).running()
+    # a change of 1 A (3 N*m) stays within twice the dry friction (3.47 N*m): a handlebar
+    # held in its friction band need not move
+    assert all(d.period(11.0, theta=0.1) == 11.0 for _ in range(5000))
+    # a change of 5 A with the angle moving by one count every 20 ms: each change restarts
+    # the monitor (0.02 s at 0.85 rad/s beyond the band is 0.017 rad < 0.05 rad)
+    count = 2 * math.pi / 2**14
+    for k in range(5000):
+        assert d.period(16.0, theta=0.1 + count * (k // 20)) == 16.0
+    assert d.stage.fault == Fault.NONE and d.stage.free_turn < 0.05
+
+
+def test_frozen_sensor_monitor_rests_during_a_stops_fade_out() -> None:
+    # a steady turn held at 10 A (30 N*m), then a stop: the command fades to zero over
+    # 0.5 s with the angle still, which would be a 0.4 rad turn of a free handlebar
+    d = Driver(handlebar=True).running()
+    assert all(d.period(10.0, theta=0.1) == 10.0 for _ in range(1000))
+    d.stage.request_stop()
+    out = [d.period(10.0, theta=0.1) for _ in range(600)]
+    assert out[-1] == 0.0 and d.stage.state == State.IDLE and d.stage.fault == Fault.NONE
