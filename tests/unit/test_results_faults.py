@@ -160,3 +160,45 @@ def test_leaving_no_stale_lock_after_an_error_in_the_constructor(tmp_path: Path)
     assert not lock_file(tmp_path / "run").exists()
     time.sleep(0)
     assert os.listdir(tmp_path) == ["run"]
+
+
+def _swallowed_sigterm() -> None:
+    """Run the SIGTERM handler where Python ignores exceptions (a finaliser, a weakref callback)."""
+    try:
+        signal.getsignal(signal.SIGTERM)(signal.SIGTERM, None)  # type: ignore[operator]
+    except KeyboardInterrupt:
+        pass  # what Python does there: prints "Exception ignored" and goes on
+
+
+def _write_through_a_swallowed_sigterm(folder: Path, blocks_after: int) -> None:
+    """Five rows, a swallowed SIGTERM, then ``blocks_after`` blocks of five rows."""
+    with ResultWriter(folder, NAMES, {}) as w:
+        w.append(_block(0, 5))
+        _swallowed_sigterm()
+        for k in range(blocks_after):
+            w.append(_block(5 * (k + 1), 5))
+
+
+def test_a_sigterm_swallowed_by_a_finaliser_still_stops_the_run_at_the_next_block(
+    tmp_path: Path,
+) -> None:
+    """Seen in the wild: the handler's raise landed in a WeakValueDictionary callback, Python
+    ignored it and the run completed with exit 0. The writer remembers the signal and stops at
+    the next block, keeping the rows and marking the result partial."""
+    folder = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt, match="SIGTERM"):
+        _write_through_a_swallowed_sigterm(folder, blocks_after=2)  # one written, then the stop
+    # no previous result: the partial one is published in the folder, marked so
+    with h5py.File(folder / "result.h5", "r") as h5:
+        assert h5["signals"].shape[0] == 10 and not h5.attrs["complete"]
+
+
+def test_a_sigterm_swallowed_after_the_last_block_marks_the_result_partial(
+    tmp_path: Path,
+) -> None:
+    folder = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt, match="SIGTERM"):
+        _write_through_a_swallowed_sigterm(folder, blocks_after=0)
+    with h5py.File(folder / "result.h5", "r") as h5:
+        assert h5["signals"].shape[0] == 5 and not h5.attrs["complete"]
+    assert (folder / "result.partial.csv").exists() and not (folder / "result.csv").exists()

@@ -66,6 +66,7 @@ __all__ = [
     "RESERVE_BYTES",
     "ResultWriter",
     "SimResult",
+    "StopRequest",
     "is_complete_result",
     "load_result",
     "lock_file",
@@ -209,32 +210,54 @@ class _FolderLock:
         self._fd = None
 
 
+class StopRequest:
+    """The stop signal received within :func:`terminate_as_interrupt`, kept until acted on.
+
+    The handler raises :class:`KeyboardInterrupt` where Python happens to be; when that is a
+    finaliser or a weak-reference callback, Python prints "Exception ignored" and goes on, and
+    the stop would be lost. :meth:`check`, called where the run can stop (each block of rows),
+    raises it again.
+    """
+
+    def __init__(self) -> None:
+        self.name: str | None = None
+
+    def check(self) -> None:
+        """Raise :class:`KeyboardInterrupt` if a stop signal has arrived."""
+        if self.name is not None:
+            raise KeyboardInterrupt(self.name)
+
+
 @contextmanager
-def terminate_as_interrupt() -> Iterator[None]:
+def terminate_as_interrupt() -> Iterator[StopRequest]:
     """Within the block, SIGTERM and SIGHUP raise :class:`KeyboardInterrupt`, as Ctrl-C does.
 
     A service manager, ``timeout`` or a closed terminal stops a run with SIGTERM or SIGHUP,
     whose default action ends the process at once, leaving files open. Turned into
     ``KeyboardInterrupt``, they unwind the ``with`` blocks like Ctrl-C: the result is closed
-    and marked partial. Outside the main thread (where Python cannot install handlers) the
-    block runs unchanged. The previous handlers are restored on leaving.
+    and marked partial. The block gets a :class:`StopRequest` that remembers the signal, for a
+    raise that landed where Python ignores exceptions. Outside the main thread (where Python
+    cannot install handlers) the block runs unchanged. The previous handlers are restored on
+    leaving.
 
     Examples
     --------
-    >>> with terminate_as_interrupt():
-    ...     pass
+    >>> with terminate_as_interrupt() as stop:
+    ...     stop.check()
     """
+    stop = StopRequest()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield stop
         return
 
     def _raise(signum: int, frame: FrameType | None) -> None:
-        raise KeyboardInterrupt(signal.Signals(signum).name)
+        stop.name = signal.Signals(signum).name
+        raise KeyboardInterrupt(stop.name)
 
     stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
     previous = {sig: signal.signal(sig, _raise) for sig in stops}
     try:
-        yield
+        yield stop
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
@@ -305,6 +328,7 @@ class ResultWriter:
         self._last_t = -math.inf
         self._closed = False
         self._signals: Any = None
+        self._stop = StopRequest()
         try:
             self._folder.parent.mkdir(parents=True, exist_ok=True)
         except OSError as err:
@@ -427,6 +451,7 @@ class ResultWriter:
             self._fail(self._csv_path, err)
         self._rows += m
         self._last_t = float(t[-1])
+        self._stop.check()  # a stop signal whose raise was swallowed stops the run here
 
     def _check_reserve(self, block_bytes: int) -> None:
         """Stop while the files can still be closed cleanly, before the disk is full.
@@ -528,7 +553,7 @@ class ResultWriter:
 
     def __enter__(self) -> Self:
         self._signals = terminate_as_interrupt()
-        self._signals.__enter__()
+        self._stop = self._signals.__enter__()
         return self
 
     def __exit__(
@@ -537,6 +562,8 @@ class ResultWriter:
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
+        if exc_type is None and self._stop.name is not None and not self._closed:
+            exc_type = KeyboardInterrupt  # a stop signal whose raise was swallowed
         try:
             if exc_type is None:
                 self.close()
@@ -555,6 +582,8 @@ class ResultWriter:
             if self._signals is not None:
                 self._signals.__exit__(None, None, None)
                 self._signals = None
+        if exc is None:
+            self._stop.check()
 
 
 def _reason(err: BaseException) -> str:
