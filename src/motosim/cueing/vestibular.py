@@ -31,7 +31,7 @@ vehicle's is above threshold and the platform's is not. Shares are fractions of 
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -158,14 +158,8 @@ TELBAN_CARDULLO_2005 = VestibularModel(
 thresholds (roll 3.0, pitch 3.6, yaw 2.6 deg/s; 0.17 m/s^2 in x and y). The default of the
 score and of the MPC's scaling."""
 
-BENSON_1986_1989 = VestibularModel(
-    canal_tau_L=5.73,
-    canal_tau_S=0.005,
-    canal_tau_a=80.0,
-    otolith_K=0.4,
-    otolith_tau_a=13.2,
-    otolith_tau_L=5.33,
-    otolith_tau_S=0.66,
+BENSON_1986_1989 = replace(
+    TELBAN_CARDULLO_2005,
     thresholds=(BENSON_ROLL, BENSON_PITCH, BENSON_YAW, BENSON_SURGE, BENSON_SWAY),
 )
 """The same models with the laboratory thresholds of Benson et al. (1986, 1989): roll 2.04,
