@@ -8,7 +8,12 @@ from typing import Any
 import numpy as np
 
 from motosim.cli._common import print_json, warn_atypical
-from motosim.cli.rtcheck import add_privilege_options, clock_from_args, privileges_from_args
+from motosim.cli.rtcheck import (
+    add_link_option,
+    add_privilege_options,
+    clock_from_args,
+    privileges_from_args,
+)
 from motosim.errors import MotosimError
 
 __all__ = ["register"]
@@ -33,13 +38,7 @@ def register(sub: Any) -> None:
         "--bus", required=True, help="python-can INTERFACE[:CHANNEL]: udp_multicast, ..."
     )
     parser.add_argument("--duration", type=float, help="stop after this long [s]")
-    parser.add_argument(
-        "--link",
-        choices=("fast", "python-can"),
-        default="fast",
-        help="on udp_multicast, send and read python-can's frames on its socket without a "
-        "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
-    )
+    add_link_option(parser)
     parser.add_argument(
         "--rate",
         type=float,

@@ -14,11 +14,23 @@ from motosim.rt.loop import TimingStats
 from motosim.rt.privileges import Privilege, apply_privileges
 
 __all__ = [
+    "add_link_option",
     "add_privilege_options",
     "check_privilege_options",
     "privileges_from_args",
     "register",
 ]
+
+
+def add_link_option(parser: argparse.ArgumentParser) -> None:
+    """``--link``, how ``run`` and ``rig`` talk on a udp_multicast bus."""
+    parser.add_argument(
+        "--link",
+        choices=("fast", "python-can"),
+        default="fast",
+        help="on udp_multicast, send and read python-can's frames on its socket without a "
+        "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
+    )
 
 
 def add_privilege_options(parser: argparse.ArgumentParser) -> None:

@@ -14,6 +14,7 @@ import numpy as np
 
 from motosim.cli._common import print_json, refuse_special, warn_atypical, write_text
 from motosim.cli.rtcheck import (
+    add_link_option,
     add_privilege_options,
     check_privilege_options,
     clock_from_args,
@@ -62,13 +63,7 @@ def register(sub: Any) -> None:
         help="python-can INTERFACE[:CHANNEL]: socketcan:can0, virtual, udp_multicast, ...",
     )
     parser.add_argument("--out", required=True, help="folder for the result")
-    parser.add_argument(
-        "--link",
-        choices=("fast", "python-can"),
-        default="fast",
-        help="on udp_multicast, send and read python-can's frames on its socket without a "
-        "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
-    )
+    add_link_option(parser)
     parser.add_argument("--duration", type=float, help="run for this long [s] (the scenario's)")
     parser.add_argument(
         "--pace",
