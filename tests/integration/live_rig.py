@@ -56,16 +56,19 @@ def _motosim(*argv: str) -> subprocess.Popen[str]:
     )
 
 
-def _free_udp_port() -> int:
+def free_udp_port() -> int:
+    """A UDP port of 127.0.0.1 free now (for a telemetry address)."""
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
 
 
-def _wait_for_status(seconds: float) -> None:
+def wait_for_status(bus: str, seconds: float) -> None:
+    """Return once a rig's status frame (0x101) is heard on ``bus``; TimeoutError after
+    ``seconds``."""
     from motosim.io.can import open_link
 
-    with open_link(BUS) as link:
+    with open_link(bus) as link:
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             frame = link.receive(0.1)
@@ -99,12 +102,12 @@ def live_run(folder: Path, duration: float = 60.0) -> Iterator[LiveRun]:
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / "live.toml"
     path.write_text(SCENARIO.format(duration=duration), encoding="utf-8")
-    telemetry = f"127.0.0.1:{_free_udp_port()}"
+    telemetry = f"127.0.0.1:{free_udp_port()}"
     rig = _motosim("rig", str(path), "--bus", BUS, "--duration", str(duration + 60),
                    "--telemetry", telemetry)  # fmt: skip
     run = reader = None
     try:
-        _wait_for_status(60.0)
+        wait_for_status(BUS, 60.0)
         run = _motosim(
             "run", str(path), "--bus", BUS, "--out", str(folder / "run"), "--no-report",
             "--telemetry", telemetry, "--view", "--view-port", "0",

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from live_rig import free_udp_port, wait_for_status
 from rt_tables import safety_table
 
 from motosim.cli.main import main
@@ -115,39 +116,19 @@ def _motosim(*argv: str) -> subprocess.Popen[str]:
     )
 
 
-def _wait_for_status(seconds: float) -> None:
-    from motosim.io.can import open_link
-
-    with open_link(BUS) as link:
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            frame = link.receive(0.1)
-            if frame is not None and frame[0] == 0x101:
-                return
-    pytest.fail("the rig sent no status frame")
-
-
-def _free_port() -> int:
-    import socket
-
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 @pytest.fixture
 def rig(tmp_path: Path, request: pytest.FixtureRequest) -> object:
     _udp_multicast()
     path = tmp_path / "rt.toml"
     text = getattr(request, "param", SCENARIO)
     path.write_text(text, encoding="utf-8")
-    telemetry = f"127.0.0.1:{_free_port()}"
+    telemetry = f"127.0.0.1:{free_udp_port()}"
     proc = _motosim(
         "rig", str(path), "--bus", BUS, "--duration", "120", "--json",
         "--telemetry", telemetry,
     )  # fmt: skip
     try:
-        _wait_for_status(60.0)
+        wait_for_status(BUS, 60.0)
         yield path, telemetry
     finally:
         proc.send_signal(signal.SIGINT)
