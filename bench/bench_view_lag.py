@@ -36,6 +36,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,15 @@ def _chromium_cpu(root: int) -> dict[str, float]:
     return out
 
 
+def _counters(view: Any) -> tuple[list[float], dict[str, float]]:
+    """The page's frames, clock [ms], lags and ages recorded, frames rendered; Chromium's CPU."""
+    counts = view.evaluate(
+        "[motosimStats.frames, performance.now(), motosimStats.lags.length,"
+        " motosimStats.ages.length, motosimStats.rendered]"
+    )
+    return counts, _chromium_cpu(view.process.pid)
+
+
 def run() -> dict[str, float]:
     """Lag and frame rate of the rider's view of a live run (empty without the tools)."""
     sys.path.insert(0, str(Path(__file__).parents[1] / "tests" / "integration"))
@@ -94,19 +104,9 @@ def run() -> dict[str, float]:
             try:
                 view.wait_for("window.motosimStats && motosimStats.ready", timeout=60)
                 time.sleep(WARM_UP)
-                f0, p0, n0, a0 = view.evaluate(
-                    "[motosimStats.frames, performance.now(), motosimStats.lags.length,"
-                    " motosimStats.ages.length]"
-                )
-                cpu0 = _chromium_cpu(view.process.pid)
-                r0 = view.evaluate("motosimStats.rendered")
+                (f0, p0, n0, a0, r0), cpu0 = _counters(view)
                 time.sleep(WINDOW)
-                f1, p1, n1, a1 = view.evaluate(
-                    "[motosimStats.frames, performance.now(), motosimStats.lags.length,"
-                    " motosimStats.ages.length]"
-                )
-                cpu1 = _chromium_cpu(view.process.pid)
-                r1 = view.evaluate("motosimStats.rendered")
+                (f1, p1, n1, a1, r1), cpu1 = _counters(view)
                 if live.process.poll() is not None:
                     raise RuntimeError("the run ended early:\n" + "".join(live.log))
                 lags = np.array(view.evaluate(f"motosimStats.lags.slice({n0}, {n1})"))
