@@ -482,13 +482,14 @@ def simulate(
     for k0 in range(0, n, rows):
         out = np.full((min(rows, n - k0), len(SIGNALS)), np.nan)
         done = _run_chunk(k0, out, model, data, rig, world, limits)
+        stopped = done < out.shape[0]
         out = out[:done]
         _check_block(out)
         if on_block is not None:
             on_block(out)
-        if keep or k0 + rows >= n or done < rows:
+        if keep or k0 + rows >= n or stopped:
             blocks.append(out)
-        if done < rows and k0 + done < n:
+        if stopped:
             break
     out = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
     return TimeSeries(out[:, 0], out[:, 1:], SIGNALS[1:])  # views: no copy of the run
