@@ -136,6 +136,39 @@ def test_runs_beyond_a_limit_are_failures_with_their_metrics(tmp_path: Path) -> 
     assert np.array_equal(limited["max_abs_i_m"], values)
 
 
+FALLING = """
+[scenario]
+name = "push"
+duration = 3.0
+[rider]
+kind = "torque"
+profile = { kind = "constant", value = 1.0 }
+[controller]
+kind = "paper"
+"""
+
+
+def test_a_run_that_falls_stops_there_and_is_a_failure(tmp_path: Path) -> None:
+    # a steady 20 N*m push with the paper's loose controller capsizes the motorcycle in
+    # about 1.9 s (roll beyond 45 deg), a 1 N*m push does not in 3 s: as `motosim simulate`
+    # does, the campaign stops the first at the fall and records it as a failure
+    (tmp_path / "push.toml").write_text(FALLING)
+    (tmp_path / "c.toml").write_text(
+        '[campaign]\nname = "push"\nscenario = "push.toml"\nsampling = "grid"\nruns = 2\n'
+        'metrics = ["max_abs_phi"]\n[factors]\n"rider.profile.value" = [1.0, 20.0]\n'
+    )
+    summary = run_campaign(load_campaign(tmp_path / "c.toml"), tmp_path / "out", jobs=1)
+    results = load_results(tmp_path / "out")
+    fell = results["rider.profile.value"] == 20.0
+    assert summary.failed == int(fell.sum()) == 1
+    assert set(results["status"][fell]) == {"failed"}
+    assert all(r.startswith("the motorcycle fell at t = ") for r in results["reason"][fell])
+    assert np.all((results["failed_at"][fell] > 1.0) & (results["failed_at"][fell] < 3.0))
+    # stopped at the first row beyond 45 deg, not integrated on
+    assert np.all(np.degrees(results["max_abs_phi"][fell]) < 46.0)
+    assert set(results["status"][~fell]) == {"ok"}
+
+
 def test_joblib_and_dask_give_the_serial_metrics(tmp_path: Path) -> None:
     campaign = load_campaign(_write(tmp_path))
     run_campaign(campaign, tmp_path / "serial", jobs=1)

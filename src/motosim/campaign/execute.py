@@ -11,8 +11,10 @@ or PBS). Each task simulates its runs with :func:`motosim.sim.simulate` on the s
 and returns one row per run; the parent writes each task's rows as one Parquet part as soon
 as it arrives (:class:`motosim.campaign.results.ResultStore`). A run that diverges
 (:class:`~motosim.errors.RunFailedError`) or whose combination of values is invalid is a
-row with ``status = "failed"`` and its reason, and so is a run whose metrics exceed the
-campaign's ``limits`` (its metrics kept). With ``series``, the worker writes each run's
+row with ``status = "failed"`` and its reason, and so is a run that left the model's range (it
+fell, or its speed left 3-60 m/s: it stops there, as ``motosim simulate`` does, and keeps the
+metrics of its rows until then) or whose metrics exceed the campaign's ``limits`` (its metrics
+kept). With ``series``, the worker writes each run's
 signals to ``DIR/series.zarr`` (:mod:`motosim.campaign.series`) before returning its row, so
 a run whose row is in a part has its series too.
 """
@@ -41,7 +43,7 @@ from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
 from motosim.sim import build_stack, prepare, simulate
-from motosim.sim.metrics import run_metrics
+from motosim.sim.metrics import run_metrics, stop_reason, validity_limits
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
@@ -237,13 +239,17 @@ def _run_one(
         )
     except MotosimError as err:
         return "failed", f"invalid: {err}", math.nan, nan, None
+    limits = validity_limits(scenario.motorcycle.speed)
     try:
         ts = simulate(
-            inputs, rng=np.random.default_rng(scenario.seed), stack=d.stack, chunk=scenario.duration
-        )
+            inputs, rng=np.random.default_rng(scenario.seed), stack=d.stack,
+            chunk=scenario.duration, stop_outside=limits,
+        )  # fmt: skip
     except RunFailedError as err:
         return "failed", str(err), math.nan if err.time is None else err.time, nan, None
     values = _metrics(ts, task.metrics)
+    if ts.t.size < round(scenario.duration * scenario.rates.control):
+        return "failed", stop_reason(ts, limits), float(ts.t[-1]), values, ts
     found = dict(zip(task.metrics, values, strict=True))
     beyond = [f"{k} = {found[k]:.4g} > {v:g}" for k, v in task.limits if not found[k] <= v]
     if beyond:

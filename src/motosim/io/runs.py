@@ -11,7 +11,6 @@ it to :func:`motosim.sim.simulate`.
 """
 
 import dataclasses
-import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -35,7 +34,7 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
-from motosim.sim.metrics import failure, run_metrics, validity_limits
+from motosim.sim.metrics import failure, run_metrics, stop_reason, validity_limits
 from motosim.sim.scenario import CsvProfile, OpenDrivePath, implausible
 from motosim.timeseries import TimeSeries
 
@@ -210,7 +209,7 @@ def run_to_folder(
             summary: dict[str, Any] = run_metrics(
                 run.t, run.get, complete=not stopped, max_current=sc.controller.max_current
             )
-            reason = _stop_reason(run, limits) if stopped else failure(summary)
+            reason = stop_reason(run, limits) if stopped else failure(summary)
             if reason is not None:
                 summary["failure"] = reason
             writer.close(summary)
@@ -226,20 +225,3 @@ def run_to_folder(
             time=float(run.t[-1]) if stopped else None,
         )
     return summary
-
-
-def _stop_reason(run: TimeSeries, limits: tuple[float, float, float]) -> str:
-    """Why a run stopped at its last row: the roll or the speed beyond ``limits``, and when."""
-    t, phi, speed = float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1])
-    roll, low, high = limits
-    if abs(phi) > roll:
-        return (
-            f"the motorcycle fell at t = {t:.3f} s: roll {math.degrees(phi):.1f} deg, beyond "
-            f"{math.degrees(roll):.0f} deg where the linear model no longer holds; the run "
-            "stopped there"
-        )
-    return (
-        f"the speed left the model's range at t = {t:.3f} s: {speed:.5g} m/s, outside "
-        f"{low:g} to {high:g} m/s (the virtual rider's schedule and the linearisation about "
-        "forward running); the run stopped there"
-    )

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.sim.rider import SPEED_RANGE
+from motosim.timeseries import TimeSeries
 
 __all__ = [
     "BUZZ_CUTOFF",
@@ -25,6 +26,7 @@ __all__ = [
     "failure",
     "highpass",
     "run_metrics",
+    "stop_reason",
     "validity_limits",
     "warnings",
 ]
@@ -254,6 +256,37 @@ def failure(metrics: dict[str, float]) -> str | None:
             "the time"
         )
     return None
+
+
+def stop_reason(run: TimeSeries, limits: tuple[float, float, float]) -> str:
+    """Why a run stopped at its last row, in one line: the roll or the speed beyond ``limits``.
+
+    Parameters
+    ----------
+    run : TimeSeries
+        A run stopped by :func:`motosim.sim.simulate`'s ``stop_outside``; it has ``phi``
+        [rad] and ``v_x`` [m/s].
+    limits : tuple of float
+        The ``stop_outside`` it ran with (:func:`validity_limits`).
+
+    Returns
+    -------
+    str
+        The reason, with the time and the value.
+    """
+    t, phi, speed = float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1])
+    roll, low, high = limits
+    if abs(phi) > roll:
+        return (
+            f"the motorcycle fell at t = {t:.3f} s: roll {math.degrees(phi):.1f} deg, beyond "
+            f"{math.degrees(roll):.0f} deg where the linear model no longer holds; the run "
+            "stopped there"
+        )
+    return (
+        f"the speed left the model's range at t = {t:.3f} s: {speed:.5g} m/s, outside "
+        f"{low:g} to {high:g} m/s (the virtual rider's schedule and the linearisation about "
+        "forward running); the run stopped there"
+    )
 
 
 def warnings(metrics: dict[str, float]) -> list[str]:
