@@ -48,10 +48,19 @@ tuning's ``otolith_weight`` and ``angle_weight`` for roll and yaw, ``surge_weigh
 ``pitch_angle_weight`` for pitch, whose tilt follows the perceived longitudinal force rather
 than the washout's tilt). ``r_c`` and ``r_o`` are the vehicle's perceived
 rate and specific force predicted by the same vestibular models from their present state,
-with the motorcycle's present motion fading as ``exp(-t / prediction_time)``: the future of
-the ride is unknown, and holding a lean rate over the horizon would have the plan spread the
-platform's travel evenly over it (the least-squares optimum of a held rate against an angle
-limit), rolling at ``X / (N h)`` instead of reproducing the onset. The vehicle's angular
+each input predicted as a held part plus a part fading as ``exp(-t / prediction_time)``.
+The angular velocities and the longitudinal force fade entirely: the future of the ride is
+unknown, and holding a lean rate over the horizon would have the plan spread the platform's
+travel evenly over it (the least-squares optimum of a held rate against an angle limit),
+rolling at ``X / (N h)`` instead of reproducing the onset. The lateral force at the head
+is split by its cause (:mod:`motosim.cueing.head`: ``f_y = a_y cos(phi) - g sin(phi) + h
+phi_ddot + ...`` with ``h`` the head's height above the roll axis, the ground): the
+tangential acceleration ``h phi_ddot`` of a roll onset fades with the roll rate, and the
+rest, the turn's imbalance (a gust's side force, a lean that does not match the turn), is
+held. ``phi_ddot`` is the backward difference of the roll rate over the loop period. A
+force held over the whole horizon would have the plan answer every roll onset's transient
+with a sustained tilt, and a faded one would have it ignore a gust's sustained force (the
+measurements behind these choices are in docs/guide/cueing.md). The vehicle's angular
 velocity is turned into the rate each axis must give with the head-frame kinematics of
 :mod:`motosim.cueing.head` and the other axes' present state: ``q = theta_dot cos(phi) +
 psi_dot sin(phi) cos(theta)`` means a rolled platform that yaws already gives pitch rate,
