@@ -57,7 +57,8 @@ is split by its cause (:mod:`motosim.cueing.head`: ``f_y = a_y cos(phi) - g sin(
 phi_ddot + ...`` with ``h`` the head's height above the roll axis, the ground): the
 tangential acceleration ``h phi_ddot`` of a roll onset fades with the roll rate, and the
 rest, the turn's imbalance (a gust's side force, a lean that does not match the turn), is
-held. ``phi_ddot`` is the backward difference of the roll rate over the loop period. A
+held. ``phi_ddot`` is the backward difference of the roll rate over the loop period; its
+noise only moves force between the two parts, whose sum is the present force exactly. A
 force held over the whole horizon would have the plan answer every roll onset's transient
 with a sustained tilt, and a faded one would have it ignore a gust's sustained force (the
 measurements behind these choices are in docs/guide/cueing.md). The vehicle's angular

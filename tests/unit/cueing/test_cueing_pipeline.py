@@ -180,3 +180,33 @@ def test_mpc_feeds_the_pitch_onset_through_in_the_same_step() -> None:
     target = mpc.step(np.array([0.0, rate, 0.0, 0.0, 0.0]), onset[0], onset)
     assert target[1] == pytest.approx(rate * 0.01, rel=0.05)
     assert mpc.rates[1] == pytest.approx(rate, rel=0.1)
+
+
+def test_mpc_on_abrupt_and_noisy_motion_stays_finite_and_within_limits() -> None:
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.limits import apply_limits, design_limits
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+    from motosim.cueing.vestibular import limit_margins
+
+    # steps, white noise and square waves of 3 rad/s and 15 m/s^2 on every input: the roll
+    # acceleration the plan differences from the roll rate is then huge and noisy; the
+    # targets stay finite and, through the limit manager with the planned rates fed
+    # forward, within every limit
+    cfg = load_platform("simacom_platform")
+    design = design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01)
+    rng = np.random.default_rng(13)
+    t = np.arange(300) * 0.01
+    for s in (
+        np.where(t > 0.5, 3.0, 0.0),
+        3.0 * rng.standard_normal(t.size),
+        3.0 * np.sign(np.sin(4.0 * np.pi * t)),
+    ):
+        mpc = MpcCueing(design)
+        motion = np.column_stack([s, 0.3 * s[::-1], -s, 5.0 * s, 5.0 * s[::-1]])
+        targets, rates = np.empty((t.size, 3)), np.empty((t.size, 3))
+        for k in range(t.size):
+            targets[k] = mpc.step(motion[k], np.zeros(3))
+            rates[k] = mpc.rates
+        assert np.all(np.isfinite(targets)) and np.all(np.isfinite(rates))
+        limited = apply_limits(design_limits(cfg.platform, 0.01), targets, rates)
+        assert limit_margins(cfg.platform, limited, 0.01)[1] == 0
