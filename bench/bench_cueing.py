@@ -130,14 +130,16 @@ def _platform_stage(cfg: object) -> float:
 TRAINING = (
     "crosswind_30", "emergency_braking", "lane_change_20", "obstacle_avoidance_15", "slalom_10",
 )  # fmt: skip
-OTHERS = ("turn_30", "straight_50_gust")
+OTHERS = ("turn_30", "straight_50_gust", "lane_change_30", "slalom_15")
+"""Unseen checks: two scenarios of scenarios/ and two of bench/scenarios/ at other speeds."""
 
 
 def table(runs: str, thresholds: str = "telban") -> str:
     """Markdown table washout vs MPC on result folders ``runs/NAME`` of `motosim simulate`.
 
-    Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario,
-    then ``python bench/bench_cueing.py RUNS`` (``RUNS benson`` to score with the thresholds
+    Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario
+    (``bench/scenarios/NAME.toml`` for the last two of :data:`OTHERS`), then ``python
+    bench/bench_cueing.py RUNS`` (``RUNS benson`` to score with the thresholds
     of Benson et al. 1986, 1989; the MPC still plans with the default model's).
     """
     from pathlib import Path
@@ -149,8 +151,9 @@ def table(runs: str, thresholds: str = "telban") -> str:
     deg = 180 / np.pi
     lines = [
         "| scenario | algorithm | violations | false cues % | missing cues % | roll rate RMS "
-        "[deg/s] | pitch rate RMS [deg/s] | yaw rate RMS [deg/s] | lateral force RMS [m/s^2] |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "[deg/s] | pitch rate RMS [deg/s] | yaw rate RMS [deg/s] | lateral force RMS [m/s^2] "
+        "| longitudinal force RMS [m/s^2] |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name in (*TRAINING, *OTHERS):
         folder = Path(runs) / name
@@ -171,7 +174,8 @@ def table(runs: str, thresholds: str = "telban") -> str:
             lines.append(
                 f"| {label} | {algorithm} | {s.violations} | {false:.1f} | {missing:.1f} | "
                 f"{ch['roll'].rms_error * deg:.2f} | {ch['pitch'].rms_error * deg:.2f} | "
-                f"{ch['yaw'].rms_error * deg:.2f} | {ch['sway'].rms_error:.2f} |"
+                f"{ch['yaw'].rms_error * deg:.2f} | {ch['sway'].rms_error:.2f} | "
+                f"{ch['surge'].rms_error:.2f} |"
             )
     return "\n".join(lines)
 

@@ -48,10 +48,20 @@ tuning's ``otolith_weight`` and ``angle_weight`` for roll and yaw, ``surge_weigh
 ``pitch_angle_weight`` for pitch, whose tilt follows the perceived longitudinal force rather
 than the washout's tilt). ``r_c`` and ``r_o`` are the vehicle's perceived
 rate and specific force predicted by the same vestibular models from their present state,
-with the motorcycle's present motion fading as ``exp(-t / prediction_time)``: the future of
-the ride is unknown, and holding a lean rate over the horizon would have the plan spread the
-platform's travel evenly over it (the least-squares optimum of a held rate against an angle
-limit), rolling at ``X / (N h)`` instead of reproducing the onset. The vehicle's angular
+each input predicted as a held part plus a part fading as ``exp(-t / prediction_time)``.
+The angular velocities and the longitudinal force fade entirely: the future of the ride is
+unknown, and holding a lean rate over the horizon would have the plan spread the platform's
+travel evenly over it (the least-squares optimum of a held rate against an angle limit),
+rolling at ``X / (N h)`` instead of reproducing the onset. The lateral force at the head
+is split by its cause (:mod:`motosim.cueing.head`: ``f_y = a_y cos(phi) - g sin(phi) + h
+phi_ddot + ...`` with ``h`` the head's height above the roll axis, the ground): the
+tangential acceleration ``h phi_ddot`` of a roll onset fades with the roll rate, and the
+rest, the turn's imbalance (a gust's side force, a lean that does not match the turn), is
+held. ``phi_ddot`` is the backward difference of the roll rate over the loop period; its
+noise only moves force between the two parts, whose sum is the present force exactly. A
+force held over the whole horizon would have the plan answer every roll onset's transient
+with a sustained tilt, and a faded one would have it ignore a gust's sustained force (the
+measurements behind these choices are in docs/guide/cueing.md). The vehicle's angular
 velocity is turned into the rate each axis must give with the head-frame kinematics of
 :mod:`motosim.cueing.head` and the other axes' present state: ``q = theta_dot cos(phi) +
 psi_dot sin(phi) cos(theta)`` means a rolled platform that yaws already gives pitch rate,
@@ -110,9 +120,9 @@ class AxisPlan:
         QP Hessian.
     F : ndarray, shape (N, nx)
         Linear term per unit initial state.
-    G_canal, G_otolith : ndarray, shape (N, n + 1)
+    G_canal, G_otolith : ndarray, shape (N, n + 2)
         The vehicle's predicted perception at steps 1..N per unit vestibular state and
-        present input (fading over the horizon).
+        present input's held and fading parts.
     W_canal, W_otolith : ndarray, shape (N, N)
         Linear term per unit predicted perception, with the minus sign.
     G_angle : ndarray, shape (N,)
@@ -132,6 +142,10 @@ class AxisPlan:
         The banded prediction steps of the rotation and of the force (roll and pitch).
     limits : tuple of float
         ``(X, V, A)``.
+    head_height : float
+        Height [m] of the rider's head above the motorcycle's roll axis (the ground) for the
+        roll plan, whose lateral force has a part ``head_height * roll acceleration`` that
+        fades; 0 for pitch and yaw.
     """
 
     A_loop: Array
@@ -154,6 +168,7 @@ class AxisPlan:
     band_lin: Array
     band_steps: tuple[NDArray[np.intp], ...]
     limits: tuple[float, float, float]
+    head_height: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,18 +200,19 @@ def _discrete(A: Array, B: Array, dt: float) -> tuple[Array, Array]:
 
 
 def _vehicle_prediction(A: Array, B: Array, C: Array, h: float, N: int, tau: float) -> Array:
-    """Outputs at steps 1..N of a model from state x driven by ``w(t) = w0 exp(-t / tau)``:
-    (N, n + 1) map of ``[x, w0]``."""
+    """Outputs at steps 1..N of a model from state x driven by ``w(t) = w_h + w_f exp(-t /
+    tau)`` (a held part and a fading part): (N, n + 2) map of ``[x, w_h, w_f]``."""
     from scipy.linalg import expm
 
     n = A.shape[0]
-    M = np.zeros((n + 1, n + 1))
+    M = np.zeros((n + 2, n + 2))
     M[:n, :n] = A
     M[:n, n] = B
-    M[n, n] = -1.0 / tau
+    M[:n, n + 1] = B
+    M[n + 1, n + 1] = -1.0 / tau
     E = expm(M * h)
-    out = np.zeros((N, n + 1))
-    power = np.eye(n + 1)
+    out = np.zeros((N, n + 2))
+    power = np.eye(n + 2)
     for k in range(N):
         power = E @ power
         out[k] = C @ power[:n]
@@ -314,6 +330,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         band_lin=np.concatenate(band_lin),
         band_steps=tuple(band_steps),
         limits=(limits.angle, rate, limits.accel),
+        head_height=config.rider.height if axis == 0 else 0.0,
     )
 
 
@@ -376,6 +393,7 @@ class MpcCueing:
         self._canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
         self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
         self._feed = np.zeros(3)
+        self._roll_rate = math.nan  # the last step's roll rate, for the roll acceleration
         self._feed_canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
         self._maps = [self._stack(plan) for plan in design.axes]
         self.fallbacks = 0
@@ -428,12 +446,13 @@ class MpcCueing:
     def _stack(plan: AxisPlan) -> tuple[Array, Array, int, int]:
         """One matrix from ``v = [x0, xc, w_c, xo, w_o, xf, w_f, ref]`` (plan state, vehicle
         canal and otolith states and inputs, fed-through onset's canal state and rate,
-        angle reference) to ``[q_u, r_b, pred, free]``, and one to the next ``[xc, xo, xf]``."""
+        angle reference; each input as its held and fading parts) to ``[q_u, r_b, pred,
+        free]``, and one to the next ``[xc, xo, xf]``."""
         N = plan.P.shape[0]
         nx = plan.A_loop.shape[0]
         nc = plan.vehicle_canal[0].shape[0]
         no = plan.vehicle_otolith[0].shape[0]
-        c, o, f, r = nx, nx + nc + 1, nx + nc + no + 2, nx + 2 * nc + no + 3
+        c, o, f, r = nx, nx + nc + 2, nx + nc + no + 4, nx + 2 * nc + no + 6
         rows_c, rows_o = (*plan.band_steps, np.arange(0))[:2]
         nb, nr = plan.band_M.shape[0], rows_c.size
         K = np.zeros((N + nb + 2 * N + nb, r + 1))
@@ -448,9 +467,11 @@ class MpcCueing:
         K[3 * N + nb : 3 * N + nb + nr, f:r] = plan.G_canal[rows_c]
         (Ac, Bc), (Ao, Bo) = plan.vehicle_canal, plan.vehicle_otolith
         U = np.zeros((2 * nc + no, r + 1))
-        U[:nc, c : c + nc], U[:nc, c + nc] = Ac, Bc
-        U[nc : nc + no, o : o + no], U[nc : nc + no, o + no] = Ao, Bo
-        U[nc + no :, f : f + nc], U[nc + no :, f + nc] = Ac, Bc
+        U[:nc, c : c + nc], U[:nc, c + nc], U[:nc, c + nc + 1] = Ac, Bc, Bc
+        U[nc : nc + no, o : o + no], U[nc : nc + no, o + no], U[nc : nc + no, o + no + 1] = (
+            Ao, Bo, Bo,
+        )  # fmt: skip
+        U[nc + no :, f : f + nc], U[nc + no :, f + nc], U[nc + no :, f + nc + 1] = Ac, Bc, Bc
         return K, U, nc, no
 
     @staticmethod
@@ -471,6 +492,7 @@ class MpcCueing:
         """Back to neutral rest, vestibular states at zero."""
         for x in (*self._state, *self._canal, *self._otolith, self._feed, *self._feed_canal):
             x[:] = 0.0
+        self._roll_rate = math.nan
 
     def step(self, motion: Array, reference: Array, onset: Array | None = None) -> Array:
         """One loop step.
@@ -515,9 +537,15 @@ class MpcCueing:
             if onset is not None:
                 w_c -= float(onset[1, j])
             K, U, nc, no = self._maps[j]
+            held, fading = 0.0, w_o  # the otolith input's parts (module docstring)
+            if j == 0:
+                alpha = (w_c - self._roll_rate) / self.design.dt
+                self._roll_rate = w_c
+                fading = plan.head_height * alpha if math.isfinite(alpha) else 0.0
+                held = w_o - fading
             v = np.concatenate(
-                [x0, self._canal[j], (w_c,), self._otolith[j], (w_o,), self._feed_canal[j],
-                 (feed_rate,), (reference[j] - feed,)]
+                [x0, self._canal[j], (0.0, w_c), self._otolith[j], (held, fading),
+                 self._feed_canal[j], (0.0, feed_rate), (reference[j] - feed,)]
             )  # fmt: skip
             y = K @ v
             N = plan.P.shape[0]

@@ -211,8 +211,10 @@ class MpcTuning:
         not perceived as a rotation (the tilt-coordination rate limit of the washout).
     prediction_time : float
         Time constant [s] of the vehicle motion's predicted decay over the horizon: the
-        motorcycle's present angular velocity and specific force are assumed to fade as
-        ``exp(-t / prediction_time)`` (a lean rate does not last: the lean is bounded).
+        motorcycle's present angular velocity, longitudinal force and the roll-acceleration
+        part of its lateral force are assumed to fade as ``exp(-t / prediction_time)`` (a
+        lean rate does not last: the lean is bounded); the rest of the lateral force is held
+        (see :mod:`motosim.cueing.mpc`).
     surge_weight : float
         The otolith weight of the pitch axis (longitudinal specific force, the cue of tilt
         coordination); ``otolith_weight`` is that of the roll axis (lateral force).

@@ -12,8 +12,9 @@ The numbers (:data:`TELBAN_CARDULLO_2005`): canal ``tau_L`` = 5.73 s (cupula lon
 constant), ``tau_S`` = 0.005 s, ``tau_a`` = 80 s (adaptation); otolith ``K`` = 0.4, ``tau_a``
 = 13.2 s, ``tau_L`` = 5.33 s, ``tau_S`` = 0.66 s, the otolith form being that of Young &
 Meiry, *A revised dynamic otolith model*, Aerospace Medicine 39(6), 1968; thresholds roll
-3.0, pitch 3.6, yaw 2.6 deg/s and 0.17 m/s^2 in x and y, the task-level values Telban &
-Cardullo tabulate after Reid & Nahon (1985). The primary laboratory measurements are lower:
+3.0, pitch 3.6, yaw 2.6 deg/s and 0.17 m/s^2 in x and y, the task-level values quoted from
+Telban & Cardullo after Reid & Nahon (1985) (not checked against either report: see
+:data:`THRESHOLD_ROLL`). The primary laboratory measurements are lower:
 Benson, Hutt & Brown (1989) roll 2.04, pitch 2.07, yaw 1.5 deg/s; Benson, Spencer & Stott
 (1986) 0.063 and 0.057 m/s^2 (:data:`BENSON_1986_1989`); each constant cites its source.
 The same canal long and adaptation time constants (5.7 s, 80 s) are those of the observer
@@ -116,8 +117,13 @@ _D = math.pi / 180.0
 # Perception thresholds, each beside its source. Rotation thresholds are on the angular
 # velocity [rad/s], specific-force thresholds on the force [m/s^2].
 THRESHOLD_ROLL = 3.0 * _D
-"""Roll rate [rad/s]: Telban & Cardullo (2005), table of vestibular thresholds, after Reid &
-Nahon (1985), UTIAS Report 296 (a task-level value; not checked against either text here)."""
+"""Roll rate [rad/s]: the value quoted from Telban & Cardullo (2005) after Reid & Nahon
+(1985), UTIAS Report 296. Not checked: neither report could be consulted for this package,
+and no primary text giving these numbers was found; they are a task-level (pilot in the
+loop) value, consistent in kind with Samji & Reid, *The detection of low-amplitude yawing
+motion transients in a flight simulator*, IEEE Trans. Syst. Man Cybern. 22(2):300-306,
+1992 (abstract: detection levels rise significantly when the pilot controls the simulator
+instead of observing), and 1.5 to 3 times the laboratory values of :data:`BENSON_ROLL`."""
 THRESHOLD_PITCH = 3.6 * _D
 """Pitch rate [rad/s]: same table as :data:`THRESHOLD_ROLL`."""
 THRESHOLD_YAW = 2.6 * _D

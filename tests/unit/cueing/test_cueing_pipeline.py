@@ -61,11 +61,13 @@ def test_mpc_rests_at_neutral_and_refuses_a_slow_loop() -> None:
 def test_mpc_vehicle_prediction_fades_with_its_time_constant() -> None:
     from motosim.cueing.mpc import _vehicle_prediction
 
-    # an integrator 1/s driven by w0 exp(-t / tau) reaches w0 tau (1 - exp(-t / tau))
+    # an integrator 1/s driven by w_h + w_f exp(-t / tau) reaches w_h t + w_f tau (1 -
+    # exp(-t / tau)): the held part integrates to a ramp, the fading part saturates
     tau, h, N = 0.3, 0.05, 20
     out = _vehicle_prediction(np.zeros((1, 1)), np.ones(1), np.ones(1), h, N, tau)
     t = h * np.arange(1, N + 1)
-    np.testing.assert_allclose(out[:, 1], tau * (1 - np.exp(-t / tau)), rtol=1e-9)
+    np.testing.assert_allclose(out[:, 1], t, rtol=1e-9)
+    np.testing.assert_allclose(out[:, 2], tau * (1 - np.exp(-t / tau)), rtol=1e-9)
     np.testing.assert_allclose(out[:, 0], 1.0)  # the state itself is held by 1/s
 
 
@@ -93,6 +95,33 @@ def test_mpc_rolls_faster_with_a_fading_prediction_than_with_a_held_one() -> Non
             rates.append(mpc.rates[0])
         peaks.append(np.degrees(max(rates)))
     assert peaks[0] > 23.0 and peaks[0] > peaks[1] + 3.0
+
+
+def test_mpc_holds_a_sustained_lateral_force_and_lets_a_roll_transient_fade() -> None:
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+
+    # a gust's side force of 1 m/s^2 at the head, no rotation: predicted held, it tilts the
+    # platform to give it (f_y = -g sin(phi_s)), measured -0.67 deg after 3 s; the previous
+    # design, which predicted it to fade in 0.15 s, tilted -0.18 deg
+    cfg = load_platform("simacom_platform")
+    design = design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01)
+    mpc = MpcCueing(design)
+    for _ in range(300):
+        roll = mpc.step(np.array([0.0, 0.0, 0.0, 0.0, 1.0]), np.zeros(3))[0]
+    assert np.degrees(roll) < -0.5
+    # a roll onset (20 deg/s for 0.3 s) whose lateral force is only the head's tangential
+    # acceleration h phi_ddot: that part fades, so the roll is not held afterwards (measured
+    # 4.3 deg at 0.7 s, 0.09 deg at 3 s, as with a fading prediction: 4.3 and 0.06 deg)
+    mpc = MpcCueing(design)
+    t = np.arange(0.0, 3.0, 0.01)
+    rate = np.radians(20.0) * np.clip(np.minimum(t / 0.2, (0.7 - t) / 0.2), 0.0, 1.0)
+    alpha = np.gradient(rate, 0.01)
+    rolls = [
+        mpc.step(np.array([w, 0.0, 0.0, 0.0, cfg.rider.height * a]), np.zeros(3))[0]
+        for w, a in zip(rate, alpha, strict=True)
+    ]
+    assert np.degrees(max(rolls)) > 4.0 and abs(np.degrees(rolls[-1])) < 0.2
 
 
 def test_mpc_false_cue_constraint_keeps_an_unprompted_roll_below_threshold() -> None:
@@ -125,7 +154,8 @@ def test_mpc_force_false_cue_band_holds_back_a_sustained_roll() -> None:
 
     # the motorcycle still, the angle reference at 10 deg of roll: the tilt's lateral force
     # g sin(10 deg) = 1.7 m/s^2 is ten times the 0.17 m/s^2 threshold, a false cue the band
-    # weighs; measured 3.6 deg after 3 s with the band against 7.9 deg without
+    # weighs; measured 5.9 deg after 3 s with the band (weight 0.5 of the platform file)
+    # against 7.9 deg without
     cfg = load_platform("simacom_platform")
     free = dataclasses.replace(cfg, mpc=dataclasses.replace(cfg.mpc, force_false_cue_weight=0.0))
     final = []
@@ -134,7 +164,7 @@ def test_mpc_force_false_cue_band_holds_back_a_sustained_roll() -> None:
         for _ in range(300):
             roll = mpc.step(np.zeros(5), np.array([np.radians(10.0), 0.0, 0.0]))[0]
         final.append(np.degrees(roll))
-    assert final[0] < 0.6 * final[1]
+    assert final[0] < 0.8 * final[1]
 
 
 def test_mpc_feeds_the_pitch_onset_through_in_the_same_step() -> None:
@@ -150,3 +180,33 @@ def test_mpc_feeds_the_pitch_onset_through_in_the_same_step() -> None:
     target = mpc.step(np.array([0.0, rate, 0.0, 0.0, 0.0]), onset[0], onset)
     assert target[1] == pytest.approx(rate * 0.01, rel=0.05)
     assert mpc.rates[1] == pytest.approx(rate, rel=0.1)
+
+
+def test_mpc_on_abrupt_and_noisy_motion_stays_finite_and_within_limits() -> None:
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.limits import apply_limits, design_limits
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+    from motosim.cueing.vestibular import limit_margins
+
+    # steps, white noise and square waves of 3 rad/s and 15 m/s^2 on every input: the roll
+    # acceleration the plan differences from the roll rate is then huge and noisy; the
+    # targets stay finite and, through the limit manager with the planned rates fed
+    # forward, within every limit
+    cfg = load_platform("simacom_platform")
+    design = design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01)
+    rng = np.random.default_rng(13)
+    t = np.arange(300) * 0.01
+    for s in (
+        np.where(t > 0.5, 3.0, 0.0),
+        3.0 * rng.standard_normal(t.size),
+        3.0 * np.sign(np.sin(4.0 * np.pi * t)),
+    ):
+        mpc = MpcCueing(design)
+        motion = np.column_stack([s, 0.3 * s[::-1], -s, 5.0 * s, 5.0 * s[::-1]])
+        targets, rates = np.empty((t.size, 3)), np.empty((t.size, 3))
+        for k in range(t.size):
+            targets[k] = mpc.step(motion[k], np.zeros(3))
+            rates[k] = mpc.rates
+        assert np.all(np.isfinite(targets)) and np.all(np.isfinite(rates))
+        limited = apply_limits(design_limits(cfg.platform, 0.01), targets, rates)
+        assert limit_margins(cfg.platform, limited, 0.01)[1] == 0
