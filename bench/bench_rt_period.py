@@ -27,7 +27,7 @@ from motosim.params import load_parameters
 from motosim.rt.ring import SampleRing
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits, SafetyStage
-from motosim.rt.stack import CompiledStack
+from motosim.rt.stack import CompiledStack, compiled
 from motosim.rt.telemetry import StateSender
 from motosim.sim import build_stack, parse_scenario, prepare
 from motosim.sim.stack import new_data, reset
@@ -128,8 +128,9 @@ def _pieces(n: int) -> dict[str, np.ndarray]:
     codecs = handlebar_codecs()
     stack = _stack()
     stack.reset(0.0, 0.0)
-    model, fast_step = stack.model, stack._step  # the same kernel, two ways to call it
+    model = stack.model
     data, data2 = new_data(model), new_data(model)  # each from the same start
+    fast_step = compiled(sim_step, model, data2, 0.0, 0.0, 0.0, 0.0, 0.0)  # the same kernel
     reset(model, data, 0.0, 0.0)
     reset(model, data2, 0.0, 0.0)
     safety = SafetyStage(LIMITS, dt=1e-3)

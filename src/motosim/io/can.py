@@ -279,7 +279,7 @@ def codec_table(codec: FrameCodec) -> NDArray[np.float64]:
         length = mask.bit_length()
         if length > 63:
             raise MotosimError(
-                f"signal {codec.names[i]}: {length} bits; expected at most 63 for the compiled codec"
+                f"signal {codec.names[i]}: {length} bits; expected at most 63 (compiled codec)"
             )
         table[i + 1, :7] = (start, length, 1.0 if sign else 0.0, scale, offset, lo, hi)
     return table
@@ -362,6 +362,12 @@ _KEY_DATA = tuple(b"data")
 
 
 @njit(cache=True)
+def _byte(buf: NDArray[np.uint8], at: int) -> int:
+    """The byte at ``at`` as a signed integer (numba's ``int`` of a uint8 is unsigned)."""
+    return int(np.int64(buf[at]))
+
+
+@njit(cache=True)
 def _is_key(buf: NDArray[np.uint8], pos: int, length: int, key: tuple[int, ...]) -> bool:
     if length != len(key):
         return False
@@ -374,7 +380,7 @@ def _is_key(buf: NDArray[np.uint8], pos: int, length: int, key: tuple[int, ...])
 @njit(cache=True)
 def _msgpack_size(buf: NDArray[np.uint8], pos: int, end: int) -> tuple[int, int]:
     """(header size, payload size) of the msgpack scalar at ``pos`` (-1, 0: not one)."""
-    c = np.int64(buf[pos])
+    c = _byte(buf, pos)
     if c < 0x80 or c >= 0xE0 or c == 0xC0 or c == 0xC2 or c == 0xC3:
         return 1, 0
     if 0xA0 <= c <= 0xBF:  # fixstr
@@ -388,9 +394,9 @@ def _msgpack_size(buf: NDArray[np.uint8], pos: int, end: int) -> tuple[int, int]
     if c == 0xCF or c == 0xD3 or c == 0xCB:
         return 1, 8
     if (c == 0xD9 or c == 0xC4) and pos + 1 < end:  # str8, bin8
-        return 2, np.int64(buf[pos + 1])
+        return 2, _byte(buf, pos + 1)
     if (c == 0xDA or c == 0xC5) and pos + 2 < end:  # str16, bin16
-        return 3, (np.int64(buf[pos + 1]) << 8) | np.int64(buf[pos + 2])
+        return 3, (_byte(buf, pos + 1) << 8) | _byte(buf, pos + 2)
     return -1, 0
 
 
@@ -405,12 +411,12 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
     pos = start
     if length < 1:
         return -1, 0, 0, 0
-    c = np.int64(buf[pos])
+    c = _byte(buf, pos)
     if 0x80 <= c <= 0x8F:
         entries = c & 0x0F
         pos += 1
     elif c == 0xDE and length >= 3:
-        entries = (np.int64(buf[pos + 1]) << 8) | np.int64(buf[pos + 2])
+        entries = (_byte(buf, pos + 1) << 8) | _byte(buf, pos + 2)
         pos += 3
     else:
         return -1, 0, 0, 0
@@ -420,7 +426,7 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
         if pos >= end:
             return -1, 0, 0, 0
         head, size = _msgpack_size(buf, pos, end)
-        c = np.int64(buf[pos])
+        c = _byte(buf, pos)
         if head < 0 or not (0xA0 <= c <= 0xBF or c == 0xD9):  # keys are strings
             return -1, 0, 0, 0
         key, key_length = pos + head, size
@@ -430,7 +436,7 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
         head, size = _msgpack_size(buf, pos, end)
         if head < 0 or pos + head + size > end:
             return -1, 0, 0, 0
-        c = np.int64(buf[pos])
+        c = _byte(buf, pos)
         value = pos + head
         if _is_key(buf, key, key_length, _KEY_ID):
             if c < 0x80:
@@ -438,7 +444,7 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
             elif 0xCC <= c <= 0xCF:
                 frame_id = 0
                 for j in range(size):
-                    frame_id = (frame_id << 8) | np.int64(buf[value + j])
+                    frame_id = (frame_id << 8) | _byte(buf, value + j)
             else:
                 return -1, 0, 0, 0
         elif _is_key(buf, key, key_length, _KEY_ERROR) or _is_key(
@@ -775,6 +781,48 @@ class UdpMulticastLink:
             self.errors += 1
             return False
         return True
+
+    def datagram(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
+        """python-can's packed bytes of a frame, data zero, and where its data bytes start:
+        write the data there and send the array with :meth:`send_datagram` (the fused
+        period of :mod:`motosim.rt.fused` encodes its command frame in place)."""
+        before, after = self._template(frame_id, length)
+        packed = np.frombuffer(before + bytes(length) + after, dtype=np.uint8).copy()
+        return packed, len(before)
+
+    def send_datagram(self, datagram: Any) -> bool:
+        """Send a datagram made by :meth:`datagram`; False (``errors`` + 1) if refused."""
+        try:
+            self._out.sendto(datagram, self._dest)
+        except OSError:
+            self.errors += 1
+            return False
+        return True
+
+    def receive_datagrams(
+        self, views: Sequence[Any], lengths: NDArray[np.int64], start: int
+    ) -> int:
+        """Read the datagrams waiting (non-blocking) into ``views[start:]`` (writable buffers,
+        e.g. memoryviews of an array's rows), their sizes into ``lengths``; the index after
+        the last one read. :func:`unpack_frame` reads them."""
+        poll = self._poll.poll
+        recv_into = self._sock.recv_into
+        n = start
+        limit = len(views)
+        while n < limit and poll(0):
+            try:
+                lengths[n] = recv_into(views[n])
+            except BlockingIOError:
+                break
+            except OSError:
+                self.errors += 1
+                break
+            n += 1
+        return n
+
+    def readable(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` [s] for a datagram; whether one is waiting."""
+        return bool(self._select([self._sock], (), (), timeout)[0])
 
     def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
         """The next received frame as ``(frame_id, data)``, or None if none came in ``timeout``.

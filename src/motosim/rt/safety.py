@@ -316,9 +316,9 @@ def safety_step(
         s[S_MISSING] += 1.0
         if s[S_MISSING] >= p[P_WATCHDOG] and s[S_STATE] != 0.0:
             safety_trip(s, 1)  # WATCHDOG
-    if not (
-        math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)
-    ) or math.isinf(tau_hat):
+    if not (math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)) or math.isinf(
+        tau_hat
+    ):
         safety_trip(s, 2)  # NON_FINITE
     elif abs(theta) > p[P_HARD_STOP]:
         safety_trip(s, 7)  # END_STOP
@@ -367,7 +367,7 @@ def safety_step(
     last = s[S_LAST]
     i = min(max(i, last - step), last + step)
     s[S_LAST] = i
-    return i
+    return float(i)
 
 
 class SafetyStage:

@@ -134,7 +134,9 @@ def test_udp_multicast_datagrams_are_read_as_python_can_packs_them(
     datagram = np.frombuffer(b"xx" + pack_message(message), dtype=np.uint8)
     kind, got, start, length = unpack_frame(datagram, 2, datagram.size - 2)
     assert (kind, got, datagram[start : start + length].tobytes()) == (
-        0 if error else 1, frame_id, payload
+        0 if error else 1,
+        frame_id,
+        payload,
     )
     assert unpack_frame(datagram, 2, datagram.size - 3)[0] == -1  # cut short
     assert unpack_frame(np.frombuffer(b"\x93\x01\x02\x03", np.uint8), 0, 4)[0] == -1
