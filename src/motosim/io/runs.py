@@ -43,6 +43,7 @@ __all__ = [
     "load_run",
     "load_scenario",
     "parameter_source",
+    "range_reason",
     "read_road",
     "resolve",
     "run_to_folder",
@@ -230,7 +231,18 @@ def run_to_folder(
 
 def _stop_reason(run: TimeSeries, limits: tuple[float, float, float]) -> str:
     """Why a run stopped at its last row: the roll or the speed beyond ``limits``, and when."""
-    t, phi, speed = float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1])
+    return range_reason(float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1]), limits)
+
+
+def range_reason(t: float, phi: float, speed: float, limits: tuple[float, float, float]) -> str:
+    """Why a run stopped at time ``t`` [s] with roll ``phi`` [rad] and speed ``speed`` [m/s]
+    beyond ``limits`` (:func:`motosim.sim.metrics.validity_limits`), in one line.
+
+    Examples
+    --------
+    >>> range_reason(2.5, 0.9, 20.0, (0.785, 3.0, 60.0)).split(",")[0]
+    'the motorcycle fell at t = 2.500 s: roll 51.6 deg'
+    """
     roll, low, high = limits
     if abs(phi) > roll:
         return (

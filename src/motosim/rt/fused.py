@@ -14,7 +14,9 @@ does (see :mod:`motosim.rt.run`):
    valid status frame, an arm request;
 3. the stack (:func:`~motosim.rt.stack.stack_reset` on the start,
    :func:`~motosim.rt.stack.stack_period`);
-4. :func:`finish`: the safety stage (:func:`~motosim.rt.safety.safety_step`), the command
+4. :func:`finish`: the virtual motorcycle's range (a fall, a speed outside the model's: the
+   torque fades out and the run ends, as offline), the safety stage
+   (:func:`~motosim.rt.safety.safety_step`), the command
    frame and, every ``heartbeat_every`` periods, the heartbeat frame encoded
    (:func:`~motosim.io.can.encode_frame`) in place in the bytes to send; the row written into
    the ring's next slot (its head is advanced by the runner once the time stamps of the
@@ -41,6 +43,7 @@ from motosim.rt.safety import (
     S_STATE,
     safety_enable,
     safety_estop_frame,
+    safety_request_stop,
     safety_status_frame,
     safety_step,
     safety_trip,
@@ -63,16 +66,20 @@ Ints = NDArray[np.int64]
 (
     R_T0, R_THETA, R_CURRENT, R_PREV_THETA, R_STARTED, R_FRESH, R_STOP, R_FINISHING, R_ARMED,
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
-    R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS,
-) = range(22)  # fmt: skip
-RUNNER_STATE_SIZE = 22
+    R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
+    R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
+) = range(31)  # fmt: skip
+RUNNER_STATE_SIZE = 31
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
 the angle of the period before, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
 status frames received, datagrams that were no frames; then its settings: periods to linger
 after a fault, the ``NO_DRIVE`` timeout [periods], periods between heartbeats, the period
 [s], where the stack's row holds the torque estimate and the handlebar rate (-1: nowhere),
-and whether the received frames are python-can datagrams (1) or id, length and bytes (0)."""
+whether the received frames are python-can datagrams (1) or id, length and bytes (0); the
+virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]), where the
+stack's row holds its roll and speed (-1: nowhere); and whether, when (since the first
+deadline [s]), at which roll [rad] and speed [m/s] the motorcycle left that range."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -225,6 +232,18 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
         omega = 0.0
     r[R_PREV_THETA] = theta_now
     tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
+    phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
+    if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
+        phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
+        if abs(phi) > r[R_ROLL] or speed < r[R_SPEED_LOW] or speed > r[R_SPEED_HIGH]:
+            # the motorcycle fell or left the model's speeds: the run ends as offline, the
+            # torque faded out as at the end of its duration
+            r[R_LEFT] = 1.0
+            r[R_LEFT_T] = t - r[R_T0]
+            r[R_LEFT_PHI] = phi
+            r[R_LEFT_SPEED] = speed
+            r[R_FINISHING] = 1.0
+            safety_request_stop(s)
     theta = theta_now if started else 0.0
     out = safety_step(s, a.limits, command, theta, omega, tau_hat, t - r[R_T0])
     state = s[S_STATE]

@@ -160,6 +160,11 @@ class RealtimeRunner:
         The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
     handlebar : HandlebarParameters, optional
         The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
+    validity : tuple of float, optional
+        The virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]:
+        :func:`motosim.sim.metrics.validity_limits`), read from the stack's ``phi`` and
+        ``v_x``: beyond it the torque fades out and the run ends, as offline ``simulate``
+        stops there; :attr:`left_range` says why. Without it the run goes on.
     """
 
     def __init__(
@@ -181,6 +186,7 @@ class RealtimeRunner:
         now: Callable[[], float] | None = None,
         clock: Clock | None = None,
         handlebar: HandlebarParameters | None = None,
+        validity: tuple[float, float, float] | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -200,6 +206,9 @@ class RealtimeRunner:
         self._arrays = self._allocate(stepper, link, codecs, rate, linger, start_timeout)
         self._r = self._arrays.runner
         self._r[fused.R_ARMED] = 0.0 if wait_for_arm else 1.0
+        self._validity = validity
+        if validity is not None:
+            self._r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = validity
         self._views = [memoryview(row) for row in self._arrays.rx]
         self._datagrams = isinstance(link, UdpMulticastLink)
         self._fused = isinstance(stepper, CompiledStack)
@@ -243,6 +252,9 @@ class RealtimeRunner:
         r[fused.R_S_TAU] = names.index("tau_r_hat") if "tau_r_hat" in names else -1
         r[fused.R_S_RATE] = names.index("theta_h_dot_hat") if "theta_h_dot_hat" in names else -1
         r[fused.R_DATAGRAMS] = 1.0 if isinstance(link, UdpMulticastLink) else 0.0
+        r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = (math.inf, -math.inf, math.inf)
+        r[fused.R_S_PHI] = names.index("phi") if "phi" in names else -1
+        r[fused.R_S_SPEED] = names.index("v_x") if "v_x" in names else -1
         safety, limits = self.safety.arrays
         ring, head = self.ring.arrays
         if isinstance(stepper, CompiledStack):
@@ -323,6 +335,26 @@ class RealtimeRunner:
         another thread. Ignored after a stop request or a fault.
         """
         self._r[fused.R_ARM_REQUEST] = 1.0
+
+    @property
+    def left_range(self) -> str | None:
+        """Why the run stopped early because the virtual motorcycle fell or its speed left the
+        model's (one line, with the time), or None."""
+        r = self._r
+        if not r[fused.R_LEFT] or self._validity is None:
+            return None
+        from motosim.io.runs import range_reason
+
+        return range_reason(
+            float(r[fused.R_LEFT_T]), float(r[fused.R_LEFT_PHI]), float(r[fused.R_LEFT_SPEED]),
+            self._validity,
+        )  # fmt: skip
+
+    @property
+    def left_range_time(self) -> float:
+        """When the motorcycle left its range [s since the first deadline] (NaN if not)."""
+        r = self._r
+        return float(r[fused.R_LEFT_T]) if r[fused.R_LEFT] else math.nan
 
     @property
     def stop_requested(self) -> bool:
