@@ -88,7 +88,7 @@ class StateSender:
             ) from None
         self._buffer = np.zeros(2 + width, dtype="<f8")
         self._index = self._buffer[:1].view("<u8")
-        self._bytes = memoryview(self._buffer).cast("B")
+        self._bytes = self._buffer.data.cast("B")
         self._send = self._socket.send
         self.dropped = 0
 
