@@ -6,9 +6,10 @@ period the drive sends a status frame, then the loop's period runs
 the frames, steps the stack and the safety stage, encodes the command and writes the row
 into the ring, then send the command). The pieces (the Python codec and safety stage that
 the compiled call replaces among them) are timed alone the same number of times. Everything
-is measured twice in the same run: with the python-can ``CanLink`` (every frame a ``can.Message``, packed and unpacked by python-can: the
-"before") and with :class:`motosim.io.can.UdpMulticastLink` (python-can's socket and wire
-format, no message objects: the "after"), and the ratios are printed.
+is measured twice in the same run: with the python-can ``CanLink`` (every frame a
+``can.Message``, packed and unpacked by python-can: the "before") and with
+:class:`motosim.io.can.UdpMulticastLink` (python-can's socket and wire format, no message
+objects: the "after"), and the ratios are printed.
 
 Run alone: ``python bench/bench_rt_period.py [--periods 3000]``; the load average is printed
 with the figures (on a shared machine the absolute numbers move with it, the ratios less).
