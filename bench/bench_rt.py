@@ -4,9 +4,13 @@ Three measurements, each with the privileges this machine grants (SCHED_FIFO, CP
 mlockall: applied as root, refused otherwise, and reported):
 
 1. ``rt-check``: an empty 1 kHz loop for 10 s (what the scheduler alone adds);
-2. the stack step as the loop calls it (:class:`motosim.rt.stack.CompiledStack`, from
-   Python) against its offline speed (``motosim simulate``: the whole closed loop compiled,
-   plant included, per period) -- the loop must not make the step slower;
+2. the period's compiled work called as the loop calls it, once per period from Python,
+   against the same compiled work in a compiled loop over the same recorded status frames
+   (the same commands sent, checked): the fused period (:func:`motosim.rt.fused.fused_period`:
+   frame decoded, safety stage, stack, command encoded, row kept) and the stack's period
+   alone (:func:`motosim.rt.stack.stack_period`); what the ratio shows is the cost of calling
+   compiled code from Python (numba unboxing the stack's records on every call); with the
+   offline closed loop's period (``motosim simulate``, plant included) for reference;
 3. ``motosim run`` at 1 kHz (status frames at 1 kHz) against ``motosim rig`` in another
    process over ``udp_multicast`` for 60 s, and at 100 Hz (control and status) for 20 s,
    each with python-can's link (``--link python-can``: the "before") and with the fast link
@@ -32,15 +36,21 @@ import tempfile
 import time
 import tomllib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numba import njit
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER
+from motosim.io.can import handlebar_codecs
 from motosim.params import load_parameters
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
+from motosim.rt.config import parse_safety
+from motosim.rt.fused import PeriodArrays, fused_period
 from motosim.rt.privileges import apply_privileges
-from motosim.rt.stack import CompiledStack
+from motosim.rt.run import RealtimeRunner
+from motosim.rt.stack import CompiledStack, stack_period
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests" / "integration"))
@@ -76,7 +86,53 @@ def _us(seconds: float) -> float:
     return round(seconds * 1e6, 1)
 
 
-def _stack_speed() -> dict[str, float]:
+class _Quiet:
+    """A link that sends nowhere and receives nothing (the frames are given to the period)."""
+
+    errors = 0
+
+    def send(self, frame_id: int, data: bytes) -> bool:
+        return True
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        return None
+
+
+@njit(cache=False)
+def _replay(
+    model: Any, data: Any, force: Any, side: Any, state: Any, a: PeriodArrays,
+    frames: Any, status_id: int, sent: Any, first: int, end: int,
+) -> None:  # fmt: skip
+    """The fused period over recorded status frames, in a compiled loop (the "offline" way)."""
+    for k in range(first, end):
+        a.rx[0, : frames.shape[1]] = frames[k]
+        a.rx_length[0] = frames.shape[1]
+        a.rx_id[0] = status_id
+        fused_period(model, data, force, side, state, a, 1, k, k * 1e-3, np.nan, np.nan)
+        a.ring_head[0] += 1
+        sent[k] = a.command_frame
+
+
+@njit(cache=False)
+def _steps(
+    model: Any, data: Any, force: Any, side: Any, state: Any, row: Any, theta: Any, first: int,
+    end: int,
+) -> None:  # fmt: skip
+    """The stack's period over recorded angles, in a compiled loop."""
+    for k in range(first, end):
+        stack_period(model, data, force, side, state, row, theta[k], 0.0)
+
+
+CHUNK = 50
+"""Periods timed together in the compiled loops (a period's own time is below the clock's
+resolution and overhead)."""
+
+
+def _stack_speed(n: int = 20_000) -> dict[str, float]:
+    """The same compiled work called once per period from Python (as the loop does) and in
+    a compiled loop over the same recorded inputs: the fused period (frame decoded, safety
+    stage, stack, command encoded, row kept) and the stack's period alone; with the offline
+    closed loop's period (``motosim simulate``, plant included) for reference."""
     text = SCENARIO.format(duration=10.0, control=1000.0) + safety_table(3)
     data = {k: v for k, v in tomllib.loads(text).items() if k != "realtime"}
     sc = parse_scenario(data, origin="bench")
@@ -89,21 +145,79 @@ def _stack_speed() -> dict[str, float]:
     start = time.perf_counter()
     simulate(inputs, rng=np.random.default_rng(0))
     offline = (time.perf_counter() - start) / 10_000
-    stack = CompiledStack(build_stack(inputs))
-    stack.reset(0.0, 0.0)
-    n = 20_000
+    model = build_stack(inputs)
+    codecs = handlebar_codecs()
+    limits = parse_safety(tomllib.loads(safety_table(3))["realtime"]["safety"], origin="bench")
+    st = codecs.status
+    values = np.zeros(len(st.names))
     theta = 0.01 * np.sin(np.arange(n) * 1e-3 * 6.0)
+    frames = np.zeros((n, st.length), dtype=np.uint8)
+    for k in range(n):  # the drive's status frames: a steered handlebar, counter moving
+        values[codecs.position(st, "angle")] = theta[k]
+        values[codecs.position(st, "counter")] = k & 0xF
+        frames[k] = np.frombuffer(st.encode(values), dtype=np.uint8)
+
+    def runner() -> RealtimeRunner:
+        return RealtimeRunner(CompiledStack(model), _Quiet(), codecs, limits, rate=1000.0,
+                              capacity=1 << 12, handlebar=hb)  # fmt: skip
+
+    one, loop = runner(), runner()  # the same start
+    kernel = one._kernel
+    assert kernel is not None
+    args, a = one._stack_args, one._arrays
     times = np.empty(n)
+    sent = np.zeros((n, a.command_frame.size), dtype=np.uint8)
     clock = time.perf_counter
+    nan = float("nan")
     for k in range(n):
-        a = clock()
+        a.rx[0, : st.length] = frames[k]
+        a.rx_length[0] = st.length
+        a.rx_id[0] = st.frame_id
+        t0 = clock()
+        kernel(*args, a, 1, k, k * 1e-3, nan, nan)
+        times[k] = clock() - t0
+        a.ring_head[0] += 1
+        sent[k] = a.command_frame
+    replayed = np.zeros_like(sent)
+    _replay(*loop._stack_args, loop._arrays, frames, st.frame_id, replayed, 0, 10)  # compile
+    loop = runner()
+    chunks = np.empty(n // CHUNK)  # per period, from the time of CHUNK periods in a row
+    for j in range(chunks.size):
+        t0 = clock()
+        _replay(*loop._stack_args, loop._arrays, frames, st.frame_id, replayed,
+                j * CHUNK, (j + 1) * CHUNK)  # fmt: skip
+        chunks[j] = (clock() - t0) / CHUNK
+    assert np.array_equal(sent, replayed), "the two ways sent different commands"
+    stack = CompiledStack(model)
+    stack.reset(0.0, 0.0)
+    step_times = np.empty(n)
+    for k in range(n):
+        t0 = clock()
         stack.step(float(theta[k]), 0.0)
-        times[k] = clock() - a
+        step_times[k] = clock() - t0
+    other = CompiledStack(model)
+    args2 = (other.model, other.data, other.force, other.side_force, other.state, other.row())
+    _steps(*args2, theta, 0, 10)
+    other.reset(0.0, 0.0)
+    step_chunks = np.empty(n // CHUNK)
+    for j in range(step_chunks.size):
+        t0 = clock()
+        _steps(*args2, theta, j * CHUNK, (j + 1) * CHUNK)
+        step_chunks[j] = (clock() - t0) / CHUNK
+    p50, c50 = float(np.median(times)), float(np.median(chunks))
+    s50, sc50 = float(np.median(step_times)), float(np.median(step_chunks))
     return {
-        "offline_period_us (whole loop, compiled)": _us(offline),
-        "loop_stack_step_p50_us": _us(float(np.percentile(times, 50))),
-        "loop_stack_step_p99_us": _us(float(np.percentile(times, 99))),
-        "loop_over_offline_p50": round(float(np.percentile(times, 50)) / offline, 2),
+        "offline closed-loop period (simulate, plant included) us": _us(offline),
+        "fused period from Python, per period p50 us": _us(p50),
+        "fused period from Python, per period p99 us": _us(float(np.percentile(times, 99))),
+        "fused period in a compiled loop, p50 us": _us(c50),
+        "fused period: from Python / compiled loop, p50": round(p50 / c50, 2),
+        "fused period: from Python / compiled loop, mean": round(
+            float(np.mean(times) / np.mean(chunks)), 2
+        ),
+        "stack period from Python p50 us": _us(s50),
+        "stack period in a compiled loop, p50 us": _us(sc50),
+        "stack period: from Python / compiled loop, p50": round(s50 / sc50, 2),
     }
 
 
@@ -206,7 +320,12 @@ if __name__ == "__main__":
     parser.add_argument("--seconds", type=float, default=60.0, help="1 kHz run length [s]")
     parser.add_argument("--quick", action="store_true", help="only the fast link at 1 kHz")
     parser.add_argument("--bus", default=BUS, help=f"the bus of the runs (default {BUS})")
+    parser.add_argument("--stack-only", action="store_true", help="only the in-loop/offline speed")
     args = parser.parse_args()
     BUS = args.bus
+    if args.stack_only:
+        for key, value in _stack_speed().items():
+            print(f"  {key:<52} {value}")
+        sys.exit(0)
     for key, value in run(args.seconds, quick=args.quick).items():
         print(f"  {key:<52} {value}")

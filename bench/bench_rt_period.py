@@ -2,12 +2,14 @@
 
 One process, two ends of python-can's ``udp_multicast`` bus (the loop's and a drive's): each
 period the drive sends a status frame, then the loop's period runs
-(:meth:`motosim.rt.run.RealtimeRunner.period`: read the bus, step the compiled stack, the
-safety stage, encode and send the command, push a row to the ring). The pieces are timed
-alone the same number of times. Everything is measured twice in the same run: with the
-python-can ``CanLink`` (every frame a ``can.Message``, packed and unpacked by python-can: the
-"before") and with :class:`motosim.io.can.UdpMulticastLink` (python-can's socket and wire
-format, no message objects: the "after"), and the ratios are printed.
+(:meth:`motosim.rt.run.RealtimeRunner.period`: read the bus, one compiled call that decodes
+the frames, steps the stack and the safety stage, encodes the command and writes the row
+into the ring, then send the command). The pieces (the Python codec and safety stage that
+the compiled call replaces among them) are timed alone the same number of times. Everything
+is measured twice in the same run: with the python-can ``CanLink`` (every frame a
+``can.Message``, packed and unpacked by python-can: the "before") and with
+:class:`motosim.io.can.UdpMulticastLink` (python-can's socket and wire format, no message
+objects: the "after"), and the ratios are printed.
 
 Run alone: ``python bench/bench_rt_period.py [--periods 3000]``; the load average is printed
 with the figures (on a shared machine the absolute numbers move with it, the ratios less).
@@ -27,7 +29,7 @@ from motosim.params import load_parameters
 from motosim.rt.ring import SampleRing
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits, SafetyStage
-from motosim.rt.stack import CompiledStack
+from motosim.rt.stack import CompiledStack, compiled
 from motosim.rt.telemetry import StateSender
 from motosim.sim import build_stack, parse_scenario, prepare
 from motosim.sim.stack import new_data, reset
@@ -128,8 +130,9 @@ def _pieces(n: int) -> dict[str, np.ndarray]:
     codecs = handlebar_codecs()
     stack = _stack()
     stack.reset(0.0, 0.0)
-    model, fast_step = stack.model, stack._step  # the same kernel, two ways to call it
+    model = stack.model
     data, data2 = new_data(model), new_data(model)  # each from the same start
+    fast_step = compiled(sim_step, model, data2, 0.0, 0.0, 0.0, 0.0, 0.0)  # the same kernel
     reset(model, data, 0.0, 0.0)
     reset(model, data2, 0.0, 0.0)
     safety = SafetyStage(LIMITS, dt=1e-3)

@@ -198,6 +198,39 @@ def test_ctrl_c_fades_the_torque_out_and_closes_the_files(
     assert np.all(tail <= envelope * 10.0 + 1e-9)
 
 
+FALLING = SCENARIO.replace(
+    'profile = { kind = "square", low = -3.0, high = 3.0, period = 1.0, start = 0.2 }',
+    'profile = { kind = "constant", value = 10.0 }',
+).replace("duration = 2.0", "duration = 8.0")
+
+
+@pytest.mark.parametrize("rig", [FALLING], indirect=True)
+def test_a_fall_fades_the_torque_out_and_ends_the_run_with_exit_3(
+    rig: tuple[Path, object], tmp_path: Path
+) -> None:
+    # A constant 10 N*m at the handlebar: offline, the motorcycle passes 45 deg of roll at
+    # 3.45 s (motosim simulate, seed 0) and the run stops there, exit 3, its files closed
+    # and flagged; the real-time run does the same, the torque faded out.
+    path, _ = rig
+    out = tmp_path / "run"
+    proc = _motosim("run", str(path), "--bus", BUS, "--out", str(out), "--no-report")
+    _, stderr = proc.communicate(timeout=180)
+    assert proc.returncode == 3, stderr
+    last = stderr.strip().splitlines()[-1]
+    assert last.startswith("motosim: run failed: rt_cli: the motorcycle fell at t = "), stderr
+    assert "deg, beyond 45 deg" in last and f"the result is in {out}, flagged" in last
+    fell = float(last.split("fell at t = ")[1].split(" s")[0])
+    result = load_result(out)  # closed whole, not partial
+    assert 2.0 < fell < 6.0 and result.t[-1] < 8.0
+    assert result.summary["complete"] == 0.0 and result.summary["flag_fall"] == 1.0
+    assert "fell at t" in result.summary["failure"]
+    after = result.t >= fell
+    assert after.sum() == pytest.approx(500, abs=5)  # the 0.5 s fade-out, then the end
+    assert result["i_m"][-1] == 0.0
+    envelope = np.linspace(1.0, 0.0, after.sum() + 1)[1:]
+    assert np.all(np.abs(result["i_m"][after]) <= envelope * 10.0 + 0.02)
+
+
 LANE_CHANGE = (
     SCENARIO.replace(
         'kind = "torque"\nprofile = { kind = "square", low = -3.0, high = 3.0, period = 1.0,'

@@ -21,7 +21,7 @@ from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
 from motosim.rt.rig import RigSettings, VirtualRig
 from motosim.rt.run import RealtimeRunner
-from motosim.rt.safety import SafetyLimits
+from motosim.rt.safety import SafetyLimits, State
 from motosim.rt.stack import CompiledStack
 from motosim.sim import build_rig, build_stack, parse_scenario, prepare, simulate
 
@@ -176,3 +176,138 @@ def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
     # the lateral position follows the offline run's within 0.1 m
     assert offline["y"][-1] == pytest.approx(3.5, abs=0.3)
     assert np.max(np.abs(y - offline["y"])) < 0.1
+
+
+class _StackInPython:
+    """A :class:`CompiledStack` behind the stepper protocol without being one: the runner
+    then takes its frames, starts and finishes each period in three compiled calls around
+    the stack's ``step`` instead of its one fused call."""
+
+    def __init__(self, stack: CompiledStack) -> None:
+        self.stack = stack
+        self.names = stack.names
+
+    def reset(self, theta: float, current: float) -> None:
+        self.stack.reset(theta, current)
+
+    def step(self, theta_meas: float, i_meas: float) -> float:
+        return self.stack.step(theta_meas, i_meas)
+
+    def row(self) -> np.ndarray:
+        return self.stack.row()
+
+
+def _run_both_ways(fused: bool, rate: float = 1000.0) -> tuple[RealtimeRunner, np.ndarray]:
+    inputs = _inputs(rate)
+    sc = inputs.scenario  # type: ignore[attr-defined]
+    model = build_stack(inputs)  # type: ignore[arg-type]
+    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
+    limits = SafetyLimits(  # limits that bind: slew, speed, clamp, hands-off, a 0.5 s fade
+        max_current=0.1, max_slew=400.0, max_speed=1.0, speed_band=2.0, soft_stop=0.05,
+        hard_stop=5.0, end_stop_gain=20.0, hands_off_torque=0.5, hands_off_time=0.05,
+        hands_off_gain=0.5,
+    )  # fmt: skip
+    settings = RigSettings(
+        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
+        encoder_bits=sc.measurement.encoder_bits, current_noise=0.01,
+        max_current=sc.controller.max_current,
+    )  # fmt: skip
+    codecs = handlebar_codecs()
+    channel = f"virtual:rt_fused_{fused}"
+    stack = CompiledStack(model, force=world.force, side_force=world.side_force)
+    stepper = stack if fused else _StackInPython(stack)
+    with open_link(channel) as host, open_link(channel) as drive:
+        rig = VirtualRig(
+            inputs.true_handlebar,  # type: ignore[attr-defined]
+            settings, codecs, drive, world.rider_profile, np.random.default_rng(0),
+            rider_on_enable=False,
+        )  # fmt: skip
+        clock = SimulatedClock(-1.0 / rate)
+        runner = RealtimeRunner(
+            stepper, host, codecs, limits, rate=rate, handlebar=inputs.nominal_handlebar,  # type: ignore[attr-defined]
+            now=clock.now,
+        )  # fmt: skip
+        clock.listen(rig.advance_to)
+
+        def period(k: int, t: float) -> bool:
+            if k == 1500:
+                runner.request_stop()  # a fade-out to the end
+            return runner.period(k, t)
+
+        RateLoop(rate, clock).run(period, periods=round(sc.duration * rate))
+    return runner, runner.ring.drain()
+
+
+def test_the_fused_period_is_the_period_around_a_python_stack() -> None:
+    # The same compiled pieces called as one (a CompiledStack) or three around a stack in
+    # Python give the same rows to the last bit, protections binding and a stop included.
+    fused, rows = _run_both_ways(True)
+    split, rows_split = _run_both_ways(False)
+    assert fused.fused and not split.fused
+    assert rows.shape == rows_split.shape and rows.shape[0] > 1600
+    assert np.array_equal(rows, rows_split, equal_nan=True)
+    col = {name: j for j, name in enumerate(fused.names)}
+    i_safe = rows[:, col["i_safe"]]
+    assert np.max(np.abs(i_safe)) == pytest.approx(0.1)  # the end stop spring, clamped
+    same = dataclasses.replace(fused.counters(), fault_time=0.0)  # NaN: no fault
+    assert same == dataclasses.replace(split.counters(), fault_time=0.0)
+    assert same.state == "IDLE" and same.fault == "NONE"
+
+
+@pytest.mark.parametrize(
+    ("validity", "reason", "fade"),
+    [  # a roll of 2 mrad taken as a fall, once the torque is on: a whole fade-out of 0.1 s
+        ((0.002, 3.0, 60.0), "the motorcycle fell at t = ", 100),
+        # 20 m/s above 19 m/s on the first period, the torque not on yet: it ends at once
+        ((0.785, 3.0, 19.0), "the speed left the model's range at t = ", 1),
+    ],
+)
+def test_leaving_the_models_range_fades_the_torque_out_and_ends_the_run(
+    validity: tuple[float, float, float], reason: str, fade: int
+) -> None:
+    # As offline simulate stops at a fall or a speed out of range, the real-time run does:
+    # the safety stage fades the torque out over its fade_in, then the run ends (no fault).
+    rate = 1000.0
+    inputs = _inputs(rate)
+    sc = inputs.scenario  # type: ignore[attr-defined]
+    model = build_stack(inputs)  # type: ignore[arg-type]
+    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
+    limits = dataclasses.replace(_limits(rate), fade_in=0.1)
+    settings = RigSettings(
+        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
+        encoder_bits=sc.measurement.encoder_bits, current_noise=0.0,
+        max_current=sc.controller.max_current,
+    )  # fmt: skip
+    codecs = handlebar_codecs()
+    channel = f"virtual:rt_range_{validity[0]}"
+    with open_link(channel) as host, open_link(channel) as drive:
+        rig = VirtualRig(
+            inputs.true_handlebar,  # type: ignore[attr-defined]
+            settings, codecs, drive, world.rider_profile, np.random.default_rng(0),
+            rider_on_enable=False,
+        )  # fmt: skip
+        clock = SimulatedClock(-1.0 / rate)
+        runner = RealtimeRunner(
+            CompiledStack(model, force=world.force, side_force=world.side_force),
+            host, codecs, limits, rate=rate, now=clock.now, validity=validity,
+        )  # fmt: skip
+        clock.listen(rig.advance_to)
+        n = round(sc.duration * rate)
+        RateLoop(rate, clock).run(runner.period, periods=n)
+    rows = runner.ring.drain()
+    col = {name: j for j, name in enumerate(runner.names)}
+    t, phi, speed = rows[:, col["t"]], rows[:, col["phi"]], rows[:, col["v_x"]]
+    outside = (np.abs(phi) > validity[0]) | (speed < validity[1]) | (speed > validity[2])
+    first = int(np.argmax(outside))
+    assert outside[first] and rows.shape[0] < n  # it left the range, and the run ended early
+    message = runner.left_range
+    assert message is not None and message.startswith(reason) and "\n" not in message
+    assert runner.left_range_time == t[first] and f"t = {t[first]:.3f} s" in message
+    i_safe, state = rows[:, col["i_safe"]], rows[:, col["state"]]
+    # the fade-out from that period, then IDLE with zero torque: the end
+    assert rows.shape[0] - first == pytest.approx(fade, abs=1)
+    assert state[first] == (State.STOPPING if fade > 1 else State.IDLE)
+    assert state[-1] == State.IDLE and i_safe[-1] == 0.0
+    envelope = np.clip(1.0 - (np.arange(rows.shape[0] - first) + 1) / 100.0, 0.0, 1.0)
+    assert np.all(np.abs(i_safe[first:]) <= envelope * np.max(np.abs(rows[:, col["i_cmd"]])) + 1e-9)
+    assert runner.counters().fault == "NONE" and not runner.stop_requested

@@ -43,7 +43,7 @@ from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
 from motosim.sim import build_stack, prepare, simulate
-from motosim.sim.metrics import run_metrics, stop_reason, validity_limits
+from motosim.sim.metrics import range_reason, run_metrics, validity_limits
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
@@ -249,7 +249,9 @@ def _run_one(
         return "failed", str(err), math.nan if err.time is None else err.time, nan, None
     values = _metrics(ts, task.metrics)
     if ts.t.size < round(scenario.duration * scenario.rates.control):
-        return "failed", stop_reason(ts, limits), float(ts.t[-1]), values, ts
+        t_end = float(ts.t[-1])
+        reason = range_reason(t_end, float(ts["phi"][-1]), float(ts["v_x"][-1]), limits)
+        return "failed", reason, t_end, values, ts
     found = dict(zip(task.metrics, values, strict=True))
     beyond = [f"{k} = {found[k]:.4g} > {v:g}" for k, v in task.limits if not found[k] <= v]
     if beyond:

@@ -33,7 +33,7 @@ from motosim.sim import (
     parse_scenario,
     run_metadata,
 )
-from motosim.sim.metrics import run_metrics
+from motosim.sim.metrics import run_metrics, validity_limits
 from motosim.sim.scenario import implausible
 
 if TYPE_CHECKING:
@@ -339,9 +339,11 @@ def _writer_main(
             )
             summary |= extra
             summary["ring_dropped"] = float(ring.dropped)
-            if not complete:  # stopped or faulted: files closed, marked incomplete
-                # the writer's "run interrupted" warning would name this exception and the
-                # staging folder; motosim run says itself where the partial result is
+            if not complete and "failure" not in extra:
+                # stopped or faulted: files closed, marked incomplete (a fall is closed whole
+                # and flagged with its failure, as offline); the writer's "run interrupted"
+                # warning would name this exception and the staging folder; motosim run says
+                # itself where the partial result is
                 logging.getLogger("motosim.io.results").addFilter(
                     lambda record: not record.getMessage().startswith("run interrupted by")
                 )
@@ -446,6 +448,7 @@ def run(args: argparse.Namespace) -> int:
             now=clock.now,
             clock=clock,
             handlebar=inputs.nominal_handlebar,
+            validity=validity_limits(sc.motorcycle.speed),
         )
         metadata = run_metadata(inputs) | {
             "realtime": {
@@ -524,6 +527,12 @@ def run(args: argparse.Namespace) -> int:
                 "motorcycle fell behind the wall clock; check this PC with motosim rt-check "
                 "and give --fifo 80 --cpu 1 --mlock (see the README's lab set-up)"
             )
+    reason = runner.left_range
+    if counters.fault == "NONE" and reason is not None:
+        raise RunFailedError(
+            f"{sc.name}: {reason}; the result is in {folder}, flagged",
+            time=runner.left_range_time,
+        )
     if counters.fault == "NONE" and runner.stop_requested:
         print(f"motosim run: stopped, torque faded out; result in {folder}", file=sys.stderr)
         return 130
@@ -669,7 +678,9 @@ def _loop(
             thaw_gc()
         stats = loop.stats()
         complete = complete and runner.safety.fault.name == "NONE"
-        extra = {f"rt_{key}": float(value) for key, value in stats.as_dict().items()}
+        extra: dict[str, Any] = {f"rt_{k}": float(v) for k, v in stats.as_dict().items()}
+        if runner.left_range is not None and runner.safety.fault.name == "NONE":
+            extra["failure"] = runner.left_range  # the motorcycle fell: flagged, as offline
         ours.send(("close", complete, extra))
         if not ours.poll(120.0):
             raise MotosimError(f"{folder}: the result writer did not finish")

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
@@ -48,12 +49,16 @@ __all__ = [
     "SignalLayout",
     "UdpMulticastLink",
     "check_bus",
+    "codec_table",
     "crc8_sae_j1850",
+    "decode_frame",
+    "encode_frame",
     "handlebar_codecs",
     "load_dbc",
     "open_link",
     "packaged_dbc",
     "platform_codecs",
+    "unpack_frame",
 ]
 
 
@@ -68,6 +73,7 @@ def _crc_table() -> tuple[int, ...]:
 
 
 _CRC8 = _crc_table()
+_CRC8_TABLE = np.array(_CRC8, dtype=np.uint8)
 
 
 def crc8_sae_j1850(data: bytes | bytearray, crc: int = 0xFF) -> int:
@@ -250,6 +256,211 @@ class FrameCodec:
         if self.checksum_index < 0:
             return True
         return self._crc(raw) == (raw >> self._checksum_shift) & 0xFF
+
+
+def codec_table(codec: FrameCodec) -> NDArray[np.float64]:
+    """The codec as the array the compiled :func:`encode_frame` and :func:`decode_frame` read.
+
+    Row 0: frame id, length [bytes], checksum index (-1: none), checksum bit, the CRC of the
+    frame id's two bytes, counter index (-1: none); then one row per signal: start bit,
+    length [bits], signed (0/1), scale, offset, lowest and highest raw value.
+
+    Raises
+    ------
+    MotosimError
+        For a signal of 64 bits (the compiled codec works on 63-bit raw values).
+    """
+    table = np.zeros((len(codec.names) + 1, 8))
+    table[0, :6] = (
+        codec.frame_id, codec.length, codec.checksum_index, codec._checksum_shift,
+        codec._id_crc, codec.counter_index,
+    )  # fmt: skip
+    for i, (start, mask, sign, _wrap, scale, offset, lo, hi) in enumerate(codec._fields):
+        length = mask.bit_length()
+        if length > 63:
+            raise MotosimError(
+                f"signal {codec.names[i]}: {length} bits; expected at most 63 (compiled codec)"
+            )
+        table[i + 1, :7] = (start, length, 1.0 if sign else 0.0, scale, offset, lo, hi)
+    return table
+
+
+@njit(cache=True)
+def _table_crc(table: NDArray[np.float64], raw: np.uint64) -> int:
+    """CRC-8/SAE-J1850 of the frame id and the frame ``raw`` (checksum bits zeroed)."""
+    crc = int(table[0, 4])
+    for b in range(int(table[0, 1])):
+        byte = int((raw >> np.uint64(8 * b)) & np.uint64(0xFF))
+        crc = int(_CRC8_TABLE[crc ^ byte])
+    return crc ^ 0xFF
+
+
+@njit(cache=True)
+def decode_frame(
+    table: NDArray[np.float64],
+    data: NDArray[np.uint8],
+    start: int,
+    length: int,
+    out: NDArray[np.float64],
+) -> bool:
+    """:meth:`FrameCodec.decode`, compiled: the frame ``data[start:start + length]``.
+
+    ``table`` is :func:`codec_table`'s; False (``out`` unchanged) on a wrong length, False
+    (``out`` written) on a wrong checksum.
+    """
+    if length != int(table[0, 1]):
+        return False
+    raw = np.uint64(0)
+    for b in range(length):
+        raw |= np.uint64(data[start + b]) << np.uint64(8 * b)
+    for i in range(table.shape[0] - 1):
+        f = table[i + 1]
+        bits = int(f[1])
+        mask = (np.uint64(1) << np.uint64(bits)) - np.uint64(1)
+        r = np.int64((raw >> np.uint64(int(f[0]))) & mask)
+        if f[2] != 0.0 and (r >> np.int64(bits - 1)) & np.int64(1):
+            r -= np.int64(1) << np.int64(bits)
+        out[i] = r * f[3] + f[4]
+    if table[0, 2] < 0.0:
+        return True
+    shift = np.uint64(int(table[0, 3]))
+    keep = ~(np.uint64(0xFF) << shift)
+    return _table_crc(table, raw & keep) == int((raw >> shift) & np.uint64(0xFF))
+
+
+@njit(cache=True)
+def encode_frame(
+    table: NDArray[np.float64], values: NDArray[np.float64], out: NDArray[np.uint8], start: int
+) -> None:
+    """:meth:`FrameCodec.encode`, compiled: the frame's bytes into ``out[start:]``.
+
+    Values saturate to each signal's range and round half to even, as Python's ``round``;
+    NaN encodes as raw 0; the checksum is computed.
+    """
+    raw = np.uint64(0)
+    for i in range(table.shape[0] - 1):
+        f = table[i + 1]
+        v = (values[i] - f[4]) / f[3]
+        r = np.int64(0)
+        if v == v:
+            r = np.int64(np.rint(min(max(v, f[5]), f[6])))
+        bits = np.int64(f[1])
+        mask = (np.int64(1) << bits) - np.int64(1)
+        raw |= np.uint64(r & mask) << np.uint64(int(f[0]))
+    if table[0, 2] >= 0.0:
+        shift = np.uint64(int(table[0, 3]))
+        keep = ~(np.uint64(0xFF) << shift)
+        raw = (raw & keep) | (np.uint64(_table_crc(table, raw & keep)) << shift)
+    for b in range(int(table[0, 1])):
+        out[start + b] = np.uint8((raw >> np.uint64(8 * b)) & np.uint64(0xFF))
+
+
+_KEY_ID = tuple(b"arbitration_id")
+_KEY_ERROR = tuple(b"is_error_frame")
+_KEY_REMOTE = tuple(b"is_remote_frame")
+_KEY_DATA = tuple(b"data")
+
+
+@njit(cache=True)
+def _byte(buf: NDArray[np.uint8], at: int) -> int:
+    """The byte at ``at`` as a signed integer (numba's ``int`` of a uint8 is unsigned)."""
+    return int(np.int64(buf[at]))
+
+
+@njit(cache=True)
+def _is_key(buf: NDArray[np.uint8], pos: int, length: int, key: tuple[int, ...]) -> bool:
+    if length != len(key):
+        return False
+    for j in range(length):
+        if buf[pos + j] != key[j]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _msgpack_size(buf: NDArray[np.uint8], pos: int, end: int) -> tuple[int, int]:
+    """(header size, payload size) of the msgpack scalar at ``pos`` (-1, 0: not one)."""
+    c = _byte(buf, pos)
+    if c < 0x80 or c >= 0xE0 or c == 0xC0 or c == 0xC2 or c == 0xC3:
+        return 1, 0
+    if 0xA0 <= c <= 0xBF:  # fixstr
+        return 1, c & 0x1F
+    if c == 0xCC or c == 0xD0:
+        return 1, 1
+    if c == 0xCD or c == 0xD1:
+        return 1, 2
+    if c == 0xCE or c == 0xD2 or c == 0xCA:
+        return 1, 4
+    if c == 0xCF or c == 0xD3 or c == 0xCB:
+        return 1, 8
+    if (c == 0xD9 or c == 0xC4) and pos + 1 < end:  # str8, bin8
+        return 2, _byte(buf, pos + 1)
+    if (c == 0xDA or c == 0xC5) and pos + 2 < end:  # str16, bin16
+        return 3, (_byte(buf, pos + 1) << 8) | _byte(buf, pos + 2)
+    return -1, 0
+
+
+@njit(cache=True)
+def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, int, int, int]:
+    """A python-can ``udp_multicast`` datagram (its ``pack_message``'s msgpack map), compiled.
+
+    Returns ``(kind, frame_id, data_start, data_length)``: kind 1 for a data frame, 0 for an
+    error or remote frame (to ignore), -1 for bytes that are not such a datagram.
+    """
+    end = start + length
+    pos = start
+    if length < 1:
+        return -1, 0, 0, 0
+    c = _byte(buf, pos)
+    if 0x80 <= c <= 0x8F:
+        entries = c & 0x0F
+        pos += 1
+    elif c == 0xDE and length >= 3:
+        entries = (_byte(buf, pos + 1) << 8) | _byte(buf, pos + 2)
+        pos += 3
+    else:
+        return -1, 0, 0, 0
+    frame_id, data_start, data_length = -1, 0, -1
+    flagged = False
+    for _ in range(entries):
+        if pos >= end:
+            return -1, 0, 0, 0
+        head, size = _msgpack_size(buf, pos, end)
+        c = _byte(buf, pos)
+        if head < 0 or not (0xA0 <= c <= 0xBF or c == 0xD9):  # keys are strings
+            return -1, 0, 0, 0
+        key, key_length = pos + head, size
+        pos = key + key_length
+        if pos >= end:
+            return -1, 0, 0, 0
+        head, size = _msgpack_size(buf, pos, end)
+        if head < 0 or pos + head + size > end:
+            return -1, 0, 0, 0
+        c = _byte(buf, pos)
+        value = pos + head
+        if _is_key(buf, key, key_length, _KEY_ID):
+            if c < 0x80:
+                frame_id = c
+            elif 0xCC <= c <= 0xCF:
+                frame_id = 0
+                for j in range(size):
+                    frame_id = (frame_id << 8) | _byte(buf, value + j)
+            else:
+                return -1, 0, 0, 0
+        elif _is_key(buf, key, key_length, _KEY_ERROR) or _is_key(
+            buf, key, key_length, _KEY_REMOTE
+        ):
+            flagged = flagged or c == 0xC3
+        elif _is_key(buf, key, key_length, _KEY_DATA):
+            if c != 0xC4 and c != 0xC5:
+                return -1, 0, 0, 0
+            data_start, data_length = value, size
+        pos = value + size
+    if frame_id < 0 or data_length < 0:
+        return -1, 0, 0, 0
+    if flagged:
+        return 0, frame_id, data_start, data_length
+    return 1, frame_id, data_start, data_length
 
 
 @dataclass(frozen=True, slots=True)
@@ -570,6 +781,48 @@ class UdpMulticastLink:
             self.errors += 1
             return False
         return True
+
+    def datagram(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
+        """python-can's packed bytes of a frame, data zero, and where its data bytes start:
+        write the data there and send the array with :meth:`send_datagram` (the fused
+        period of :mod:`motosim.rt.fused` encodes its command frame in place)."""
+        before, after = self._template(frame_id, length)
+        packed = np.frombuffer(before + bytes(length) + after, dtype=np.uint8).copy()
+        return packed, len(before)
+
+    def send_datagram(self, datagram: Any) -> bool:
+        """Send a datagram made by :meth:`datagram`; False (``errors`` + 1) if refused."""
+        try:
+            self._out.sendto(datagram, self._dest)
+        except OSError:
+            self.errors += 1
+            return False
+        return True
+
+    def receive_datagrams(
+        self, views: Sequence[Any], lengths: NDArray[np.int64], start: int
+    ) -> int:
+        """Read the datagrams waiting (non-blocking) into ``views[start:]`` (writable buffers,
+        e.g. memoryviews of an array's rows), their sizes into ``lengths``; the index after
+        the last one read. :func:`unpack_frame` reads them."""
+        poll = self._poll.poll
+        recv_into = self._sock.recv_into
+        n = start
+        limit = len(views)
+        while n < limit and poll(0):
+            try:
+                lengths[n] = recv_into(views[n])
+            except BlockingIOError:
+                break
+            except OSError:
+                self.errors += 1
+                break
+            n += 1
+        return n
+
+    def readable(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` [s] for a datagram; whether one is waiting."""
+        return bool(self._select([self._sock], (), (), timeout)[0])
 
     def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
         """The next received frame as ``(frame_id, data)``, or None if none came in ``timeout``.

@@ -34,7 +34,7 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
-from motosim.sim.metrics import failure, run_metrics, stop_reason, validity_limits
+from motosim.sim.metrics import failure, range_reason, run_metrics, validity_limits
 from motosim.sim.scenario import CsvProfile, OpenDrivePath, implausible
 from motosim.timeseries import TimeSeries
 
@@ -42,6 +42,7 @@ __all__ = [
     "load_run",
     "load_scenario",
     "parameter_source",
+    "range_reason",
     "read_road",
     "resolve",
     "run_to_folder",
@@ -209,7 +210,11 @@ def run_to_folder(
             summary: dict[str, Any] = run_metrics(
                 run.t, run.get, complete=not stopped, max_current=sc.controller.max_current
             )
-            reason = stop_reason(run, limits) if stopped else failure(summary)
+            reason = (
+                range_reason(float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1]), limits)
+                if stopped
+                else failure(summary)
+            )
             if reason is not None:
                 summary["failure"] = reason
             writer.close(summary)

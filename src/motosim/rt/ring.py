@@ -101,6 +101,13 @@ class SampleRing:
         """Rows pushed so far."""
         return int(self._counters[0])
 
+    @property
+    def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """The rows and the counters (rows written, rows read), for a producer that writes a
+        row in place (the fused period of :mod:`motosim.rt.fused`): it writes the slot
+        ``written % capacity``, then adds 1 to ``counters[0]``."""
+        return self._buf, self._counters
+
     def push(self, row: NDArray[np.float64]) -> None:
         """Copy ``row`` (``width`` values) into the next slot (the loop's side)."""
         counters = self._counters

@@ -32,11 +32,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.io.can import HandlebarCodecs
+from motosim.io.can import HandlebarCodecs, UdpMulticastLink, codec_table
 from motosim.params.handlebar import HandlebarParameters
+from motosim.rt import fused
 from motosim.rt.clock import Clock
+from motosim.rt.fused import PeriodArrays
 from motosim.rt.ring import SampleRing
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
+from motosim.rt.stack import CompiledStack, compiled
+from motosim.sim.metrics import range_reason
 
 if TYPE_CHECKING:
     from motosim.rt.platform import PlatformOutput
@@ -157,6 +161,11 @@ class RealtimeRunner:
         The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
     handlebar : HandlebarParameters, optional
         The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
+    validity : tuple of float, optional
+        The virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]:
+        :func:`motosim.sim.metrics.validity_limits`), read from the stack's ``phi`` and
+        ``v_x``: beyond it the torque fades out and the run ends, as offline ``simulate``
+        stops there; :attr:`left_range` says why. Without it the run goes on.
     """
 
     def __init__(
@@ -178,12 +187,12 @@ class RealtimeRunner:
         now: Callable[[], float] | None = None,
         clock: Clock | None = None,
         handlebar: HandlebarParameters | None = None,
+        validity: tuple[float, float, float] | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
         self.stepper = stepper
         self._now = now
-        self._calls = 0
         self.clock = clock
         self.telemetry = telemetry
         self.platform = platform
@@ -195,51 +204,119 @@ class RealtimeRunner:
         )
         self.names = LOOP_SIGNALS + tuple(stepper.names)
         self.ring = SampleRing(capacity, len(self.names), shared=shared_ring)
-        self._row = np.zeros(len(self.names))
-        self._n_loop = len(LOOP_SIGNALS)
-        st, cmd, es, hb = codecs.status, codecs.command, codecs.estop, codecs.heartbeat
-        self._status = np.zeros(len(st.names))
-        self._estop = np.zeros(len(es.names))
-        self._command = np.zeros(len(cmd.names))
-        self._heartbeat = np.zeros(len(hb.names))
-        self._ids = (st.frame_id, es.frame_id)
-        self._i_angle = codecs.position(st, "angle")
-        self._i_current = codecs.position(st, "current")
-        self._i_counter = codecs.position(st, "counter")
-        self._i_drive_fault = codecs.position(st, "drive_fault")
-        self._i_estop = codecs.position(es, "estop_signal")
-        self._c_current = codecs.position(cmd, "current_command")
-        self._c_enable = codecs.position(cmd, "enable")
-        self._c_counter = codecs.position(cmd, "counter")
-        self._h_state = codecs.position(hb, "state")
-        self._h_fault = codecs.position(hb, "fault")
-        self._h_counter = codecs.position(hb, "counter")
-        names = tuple(stepper.names)
-        self._s_tau = names.index("tau_r_hat") if "tau_r_hat" in names else -1
-        self._s_rate = names.index("theta_h_dot_hat") if "theta_h_dot_hat" in names else -1
-        self._heartbeat_every = max(1, round(0.1 * rate))
-        self._linger = max(1, round(linger * rate))
-        self._start_timeout = max(1, round(start_timeout * rate))
-        self._t0 = math.nan
-        self._theta = math.nan
-        self._current = math.nan
-        self._prev_theta = math.nan
-        self._started = False
-        self._fresh = False
-        self._stop = False
-        self._finishing = False
-        self._armed = not wait_for_arm
-        self._arm_request = False
-        self._after_fault = 0
-        self._sent = 0
-        self.status_frames = 0
+        self._arrays = self._allocate(stepper, link, codecs, rate, linger, start_timeout)
+        self._r = self._arrays.runner
+        self._r[fused.R_ARMED] = 0.0 if wait_for_arm else 1.0
+        self._validity = validity
+        if validity is not None:
+            self._r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = validity
+        self._views = [memoryview(row) for row in self._arrays.rx]
+        self._datagrams = isinstance(link, UdpMulticastLink)
+        self._fused = isinstance(stepper, CompiledStack)
+        self._bad_reported = 0
         self.send_errors = 0
+        self._compile()
+
+    def _allocate(
+        self,
+        stepper: StackStepper,
+        link: FrameLink,
+        codecs: HandlebarCodecs,
+        rate: float,
+        linger: float,
+        start_timeout: float,
+    ) -> PeriodArrays:
+        """Every array of the period (:class:`~motosim.rt.fused.PeriodArrays`)."""
+        st, cmd, es, hb = codecs.status, codecs.command, codecs.estop, codecs.heartbeat
+        if isinstance(link, UdpMulticastLink):
+            command_frame, command_at = link.datagram(cmd.frame_id, cmd.length)
+            heartbeat_frame, heartbeat_at = link.datagram(hb.frame_id, hb.length)
+        else:
+            command_frame, command_at = np.zeros(cmd.length, dtype=np.uint8), 0
+            heartbeat_frame, heartbeat_at = np.zeros(hb.length, dtype=np.uint8), 0
+        positions = np.zeros(fused.POSITIONS_SIZE, dtype=np.int64)
+        position = codecs.position
+        positions[:] = (
+            position(st, "angle"), position(st, "current"), position(st, "counter"),
+            position(st, "drive_fault"), position(es, "estop_signal"),
+            position(cmd, "current_command"), position(cmd, "enable"), position(cmd, "counter"),
+            position(hb, "state"), position(hb, "fault"), position(hb, "counter"),
+            command_at, heartbeat_at, len(LOOP_SIGNALS),
+        )  # fmt: skip
+        names = tuple(stepper.names)
+        r = np.zeros(fused.RUNNER_STATE_SIZE)
+        r[[fused.R_T0, fused.R_THETA, fused.R_CURRENT, fused.R_PREV_THETA]] = math.nan
+        r[fused.R_LINGER] = max(1, round(linger * rate))
+        r[fused.R_START_TIMEOUT] = max(1, round(start_timeout * rate))
+        r[fused.R_HEARTBEAT_EVERY] = max(1, round(0.1 * rate))
+        r[fused.R_DT] = self.dt
+        r[fused.R_S_TAU] = names.index("tau_r_hat") if "tau_r_hat" in names else -1
+        r[fused.R_S_RATE] = names.index("theta_h_dot_hat") if "theta_h_dot_hat" in names else -1
+        r[fused.R_DATAGRAMS] = 1.0 if isinstance(link, UdpMulticastLink) else 0.0
+        r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = (math.inf, -math.inf, math.inf)
+        r[fused.R_S_PHI] = names.index("phi") if "phi" in names else -1
+        r[fused.R_S_SPEED] = names.index("v_x") if "v_x" in names else -1
+        safety, limits = self.safety.arrays
+        ring, head = self.ring.arrays
+        if isinstance(stepper, CompiledStack):
+            stack_row = stepper.row()  # the stack writes its row where the period reads it
+        else:
+            stack_row = np.zeros(len(names))
+        return PeriodArrays(
+            runner=r, positions=positions, safety=safety, limits=limits,
+            status=codec_table(st), estop=codec_table(es), command=codec_table(cmd),
+            heartbeat=codec_table(hb), status_values=np.zeros(len(st.names)),
+            estop_values=np.zeros(len(es.names)), command_values=np.zeros(len(cmd.names)),
+            heartbeat_values=np.zeros(len(hb.names)),
+            rx=np.zeros((fused.RX_FRAMES, fused.RX_BYTES), dtype=np.uint8),
+            rx_length=np.zeros(fused.RX_FRAMES, dtype=np.int64),
+            rx_id=np.zeros(fused.RX_FRAMES, dtype=np.int64), command_frame=command_frame,
+            heartbeat_frame=heartbeat_frame, stack_row=stack_row, ring=ring, ring_head=head,
+        )  # fmt: skip
+
+    def _compile(self) -> None:
+        """Compile (or load) every function of the period for its arrays' types, and keep
+        their compiled overloads (called without numba's dispatch): before the first
+        deadline, nothing is compiled inside the loop."""
+        a = self._arrays
+        self._take = compiled(fused.take_frames, a, 0, 0)
+        self._begin = compiled(fused.begin, a, 0, 0.0)
+        self._finish = compiled(fused.finish, a, 0.0, 0, 0.0, 0.0, 0.0)
+        self._kernel: Callable[..., int] | None = None
+        self._stack_args: tuple[object, ...] = ()
+        if isinstance(self.stepper, CompiledStack):
+            st = self.stepper
+            self._stack_args = (st.model, st.data, st.force, st.side_force, st.state)
+            self._kernel = compiled(fused.fused_period, *self._stack_args, a, 0, 0, 0.0, 0.0, 0.0)
+        self._send_command = self._sender(a.command_frame, self.codecs.command.frame_id)
+        self._send_heartbeat = self._sender(a.heartbeat_frame, self.codecs.heartbeat.frame_id)
+
+    def _sender(self, frame: NDArray[np.uint8], frame_id: int) -> Callable[[], bool]:
+        """A function sending ``frame``'s bytes as they are when it is called."""
+        link = self.link
+        if isinstance(link, UdpMulticastLink):
+            view = memoryview(frame)  # type: ignore[arg-type]
+            send_datagram = link.send_datagram
+            return lambda: send_datagram(view)
+        send = link.send
+        return lambda: send(frame_id, frame.tobytes())
+
+    @property
+    def fused(self) -> bool:
+        """Whether each period is one compiled call, stack included (a
+        :class:`~motosim.rt.stack.CompiledStack`), or three around the stack's ``step``."""
+        return self._fused
+
+    @property
+    def status_frames(self) -> int:
+        """Status frames received (valid or not)."""
+        return int(self._r[fused.R_STATUS_FRAMES])
 
     @property
     def first_timeout(self) -> float:
         """How long a bus-paced loop waits for the drive's first frame [s]: one period past
         ``start_timeout``, so that the ``NO_DRIVE`` fault trips on that wait's timeout."""
-        return (self._start_timeout + 1) * self.dt
+        return float(self._r[fused.R_START_TIMEOUT] + 1) * self.dt
 
     @property
     def watchdog_time(self) -> float:
@@ -249,7 +326,7 @@ class RealtimeRunner:
     # --- operator ----------------------------------------------------------------------
     def request_stop(self) -> None:
         """Fade the torque out and end the run (safe from a signal handler)."""
-        self._stop = True
+        self._r[fused.R_STOP] = 1.0
         self.safety.request_stop()
 
     def arm(self) -> None:
@@ -258,19 +335,37 @@ class RealtimeRunner:
         Only a request: the loop's own thread enables the safety stage, so this is safe from
         another thread. Ignored after a stop request or a fault.
         """
-        self._arm_request = True
+        self._r[fused.R_ARM_REQUEST] = 1.0
+
+    @property
+    def left_range(self) -> str | None:
+        """Why the run stopped early because the virtual motorcycle fell or its speed left the
+        model's (one line, with the time), or None."""
+        r = self._r
+        if not r[fused.R_LEFT] or self._validity is None:
+            return None
+        return range_reason(
+            float(r[fused.R_LEFT_T]), float(r[fused.R_LEFT_PHI]), float(r[fused.R_LEFT_SPEED]),
+            self._validity,
+        )  # fmt: skip
+
+    @property
+    def left_range_time(self) -> float:
+        """When the motorcycle left its range [s since the first deadline] (NaN if not)."""
+        r = self._r
+        return float(r[fused.R_LEFT_T]) if r[fused.R_LEFT] else math.nan
 
     @property
     def stop_requested(self) -> bool:
         """Whether :meth:`request_stop` was called."""
-        return self._stop
+        return bool(self._r[fused.R_STOP])
 
     def finish(self) -> int:
         """End a run that reached its duration: fade the torque out like a stop request
         (without counting as one); the number of periods the fade-out needs (0 when the
         torque is already off); :meth:`period` returns False once the torque is off."""
         if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
-            self._finishing = True
+            self._r[fused.R_FINISHING] = 1.0
             self.safety.request_stop()
             return math.ceil(self.safety.envelope * self.safety.limits.fade_in / self.dt) + 2
         return 0
@@ -287,37 +382,32 @@ class RealtimeRunner:
         return dropped
 
     # --- the period --------------------------------------------------------------------
-    def _frame(self, frame_id: int, data: bytes) -> bool:
-        """Handle one received frame; True if it is a status frame (valid or not)."""
-        status_id, estop_id = self._ids
-        if frame_id == status_id:
-            self.status_frames += 1
-            values = self._status
-            ok = self.codecs.status.decode(data, values)
-            if self.safety.status_frame(
-                checksum_ok=ok,
-                counter=values[self._i_counter],
-                drive_fault=values[self._i_drive_fault] > 0.5,
-            ):
-                self._theta = float(values[self._i_angle])
-                self._current = float(values[self._i_current])
-                self._fresh = True
-            return True
-        if frame_id == estop_id:
-            ok = self.codecs.estop.decode(data, self._estop)
-            self.safety.estop_frame(checksum_ok=ok, pressed=self._estop[self._i_estop] > 0.5)
-        return False
-
-    def _read_bus(self) -> bool:
+    def _read_bus(self, start: int = 0, timeout: float = 0.0) -> int:
+        """Read the frames waiting (one, waiting up to ``timeout`` [s], if ``timeout`` > 0)
+        into the period's arrays from ``start``; the index after the last one."""
+        a = self._arrays
+        if self._datagrams:
+            link: UdpMulticastLink = self.link  # type: ignore[assignment]
+            if timeout > 0.0:
+                if not link.readable(timeout):
+                    return start
+                one = self._views[start : start + 1]
+                return start + link.receive_datagrams(one, a.rx_length[start:], 0)
+            return link.receive_datagrams(self._views, a.rx_length, start)
         receive = self.link.receive
-        for _ in range(64):  # bounded: a flooded bus cannot hold the loop
-            frame = receive()
+        n = start
+        while n < fused.RX_FRAMES:  # bounded: a flooded bus cannot hold the loop
+            frame = receive(timeout)
             if frame is None:
                 break
-            self._frame(frame[0], frame[1])
-        fresh = self._fresh
-        self._fresh = False
-        return fresh
+            data = frame[1][: fused.RX_BYTES]
+            a.rx_id[n] = frame[0]
+            a.rx_length[n] = len(data)
+            a.rx[n, : len(data)] = np.frombuffer(data, dtype=np.uint8)
+            n += 1
+            if timeout > 0.0:
+                break
+        return n
 
     def wait_status(self, until: float) -> bool:
         """Block on the bus until a status frame arrives or ``clock`` reaches ``until`` [s].
@@ -331,16 +421,15 @@ class RealtimeRunner:
         clock = self.clock
         if clock is None:
             raise MotosimError("wait_status needs the runner's clock (clock=...)")
-        receive = self.link.receive
         now = clock.now
+        a = self._arrays
         while True:
             remaining = until - now()
             if remaining <= 0.0:
-                if self._started:
+                if self._r[fused.R_STARTED]:
                     self.safety.silent()
                 return False
-            frame = receive(remaining)
-            if frame is not None and self._frame(frame[0], frame[1]):
+            if self._read_bus(0, remaining) and self._take(a, 0, 1):
                 return True
 
     def period(self, k: int, t: float) -> bool:
@@ -348,90 +437,64 @@ class RealtimeRunner:
 
         The recorded time is ``t`` minus the first period's deadline.
         """
-        woke = self._now() if self._now is not None else math.nan
-        safety = self.safety
-        if self._t0 != self._t0:
-            self._t0 = t
-        fresh = self._read_bus()
-        done_read = self._now() if self._now is not None else math.nan
-        if not self._started and k >= self._start_timeout:
-            safety.trip(Fault.NO_DRIVE)
-        if fresh and not self._started:
-            self._started = True
-            self.stepper.reset(self._theta, self._current)
-            self._prev_theta = self._theta
-            if not self._stop and self._armed:
-                safety.enable()
-        if self._arm_request and self._started:
-            self._arm_request = False
-            if not self._armed and not self._stop:
-                self._armed = True
-                safety.enable()
-        command = 0.0
-        stack_row = None
-        if self._started:
-            command = self.stepper.step(self._theta, self._current)
-            stack_row = self.stepper.row()
-        if stack_row is not None and self._s_rate >= 0:
-            omega = stack_row[self._s_rate]
+        now = self._now
+        woke = now() if now is not None else math.nan
+        frames = self._read_bus()
+        done_read = now() if now is not None else math.nan
+        a = self._arrays
+        if self._kernel is not None:
+            flags: int = self._kernel(*self._stack_args, a, frames, k, t, woke, done_read)
         else:
-            omega = (self._theta - self._prev_theta) / self.dt if self._started else 0.0
-        self._prev_theta = self._theta
-        tau_hat = stack_row[self._s_tau] if stack_row is not None and self._s_tau >= 0 else math.nan
-        theta = self._theta if self._started else 0.0
-        out = safety.step(command, theta=theta, omega=omega, tau_hat=tau_hat, now=t - self._t0)
-        state = safety.state
-        done_control = self._now() if self._now is not None else math.nan
-        self._send(out, state, k)
-        done_send = self._now() if self._now is not None else math.nan
-        if stack_row is not None and self.telemetry is not None:  # after the command, which
-            self.telemetry(k, t - self._t0, stack_row)  # thus leaves a datagram sooner
-        if self.platform is not None:
-            self.platform.step(k, t - self._t0, stack_row, state, safety.fault, safety.envelope)
-        row = self._row
-        row[0] = t - self._t0
-        row[1] = self._theta
-        row[2] = self._current
-        row[3] = command
-        row[4] = out
-        row[5] = state
-        row[6] = safety.fault
-        row[7] = t
-        row[8] = woke - t
-        row[10] = k - self._calls  # deadlines skipped before this one
-        row[11] = done_read - woke
-        row[12] = done_control - woke
-        row[13] = done_send - woke
-        self._calls += 1
-        if stack_row is not None:
-            row[self._n_loop :] = stack_row
-        row[9] = (self._now() - woke) if self._now is not None else math.nan
-        self.ring.push(row)
-        if state == State.FAULT:
-            self._after_fault += 1
-            return self._after_fault < self._linger
-        return not ((self._stop or self._finishing) and state == State.IDLE)
-
-    def _send(self, current: float, state: State, k: int) -> None:
-        cmd = self._command
-        cmd[self._c_current] = current
-        live = state in (State.FADE_IN, State.RUNNING, State.STOPPING)
-        cmd[self._c_enable] = 1.0 if live else 0.0
-        cmd[self._c_counter] = self._sent & 0xF
-        self._sent += 1
-        codecs = self.codecs
-        if not self.link.send(codecs.command.frame_id, codecs.command.encode(cmd)):
+            flags = self._stack_period(a, frames, k, t, woke, done_read)
+        done_control = now() if now is not None else math.nan
+        if not self._send_command():
             self.send_errors += 1
-        if k % self._heartbeat_every == 0:
-            hb = self._heartbeat
-            hb[self._h_state] = state
-            hb[self._h_fault] = self.safety.fault
-            hb[self._h_counter] = (k // self._heartbeat_every) & 0xF
-            if not self.link.send(codecs.heartbeat.frame_id, codecs.heartbeat.encode(hb)):
-                self.send_errors += 1
+        if flags & 2 and not self._send_heartbeat():
+            self.send_errors += 1
+        done_send = now() if now is not None else math.nan
+        if self.telemetry is not None or self.platform is not None:
+            self._publish(k, t)
+        slot = flags >> 2
+        ring = a.ring
+        ring[slot, 12] = done_control - woke
+        ring[slot, 13] = done_send - woke
+        ring[slot, 9] = (now() - woke) if now is not None else math.nan
+        a.ring_head[0] += 1
+        return bool(flags & 1)
+
+    def _stack_period(
+        self, a: PeriodArrays, frames: int, k: int, t: float, woke: float, done_read: float
+    ) -> int:
+        """A period around a stack in Python: the compiled steps one by one."""
+        self._take(a, 0, frames)
+        r = self._r
+        if self._begin(a, k, t):
+            self.stepper.reset(float(r[fused.R_THETA]), float(r[fused.R_CURRENT]))
+        command = 0.0
+        if r[fused.R_STARTED]:
+            command = self.stepper.step(float(r[fused.R_THETA]), float(r[fused.R_CURRENT]))
+            a.stack_row[:] = self.stepper.row()
+        flags: int = self._finish(a, float(command), k, t, woke, done_read)
+        return flags
+
+    def _publish(self, k: int, t: float) -> None:
+        """The stack's row to the telemetry (after the command, which thus leaves a datagram
+        sooner) and the platform's stage."""
+        started = bool(self._r[fused.R_STARTED])
+        elapsed = t - self._r[fused.R_T0]
+        row = self._arrays.stack_row if started else None
+        if row is not None and self.telemetry is not None:
+            self.telemetry(k, elapsed, row)
+        if self.platform is not None:
+            s = self.safety
+            self.platform.step(k, elapsed, row, s.state, s.fault, s.envelope)
 
     def counters(self) -> RunCounters:
         """What happened on the bus and in the safety stage so far."""
+        bad = int(self._r[fused.R_BAD])  # datagrams that were no frames: the link's errors
+        if bad > self._bad_reported and hasattr(self.link, "errors"):
+            self.link.errors += bad - self._bad_reported
+            self._bad_reported = bad
         s = self.safety
         return RunCounters(
             status_frames=self.status_frames,

@@ -28,12 +28,18 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
 
 A fault gives a zero command in the same period it is detected, without slew limiting, and
 stays latched until :meth:`SafetyStage.clear`; enabling again starts a new fade-in. The stage
-works on Python floats only and allocates nothing per period.
+keeps its state in a float64 array stepped by compiled functions (:func:`safety_step` and
+the others), which the fused period of :mod:`motosim.rt.fused` calls as they are; it
+allocates nothing per period.
 """
 
 import math
 from dataclasses import dataclass
 from enum import IntEnum
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
@@ -177,6 +183,193 @@ class SafetyLimits:
             )
 
 
+# --- the compiled stage ---------------------------------------------------------------
+# The stage's state and limits are two float64 arrays so that compiled code (the fused
+# period of :mod:`motosim.rt.fused`) and :class:`SafetyStage` run the very same functions.
+
+S_STATE, S_FAULT, S_FAULT_TIME, S_T, S_ENVELOPE, S_LAST, S_COUNTER, S_FRESH = range(8)
+S_MISSING, S_QUIET, S_HANDS_OFF, S_REF_THETA, S_REF_TORQUE, S_FREE, S_LOST, S_STALE = range(8, 16)
+SAFETY_STATE_SIZE = 16
+"""Positions in the stage's state array (state and fault codes, the fault's time [s], the
+stage's time [s], the fade envelope, the last command [A], the last alive counter, a fresh
+frame flag, periods without a fresh frame, hands-off time [s] and flag, the frozen-sensor
+monitor's reference angle [rad], torque [N*m] and free turn [rad], frames lost and stale)."""
+
+(
+    P_MAX_CURRENT, P_MAX_SLEW, P_MAX_SPEED, P_SPEED_BAND, P_SOFT_STOP, P_HARD_STOP,
+    P_END_STOP_GAIN, P_HANDS_OFF_TORQUE, P_HANDS_OFF_TIME, P_HANDS_OFF_GAIN, P_FADE_IN,
+    P_FROZEN_ANGLE, P_WATCHDOG, P_DT, P_MONITOR, P_TORQUE_PER_AMP, P_BAND, P_BETA,
+) = range(18)  # fmt: skip
+SAFETY_PARAMS_SIZE = 18
+
+
+def safety_params(
+    limits: SafetyLimits, dt: float, watchdog: int, handlebar: HandlebarParameters | None
+) -> NDArray[np.float64]:
+    """The limits, the period [s], the watchdog's periods and the frozen-sensor monitor's
+    handlebar (N k_t [N*m/A], twice the dry friction [N*m], beta_eq [N*m*s/rad]) as the
+    array the compiled stage reads."""
+    p = np.zeros(SAFETY_PARAMS_SIZE)
+    p[:P_WATCHDOG] = [
+        limits.max_current, limits.max_slew, limits.max_speed, limits.speed_band,
+        limits.soft_stop, limits.hard_stop, limits.end_stop_gain, limits.hands_off_torque,
+        limits.hands_off_time, limits.hands_off_gain, limits.fade_in, limits.frozen_angle,
+    ]  # fmt: skip
+    p[P_WATCHDOG] = watchdog
+    p[P_DT] = dt
+    if handlebar is not None:
+        p[P_MONITOR] = 1.0
+        p[P_TORQUE_PER_AMP] = handlebar.torque_per_amp
+        p[P_BAND] = 2.0 * handlebar.beta_s
+        p[P_BETA] = handlebar.beta_eq
+    return p
+
+
+def new_safety_state() -> NDArray[np.float64]:
+    """A stage's state array, IDLE without a fault."""
+    s = np.zeros(SAFETY_STATE_SIZE)
+    s[S_FAULT_TIME] = math.nan
+    s[S_COUNTER] = -1.0
+    s[S_REF_THETA] = math.nan
+    return s
+
+
+@njit(cache=True)
+def safety_trip(s: NDArray[np.float64], fault: int) -> None:
+    """Latch ``fault`` (a :class:`Fault` code) now: the next step returns 0."""
+    if fault == 0:
+        return
+    if s[S_FAULT] == 0.0:
+        s[S_FAULT] = fault
+        s[S_FAULT_TIME] = s[S_T]
+    s[S_STATE] = 3.0  # FAULT
+    s[S_ENVELOPE] = 0.0
+    s[S_LAST] = 0.0
+
+
+@njit(cache=True)
+def safety_status_frame(
+    s: NDArray[np.float64], checksum_ok: bool, counter: float, drive_fault: bool
+) -> bool:
+    """:meth:`SafetyStage.status_frame` on the state array."""
+    if not checksum_ok:
+        safety_trip(s, 3)  # CHECKSUM
+        return False
+    c = int(counter) & 0xF
+    last = int(s[S_COUNTER])
+    if c == last:
+        s[S_STALE] += 1.0
+        return False
+    if last >= 0:
+        s[S_LOST] += (c - last - 1) & 0xF
+    s[S_COUNTER] = c
+    if drive_fault:
+        safety_trip(s, 6)  # DRIVE_FAULT
+    s[S_FRESH] = 1.0
+    return True
+
+
+@njit(cache=True)
+def safety_estop_frame(s: NDArray[np.float64], checksum_ok: bool, pressed: bool) -> None:
+    """:meth:`SafetyStage.estop_frame` on the state array."""
+    if not checksum_ok:
+        safety_trip(s, 3)  # CHECKSUM
+    elif pressed:
+        safety_trip(s, 4)  # ESTOP_CAN
+
+
+@njit(cache=True)
+def _frozen_monitor(s: NDArray[np.float64], p: NDArray[np.float64], theta: float) -> None:
+    """The frozen-sensor monitor of one period (see :class:`SafetyStage`, Notes)."""
+    torque = p[P_TORQUE_PER_AMP] * s[S_LAST]
+    state = s[S_STATE]
+    if theta != s[S_REF_THETA] or state == 0.0 or state == 4.0:  # IDLE, STOPPING
+        s[S_REF_THETA] = theta
+        s[S_REF_TORQUE] = torque
+        s[S_FREE] = 0.0
+        return
+    drive = abs(torque - s[S_REF_TORQUE]) - p[P_BAND]
+    if drive > 0.0:
+        s[S_FREE] += drive / p[P_BETA] * p[P_DT]
+        if s[S_FREE] > p[P_FROZEN_ANGLE]:
+            safety_trip(s, 9)  # FROZEN_SENSOR
+
+
+@njit(cache=True)
+def safety_step(
+    s: NDArray[np.float64],
+    p: NDArray[np.float64],
+    command: float,
+    theta: float,
+    omega: float,
+    tau_hat: float,
+    now: float,
+) -> float:
+    """:meth:`SafetyStage.step` on the state array (``now`` NaN: the stage counts its own
+    periods)."""
+    dt = p[P_DT]
+    s[S_T] = s[S_T] + dt if now != now else now
+    if s[S_FRESH] != 0.0:
+        s[S_MISSING] = 0.0
+        s[S_FRESH] = 0.0
+    else:
+        s[S_MISSING] += 1.0
+        if s[S_MISSING] >= p[P_WATCHDOG] and s[S_STATE] != 0.0:
+            safety_trip(s, 1)  # WATCHDOG
+    if not (math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)) or math.isinf(
+        tau_hat
+    ):
+        safety_trip(s, 2)  # NON_FINITE
+    elif abs(theta) > p[P_HARD_STOP]:
+        safety_trip(s, 7)  # END_STOP
+    elif p[P_MONITOR] != 0.0:
+        _frozen_monitor(s, p, theta)
+    state = s[S_STATE]
+    if state == 3.0 or state == 0.0:  # FAULT, IDLE
+        s[S_LAST] = 0.0
+        s[S_ENVELOPE] = 0.0
+        return 0.0
+    # speed limiter: only reduces a command that pushes the handlebar faster
+    i = command
+    excess = abs(omega) - p[P_MAX_SPEED]
+    if excess > 0.0 and i * omega > 0.0:
+        i *= max(0.0, 1.0 - excess / p[P_SPEED_BAND])
+    # soft end stops
+    over = abs(theta) - p[P_SOFT_STOP]
+    if over > 0.0:
+        out = 1.0 if theta > 0.0 else -1.0
+        if i * out > 0.0:
+            i = 0.0
+        i -= out * p[P_END_STOP_GAIN] * over
+    # hands-off: reduce the gain while nobody holds the handlebar
+    if p[P_HANDS_OFF_TORQUE] > 0.0 and tau_hat == tau_hat:
+        if abs(tau_hat) < p[P_HANDS_OFF_TORQUE]:
+            s[S_QUIET] += dt
+            s[S_HANDS_OFF] = 1.0 if s[S_QUIET] >= p[P_HANDS_OFF_TIME] else 0.0
+        else:
+            s[S_QUIET] = 0.0
+            s[S_HANDS_OFF] = 0.0
+        if s[S_HANDS_OFF] != 0.0:
+            i *= p[P_HANDS_OFF_GAIN]
+    # clamp, fade, slew
+    i = min(max(i, -p[P_MAX_CURRENT]), p[P_MAX_CURRENT])
+    ramp = dt / p[P_FADE_IN]
+    if state == 4.0:  # STOPPING
+        s[S_ENVELOPE] = max(0.0, s[S_ENVELOPE] - ramp)
+        if s[S_ENVELOPE] == 0.0:
+            s[S_STATE] = 0.0
+    elif state == 1.0:  # FADE_IN
+        s[S_ENVELOPE] = min(1.0, s[S_ENVELOPE] + ramp)
+        if s[S_ENVELOPE] >= 1.0:
+            s[S_STATE] = 2.0
+    i *= s[S_ENVELOPE]
+    step = p[P_MAX_SLEW] * dt
+    last = s[S_LAST]
+    i = min(max(i, last - step), last + step)
+    s[S_LAST] = i
+    return float(i)
+
+
 class SafetyStage:
     """The safety stage of one handlebar, stepped once per control period.
 
@@ -244,28 +437,7 @@ class SafetyStage:
     (0.0, 'communication watchdog: no valid status frame for 3 periods (t = 0.630 s)')
     """
 
-    __slots__ = (
-        "_counter",
-        "_envelope",
-        "_fault",
-        "_fault_time",
-        "_free",
-        "_fresh",
-        "_hands_off",
-        "_hb",
-        "_last",
-        "_missing",
-        "_quiet",
-        "_ref_theta",
-        "_ref_torque",
-        "_state",
-        "_t",
-        "_watchdog",
-        "dt",
-        "frames_lost",
-        "frames_stale",
-        "limits",
-    )
+    __slots__ = ("_p", "_s", "_watchdog", "dt", "limits")
 
     def __init__(
         self,
@@ -284,25 +456,14 @@ class SafetyStage:
         self._watchdog = limits.watchdog_periods * periods_per_frame
         self.limits = limits
         self.dt = float(dt)
-        self._state = State.IDLE
-        self._fault = Fault.NONE
-        self._fault_time = math.nan
-        self._t = 0.0
-        self._envelope = 0.0
-        self._last = 0.0
-        self._counter = -1
-        self._fresh = False
-        self._missing = 0
-        self._quiet = 0.0
-        self._hands_off = False
-        self._hb: tuple[float, float, float] | None = None if handlebar is None else (
-            handlebar.torque_per_amp, 2.0 * handlebar.beta_s, handlebar.beta_eq
-        )  # fmt: skip
-        self._ref_theta = math.nan
-        self._ref_torque = 0.0
-        self._free = 0.0
-        self.frames_lost = 0
-        self.frames_stale = 0
+        self._s = new_safety_state()
+        self._p = safety_params(limits, self.dt, self._watchdog, handlebar)
+
+    @property
+    def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The state and parameter arrays the compiled functions work on (shared, not
+        copies: the fused period of :mod:`motosim.rt.fused` steps this very stage)."""
+        return self._s, self._p
 
     @property
     def watchdog_periods(self) -> int:
@@ -313,70 +474,72 @@ class SafetyStage:
     @property
     def state(self) -> State:
         """IDLE, FADE_IN, RUNNING, FAULT or STOPPING."""
-        return self._state
+        return State(int(self._s[S_STATE]))
 
     @property
     def fault(self) -> Fault:
         """The latched fault (NONE when there is none)."""
-        return self._fault
+        return Fault(int(self._s[S_FAULT]))
 
     @property
     def fault_time(self) -> float:
         """When the fault was detected [s since the stage started] (NaN without a fault)."""
-        return self._fault_time
+        return float(self._s[S_FAULT_TIME])
 
     @property
     def hands_off(self) -> bool:
         """Whether nobody seems to hold the handlebar."""
-        return self._hands_off
+        return bool(self._s[S_HANDS_OFF])
 
     @property
     def free_turn(self) -> float:
         """The frozen-sensor monitor's turn of a free handlebar since the angle last changed
         [rad] (see Notes)."""
-        return self._free
+        return float(self._s[S_FREE])
 
     @property
     def envelope(self) -> float:
         """The fade-in/fade-out scale of the command, in [0, 1]."""
-        return self._envelope
+        return float(self._s[S_ENVELOPE])
+
+    @property
+    def frames_lost(self) -> int:
+        """Status frames lost (alive counter jumps)."""
+        return int(self._s[S_LOST])
+
+    @property
+    def frames_stale(self) -> int:
+        """Status frames whose alive counter had not moved (stale or duplicated)."""
+        return int(self._s[S_STALE])
 
     def describe(self) -> str:
         """The latched fault's reason and time, in words."""
-        if self._fault == Fault.NONE:
+        if self.fault == Fault.NONE:
             return "no fault"
-        reason = fault_reason(self._fault, watchdog_periods=self.limits.watchdog_periods)
-        return f"{reason} (t = {self._fault_time:.3f} s)"
+        reason = fault_reason(self.fault, watchdog_periods=self.limits.watchdog_periods)
+        return f"{reason} (t = {self.fault_time:.3f} s)"
 
     # --- operator ----------------------------------------------------------------------
     def enable(self) -> None:
         """Start the torque with a fade-in (ignored while a fault is latched)."""
-        if self._state in (State.IDLE, State.STOPPING):
-            self._state = State.FADE_IN
+        safety_enable(self._s)
 
     def request_stop(self) -> None:
         """Fade the torque out over ``fade_in`` seconds, then go IDLE."""
-        if self._state in (State.FADE_IN, State.RUNNING):
-            self._state = State.STOPPING
+        safety_request_stop(self._s)
 
     def trip(self, fault: Fault) -> None:
         """Latch ``fault`` now: the next :meth:`step` returns 0."""
-        if fault == Fault.NONE:
-            return
-        if self._fault == Fault.NONE:
-            self._fault = fault
-            self._fault_time = self._t
-        self._state = State.FAULT
-        self._envelope = 0.0
-        self._last = 0.0
+        safety_trip(self._s, int(fault))
 
     def clear(self) -> None:
         """Forget a latched fault and go IDLE (the watchdog starts afresh)."""
-        self._fault = Fault.NONE
-        self._fault_time = math.nan
-        self._state = State.IDLE
-        self._missing = 0
-        self._counter = -1
+        s = self._s
+        s[S_FAULT] = 0.0
+        s[S_FAULT_TIME] = math.nan
+        s[S_STATE] = 0.0
+        s[S_MISSING] = 0.0
+        s[S_COUNTER] = -1.0
 
     # --- frames ------------------------------------------------------------------------
     def status_frame(self, *, checksum_ok: bool, counter: float, drive_fault: bool) -> bool:
@@ -386,34 +549,18 @@ class SafetyStage:
         that has not moved (a stale or duplicated frame) makes the frame invalid; a counter
         that jumped counts the lost frames.
         """
-        if not checksum_ok:
-            self.trip(Fault.CHECKSUM)
-            return False
-        c = int(counter) & 0xF
-        if c == self._counter:
-            self.frames_stale += 1
-            return False
-        if self._counter >= 0:
-            self.frames_lost += (c - self._counter - 1) & 0xF
-        self._counter = c
-        if drive_fault:
-            self.trip(Fault.DRIVE_FAULT)
-        self._fresh = True
-        return True
+        return bool(safety_status_frame(self._s, bool(checksum_ok), float(counter),
+                                        bool(drive_fault)))  # fmt: skip
 
     def silent(self) -> None:
         """The watchdog's whole time passed without a valid status frame (a bus-paced loop's
         wait timed out): trip the watchdog now, unless IDLE (as :meth:`step` would after
         ``watchdog_periods`` periods)."""
-        if self._state != State.IDLE:
-            self.trip(Fault.WATCHDOG)
+        safety_silent(self._s)
 
     def estop_frame(self, *, checksum_ok: bool, pressed: bool) -> None:
         """An E-stop frame: pressed (or unreadable) trips the emergency stop."""
-        if not checksum_ok:
-            self.trip(Fault.CHECKSUM)
-        elif pressed:
-            self.trip(Fault.ESTOP_CAN)
+        safety_estop_frame(self._s, bool(checksum_ok), bool(pressed))
 
     # --- the period --------------------------------------------------------------------
     def step(
@@ -439,79 +586,29 @@ class SafetyStage:
             The loop's time [s], for the fault's time stamp; by default the stage counts
             its own periods.
         """
-        lim = self.limits
-        dt = self.dt
-        self._t = self._t + dt if now is None else now
-        if self._fresh:
-            self._missing = 0
-            self._fresh = False
-        else:
-            self._missing += 1
-            if self._missing >= self._watchdog and self._state != State.IDLE:
-                self.trip(Fault.WATCHDOG)
-        if not (
-            math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)
-        ) or math.isinf(tau_hat):
-            self.trip(Fault.NON_FINITE)
-        elif abs(theta) > lim.hard_stop:
-            self.trip(Fault.END_STOP)
-        elif self._hb is not None:
-            self._frozen_monitor(theta, self._hb)
-        state = self._state
-        if state == State.FAULT or state == State.IDLE:
-            self._last = 0.0
-            self._envelope = 0.0
-            return 0.0
-        # speed limiter: only reduces a command that pushes the handlebar faster
-        i = command
-        excess = abs(omega) - lim.max_speed
-        if excess > 0.0 and i * omega > 0.0:
-            i *= max(0.0, 1.0 - excess / lim.speed_band)
-        # soft end stops
-        over = abs(theta) - lim.soft_stop
-        if over > 0.0:
-            out = 1.0 if theta > 0.0 else -1.0
-            if i * out > 0.0:
-                i = 0.0
-            i -= out * lim.end_stop_gain * over
-        # hands-off: reduce the gain while nobody holds the handlebar
-        if lim.hands_off_torque > 0.0 and tau_hat == tau_hat:
-            if abs(tau_hat) < lim.hands_off_torque:
-                self._quiet += dt
-                self._hands_off = self._quiet >= lim.hands_off_time
-            else:
-                self._quiet = 0.0
-                self._hands_off = False
-            if self._hands_off:
-                i *= lim.hands_off_gain
-        # clamp, fade, slew
-        i = min(max(i, -lim.max_current), lim.max_current)
-        ramp = dt / lim.fade_in
-        if state == State.STOPPING:
-            self._envelope = max(0.0, self._envelope - ramp)
-            if self._envelope == 0.0:
-                self._state = State.IDLE
-        elif state == State.FADE_IN:
-            self._envelope = min(1.0, self._envelope + ramp)
-            if self._envelope >= 1.0:
-                self._state = State.RUNNING
-        i *= self._envelope
-        step = lim.max_slew * dt
-        i = min(max(i, self._last - step), self._last + step)
-        self._last = i
-        return i
+        t = math.nan if now is None else float(now)
+        return float(
+            safety_step(self._s, self._p, float(command), float(theta), float(omega),
+                        float(tau_hat), t)
+        )  # fmt: skip
 
-    def _frozen_monitor(self, theta: float, hb: tuple[float, float, float]) -> None:
-        """The frozen-sensor monitor of one period (see Notes); trips FROZEN_SENSOR."""
-        torque_per_amp, band, beta = hb
-        torque = torque_per_amp * self._last
-        if theta != self._ref_theta or self._state in (State.IDLE, State.STOPPING):
-            self._ref_theta = theta
-            self._ref_torque = torque
-            self._free = 0.0
-            return
-        drive = abs(torque - self._ref_torque) - band
-        if drive > 0.0:
-            self._free += drive / beta * self.dt
-            if self._free > self.limits.frozen_angle:
-                self.trip(Fault.FROZEN_SENSOR)
+
+@njit(cache=True)
+def safety_enable(s: NDArray[np.float64]) -> None:
+    """:meth:`SafetyStage.enable` on the state array."""
+    if s[S_STATE] == 0.0 or s[S_STATE] == 4.0:  # IDLE, STOPPING
+        s[S_STATE] = 1.0  # FADE_IN
+
+
+@njit(cache=True)
+def safety_request_stop(s: NDArray[np.float64]) -> None:
+    """:meth:`SafetyStage.request_stop` on the state array."""
+    if s[S_STATE] == 1.0 or s[S_STATE] == 2.0:  # FADE_IN, RUNNING
+        s[S_STATE] = 4.0  # STOPPING
+
+
+@njit(cache=True)
+def safety_silent(s: NDArray[np.float64]) -> None:
+    """:meth:`SafetyStage.silent` on the state array."""
+    if s[S_STATE] != 0.0:
+        safety_trip(s, 1)  # WATCHDOG

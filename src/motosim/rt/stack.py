@@ -20,12 +20,16 @@ bookkeeping of the real-time loop:
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.sim.stack import StackModel, new_data, reset, step
+from motosim.sim.stack import StackData, StackModel, new_data, reset, step
 
-__all__ = ["RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "result_block"]
+__all__ = [
+    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "compiled", "result_block", "stack_period",
+    "stack_reset",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 
@@ -57,9 +61,11 @@ class CompiledStack:
 
     Notes
     -----
-    The constructor runs one step on scratch data so that every compiled kernel is ready
-    before the loop's first deadline, and keeps the compiled step for the model's types
-    to call it without numba's per-call type dispatch (the same machine code).
+    One period is :func:`stack_period`, compiled: the real-time runner calls it inside its
+    fused period (:mod:`motosim.rt.fused`), and :meth:`step` calls the same function from
+    Python. The constructor compiles (or loads) it for the model's types before the loop's
+    first deadline and keeps the compiled overload to call it without numba's per-call type
+    dispatch (the same machine code).
     """
 
     names = STACK_SIGNALS
@@ -69,38 +75,25 @@ class CompiledStack:
     ) -> None:
         self.model = model
         self.data = new_data(model)
-        self._force = _series(force, "force")
-        self._side = _series(side_force, "side_force")
-        self._k = 0
-        self._last = 0.0
+        self.force = _series(force, "force")
+        self.side_force = _series(side_force, "side_force")
+        self.state = np.zeros(2)
+        """The period's index and the last command [A] (what :func:`stack_period` keeps)."""
         self._row = np.zeros(len(STACK_SIGNALS))
-        scratch = new_data(model)  # warm-up: compile (or load) every kernel now
-        reset(model, scratch, 0.0, 0.0)
-        step(model, scratch, 0.0, 0.0, 0.0, 0.0, 0.0)
-        self._step = _compiled(step, model, self.data)
+        args = (model, self.data, self.force, self.side_force, self.state, self._row, 0.0, 0.0)
+        self._step = compiled(stack_period, *args)
+        self._reset = compiled(stack_reset, *args[:5], 0.0, 0.0)
 
     def reset(self, theta: float, current: float) -> None:
         """Start the stack at the measured angle [rad] and current [A]."""
-        reset(self.model, self.data, theta, current)
-        self._k = 0
-        self._last = current
+        self._reset(self.model, self.data, self.force, self.side_force, self.state, theta, current)
 
     def step(self, theta_meas: float, i_meas: float) -> float:
         """One period of the compiled stack: the motor current command [A]."""
-        k = self._k
-        force, side = self._force, self._side
-        f = force[k] if k < force.size else force[-1]
-        fy = side[k] if k < side.size else side[-1]
         command: float = self._step(
-            self.model, self.data, theta_meas, i_meas - self._last, 0.0, f, fy
-        )
-        self._last = command
-        self._k += 1
-        held, z, row = self.data.held, self.data.motorcycle, self._row
-        row[0], row[1], row[2], row[3] = held[3], held[0], held[2], command
-        row[4], row[5], row[6], row[7] = z[5], z[8], z[0], z[1]
-        row[8], row[9], row[10], row[11] = z[2], z[3], z[4], z[6]
-        row[12], row[13], row[14], row[15] = z[7], z[9], z[10], z[11]
+            self.model, self.data, self.force, self.side_force, self.state, self._row,
+            theta_meas, i_meas,
+        )  # fmt: skip
         return command
 
     def row(self) -> Array:
@@ -108,25 +101,72 @@ class CompiledStack:
         return self._row
 
 
-def _compiled(kernel: Any, model: StackModel, data: Any) -> Any:
-    """The compiled ``kernel`` for the stack's argument types, called without numba's dispatch.
+@njit(cache=True)
+def stack_reset(
+    model: StackModel,
+    data: StackData,
+    force: Array,
+    side_force: Array,
+    state: Array,
+    theta: float,
+    current: float,
+) -> None:
+    """:func:`~motosim.sim.stack.reset` at the measured angle [rad] and current [A]; the
+    period's index to 0 and the last command to the measured current."""
+    reset(model, data, theta, current)
+    state[0] = 0.0
+    state[1] = current
+
+
+@njit(cache=True)
+def stack_period(
+    model: StackModel,
+    data: StackData,
+    force: Array,
+    side_force: Array,
+    state: Array,
+    row: Array,
+    theta_meas: float,
+    i_meas: float,
+) -> float:
+    """One period of the stack in the loop: the motor current command [A].
+
+    :func:`~motosim.sim.stack.step` with this period's forces (the last ones held) and
+    ``current_error`` the measured current minus the last command (``state[1]``); the
+    stack's row (:data:`STACK_SIGNALS`) into ``row``.
+    """
+    k = int(state[0])
+    f = force[k] if k < force.size else force[-1]
+    fy = side_force[k] if k < side_force.size else side_force[-1]
+    command = step(model, data, theta_meas, i_meas - state[1], 0.0, f, fy)
+    state[1] = command
+    state[0] = k + 1
+    held, z = data.held, data.motorcycle
+    row[0], row[1], row[2], row[3] = held[3], held[0], held[2], command
+    row[4], row[5], row[6], row[7] = z[5], z[8], z[0], z[1]
+    row[8], row[9], row[10], row[11] = z[2], z[3], z[4], z[6]
+    row[12], row[13], row[14], row[15] = z[7], z[9], z[10], z[11]
+    return command
+
+
+def compiled(kernel: Any, *args: Any) -> Any:
+    """The compiled ``kernel`` for the types of ``args``, called without numba's dispatch.
 
     A numba dispatcher works out the types of its arguments on every call: for the stack's
     model and data structures that costs about three times the step itself (measured in
-    ``bench/bench_rt_period.py``). The compiled overload's ``entry_point`` (in the
-    dispatcher's ``overloads``, keyed by the argument types) unboxes the same arguments and
-    runs the same machine code. Without numba's JIT (``NUMBA_DISABLE_JIT=1``) the plain
-    function is returned.
+    ``bench/bench_rt_period.py``). The overload compiled (or loaded from the cache) here for
+    the types of ``args`` has an ``entry_point`` that unboxes the same arguments and runs the
+    same machine code; nothing is run. Without numba's JIT (``NUMBA_DISABLE_JIT=1``) the
+    plain function is returned.
     """
-    overloads = getattr(kernel, "overloads", None)
-    if not overloads:
+    if not hasattr(kernel, "compile"):
         return kernel
     import numba
 
     typeof: Any = numba.typeof
-    types = tuple(typeof(a) for a in (model, data, 0.0, 0.0, 0.0, 0.0, 0.0))
-    found = overloads.get(types)
-    return kernel if found is None else found.entry_point
+    types = tuple(typeof(a) for a in args)
+    kernel.compile(types)
+    return kernel.overloads[types].entry_point
 
 
 def _series(values: Array | None, name: str) -> Array:

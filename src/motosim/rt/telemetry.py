@@ -67,19 +67,39 @@ def parse_address(text: str) -> tuple[str, int]:
 
 
 class StateSender:
-    """Send ``(index, t, row)`` datagrams to ``address``; never blocks."""
+    """Send ``(index, t, row)`` datagrams to ``address``; never blocks.
+
+    The socket is connected to ``address`` once (a host name is looked up there, not on
+    every datagram) and each datagram is written into one preallocated little-endian buffer
+    (the layout of ``struct`` format ``<Qd`` and ``width`` doubles) and sent as it is.
+    """
 
     def __init__(self, address: tuple[str, int], *, width: int = _WIDTH) -> None:
         self._format = _format(width)
         self._address = address
         self._socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._socket.setblocking(False)
+        try:
+            self._socket.connect(address)
+        except OSError as err:
+            self._socket.close()
+            raise MotosimError(
+                f"--telemetry {address[0]}:{address[1]}: cannot send there: {err}"
+            ) from None
+        self._buffer = np.zeros(2 + width, dtype="<f8")
+        self._index = self._buffer[:1].view("<u8")
+        self._bytes = self._buffer.data.cast("B")
+        self._send = self._socket.send
         self.dropped = 0
 
     def send(self, index: int, t: float, row: NDArray[np.float64]) -> None:
         """Publish one period's row (``width`` values)."""
+        buffer = self._buffer
+        self._index[0] = index
+        buffer[1] = t
+        buffer[2:] = row
         try:
-            self._socket.sendto(self._format.pack(index, t, *row.tolist()), self._address)
+            self._send(self._bytes)
         except OSError:  # nobody listening (ICMP refused), buffer full: drop, count
             self.dropped += 1
 

@@ -15,7 +15,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.sim.rider import SPEED_RANGE
-from motosim.timeseries import TimeSeries
 
 __all__ = [
     "BUZZ_CUTOFF",
@@ -25,8 +24,8 @@ __all__ = [
     "STICK_RATE",
     "failure",
     "highpass",
+    "range_reason",
     "run_metrics",
-    "stop_reason",
     "validity_limits",
     "warnings",
 ]
@@ -258,23 +257,15 @@ def failure(metrics: dict[str, float]) -> str | None:
     return None
 
 
-def stop_reason(run: TimeSeries, limits: tuple[float, float, float]) -> str:
-    """Why a run stopped at its last row, in one line: the roll or the speed beyond ``limits``.
+def range_reason(t: float, phi: float, speed: float, limits: tuple[float, float, float]) -> str:
+    """Why a run stopped at time ``t`` [s] with roll ``phi`` [rad] and speed ``speed`` [m/s]
+    beyond ``limits`` (:func:`validity_limits`), in one line.
 
-    Parameters
-    ----------
-    run : TimeSeries
-        A run stopped by :func:`motosim.sim.simulate`'s ``stop_outside``; it has ``phi``
-        [rad] and ``v_x`` [m/s].
-    limits : tuple of float
-        The ``stop_outside`` it ran with (:func:`validity_limits`).
-
-    Returns
-    -------
-    str
-        The reason, with the time and the value.
+    Examples
+    --------
+    >>> range_reason(2.5, 0.9, 20.0, (0.785, 3.0, 60.0)).split(",")[0]
+    'the motorcycle fell at t = 2.500 s: roll 51.6 deg'
     """
-    t, phi, speed = float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1])
     roll, low, high = limits
     if abs(phi) > roll:
         return (

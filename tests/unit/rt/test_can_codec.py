@@ -9,11 +9,15 @@ from motosim.errors import MotosimError
 from motosim.io.can import (
     FrameCodec,
     SignalLayout,
+    codec_table,
     crc8_sae_j1850,
+    decode_frame,
+    encode_frame,
     handlebar_codecs,
     load_dbc,
     open_link,
     platform_codecs,
+    unpack_frame,
 )
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
@@ -61,6 +65,81 @@ def test_codec_agrees_with_cantools_both_ways(data: st.DataObject) -> None:
     theirs = message.decode(ours, decode_choices=False)
     for name, value in zip(codec.names, out, strict=True):
         assert value == pytest.approx(theirs[name], rel=1e-12, abs=1e-12)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.data())
+def test_compiled_codec_agrees_with_cantools_both_ways(data: st.DataObject) -> None:
+    # the codec of the fused period (encode_frame, decode_frame on codec_table) against
+    # cantools' reading of the DBC, as the Python codec above
+    message = data.draw(st.sampled_from(DB.messages))
+    codec = FRAMES[message.frame_id]
+    table = codec_table(codec)
+    values = _physical(message, data.draw)
+    frame = np.zeros(3 + codec.length, dtype=np.uint8)
+    encode_frame(table, np.array([values[n] for n in codec.names]), frame, 3)
+    ours = frame[3:].tobytes()
+    values["CHECKSUM"] = ours[0]
+    assert ours == message.encode(values, scaling=True, strict=True)
+    out = np.zeros(len(codec.names))
+    assert decode_frame(table, frame, 3, codec.length, out)
+    theirs = message.decode(ours, decode_choices=False)
+    for name, value in zip(codec.names, out, strict=True):
+        assert value == pytest.approx(theirs[name], rel=1e-12, abs=1e-12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.sampled_from(sorted(FRAMES)),
+    st.lists(st.floats(-1e6, 1e6) | st.just(float("nan")), min_size=8, max_size=8),
+    st.integers(0, 63),
+)
+def test_compiled_codec_is_the_python_codec(frame_id: int, raw: list[float], bit: int) -> None:
+    # out-of-range values saturate, halves round to even, NaN encodes as 0, as in encode;
+    # a flipped bit fails the checksum in both
+    codec = FRAMES[frame_id]
+    values = np.array(raw[: len(codec.names)])
+    table = codec_table(codec)
+    frame = np.zeros(codec.length, dtype=np.uint8)
+    encode_frame(table, values, frame, 0)
+    assert frame.tobytes() == codec.encode(values)
+    frame[(bit // 8) % codec.length] ^= 1 << (bit % 8)
+    ours, theirs = np.zeros(len(codec.names)), np.zeros(len(codec.names))
+    assert decode_frame(table, frame, 0, codec.length, ours) == codec.decode(
+        frame.tobytes(), theirs
+    )
+    assert np.array_equal(ours, theirs)
+    assert not decode_frame(table, frame, 0, codec.length - 1, ours)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.integers(0, 0x7FF),
+    st.binary(max_size=8),
+    st.booleans(),
+    st.floats(0.0, 1e9),
+    st.sampled_from([None, "can0", 3]),
+)
+def test_udp_multicast_datagrams_are_read_as_python_can_packs_them(
+    frame_id: int, payload: bytes, error: bool, stamp: float, channel: object
+) -> None:
+    can = pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
+    pytest.importorskip("msgpack", reason="python-can's udp_multicast needs msgpack")
+    from can.interfaces.udp_multicast.utils import pack_message
+
+    message = can.Message(
+        arbitration_id=frame_id, data=payload, is_extended_id=False, is_error_frame=error,
+        timestamp=stamp, channel=channel,
+    )  # fmt: skip
+    datagram = np.frombuffer(b"xx" + pack_message(message), dtype=np.uint8)
+    kind, got, start, length = unpack_frame(datagram, 2, datagram.size - 2)
+    assert (kind, got, datagram[start : start + length].tobytes()) == (
+        0 if error else 1,
+        frame_id,
+        payload,
+    )
+    assert unpack_frame(datagram, 2, datagram.size - 3)[0] == -1  # cut short
+    assert unpack_frame(np.frombuffer(b"\x93\x01\x02\x03", np.uint8), 0, 4)[0] == -1
 
 
 def test_every_frame_of_the_dbc_has_a_codec() -> None:

@@ -1,0 +1,322 @@
+"""The control period compiled: frames decoded, stack, safety stage, command encoded, row kept.
+
+:class:`~motosim.rt.run.RealtimeRunner` does in Python only what needs the interpreter: it
+reads the waiting frames' raw bytes from the socket, makes one call of :func:`fused_period`
+(compiled with numba, on arrays allocated before the first deadline) and sends the command
+frame's bytes that the call wrote. The call does, in order, what each period of the runner
+does (see :mod:`motosim.rt.run`):
+
+1. :func:`take_frames`: each frame read (a python-can ``udp_multicast`` datagram read by
+   :func:`~motosim.io.can.unpack_frame`, or a frame's id, length and bytes), the status frames
+   decoded (:func:`~motosim.io.can.decode_frame`) and checked by the safety stage, the E-stop
+   frames too;
+2. :func:`begin`: the first period's time, the ``NO_DRIVE`` timeout, the start on the first
+   valid status frame, an arm request;
+3. the stack (:func:`~motosim.rt.stack.stack_reset` on the start,
+   :func:`~motosim.rt.stack.stack_period`);
+4. :func:`finish`: the virtual motorcycle's range (a fall, a speed outside the model's: the
+   torque fades out and the run ends, as offline), the safety stage
+   (:func:`~motosim.rt.safety.safety_step`), the command
+   frame and, every ``heartbeat_every`` periods, the heartbeat frame encoded
+   (:func:`~motosim.io.can.encode_frame`) in place in the bytes to send; the row written into
+   the ring's next slot (its head is advanced by the runner once the time stamps of the
+   send are in the row).
+
+A runner whose stack is not a :class:`~motosim.rt.stack.CompiledStack` (a test double in
+Python) calls :func:`take_frames`, :func:`begin` and :func:`finish` one by one around its
+stack's ``step``: the same compiled functions, so both ways behave the same.
+
+All the runner's state is in the arrays of :class:`PeriodArrays`; ``R_*`` are the positions
+in its ``runner`` array, ``Q_*`` those in ``positions``.
+"""
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from motosim.io.can import decode_frame, encode_frame, unpack_frame
+from motosim.rt.safety import (
+    S_FAULT,
+    S_STATE,
+    safety_enable,
+    safety_estop_frame,
+    safety_request_stop,
+    safety_status_frame,
+    safety_step,
+    safety_trip,
+)
+from motosim.rt.stack import stack_period, stack_reset
+
+__all__ = [
+    "RUNNER_STATE_SIZE",
+    "PeriodArrays",
+    "begin",
+    "finish",
+    "fused_period",
+    "take_frames",
+]
+
+Array = NDArray[np.float64]
+Bytes = NDArray[np.uint8]
+Ints = NDArray[np.int64]
+
+(
+    R_T0, R_THETA, R_CURRENT, R_PREV_THETA, R_STARTED, R_FRESH, R_STOP, R_FINISHING, R_ARMED,
+    R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
+    R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
+    R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
+) = range(31)  # fmt: skip
+RUNNER_STATE_SIZE = 31
+"""The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
+the angle of the period before, flags (started, a fresh status frame, stop requested,
+finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
+status frames received, datagrams that were no frames; then its settings: periods to linger
+after a fault, the ``NO_DRIVE`` timeout [periods], periods between heartbeats, the period
+[s], where the stack's row holds the torque estimate and the handlebar rate (-1: nowhere),
+whether the received frames are python-can datagrams (1) or id, length and bytes (0); the
+virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]), where the
+stack's row holds its roll and speed (-1: nowhere); and whether, when (since the first
+deadline [s]), at which roll [rad] and speed [m/s] the motorcycle left that range."""
+
+(
+    Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
+    Q_COMMAND_COUNTER, Q_STATE, Q_FAULT, Q_HEARTBEAT_COUNTER, Q_COMMAND_AT, Q_HEARTBEAT_AT,
+    Q_LOOP_COLUMNS,
+) = range(14)  # fmt: skip
+POSITIONS_SIZE = 14
+"""Where the loop's signals sit in the frames' values (status: angle, current, counter,
+drive fault; E-stop: its signal; command: current, enable, counter; heartbeat: state, fault,
+counter), where the command and heartbeat frames' data bytes start in the bytes to send,
+and the number of the loop's own columns in a row."""
+
+RX_FRAMES = 64
+"""The most frames read in one period (a flooded bus cannot hold the loop)."""
+RX_BYTES = 512
+"""The largest datagram kept [bytes] (python-can's frame of 8 data bytes takes about 170)."""
+
+
+class PeriodArrays(NamedTuple):
+    """Every array one period reads or writes, allocated before the first deadline."""
+
+    runner: Array
+    """The runner's state (``R_*``)."""
+    positions: Ints
+    """Signal and byte positions (``Q_*``)."""
+    safety: Array
+    """The safety stage's state (:func:`motosim.rt.safety.new_safety_state`)."""
+    limits: Array
+    """Its limits (:func:`motosim.rt.safety.safety_params`)."""
+    status: Array
+    """The status frame's codec (:func:`motosim.io.can.codec_table`)."""
+    estop: Array
+    """The E-stop frame's codec."""
+    command: Array
+    """The command frame's codec."""
+    heartbeat: Array
+    """The heartbeat frame's codec."""
+    status_values: Array
+    """The last status frame's values."""
+    estop_values: Array
+    """The last E-stop frame's values."""
+    command_values: Array
+    """The command frame's values."""
+    heartbeat_values: Array
+    """The heartbeat frame's values."""
+    rx: Bytes
+    """The frames read this period, one per row (``RX_FRAMES`` x ``RX_BYTES``)."""
+    rx_length: Ints
+    """Their lengths [bytes]."""
+    rx_id: Ints
+    """Their ids (frames given as id, length and bytes)."""
+    command_frame: Bytes
+    """The command frame's bytes to send (its data from ``positions[Q_COMMAND_AT]``)."""
+    heartbeat_frame: Bytes
+    """The heartbeat frame's bytes to send."""
+    stack_row: Array
+    """The stack's row after its last step."""
+    ring: Array
+    """The ring's rows (:attr:`motosim.rt.ring.SampleRing.arrays`)."""
+    ring_head: Ints
+    """The ring's counters: rows written, rows read."""
+
+
+@njit(cache=True)
+def take_frames(a: PeriodArrays, first: int, end: int) -> int:
+    """Handle the frames ``first`` .. ``end - 1`` of ``a.rx``; the number of status frames.
+
+    A status frame is decoded and checked by the safety stage (checksum, alive counter, the
+    drive's fault flag); if valid and fresh, its angle and current are kept. An E-stop frame
+    pressed, or unreadable, trips the emergency stop. Other frames are ignored; datagrams
+    that are no python-can frames are counted (``R_BAD``).
+    """
+    r, q, s = a.runner, a.positions, a.safety
+    status_id = int(a.status[0, 0])
+    estop_id = int(a.estop[0, 0])
+    count = 0
+    for j in range(first, end):
+        if r[R_DATAGRAMS] != 0.0:
+            kind, frame_id, start, length = unpack_frame(a.rx[j], 0, a.rx_length[j])
+            if kind < 0:
+                r[R_BAD] += 1.0
+                continue
+            if kind == 0:  # an error or remote frame
+                continue
+        else:
+            frame_id, start, length = a.rx_id[j], 0, a.rx_length[j]
+        if frame_id == status_id:
+            r[R_STATUS_FRAMES] += 1.0
+            values = a.status_values
+            ok = decode_frame(a.status, a.rx[j], start, length, values)
+            if safety_status_frame(s, ok, values[q[Q_COUNTER]], values[q[Q_DRIVE_FAULT]] > 0.5):
+                r[R_THETA] = values[q[Q_ANGLE]]
+                r[R_CURRENT] = values[q[Q_CURRENT]]
+                r[R_FRESH] = 1.0
+            count += 1
+        elif frame_id == estop_id:
+            values = a.estop_values
+            ok = decode_frame(a.estop, a.rx[j], start, length, values)
+            safety_estop_frame(s, ok, values[q[Q_ESTOP]] > 0.5)
+    return count
+
+
+@njit(cache=True)
+def begin(a: PeriodArrays, k: int, t: float) -> bool:
+    """After the frames of period ``k`` (deadline ``t`` [s]): True if the stack must be
+    reset now (the first valid status frame came), at ``R_THETA`` and ``R_CURRENT``."""
+    r, s = a.runner, a.safety
+    if r[R_T0] != r[R_T0]:
+        r[R_T0] = t
+    fresh = r[R_FRESH] != 0.0
+    r[R_FRESH] = 0.0
+    started = r[R_STARTED] != 0.0
+    if not started and k >= r[R_START_TIMEOUT]:
+        safety_trip(s, 8)  # NO_DRIVE
+    reset = False
+    if fresh and not started:
+        r[R_STARTED] = 1.0
+        started = True
+        reset = True
+        r[R_PREV_THETA] = r[R_THETA]
+        if r[R_STOP] == 0.0 and r[R_ARMED] != 0.0:
+            safety_enable(s)
+    if r[R_ARM_REQUEST] != 0.0 and started:
+        r[R_ARM_REQUEST] = 0.0
+        if r[R_ARMED] == 0.0 and r[R_STOP] == 0.0:
+            r[R_ARMED] = 1.0
+            safety_enable(s)
+    return reset
+
+
+@njit(cache=True)
+def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_read: float) -> int:
+    """The safety stage on the stack's ``command`` [A], the frames to send, the row.
+
+    ``woke`` and ``done_read`` are the period's wake-up and the end of the bus read on the
+    loop's clock [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
+    whether the run goes on, whether the heartbeat frame is to be sent this period, and the
+    ring's slot the row went to (the runner writes the send's time stamps there, then
+    advances the ring's head).
+    """
+    r, q, s = a.runner, a.positions, a.safety
+    started = r[R_STARTED] != 0.0
+    theta_now = r[R_THETA]
+    rate_at, tau_at = int(r[R_S_RATE]), int(r[R_S_TAU])
+    if started and rate_at >= 0:
+        omega = a.stack_row[rate_at]
+    elif started:
+        omega = (theta_now - r[R_PREV_THETA]) / r[R_DT]
+    else:
+        omega = 0.0
+    r[R_PREV_THETA] = theta_now
+    tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
+    phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
+    if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
+        phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
+        if abs(phi) > r[R_ROLL] or speed < r[R_SPEED_LOW] or speed > r[R_SPEED_HIGH]:
+            # the motorcycle fell or left the model's speeds: the run ends as offline, the
+            # torque faded out as at the end of its duration
+            r[R_LEFT] = 1.0
+            r[R_LEFT_T] = t - r[R_T0]
+            r[R_LEFT_PHI] = phi
+            r[R_LEFT_SPEED] = speed
+            r[R_FINISHING] = 1.0
+            safety_request_stop(s)
+    theta = theta_now if started else 0.0
+    out = safety_step(s, a.limits, command, theta, omega, tau_hat, t - r[R_T0])
+    state = s[S_STATE]
+    values = a.command_values
+    values[q[Q_COMMAND_CURRENT]] = out
+    live = state == 1.0 or state == 2.0 or state == 4.0  # FADE_IN, RUNNING, STOPPING
+    values[q[Q_ENABLE]] = 1.0 if live else 0.0
+    sent = int(r[R_SENT])
+    values[q[Q_COMMAND_COUNTER]] = sent & 0xF
+    r[R_SENT] = sent + 1
+    encode_frame(a.command, values, a.command_frame, q[Q_COMMAND_AT])
+    every = int(r[R_HEARTBEAT_EVERY])
+    beat = k % every == 0
+    if beat:
+        values = a.heartbeat_values
+        values[q[Q_STATE]] = state
+        values[q[Q_FAULT]] = s[S_FAULT]
+        values[q[Q_HEARTBEAT_COUNTER]] = (k // every) & 0xF
+        encode_frame(a.heartbeat, values, a.heartbeat_frame, q[Q_HEARTBEAT_AT])
+    slot = int(a.ring_head[0] % a.ring.shape[0])
+    row = a.ring[slot]
+    row[0] = t - r[R_T0]
+    row[1] = theta_now
+    row[2] = r[R_CURRENT]
+    row[3] = command
+    row[4] = out
+    row[5] = state
+    row[6] = s[S_FAULT]
+    row[7] = t
+    row[8] = woke - t
+    row[9] = math.nan  # compute, done_control, done_send: by the runner after the send
+    row[10] = k - r[R_CALLS]  # deadlines skipped before this one
+    row[11] = done_read - woke
+    row[12] = math.nan
+    row[13] = math.nan
+    r[R_CALLS] += 1.0
+    n_loop = q[Q_LOOP_COLUMNS]
+    for j in range(a.stack_row.size):
+        row[n_loop + j] = a.stack_row[j] if started else 0.0
+    if state == 3.0:  # FAULT
+        r[R_AFTER_FAULT] += 1.0
+        carry_on = r[R_AFTER_FAULT] < r[R_LINGER]
+    else:
+        carry_on = not ((r[R_STOP] != 0.0 or r[R_FINISHING] != 0.0) and state == 0.0)
+    return (1 if carry_on else 0) + (2 if beat else 0) + 4 * slot
+
+
+@njit(cache=True)
+def fused_period(
+    model: Any,
+    data: Any,
+    force: Array,
+    side_force: Array,
+    stack_state: Array,
+    a: PeriodArrays,
+    frames: int,
+    k: int,
+    t: float,
+    woke: float,
+    done_read: float,
+) -> int:
+    """One whole period of a runner whose stack is compiled: :func:`take_frames` of the
+    ``frames`` read, :func:`begin`, the stack (:func:`~motosim.rt.stack.stack_reset`,
+    :func:`~motosim.rt.stack.stack_period`, with ``model``, ``data``, the forces and the
+    stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`
+    (whose value it returns)."""
+    r = a.runner
+    take_frames(a, 0, frames)
+    if begin(a, k, t):
+        stack_reset(model, data, force, side_force, stack_state, r[R_THETA], r[R_CURRENT])
+    command = 0.0
+    if r[R_STARTED] != 0.0:
+        command = stack_period(
+            model, data, force, side_force, stack_state, a.stack_row, r[R_THETA], r[R_CURRENT]
+        )
+    return finish(a, command, k, t, woke, done_read)
