@@ -134,14 +134,13 @@ OTHERS = ("turn_30", "straight_50_gust", "lane_change_30", "slalom_15")
 """Unseen checks: two scenarios of scenarios/ and two of bench/scenarios/ at other speeds."""
 
 
-def table(runs: str, thresholds: str = "telban", prediction: str = "") -> str:
+def table(runs: str, thresholds: str = "telban") -> str:
     """Markdown table washout vs MPC on result folders ``runs/NAME`` of `motosim simulate`.
 
     Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario
     (``bench/scenarios/NAME.toml`` for the last two of :data:`OTHERS`), then ``python
     bench/bench_cueing.py RUNS`` (``RUNS benson`` to score with the thresholds
-    of Benson et al. 1986, 1989; the MPC still plans with the default model's; ``RUNS telban
-    model`` to give the MPC the run's motorcycle for its model-based prediction).
+    of Benson et al. 1986, 1989; the MPC still plans with the default model's).
     """
     from pathlib import Path
 
@@ -162,14 +161,8 @@ def table(runs: str, thresholds: str = "telban", prediction: str = "") -> str:
             continue
         r = load_result(folder)
         series = TimeSeries(r.t, r.data, r.names)
-        params = None
-        if prediction == "model":
-            from motosim.params.sharp import SharpParameters
-
-            params = SharpParameters(**r.metadata["sharp"])
         for algorithm in ("washout", "mpc"):
-            run = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0,  # type: ignore[arg-type]
-                      params=params)  # fmt: skip
+            run = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0)  # type: ignore[arg-type]
             s = run.score
             if thresholds == "benson":
                 s = score(BENSON_1986_1989, run.vehicle, run.platform, cfg.platform,
@@ -190,4 +183,4 @@ def table(runs: str, thresholds: str = "telban", prediction: str = "") -> str:
 if __name__ == "__main__":
     import sys
 
-    print(table(*sys.argv[1:4]) if len(sys.argv) > 1 else run())
+    print(table(*sys.argv[1:3]) if len(sys.argv) > 1 else run())

@@ -90,19 +90,9 @@ from numpy.typing import NDArray
 from motosim.cueing.platform import CueingConfig
 from motosim.cueing.vestibular import VestibularModel, canal_tf, otolith_tf
 from motosim.errors import MotosimError
-from motosim.params.sharp import SharpParameters
 from motosim.timeseries import TimeSeries
 
-__all__ = [
-    "LATERAL_INPUTS",
-    "MOTION_INPUTS",
-    "AxisPlan",
-    "LateralModel",
-    "MpcCueing",
-    "MpcDesign",
-    "apply_mpc",
-    "design_mpc",
-]
+__all__ = ["MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "design_mpc"]
 
 Array = NDArray[np.float64]
 
@@ -115,14 +105,6 @@ BAND_MARGIN = 0.9
 """The band of the false-cue constraints, as a fraction of the perception threshold."""
 MOTION_INPUTS = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
 """What :meth:`MpcCueing.step` reads, in order."""
-LATERAL_INPUTS = (
-    "v_x", "v_y", "psi_dot", "phi_dot", "delta_dot", "phi", "delta", "F_yr", "F_yf", "tau_r_hat",
-)  # fmt: skip
-"""The motorcycle's state and rider torque estimate :meth:`MpcCueing.step` reads for the
-model-based prediction, in order (the signals of :mod:`motosim.signals`)."""
-MIN_MODEL_SPEED = 1.0
-"""Below this forward speed [m/s] (:data:`motosim.model.sharp.MIN_SPEED`) the lateral model
-is not used and the motion is predicted as held and fading parts."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -190,48 +172,11 @@ class AxisPlan:
 
 
 @dataclass(frozen=True, slots=True)
-class LateralModel:
-    """The motorcycle's linear lateral model, for the model-based prediction.
-
-    Attributes
-    ----------
-    A0, A1, B : ndarray
-        ``A_v(v_x) = A0 + v_x A1`` (8 x 8) and ``B_v`` (8,) of
-        :func:`motosim.model.sharp.lpv_matrices`, states :data:`LATERAL_STATES`, input the
-        rider's torque [N*m].
-    g : float
-        Gravitational acceleration of the parameter set [m/s^2].
-    head : tuple of float
-        ``(x, height)`` [m]: the rider's head ahead of the rear contact point and above the
-        ground.
-    torque_time : float
-        The rider's torque, and the part of each rate the model does not explain, are
-        predicted to fade as ``exp(-t / torque_time)`` [s].
-    step : float
-        The prediction step [s].
-    forced : tuple of ndarray
-        Per axis ``(canal, otolith)`` zero-state responses at steps 1..N to an input sampled
-        at steps 0..N and linear in between, shape (N, N + 1) each.
-    """
-
-    A0: Array
-    A1: Array
-    B: Array
-    g: float
-    head: tuple[float, float]
-    torque_time: float
-    step: float
-    forced: tuple[tuple[Array, Array], ...]
-
-
-@dataclass(frozen=True, slots=True)
 class MpcDesign:
-    """Per-axis plans (roll, pitch, yaw) at one loop period ``dt`` [s], and the lateral model
-    of the model-based prediction (None: the held and fading prediction only)."""
+    """Per-axis plans (roll, pitch, yaw) at one loop period ``dt`` [s]."""
 
     dt: float
     axes: tuple[AxisPlan, AxisPlan, AxisPlan]
-    lateral: LateralModel | None = None
 
 
 def _ss(num: Array, den: Array) -> tuple[Array, Array, Array]:
@@ -271,28 +216,6 @@ def _vehicle_prediction(A: Array, B: Array, C: Array, h: float, N: int, tau: flo
     for k in range(N):
         power = E @ power
         out[k] = C @ power[:n]
-    return out
-
-
-def _forced_response(A: Array, B: Array, C: Array, h: float, N: int) -> Array:
-    """Outputs at steps 1..N of a model from rest driven by an input sampled at steps 0..N
-    and linear between samples (first-order hold): (N, N + 1) map of the samples."""
-    from scipy.linalg import expm
-
-    n = A.shape[0]
-    M = np.zeros((n + 2, n + 2))
-    M[:n, :n] = A
-    M[:n, n] = B
-    M[n, n + 1] = 1.0 / h
-    E = expm(M * h)
-    Ad, G1, G2 = E[:n, :n], E[:n, n], E[:n, n + 1]
-    out = np.zeros((N, N + 1))
-    x = np.zeros((n, N + 1))
-    for k in range(N):
-        x = Ad @ x
-        x[:, k] += G1 - G2
-        x[:, k + 1] += G2
-        out[k] = C @ x
     return out
 
 
@@ -411,12 +334,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
     )
 
 
-def design_mpc(
-    config: CueingConfig,
-    model: VestibularModel,
-    dt: float,
-    params: SharpParameters | None = None,
-) -> MpcDesign:
+def design_mpc(config: CueingConfig, model: VestibularModel, dt: float) -> MpcDesign:
     """Build the three condensed QPs of the module docstring.
 
     Parameters
@@ -427,9 +345,6 @@ def design_mpc(
         Canal and otolith models and the thresholds that scale the errors.
     dt : float
         Loop period [s]; at most the prediction step.
-    params : SharpParameters, optional
-        The motorcycle: with it, the motion is predicted with its lateral model when
-        :meth:`MpcCueing.step` is given its state (module docstring).
 
     Returns
     -------
@@ -445,28 +360,8 @@ def design_mpc(
         raise MotosimError(
             f"loop period dt = {dt!r} s; expected > 0 and <= the MPC step {config.mpc.step:g} s"
         )
-    axes = (_axis(config, model, 0, dt), _axis(config, model, 1, dt), _axis(config, model, 2, dt))
-    lateral = None
-    if params is not None:
-        from motosim.model.sharp import lpv_matrices
-
-        A0, A1, B = lpv_matrices(params)
-        N, h = config.mpc.horizon, config.mpc.step
-        canal, otolith = _ss(*canal_tf(model)), _ss(*otolith_tf(model))
-        forced = tuple(
-            (_forced_response(*canal, h, N), _forced_response(*otolith, h, N)) for _ in axes
-        )
-        lateral = LateralModel(
-            A0=A0,
-            A1=A1,
-            B=B,
-            g=params.g,
-            head=(config.rider.x, config.rider.height),
-            torque_time=config.mpc.prediction_time,
-            step=h,
-            forced=forced,
-        )
-    return MpcDesign(dt, axes, lateral)
+    return MpcDesign(dt, (_axis(config, model, 0, dt), _axis(config, model, 1, dt),
+                          _axis(config, model, 2, dt)))  # fmt: skip
 
 
 class MpcCueing:
@@ -501,10 +396,6 @@ class MpcCueing:
         self._roll_rate = math.nan  # the last step's roll rate, for the roll acceleration
         self._feed_canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
         self._maps = [self._stack(plan) for plan in design.axes]
-        self._fade = np.zeros(design.axes[0].P.shape[0] + 1)
-        if design.lateral is not None:
-            lat = design.lateral
-            self._fade = np.exp(-np.arange(self._fade.size) * lat.step / lat.torque_time)
         self.fallbacks = 0
         """Steps planned without the angle and rate bounds (no admissible plan)."""
         self.rates = np.zeros(3)
@@ -583,38 +474,6 @@ class MpcCueing:
         U[nc + no :, f : f + nc], U[nc + no :, f + nc], U[nc + no :, f + nc + 1] = Ac, Bc, Bc
         return K, U, nc, no
 
-    def _model_terms(
-        self, j: int, K: Array, v: Array, model: Array, w_c: float, w_o: float, scale: float,
-        nc: int, no: int,
-    ) -> Array:  # fmt: skip
-        """``K @ v`` with the vehicle's rate (and for roll its lateral force) predicted by the
-        lateral model ``model`` (:meth:`_lateral_prediction`) plus what it does not explain
-        now (``w - model[0]``): fading for the rate, held for the force."""
-        lat = self.design.lateral
-        assert lat is not None
-        plan = self.design.axes[j]
-        N = plan.P.shape[0]
-        nx = plan.A_loop.shape[0]
-        c, o = nx + nc, nx + nc + 2 + no
-        fade = self._fade
-        rate = scale * model[j]
-        seq_c = rate + (w_c - rate[0]) * fade
-        free = v.copy()
-        free[c : c + 2] = 0.0
-        forced_c = lat.forced[j][0] @ seq_c
-        forced_o = np.zeros(N)
-        if j == 0:
-            seq_o = model[3] + (w_o - model[3, 0])
-            free[o : o + 2] = 0.0
-            forced_o = lat.forced[j][1] @ seq_o
-        y = K @ free
-        rows_c, rows_o = (*plan.band_steps, np.arange(0))[:2]
-        nr = rows_c.size
-        y[:N] -= plan.W_canal @ forced_c + plan.W_otolith @ forced_o
-        y[N : N + nr] += forced_c[rows_c]
-        y[N + nr : N + plan.band_M.shape[0]] += forced_o[rows_o]
-        return y
-
     @staticmethod
     def _bounds(plan: AxisPlan, pred: Array, free: Array, felt: Array) -> tuple[Array, Array]:
         X, V, A = plan.limits
@@ -635,52 +494,7 @@ class MpcCueing:
             x[:] = 0.0
         self._roll_rate = math.nan
 
-    def _lateral_prediction(self, state: Array) -> Array | None:
-        """The lateral model's head motion at steps 0..N from ``state``
-        (:data:`LATERAL_INPUTS`): rows roll, pitch and yaw rates [rad/s] and lateral force
-        [m/s^2], shape (4, N + 1); None where the state cannot be used."""
-        lat = self.design.lateral
-        v_x = float(state[0])
-        if lat is None or not (np.all(np.isfinite(state)) and v_x >= MIN_MODEL_SPEED):
-            return None
-        from scipy.linalg import expm
-
-        plan = self.design.axes[0]
-        N, h = plan.P.shape[0], lat.step
-        A = lat.A0 + v_x * lat.A1
-        M = np.zeros((9, 9))
-        M[:8, :8], M[:8, 8], M[8, 8] = A, lat.B, -1.0 / lat.torque_time
-        E = expm(M * h)
-        z = np.empty((N + 1, 9))
-        z[0] = state[1:]
-        for k in range(N):
-            z[k + 1] = E @ z[k]
-        x, tau = z[:, :8], z[:, 8]
-        dx = x @ A.T + np.outer(tau, lat.B)
-        psi_dot, phi_dot, phi = x[:, 1], x[:, 2], x[:, 4]
-        sf, cf = np.sin(phi), np.cos(phi)
-        p, q, r = phi_dot, psi_dot * sf, psi_dot * cf
-        x_h, z_h = lat.head[0], -lat.head[1]
-        alpha_x, alpha_z = dx[:, 2], dx[:, 1] * cf - psi_dot * sf * phi_dot
-        # f_y of motosim.cueing.head with theta = 0: a_y cos(phi) - g sin(phi) + (alpha x
-        # r)_y + (omega x (omega x r))_y, r = (x_h, 0, z_h)
-        f_y = (
-            (dx[:, 0] + v_x * psi_dot) * cf
-            - lat.g * sf
-            + alpha_z * x_h
-            - alpha_x * z_h
-            + r * q * z_h
-            + p * q * x_h
-        )
-        return np.vstack([p, q, r, f_y])
-
-    def step(
-        self,
-        motion: Array,
-        reference: Array,
-        onset: Array | None = None,
-        lateral: Array | None = None,
-    ) -> Array:
+    def step(self, motion: Array, reference: Array, onset: Array | None = None) -> Array:
         """One loop step.
 
         Parameters
@@ -696,10 +510,6 @@ class MpcCueing:
             Row 0: roll, pitch and yaw angles [rad] fed through to the targets beside the
             plan (the suspension's pitch onset); row 1: the motorcycle's head-frame angular
             velocity [rad/s] they render, which the plan then leaves out of its tracking.
-        lateral : ndarray, shape (10,), optional
-            The motorcycle's state and rider torque estimate now (:data:`LATERAL_INPUTS`):
-            with a design's lateral model, the roll, pitch and yaw rates and the lateral
-            force are predicted with it (module docstring).
 
         Returns
         -------
@@ -707,7 +517,6 @@ class MpcCueing:
             Platform roll, pitch and yaw targets [rad] for the limit manager.
         """
         out = np.empty(3)
-        model = None if lateral is None else self._lateral_prediction(lateral)
         (roll, _), (pitch, pitch_dot), (_, yaw_dot) = (x[:2] for x in self._state)
         # the rate each axis must give so that the head's angular velocity (module
         # docstring of motosim.cueing.head) matches, the other axes' present rates held
@@ -717,7 +526,6 @@ class MpcCueing:
             ((motion[1] - yaw_dot * sr * cp) / cr, motion[3]),
             ((motion[2] + pitch_dot * sr) / (cr * cp), 0.0),
         )
-        scales = (1.0, 1.0 / cr, 1.0 / (cr * cp))  # of the vehicle's rate in each axis's
         for j, plan in enumerate(self.design.axes):
             x0 = self._state[j]
             w_c, w_o = inputs[j]
@@ -739,12 +547,9 @@ class MpcCueing:
                 [x0, self._canal[j], (0.0, w_c), self._otolith[j], (held, fading),
                  self._feed_canal[j], (0.0, feed_rate), (reference[j] - feed,)]
             )  # fmt: skip
+            y = K @ v
             N = plan.P.shape[0]
             nb = plan.band_M.shape[0]
-            if model is None:
-                y = K @ v
-            else:
-                y = self._model_terms(j, K, v, model, w_c, w_o, scales[j], nc, no)
             r_b = y[N : N + nb]
             felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
             q = np.concatenate([y[:N], plan.band_lin])
@@ -776,11 +581,7 @@ class MpcCueing:
 
 
 def apply_mpc(
-    design: MpcDesign,
-    vehicle: TimeSeries,
-    reference: Array,
-    onset: Array | None = None,
-    lateral: Array | None = None,
+    design: MpcDesign, vehicle: TimeSeries, reference: Array, onset: Array | None = None
 ) -> tuple[Array, Array]:
     """Run the MPC cueing over a whole series from rest.
 
@@ -795,9 +596,6 @@ def apply_mpc(
         Angle references [rad] (see :meth:`MpcCueing.step`).
     onset : ndarray, shape (n, 2, 3), optional
         The onsets fed through, per sample (see :meth:`MpcCueing.step`).
-    lateral : ndarray, shape (n, 10), optional
-        The motorcycle's state and rider torque estimate per sample (:data:`LATERAL_INPUTS`)
-        for a design with a lateral model.
 
     Returns
     -------
@@ -809,11 +607,6 @@ def apply_mpc(
     ref = np.asarray(reference, dtype=np.float64)
     targets, rates = np.empty((motion.shape[0], 3)), np.empty((motion.shape[0], 3))
     for k in range(motion.shape[0]):
-        targets[k] = mpc.step(
-            motion[k],
-            ref[k],
-            None if onset is None else onset[k],
-            None if lateral is None else lateral[k],
-        )
+        targets[k] = mpc.step(motion[k], ref[k], None if onset is None else onset[k])
         rates[k] = mpc.rates
     return targets, rates

@@ -123,19 +123,14 @@ def cue(
     targets = apply_washout(washout, inputs)[:, :3]
     rates = None
     if algorithm == "mpc":  # the washout's commands are the MPC's angle reference
-        from motosim.cueing.mpc import LATERAL_INPUTS, apply_mpc, design_mpc
+        from motosim.cueing.mpc import apply_mpc, design_mpc
 
         # the suspension pitch's onset is fed through (the washout's high-passed pitch):
         # [angle fed through, the vehicle's head-frame pitch rate it renders]
         onset = np.zeros((targets.shape[0], 2, 3))
         onset[:, 0, 1] = run_section(np.asarray(washout.pitch_onset), vehicle["theta"])
         onset[:, 1, 1] = vehicle["theta_dot"] * np.cos(run["phi"])
-        # with the motorcycle and its recorded state, the motion is predicted by its model
-        lateral = None
-        if params is not None and all(name in run.names for name in LATERAL_INPUTS):
-            lateral = np.column_stack([run[name] for name in LATERAL_INPUTS])
-        design = design_mpc(config, model, dt, params if lateral is not None else None)
-        targets, rates = apply_mpc(design, vehicle, targets, onset, lateral)
+        targets, rates = apply_mpc(design_mpc(config, model, dt), vehicle, targets, onset)
     limited = apply_limits(design_limits(config.platform, dt), targets, rates)
     horizon = horizon_gain * run["phi"] - limited[:, 0]
     commands = TimeSeries(run.t, np.column_stack([limited, horizon]), COMMAND_SIGNALS)
