@@ -180,7 +180,69 @@ def table(runs: str, thresholds: str = "telban") -> str:
     return "\n".join(lines)
 
 
+def prediction_errors(runs: str) -> str:
+    """RMS error [deg/s] of roll-rate predictions 0.25 s and 1 s ahead on result folders.
+
+    Three predictions from each 0.05 s sample of a run at 100 Hz: the MPC's (the present
+    rate fading over its ``prediction_time``), and Sharp's linear model at the present speed
+    from the recorded lateral state and rider torque estimate, the torque fading over the
+    same time or held. Reproduce: ``python bench/bench_cueing.py RUNS prediction`` on the
+    folders of :func:`table`.
+    """
+    from pathlib import Path
+
+    from scipy.linalg import expm
+
+    from motosim.io.results import load_result
+    from motosim.model.sharp import lpv_matrices
+    from motosim.params.sharp import SharpParameters
+
+    tuning = load_platform("simacom_platform").mpc
+    h, n, tau = tuning.step, tuning.horizon, tuning.prediction_time
+    names = ("v_x", "v_y", "psi_dot", "phi_dot", "delta_dot", "phi", "delta", "F_yr", "F_yf",
+             "tau_r_hat")  # fmt: skip
+    ahead = (round(0.25 / h), n)
+    lines = [
+        "| scenario | faded | model, torque fading | model, torque held |",
+        "|---|---|---|---|",
+    ]
+    for name in (*TRAINING, *OTHERS):
+        folder = Path(runs) / name
+        if not folder.is_dir():
+            continue
+        r = load_result(folder)
+        A0, A1, B = lpv_matrices(SharpParameters(**r.metadata["sharp"]))
+        every = round(0.01 / float(r.t[1] - r.t[0]))
+        x = r.data[::every][:, [r.names.index(c) for c in names]]
+        per = round(h / 0.01)
+        errors: dict[str, list[np.ndarray]] = {"faded": [], "fading": [], "held": []}
+        times = np.arange(n + 1) * h
+        for k in range(0, x.shape[0] - per * n - 1, per):
+            future = x[k : k + per * n + 1 : per, 3]
+            errors["faded"].append(future - x[k, 3] * np.exp(-times / tau))
+            A = A0 + x[k, 0] * A1
+            for label, decay in (("fading", -1.0 / tau), ("held", 0.0)):
+                M = np.zeros((9, 9))
+                M[:8, :8], M[:8, 8], M[8, 8] = A, B, decay
+                E = expm(M * h)
+                z = x[k, 1:].copy()
+                predicted = [z[2]]
+                for _ in range(n):
+                    z = E @ z
+                    predicted.append(z[2])
+                errors[label].append(future - np.array(predicted))
+        cells = []
+        for e in errors.values():
+            rms = np.degrees(np.sqrt(np.mean(np.array(e)[:, ahead] ** 2, axis=0)))
+            cells.append(f"{rms[0]:.1f} / {rms[1]:.1f}")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 if __name__ == "__main__":
     import sys
 
-    print(table(*sys.argv[1:3]) if len(sys.argv) > 1 else run())
+    if len(sys.argv) > 2 and sys.argv[2] == "prediction":
+        print(prediction_errors(sys.argv[1]))
+    else:
+        print(table(*sys.argv[1:3]) if len(sys.argv) > 1 else run())
