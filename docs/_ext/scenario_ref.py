@@ -199,13 +199,13 @@ DESCRIPTIONS: dict[str, str] = {
     "path.avoidance.start": "Where it starts [m].",
     "path.opendrive.file": (
         "An OpenDRIVE (`.xodr`) file, relative to the scenario: the reference line of its "
-        "road's `<planView>` (lines, arcs, spirals; `poly3` and `paramPoly3` are refused), "
+        "road's `<planView>` (lines, arcs, spirals, `paramPoly3` and `poly3`), "
         "moved to start at the origin heading along x, straight on past its end."
     ),
     "path.opendrive.road": 'The `id` of the road; `""`: the file\'s only road.',
     "path.opendrive.geometry": (
         "The road's geometries (`kind`, `s`, `x`, `y`, `hdg`, `length`, `curv_start`, "
-        "`curv_end`, in the file's frame), read from `file` when the scenario is loaded; "
+        "`curv_end`, a cubic's `poly` and `p_end`, in the file's frame), read from `file` when the scenario is loaded; "
         "a saved result keeps them, so leave it out."
     ),
 }

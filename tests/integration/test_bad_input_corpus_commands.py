@@ -409,13 +409,23 @@ def _damaged_roads(text: str) -> Iterator[tuple[str, bytes]]:
             "<OpenDRIVE>", '<!DOCTYPE r [<!ENTITY e SYSTEM "file:///etc/passwd">]><OpenDRIVE>', 1
         ).encode(),
     )
-    yield (
-        "paramPoly3",
+    yield (  # a straight line half as long as its length attribute says
+        "paramPoly3-length",
         text.replace(
-            "<line/>", '<paramPoly3 aU="0" bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/>', 1
+            "<line/>", '<paramPoly3 aU="0" bU="0.5" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/>', 1
         ).encode(),
     )
-    yield "poly3", text.replace("<line/>", '<poly3 a="0" b="0" c="0" d="0"/>', 1).encode()
+    yield (  # u = p^3: the curve stands still at its start
+        "paramPoly3-cusp",
+        text.replace(
+            "<line/>",
+            '<paramPoly3 aU="0" bU="0" cU="0" dU="1" aV="0" bV="0" cV="0" dV="0" '
+            'pRange="normalized"/>',
+            1,
+        ).encode(),
+    )
+    yield "poly3-tight", text.replace("<line/>", '<poly3 a="0" b="0" c="5" d="0"/>', 1).encode()
+    yield "poly3-nan", text.replace("<line/>", '<poly3 a="0" b="nan" c="0" d="0"/>', 1).encode()
     yield "gap", text.replace('x="214.64', 'x="215.64', 1).encode()
     yield "nan-curvature", text.replace('curvature="0.005"', 'curvature="nan"', 1).encode()
     yield "huge-curvature", text.replace('curvature="0.005"', 'curvature="1e300"', 1).encode()

@@ -5,6 +5,12 @@ linearly with arc length; its position is the Fresnel integrals' (Abramowitz & S
 and 7.3.2), here evaluated by ``scipy.special.fresnel`` (independent of the Gauss-Legendre
 quadrature of :meth:`motosim.sim.paths.RoadGeometry.positions`). OpenDRIVE stores each
 geometry's start (x, y, hdg): the integrated end of one must be the start of the next.
+
+Its polynomial geometries (section 7.4.4-7.4.5) are checked on the parabola v = c u^2, whose
+arc length has the closed form s(u) = u sqrt(1 + 4 c^2 u^2) / 2 + asinh(2 c u) / (4 c), heading
+atan(2 c u) and curvature 2 c / (1 + 4 c^2 u^2)^(3/2) (any calculus text), written as a
+``poly3`` and as a ``paramPoly3`` with both ``pRange`` values, and on a ``paramPoly3`` that is a
+straight line.
 """
 
 import itertools
@@ -13,9 +19,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 from scipy.special import fresnel
 
-from motosim.io.opendrive import read_opendrive
+from motosim.io.opendrive import parse_opendrive, read_opendrive
 from motosim.io.runs import load_scenario
 from motosim.sim.paths import RoadGeometry, reference_line, road_poses
 
@@ -77,6 +84,54 @@ def test_line() -> None:
     g = RoadGeometry("line", 0.0, 1.0, 2.0, 0.5, 10.0)
     x, y = g.positions(np.array([0.0, 10.0]))
     assert np.allclose([x[1], y[1]], [1.0 + 10 * math.cos(0.5), 2.0 + 10 * math.sin(0.5)])
+
+
+def _road(shape: str, length: float) -> bytes:
+    start = f's="0" x="2" y="-1" hdg="0.3" length="{length!r}"'
+    text = f"<OpenDRIVE><road id='1'><planView><geometry {start}>{shape}</geometry></planView>"
+    return (text + "</road></OpenDRIVE>").encode()
+
+
+@pytest.mark.parametrize("c", [0.01, -0.03, 0.4])
+def test_polynomials_are_the_parabola(c: float) -> None:
+    def arc(u: float) -> float:  # closed-form arc length of v = c u^2
+        return u * math.sqrt(1 + 4 * c * c * u * u) / 2 + math.asinh(2 * c * u) / (4 * c)
+
+    end = 30.0 if abs(c) < 0.1 else 2.0  # curvature within the 1/m accepted
+    length = arc(end)
+    k = end / length  # u per unit of p when p runs over the arc length
+    shapes = [
+        f'<poly3 a="0" b="0" c="{c!r}" d="0"/>',
+        f'<paramPoly3 aU="0" bU="{end!r}" cU="0" dU="0" aV="0" bV="0" cV="{c * end**2!r}" '
+        'dV="0" pRange="normalized"/>',
+        f'<paramPoly3 aU="0" bU="{k!r}" cU="0" dU="0" aV="0" bV="0" cV="{c * k * k!r}" dV="0"/>',
+    ]
+    s = np.linspace(0.0, length, 23)
+    u = np.array([brentq(lambda x, t=t: arc(x) - t, 0.0, end + 1.0, xtol=1e-14) for t in s])
+    lx, ly = u, c * u**2
+    x_ref = 2.0 + math.cos(0.3) * lx - math.sin(0.3) * ly
+    y_ref = -1.0 + math.sin(0.3) * lx + math.cos(0.3) * ly
+    for shape in shapes:
+        (g,) = parse_opendrive(_road(shape, length), origin="parabola.xodr")
+        x, y, psi, kappa = road_poses((g,), s)
+        np.testing.assert_allclose(x, x_ref, atol=1e-9, rtol=0)
+        np.testing.assert_allclose(y, y_ref, atol=1e-9, rtol=0)
+        np.testing.assert_allclose(psi, 0.3 + np.arctan(2 * c * u), atol=1e-12)
+        np.testing.assert_allclose(kappa, 2 * c / (1 + 4 * c * c * u * u) ** 1.5, atol=1e-12)
+
+
+def test_a_straight_param_poly3_is_the_line() -> None:
+    line = RoadGeometry("line", 0.0, 1.0, 2.0, 0.5, 10.0)
+    (poly,) = parse_opendrive(
+        _road(
+            '<paramPoly3 aU="0" bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/>', 10.0
+        ).replace(b'x="2" y="-1" hdg="0.3"', b'x="1" y="2" hdg="0.5"'),
+        origin="line.xodr",
+    )
+    u = np.linspace(0.0, 10.0, 11)
+    np.testing.assert_allclose(poly.positions(u), line.positions(u), atol=1e-12)
+    np.testing.assert_allclose(poly.heading(u), line.heading(u), atol=1e-15)
+    assert np.all(poly.curvature(u) == 0.0)
 
 
 def test_each_geometry_ends_where_the_file_starts_the_next() -> None:

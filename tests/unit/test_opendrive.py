@@ -48,10 +48,29 @@ def test_a_namespace_and_zero_length_geometries_are_accepted() -> None:
     ("raw", "expected"),
     [
         (
-            _geometry('<paramPoly3 aU="0" bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/>'),
-            "<paramPoly3> is not supported; expected <line>, <arc> or <spiral>",
+            _geometry('<paramPoly3 aU="0" bU="0.5" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/>'),
+            "a paramPoly3 whose arc length is 5 m; its length says 10 m",
         ),
-        (_geometry('<poly3 a="0" b="0" c="0" d="0"/>'), "<poly3> is not supported"),
+        (
+            _geometry('<poly3 a="0" b="0" c="5" d="0"/>'),
+            "a paramPoly3 with curvature up to 10 1/m; expected at most 1 1/m",
+        ),
+        (
+            _geometry(
+                '<paramPoly3 aU="0" bU="0" cU="0" dU="1" aV="0" bV="0" cV="0" dV="0" '
+                'pRange="normalized"/>',
+                length="1",
+            ),
+            "a paramPoly3 that stops or turns back (zero speed)",
+        ),
+        (
+            _geometry(
+                '<paramPoly3 aU="0" bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0" '
+                'pRange="unit"/>'
+            ),
+            "pRange = 'unit'; expected 'arcLength' or 'normalized'",
+        ),
+        (_geometry('<poly3 a="0" b="0" c="0"/>'), "missing attribute 'd'; expected a number"),
         (_geometry("<line/>", hdg="nan"), "hdg = 'nan'; expected a finite number"),
         (_geometry("<line/>", x="1e400"), "x = '1e400'; expected a finite number"),
         (_geometry("<line/>", length="-3"), "length = -3.0; expected a finite length > 0"),
@@ -104,6 +123,27 @@ def test_path_kind_parses_and_round_trips_with_its_geometry() -> None:
     again = scenario_from_dict(scenario_dict(scenario), origin="metadata")
     assert again == scenario
     assert np.array_equal(again.rider.path.build(10.0).x, path.build(10.0).x)  # type: ignore[union-attr]
+
+
+def test_a_polynomial_road_is_continuous_and_round_trips() -> None:
+    # a gentle poly3 bend, then the line that starts where it ends (as an exporter writes it)
+    (bend,) = parse_opendrive(_geometry('<poly3 a="0" b="0" c="0.002" d="-2e-5"/>',
+                                        length="50"), origin="r.xodr")  # fmt: skip
+    x, y, hdg = bend.end()
+    line = f'<geometry s="50" x="{x!r}" y="{y!r}" hdg="{hdg!r}" length="30"><line/></geometry>'
+    raw = _geometry('<poly3 a="0" b="0" c="0.002" d="-2e-5"/>', length="50")
+    geometry = parse_opendrive(raw.replace(b"</planView>", line.encode() + b"</planView>"),
+                               origin="r.xodr")  # fmt: skip
+    assert [g.kind for g in geometry] == ["paramPoly3", "line"]
+    rider = {"kind": "virtual", "path": {"kind": "opendrive", "file": "r.xodr"}}
+    doc = {"scenario": {"name": "x"}, "motorcycle": {"speed": 15.0}, "rider": rider}
+    plain = parse_scenario(doc, origin="s.toml")
+    path = dataclasses.replace(plain.rider.path, geometry=geometry)  # type: ignore[type-var]
+    scenario = dataclasses.replace(plain, rider=dataclasses.replace(plain.rider, path=path))
+    again = scenario_from_dict(scenario_dict(scenario), origin="metadata")
+    assert again == scenario
+    road = again.rider.path.build(80.0)  # type: ignore[union-attr]
+    assert np.max(np.abs(np.diff(road.psi))) < 0.01  # no kink where the bend meets the line
 
 
 def test_path_kind_without_its_file_read_says_so() -> None:

@@ -3,9 +3,9 @@
 A scenario's path ``{ kind = "opendrive", file = "road.xodr" }`` names a file of the ASAM
 OpenDRIVE format (an XML document); :func:`read_opendrive` reads the ``<planView>`` of one of
 its roads into :class:`motosim.sim.paths.RoadGeometry` records, which
-:func:`motosim.sim.paths.reference_line` samples. Only the plan view is read (lines, arcs and
-spirals, ASAM OpenDRIVE 1.6 section 7.4): lanes, elevation, superelevation and junctions are
-ignored, and the polynomial geometries (``poly3``, ``paramPoly3``) are refused.
+:func:`motosim.sim.paths.reference_line` samples. Only the plan view is read (lines, arcs,
+spirals, ``paramPoly3`` and the deprecated ``poly3``, ASAM OpenDRIVE 1.6 section 7.4): lanes,
+elevation, superelevation and junctions are ignored.
 
 The file is untrusted input: its size is checked before it is read, a document type
 declaration (``<!DOCTYPE``, hence any entity) is refused, and it is parsed by
@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from motosim.errors import MotosimError
-from motosim.sim.paths import RoadGeometry, road_poses
+from motosim.sim.paths import MAX_ROAD_LENGTH, RoadGeometry, road_poses
 
 __all__ = ["MAX_GEOMETRIES", "MAX_XODR_BYTES", "parse_opendrive", "read_opendrive"]
 
@@ -31,7 +31,7 @@ MAX_XODR_BYTES = 20_000_000
 """Largest ``.xodr`` file read [bytes] (a city's map is a few MB)."""
 MAX_GEOMETRIES = 100_000
 """Most ``<geometry>`` elements of the chosen road."""
-_REFUSED = ("poly3", "paramPoly3")
+_SHAPES = "<line>, <arc>, <spiral>, <paramPoly3> or <poly3>"
 
 
 def _parse_xml(raw: bytes, origin: str) -> Any:
@@ -75,6 +75,49 @@ def _number(element: Any, name: str, where: str) -> float:
     return value
 
 
+def _polynomial(shape: Any, length: float, where: str) -> tuple[tuple[float, ...], float]:
+    """A ``<paramPoly3>`` or ``<poly3>`` as paramPoly3 coefficients and the end parameter.
+
+    A ``poly3`` (``v = a + b u + c u^2 + d u^3``) is the paramPoly3 ``u(p) = p``; its end is
+    where its arc length reaches ``length`` (Newton's iteration from ``u = length``).
+    """
+    if not 0.0 < length <= MAX_ROAD_LENGTH:
+        raise MotosimError(
+            f"{where}: length = {length!r}; expected a finite length > 0 and at most "
+            f"{MAX_ROAD_LENGTH:g} m"
+        )
+    if shape.tag == "paramPoly3":
+        names = ("aU", "bU", "cU", "dU", "aV", "bV", "cV", "dV")
+        coefficients = tuple(_number(shape, n, where) for n in names)
+        p_range = shape.get("pRange", "arcLength")
+        if p_range not in ("arcLength", "normalized"):
+            raise MotosimError(
+                f"{where}: pRange = {p_range[:40]!r}; expected 'arcLength' or 'normalized'"
+            )
+        return coefficients, (length if p_range == "arcLength" else 1.0)
+    a, b, c, d = (_number(shape, n, where) for n in ("a", "b", "c", "d"))
+    coefficients = (0.0, 1.0, 0.0, 0.0, a, b, c, d)
+    nodes, weights = np.polynomial.legendre.leggauss(8)
+
+    def slope(u: Any) -> Any:
+        return np.sqrt(1.0 + (b + u * (2.0 * c + 3.0 * d * u)) ** 2)
+
+    u_end = length  # the arc length is at least u, so the end is at most length
+    pieces = max(8, min(4096, math.ceil(length / 0.25)))
+    for _ in range(50):
+        edges = np.linspace(0.0, u_end, pieces + 1)
+        half = 0.5 * np.diff(edges)
+        mid = 0.5 * (edges[1:] + edges[:-1])
+        arc = float(np.sum(half * (slope(mid[:, None] + half[:, None] * nodes) @ weights)))
+        step = (arc - length) / float(slope(u_end))
+        u_end -= step
+        if not (math.isfinite(u_end) and u_end > 0.0):
+            raise MotosimError(f"{where}: a poly3 whose arc length never reaches its length")
+        if abs(step) <= 1e-12 * length:
+            break
+    return coefficients, u_end
+
+
 def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeometry, ...]:
     """The plan view of one road of an OpenDRIVE document.
 
@@ -96,8 +139,9 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
     ------
     MotosimError
         One line: not XML, a DTD, no ``<OpenDRIVE>`` root, no such road (or several and no
-        ``road`` given), a missing or non-finite number, a value out of range, a ``poly3`` or
-        ``paramPoly3`` geometry, or geometries that are not one continuous line.
+        ``road`` given), a missing or non-finite number, a value out of range, a polynomial
+        geometry that is not a road (a cusp, a turn of 180 deg, a ``length`` that is not its
+        arc length), or geometries that are not one continuous line.
 
     Examples
     --------
@@ -140,13 +184,11 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
         shapes = [child for child in element if child.tag != "userData"]
         if len(shapes) != 1:
             names = ", ".join(f"<{c.tag}>" for c in shapes) or "none"
-            raise MotosimError(f"{where}: {names}; expected one of <line>, <arc>, <spiral>")
+            raise MotosimError(f"{where}: {names}; expected one of {_SHAPES}")
         shape = shapes[0]
-        if shape.tag in _REFUSED:
-            raise MotosimError(
-                f"{where}: <{shape.tag}> is not supported; expected <line>, <arc> or <spiral> "
-                "(poly3 and paramPoly3 are not read)"
-            )
+        poly: tuple[float, ...] | None = None
+        p_end = 0.0
+        kind: Any = shape.tag
         if shape.tag == "line":
             curv = (0.0, 0.0)
         elif shape.tag == "arc":
@@ -154,17 +196,17 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
             curv = (c, c)
         elif shape.tag == "spiral":
             curv = (_number(shape, "curvStart", where), _number(shape, "curvEnd", where))
-        else:
-            raise MotosimError(
-                f"{where}: <{shape.tag[:40]}>; expected one of <line>, <arc>, <spiral>"
-            )
+        elif shape.tag not in ("paramPoly3", "poly3"):
+            raise MotosimError(f"{where}: <{shape.tag[:40]}>; expected one of {_SHAPES}")
         start = [_number(element, name, where) for name in ("s", "x", "y", "hdg", "length")]
         if start[4] == 0.0:
             continue  # a zero-length geometry (exporters write them) draws nothing
+        if shape.tag in ("paramPoly3", "poly3"):
+            curv = (0.0, 0.0)
+            kind, poly, p_end = "paramPoly3", *_polynomial(shape, start[4], where)
         try:
             s, x, y, hdg, length = start
-            kind: Any = shape.tag
-            out.append(RoadGeometry(kind, s, x, y, hdg, length, *curv))
+            out.append(RoadGeometry(kind, s, x, y, hdg, length, *curv, poly, p_end))
         except MotosimError as err:
             raise MotosimError(f"{where}: {err}") from None
     out.sort(key=lambda g: g.s)

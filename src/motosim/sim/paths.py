@@ -5,10 +5,10 @@ the initial heading and y to its right (SAE axes seen from above), heading psi [
 turning right) and curvature kappa [1/m] (positive for a right turn), every ``ds`` metres.
 
 Besides the built-in shapes, :func:`reference_line` samples the reference line of an
-OpenDRIVE road: its ``<planView>`` geometries (:class:`RoadGeometry`: lines, arcs and spirals,
-the spirals clothoids whose curvature changes linearly with arc length), as the ASAM
-OpenDRIVE 1.6 standard (section 7.4, "Geometry") defines them. Reading the ``.xodr`` file is
-:func:`motosim.io.opendrive.read_opendrive`'s part.
+OpenDRIVE road: its ``<planView>`` geometries (:class:`RoadGeometry`: lines, arcs, spirals,
+the spirals clothoids whose curvature changes linearly with arc length, and parametric cubic
+curves), as the ASAM OpenDRIVE 1.6 standard (section 7.4, "Geometry") defines them. Reading
+the ``.xodr`` file is :func:`motosim.io.opendrive.read_opendrive`'s part.
 """
 
 import math
@@ -179,8 +179,9 @@ class RoadGeometry:
 
     Attributes
     ----------
-    kind : {"line", "arc", "spiral"}
-        The element inside ``<geometry>``.
+    kind : {"line", "arc", "spiral", "paramPoly3"}
+        The element inside ``<geometry>`` (a ``<poly3>`` is read as the ``paramPoly3`` with
+        ``u = p``).
     s : float
         Start position along the reference line [m].
     x, y : float
@@ -193,10 +194,17 @@ class RoadGeometry:
     curv_start, curv_end : float
         Curvature at the start and at the end [1/m], positive turning left (counter-clockwise):
         both 0 for a line, both the arc's ``curvature`` for an arc, ``curvStart`` and
-        ``curvEnd`` for a spiral.
+        ``curvEnd`` for a spiral, unused (0) for a ``paramPoly3``.
+    poly : tuple of 8 floats, optional
+        A ``paramPoly3``'s ``(aU, bU, cU, dU, aV, bV, cV, dV)``: the curve is
+        ``u(p) = aU + bU p + cU p^2 + dU p^3``, ``v(p)`` likewise, in the frame at ``(x, y)``
+        turned by ``hdg`` (u forward, v to the left) [m, m/p, ...].
+    p_end : float
+        The parameter at the curve's end: ``length`` for ``pRange = "arcLength"``, 1 for
+        ``"normalized"`` [m or 1]; its arc length from 0 to ``p_end`` must be ``length``.
     """
 
-    kind: Literal["line", "arc", "spiral"]
+    kind: Literal["line", "arc", "spiral", "paramPoly3"]
     s: float
     x: float
     y: float
@@ -204,10 +212,14 @@ class RoadGeometry:
     length: float
     curv_start: float = 0.0
     curv_end: float = 0.0
+    poly: tuple[float, ...] | None = None
+    p_end: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.kind not in ("line", "arc", "spiral"):
-            raise MotosimError(f"kind = {self.kind!r}; expected 'line', 'arc' or 'spiral'")
+        if self.kind not in ("line", "arc", "spiral", "paramPoly3"):
+            raise MotosimError(
+                f"kind = {self.kind!r}; expected 'line', 'arc', 'spiral' or 'paramPoly3'"
+            )
         for name, value, bound in (
             ("s", self.s, MAX_ROAD_LENGTH),
             ("x", self.x, MAX_COORDINATE),
@@ -234,14 +246,28 @@ class RoadGeometry:
                 f"an arc with curvature {self.curv_start!r} to {self.curv_end!r}; expected one "
                 "constant curvature"
             )
+        if (self.kind == "paramPoly3") != (self.poly is not None):
+            raise MotosimError(
+                f"poly = {self.poly!r} for a {self.kind}; expected the 8 coefficients for a "
+                "paramPoly3 and none otherwise"
+            )
+        if self.poly is not None:
+            _check_poly(self)
 
     def heading(self, u: Array) -> Array:
         """Heading [rad] (file frame) at the distances ``u`` [m] from the start."""
+        if self.poly is not None:
+            d = _poly_values(self.poly, _poly_parameter(self, u))
+            return self.hdg + np.arctan2(d[3], d[2])
         rate = (self.curv_end - self.curv_start) / self.length
         return self.hdg + self.curv_start * u + 0.5 * rate * u**2
 
     def curvature(self, u: Array) -> Array:
         """Curvature [1/m] (positive left) at the distances ``u`` [m] from the start."""
+        if self.poly is not None:
+            _, _, du, dv, ddu, ddv = _poly_values(self.poly, _poly_parameter(self, u))
+            kappa: Array = (du * ddv - dv * ddu) / np.hypot(du, dv) ** 3
+            return kappa
         rate = (self.curv_end - self.curv_start) / self.length
         return self.curv_start + rate * u
 
@@ -250,9 +276,14 @@ class RoadGeometry:
 
         The integral of (cos, sin) of :meth:`heading` from 0 to each ``u``, by five-point
         Gauss-Legendre quadrature on intervals of at most 0.25 m: exact to rounding for a line
-        and an arc, and to far below a micrometre for a clothoid of curvature up to 1/m.
+        and an arc, and to far below a micrometre for a clothoid of curvature up to 1/m. A
+        ``paramPoly3`` is evaluated where its arc length is ``u`` (:func:`_poly_parameter`).
         """
         u = np.asarray(u, dtype=np.float64)
+        if self.poly is not None:
+            pu, pv = _poly_values(self.poly, _poly_parameter(self, u))[:2]
+            c, s = math.cos(self.hdg), math.sin(self.hdg)
+            return self.x + c * pu - s * pv, self.y + s * pu + c * pv
         n = max(1, math.ceil(self.length / _STEP))
         grid = np.union1d(np.concatenate([[0.0], np.clip(u, 0.0, None)]),
                           np.linspace(0.0, self.length, n + 1))  # fmt: skip
@@ -271,6 +302,95 @@ class RoadGeometry:
         """Where the geometry ends: x, y [m] and heading [rad], file frame."""
         x, y = self.positions(np.array([self.length]))
         return float(x[0]), float(y[0]), float(self.heading(np.array([self.length]))[0])
+
+
+def _poly_values(poly: tuple[float, ...], p: Array) -> tuple[Array, ...]:
+    """u, v and their first and second derivatives in p of a paramPoly3 at ``p``."""
+    aU, bU, cU, dU, aV, bV, cV, dV = poly
+    return (
+        aU + p * (bU + p * (cU + p * dU)),
+        aV + p * (bV + p * (cV + p * dV)),
+        bU + p * (2.0 * cU + 3.0 * dU * p),
+        bV + p * (2.0 * cV + 3.0 * dV * p),
+        2.0 * cU + 6.0 * dU * p,
+        2.0 * cV + 6.0 * dV * p,
+    )
+
+
+def _speed(poly: tuple[float, ...], p: Array) -> Array:
+    """|d(u, v)/dp| of a paramPoly3 [m per unit of p]."""
+    d = _poly_values(poly, p)
+    return np.hypot(d[2], d[3])
+
+
+def _arc_table(poly: tuple[float, ...], p_end: float, length: float) -> tuple[Array, Array]:
+    """Parameters ``p_k`` from 0 to ``p_end`` and the arc lengths at them [m]: five-point
+    Gauss-Legendre on intervals of at most about 0.25 m (at least 64)."""
+    n = max(64, math.ceil(length / _STEP))
+    grid = np.linspace(0.0, p_end, n + 1)
+    half = 0.5 * (grid[1:] - grid[:-1])
+    nodes = 0.5 * (grid[1:] + grid[:-1])[:, None] + half[:, None] * _NODES[None, :]
+    pieces = half * (_speed(poly, nodes) @ _WEIGHTS)
+    return grid, np.concatenate([[0.0], np.cumsum(pieces)])
+
+
+def _poly_parameter(g: "RoadGeometry", u: Array) -> Array:
+    """The parameter p where a paramPoly3's arc length is ``u`` [m] (clipped to the curve).
+
+    From the interval of the arc-length table that holds ``u``, Newton's iteration on
+    ``S(p) - u`` with ``S`` integrated by Gauss-Legendre from the interval's start:
+    converged to rounding in a few steps, as ``S`` is smooth and increasing.
+    """
+    assert g.poly is not None
+    grid, arc = _arc_table(g.poly, g.p_end, g.length)
+    target = np.clip(np.asarray(u, dtype=np.float64), 0.0, arc[-1])
+    k = np.clip(np.searchsorted(arc, target, side="right") - 1, 0, grid.size - 2)
+    p0, p1, s0 = grid[k], grid[k + 1], arc[k]
+    width = arc[k + 1] - s0
+    p = p0 + (p1 - p0) * np.where(
+        width > 0.0, (target - s0) / np.where(width > 0.0, width, 1.0), 0.0
+    )
+    for _ in range(6):
+        half = 0.5 * (p - p0)
+        nodes = 0.5 * (p + p0)[:, None] + half[:, None] * _NODES[None, :]
+        covered = s0 + half * (_speed(g.poly, nodes) @ _WEIGHTS)
+        p = np.clip(p - (covered - target) / _speed(g.poly, p), p0, p1)
+    return p
+
+
+def _check_poly(g: "RoadGeometry") -> None:
+    """Refuse a paramPoly3 that is not a road: bad numbers, a stop or cusp, a sharp turn, a
+    ``length`` that is not its arc length."""
+    assert g.poly is not None
+    if len(g.poly) != 8 or not all(
+        isinstance(c, int | float) and math.isfinite(c) and abs(c) <= MAX_COORDINATE for c in g.poly
+    ):
+        raise MotosimError(
+            f"poly = {g.poly!r}; expected 8 finite coefficients within +-{MAX_COORDINATE:g}"
+        )
+    if not (math.isfinite(g.p_end) and 0.0 < g.p_end <= MAX_ROAD_LENGTH):
+        raise MotosimError(f"p_end = {g.p_end!r}; expected a finite parameter range > 0")
+    grid, arc = _arc_table(g.poly, g.p_end, g.length)
+    fine = np.linspace(0.0, g.p_end, 8 * grid.size + 1)
+    if np.min(_speed(g.poly, fine)) <= 1e-9 * max(1.0, arc[-1] / g.p_end):
+        raise MotosimError("a paramPoly3 that stops or turns back (zero speed); expected a road")
+    if abs(arc[-1] - g.length) > max(GAP, 1e-6 * g.length):
+        raise MotosimError(
+            f"a paramPoly3 whose arc length is {arc[-1]:.6g} m; its length says {g.length:.6g} m"
+        )
+    _, _, du, dv, ddu, ddv = _poly_values(g.poly, fine)
+    kappa = (du * ddv - dv * ddu) / np.hypot(du, dv) ** 3
+    if np.max(np.abs(kappa)) > MAX_CURVATURE:
+        raise MotosimError(
+            f"a paramPoly3 with curvature up to {np.max(np.abs(kappa)):.3g} 1/m; expected at "
+            f"most {MAX_CURVATURE:g} 1/m"
+        )
+    turn = np.unwrap(np.arctan2(dv, du))
+    if np.max(np.abs(turn)) >= math.pi:
+        raise MotosimError(
+            "a paramPoly3 that turns by 180 deg or more from its start heading; expected less "
+            "(split it into several geometries)"
+        )
 
 
 def road_poses(geometry: tuple[RoadGeometry, ...], s: Array) -> tuple[Array, Array, Array, Array]:

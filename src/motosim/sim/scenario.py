@@ -346,10 +346,11 @@ class OpenDrivePath:
     """The reference line of road ``road`` of the OpenDRIVE file ``file`` (see below).
 
     ``file`` is relative to the scenario file; :func:`motosim.io.runs.load_scenario` (and
-    :func:`motosim.io.runs.resolve`) read its ``<planView>`` into ``geometry`` (lines, arcs and
-    spirals, :class:`motosim.sim.paths.RoadGeometry`), which a saved result keeps, so that a
-    run is replayed without the file. The line is moved to start at the origin heading along
-    x (:func:`motosim.sim.paths.reference_line`) and goes straight on past its end.
+    :func:`motosim.io.runs.resolve`) read its ``<planView>`` into ``geometry`` (lines, arcs,
+    spirals and cubics, :class:`motosim.sim.paths.RoadGeometry`), which a saved result keeps,
+    so that a run is replayed without the file. The line is moved to start at the origin
+    heading along x (:func:`motosim.sim.paths.reference_line`) and goes straight on past its
+    end.
     """
 
     file: str
