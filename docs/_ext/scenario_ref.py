@@ -205,8 +205,8 @@ DESCRIPTIONS: dict[str, str] = {
     "path.opendrive.road": 'The `id` of the road; `""`: the file\'s only road.',
     "path.opendrive.geometry": (
         "The road's geometries (`kind`, `s`, `x`, `y`, `hdg`, `length`, `curv_start`, "
-        "`curv_end`, a cubic's `poly` and `p_end`, in the file's frame), read from `file` when the scenario is loaded; "
-        "a saved result keeps them, so leave it out."
+        "`curv_end`, a cubic's `poly` and `p_end`, in the file's frame), read from `file` "
+        "when the scenario is loaded; a saved result keeps them, so leave it out."
     ),
 }
 
