@@ -9,7 +9,8 @@ mlockall: applied as root, refused otherwise, and reported):
    (the same commands sent, checked): the fused period (:func:`motosim.rt.fused.fused_period`:
    frame decoded, safety stage, stack, command encoded, row kept) and the stack's period
    alone (:func:`motosim.rt.stack.stack_period`); what the ratio shows is the cost of calling
-   compiled code from Python (numba unboxing the stack's records on every call); with the
+   compiled code from Python (the one :class:`~motosim.rt.fused.PeriodContext` unboxed, the
+   caches cooled by the interpreter between calls); with the
    offline closed loop's period (``motosim simulate``, plant included) for reference;
 3. ``motosim run`` at 1 kHz (status frames at 1 kHz) against ``motosim rig`` in another
    process over ``udp_multicast`` for 60 s, and at 100 Hz (control and status) for 20 s,
@@ -253,6 +254,7 @@ def _run_against_rig(
             return {"error": err.strip().splitlines()[-1] if err.strip() else run.returncode}
         payload = json.loads(out)
     t = payload["timing"]
+    stream = payload.get("state_stream", {})
     return {
         "wake_p50_us": _us(t["wake_p50"]),
         "wake_p99_us": _us(t["wake_p99"]),
@@ -268,6 +270,10 @@ def _run_against_rig(
         "frames_lost": payload["counters"]["frames_lost"],
         "where the compute time went, p50/p99 us": ", ".join(
             f"{stage} {_us(v['p50'])}/{_us(v['p99'])}" for stage, v in payload["profile"].items()
+        ),
+        "state stream (writer process): sent, lag p50/p99/max us": (
+            f"{stream.get('sent', 0):.0f}, {_us(stream.get('lag_p50', float('nan')))}/"
+            f"{_us(stream.get('lag_p99', float('nan')))}/{_us(stream.get('lag_max', float('nan')))}"
         ),
         "load average (1, 5, 15 min) at the start": " ".join(f"{x:.1f}" for x in load),
         "privileges": ", ".join(
