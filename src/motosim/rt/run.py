@@ -147,7 +147,9 @@ class RealtimeRunner:
         Put the ring in shared memory, for a writer process (:meth:`SampleRing.attach`).
     telemetry : callable, optional
         ``telemetry(k, t, row)`` publishes each period's stack row (a
-        :class:`~motosim.rt.telemetry.StateSender`'s ``send``).
+        :class:`~motosim.rt.telemetry.StateSender`'s ``send``), in the period: for a
+        lock-step run; ``motosim run`` gives none and publishes the ring's newest row from
+        its writer process (:class:`~motosim.rt.telemetry.StateRelay`).
     wait_for_arm : bool
         Keep the torque off (safety stage IDLE) after the drive's first status frame until
         :meth:`arm` is called (the view's Arm button); the loop runs and records meanwhile.
