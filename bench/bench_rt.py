@@ -9,7 +9,8 @@ mlockall: applied as root, refused otherwise, and reported):
    (the same commands sent, checked): the fused period (:func:`motosim.rt.fused.fused_period`:
    frame decoded, safety stage, stack, command encoded, row kept) and the stack's period
    alone (:func:`motosim.rt.stack.stack_period`); what the ratio shows is the cost of calling
-   compiled code from Python (numba unboxing the stack's records on every call); with the
+   compiled code from Python (the one :class:`~motosim.rt.fused.PeriodContext` unboxed, the
+   caches cooled by the interpreter between calls); with the
    offline closed loop's period (``motosim simulate``, plant included) for reference;
 3. ``motosim run`` at 1 kHz (status frames at 1 kHz) against ``motosim rig`` in another
    process over ``udp_multicast`` for 60 s, and at 100 Hz (control and status) for 20 s,
@@ -47,7 +48,7 @@ from motosim.params import load_parameters
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
 from motosim.rt.config import parse_safety
-from motosim.rt.fused import PeriodArrays, fused_period
+from motosim.rt.fused import context_period
 from motosim.rt.privileges import apply_privileges
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.stack import CompiledStack, stack_period
@@ -100,15 +101,16 @@ class _Quiet:
 
 @njit(cache=False)
 def _replay(
-    model: Any, data: Any, force: Any, side: Any, state: Any, a: PeriodArrays,
-    frames: Any, status_id: int, sent: Any, first: int, end: int,
+    c: Any, frames: Any, status_id: int, sent: Any, first: int, end: int
 ) -> None:  # fmt: skip
-    """The fused period over recorded status frames, in a compiled loop (the "offline" way)."""
+    """The fused period over recorded status frames, in a compiled loop (the "offline" way):
+    the same :func:`context_period` on the same :class:`PeriodContext` as the loop calls."""
+    a = c.arrays
     for k in range(first, end):
         a.rx[0, : frames.shape[1]] = frames[k]
         a.rx_length[0] = frames.shape[1]
         a.rx_id[0] = status_id
-        fused_period(model, data, force, side, state, a, 1, k, k * 1e-3, np.nan, np.nan)
+        context_period(c, 1, k, k * 1e-3, np.nan, np.nan)
         a.ring_head[0] += 1
         sent[k] = a.command_frame
 
@@ -164,7 +166,7 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
     one, loop = runner(), runner()  # the same start
     kernel = one._kernel
     assert kernel is not None
-    args, a = one._stack_args, one._arrays
+    context, a = one._context, one._arrays
     times = np.empty(n)
     sent = np.zeros((n, a.command_frame.size), dtype=np.uint8)
     clock = time.perf_counter
@@ -174,18 +176,17 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         a.rx_length[0] = st.length
         a.rx_id[0] = st.frame_id
         t0 = clock()
-        kernel(*args, a, 1, k, k * 1e-3, nan, nan)
+        kernel(context, 1, k, k * 1e-3, nan, nan)
         times[k] = clock() - t0
         a.ring_head[0] += 1
         sent[k] = a.command_frame
     replayed = np.zeros_like(sent)
-    _replay(*loop._stack_args, loop._arrays, frames, st.frame_id, replayed, 0, 10)  # compile
+    _replay(loop._context, frames, st.frame_id, replayed, 0, 10)  # compile
     loop = runner()
     chunks = np.empty(n // CHUNK)  # per period, from the time of CHUNK periods in a row
     for j in range(chunks.size):
         t0 = clock()
-        _replay(*loop._stack_args, loop._arrays, frames, st.frame_id, replayed,
-                j * CHUNK, (j + 1) * CHUNK)  # fmt: skip
+        _replay(loop._context, frames, st.frame_id, replayed, j * CHUNK, (j + 1) * CHUNK)
         chunks[j] = (clock() - t0) / CHUNK
     assert np.array_equal(sent, replayed), "the two ways sent different commands"
     stack = CompiledStack(model)
@@ -253,6 +254,7 @@ def _run_against_rig(
             return {"error": err.strip().splitlines()[-1] if err.strip() else run.returncode}
         payload = json.loads(out)
     t = payload["timing"]
+    stream = payload.get("state_stream", {})
     return {
         "wake_p50_us": _us(t["wake_p50"]),
         "wake_p99_us": _us(t["wake_p99"]),
@@ -268,6 +270,10 @@ def _run_against_rig(
         "frames_lost": payload["counters"]["frames_lost"],
         "where the compute time went, p50/p99 us": ", ".join(
             f"{stage} {_us(v['p50'])}/{_us(v['p99'])}" for stage, v in payload["profile"].items()
+        ),
+        "state stream (writer process): sent, lag p50/p99/max us": (
+            f"{stream.get('sent', 0):.0f}, {_us(stream.get('lag_p50', float('nan')))}/"
+            f"{_us(stream.get('lag_p99', float('nan')))}/{_us(stream.get('lag_max', float('nan')))}"
         ),
         "load average (1, 5, 15 min) at the start": " ".join(f"{x:.1f}" for x in load),
         "privileges": ", ".join(

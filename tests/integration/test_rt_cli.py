@@ -255,8 +255,10 @@ def test_the_rigs_virtual_rider_steers_by_the_runs_state_stream(
         "run", str(path), "--bus", BUS, "--out", str(out), "--json", "--no-report",
         "--telemetry", telemetry,
     )  # fmt: skip
-    _, stderr = proc.communicate(timeout=180)
+    stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
+    stream = json.loads(stdout)["state_stream"]  # sent by the writer process, not the loop
+    assert stream["sent"] > 100 and stream["lag_p50"] < 0.05
     # without the stream the rider holds 0 N*m and the motorcycle stays on y = 0; missed
     # deadlines on a busy machine slow the virtual motorcycle (each period advances it by
     # one period), so only the lane change under way is asserted here: the lock-step test in

@@ -6,6 +6,7 @@ import math
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -259,16 +260,21 @@ def _writer_main(
     overwrite: bool,
     torque_per_amp: float,
     view: _ViewSetup | None = None,
+    telemetry: tuple[str, int] | None = None,
+    rate: float = 1000.0,
 ) -> None:
     """The writer process: drain the loop's shared ring into the result files every 0.1 s
-    (and, with ``view``, into the view's ring every 5 ms).
+    (and, with ``view``, into the view's ring every 5 ms); with ``telemetry``, publish the
+    state stream there from the ring's newest row every 1 ms, in a thread
+    (:class:`~motosim.rt.telemetry.StateRelay`: the loop sends no datagram of its own).
 
     Writing files takes milliseconds with the interpreter lock held; in its own process it
     cannot delay the loop. Messages on ``conn``: ("ready", view URL or None) or ("error",
     text) first; then, on ("close", complete, extra summary), the last rows are written and
-    ("done", summary) sent back. With ``view``, it also serves the rider's view and the
-    dashboard from a :class:`~motosim.io.telemetry.TelemetryRing` it fills every 5 ms, with
-    the loop's timing and safety columns (:class:`~motosim.view.live.LoopRows`).
+    ("done", summary, folder, profile, state stream figures) sent back. With ``view``, it
+    also serves the rider's view and the dashboard from a
+    :class:`~motosim.io.telemetry.TelemetryRing` it fills every 5 ms, with the loop's timing
+    and safety columns (:class:`~motosim.view.live.LoopRows`).
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the loop's to handle
     from motosim.io.telemetry import TelemetryRing
@@ -297,6 +303,7 @@ def _writer_main(
         if server is not None:
             server.stop()
         return
+    stop_relay = _start_relay(ring, names, telemetry, rate)
     conn.send(("ready", url))
     blocks: list[np.ndarray] = []
     pending: list[np.ndarray] = []
@@ -352,11 +359,42 @@ def _writer_main(
     except _EarlyStopError:
         pass
     finally:
+        stream = stop_relay()
         ring.close()
         if server is not None:
             server.stop()
     profile = profile_stats(np.vstack(stamps), stamp_names) if stamps else {}
-    conn.send(("done", summary, str(writer.location), profile))
+    conn.send(("done", summary, str(writer.location), profile, stream))
+
+
+def _start_relay(
+    ring: Any, names: tuple[str, ...], address: tuple[str, int] | None, rate: float
+) -> Callable[[], dict[str, float]]:
+    """Start the state stream's relay thread in the writer process (none without
+    ``address``); the function that stops it and gives its figures (datagrams sent and
+    dropped, the lag after the loop's row [s])."""
+    if address is None:
+        return dict
+    from motosim.rt.stack import STACK_SIGNALS
+    from motosim.rt.telemetry import StateRelay, StateSender
+
+    sender = StateSender(address, width=len(STACK_SIGNALS))
+    buffer, counters = ring.arrays
+    relay = StateRelay(
+        buffer, counters, names, names.index(STACK_SIGNALS[0]), sender.send, rate=rate
+    )
+    stop = threading.Event()
+    thread = threading.Thread(target=relay.run, args=(stop,), name="motosim-state", daemon=True)
+    thread.start()
+
+    def finish() -> dict[str, float]:
+        stop.set()
+        thread.join(timeout=1.0)
+        sender.close()
+        lags = {f"lag_{k}": v for k, v in relay.lag_stats().items()}
+        return {"sent": float(relay.sent), "dropped": float(sender.dropped)} | lags
+
+    return finish
 
 
 def _keyboard(runner: Any) -> None:
@@ -405,11 +443,12 @@ def run(args: argparse.Namespace) -> int:
     world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
     codecs = handlebar_codecs()
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-    sender = None
-    if args.telemetry != "off":
+    telemetry = None
+    if args.telemetry != "off":  # sent by the writer process (StateRelay), not the loop
         from motosim.rt.telemetry import StateSender, parse_address
 
-        sender = StateSender(parse_address(args.telemetry), width=len(stack.names))
+        telemetry = parse_address(args.telemetry)
+        StateSender(telemetry, width=len(stack.names)).close()  # refused here, not there
     platform = None
     udp_sender = None
     if args.platform_udp != "off" or args.platform_can:
@@ -442,7 +481,6 @@ def run(args: argparse.Namespace) -> int:
             periods_per_frame=model.measure_every,
             capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
             shared_ring=True,
-            telemetry=None if sender is None else sender.send,
             wait_for_arm=view is not None,
             platform=platform,
             now=clock.now,
@@ -462,13 +500,11 @@ def run(args: argparse.Namespace) -> int:
         # the timing and the report go where the rows went
         stats, privileges, summary, folder = _loop(
             args, runner, clock, rate, periods, folder, metadata,
-            inputs.nominal_handlebar.torque_per_amp, view,
+            inputs.nominal_handlebar.torque_per_amp, view, telemetry,
         )  # fmt: skip
         counters = runner.counters()
     finally:
         link.close()
-        if sender is not None:
-            sender.close()
         if platform is not None and platform.sender is not None:
             platform.sender.close()
         elif udp_sender is not None:
@@ -478,6 +514,7 @@ def run(args: argparse.Namespace) -> int:
         "pace": args.pace,
         "timing": timing,
         "profile": summary.get("profile", {}),
+        "state_stream": summary.get("state_stream", {}),
         "units": "s",
         "privileges": [
             {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
@@ -596,8 +633,10 @@ def _loop(
     metadata: dict[str, Any],
     torque_per_amp: float,
     view: _ViewSetup | None = None,
+    telemetry: tuple[str, int] | None = None,
 ) -> tuple[Any, tuple[Any, ...], dict[str, Any], Path]:
-    """The real-time part: writer process (and view), privileges, signals, keyboard, the loop."""
+    """The real-time part: writer process (and view, and the state stream to ``telemetry``),
+    privileges, signals, keyboard, the loop."""
     import dataclasses
     import multiprocessing
 
@@ -625,7 +664,7 @@ def _loop(
     writer = ctx.Process(
         target=_writer_main,
         args=(theirs, runner.ring.handle, runner.names, str(folder), metadata,
-              bool(args.overwrite), torque_per_amp, view),
+              bool(args.overwrite), torque_per_amp, view, telemetry, rate),
         name="motosim-writer",
         daemon=True,
     )  # fmt: skip
@@ -684,8 +723,8 @@ def _loop(
         ours.send(("close", complete, extra))
         if not ours.poll(120.0):
             raise MotosimError(f"{folder}: the result writer did not finish")
-        _, summary, location, profile = ours.recv()
-        summary = summary | {"profile": profile}
+        _, summary, location, profile, stream = ours.recv()
+        summary = summary | {"profile": profile, "state_stream": stream}
     finally:
         writer.join(timeout=10.0)
         if writer.is_alive():

@@ -22,6 +22,12 @@ does (see :mod:`motosim.rt.run`):
    the ring's next slot (its head is advanced by the runner once the time stamps of the
    send are in the row).
 
+The runner holds every argument of :func:`fused_period` in one :class:`PeriodContext` (a
+numba ``structref`` built before the first deadline) and calls :func:`context_period` on it:
+numba unboxes one pointer per call instead of the stack's model and data records and every
+array of :class:`PeriodArrays` (about 20 arrays: 4.6 us per call against 0.4 us, measured
+with empty functions of the same arguments).
+
 A runner whose stack is not a :class:`~motosim.rt.stack.CompiledStack` (a test double in
 Python) calls :func:`take_frames`, :func:`begin` and :func:`finish` one by one around its
 stack's ``step``: the same compiled functions, so both ways behave the same.
@@ -35,6 +41,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.core import types
+from numba.experimental import structref
 from numpy.typing import NDArray
 
 from motosim.io.can import decode_frame, encode_frame, unpack_frame
@@ -53,7 +61,9 @@ from motosim.rt.stack import stack_period, stack_reset
 __all__ = [
     "RUNNER_STATE_SIZE",
     "PeriodArrays",
+    "PeriodContext",
     "begin",
+    "context_period",
     "finish",
     "fused_period",
     "take_frames",
@@ -320,3 +330,58 @@ def fused_period(
             model, data, force, side_force, stack_state, a.stack_row, r[R_THETA], r[R_CURRENT]
         )
     return finish(a, command, k, t, woke, done_read)
+
+
+@structref.register
+class PeriodContextType(types.StructRef):
+    """numba's type of :class:`PeriodContext` (one per set of field types)."""
+
+    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
+        """The fields' types without literal values."""
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
+
+
+class PeriodContext(structref.StructRefProxy):
+    """Every argument of :func:`fused_period` but the period's own, in one numba object.
+
+    Passing it to a compiled function unboxes one pointer; the fields are the very objects
+    given (the arrays are shared, not copied: what Python writes into them, the period reads).
+
+    Parameters
+    ----------
+    model, data, force, side_force, stack_state
+        Those of :class:`~motosim.rt.stack.CompiledStack` (its ``model``, ``data``,
+        ``force``, ``side_force``, ``state``).
+    arrays : PeriodArrays
+        The period's arrays.
+    """
+
+    def __new__(
+        cls,
+        model: Any,
+        data: Any,
+        force: Array,
+        side_force: Array,
+        stack_state: Array,
+        arrays: PeriodArrays,
+    ) -> "PeriodContext":
+        made: PeriodContext = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
+            cls, model, data, force, side_force, stack_state, arrays
+        )
+        return made
+
+
+structref.define_proxy(  # type: ignore[no-untyped-call]
+    PeriodContext,
+    PeriodContextType,
+    ["model", "data", "force", "side_force", "stack_state", "arrays"],
+)
+
+
+@njit(cache=True)
+def context_period(c: Any, frames: int, k: int, t: float, woke: float, done_read: float) -> int:
+    """:func:`fused_period` with the arguments held by ``c``, a :class:`PeriodContext`."""
+    return fused_period(
+        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
+        done_read,
+    )  # fmt: skip

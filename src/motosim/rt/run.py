@@ -147,7 +147,9 @@ class RealtimeRunner:
         Put the ring in shared memory, for a writer process (:meth:`SampleRing.attach`).
     telemetry : callable, optional
         ``telemetry(k, t, row)`` publishes each period's stack row (a
-        :class:`~motosim.rt.telemetry.StateSender`'s ``send``).
+        :class:`~motosim.rt.telemetry.StateSender`'s ``send``), in the period: for a
+        lock-step run; ``motosim run`` gives none and publishes the ring's newest row from
+        its writer process (:class:`~motosim.rt.telemetry.StateRelay`).
     wait_for_arm : bool
         Keep the torque off (safety stage IDLE) after the drive's first status frame until
         :meth:`arm` is called (the view's Arm button); the loop runs and records meanwhile.
@@ -283,11 +285,16 @@ class RealtimeRunner:
         self._begin = compiled(fused.begin, a, 0, 0.0)
         self._finish = compiled(fused.finish, a, 0.0, 0, 0.0, 0.0, 0.0)
         self._kernel: Callable[..., int] | None = None
-        self._stack_args: tuple[object, ...] = ()
+        self._context: object = None
         if isinstance(self.stepper, CompiledStack):
             st = self.stepper
-            self._stack_args = (st.model, st.data, st.force, st.side_force, st.state)
-            self._kernel = compiled(fused.fused_period, *self._stack_args, a, 0, 0, 0.0, 0.0, 0.0)
+            stack_args = (st.model, st.data, st.force, st.side_force, st.state)
+            if hasattr(fused.context_period, "compile"):  # one argument unboxed per call
+                self._context = fused.PeriodContext(*stack_args, a)
+                self._kernel = compiled(fused.context_period, self._context, 0, 0, 0.0, 0.0, 0.0)
+            else:  # without numba's JIT: the plain function on the arrays
+                self._context = (*stack_args, a)
+                self._kernel = lambda c, *rest: fused.fused_period(*c, *rest)
         self._send_command = self._sender(a.command_frame, self.codecs.command.frame_id)
         self._send_heartbeat = self._sender(a.heartbeat_frame, self.codecs.heartbeat.frame_id)
 
@@ -443,7 +450,7 @@ class RealtimeRunner:
         done_read = now() if now is not None else math.nan
         a = self._arrays
         if self._kernel is not None:
-            flags: int = self._kernel(*self._stack_args, a, frames, k, t, woke, done_read)
+            flags: int = self._kernel(self._context, frames, k, t, woke, done_read)
         else:
             flags = self._stack_period(a, frames, k, t, woke, done_read)
         done_control = now() if now is not None else math.nan

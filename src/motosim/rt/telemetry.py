@@ -7,19 +7,34 @@ the command and the virtual motorcycle's states, SI units) as one little-endian 
 display reads, and what the virtual rig's virtual rider steers by, as a person steers by the
 visual. Sending is one non-blocking ``sendto`` (a few microseconds); a datagram that cannot
 be sent is dropped and counted, never waited for.
+
+``motosim run`` sends it from outside the loop: a :class:`StateRelay` in the result writer's
+process reads the newest row of the loop's shared ring every millisecond and publishes its
+stack columns, so the loop's period has no ``sendto`` of its own (its tail of 30-100 us
+under load). The state then reaches a reader about a millisecond later (the relay's
+:meth:`StateRelay.lag_stats` measure it), as a person sees the visual some tens of
+milliseconds after the event anyway. A :class:`StateSender` can still be the runner's
+``telemetry`` (called in the period: the lock-step tests, where the rider must see the
+period's state at once).
 """
 
 import ipaddress
+import math
 import re
 import socket
 import struct
+import threading
+import time
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 
-__all__ = ["DEFAULT_ADDRESS", "StateReceiver", "StateSender", "is_host", "parse_address"]
+__all__ = [
+    "DEFAULT_ADDRESS", "StateReceiver", "StateRelay", "StateSender", "is_host", "parse_address",
+]  # fmt: skip
 
 DEFAULT_ADDRESS = ("127.0.0.1", 47474)
 """Where the state stream goes when nothing else is asked."""
@@ -148,3 +163,90 @@ class StateReceiver:
     def close(self) -> None:
         """Close the socket."""
         self._socket.close()
+
+
+class StateRelay:
+    """Publish, from outside the loop, the newest row of the loop's ring as the state stream.
+
+    Each :meth:`poll` reads how many rows the loop has written; if a new one came, the
+    newest (the row before the ring's head, complete: the loop advances the head after
+    writing it) is sent with ``sender`` as ``(index, t, stack columns)``, ``index`` being
+    the period's index ``round(t * rate)``. Rows before the stack started (no valid angle
+    yet: ``theta_h_meas`` NaN) are not sent, as the loop did not send them. Older rows that
+    came between two polls are skipped: a reader keeps only the newest anyway.
+
+    Parameters
+    ----------
+    buffer : ndarray, shape (capacity, width)
+        The ring's rows (:attr:`motosim.rt.ring.SampleRing.arrays`).
+    counters : ndarray of int64
+        The ring's counters (rows written first).
+    names : tuple of str
+        The ring's columns (:attr:`motosim.rt.run.RealtimeRunner.names`): the loop's own
+        (``t``, ``theta_h_meas``, ``t_clock``, ``wake``, ``compute``) then the stack's.
+    first : int
+        The first of the stack's columns.
+    send : callable
+        ``send(index, t, row)`` (:meth:`StateSender.send`).
+    rate : float
+        The loop's rate [Hz].
+    now : callable
+        The loop's clock [s] (``time.monotonic``, the clock of ``motosim run``: one clock for
+        every process of the machine), for the lag.
+    """
+
+    def __init__(
+        self,
+        buffer: NDArray[np.float64],
+        counters: NDArray[np.int64],
+        names: tuple[str, ...],
+        first: int,
+        send: Callable[[int, float, NDArray[np.float64]], None],
+        *,
+        rate: float,
+        now: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self._buffer = buffer
+        self._counters = counters
+        self._send = send
+        self._rate = float(rate)
+        self._now = now
+        self._first = first
+        self._cols = [names.index(n) for n in ("t", "theta_h_meas", "t_clock", "wake", "compute")]
+        self._seen = 0
+        self._lags = np.zeros(1 << 16)
+        self.sent = 0
+        """Datagrams sent."""
+
+    def poll(self) -> bool:
+        """Send the newest row if one came since the last poll; True if one was sent."""
+        head = int(self._counters[0])
+        if head <= self._seen:
+            return False
+        self._seen = head
+        row = self._buffer[(head - 1) % self._buffer.shape[0]].copy()
+        t, theta, t_clock, wake, compute = row[self._cols]
+        if not math.isfinite(theta):
+            return False
+        self._send(round(t * self._rate), float(t), row[self._first :])
+        lag = self._now() - (t_clock + wake + compute)  # since the loop finished the row
+        if math.isfinite(lag):
+            self._lags[self.sent % self._lags.size] = lag
+        self.sent += 1
+        return True
+
+    def run(self, stop: threading.Event, interval: float = 1e-3) -> None:
+        """:meth:`poll` every ``interval`` [s] until ``stop`` is set (a thread's target)."""
+        while not stop.wait(interval):
+            self.poll()
+        self.poll()
+
+    def lag_stats(self) -> dict[str, float]:
+        """How long after the loop wrote a row it was sent: p50, p99 and max [s] (empty if
+        nothing was sent)."""
+        n = min(self.sent, self._lags.size)
+        if n == 0:
+            return {}
+        lags = self._lags[:n]
+        p50, p99 = np.percentile(lags, (50.0, 99.0))
+        return {"p50": float(p50), "p99": float(p99), "max": float(lags.max())}
