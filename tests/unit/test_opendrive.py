@@ -71,6 +71,14 @@ def test_a_namespace_and_zero_length_geometries_are_accepted() -> None:
             "pRange = 'unit'; expected 'arcLength' or 'normalized'",
         ),
         (_geometry('<poly3 a="0" b="0" c="0"/>'), "missing attribute 'd'; expected a number"),
+        (  # u = 100 p - 300 p^3, v = 150 p^2 - 120 p^3: ends heading 184 deg from its start
+            _geometry(
+                '<paramPoly3 aU="0" bU="100" cU="0" dU="-300" aV="0" bV="0" cV="150" dV="-120" '
+                'pRange="normalized"/>',
+                length="256.2601696980916",
+            ),
+            "a paramPoly3 that turns by 180 deg or more from its start heading",
+        ),
         (_geometry("<line/>", hdg="nan"), "hdg = 'nan'; expected a finite number"),
         (_geometry("<line/>", x="1e400"), "x = '1e400'; expected a finite number"),
         (_geometry("<line/>", length="-3"), "length = -3.0; expected a finite length > 0"),

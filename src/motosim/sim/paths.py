@@ -252,12 +252,12 @@ class RoadGeometry:
                 "paramPoly3 and none otherwise"
             )
         if self.poly is not None:
-            _check_poly(self)
+            _check_poly(self.poly, self.p_end, self.length)
 
     def heading(self, u: Array) -> Array:
         """Heading [rad] (file frame) at the distances ``u`` [m] from the start."""
         if self.poly is not None:
-            d = _poly_values(self.poly, _poly_parameter(self, u))
+            d = _poly_values(self.poly, _poly_parameter(self.poly, self.p_end, self.length, u))
             return self.hdg + np.arctan2(d[3], d[2])
         rate = (self.curv_end - self.curv_start) / self.length
         return self.hdg + self.curv_start * u + 0.5 * rate * u**2
@@ -265,7 +265,9 @@ class RoadGeometry:
     def curvature(self, u: Array) -> Array:
         """Curvature [1/m] (positive left) at the distances ``u`` [m] from the start."""
         if self.poly is not None:
-            _, _, du, dv, ddu, ddv = _poly_values(self.poly, _poly_parameter(self, u))
+            _, _, du, dv, ddu, ddv = _poly_values(
+                self.poly, _poly_parameter(self.poly, self.p_end, self.length, u)
+            )
             kappa: Array = (du * ddv - dv * ddu) / np.hypot(du, dv) ** 3
             return kappa
         rate = (self.curv_end - self.curv_start) / self.length
@@ -281,7 +283,9 @@ class RoadGeometry:
         """
         u = np.asarray(u, dtype=np.float64)
         if self.poly is not None:
-            pu, pv = _poly_values(self.poly, _poly_parameter(self, u))[:2]
+            pu, pv = _poly_values(
+                self.poly, _poly_parameter(self.poly, self.p_end, self.length, u)
+            )[:2]
             c, s = math.cos(self.hdg), math.sin(self.hdg)
             return self.x + c * pu - s * pv, self.y + s * pu + c * pv
         n = max(1, math.ceil(self.length / _STEP))
@@ -334,15 +338,14 @@ def _arc_table(poly: tuple[float, ...], p_end: float, length: float) -> tuple[Ar
     return grid, np.concatenate([[0.0], np.cumsum(pieces)])
 
 
-def _poly_parameter(g: "RoadGeometry", u: Array) -> Array:
+def _poly_parameter(poly: tuple[float, ...], p_end: float, length: float, u: Array) -> Array:
     """The parameter p where a paramPoly3's arc length is ``u`` [m] (clipped to the curve).
 
     From the interval of the arc-length table that holds ``u``, Newton's iteration on
     ``S(p) - u`` with ``S`` integrated by Gauss-Legendre from the interval's start:
     converged to rounding in a few steps, as ``S`` is smooth and increasing.
     """
-    assert g.poly is not None
-    grid, arc = _arc_table(g.poly, g.p_end, g.length)
+    grid, arc = _arc_table(poly, p_end, length)
     target = np.clip(np.asarray(u, dtype=np.float64), 0.0, arc[-1])
     k = np.clip(np.searchsorted(arc, target, side="right") - 1, 0, grid.size - 2)
     p0, p1, s0 = grid[k], grid[k + 1], arc[k]
@@ -353,32 +356,31 @@ def _poly_parameter(g: "RoadGeometry", u: Array) -> Array:
     for _ in range(6):
         half = 0.5 * (p - p0)
         nodes = 0.5 * (p + p0)[:, None] + half[:, None] * _NODES[None, :]
-        covered = s0 + half * (_speed(g.poly, nodes) @ _WEIGHTS)
-        p = np.clip(p - (covered - target) / _speed(g.poly, p), p0, p1)
+        covered = s0 + half * (_speed(poly, nodes) @ _WEIGHTS)
+        p = np.clip(p - (covered - target) / _speed(poly, p), p0, p1)
     return p
 
 
-def _check_poly(g: "RoadGeometry") -> None:
+def _check_poly(poly: tuple[float, ...], p_end: float, length: float) -> None:
     """Refuse a paramPoly3 that is not a road: bad numbers, a stop or cusp, a sharp turn, a
     ``length`` that is not its arc length."""
-    assert g.poly is not None
-    if len(g.poly) != 8 or not all(
-        isinstance(c, int | float) and math.isfinite(c) and abs(c) <= MAX_COORDINATE for c in g.poly
+    if len(poly) != 8 or not all(
+        isinstance(c, int | float) and math.isfinite(c) and abs(c) <= MAX_COORDINATE for c in poly
     ):
         raise MotosimError(
-            f"poly = {g.poly!r}; expected 8 finite coefficients within +-{MAX_COORDINATE:g}"
+            f"poly = {poly!r}; expected 8 finite coefficients within +-{MAX_COORDINATE:g}"
         )
-    if not (math.isfinite(g.p_end) and 0.0 < g.p_end <= MAX_ROAD_LENGTH):
-        raise MotosimError(f"p_end = {g.p_end!r}; expected a finite parameter range > 0")
-    grid, arc = _arc_table(g.poly, g.p_end, g.length)
-    fine = np.linspace(0.0, g.p_end, 8 * grid.size + 1)
-    if np.min(_speed(g.poly, fine)) <= 1e-9 * max(1.0, arc[-1] / g.p_end):
+    if not (math.isfinite(p_end) and 0.0 < p_end <= MAX_ROAD_LENGTH):
+        raise MotosimError(f"p_end = {p_end!r}; expected a finite parameter range > 0")
+    grid, arc = _arc_table(poly, p_end, length)
+    fine = np.linspace(0.0, p_end, 8 * grid.size + 1)
+    if np.min(_speed(poly, fine)) <= 1e-9 * max(1.0, arc[-1] / p_end):
         raise MotosimError("a paramPoly3 that stops or turns back (zero speed); expected a road")
-    if abs(arc[-1] - g.length) > max(GAP, 1e-6 * g.length):
+    if abs(arc[-1] - length) > max(GAP, 1e-6 * length):
         raise MotosimError(
-            f"a paramPoly3 whose arc length is {arc[-1]:.6g} m; its length says {g.length:.6g} m"
+            f"a paramPoly3 whose arc length is {arc[-1]:.6g} m; its length says {length:.6g} m"
         )
-    _, _, du, dv, ddu, ddv = _poly_values(g.poly, fine)
+    _, _, du, dv, ddu, ddv = _poly_values(poly, fine)
     kappa = (du * ddv - dv * ddu) / np.hypot(du, dv) ** 3
     if np.max(np.abs(kappa)) > MAX_CURVATURE:
         raise MotosimError(
@@ -386,7 +388,7 @@ def _check_poly(g: "RoadGeometry") -> None:
             f"most {MAX_CURVATURE:g} 1/m"
         )
     turn = np.unwrap(np.arctan2(dv, du))
-    if np.max(np.abs(turn)) >= math.pi:
+    if np.max(np.abs(turn - turn[0])) >= math.pi:
         raise MotosimError(
             "a paramPoly3 that turns by 180 deg or more from its start heading; expected less "
             "(split it into several geometries)"
