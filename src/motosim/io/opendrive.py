@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from motosim.errors import MotosimError
+from motosim.params.toml import read_limited
 from motosim.sim.paths import MAX_ROAD_LENGTH, RoadGeometry, road_poses
 
 __all__ = ["MAX_GEOMETRIES", "MAX_XODR_BYTES", "parse_opendrive", "read_opendrive"]
@@ -230,21 +231,5 @@ def read_opendrive(path: str | Path, *, road: str = "") -> tuple[RoadGeometry, .
     MotosimError
         One line: no such file, too large, unreadable, or what :func:`parse_opendrive` refuses.
     """
-    source = Path(path)
-    origin = str(path)
-    try:
-        if not source.is_file():
-            raise MotosimError(f"{origin}: no such OpenDRIVE file")
-        size = source.stat().st_size
-        if size > MAX_XODR_BYTES:
-            raise MotosimError(
-                f"{origin}: the OpenDRIVE file is {size} bytes; expected at most "
-                f"{MAX_XODR_BYTES} bytes"
-            )
-        with source.open("rb") as handle:
-            raw = handle.read(MAX_XODR_BYTES + 1)
-    except OSError as err:
-        raise MotosimError(f"{origin}: cannot read the OpenDRIVE file: {err.strerror}") from None
-    if len(raw) > MAX_XODR_BYTES:
-        raise MotosimError(f"{origin}: the OpenDRIVE file is over {MAX_XODR_BYTES} bytes")
-    return parse_opendrive(raw, origin=origin, road=road)
+    raw = read_limited(Path(path), what="OpenDRIVE file", max_bytes=MAX_XODR_BYTES)
+    return parse_opendrive(raw, origin=str(path), road=road)

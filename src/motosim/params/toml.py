@@ -28,7 +28,9 @@ from typing import Any
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
-__all__ = ["MAX_DEPTH", "MAX_FILE_BYTES", "MAX_MAGNITUDE", "parse_toml", "read_toml"]
+__all__ = [
+    "MAX_DEPTH", "MAX_FILE_BYTES", "MAX_MAGNITUDE", "parse_toml", "read_limited", "read_toml",
+]  # fmt: skip
 
 MAX_FILE_BYTES = 1_000_000
 """Largest TOML file read [bytes]; motosim's files are a few kilobytes."""
@@ -133,6 +135,50 @@ def parse_toml(text: str, *, origin: str) -> dict[str, Any]:
     return data
 
 
+def read_limited(path: Path, *, what: str, max_bytes: int) -> bytes:
+    """The bytes of the regular file ``path``, at most ``max_bytes`` of them.
+
+    The size is checked before reading, and again on what was read (a file that grew
+    meanwhile, or a special file that claims no size).
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    what : str
+        What the file should be, for messages, e.g. ``"parameter file"``.
+    max_bytes : int
+        Largest size read [bytes].
+
+    Raises
+    ------
+    MotosimError
+        One line naming the file: missing, a directory, unreadable or larger than
+        ``max_bytes``.
+    """
+    origin = str(path)
+    article = "an" if what[:1].lower() in "aeiou" else "a"
+    try:
+        if path.is_dir():
+            raise MotosimError(f"{origin}: is a directory; expected {article} {what}")
+        if not path.is_file():
+            raise MotosimError(f"{origin}: no such {what}")
+        size = path.stat().st_size
+        if size > max_bytes:
+            raise MotosimError(
+                f"{origin}: the {what} is {size} bytes; expected at most {max_bytes} bytes"
+            )
+        with path.open("rb") as handle:
+            raw = handle.read(max_bytes + 1)
+    except OSError as err:
+        raise MotosimError(f"{origin}: cannot read the {what}: {err.strerror}") from None
+    if len(raw) > max_bytes:  # grew while we looked, or a special file
+        raise MotosimError(
+            f"{origin}: the {what} is over {max_bytes} bytes; expected at most {max_bytes} bytes"
+        )
+    return raw
+
+
 def read_toml(path: Path, *, what: str, max_bytes: int = MAX_FILE_BYTES) -> dict[str, Any]:
     """Read a UTF-8 TOML file, refusing in one line whatever is not a sane document.
 
@@ -165,22 +211,5 @@ def read_toml(path: Path, *, what: str, max_bytes: int = MAX_FILE_BYTES) -> dict
     'sharp'
     """
     origin = str(path)
-    try:
-        if path.is_dir():
-            raise MotosimError(f"{origin}: is a directory; expected a {what}")
-        if not path.is_file():
-            raise MotosimError(f"{origin}: no such {what}")
-        size = path.stat().st_size
-        if size > max_bytes:
-            raise MotosimError(
-                f"{origin}: the {what} is {size} bytes; expected at most {max_bytes} bytes"
-            )
-        with path.open("rb") as handle:
-            raw = handle.read(max_bytes + 1)
-    except OSError as err:
-        raise MotosimError(f"{origin}: cannot read the {what}: {err.strerror}") from None
-    if len(raw) > max_bytes:  # grew while we looked, or a special file
-        raise MotosimError(
-            f"{origin}: the {what} is over {max_bytes} bytes; expected at most {max_bytes} bytes"
-        )
+    raw = read_limited(path, what=what, max_bytes=max_bytes)
     return parse_toml(_decode(raw, origin, what), origin=origin)
