@@ -71,6 +71,21 @@ def test_a_namespace_and_zero_length_geometries_are_accepted() -> None:
             "pRange = 'unit'; expected 'arcLength' or 'normalized'",
         ),
         (_geometry('<poly3 a="0" b="0" c="0"/>'), "missing attribute 'd'; expected a number"),
+        (  # many long geometries are refused before each one's arc length is integrated
+            _geometry(
+                '<paramPoly3 aU="0" bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/>',
+                length="30000",
+            ).replace(
+                b"</planView>",
+                b"".join(
+                    b'<geometry s="0" x="0" y="0" hdg="0" length="30000"><paramPoly3 aU="0" '
+                    b'bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0"/></geometry>'
+                    for _ in range(1000)
+                )
+                + b"</planView>",
+            ),
+            "geometry 2: the geometries reach 60000 m; expected a reference line of at most",
+        ),
         (  # u = 100 p - 300 p^3, v = 150 p^2 - 120 p^3: ends heading 184 deg from its start
             _geometry(
                 '<paramPoly3 aU="0" bU="100" cU="0" dU="-300" aV="0" bV="0" cV="150" dV="-120" '

@@ -180,6 +180,7 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
             f"{label}: {len(elements)} geometries; expected at most {MAX_GEOMETRIES}"
         )
     out = []
+    total = 0.0
     for k, element in enumerate(elements, start=1):
         where = f"{label} geometry {k}"
         shapes = [child for child in element if child.tag != "userData"]
@@ -202,6 +203,12 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
         start = [_number(element, name, where) for name in ("s", "x", "y", "hdg", "length")]
         if start[4] == 0.0:
             continue  # a zero-length geometry (exporters write them) draws nothing
+        total += abs(start[4])
+        if total > MAX_ROAD_LENGTH:  # before a cubic's arc length is integrated
+            raise MotosimError(
+                f"{where}: the geometries reach {total:.6g} m; expected a reference line of at "
+                f"most {MAX_ROAD_LENGTH:g} m"
+            )
         if shape.tag in ("paramPoly3", "poly3"):
             curv = (0.0, 0.0)
             kind, poly, p_end = "paramPoly3", *_polynomial(shape, start[4], where)
