@@ -24,6 +24,7 @@ from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits, State
 from motosim.rt.stack import CompiledStack
 from motosim.sim import build_rig, build_stack, parse_scenario, prepare, simulate
+from motosim.sim.scenario import Scenario
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
@@ -50,6 +51,17 @@ def _limits(rate: float) -> SafetyLimits:
     )  # fmt: skip
 
 
+def _rig_settings(sc: Scenario, current_noise: float = 0.0) -> RigSettings:
+    """The rig of scenario ``sc``: its plant and measurement rates, encoder and current limit."""
+    return RigSettings(
+        plant_rate=sc.rates.plant,
+        status_rate=sc.rates.measurement,
+        encoder_bits=sc.measurement.encoder_bits,
+        current_noise=current_noise,
+        max_current=sc.controller.max_current,
+    )
+
+
 def _inputs(measurement: float) -> object:
     data = {**SCENARIO, "rates": {**SCENARIO["rates"], "measurement": measurement}}
     scenario = parse_scenario(data, origin="test")
@@ -72,13 +84,7 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
     rate = sc.rates.control
     limits = _limits(rate)
-    settings = RigSettings(
-        plant_rate=sc.rates.plant,
-        status_rate=sc.rates.measurement,
-        encoder_bits=sc.measurement.encoder_bits,
-        current_noise=0.0,
-        max_current=sc.controller.max_current,
-    )
+    settings = _rig_settings(sc)
     codecs = handlebar_codecs()
     channel = f"virtual:rt_vs_offline_{measurement:g}"
     with open_link(channel) as host, open_link(channel) as drive:
@@ -143,13 +149,7 @@ def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
     model = build_stack(inputs)
     world = build_rig(inputs, rng=np.random.default_rng(0))
     rate = sc.rates.control
-    settings = RigSettings(
-        plant_rate=sc.rates.plant,
-        status_rate=sc.rates.measurement,
-        encoder_bits=sc.measurement.encoder_bits,
-        current_noise=0.0,
-        max_current=sc.controller.max_current,
-    )
+    settings = _rig_settings(sc)
     codecs = handlebar_codecs()
     receiver = StateReceiver(("127.0.0.1", 0))
     sender = StateSender(receiver.address)
@@ -207,11 +207,7 @@ def _run_both_ways(fused: bool, rate: float = 1000.0) -> tuple[RealtimeRunner, n
         hard_stop=5.0, end_stop_gain=20.0, hands_off_torque=0.5, hands_off_time=0.05,
         hands_off_gain=0.5,
     )  # fmt: skip
-    settings = RigSettings(
-        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
-        encoder_bits=sc.measurement.encoder_bits, current_noise=0.01,
-        max_current=sc.controller.max_current,
-    )  # fmt: skip
+    settings = _rig_settings(sc, current_noise=0.01)
     codecs = handlebar_codecs()
     channel = f"virtual:rt_fused_{fused}"
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
@@ -273,11 +269,7 @@ def test_leaving_the_models_range_fades_the_torque_out_and_ends_the_run(
     model = build_stack(inputs)  # type: ignore[arg-type]
     world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
     limits = dataclasses.replace(_limits(rate), fade_in=0.1)
-    settings = RigSettings(
-        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
-        encoder_bits=sc.measurement.encoder_bits, current_noise=0.0,
-        max_current=sc.controller.max_current,
-    )  # fmt: skip
+    settings = _rig_settings(sc)
     codecs = handlebar_codecs()
     channel = f"virtual:rt_range_{validity[0]}"
     with open_link(channel) as host, open_link(channel) as drive:
