@@ -257,19 +257,14 @@ class RoadGeometry:
     def heading(self, u: Array) -> Array:
         """Heading [rad] (file frame) at the distances ``u`` [m] from the start."""
         if self.poly is not None:
-            d = _poly_values(self.poly, _poly_parameter(self.poly, self.p_end, self.length, u))
-            return self.hdg + np.arctan2(d[3], d[2])
+            return self._cubic_pose(self.poly, u)[2]
         rate = (self.curv_end - self.curv_start) / self.length
         return self.hdg + self.curv_start * u + 0.5 * rate * u**2
 
     def curvature(self, u: Array) -> Array:
         """Curvature [1/m] (positive left) at the distances ``u`` [m] from the start."""
         if self.poly is not None:
-            _, _, du, dv, ddu, ddv = _poly_values(
-                self.poly, _poly_parameter(self.poly, self.p_end, self.length, u)
-            )
-            kappa: Array = (du * ddv - dv * ddu) / np.hypot(du, dv) ** 3
-            return kappa
+            return self._cubic_pose(self.poly, u)[3]
         rate = (self.curv_end - self.curv_start) / self.length
         return self.curv_start + rate * u
 
@@ -283,11 +278,8 @@ class RoadGeometry:
         """
         u = np.asarray(u, dtype=np.float64)
         if self.poly is not None:
-            pu, pv = _poly_values(
-                self.poly, _poly_parameter(self.poly, self.p_end, self.length, u)
-            )[:2]
-            c, s = math.cos(self.hdg), math.sin(self.hdg)
-            return self.x + c * pu - s * pv, self.y + s * pu + c * pv
+            x, y = self._cubic_pose(self.poly, u)[:2]
+            return x, y
         n = max(1, math.ceil(self.length / _STEP))
         grid = np.union1d(np.concatenate([[0.0], np.clip(u, 0.0, None)]),
                           np.linspace(0.0, self.length, n + 1))  # fmt: skip
@@ -302,10 +294,28 @@ class RoadGeometry:
         idx = np.searchsorted(grid, u)
         return self.x + cx[idx], self.y + cy[idx]
 
+    def pose(self, u: Array) -> tuple[Array, Array, Array, Array]:
+        """x, y [m], heading [rad] and curvature [1/m] (file frame) at the sorted distances
+        ``u`` [m] from the start (a ``paramPoly3``'s arc length inverted once for all four)."""
+        if self.poly is not None:
+            return self._cubic_pose(self.poly, u)
+        x, y = self.positions(u)
+        return x, y, self.heading(u), self.curvature(u)
+
     def end(self) -> tuple[float, float, float]:
         """Where the geometry ends: x, y [m] and heading [rad], file frame."""
-        x, y = self.positions(np.array([self.length]))
-        return float(x[0]), float(y[0]), float(self.heading(np.array([self.length]))[0])
+        x, y, psi, _ = self.pose(np.array([self.length]))
+        return float(x[0]), float(y[0]), float(psi[0])
+
+    def _cubic_pose(self, poly: tuple[float, ...], u: Array) -> tuple[Array, Array, Array, Array]:
+        """:meth:`pose` of a ``paramPoly3`` (``poly``, its coefficients), evaluated where its
+        arc length is ``u``."""
+        p = _poly_parameter(poly, self.p_end, self.length, np.asarray(u, dtype=np.float64))
+        pu, pv, du, dv, ddu, ddv = _poly_values(poly, p)
+        c, s = math.cos(self.hdg), math.sin(self.hdg)
+        kappa: Array = (du * ddv - dv * ddu) / np.hypot(du, dv) ** 3
+        return (self.x + c * pu - s * pv, self.y + s * pu + c * pv,
+                self.hdg + np.arctan2(dv, du), kappa)  # fmt: skip
 
 
 def _poly_values(poly: tuple[float, ...], p: Array) -> tuple[Array, ...]:
@@ -423,8 +433,8 @@ def road_poses(geometry: tuple[RoadGeometry, ...], s: Array) -> tuple[Array, Arr
             turn += 2.0 * math.pi * round((previous - g.hdg - turn) / (2.0 * math.pi))
         sel = which == k
         u = np.minimum(s[sel] - starts[k], g.length)
-        gx, gy = g.positions(u)
-        x[sel], y[sel], psi[sel], kappa[sel] = gx, gy, g.heading(u) + turn, g.curvature(u)
+        gx, gy, gpsi, gkappa = g.pose(u)
+        x[sel], y[sel], psi[sel], kappa[sel] = gx, gy, gpsi + turn, gkappa
         if k == len(geometry) - 1:  # straight on past the end
             beyond = np.maximum(s[sel] - starts[k] - g.length, 0.0)
             end_psi = float(g.heading(np.array([g.length]))[0]) + turn
