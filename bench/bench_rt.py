@@ -267,6 +267,7 @@ def _run_against_rig(
         "missed": t["missed"],
         "periods": t["periods"],
         "missed_percent": round(100.0 * t["miss_ratio"], 3),
+        "frame periods without a frame (bus-paced: the rig's)": t.get("gaps", 0),
         "frames_lost": payload["counters"]["frames_lost"],
         "where the compute time went, p50/p99 us": ", ".join(
             f"{stage} {_us(v['p50'])}/{_us(v['p99'])}" for stage, v in payload["profile"].items()

@@ -155,11 +155,14 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     timing = report["timing"]
     # one row per 1 kHz control period served (a missed deadline is skipped and counted)
     assert result.complete and result.t.size == timing["served"]
-    # where the compute time went: four stages whose medians add up to about the compute
+    # where the compute time went: four stages whose medians add up to about the compute,
+    # and the stack's own time (timed inside the compiled period) within the control stage
     profile = report["profile"]
-    assert list(profile) == ["read", "control", "send", "rest"]
+    assert list(profile) == ["read", "control", "send", "rest", "stack"]
     assert all(0.0 <= stage["p50"] <= stage["p99"] <= stage["max"] for stage in profile.values())
+    stack = profile.pop("stack")
     assert sum(stage["max"] for stage in profile.values()) >= timing["compute_p50"]
+    assert 0.0 < stack["p50"] < profile["control"]["p50"]
     # 2 s at 1 kHz, then the torque fades out over the 0.5 s fade_in (never a step to zero)
     assert timing["periods"] > 2000 and 2.4 < result.t[-1]
     assert result["i_m"][-1] == 0.0 and payload["state"] == "IDLE"

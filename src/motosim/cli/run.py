@@ -308,7 +308,7 @@ def _writer_main(
     blocks: list[np.ndarray] = []
     pending: list[np.ndarray] = []
     stamps: list[np.ndarray] = []  # the loop's profile columns, for timing.json
-    stamp_names = ("compute", "done_read", "done_control", "done_send")
+    stamp_names = ("compute", "done_read", "done_control", "done_send", "stack")
     stamp_cols = [names.index(n) for n in stamp_names] if set(stamp_names) <= set(names) else []
     col_state = names.index("state")
     period = 0.1 if view is None else 0.005  # the view is at most 5 ms behind the writer
@@ -548,6 +548,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"  {wake} p99 {stats.wake_p99 * us:.0f} us, compute p99 "
             f"{stats.compute_p99 * us:.0f} us, missed {stats.missed} of {stats.periods}"
+            + (f", {stats.gaps} frame periods without a frame" if args.pace == "bus" else "")
         )
         for p in privileges:
             print(f"  {p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
@@ -692,6 +693,7 @@ def _loop(
             loop = FramePacedLoop(
                 rate, clock, runner.wait_status, timeout=runner.watchdog_time,
                 first_timeout=runner.first_timeout, capacity=capacity,
+                received=lambda: runner.status_frames,
             )  # fmt: skip
         else:
             loop = RateLoop(rate, clock, capacity=capacity)

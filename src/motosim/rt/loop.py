@@ -48,6 +48,9 @@ class TimingStats:
         Wake-up latency after the deadline [s] (median, 99th, 99.9th percentile, maximum).
     compute_p50, compute_p99, compute_p999, compute_max : float
         Compute time of one step [s], same statistics.
+    gaps : int
+        A loop paced by the drive's frames (:class:`FramePacedLoop`): frame periods the
+        drive left without a frame (its pace, not the loop's); 0 for a clock-paced loop.
     """
 
     rate: float
@@ -62,6 +65,7 @@ class TimingStats:
     compute_p99: float
     compute_p999: float
     compute_max: float
+    gaps: int = 0
 
     @property
     def miss_ratio(self) -> float:
@@ -76,7 +80,7 @@ class TimingStats:
 
 
 def timing_stats(
-    rate: float, wake: np.ndarray, compute: np.ndarray, *, periods: int, missed: int
+    rate: float, wake: np.ndarray, compute: np.ndarray, *, periods: int, missed: int, gaps: int = 0
 ) -> TimingStats:
     """Summarise wake-up latencies and compute times [s] of the served steps.
 
@@ -88,7 +92,7 @@ def timing_stats(
     """
     if wake.size == 0:
         nan = float("nan")
-        return TimingStats(rate, periods, 0, missed, *(nan,) * 8)
+        return TimingStats(rate, periods, 0, missed, *(nan,) * 8, gaps=gaps)
     qs = (50.0, 99.0, 99.9)
     w = np.percentile(wake, qs)
     c = np.percentile(compute, qs)
@@ -105,6 +109,7 @@ def timing_stats(
         compute_p99=float(c[1]),
         compute_p999=float(c[2]),
         compute_max=float(compute.max()),
+        gaps=gaps,
     )
 
 
@@ -145,6 +150,7 @@ class RateLoop:
         self._compute = np.zeros(capacity)
         self._served = 0
         self._missed = 0
+        self._gaps = 0
         self._periods = 0
         self._stop = False
 
@@ -227,6 +233,7 @@ class RateLoop:
             self._compute[:n],
             periods=self._periods,
             missed=self._missed,
+            gaps=self._gaps,
         )
 
 
@@ -236,13 +243,19 @@ class FramePacedLoop(RateLoop):
     Each period the loop calls ``wait(until)``, which blocks until a status frame has arrived
     (True) or the clock reaches ``until`` [s] (False), then ``step(k, t)`` with ``t`` the time
     the wait returned. ``until`` is the last wake-up plus ``timeout`` (the watchdog's time),
-    or plus ``first_timeout`` before the first frame. A timeout still runs the step: the
-    frames due meanwhile are counted as missed and ``k`` jumps over them.
+    or plus ``first_timeout`` before the first frame. A timeout still runs the step (the
+    caller's watchdog trips then) and ``k`` jumps over the frame periods without a frame.
 
-    Its :meth:`stats` are :class:`TimingStats` with these meanings: ``wake`` is the interval
-    between two frames minus the nominal period (the drive's pace as the loop sees it: its
-    jitter, negative for a frame early), ``compute`` the step's time, ``missed`` the frame
-    periods without a frame (a gap of ``n`` periods counts ``n - 1``).
+    Each frame's deadline is the next one: the step that answers it must end within a frame
+    period. Its :meth:`stats` are :class:`TimingStats` with these meanings: ``wake`` is the
+    interval between two frames minus the nominal period (the drive's pace as the loop sees
+    it: its jitter, negative for a frame early), ``compute`` the step's time, ``missed`` the
+    frames that got no answer in time: a step longer than a frame period, and, given
+    ``received``, every status frame read in a period that answered a newer one (the loop
+    was late: it answers the newest frame, never a backlog one by one). ``gaps`` are the
+    drive's: the frame periods without a frame (the periods that passed less the frames
+    received, given ``received``; else those between two frames, a gap of ``n`` periods
+    counting ``n - 1``).
 
     Parameters
     ----------
@@ -254,6 +267,9 @@ class FramePacedLoop(RateLoop):
         ``wait(until) -> bool``, see above (``RealtimeRunner.wait_status``).
     timeout, first_timeout : float
         The longest wait for a frame [s], > 0, and for the first one.
+    received : callable, optional
+        ``received() -> int``: the status frames received so far, by the wait and the steps
+        (``RealtimeRunner.status_frames``).
     capacity : int
         Steps whose timing is kept.
 
@@ -270,8 +286,8 @@ class FramePacedLoop(RateLoop):
     >>> ks = []
     >>> loop.run(lambda k, t: ks.append(k) is None, periods=5)
     4
-    >>> ks, loop.stats().missed
-    ([0, 1, 3, 4], 1)
+    >>> ks, loop.stats().missed, loop.stats().gaps
+    ([0, 1, 3, 4], 0, 1)
     """
 
     def __init__(
@@ -282,6 +298,7 @@ class FramePacedLoop(RateLoop):
         *,
         timeout: float,
         first_timeout: float | None = None,
+        received: Callable[[], int] | None = None,
         capacity: int = 1 << 17,
     ) -> None:
         super().__init__(rate, clock, capacity=capacity)
@@ -291,6 +308,7 @@ class FramePacedLoop(RateLoop):
                 f"timeout = {timeout!r} s, first_timeout = {first!r} s: expected positive times"
             )
         self._wait = wait
+        self._received = received
         self._timeout = float(timeout)
         self._first_timeout = float(first)
         self._timeouts = 0
@@ -312,12 +330,16 @@ class FramePacedLoop(RateLoop):
             raise MotosimError(f"periods = {periods!r}: expected a non-negative count")
         now = self._clock.now
         wait = self._wait
+        received = self._received
         wake, compute = self._wake, self._compute
         cap = wake.size
         period = self._period
         served = self._served
         missed = 0
+        gaps = 0
         timeouts = 0
+        frames = received() if received is not None else 0
+        start = frames
         self._stop = False
         k = 0
         last = now()
@@ -335,20 +357,31 @@ class FramePacedLoop(RateLoop):
                 timeouts += 1
             skip = gap - 1
             if k + skip >= periods:  # the run's last periods passed without a frame
-                missed += periods - k
+                gaps += periods - k
                 k = periods
                 break
-            missed += skip
+            gaps += skip
             k += skip
             slot = served % cap
             wake[slot] = jitter
             carry_on = step(k, woke)
-            compute[slot] = now() - woke
+            spent = now() - woke
+            compute[slot] = spent
+            if spent > period:  # the answer left after the next frame was due
+                missed += 1
+            if received is not None:  # frames read with a newer one got no answer of theirs
+                read = received()
+                if served > self._served:  # (the first step's were queued before the run)
+                    missed += max(0, read - frames - (1 if arrived else 0))
+                frames = read
             served += 1
             k += 1
             last = woke
             limit = self._timeout
             if not carry_on:
                 break
+        if received is not None:
+            gaps = max(0, k - (frames - start))
         self._timeouts += timeouts
+        self._gaps += gaps
         return self._close(k, periods, missed, served)

@@ -58,7 +58,7 @@ Array = NDArray[np.float64]
 
 LOOP_SIGNALS = (
     "t", "theta_h_meas", "i_m_meas", "i_cmd", "i_safe", "state", "fault",
-    "t_clock", "wake", "compute", "missed", "done_read", "done_control", "done_send",
+    "t_clock", "wake", "compute", "missed", "done_read", "done_control", "done_send", "stack",
 )  # fmt: skip
 """The loop's own columns, before the stack's: time [s], the measured angle [rad] and current
 [A] used this period, the stack's command and the one sent [A], the safety state and fault
@@ -68,7 +68,8 @@ written [s] (NaN without ``now``), and the deadlines missed before it; then wher
 time went: the times [s] after the wake-up at which the bus was read, the stack and the
 safety stage had run and the command frame was sent (NaN without ``now``;
 :func:`profile_stats` summarises them; the rest, up to ``compute``, is the telemetry
-datagram, the platform's stage and the row)."""
+datagram, the platform's stage and the row); and the stack's own time [s], measured inside the
+compiled period (NaN for a stack in Python)."""
 
 
 class StackStepper(Protocol):
@@ -248,6 +249,7 @@ class RealtimeRunner:
         names = tuple(stepper.names)
         r = np.zeros(fused.RUNNER_STATE_SIZE)
         r[[fused.R_T0, fused.R_THETA, fused.R_CURRENT, fused.R_PREV_THETA]] = math.nan
+        r[fused.R_STACK_TIME] = math.nan  # measured by the fused period only
         r[fused.R_LINGER] = max(1, round(linger * rate))
         r[fused.R_START_TIMEOUT] = max(1, round(start_timeout * rate))
         r[fused.R_HEARTBEAT_EVERY] = max(1, round(0.1 * rate))
@@ -520,26 +522,29 @@ PROFILE_STAGES = ("read", "control", "send", "rest")
 
 def profile_stats(rows: Array, names: tuple[str, ...]) -> dict[str, dict[str, float]]:
     """Where the compute time of the periods in ``rows`` went: p50, p99 and max [s] of each
-    stage (the bus read, the stack and safety stage, the send, the rest up to the row).
+    stage (the bus read, the stack and safety stage, the send, the rest up to the row); with
+    a ``stack`` column, also the stack's own time inside the control stage (``"stack"``).
 
     Rows without the stamps (NaN, a loop without ``now``) are left out.
 
     Examples
     --------
-    >>> names = ("compute", "done_read", "done_control", "done_send")
-    >>> rows = np.array([[10e-6, 2e-6, 5e-6, 9e-6]] * 3)
+    >>> names = ("compute", "done_read", "done_control", "done_send", "stack")
+    >>> rows = np.array([[10e-6, 2e-6, 5e-6, 9e-6, 1e-6]] * 3)
     >>> {k: round(v["p50"] * 1e6, 3) for k, v in profile_stats(rows, names).items()}
-    {'read': 2.0, 'control': 3.0, 'send': 4.0, 'rest': 1.0}
+    {'read': 2.0, 'control': 3.0, 'send': 4.0, 'rest': 1.0, 'stack': 1.0}
     """
     col = [names.index(n) for n in ("done_read", "done_control", "done_send", "compute")]
     stamps = rows[:, col]
     stamps = stamps[np.all(np.isfinite(stamps), axis=1)]
-    if stamps.shape[0] == 0:
-        return {}
     spans = np.diff(stamps, axis=1, prepend=0.0)
-    q = np.percentile(spans, (50.0, 99.0), axis=0)
-    top = spans.max(axis=0)
-    return {
-        stage: {"p50": float(q[0, j]), "p99": float(q[1, j]), "max": float(top[j])}
-        for j, stage in enumerate(PROFILE_STAGES)
-    }
+    stages = {stage: spans[:, j] for j, stage in enumerate(PROFILE_STAGES)}
+    if "stack" in names:
+        stages["stack"] = rows[:, names.index("stack")]
+    out = {}
+    for stage, times in stages.items():
+        times = times[np.isfinite(times)]
+        if times.size:
+            q = np.percentile(times, (50.0, 99.0))
+            out[stage] = {"p50": float(q[0]), "p99": float(q[1]), "max": float(times.max())}
+    return out

@@ -145,7 +145,38 @@ def test_a_bus_paced_loop_still_steps_when_the_frames_stop() -> None:
     seen: list[tuple[int, float]] = []
     loop.run(lambda k, t: seen.append((k, round(t, 9))) is None, periods=10)
     assert seen == [(0, 0.01), (1, 0.02), (4, 0.05), (7, 0.08)]  # none past the run
-    assert loop.timeouts == 3 and loop.stats().missed == 10 - len(seen)
+    stats = loop.stats()
+    assert loop.timeouts == 3 and stats.gaps == 10 - len(seen) and stats.missed == 0
+
+
+def test_a_bus_paced_loop_counts_the_frames_it_answered_late_apart_from_the_drive_s_gaps() -> None:
+    # each frame's deadline is the next one. A step stalled 2.5 periods answers the frame of
+    # 0.02 s after the one of 0.03 s is due (missed); the next period reads the frames of 0.03
+    # and 0.04 s together and answers the newer (0.03 s missed, 0.04 s answered in time). The
+    # drive's own gap (no frame at 0.07 s) is not the loop's miss.
+    clock = SimulatedClock()
+    due = [0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.08, 0.09]
+    read = [0]
+
+    def wait(until: float) -> bool:
+        if read[0] < len(due) and due[read[0]] <= until:
+            clock.sleep_until(due[read[0]])
+            read[0] += 1
+            return True
+        clock.sleep_until(until)
+        return False
+
+    def step(k: int, t: float) -> bool:
+        while read[0] < len(due) and due[read[0]] <= clock.now():  # the period's bus read
+            read[0] += 1
+        if k == 1:
+            clock.advance(0.025)
+        return True
+
+    loop = FramePacedLoop(100.0, clock, wait, timeout=0.03, received=lambda: read[0])
+    assert loop.run(step, periods=9) == 7
+    stats = loop.stats()
+    assert (stats.missed, stats.gaps, stats.periods) == (2, 1, 9)
 
 
 @pytest.mark.parametrize(("rate", "timeout"), [(0.0, 0.03), (100.0, 0.0), (100.0, float("nan"))])
