@@ -7,10 +7,12 @@ mlockall: applied as root, refused otherwise, and reported):
 2. the period's compiled work called as the loop calls it, once per period from Python,
    against the same compiled work in a compiled loop over the same recorded status frames
    (the same commands sent, checked): the fused period (:func:`motosim.rt.fused.fused_period`:
-   frame decoded, safety stage, stack, command encoded, row kept) and the stack's period
-   alone (:func:`motosim.rt.stack.stack_period`); what the ratio shows is the cost of calling
-   compiled code from Python (the one :class:`~motosim.rt.fused.PeriodContext` unboxed, the
-   caches cooled by the interpreter between calls); with the
+   frame decoded, safety stage, stack, command encoded, row kept); what the ratio shows is
+   the cost of calling compiled code from Python (the one
+   :class:`~motosim.rt.fused.PeriodContext` unboxed); and the stack's step
+   (:func:`motosim.rt.stack.stack_period`) in a compiled loop, each step timed from compiled
+   code (:func:`motosim.rt.fused.monotonic_ns`) as the fused period times it in every run:
+   the "offline" step that the step inside ``motosim run`` (3.) is compared with; with the
    offline closed loop's period (``motosim simulate``, plant included) for reference;
 3. ``motosim run`` at 1 kHz (status frames at 1 kHz) against ``motosim rig`` in another
    process over ``udp_multicast`` for 60 s, and at 100 Hz (control and status) for 20 s,
@@ -48,7 +50,7 @@ from motosim.params import load_parameters
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
 from motosim.rt.config import parse_safety
-from motosim.rt.fused import context_period
+from motosim.rt.fused import context_period, monotonic_ns
 from motosim.rt.privileges import apply_privileges
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.stack import CompiledStack, stack_period
@@ -118,11 +120,14 @@ def _replay(
 @njit(cache=False)
 def _steps(
     model: Any, data: Any, force: Any, side: Any, state: Any, row: Any, theta: Any, first: int,
-    end: int,
+    end: int, times: Any,
 ) -> None:  # fmt: skip
-    """The stack's period over recorded angles, in a compiled loop."""
+    """The stack's period over recorded angles, in a compiled loop, each timed as the fused
+    period times it in ``motosim run`` (:func:`monotonic_ns` around it) [s]."""
     for k in range(first, end):
+        start = monotonic_ns()
         stack_period(model, data, force, side, state, row, theta[k], 0.0)
+        times[k] = (monotonic_ns() - start) * 1e-9
 
 
 CHUNK = 50
@@ -189,24 +194,13 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         _replay(loop._context, frames, st.frame_id, replayed, j * CHUNK, (j + 1) * CHUNK)
         chunks[j] = (clock() - t0) / CHUNK
     assert np.array_equal(sent, replayed), "the two ways sent different commands"
-    stack = CompiledStack(model)
-    stack.reset(0.0, 0.0)
-    step_times = np.empty(n)
-    for k in range(n):
-        t0 = clock()
-        stack.step(float(theta[k]), 0.0)
-        step_times[k] = clock() - t0
     other = CompiledStack(model)
     args2 = (other.model, other.data, other.force, other.side_force, other.state, other.row())
-    _steps(*args2, theta, 0, 10)
+    step_times = np.empty(n)
+    _steps(*args2, theta, 0, 10, step_times)  # compile
     other.reset(0.0, 0.0)
-    step_chunks = np.empty(n // CHUNK)
-    for j in range(step_chunks.size):
-        t0 = clock()
-        _steps(*args2, theta, j * CHUNK, (j + 1) * CHUNK)
-        step_chunks[j] = (clock() - t0) / CHUNK
+    _steps(*args2, theta, 0, n, step_times)
     p50, c50 = float(np.median(times)), float(np.median(chunks))
-    s50, sc50 = float(np.median(step_times)), float(np.median(step_chunks))
     return {
         "offline closed-loop period (simulate, plant included) us": _us(offline),
         "fused period from Python, per period p50 us": _us(p50),
@@ -216,9 +210,12 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         "fused period: from Python / compiled loop, mean": round(
             float(np.mean(times) / np.mean(chunks)), 2
         ),
-        "stack period from Python p50 us": _us(s50),
-        "stack period in a compiled loop, p50 us": _us(sc50),
-        "stack period: from Python / compiled loop, p50": round(s50 / sc50, 2),
+        "stack step in a compiled loop (offline), timed inside, p50 us": _us(
+            float(np.median(step_times))
+        ),
+        "stack step in a compiled loop (offline), timed inside, p99 us": _us(
+            float(np.percentile(step_times, 99))
+        ),
     }
 
 
@@ -255,6 +252,7 @@ def _run_against_rig(
         payload = json.loads(out)
     t = payload["timing"]
     stream = payload.get("state_stream", {})
+    stack = payload["profile"].get("stack", {})  # timed inside the compiled period
     return {
         "wake_p50_us": _us(t["wake_p50"]),
         "wake_p99_us": _us(t["wake_p99"]),
@@ -269,6 +267,8 @@ def _run_against_rig(
         "missed_percent": round(100.0 * t["miss_ratio"], 3),
         "frame periods without a frame (bus-paced: the rig's)": t.get("gaps", 0),
         "frames_lost": payload["counters"]["frames_lost"],
+        "stack step in the loop, p50 us": _us(stack.get("p50", float("nan"))),
+        "stack step in the loop, p99 us": _us(stack.get("p99", float("nan"))),
         "where the compute time went, p50/p99 us": ", ".join(
             f"{stage} {_us(v['p50'])}/{_us(v['p99'])}" for stage, v in payload["profile"].items()
         ),
@@ -314,6 +314,10 @@ def run(seconds: float = 60.0, *, quick: bool = False) -> dict[str, object]:
     for control, length, link, pace in cases:
         figures = _run_against_rig(control, length, link=link, pace=pace)
         out |= {f"run {control:g} Hz {link} {pace} {k}": v for k, v in figures.items()}
+    offline = out["stack stack step in a compiled loop (offline), timed inside, p50 us"]
+    inside = out.get("run 1000 Hz fast clock stack step in the loop, p50 us")
+    if isinstance(inside, float) and isinstance(offline, float):
+        out["stack step: in the loop / offline, p50"] = round(inside / offline, 2)
     for control in (1000.0, 100.0):
         before, after = (out.get(f"run {control:g} Hz {x} clock compute_p50_us") for x in
                          ("python-can", "fast"))  # fmt: skip

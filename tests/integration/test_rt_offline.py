@@ -197,7 +197,9 @@ class _StackInPython:
         return self.stack.row()
 
 
-def _run_both_ways(fused: bool, rate: float = 1000.0) -> tuple[RealtimeRunner, np.ndarray]:
+def _run_both_ways(
+    fused: bool, rate: float = 1000.0, *, warm: bool = False
+) -> tuple[RealtimeRunner, np.ndarray]:
     inputs = _inputs(rate)
     sc = inputs.scenario  # type: ignore[attr-defined]
     model = build_stack(inputs)  # type: ignore[arg-type]
@@ -209,7 +211,7 @@ def _run_both_ways(fused: bool, rate: float = 1000.0) -> tuple[RealtimeRunner, n
     )  # fmt: skip
     settings = _rig_settings(sc, current_noise=0.01)
     codecs = handlebar_codecs()
-    channel = f"virtual:rt_fused_{fused}"
+    channel = f"virtual:rt_fused_{fused}_{warm}"
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
     stepper = stack if fused else _StackInPython(stack)
     with open_link(channel) as host, open_link(channel) as drive:
@@ -230,24 +232,40 @@ def _run_both_ways(fused: bool, rate: float = 1000.0) -> tuple[RealtimeRunner, n
                 runner.request_stop()  # a fade-out to the end
             return runner.period(k, t)
 
-        RateLoop(rate, clock).run(period, periods=round(sc.duration * rate))
+        loop = RateLoop(rate, clock, warm=runner.warm if warm else None)
+        loop.run(period, periods=round(sc.duration * rate))
     return runner, runner.ring.drain()
 
 
 def test_the_fused_period_is_the_period_around_a_python_stack() -> None:
     # The same compiled pieces called as one (a CompiledStack) or three around a stack in
-    # Python give the same rows to the last bit, protections binding and a stop included.
+    # Python give the same rows to the last bit, protections binding and a stop included;
+    # only the fused period times its stack (from compiled code: a wall-clock time).
     fused, rows = _run_both_ways(True)
     split, rows_split = _run_both_ways(False)
     assert fused.fused and not split.fused
     assert rows.shape == rows_split.shape and rows.shape[0] > 1600
-    assert np.array_equal(rows, rows_split, equal_nan=True)
     col = {name: j for j, name in enumerate(fused.names)}
+    stack, stack_split = rows[:, col["stack"]], rows_split[:, col["stack"]]
+    assert np.all(np.isnan(stack_split)) and np.all(stack[np.isfinite(stack)] > 0.0)
+    assert np.isfinite(stack).sum() >= rows.shape[0] - 2  # every period once started
+    rows[:, col["stack"]] = rows_split[:, col["stack"]] = 0.0
+    assert np.array_equal(rows, rows_split, equal_nan=True)
     i_safe = rows[:, col["i_safe"]]
     assert np.max(np.abs(i_safe)) == pytest.approx(0.1)  # the end stop spring, clamped
     same = dataclasses.replace(fused.counters(), fault_time=0.0)  # NaN: no fault
     assert same == dataclasses.replace(split.counters(), fault_time=0.0)
     assert same.state == "IDLE" and same.fault == "NONE"
+
+
+def test_warming_the_stack_before_each_deadline_changes_nothing() -> None:
+    # RealtimeRunner.warm steps a copy of the stack's state (to bring its code and data into
+    # the caches): the rows are those of a run without it, to the last bit
+    _, rows = _run_both_ways(True)
+    warmed, rows_warm = _run_both_ways(True, warm=True)
+    col = {name: j for j, name in enumerate(warmed.names)}
+    rows[:, col["stack"]] = rows_warm[:, col["stack"]] = 0.0
+    assert rows.shape == rows_warm.shape and np.array_equal(rows, rows_warm, equal_nan=True)
 
 
 @pytest.mark.parametrize(

@@ -695,8 +695,8 @@ def _loop(
                 first_timeout=runner.first_timeout, capacity=capacity,
                 received=lambda: runner.status_frames,
             )  # fmt: skip
-        else:
-            loop = RateLoop(rate, clock, capacity=capacity)
+        else:  # the stack warmed in the caches just before each deadline
+            loop = RateLoop(rate, clock, capacity=capacity, warm=runner.warm)
         if sys.stdin is not None and sys.stdin.isatty():
             threading.Thread(target=_keyboard, args=(runner,), daemon=True).start()
             print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=sys.stderr)

@@ -386,6 +386,24 @@ def fused_period(
     return finish(a, command, k, t, woke, done_read)
 
 
+@njit(cache=True)
+def stack_warm(
+    model: Any, data: Any, shadow: Any, force: Array, side_force: Array, stack_state: Array,
+    shadow_state: Array, shadow_row: Array, theta: float, current: float,
+) -> None:  # fmt: skip
+    """One stack period on ``shadow``, a copy of the stack's ``data`` and ``stack_state``
+    made now, whose result is thrown away: the stack's code and data are then in the CPU's
+    caches for the next period's real step."""
+    shadow.estimator[:] = data.estimator
+    shadow.differentiator[:] = data.differentiator
+    shadow.controller[:] = data.controller
+    shadow.motorcycle[:] = data.motorcycle
+    shadow.held[:] = data.held
+    shadow.periods[:] = data.periods
+    shadow_state[:] = stack_state
+    stack_period(model, shadow, force, side_force, shadow_state, shadow_row, theta, current)
+
+
 @structref.register
 class PeriodContextType(types.StructRef):
     """numba's type of :class:`PeriodContext` (one per set of field types)."""
@@ -418,18 +436,34 @@ class PeriodContext(structref.StructRefProxy):
         side_force: Array,
         stack_state: Array,
         arrays: PeriodArrays,
+        shadow: Any,
+        shadow_state: Array,
+        shadow_row: Array,
     ) -> "PeriodContext":
         made: PeriodContext = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, model, data, force, side_force, stack_state, arrays
-        )
+            cls, model, data, force, side_force, stack_state, arrays, shadow, shadow_state,
+            shadow_row,
+        )  # fmt: skip
         return made
 
 
 structref.define_proxy(  # type: ignore[no-untyped-call]
     PeriodContext,
     PeriodContextType,
-    ["model", "data", "force", "side_force", "stack_state", "arrays"],
-)
+    ["model", "data", "force", "side_force", "stack_state", "arrays", "shadow", "shadow_state",
+     "shadow_row"],
+)  # fmt: skip
+
+
+@njit(cache=True)
+def context_warm(c: Any) -> None:
+    """:func:`stack_warm` at the last valid measurement, once the stack has started."""
+    r = c.arrays.runner
+    if r[R_STARTED] != 0.0:
+        stack_warm(
+            c.model, c.data, c.shadow, c.force, c.side_force, c.stack_state, c.shadow_state,
+            c.shadow_row, r[R_THETA], r[R_CURRENT],
+        )  # fmt: skip
 
 
 @njit(cache=True)

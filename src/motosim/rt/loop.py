@@ -27,7 +27,7 @@ import numpy as np
 from motosim.errors import MotosimError
 from motosim.rt.clock import Clock
 
-__all__ = ["FramePacedLoop", "RateLoop", "TimingStats", "timing_stats"]
+__all__ = ["WARM_LEAD", "FramePacedLoop", "RateLoop", "TimingStats", "timing_stats"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,6 +113,10 @@ def timing_stats(
     )
 
 
+WARM_LEAD = 50e-6
+"""How long before a deadline the loop's ``warm`` is called [s]."""
+
+
 class RateLoop:
     """Run a step at a fixed rate on absolute deadlines.
 
@@ -125,6 +129,10 @@ class RateLoop:
         :class:`~motosim.rt.clock.SimulatedClock` in tests).
     capacity : int
         Steps whose timing is kept (a ring: the last ``capacity`` steps are summarised).
+    warm : callable, optional
+        Called ``WARM_LEAD`` before each deadline (within the clock's spin: the wake-up is
+        not delayed) to bring the step's code and data into the CPU's caches
+        (:meth:`motosim.rt.run.RealtimeRunner.warm`).
 
     Examples
     --------
@@ -138,7 +146,14 @@ class RateLoop:
     [0.01, 0.02, 0.03]
     """
 
-    def __init__(self, rate: float, clock: Clock, *, capacity: int = 1 << 17) -> None:
+    def __init__(
+        self,
+        rate: float,
+        clock: Clock,
+        *,
+        capacity: int = 1 << 17,
+        warm: Callable[[], None] | None = None,
+    ) -> None:
         if not (np.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
         if capacity < 1:
@@ -153,6 +168,7 @@ class RateLoop:
         self._gaps = 0
         self._periods = 0
         self._stop = False
+        self._warm = warm
 
     @property
     def period(self) -> float:
@@ -185,6 +201,7 @@ class RateLoop:
         clock = self._clock
         now = clock.now
         sleep_until = clock.sleep_until
+        warm = self._warm
         wake, compute = self._wake, self._compute
         cap = wake.size
         period = self._period
@@ -195,6 +212,9 @@ class RateLoop:
         k = 0
         while k < periods and not self._stop:
             deadline = t0 + k * period
+            if warm is not None:
+                sleep_until(deadline - WARM_LEAD)
+                warm()
             sleep_until(deadline)
             woke = now()
             carry_on = step(k, deadline)

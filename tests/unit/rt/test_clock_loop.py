@@ -9,7 +9,7 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock, SimulatedClock
-from motosim.rt.loop import FramePacedLoop, RateLoop
+from motosim.rt.loop import WARM_LEAD, FramePacedLoop, RateLoop
 from motosim.rt.privileges import apply_privileges, freeze_gc, pin_cpus, thaw_gc
 from motosim.rt.ring import SampleRing
 
@@ -183,3 +183,13 @@ def test_a_bus_paced_loop_counts_the_frames_it_answered_late_apart_from_the_driv
 def test_bus_paced_loop_refuses_bad_settings(rate: float, timeout: float) -> None:
     with pytest.raises(MotosimError):
         FramePacedLoop(rate, SimulatedClock(), lambda until: True, timeout=timeout)
+
+
+def test_the_warm_up_runs_just_before_each_deadline() -> None:
+    clock = SimulatedClock()
+    calls: list[float] = []
+    loop = RateLoop(100.0, clock, warm=lambda: calls.append(clock.now()))
+    steps: list[float] = []
+    assert loop.run(lambda k, t: steps.append(t) is None, periods=3) == 3
+    assert calls == pytest.approx([t - WARM_LEAD for t in steps])
+    assert steps == pytest.approx([0.01, 0.02, 0.03])  # the deadlines unchanged
