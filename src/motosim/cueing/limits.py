@@ -139,10 +139,10 @@ def limit_step(lim: Array, state: Array, target: float, target_rate: float = 0.0
     hi = min(v + c, V, _brake_speed(X - x, c, h))
     lo = max(v - c, -V, -_brake_speed(X + x, c, h))
     floor, ceiling = -X, X
-    if u >= 0.0 and x >= 0.0:  # do not carry the axis across neutral
+    if u >= 0.0 and x >= 0.0 and target_rate >= 0.0:  # do not carry the axis across neutral
         lo = max(lo, -_brake_speed(x, c, h))
         floor = 0.0
-    if u <= 0.0 and x <= 0.0:
+    if u <= 0.0 and x <= 0.0 and target_rate <= 0.0:
         hi = min(hi, _brake_speed(-x, c, h))
         ceiling = 0.0
     if lo > hi + 1e-9 * c:  # only from a state not reachable under the limits: brake hardest
