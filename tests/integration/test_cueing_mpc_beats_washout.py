@@ -3,8 +3,8 @@
 Issue 13's target: on the training scenarios the MPC has fewer false cues and a lower
 perceived roll and pitch error than the washout. These two are simulated here and scored
 by :func:`motosim.cueing.cue` at the 100 Hz of the comparison table of
-docs/guide/cueing.md (the figures of that table: obstacle avoidance 4.9 against 6.2 % false
-cues, 14.6 against 16.1 deg/s roll, 1.51 against 2.18 deg/s pitch; crosswind 0.8 against
+docs/guide/cueing.md (the figures of that table: obstacle avoidance 4.7 against 6.2 % false
+cues, 14.19 against 16.12 deg/s roll, 1.50 against 2.18 deg/s pitch; crosswind 0.8 against
 1.3 %, 1.03 against 1.20 deg/s, 0.03 against 0.04 deg/s). The crosswind is the scenario the
 MPC lost on roll before its lateral force was predicted as a held imbalance plus a fading
 roll-acceleration term: a comparison that can and did fail.

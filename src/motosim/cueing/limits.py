@@ -7,8 +7,10 @@ follow, before
 
 - the target (so a held target is reached without overshoot),
 - each angle limit ``+/-X``,
-- neutral, when the target and the axis are on the same side of it (so a command that
-  returns to neutral is never carried across it),
+- neutral, when the target and the axis are on the same side of it and the target is not
+  planned to move towards it (so a command that returns to neutral is never carried across
+  it, and a planned trajectory that sweeps through neutral, the MPC's, is not stopped there
+  for a step: a stop of 0.01 s at 120 deg/s^2 is a jolt the rider feels),
 
 and it is clipped to the rate limit ``V`` and to ``v_prev +/- A dt``. A target that comes
 with its own planned rate (the MPC's, ``target_rate``) is followed at that rate plus the
@@ -139,10 +141,11 @@ def limit_step(lim: Array, state: Array, target: float, target_rate: float = 0.0
     hi = min(v + c, V, _brake_speed(X - x, c, h))
     lo = max(v - c, -V, -_brake_speed(X + x, c, h))
     floor, ceiling = -X, X
-    if u >= 0.0 and x >= 0.0:  # do not carry the axis across neutral
+    # do not carry the axis across neutral, unless the target's own plan heads for it
+    if u >= 0.0 and x >= 0.0 and target_rate >= 0.0:
         lo = max(lo, -_brake_speed(x, c, h))
         floor = 0.0
-    if u <= 0.0 and x <= 0.0:
+    if u <= 0.0 and x <= 0.0 and target_rate <= 0.0:
         hi = min(hi, _brake_speed(-x, c, h))
         ceiling = 0.0
     if lo > hi + 1e-9 * c:  # only from a state not reachable under the limits: brake hardest

@@ -111,3 +111,19 @@ def test_a_planned_ramp_is_followed_without_lag(platform: Platform) -> None:
     braked = apply_limits(design, targets)[:, 0]
     assert np.max(np.abs(followed - ramp)) < np.radians(0.05)
     assert np.max(np.abs(braked - ramp)) > np.radians(0.2)  # braking towards each sample lags
+
+
+def test_a_planned_sweep_through_neutral_is_not_stopped_there(platform: Platform) -> None:
+    # a planned roll x = A (cos wt - cos 2wt) from rest, through neutral both ways (A = 3 deg,
+    # w = 2.5 rad/s: rate <= 23 deg/s, acceleration <= 5 A w^2 = 94 deg/s^2, within the
+    # limits), with its rate: followed without braking to a stop at each crossing of neutral
+    design = design_limits(platform, DT)
+    t = np.arange(600) * DT
+    a, w = np.radians(3.0), 2.5
+    plan = a * (np.cos(w * t) - np.cos(2 * w * t))
+    speed = a * w * (2 * np.sin(2 * w * t) - np.sin(w * t))
+    zero = 0 * t
+    followed = apply_limits(design, np.column_stack([plan, zero, zero]),
+                            np.column_stack([speed, zero, zero]))[:, 0]  # fmt: skip
+    assert np.max(np.abs(followed - plan)) < np.radians(0.05)
+    assert np.max(np.abs(np.diff(followed, 2))) / DT**2 < np.radians(100.0)
