@@ -138,11 +138,14 @@ def run(args: argparse.Namespace) -> int:
         loop = RateLoop(rate, clock, capacity=min(periods, 1 << 20))
         privileges = privileges_from_args(args)
         t0 = [math.nan]
+        last = [-1]
 
         def tick(k: int, t: float) -> bool:
             if t0[0] != t0[0]:
                 t0[0] = t
-            rig.advance_to(t - t0[0])
+            # a late tick (deadlines skipped) sends the newest status frame, not a backlog
+            rig.advance_to(t - t0[0], catch_up=k <= last[0] + 1 or rate < settings.status_rate)
+            last[0] = k
             if twin is not None:
                 twin.advance_to(t - t0[0])
                 if args.platform_can and twin.t >= status_due[0]:
@@ -168,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
         "time": rig.t,
         "frames_sent": rig.frames_sent,
         "frames_dropped": rig.frames_dropped,
+        "frames_late": rig.frames_late,
         "commands": rig.commands,
         "bad_commands": rig.bad_commands,
         "bus_errors": link.errors,
@@ -191,7 +195,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(
             f"rig: {rig.t:.3f} s simulated, {rig.frames_sent} status frames sent "
-            f"({rig.frames_dropped} dropped), {rig.commands} commands received "
+            f"({rig.frames_dropped} dropped, {rig.frames_late} not sent because the rig was "
+            f"late), {rig.commands} commands received "
             f"({rig.bad_commands} bad); wake-up p99 {stats.wake_p99 * 1e6:.0f} us, "
             f"missed {stats.missed}"
         )

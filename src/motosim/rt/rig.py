@@ -305,6 +305,9 @@ class VirtualRig:
         _plant_steps(self.x.copy(), 0.0, self._idle, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4)
         self.frames_sent = 0
         self.frames_dropped = 0
+        self.frames_late = 0
+        """Status frames not sent because the rig's process was late (see
+        :meth:`advance_to`)."""
         self.commands = 0
         self.bad_commands = 0
         self.on_frame: Callable[[int, bytes], object] | None = None
@@ -345,8 +348,14 @@ class VirtualRig:
         self._estop_sent = False
         self._bad_sent = False
 
-    def advance_to(self, t: float) -> None:
-        """Take the commands received, run the plant to time ``t`` [s], send what is due."""
+    def advance_to(self, t: float, *, catch_up: bool = True) -> None:
+        """Take the commands received, run the plant to time ``t`` [s], send what is due.
+
+        ``catch_up`` False: the caller (a rig process ticking on the wall clock) is late by
+        more than a status period. Of the status frames due meanwhile only the newest is
+        sent: a drive sends on its own timer, never a backlog at once, which a loop paced by
+        the frames could not answer one by one (the others counted in :attr:`frames_late`).
+        """
         self._receive()
         s = self.settings
         hb = self.hb
@@ -371,8 +380,9 @@ class VirtualRig:
             )  # fmt: skip
             self.k += n
             self._sample()
-            self._deliver(min(self.t, t))  # the plant may run ahead of t; the bus may not
-        self._deliver(t)
+            if catch_up:
+                self._deliver(min(self.t, t))  # the plant may run ahead of t; the bus may not
+        self._deliver(t, newest_status=not catch_up)
 
     def _sample(self) -> None:
         s, f = self.settings, self.settings.faults
@@ -439,10 +449,22 @@ class VirtualRig:
         heapq.heappush(self._queue, (due, self._seq, frame_id, frame))
         self._seq += 1
 
-    def _deliver(self, t: float) -> None:
+    def _deliver(self, t: float, *, newest_status: bool = False) -> None:
+        """Send the frames due by ``t`` [s]; with ``newest_status``, of the status frames
+        only the newest due (the others counted in :attr:`frames_late`)."""
         queue = self._queue
+        status_id = self.codecs.status.frame_id
+        newest = -math.inf
+        if newest_status:
+            newest = max(
+                (due for due, _, frame_id, _ in queue if frame_id == status_id and due <= t),
+                default=-math.inf,
+            )
         while queue and queue[0][0] <= t + 1e-12:
-            _, _, frame_id, frame = heapq.heappop(queue)
+            due, _, frame_id, frame = heapq.heappop(queue)
+            if frame_id == status_id and due < newest:
+                self.frames_late += 1
+                continue
             if self.link.send(frame_id, frame):
                 self.frames_sent += 1
 

@@ -155,6 +155,24 @@ def test_latency_delays_delivery() -> None:
     assert len(link.sent) == 1
 
 
+def test_a_late_tick_sends_the_newest_status_frame_not_a_backlog() -> None:
+    # the rig's process ticking at the status rate; a tick 2.5 periods late (not catching
+    # up): of the frames sampled at 7, 8 and 9 ms (due 0.3 ms later), only the newest due
+    # by 9.5 ms, the one of 9 ms, is sent, and the two others counted late; on time again,
+    # every frame is sent (those of 10 to 13 ms by 14 ms)
+    rig, link = _rig(latency=0.0003)
+    for k in range(1, 8):
+        rig.advance_to(k * 1e-3)
+    sent = len(link.sent)
+    rig.advance_to(0.0095, catch_up=False)
+    assert rig.frames_late == 2 and len(link.sent) == sent + 1
+    counters = _status(link)[:, ST.index("COUNTER")]
+    assert (counters[-1] - counters[-2]) % 16 == 3  # the alive counter shows the gap
+    for k in range(10, 15):
+        rig.advance_to(k * 1e-3)
+    assert rig.frames_late == 2 and len(link.sent) == sent + 1 + 4
+
+
 def test_bus_off_sends_nothing_for_its_duration() -> None:
     rig, link = _rig(bus_off_at=0.01, bus_off_duration=0.02)
     rig.advance_to(0.05)
