@@ -144,6 +144,7 @@ def _stack_analysis(
         entry["grid"] = {
             "points": grid.points,
             "unstable": grid.unstable,
+            "with_margins": grid.with_margins,
             "worst_gain_margin_db": grid.gain_margin_db,
             "worst_phase_margin_deg": grid.phase_margin_deg,
             "worst_modulus_margin": grid.modulus_margin,
@@ -315,7 +316,8 @@ def _print(report: dict[str, Any]) -> None:
             f"  {a['speed']:6.3g} {a['stable']!s:>7} {a['gain_margin_db']:8.3g} "
             f"{a['phase_margin_deg']:9.3g} {a['modulus_margin']:10.3g} "
             f"{a['feel_error_db']:8.2g} {a['feel_error_deg']:9.2g}  "
-            f"{g['points'] - g['unstable']}/{g['points']} stable, worst GM "
+            f"{g['points'] - g['unstable']}/{g['points']} stable "
+            f"({g['with_margins']} with 6 dB, 45 deg), worst GM "
             f"{g['worst_gain_margin_db']:.3g} dB, PM {g['worst_phase_margin_deg']:.3g} deg"
         )
         for c in a["friction_limit_cycles"]:
