@@ -100,7 +100,10 @@ DESCRIPTIONS: dict[str, str] = {
         '`"none"`: no feedback.'
     ),
     "controller.design": "A design file of `motosim design --out` (relative to the scenario).",
-    "controller.bandwidth": "Tracking bandwidth of the designed controller [Hz].",
+    "controller.bandwidth": (
+        "Tracking bandwidth of the designed controller [Hz]; by default 10 Hz, a fifth of the "
+        "measurement rate below 200 Hz."
+    ),
     "controller.order": "Order of the tuned K_s (0 to 3).",
     "controller.discretization": (
         'Discretisation of a continuous controller: `"zoh"` or `"tustin"`.'

@@ -24,6 +24,7 @@ from motosim.control.torque_feedback import (
     LoopAnalysis,
     analyse_loop,
     check_options,
+    default_bandwidth,
     design_torque_feedback,
 )
 from motosim.errors import MotosimError
@@ -72,7 +73,10 @@ def register(sub: Any) -> None:
         "--order", type=int, default=1, help=f"order of the tuned controller, 0-{MAX_ORDER} (1)"
     )
     parser.add_argument(
-        "--bandwidth", type=float, default=10.0, help="tracking bandwidth [Hz] (10)"
+        "--bandwidth",
+        type=float,
+        default=None,
+        help="tracking bandwidth [Hz] (10; a fifth of --rate below 200 Hz)",
     )
     parser.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (1000)")
     parser.add_argument(
@@ -140,6 +144,7 @@ def _stack_analysis(
         entry["grid"] = {
             "points": grid.points,
             "unstable": grid.unstable,
+            "with_margins": grid.with_margins,
             "worst_gain_margin_db": grid.gain_margin_db,
             "worst_phase_margin_deg": grid.phase_margin_deg,
             "worst_modulus_margin": grid.modulus_margin,
@@ -164,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
             f"--seed {short_repr(args.seed)}; expected an integer from 0 to 2^63 - 1"
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
-    check_options(bandwidth=args.bandwidth, rate=args.rate)
+    bandwidth = default_bandwidth(args.rate) if args.bandwidth is None else args.bandwidth
+    check_options(bandwidth=bandwidth, rate=args.rate)
     speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
     for speed in speeds:
         check_number(
@@ -175,13 +181,14 @@ def run(args: argparse.Namespace) -> int:
     hb = load_parameters(args.handlebar, "handlebar")
     warn_atypical("design", "--speeds", speeds)
     warn_atypical("design", "--rate", args.rate)
-    warn_atypical("design", "--bandwidth", args.bandwidth)
+    if args.bandwidth is not None:
+        warn_atypical("design", "--bandwidth", args.bandwidth)
     if not args.json:
         print(f"designing for {args.handlebar} ({args.starts} starts) ...", file=sys.stderr)
     ctrl = design_torque_feedback(
         hb,
         rng=np.random.default_rng(args.seed),
-        bandwidth=args.bandwidth,
+        bandwidth=bandwidth,
         order=args.order,
         rate=args.rate,
         n_starts=args.starts,
@@ -309,7 +316,8 @@ def _print(report: dict[str, Any]) -> None:
             f"  {a['speed']:6.3g} {a['stable']!s:>7} {a['gain_margin_db']:8.3g} "
             f"{a['phase_margin_deg']:9.3g} {a['modulus_margin']:10.3g} "
             f"{a['feel_error_db']:8.2g} {a['feel_error_deg']:9.2g}  "
-            f"{g['points'] - g['unstable']}/{g['points']} stable, worst GM "
+            f"{g['points'] - g['unstable']}/{g['points']} stable "
+            f"({g['with_margins']} with 6 dB, 45 deg), worst GM "
             f"{g['worst_gain_margin_db']:.3g} dB, PM {g['worst_phase_margin_deg']:.3g} deg"
         )
         for c in a["friction_limit_cycles"]:

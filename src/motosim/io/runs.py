@@ -97,7 +97,8 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
 
     The controller is the scenario's: none, the paper's eq. (26), the one of a design file
     (whose observer settings the run then uses too), or ours synthesised for the nominal
-    handlebar at the scenario's bandwidth and order.
+    handlebar at the scenario's bandwidth (by default
+    :func:`~motosim.control.torque_feedback.default_bandwidth` of the measurement rate) and order.
 
     Raises
     ------

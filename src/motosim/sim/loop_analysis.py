@@ -38,6 +38,7 @@ from motosim.sim.stack import StackModel, design_stack
 
 __all__ = [
     "FEEL_BAND",
+    "MARGINS",
     "GridSummary",
     "LimitCycle",
     "StackLoop",
@@ -51,6 +52,9 @@ __all__ = [
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
 
+MARGINS = (6.0, 45.0)
+"""Gain [dB] and phase [deg] margins a loop should keep (the classical requirements, e.g.
+Skogestad & Postlethwaite, Multivariable Feedback Control, section 2.4)."""
 FEEL_BAND = (0.1, 3.0)
 """Band where the rendered steering feel is compared with the motorcycle's [Hz]."""
 _GRID_POINTS = 600  # frequencies of the margin and limit-cycle search
@@ -399,12 +403,15 @@ class GridSummary:
     ----------
     points, unstable : int
         Perturbed handlebars analysed, and how many of them the loop does not stabilise.
+    with_margins : int
+        How many the loop stabilises with :data:`MARGINS` (gain and phase margins).
     gain_margin_db, phase_margin_deg, modulus_margin : float
         Smallest over the grid [dB, deg, -].
     """
 
     points: int
     unstable: int
+    with_margins: int
     gain_margin_db: float
     phase_margin_deg: float
     modulus_margin: float
@@ -436,6 +443,10 @@ def analyse_design(
         summary = GridSummary(
             points=len(grid),
             unstable=sum(not a.stable for a in grid),
+            with_margins=sum(
+                a.stable and a.gain_margin_db >= MARGINS[0] and a.phase_margin_deg >= MARGINS[1]
+                for a in grid
+            ),
             gain_margin_db=min(a.gain_margin_db for a in grid),
             phase_margin_deg=min(a.phase_margin_deg for a in grid),
             modulus_margin=min(a.modulus_margin for a in grid),

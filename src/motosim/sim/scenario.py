@@ -26,7 +26,8 @@ so that an error is one line naming the key, the value and what was expected. Th
     [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman",
                    friction_compensation = true, lipschitz = 300
     [controller]   kind = "ours" | "paper" | "none", design = "DESIGN.toml" (optional),
-                   bandwidth = 10 [Hz], order = 1, discretization = "zoh" | "tustin",
+                   bandwidth [Hz] (default: 10 Hz, a fifth of the measurement rate below
+                   200 Hz), order = 1, discretization = "zoh" | "tustin",
                    max_current = 30 [A], feedforward = ["rider", "reference"] for ours,
                    [] for the paper's (the terms of :func:`motosim.sim.stack.step`)
 
@@ -517,11 +518,15 @@ FEEDFORWARD = ("rider", "reference")
 
 @dataclass(frozen=True, slots=True)
 class Controller:
-    """The torque-feedback controller."""
+    """The torque-feedback controller.
+
+    ``bandwidth`` None: :func:`motosim.control.torque_feedback.default_bandwidth` of the
+    measurement rate (10 Hz, a fifth of the rate below 200 Hz).
+    """
 
     kind: Literal["ours", "paper", "none"] = "ours"
     design: str | None = None
-    bandwidth: float = 10.0
+    bandwidth: float | None = None
     order: int = 1
     discretization: Literal["zoh", "tustin"] = "zoh"
     max_current: float = 30.0
@@ -537,7 +542,8 @@ class Controller:
             raise MotosimError(
                 f"feedforward has {unknown[0]!r}; expected some of {', '.join(FEEDFORWARD)}"
             )
-        _check("bandwidth", self.bandwidth, low=0.0, low_open=True, high=1000.0, unit="Hz")
+        if self.bandwidth is not None:
+            _check("bandwidth", self.bandwidth, low=0.0, low_open=True, high=1000.0, unit="Hz")
         if not 0 <= self.order <= MAX_ORDER:
             raise MotosimError(f"order = {self.order}; expected an integer from 0 to {MAX_ORDER}")
         _check("max_current", self.max_current, low=0.0, low_open=True, high=1000.0, unit="A")

@@ -9,6 +9,7 @@ from motosim.control import closed_loop_poles, four_block_norm
 from motosim.control.torque_feedback import (
     PAPER_CONTROLLER,
     analyse_loop,
+    default_bandwidth,
     design_torque_feedback,
     handlebar_plants,
 )
@@ -73,3 +74,15 @@ def test_bad_options(handlebar: HandlebarParameters) -> None:
         design_torque_feedback(handlebar, rng=np.random.default_rng(0), bandwidth=300.0)
     with pytest.raises(MotosimError, match="rate"):
         design_torque_feedback(handlebar, rng=np.random.default_rng(0), rate=-1.0)
+
+
+def test_default_bandwidth_depends_on_the_rate() -> None:
+    """10 Hz at 200 Hz and faster (the 1 kHz design unchanged); a fifth of the rate below,
+    the most the design admits (the whole stack's margins at 100 Hz are in
+    tests/unit/test_loop_analysis.py)."""
+    assert default_bandwidth(1000.0) == 10.0
+    assert default_bandwidth(200.0) == 10.0
+    assert default_bandwidth(100.0) == pytest.approx(20.0)
+    assert default_bandwidth(50.0) == pytest.approx(10.0)
+    with pytest.raises(MotosimError, match="rate"):
+        default_bandwidth(0.0)
