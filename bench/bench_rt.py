@@ -65,6 +65,10 @@ name = "bench_rt"
 description = "square rider torque, the paper's K(s)"
 duration = {duration}
 
+[motorcycle]
+speed = 8.0  # m/s: Sharp's motorcycle is self-stable there (capsize, weave, wobble damped),
+             # so a minute of the square torque does not make it fall (which ends a run)
+
 [rates]
 control = {control}
 measurement = {control}
