@@ -20,21 +20,38 @@ import contextlib, io, sys
 from motosim.cli.main import main
 codes = []
 with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-    codes.append(main([{name!r}, "--help"]))
-    codes.append(main([{name!r}, "--no-such-option"]))
+    for argv in {argvs!r}:
+        codes.append(main(argv))
 heavy = sorted({{m.split(".")[0] for m in sys.modules}} & set({heavy!r}))
 print(codes, heavy)
 """
 
 
-@pytest.mark.parametrize("name", list(COMMANDS))
-def test_help_and_usage_errors_import_nothing_heavy(name: str) -> None:
-    script = _SCRIPT.format(name=name, heavy=HEAVY)
+def _codes_and_heavy(*argvs: list[str]) -> str:
+    """``[exit codes] [heavy packages imported]`` of ``motosim argv`` for each, in one fresh
+    interpreter."""
+    script = _SCRIPT.format(argvs=list(argvs), heavy=HEAVY)
     done = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, check=False
     )
     assert done.returncode == 0, done.stderr[-500:]
-    assert done.stdout.strip() == "[0, 2] []", f"motosim {name}: {done.stdout.strip()}"
+    return done.stdout.strip()
+
+
+@pytest.mark.parametrize("name", list(COMMANDS))
+def test_help_and_usage_errors_import_nothing_heavy(name: str) -> None:
+    outcome = _codes_and_heavy([name, "--help"], [name, "--no-such-option"])
+    assert outcome == "[0, 2] []", f"motosim {name}: {outcome}"
+
+
+def test_options_refused_before_the_work_import_nothing_heavy() -> None:
+    outcome = _codes_and_heavy(
+        ["design", "--order", "9"],
+        ["cueing", "result", "--rate", "0", "--out", "out"],
+        ["modes", "--speeds", "nan"],
+        ["simulate", "scenario.toml", "--out", "/no/such/folder/out"],
+    )
+    assert outcome == "[2, 2, 2, 2] []"
 
 
 def test_choices_written_out_in_the_commands_equal_their_sources() -> None:

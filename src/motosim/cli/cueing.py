@@ -77,13 +77,13 @@ def _write(run: "CueingRun", folder: Path, metadata: dict[str, Any], overwrite: 
 
 def run(args: argparse.Namespace) -> int:
     """Cue, write, plot and summarise."""
+    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
+        raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
+    check_output_folder(args.out, overwrite=args.overwrite)
     from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
     from motosim.io.results import load_result
     from motosim.timeseries import TimeSeries
 
-    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
-        raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
-    check_output_folder(args.out, overwrite=args.overwrite)
     config = load_platform(args.platform)
     result = load_result(args.result)
     series = TimeSeries(result.t, result.data, result.names)

@@ -148,19 +148,6 @@ def _stack_analysis(
 
 def run(args: argparse.Namespace) -> int:
     """Design, report and optionally write the design file."""
-    import numpy as np
-
-    from motosim.control.torque_feedback import (
-        PAPER_CONTROLLER,
-        PAPER_DEN,
-        PAPER_NUM,
-        analyse_loop,
-        check_options,
-        design_torque_feedback,
-    )
-    from motosim.estimation.walcott_zak import ObserverSettings, design_with
-    from motosim.io.design_file import dump_design
-
     if not 0 <= args.order <= MAX_ORDER:
         raise MotosimError(
             f"--order {short_repr(args.order)}; expected an integer from 0 to {MAX_ORDER} "
@@ -175,6 +162,19 @@ def run(args: argparse.Namespace) -> int:
             f"--seed {short_repr(args.seed)}; expected an integer from 0 to 2^63 - 1"
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
+    import numpy as np
+
+    from motosim.control.torque_feedback import (
+        PAPER_CONTROLLER,
+        PAPER_DEN,
+        PAPER_NUM,
+        analyse_loop,
+        check_options,
+        design_torque_feedback,
+    )
+    from motosim.estimation.walcott_zak import ObserverSettings, design_with
+    from motosim.io.design_file import dump_design
+
     check_options(bandwidth=args.bandwidth, rate=args.rate)
     speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
     for speed in speeds:

@@ -121,9 +121,6 @@ _UNITS = {"J_eq": "kg*m^2", "beta_eq": "N*m*s/rad", "beta_s": "N*m"}
 
 def run(args: argparse.Namespace) -> int:
     """Identify, report, and optionally write the parameter file and the figure."""
-    from motosim.identification import back_emf_damping, drive_from_columns, identify, validate
-    from motosim.io import parse_columns, read_rig_log
-
     if args.plot:
         check_figure_path(args.plot, overwrite=args.overwrite)
     if args.out:
@@ -131,6 +128,9 @@ def run(args: argparse.Namespace) -> int:
     motor = _motor(args)
     hb = motor.values
     assert isinstance(hb, HandlebarParameters)
+    from motosim.identification import back_emf_damping, drive_from_columns, identify, validate
+    from motosim.io import parse_columns, read_rig_log
+
     columns = parse_columns(args.columns) if args.columns else None
     rig = read_rig_log(args.log, required=("theta_h",), columns=columns)
     second = (

@@ -96,8 +96,6 @@ def _print_table(table: "ModeTable") -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compute, print and optionally plot the modes."""
-    from motosim.model.sharp import modes
-
     speeds = (
         parse_float_list("--speeds", args.speeds, max_items=_MAX_SPEEDS)
         if args.speeds is not None
@@ -110,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     params = load_parameters(args.params, "sharp")
+    from motosim.model.sharp import modes
+
     table = modes(params, speeds)
     if args.speeds is not None or args.speed_range is not None:  # the default spans 2-60 m/s
         warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)

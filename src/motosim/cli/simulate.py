@@ -59,10 +59,6 @@ def run_scenario(
 
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
-    from motosim.io.results import is_complete_result, partial_folder
-    from motosim.io.runs import load_scenario, resolve
-    from motosim.sim.metrics import warnings
-
     folder = Path(args.out)
     refuse_special(folder, "--out", "a result folder")
     if folder.exists() and not folder.is_dir():
@@ -72,6 +68,10 @@ def run(args: argparse.Namespace) -> int:
             f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
             "folder (create it first)"
         )
+    from motosim.io.results import is_complete_result, partial_folder
+    from motosim.io.runs import load_scenario, resolve
+    from motosim.sim.metrics import warnings
+
     scenario = load_scenario(args.scenario)
     if is_complete_result(folder) and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
