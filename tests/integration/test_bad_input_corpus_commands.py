@@ -236,9 +236,10 @@ def check(outcome: Outcome, rule: str, zero: Outcome | None = None) -> str | Non
 SCENARIOS = sorted((ROOT / "scenarios").rglob("*.toml"))
 CAMPAIGNS = sorted((ROOT / "campaigns").glob("*.toml"))
 PLATFORM = ROOT / "src" / "motosim" / "cueing" / "data" / "simacom_platform.toml"
-STOP_SIMULATE = ("motosim.cli.simulate.resolve",)  # past the checks, before the designs
-STOP_BUS = ("motosim.cli.run.resolve",)
-STOP_CUEING = ("motosim.cli.cueing.cue",)
+STOP_SIMULATE = ("motosim.io.runs.resolve",)  # past the checks, before the designs
+STOP_BUS = ("motosim.io.runs.resolve",)
+STOP_CUEING = ("motosim.cueing.cue",)
+STOP_DESIGN = ("motosim.control.torque_feedback.design_torque_feedback",)
 
 
 def _file_cases() -> Iterator[Any]:
@@ -500,7 +501,7 @@ def test_damaged_logs(command: str, content: bytes, tmp_path: Path) -> None:
     log.write_bytes(content)
     argv = [command, str(log)] + (["--out", str(tmp_path / "e.csv")] if command == "estimate"
                                   else [])  # fmt: skip
-    outcome = run_cli(argv, ("motosim.cli.identify.identify", "motosim.cli.estimate.estimate"))
+    outcome = run_cli(argv, ("motosim.identification.identify", "motosim.estimation.estimate"))
     assert is_refusal(outcome), outcome
 
 
@@ -509,7 +510,7 @@ def test_a_bom_or_crlf_log_reads_as_the_original(command: str, tmp_path: Path) -
     log = tmp_path / "run é.csv"
     argv = [command, str(log)] + (["--out", str(tmp_path / "e.csv")] if command == "estimate"
                                   else [])  # fmt: skip
-    stop = ("motosim.cli.identify.identify", "motosim.cli.estimate.estimate")
+    stop = ("motosim.identification.identify", "motosim.estimation.estimate")
     for content in (_log_text().encode("utf-8-sig"), _log_text().replace("\n", "\r\n").encode()):
         log.write_bytes(content)
         assert run_cli(argv, stop)[0] == "accepted"
@@ -535,7 +536,7 @@ _EDGES = ("nan", "inf", "-inf", "-1", "0", "1e300", "-1e300", _BIG, "x", "")
 STOP_RT = (
     "motosim.io.can.open_link",
     "motosim.cli.rtcheck.apply_privileges",
-    "motosim.cli.rtcheck.check_timing",
+    "motosim.rt.check.check_timing",
     "motosim.cli.run.load_realtime",
 )
 STOP_VIEW = (
@@ -598,7 +599,7 @@ def _commands(tmp: Path, result: Path) -> dict[str, Command]:
         ),
         "excite": (
             ["excite", "--duration", "2", "--out", str(tmp / "x.csv")],
-            ("motosim.cli.excite.write_log",),
+            ("motosim.io.write_log",),
             {
                 "--signal": "text",
                 "--duration": "number",
@@ -630,7 +631,7 @@ def _commands(tmp: Path, result: Path) -> dict[str, Command]:
                 "--out",
                 str(tmp / "p.csv"),
             ],
-            ("motosim.cli.excite.write_log",),
+            ("motosim.io.write_log",),
             {
                 "--max-current": "number",
                 "--inertia": "number",
@@ -645,7 +646,7 @@ def _commands(tmp: Path, result: Path) -> dict[str, Command]:
         ),
         "identify": (
             ["identify", str(log)],
-            ("motosim.cli.identify.identify",),
+            ("motosim.identification.identify",),
             {
                 "(positional)": "in",
                 "--ratio": "number",
@@ -662,7 +663,7 @@ def _commands(tmp: Path, result: Path) -> dict[str, Command]:
         ),
         "estimate": (
             ["estimate", str(log), "--out", str(tmp / "e.csv")],
-            ("motosim.cli.estimate.estimate",),
+            ("motosim.estimation.estimate",),
             {
                 "(positional)": "in",
                 "--handlebar": "in",
@@ -863,9 +864,9 @@ def _special_paths(tmp: Path) -> dict[str, str]:
 def test_special_paths_as_inputs_are_refused(tmp_path: Path, result: Path) -> None:
     log = tmp_path / "log.csv"
     log.write_text(_log_text(), encoding="utf-8")
-    stop_rt = ("motosim.io.can.open_link", "motosim.cli.rtcheck.check_timing")
-    stop_est, stop_id = ("motosim.cli.estimate.estimate",), ("motosim.cli.identify.identify",)
-    stop_excite = ("motosim.cli.excite.write_log",)
+    stop_rt = ("motosim.io.can.open_link", "motosim.rt.check.check_timing")
+    stop_est, stop_id = ("motosim.estimation.estimate",), ("motosim.identification.identify",)
+    stop_excite = ("motosim.io.write_log",)
     out = str(tmp_path / "out")
     failures = []
     for kind, path in _special_paths(tmp_path).items():
@@ -882,7 +883,7 @@ def test_special_paths_as_inputs_are_refused(tmp_path: Path, result: Path) -> No
             (["report", path], ()),
             (["view", path], STOP_VIEW),
             (["excite", "--handlebar", path, "--out", out + ".csv"], stop_excite),
-            (["design", "--handlebar", path], ("motosim.cli.design.design_torque_feedback",)),
+            (["design", "--handlebar", path], STOP_DESIGN),
             (["run", path, "--bus", "virtual", "--out", str(tmp_path / "r")], stop_rt),
             (["rig", path, "--bus", "virtual"], stop_rt),
         ]:  # fmt: skip
@@ -901,8 +902,8 @@ def test_special_paths_as_outputs_are_refused(tmp_path: Path, result: Path) -> N
         path = "/dev/null" if kind == "dev-null" else paths[kind]
         for argv, stop in [
             (["simulate", scenario, "--out", path], STOP_SIMULATE),
-            (["excite", "--duration", "20", "--out", path], ("motosim.cli.excite.write_log",)),
-            (["design", "--out", path], ("motosim.cli.design.design_torque_feedback",)),
+            (["excite", "--duration", "20", "--out", path], ("motosim.io.write_log",)),
+            (["design", "--out", path], STOP_DESIGN),
             (["cueing", str(result), "--out", path], STOP_CUEING),
             (["campaign", str(CAMPAIGNS[-1]), "--out", path], STOP_CAMPAIGN),
         ]:

@@ -85,7 +85,7 @@ def test_implausible_scenarios_warn_once(
         'profile = { kind = "constant", value = 200.0 }\n' + table,
         encoding="utf-8",
     )
-    with unittest.mock.patch("motosim.cli.simulate.resolve", side_effect=KeyboardInterrupt):
+    with unittest.mock.patch("motosim.io.runs.resolve", side_effect=KeyboardInterrupt):
         assert main(["simulate", str(path), "--out", str(tmp_path / "out")]) == 130
     lines = capsys.readouterr().err.splitlines()
     warned = [line for line in lines if line.startswith("motosim: warning: ")]

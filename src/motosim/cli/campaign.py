@@ -7,8 +7,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from motosim.cli._common import print_json, refuse_special
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
@@ -61,6 +59,8 @@ def _progress_bar(enabled: bool) -> Any:
 
 def _same_series(out: str, run_id: str, series: dict[str, Any]) -> bool:
     """Whether the stored series of a run equal ``series`` bit for bit (none: none stored)."""
+    import numpy as np
+
     from motosim.campaign.series import SERIES, load_series
 
     if not series:
@@ -72,6 +72,8 @@ def _same_series(out: str, run_id: str, series: dict[str, Any]) -> bool:
 
 
 def _rerun(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from motosim.campaign import load_campaign, load_results, plan_campaign, rerun
     from motosim.campaign.export import export_run
 

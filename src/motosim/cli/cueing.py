@@ -4,25 +4,19 @@ import argparse
 import dataclasses
 import math
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import check_output_folder, print_json, save_figure, warn_atypical
-from motosim.cueing import (
-    ALGORITHMS,
-    COMMAND_SIGNALS,
-    TELBAN_CARDULLO_2005,
-    CueingRun,
-    CueingScore,
-    cue,
-    load_platform,
-)
 from motosim.errors import MotosimError
-from motosim.io.results import ResultWriter, load_result
-from motosim.timeseries import TimeSeries
 
-__all__ = ["register", "score_summary"]
+if TYPE_CHECKING:
+    from motosim.cueing import CueingRun, CueingScore
+
+__all__ = ["ALGORITHMS", "register", "score_summary"]
+
+ALGORITHMS = ("washout", "mpc")
+"""The choices of ``--algorithm``: :data:`motosim.cueing.ALGORITHMS`, written out so that the
+parser is built without importing SciPy (a unit test checks that they are equal)."""
 
 
 def register(sub: Any) -> None:
@@ -57,7 +51,7 @@ def _finite(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def score_summary(score: CueingScore) -> dict[str, Any]:
+def score_summary(score: "CueingScore") -> dict[str, Any]:
     """Flat JSON-ready summary of a score (NaN as None), angles and rates in SI."""
     out: dict[str, Any] = {"violations": score.violations}
     for name, cs in score.channels.items():
@@ -69,7 +63,12 @@ def score_summary(score: CueingScore) -> dict[str, Any]:
     return out
 
 
-def _write(run: CueingRun, folder: Path, metadata: dict[str, Any], overwrite: bool) -> None:
+def _write(run: "CueingRun", folder: Path, metadata: dict[str, Any], overwrite: bool) -> None:
+    import numpy as np
+
+    from motosim.cueing import COMMAND_SIGNALS
+    from motosim.io.results import ResultWriter
+
     names = ("t", *COMMAND_SIGNALS)
     with ResultWriter(folder, names, metadata, overwrite=overwrite) as writer:
         writer.append(np.column_stack([run.commands.t, run.commands.data]))
@@ -81,6 +80,10 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
         raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
     check_output_folder(args.out, overwrite=args.overwrite)
+    from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
+    from motosim.io.results import load_result
+    from motosim.timeseries import TimeSeries
+
     config = load_platform(args.platform)
     result = load_result(args.result)
     series = TimeSeries(result.t, result.data, result.names)

@@ -3,9 +3,7 @@
 import argparse
 import sys
 from datetime import date
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from motosim import __version__
 from motosim.cli._common import (
@@ -15,25 +13,16 @@ from motosim.cli._common import (
     warn_atypical,
     write_text,
 )
-from motosim.control.statespace import StateSpace
-from motosim.control.torque_feedback import (
-    MAX_ORDER,
-    PAPER_CONTROLLER,
-    PAPER_DEN,
-    PAPER_NUM,
-    LoopAnalysis,
-    analyse_loop,
-    check_options,
-    default_bandwidth,
-    design_torque_feedback,
-)
 from motosim.errors import MotosimError
-from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
-from motosim.io.design_file import dump_design
 from motosim.params import load_parameters
 from motosim.params.checks import check_number, short_repr
 from motosim.params.handlebar import HandlebarParameters
-from motosim.sim.loop_analysis import StackLoopAnalysis, analyse_design
+
+if TYPE_CHECKING:
+    from motosim.control.statespace import StateSpace
+    from motosim.control.torque_feedback import LoopAnalysis
+    from motosim.estimation.walcott_zak import ObserverSettings
+    from motosim.sim.loop_analysis import StackLoopAnalysis
 
 MAX_SPEEDS = 20
 """Most speeds of the whole-stack analysis (each takes a 27-point grid)."""
@@ -41,6 +30,11 @@ SPEED_RANGE = (3.0, 60.0)
 """Speeds of Sharp's tables [m/s], where the analysis is meant."""
 
 __all__ = ["MAX_ORDER", "MAX_STARTS", "register"]
+
+MAX_ORDER = 3
+"""Highest order of the tuned controller: :data:`motosim.control.torque_feedback.MAX_ORDER`,
+written out so that the parser is built without importing SciPy (a unit test checks that they
+are equal)."""
 
 
 MAX_STARTS = 32
@@ -96,7 +90,7 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=run)
 
 
-def _analysis(a: LoopAnalysis) -> dict[str, Any]:
+def _analysis(a: "LoopAnalysis") -> dict[str, Any]:
     return {
         "four_block_gamma_unweighted": a.four_block_gamma,
         "closed_loop_poles": [[float(p.real), float(p.imag)] for p in a.closed_loop_poles],
@@ -115,7 +109,7 @@ def _analysis(a: LoopAnalysis) -> dict[str, Any]:
     }
 
 
-def _stack(a: StackLoopAnalysis) -> dict[str, Any]:
+def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
     return {
         "speed": a.speed,
         "stable": a.stable,
@@ -132,10 +126,13 @@ def _stack(a: StackLoopAnalysis) -> dict[str, Any]:
 
 
 def _stack_analysis(
-    hb: HandlebarParameters, settings: ObserverSettings, controller: StateSpace, rate: float,
+    hb: HandlebarParameters, settings: "ObserverSettings", controller: "StateSpace", rate: float,
     speeds: list[float],
 ) -> list[dict[str, Any]]:  # fmt: skip
     """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid."""
+    from motosim.estimation.walcott_zak import WalcottZakObserver, design_with
+    from motosim.sim.loop_analysis import analyse_design
+
     kernel = WalcottZakObserver(design_with(hb, settings), 1.0 / rate).kernel
     sharp = load_parameters("sharp1971", "sharp")
     out = []
@@ -169,6 +166,20 @@ def run(args: argparse.Namespace) -> int:
             f"--seed {short_repr(args.seed)}; expected an integer from 0 to 2^63 - 1"
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
+    import numpy as np
+
+    from motosim.control.torque_feedback import (
+        PAPER_CONTROLLER,
+        PAPER_DEN,
+        PAPER_NUM,
+        analyse_loop,
+        check_options,
+        default_bandwidth,
+        design_torque_feedback,
+    )
+    from motosim.estimation.walcott_zak import ObserverSettings, design_with
+    from motosim.io.design_file import dump_design
+
     bandwidth = default_bandwidth(args.rate) if args.bandwidth is None else args.bandwidth
     check_options(bandwidth=bandwidth, rate=args.rate)
     speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)

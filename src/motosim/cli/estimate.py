@@ -3,16 +3,16 @@
 import argparse
 from typing import Any
 
-import numpy as np
-
 from motosim.cli._common import check_output, print_json
-from motosim.estimation import ESTIMATORS, estimate
-from motosim.io import parse_columns, read_rig_log, write_log
 from motosim.params import load_parameters
 from motosim.params.checks import check_number
-from motosim.timeseries import TimeSeries
 
-__all__ = ["register"]
+__all__ = ["ESTIMATORS", "register"]
+
+ESTIMATORS = ("walcott_zak", "inverse_dynamics", "kalman")
+"""The choices of ``--estimator``, the default first: the keys of
+:data:`motosim.estimation.ESTIMATORS`, written out so that the parser is built without
+importing SciPy (a unit test checks that they are equal)."""
 
 
 def register(sub: Any) -> None:
@@ -34,8 +34,8 @@ def register(sub: Any) -> None:
     )
     parser.add_argument(
         "--estimator",
-        choices=tuple(ESTIMATORS),
-        default=next(iter(ESTIMATORS)),
+        choices=ESTIMATORS,
+        default=ESTIMATORS[0],
         help="estimator (default: the paper's Walcott-Zak observer)",
     )
     parser.add_argument(
@@ -68,6 +68,12 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, overwrite=args.overwrite)
     check_number(args.lipschitz, where="--lipschitz", lower=1e-3, upper=1e7, unit="rad/s^2")
     hb = load_parameters(args.handlebar, "handlebar")
+    import numpy as np
+
+    from motosim.estimation import estimate
+    from motosim.io import parse_columns, read_rig_log, write_log
+    from motosim.timeseries import TimeSeries
+
     columns = parse_columns(args.columns) if args.columns else None
     rig = read_rig_log(args.log, required=("theta_h", "i_m"), columns=columns)
     log = rig.series

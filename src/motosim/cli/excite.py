@@ -4,15 +4,10 @@ import argparse
 import math
 from typing import Any
 
-import numpy as np
-
 from motosim.cli._common import check_output, print_json, warn_atypical
 from motosim.errors import MotosimError
-from motosim.identification import MeasurementModel, excitation_run, plan_excitation
-from motosim.io import write_log
 from motosim.params import HandlebarParameters, load_parameters
 from motosim.params.checks import check_number, short_repr
-from motosim.timeseries import TimeSeries
 
 __all__ = ["register"]
 
@@ -74,6 +69,12 @@ def register(sub: Any) -> None:
 
 def _plan(args: argparse.Namespace) -> int:
     """Recommend the chirp, print it, optionally write the current command."""
+    import numpy as np
+
+    from motosim.identification import plan_excitation
+    from motosim.io import write_log
+    from motosim.timeseries import TimeSeries
+
     if args.max_current is None:
         raise MotosimError("--plan needs --max-current A; expected the drive's current limit")
     hb = load_parameters(args.handlebar, "handlebar")
@@ -166,6 +167,11 @@ def run(args: argparse.Namespace) -> int:
     _check_options(args)
     if args.plan:
         return _plan(args)
+    import numpy as np
+
+    from motosim.identification import MeasurementModel, excitation_run
+    from motosim.io import write_log
+
     if not args.out:
         raise MotosimError("excite needs --out RUN.csv; expected the log file to write")
     check_output(args.out, overwrite=args.overwrite)

@@ -4,8 +4,6 @@ import argparse
 import math
 from typing import Any
 
-import numpy as np
-
 from motosim.cli._common import check_figure_path, print_json, save_figure, warn_atypical
 from motosim.errors import MotosimError
 
@@ -55,6 +53,8 @@ def _band(text: str) -> tuple[float, float]:
 def run(args: argparse.Namespace) -> int:
     """Simulate the feel measurement and print the comparison."""
     from pathlib import Path
+
+    import numpy as np
 
     from motosim.io.runs import load_scenario, resolve
     from motosim.sim import simulate

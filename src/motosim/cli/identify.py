@@ -7,8 +7,6 @@ from datetime import date
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from motosim.cli._common import (
     check_figure_path,
     check_output,
@@ -17,21 +15,20 @@ from motosim.cli._common import (
     write_text,
 )
 from motosim.errors import MotosimError
-from motosim.identification import (
-    METHODS,
-    back_emf_damping,
-    drive_from_columns,
-    identified_parameters,
-    identify,
-    validate,
-)
-from motosim.identification.output_error import DRIVES
-from motosim.io import parse_columns, read_rig_log
 from motosim.params import ParameterSet, dump_parameter_set, load_parameter_set
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 
-__all__ = ["register"]
+__all__ = ["DRIVES", "METHODS", "register"]
+
+METHODS = ("output_error", "lsq", "rls", "gradient")
+"""The choices of ``--method``, the default first: :data:`motosim.identification.METHODS`,
+written out so that the parser is built without importing SciPy (a unit test checks that they
+are equal)."""
+
+DRIVES = ("current_held", "voltage_held", "current_sampled")
+"""The choices of ``--drive`` besides ``auto``:
+:data:`motosim.identification.output_error.DRIVES`, written out likewise."""
 
 
 def register(sub: Any) -> None:
@@ -106,7 +103,7 @@ def _motor(args: argparse.Namespace) -> ParameterSet:
         ("--torque-constant", "k_t", args.torque_constant),
     ):
         if value is not None:
-            if not (np.isfinite(value) and value > 0):
+            if not (math.isfinite(value) and value > 0):
                 raise MotosimError(f"{option} {value!r}; expected a finite number > 0")
             changes[name] = value
     if not changes:
@@ -131,6 +128,9 @@ def run(args: argparse.Namespace) -> int:
     motor = _motor(args)
     hb = motor.values
     assert isinstance(hb, HandlebarParameters)
+    from motosim.identification import back_emf_damping, drive_from_columns, identify, validate
+    from motosim.io import parse_columns, read_rig_log
+
     columns = parse_columns(args.columns) if args.columns else None
     rig = read_rig_log(args.log, required=("theta_h",), columns=columns)
     second = (
@@ -210,6 +210,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _write(args: argparse.Namespace, motor: ParameterSet, est: Any) -> Path:
+    from motosim.identification import identified_parameters
+
     hb = identified_parameters(est, motor.values)  # type: ignore[arg-type]
     note = (
         f"identified by motosim identify from {Path(args.log).name} on {date.today()} "

@@ -1,9 +1,7 @@
 """``motosim modes``: capsize, weave and wobble of the Sharp motorcycle against speed."""
 
 import argparse
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
     check_figure_path,
@@ -13,8 +11,12 @@ from motosim.cli._common import (
     save_figure,
     warn_atypical,
 )
-from motosim.model.sharp import MODE_NAMES, ModeTable, modes
 from motosim.params import load_parameters
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from motosim.model.sharp import ModeTable
 
 __all__ = ["register"]
 
@@ -46,11 +48,13 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=run)
 
 
-def _pairs(values: np.ndarray) -> list[list[float]]:
+def _pairs(values: "np.ndarray") -> list[list[float]]:
     return [[float(z.real), float(z.imag)] for z in values]
 
 
-def _payload(table: ModeTable, params: str) -> dict[str, Any]:
+def _payload(table: "ModeTable", params: str) -> dict[str, Any]:
+    from motosim.model.sharp import MODE_NAMES, ModeTable
+
     payload: dict[str, Any] = {
         "params": params,
         "speeds": [float(s) for s in table.speeds],
@@ -68,7 +72,11 @@ def _payload(table: ModeTable, params: str) -> dict[str, Any]:
     return payload
 
 
-def _print_table(table: ModeTable) -> None:
+def _print_table(table: "ModeTable") -> None:
+    import numpy as np
+
+    from motosim.model.sharp import MODE_NAMES, ModeTable
+
     print(
         f"{'speed':>7}  {'capsize':>9}  {'weave':^27}  {'wobble':^27}\n"
         f"{'[m/s]':>7}  {'Re [1/s]':>9}  {'Re [1/s]':>9} {'f [Hz]':>7} {'zeta':>8}  "
@@ -100,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     params = load_parameters(args.params, "sharp")
+    from motosim.model.sharp import modes
+
     table = modes(params, speeds)
     if args.speeds is not None or args.speed_range is not None:  # the default spans 2-60 m/s
         warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)

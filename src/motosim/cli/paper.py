@@ -5,15 +5,16 @@ import html
 from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import check_output_folder, print_json, show_progress
 from motosim.cli.simulate import run_scenario
 from motosim.errors import MotosimError
-from motosim.io.results import SimResult, load_result
-from motosim.io.runs import resolve
 from motosim.params.toml import parse_toml
-from motosim.sim import Scenario, parse_scenario
+
+if TYPE_CHECKING:
+    from motosim.io.results import SimResult
+    from motosim.sim import Scenario
 
 __all__ = ["paper_scenarios", "register"]
 
@@ -38,8 +39,10 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=run)
 
 
-def paper_scenarios() -> list[Scenario]:
+def paper_scenarios() -> list["Scenario"]:
     """The packaged scenarios of section V, in figure order."""
+    from motosim.sim import parse_scenario
+
     folder = resources.files("motosim.sim") / "data" / "paper"
     out = []
     for entry in sorted(folder.iterdir(), key=lambda p: p.name):
@@ -49,7 +52,7 @@ def paper_scenarios() -> list[Scenario]:
     return out
 
 
-def _figures(runs: dict[str, SimResult], out: Path) -> list[tuple[str, str]]:
+def _figures(runs: dict[str, "SimResult"], out: Path) -> list[tuple[str, str]]:
     from motosim.plotting.closed_loop import (
         plot_comparison,
         plot_motor_torque,
@@ -144,6 +147,8 @@ def run(args: argparse.Namespace) -> int:
         out.mkdir(exist_ok=True)
     except OSError as err:
         raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
+    from motosim.io.results import load_result
+    from motosim.io.runs import resolve
     from motosim.report import build_report  # matplotlib: seconds, only once the output is fine
 
     summaries: dict[str, dict[str, Any]] = {}

@@ -5,8 +5,6 @@ import math
 import signal
 from typing import Any
 
-import numpy as np
-
 from motosim.cli._common import print_json, warn_atypical
 from motosim.cli.rtcheck import (
     add_link_option,
@@ -77,6 +75,8 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
+    import numpy as np
+
     from motosim.cli.run import check_rt_options, load_realtime, rig_settings
     from motosim.io.can import handlebar_codecs, open_link
     from motosim.rt.loop import RateLoop

@@ -3,15 +3,16 @@
 import argparse
 import math
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import parse_float_list, print_json, warn_atypical
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
-from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
-from motosim.rt.loop import TimingStats
 from motosim.rt.privileges import Privilege, apply_privileges
+
+if TYPE_CHECKING:
+    from motosim.rt.loop import TimingStats
 
 __all__ = [
     "add_link_option",
@@ -106,7 +107,7 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=run)
 
 
-def _table(stats: TimingStats, privileges: tuple[Privilege, ...]) -> str:
+def _table(stats: "TimingStats", privileges: tuple[Privilege, ...]) -> str:
     us = 1e6
     lines = [
         f"rate {stats.rate:g} Hz, {stats.periods} deadlines, {stats.served} served",
@@ -124,6 +125,8 @@ def _table(stats: TimingStats, privileges: tuple[Privilege, ...]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Measure and print; exit 0."""
+    from motosim.rt.check import check_timing
+
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     if not (math.isfinite(args.duration) and 1e-3 <= args.duration <= 86_400.0):

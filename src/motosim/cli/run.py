@@ -11,8 +11,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from motosim.cli._common import print_json, refuse_special, warn_atypical, write_text
 from motosim.cli.rtcheck import (
     add_link_option,
@@ -22,23 +20,14 @@ from motosim.cli.rtcheck import (
     privileges_from_args,
 )
 from motosim.errors import MotosimError, RunFailedError, warn
-from motosim.io.results import ResultWriter
-from motosim.io.runs import resolve
 from motosim.params.checks import short_repr
 from motosim.params.toml import read_toml
-from motosim.sim import (
-    RunInputs,
-    Scenario,
-    build_rig,
-    build_stack,
-    parse_scenario,
-    run_metadata,
-)
-from motosim.sim.metrics import run_metrics, validity_limits
-from motosim.sim.scenario import implausible
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from motosim.rt.rig import RigSettings
+    from motosim.sim import RunInputs, Scenario
 
 __all__ = ["load_realtime", "register"]
 
@@ -151,13 +140,16 @@ def check_rt_options(args: argparse.Namespace) -> None:
     check_privilege_options(args)
 
 
-def load_realtime(path: str, *, safety: bool = False) -> tuple[RunInputs, dict[str, Any]]:
+def load_realtime(path: str, *, safety: bool = False) -> tuple["RunInputs", dict[str, Any]]:
     """Read a scenario file: its resolved run and its ``[realtime]`` table.
 
     With ``safety``, a missing ``[realtime.safety]`` table is refused before the run is
     resolved (which designs its controller: seconds).
     """
+    from motosim.io.runs import resolve
     from motosim.rt.config import parse_safety, split_realtime
+    from motosim.sim import parse_scenario
+    from motosim.sim.scenario import implausible
 
     source = Path(path)
     if not source.is_file():
@@ -175,7 +167,7 @@ def load_realtime(path: str, *, safety: bool = False) -> tuple[RunInputs, dict[s
     return resolve(scenario, source.parent), realtime
 
 
-def rig_settings(scenario: Scenario, realtime: dict[str, Any], *, origin: str) -> "RigSettings":
+def rig_settings(scenario: "Scenario", realtime: dict[str, Any], *, origin: str) -> "RigSettings":
     """The virtual rig's settings: the ``[realtime.rig]`` table over the scenario's values."""
     from motosim.rt.rig import parse_rig
 
@@ -202,8 +194,8 @@ class _ViewSetup:
 
     token: str
     port: int
-    road_x: np.ndarray
-    road_y: np.ndarray
+    road_x: "np.ndarray"
+    road_y: "np.ndarray"
     duration: float
     title: str
     control: Any  # the sending end of a pipe to the loop's process
@@ -277,11 +269,15 @@ def _writer_main(
     and safety columns (:class:`~motosim.view.live.LoopRows`).
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the loop's to handle
+    import numpy as np
+
+    from motosim.io.results import ResultWriter
     from motosim.io.telemetry import TelemetryRing
     from motosim.rt.ring import SampleRing
     from motosim.rt.run import profile_stats
     from motosim.rt.safety import State
     from motosim.rt.stack import RESULT_SIGNALS, result_block
+    from motosim.sim.metrics import run_metrics
 
     ring = SampleRing.attach(handle)
     server: Any = None
@@ -406,10 +402,14 @@ def _keyboard(runner: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
+    import numpy as np
+
     from motosim.io.can import handlebar_codecs, open_link
     from motosim.rt.config import parse_safety
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
+    from motosim.sim import build_rig, build_stack, run_metadata
+    from motosim.sim.metrics import validity_limits
 
     check_rt_options(args)
     if not 0 <= args.view_port < 65536:
@@ -583,9 +583,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _view_setup(
-    args: argparse.Namespace, inputs: RunInputs, duration: float, limits: Any
+    args: argparse.Namespace, inputs: "RunInputs", duration: float, limits: Any
 ) -> _ViewSetup:
     """Check ``--view-port`` and the optional group; the road along the scenario's path."""
+    import numpy as np
+
     from motosim.view.app import _need_starlette, new_token
     from motosim.view.feeds import road_from_xy
 

@@ -3,14 +3,13 @@
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import print_json, refuse_special, show_progress
 from motosim.errors import MotosimError, RunFailedError
-from motosim.io.results import is_complete_result, partial_folder
-from motosim.io.runs import load_scenario, resolve, run_to_folder
-from motosim.sim import RunInputs
-from motosim.sim.metrics import warnings
+
+if TYPE_CHECKING:
+    from motosim.sim import RunInputs
 
 __all__ = ["register", "run_scenario"]
 
@@ -41,9 +40,11 @@ def register(sub: Any) -> None:
 
 
 def run_scenario(
-    inputs: RunInputs, folder: Path, *, progress: bool, overwrite: bool = False
+    inputs: "RunInputs", folder: Path, *, progress: bool, overwrite: bool = False
 ) -> dict[str, Any]:
     """Simulate into ``folder``, with a progress bar on a terminal; returns the metrics."""
+    from motosim.io.runs import run_to_folder
+
     sc = inputs.scenario
     if not progress:
         return run_to_folder(inputs, folder, overwrite=overwrite)
@@ -67,6 +68,10 @@ def run(args: argparse.Namespace) -> int:
             f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
             "folder (create it first)"
         )
+    from motosim.io.results import is_complete_result, partial_folder
+    from motosim.io.runs import load_scenario, resolve
+    from motosim.sim.metrics import warnings
+
     scenario = load_scenario(args.scenario)
     if is_complete_result(folder) and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")

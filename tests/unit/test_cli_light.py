@@ -1,0 +1,69 @@
+"""Every subcommand's help and usage errors answer without loading the numerical stack.
+
+Each ``src/motosim/cli/<command>.py`` builds its parser from light modules only; SciPy, the
+numba-compiled models, h5py and the rest are imported by the function that runs the command.
+The check is on ``sys.modules`` in a fresh interpreter, not on the wall time.
+"""
+
+import subprocess
+import sys
+
+import pytest
+
+from motosim.cli.main import COMMANDS
+
+HEAVY = ("numpy", "scipy", "numba", "llvmlite", "h5py", "matplotlib", "pandas")
+"""Packages that take from a tenth of a second to seconds to import."""
+
+_SCRIPT = """
+import contextlib, io, sys
+from motosim.cli.main import main
+codes = []
+with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    for argv in {argvs!r}:
+        codes.append(main(argv))
+heavy = sorted({{m.split(".")[0] for m in sys.modules}} & set({heavy!r}))
+print(codes, heavy)
+"""
+
+
+def _codes_and_heavy(*argvs: list[str]) -> str:
+    """``[exit codes] [heavy packages imported]`` of ``motosim argv`` for each, in one fresh
+    interpreter."""
+    script = _SCRIPT.format(argvs=list(argvs), heavy=HEAVY)
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr[-500:]
+    return done.stdout.strip()
+
+
+@pytest.mark.parametrize("name", list(COMMANDS))
+def test_help_and_usage_errors_import_nothing_heavy(name: str) -> None:
+    outcome = _codes_and_heavy([name, "--help"], [name, "--no-such-option"])
+    assert outcome == "[0, 2] []", f"motosim {name}: {outcome}"
+
+
+def test_options_refused_before_the_work_import_nothing_heavy() -> None:
+    outcome = _codes_and_heavy(
+        ["design", "--order", "9"],
+        ["cueing", "result", "--rate", "0", "--out", "out"],
+        ["modes", "--speeds", "nan"],
+        ["simulate", "scenario.toml", "--out", "/no/such/folder/out"],
+    )
+    assert outcome == "[2, 2, 2, 2] []"
+
+
+def test_choices_written_out_in_the_commands_equal_their_sources() -> None:
+    from motosim.cli import cueing, design, estimate, identify
+    from motosim.control.torque_feedback import MAX_ORDER
+    from motosim.cueing import ALGORITHMS
+    from motosim.estimation import ESTIMATORS
+    from motosim.identification import METHODS
+    from motosim.identification.output_error import DRIVES
+
+    assert cueing.ALGORITHMS == ALGORITHMS
+    assert design.MAX_ORDER == MAX_ORDER
+    assert estimate.ESTIMATORS == tuple(ESTIMATORS)
+    assert identify.METHODS == METHODS
+    assert identify.DRIVES == DRIVES
