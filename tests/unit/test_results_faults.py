@@ -202,3 +202,37 @@ def test_a_sigterm_swallowed_after_the_last_block_marks_the_result_partial(
     with h5py.File(folder / "result.h5", "r") as h5:
         assert h5["signals"].shape[0] == 5 and not h5.attrs["complete"]
     assert (folder / "result.partial.csv").exists() and not (folder / "result.csv").exists()
+
+
+@pytest.mark.parametrize("stop", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_signal_between_the_two_files_waits_for_the_block(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, stop: signal.Signals
+) -> None:
+    """Seen under load: a SIGTERM that came after a block reached result.h5 and before it
+    reached the CSV left 6000 rows in one and 5000 in the other. The signal is held while a
+    block is written: both files get the block, then the run stops."""
+    import motosim.io.results as results
+
+    write_all = results._write_all
+    sent = []
+
+    def signalled_first(fd: int, data: bytes) -> None:
+        if not sent and b"\n" in data and not data.startswith(b"t,"):  # a block, not the header
+            sent.append(stop)
+            signal.getsignal(stop)(stop, None)  # type: ignore[operator]  # the signal arrives
+        write_all(fd, data)
+
+    monkeypatch.setattr(results, "_write_all", signalled_first)
+    folder = tmp_path / "run"
+
+    def run() -> None:
+        with ResultWriter(folder, NAMES, {}) as w:
+            w.append(_block(0, 5))
+            w.append(_block(5, 5))  # not reached
+
+    with pytest.raises(KeyboardInterrupt, match=stop.name):
+        run()
+    with h5py.File(folder / "result.h5", "r") as h5:
+        assert h5["signals"].shape[0] == 5 and not h5.attrs["complete"]
+    with (folder / "result.partial.csv").open(newline="") as handle:
+        assert len(list(csv.reader(handle))) - 1 == 5

@@ -221,22 +221,35 @@ class StopRequest:
 
     def __init__(self) -> None:
         self.name: str | None = None
+        self.holding = False
 
     def check(self) -> None:
         """Raise :class:`KeyboardInterrupt` if a stop signal has arrived."""
         if self.name is not None:
             raise KeyboardInterrupt(self.name)
 
+    @contextmanager
+    def held(self) -> Iterator[None]:
+        """Within the block a stop signal is kept, not raised: a block of rows goes to both
+        files or to neither (:meth:`check` raises it after)."""
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
+
 
 @contextmanager
 def terminate_as_interrupt() -> Iterator[StopRequest]:
-    """Within the block, SIGTERM and SIGHUP raise :class:`KeyboardInterrupt`, as Ctrl-C does.
+    """Within the block, SIGTERM and SIGHUP raise :class:`KeyboardInterrupt`, as Ctrl-C does
+    (Ctrl-C too, through the same handler, where its default one is installed).
 
     A service manager, ``timeout`` or a closed terminal stops a run with SIGTERM or SIGHUP,
     whose default action ends the process at once, leaving files open. Turned into
     ``KeyboardInterrupt``, they unwind the ``with`` blocks like Ctrl-C: the result is closed
     and marked partial. The block gets a :class:`StopRequest` that remembers the signal, for a
-    raise that landed where Python ignores exceptions. Outside the main thread (where Python
+    raise that landed where Python ignores exceptions, and holds it while a block of rows is
+    being written (:meth:`StopRequest.held`). Outside the main thread (where Python
     cannot install handlers) the block runs unchanged. The previous handlers are restored on
     leaving.
 
@@ -252,9 +265,12 @@ def terminate_as_interrupt() -> Iterator[StopRequest]:
 
     def _raise(signum: int, frame: FrameType | None) -> None:
         stop.name = signal.Signals(signum).name
-        raise KeyboardInterrupt(stop.name)
+        if not stop.holding:
+            raise KeyboardInterrupt(stop.name)
 
     stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # Ctrl-C, held alike
+        stops.append(signal.SIGINT)
     previous = {sig: signal.signal(sig, _raise) for sig in stops}
     try:
         yield stop
@@ -439,19 +455,20 @@ class ResultWriter:
         m = rows.shape[0]
         text = "".join(",".join(map(repr, row)) + "\n" for row in rows.tolist()).encode()
         self._check_reserve(len(text) + rows.nbytes)
-        try:
-            self._dataset.resize(self._rows + m, axis=0)
-            self._dataset[self._rows :] = rows
-            self._h5.flush()
-        except (OSError, RuntimeError) as err:  # HDF5 reports a failed write as either
-            self._fail(self._h5_path, err)
-        try:
-            _write_all(self._csv, text)
-        except OSError as err:
-            self._fail(self._csv_path, err)
-        self._rows += m
-        self._last_t = float(t[-1])
-        self._stop.check()  # a stop signal whose raise was swallowed stops the run here
+        with self._stop.held():  # a stop signal now would leave the files with other rows
+            try:
+                self._dataset.resize(self._rows + m, axis=0)
+                self._dataset[self._rows :] = rows
+                self._h5.flush()
+            except (OSError, RuntimeError) as err:  # HDF5 reports a failed write as either
+                self._fail(self._h5_path, err)
+            try:
+                _write_all(self._csv, text)
+            except OSError as err:
+                self._fail(self._csv_path, err)
+            self._rows += m
+            self._last_t = float(t[-1])
+        self._stop.check()  # a stop signal held, or whose raise was swallowed, stops here
 
     def _check_reserve(self, block_bytes: int) -> None:
         """Stop while the files can still be closed cleanly, before the disk is full.
