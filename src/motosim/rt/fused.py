@@ -67,9 +67,11 @@ __all__ = [
     "PeriodContext",
     "begin",
     "context_period",
+    "context_warm",
     "finish",
     "fused_period",
     "monotonic_ns",
+    "stack_warm",
     "take_frames",
 ]
 
@@ -426,6 +428,9 @@ class PeriodContext(structref.StructRefProxy):
         ``force``, ``side_force``, ``state``).
     arrays : PeriodArrays
         The period's arrays.
+    shadow, shadow_state, shadow_row
+        A second :class:`~motosim.sim.stack.StackData` of the same model, state and row:
+        where :func:`context_warm` steps a copy of the stack (:func:`stack_warm`).
     """
 
     def __new__(
