@@ -70,7 +70,7 @@ def register(sub: Any) -> None:
         "--bandwidth",
         type=float,
         default=None,
-        help="tracking bandwidth [Hz] (10; a fifth of --rate below 200 Hz)",
+        help="tracking bandwidth [Hz] (10; 20 from 100 to 200 Hz --rate)",
     )
     parser.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (1000)")
     parser.add_argument(

@@ -15,9 +15,9 @@ clean angle measurement). A controller K_s of fixed order is tuned on G_s for th
 objective of eq. (25) (HIFOO-like), beside the full-order optimum gamma_min; the implemented
 controller is K = W1 K_s W2. The default bandwidth (:func:`default_bandwidth`) depends on the
 rate: 10 Hz at 200 Hz and faster, which follows the weave (up to 3.5 Hz) closely and is a
-decade under the 1 kHz control rate; a fifth of the rate below 200 Hz (20 Hz at the paper's
-100 Hz CAN loop), where the stack's estimate, and so its cancellation of the rider's torque,
-lags by several samples and the feedback must correct what the cancellation misses.
+decade under the 1 kHz control rate; 20 Hz from 100 to 200 Hz (the paper's CAN loop runs at
+100 Hz), where the stack's estimate, and so its cancellation of the rider's torque, lags by
+several samples and the feedback must correct what the cancellation misses.
 """
 
 import math
@@ -43,6 +43,7 @@ __all__ = [
     "PAPER_DEN",
     "PAPER_NUM",
     "SLOW_RATE",
+    "SLOW_RATE_BANDWIDTH",
     "LoopAnalysis",
     "TorqueFeedbackDesign",
     "analyse_loop",
@@ -60,8 +61,10 @@ Array = NDArray[np.float64]
 DEFAULT_BANDWIDTH = 10.0
 """Tracking bandwidth at control rates of :data:`SLOW_RATE` and above [Hz]."""
 SLOW_RATE = 200.0
-"""Control rate below which the default bandwidth is a fifth of the rate [Hz]: a sample period
-beyond 5 ms, half the 10 ms filter of the rider-torque estimate."""
+"""Control rate below which the default bandwidth is :data:`SLOW_RATE_BANDWIDTH` [Hz]: a
+sample period beyond 5 ms, half the 10 ms filter of the rider-torque estimate."""
+SLOW_RATE_BANDWIDTH = 20.0
+"""Tracking bandwidth at control rates from 100 Hz to :data:`SLOW_RATE` [Hz]."""
 MAX_ORDER = 3
 """Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
 controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
@@ -271,13 +274,17 @@ def analyse_loop(hb: HandlebarParameters, controller: StateSpace, *, rate: float
 def default_bandwidth(rate: float) -> float:
     """The default tracking bandwidth at a control rate [Hz].
 
-    :data:`DEFAULT_BANDWIDTH` (10 Hz) at :data:`SLOW_RATE` (200 Hz) and faster; below, a fifth
-    of ``rate``, the most :func:`check_options` admits. The rule comes from the whole sampled
-    stack (:func:`motosim.sim.loop_analysis.analyse_stack`, observer, differentiator and
-    feedforward inside): at 100 Hz, 15 m/s, the 10 Hz design keeps 2.8 dB and 12 deg at the
-    motor current, the estimate's lag letting the rider-torque cancellation feed the loop
-    near 20 Hz and the Nyquist frequency; 20 Hz gives no gain crossing of the negative real
-    axis and 72 deg. At 200 Hz the 10 Hz design already keeps 10.6 dB and 146 deg.
+    :data:`DEFAULT_BANDWIDTH` (10 Hz) at :data:`SLOW_RATE` (200 Hz) and faster;
+    :data:`SLOW_RATE_BANDWIDTH` (20 Hz) from 100 to 200 Hz; below 100 Hz 10 Hz again, or a
+    fifth of ``rate`` if less (the most :func:`check_options` admits). The rule comes from the
+    whole sampled stack (:func:`motosim.sim.loop_analysis.analyse_stack`, observer,
+    differentiator and feedforward inside), at 15 m/s: at 100 Hz the 10 Hz design keeps
+    2.8 dB and 12 deg at the motor current, the estimate's lag letting the rider-torque
+    cancellation feed the loop near 20 Hz and the Nyquist frequency; 20 Hz gives no gain
+    crossing of the negative real axis and 72 deg (120 Hz 66 deg, 150 Hz 65 deg, 175 Hz
+    68 deg, 190 Hz 72 deg), where a fifth of the rate would not (190 Hz, 38 Hz: 3 deg). At
+    200 Hz the 10 Hz design already keeps 10.6 dB and 146 deg. At 80 Hz neither holds: 10 Hz
+    keeps 1.4 dB and 4.6 deg, 16 Hz is unstable.
 
     Parameters
     ----------
@@ -291,7 +298,9 @@ def default_bandwidth(rate: float) -> float:
     """
     if not (math.isfinite(rate) and rate > 0):
         raise MotosimError(f"rate = {rate!r}; expected a control rate > 0 [Hz]")
-    return DEFAULT_BANDWIDTH if rate >= SLOW_RATE else rate / 5.0
+    if 100.0 <= rate < SLOW_RATE:
+        return SLOW_RATE_BANDWIDTH
+    return min(DEFAULT_BANDWIDTH, rate / 5.0)
 
 
 def check_options(*, bandwidth: float, rate: float) -> None:
