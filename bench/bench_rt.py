@@ -123,24 +123,13 @@ def _replay(
 
 @njit(cache=False)
 def _steps(
-    model: Any, data: Any, force: Any, side: Any, state: Any, row: Any, theta: Any, first: int,
-    end: int, times: Any,
-) -> None:  # fmt: skip
-    """The stack's period over recorded angles, in a compiled loop, each timed as the fused
-    period times it in ``motosim run`` (:func:`monotonic_ns` around it) [s]."""
-    for k in range(first, end):
-        start = monotonic_ns()
-        stack_period(model, data, force, side, state, row, theta[k], 0.0)
-        times[k] = (monotonic_ns() - start) * 1e-9
-
-
-@njit(cache=False)
-def _paced_steps(
     model: Any, data: Any, force: Any, side: Any, state: Any, row: Any, theta: Any,
     times: Any, gap_ns: int,
 ) -> None:  # fmt: skip
-    """:func:`_steps` with a busy wait on the clock of ``gap_ns`` between two steps: the
-    offline code at the loop's pace (no interpreter, no system call, nothing else run)."""
+    """The stack's period over recorded angles, in a compiled loop, each timed as the fused
+    period times it in ``motosim run`` (:func:`monotonic_ns` around it) [s]; with ``gap_ns``
+    > 0, a busy wait on the clock between two steps: the offline code at the loop's pace (no
+    interpreter, no system call, nothing else run)."""
     due = monotonic_ns()
     for k in range(theta.size):
         due += gap_ns
@@ -218,13 +207,12 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
     other = CompiledStack(model)
     args2 = (other.model, other.data, other.force, other.side_force, other.state, other.row())
     step_times = np.empty(n)
-    _steps(*args2, theta, 0, 10, step_times)  # compile
+    _steps(*args2, theta[:10], step_times[:10], 0)  # compile
     other.reset(0.0, 0.0)
-    _steps(*args2, theta, 0, n, step_times)
+    _steps(*args2, theta, step_times, 0)
     paced = np.empty(3000)
-    _paced_steps(*args2, theta[:10], paced[:10], 0)  # compile
     other.reset(0.0, 0.0)
-    _paced_steps(*args2, theta[: paced.size], paced, 1_000_000)
+    _steps(*args2, theta[: paced.size], paced, 1_000_000)
     p50, c50 = float(np.median(times)), float(np.median(chunks))
     return {
         "offline closed-loop period (simulate, plant included) us": _us(offline),
