@@ -13,7 +13,9 @@ mlockall: applied as root, refused otherwise, and reported):
    (:func:`motosim.rt.stack.stack_period`) in a compiled loop, each step timed from compiled
    code (:func:`motosim.rt.fused.monotonic_ns`) as the fused period times it in every run:
    the "offline" step that the step inside ``motosim run`` (3.) is compared with; with the
-   offline closed loop's period (``motosim simulate``, plant included) for reference;
+   offline closed loop's period (``motosim simulate``, plant included) for reference; and
+   the machine's share: the offline step after a compiled busy wait of 0.1 to 3 ms and after
+   a 64 MB read (what the step costs once the CPU's caches have lost it, whatever ran);
 3. ``motosim run`` at 1 kHz (status frames at 1 kHz) against ``motosim rig`` in another
    process over ``udp_multicast`` for 60 s, and at 100 Hz (control and status) for 20 s,
    each with python-can's link (``--link python-can``: the "before") and with the fast link
@@ -124,20 +126,26 @@ def _replay(
 @njit(cache=False)
 def _steps(
     model: Any, data: Any, force: Any, side: Any, state: Any, row: Any, theta: Any,
-    times: Any, gap_ns: int,
+    times: Any, gap_ns: int, sweep: Any,
 ) -> None:  # fmt: skip
     """The stack's period over recorded angles, in a compiled loop, each timed as the fused
     period times it in ``motosim run`` (:func:`monotonic_ns` around it) [s]; with ``gap_ns``
     > 0, a busy wait on the clock between two steps: the offline code at the loop's pace (no
-    interpreter, no system call, nothing else run)."""
+    interpreter, no system call, nothing else run); with a non-empty ``sweep``, that array
+    read through before each step (the CPU's caches emptied of the stack)."""
     due = monotonic_ns()
+    total = 0.0
     for k in range(theta.size):
         due += gap_ns
         while monotonic_ns() < due:
             pass
+        for j in range(0, sweep.size, 8):
+            total += sweep[j]
         start = monotonic_ns()
         stack_period(model, data, force, side, state, row, theta[k], 0.0)
         times[k] = (monotonic_ns() - start) * 1e-9
+    if total < 0.0:  # the sweep's reads are used
+        times[0] = total
 
 
 CHUNK = 50
@@ -207,12 +215,25 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
     other = CompiledStack(model)
     args2 = (other.model, other.data, other.force, other.side_force, other.state, other.row())
     step_times = np.empty(n)
-    _steps(*args2, theta[:10], step_times[:10], 0)  # compile
+    nothing = np.zeros(0)
+    _steps(*args2, theta[:10], step_times[:10], 0, nothing)  # compile
     other.reset(0.0, 0.0)
-    _steps(*args2, theta, step_times, 0)
+    _steps(*args2, theta, step_times, 0, nothing)
     paced = np.empty(3000)
     other.reset(0.0, 0.0)
-    _steps(*args2, theta[: paced.size], paced, 1_000_000)
+    _steps(*args2, theta[: paced.size], paced, 1_000_000, nothing)
+    # the machine's share: the step after a busy wait of 0.1-3 ms (nothing else run) and
+    # after a 64 MB read (caches emptied), in rounds so that the machine's load is shared
+    gaps = {f"after a {ms:g} ms busy wait": int(ms * 1e6) for ms in (0.1, 0.3, 1.0, 3.0)}
+    sweep = np.ones(8 << 20)
+    share: dict[str, list[float]] = {}
+    block = np.empty(200)
+    for _ in range(3):
+        for name, gap in (("step after step", 0), *gaps.items(), ("after a 64 MB read", 0)):
+            other.reset(0.0, 0.0)
+            _steps(*args2, theta[: block.size], block, gap,
+                   sweep if name == "after a 64 MB read" else nothing)  # fmt: skip
+            share.setdefault(name, []).append(_us(float(np.median(block))))
     p50, c50 = float(np.median(times)), float(np.median(chunks))
     return {
         "offline closed-loop period (simulate, plant included) us": _us(offline),
@@ -232,6 +253,10 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         "stack step in a compiled loop paced at 1 kHz (busy wait), p50 us": _us(
             float(np.median(paced))
         ),
+        **{
+            f"stack step offline, {name}, p50 of three rounds us": ", ".join(map(str, v))
+            for name, v in share.items()
+        },
     }
 
 
