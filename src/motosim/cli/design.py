@@ -56,8 +56,9 @@ def register(sub: Any) -> None:
         description=(
             "Design the Walcott-Zak observer and the H-infinity loop-shaping controller of "
             "fixed order for a handlebar, analyse the loop (margins, tracking, rider-torque "
-            "rejection, sampling, +/-50 %% robustness) beside the paper's controller, and "
-            "write one design file for the simulator and the real-time loop."
+            "rejection, sampling, robustness over +/-50 % J_eq and beta_eq, +/-30 % N k_t) "
+            "beside the paper's controller, and write one design file for the simulator and "
+            "the real-time loop."
         ),
     )
     parser.add_argument(
