@@ -103,7 +103,6 @@ MAX_ITER = 50
 time 0.6 ms lower)."""
 BAND_MARGIN = 0.9
 """The band of the false-cue constraints, as a fraction of the perception threshold."""
-_EXP: dict[str, Any] = {}
 MOTION_INPUTS = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
 """What :meth:`MpcCueing.step` reads, in order."""
 
@@ -170,8 +169,6 @@ class AxisPlan:
     band_steps: tuple[NDArray[np.intp], ...]
     limits: tuple[float, float, float]
     head_height: float
-    sign_M: Array
-    sign_E: Array
 
 
 @dataclass(frozen=True, slots=True)
@@ -202,27 +199,20 @@ def _discrete(A: Array, B: Array, dt: float) -> tuple[Array, Array]:
     return E[:n, :n], E[:n, n]
 
 
-def _vehicle_prediction(
-    A: Array, B: Array, C: Array, h: float, N: int, tau: float, ramp: bool = False
-) -> Array:
-    """Outputs at steps 1..N of a model from state x driven by ``w(t) = w_h + (w_f + w_r t)
-    exp(-t / tau)`` (a held part, a fading part and, with ``ramp``, a fading ramp): (N, n + 2)
-    map of ``[x, w_h, w_f]``, or (N, n + 3) of ``[x, w_h, w_f, w_r]``."""
+def _vehicle_prediction(A: Array, B: Array, C: Array, h: float, N: int, tau: float) -> Array:
+    """Outputs at steps 1..N of a model from state x driven by ``w(t) = w_h + w_f exp(-t /
+    tau)`` (a held part and a fading part): (N, n + 2) map of ``[x, w_h, w_f]``."""
     from scipy.linalg import expm
 
     n = A.shape[0]
-    m = n + (3 if ramp else 2)
-    M = np.zeros((m, m))
+    M = np.zeros((n + 2, n + 2))
     M[:n, :n] = A
     M[:n, n] = B
     M[:n, n + 1] = B
     M[n + 1, n + 1] = -1.0 / tau
-    if ramp:
-        M[n + 1, n + 2] = 1.0
-        M[n + 2, n + 2] = -1.0 / tau
     E = expm(M * h)
-    out = np.zeros((N, m))
-    power = np.eye(m)
+    out = np.zeros((N, n + 2))
+    power = np.eye(n + 2)
     for k in range(N):
         power = E @ power
         out[k] = C @ power[:n]
@@ -307,7 +297,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         P += w * M.T @ M
         F += w * M.T @ E
         Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
-        G.append(_vehicle_prediction(Av, Bv, Cv, h, N, tuning.prediction_time, ramp=ref == 1))
+        G.append(_vehicle_prediction(Av, Bv, Cv, h, N, tuning.prediction_time))
         W.append(w * M.T)
     w_angle = (tuning.pitch_angle_weight if axis == 1 else tuning.angle_weight) / limits.angle**2
     for e, w in ((e_angle, w_angle),
@@ -316,12 +306,6 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         E = np.einsum("i,kij->kj", e, Phi)
         P += w * M.T @ M
         F += w * M.T @ E
-    if axis == 0 and _EXP.get("sign"):  # EXPERIMENT: the platform's lateral force at the head
-        f_row = -(GRAVITY * np.eye(nx)[2] + z_h * achieved_accel)
-        sign_M = np.einsum("i,kij->kj", f_row, Gam)
-        sign_E = np.einsum("i,kij->kj", f_row, Phi)
-    else:
-        sign_M, sign_E = np.zeros((0, N)), np.zeros((0, nx))
     M_a = np.einsum("i,kij->kj", e_angle, Gam)
     M_v = np.einsum("i,kij->kj", e_rate, Gam)
     H = np.vstack([np.einsum("i,kij->kj", e_angle, Phi), np.einsum("i,kij->kj", e_rate, Phi)])
@@ -347,8 +331,6 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         band_steps=tuple(band_steps),
         limits=(limits.angle, rate, limits.accel),
         head_height=config.rider.height if axis == 0 else 0.0,
-        sign_M=sign_M,
-        sign_E=sign_E,
     )
 
 
@@ -422,30 +404,20 @@ class MpcCueing:
             solver = osqp.OSQP()
             n = plan.P.shape[0]
             nb = plan.band_M.shape[0]
-            ns = plan.sign_M.shape[0]
-            P = np.zeros((n + nb + ns, n + nb + ns))
+            P = np.zeros((n + nb, n + nb))
             P[:n, :n] = plan.P
-            P[n : n + nb, n : n + nb] = np.diag(plan.band_quad)
-            A_con = np.zeros((3 * n + 3 * nb + 3 * ns, n + nb + ns))
+            P[n:, n:] = np.diag(plan.band_quad)
+            A_con = np.zeros((3 * n + 3 * nb, n + nb))
             A_con[: 3 * n, :n] = plan.A_con
             A_con[3 * n : 3 * n + nb, :n] = plan.band_M  # p - s <= U
-            A_con[3 * n : 3 * n + nb, n : n + nb] = -np.eye(nb)
+            A_con[3 * n : 3 * n + nb, n:] = -np.eye(nb)
             A_con[3 * n + nb : 3 * n + 2 * nb, :n] = plan.band_M  # p + s >= L
-            A_con[3 * n + nb : 3 * n + 2 * nb, n : n + nb] = np.eye(nb)
-            A_con[3 * n + 2 * nb : 3 * n + 3 * nb, n : n + nb] = np.eye(nb)  # s >= 0
-            r0 = 3 * n + 3 * nb
-            if ns:
-                A_con[r0 : r0 + ns, :n] = plan.sign_M  # f + S >= 0 (felt right)
-                A_con[r0 : r0 + ns, n + nb :] = np.eye(ns)
-                A_con[r0 + ns : r0 + 2 * ns, :n] = plan.sign_M  # f - S <= 0 (felt left)
-                A_con[r0 + ns : r0 + 2 * ns, n + nb :] = -np.eye(ns)
-                A_con[r0 + 2 * ns :, n + nb :] = np.eye(ns)
+            A_con[3 * n + nb : 3 * n + 2 * nb, n:] = np.eye(nb)
+            A_con[3 * n + 2 * nb :, n:] = np.eye(nb)  # s >= 0
             lo, hi = self._bounds(plan, np.zeros(2 * n), np.zeros(nb), np.zeros(nb))
-            lo = np.concatenate([lo, np.full(2 * ns, -1e9), np.zeros(ns)])
-            hi = np.concatenate([hi, np.full(3 * ns, 1e9)])
             solver.setup(
                 sparse.csc_matrix(np.triu(P)),
-                np.zeros(n + nb + ns),
+                np.zeros(n + nb),
                 sparse.csc_matrix(A_con),
                 lo,
                 hi,
@@ -480,7 +452,7 @@ class MpcCueing:
         nx = plan.A_loop.shape[0]
         nc = plan.vehicle_canal[0].shape[0]
         no = plan.vehicle_otolith[0].shape[0]
-        c, o, f, r = nx, nx + nc + 2, nx + nc + no + 5, nx + 2 * nc + no + 7
+        c, o, f, r = nx, nx + nc + 2, nx + nc + no + 4, nx + 2 * nc + no + 6
         rows_c, rows_o = (*plan.band_steps, np.arange(0))[:2]
         nb, nr = plan.band_M.shape[0], rows_c.size
         K = np.zeros((N + nb + 2 * N + nb, r + 1))
@@ -497,10 +469,8 @@ class MpcCueing:
         U = np.zeros((2 * nc + no, r + 1))
         U[:nc, c : c + nc], U[:nc, c + nc], U[:nc, c + nc + 1] = Ac, Bc, Bc
         U[nc : nc + no, o : o + no], U[nc : nc + no, o + no], U[nc : nc + no, o + no + 1] = (
-            Ao,
-            Bo,
-            Bo,
-        )  # fmt: skip  (the ramp part is zero now)
+            Ao, Bo, Bo,
+        )  # fmt: skip
         U[nc + no :, f : f + nc], U[nc + no :, f + nc], U[nc + no :, f + nc + 1] = Ac, Bc, Bc
         return K, U, nc, no
 
@@ -567,92 +537,23 @@ class MpcCueing:
             if onset is not None:
                 w_c -= float(onset[1, j])
             K, U, nc, no = self._maps[j]
-            held, fading, ramp = 0.0, w_o, 0.0  # the otolith input's parts (module docstring)
+            held, fading = 0.0, w_o  # the otolith input's parts (module docstring)
             if j == 0:
                 alpha = (w_c - self._roll_rate) / self.design.dt
                 self._roll_rate = w_c
                 fading = plan.head_height * alpha if math.isfinite(alpha) else 0.0
                 held = w_o - fading
-                if _EXP.get("oto") == "free":  # EXPERIMENT
-                    held, fading = 0.0, 0.0
-                elif _EXP.get("oto") == "fade":
-                    held, fading = 0.0, w_o
-                elif _EXP.get("oto") == "held":
-                    held, fading = w_o, 0.0
-                if _EXP.get("consistent") and math.isfinite(alpha):  # EXPERIMENT
-                    tau = _EXP["tau"]
-                    ramp = -plan.head_height * (alpha + w_c / tau) / tau * _EXP["consistent"]
             v = np.concatenate(
-                [x0, self._canal[j], (0.0, w_c), self._otolith[j], (held, fading, ramp),
+                [x0, self._canal[j], (0.0, w_c), self._otolith[j], (held, fading),
                  self._feed_canal[j], (0.0, feed_rate), (reference[j] - feed,)]
             )  # fmt: skip
             y = K @ v
             N = plan.P.shape[0]
             nb = plan.band_M.shape[0]
-            if _EXP.get("full") is not None and j == 0:  # EXPERIMENT: the true future
-                canal_true, oto_true = _EXP["full"]
-                per = round(0.05 / self.design.dt)
-                pos = np.minimum(_EXP["k"] + (np.arange(N) + 1) * per, canal_true.size - 1)
-                tc, to = canal_true[pos], oto_true[pos]
-                nx_, nc_ = x0.size, plan.G_canal.shape[1] - 2
-                if _EXP.get("only") == "canal":
-                    to = plan.G_otolith @ v[nx_ + nc_ + 2 : nx_ + nc_ + 2 + plan.G_otolith.shape[1]]
-                if _EXP.get("only") == "sway":
-                    tc = plan.G_canal @ v[nx_ : nx_ + nc_ + 2]
-                    if _EXP.get("ahead"):
-                        po = (
-                            plan.G_otolith
-                            @ v[nx_ + nc_ + 2 : nx_ + nc_ + 2 + plan.G_otolith.shape[1]]
-                        )
-                        late = (np.arange(N) + 1) * 0.05 > _EXP["ahead"] + 1e-9
-                        to = np.where(late, po, to)
-                y = y.copy()
-                y[:N] = (
-                    plan.F @ x0
-                    - plan.W_canal @ tc
-                    - plan.W_otolith @ to
-                    - plan.G_angle * (reference[j] - feed)
-                )
-                nr = plan.band_steps[0].size
-                y[N : N + nr] = tc[plan.band_steps[0]]
-                y[N + nr : N + nb] = to[plan.band_steps[1]]
             r_b = y[N : N + nb]
             felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
-            if _EXP.get("oracle") is not None and j == 0:  # EXPERIMENT
-                fut, kk = _EXP["oracle"], _EXP["k"]
-                idx = plan.band_steps[1]
-                per = round(plan.P.shape[0] and 0.05 / self.design.dt)
-                pos = np.minimum(kk + (idx + 1) * per, fut.size - 1)
-                true = fut[pos]
-                nr = plan.band_steps[0].size
-                felt[nr:] = np.where(np.abs(true) > plan.band_thr[nr:], np.sign(true), 0.0)
             q = np.concatenate([y[:N], plan.band_lin])
             lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], y[3 * N + nb :], felt)
-            if _EXP.get("cap") and j < 2:  # EXPERIMENT: cap the force on the felt side
-                nr = plan.band_steps[0].size
-                k0 = 3 * N
-                fr = y[3 * N + nb + nr :]
-                cap = np.maximum(_EXP["cap"] * np.abs(r_b[nr:]), BAND_MARGIN * plan.band_thr[nr:])
-                sl = slice(k0 + nr, k0 + nb)
-                hi[sl] = np.where(felt[nr:] > 0, cap - fr, hi[sl])
-                sl2 = slice(k0 + nb + nr, k0 + 2 * nb)
-                lo[sl2] = np.where(felt[nr:] < 0, -cap - fr, lo[sl2])
-            ns = plan.sign_M.shape[0]
-            if ns:
-                nr = plan.band_steps[0].size
-                fv = felt[nr:] if _EXP.get("sign_oracle") is None else _EXP["fo"](plan)
-                if _EXP.get("sign_level"):
-                    rr = r_b[nr:]
-                    fv = np.where(
-                        np.abs(rr) > _EXP["sign_level"] * plan.band_thr[nr:], np.sign(rr), 0.0
-                    )
-                if _EXP.get("sign_return") and x0[0] * w_c >= 0:
-                    fv = np.zeros_like(fv)
-                f0 = plan.sign_E @ x0
-                big = np.full(ns, 1e9)
-                lo = np.concatenate([lo, np.where(fv > 0, -f0, -big), -big, np.zeros(ns)])
-                hi = np.concatenate([hi, big, np.where(fv < 0, -f0, big), big])
-                q = np.concatenate([q, np.full(ns, _EXP["sign"] / plan.band_thr[-1])])
             nxt = U @ v
             self._canal[j], self._otolith[j] = nxt[:nc], nxt[nc : nc + no]
             self._feed_canal[j] = nxt[nc + no :]
@@ -676,7 +577,6 @@ class MpcCueing:
             self._state[j] = plan.A_loop @ x0 + plan.B_loop * u
             out[j] = self._state[j][0] + feed
             self.rates[j] = self._state[j][1] + feed_rate
-        _EXP["k"] = _EXP.get("k", 0) + 1
         return out
 
 
@@ -704,8 +604,7 @@ def apply_mpc(
     """
     mpc = MpcCueing(design)
     motion = np.column_stack([vehicle[name] for name in MOTION_INPUTS])
-    ref = np.asarray(reference, dtype=np.float64).copy()
-    ref[:, 0] *= _EXP.get("scale", 1.0)  # EXPERIMENT
+    ref = np.asarray(reference, dtype=np.float64)
     targets, rates = np.empty((motion.shape[0], 3)), np.empty((motion.shape[0], 3))
     for k in range(motion.shape[0]):
         targets[k] = mpc.step(motion[k], ref[k], None if onset is None else onset[k])
