@@ -239,10 +239,55 @@ def prediction_errors(runs: str) -> str:
     return "\n".join(lines)
 
 
+def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30") -> str:
+    """Where the false cues are: each interval of consecutive false cues per channel.
+
+    For each scenario (folders ``runs/NAME`` of :func:`table`, comma-separated ``names``)
+    and algorithm: the channel, the interval [s], its samples, the direction the platform
+    is perceived in, the motorcycle's perceived value at its start and end (in thresholds)
+    and the platform's roll command there [deg]. Reproduce: ``python bench/bench_cueing.py
+    RUNS intervals [NAMES]``.
+    """
+    from pathlib import Path
+
+    from motosim.cueing import cue
+    from motosim.io.results import load_result
+
+    cfg = load_platform("simacom_platform")
+    model = TELBAN_CARDULLO_2005
+    lines = [
+        "| scenario | algorithm | channel | interval [s] | samples | platform felt | "
+        "motorcycle [thresholds] | platform roll [deg] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name in names.split(","):
+        r = load_result(Path(runs) / name)
+        series = TimeSeries(r.t, r.data, r.names)
+        for algorithm in ("washout", "mpc"):
+            run = cue(cfg, series, model, algorithm=algorithm, rate=100.0)  # type: ignore[arg-type]
+            t, roll = run.commands.t, np.degrees(run.commands["phi_s"])
+            for i, channel in enumerate(run.perceived_vehicle.names):
+                thr = model.thresholds[i]
+                v, p = run.perceived_vehicle[channel], run.perceived_platform[channel]
+                felt_v = np.where(np.abs(v) > thr, np.sign(v), 0.0)
+                felt_p = np.where(np.abs(p) > thr, np.sign(p), 0.0)
+                false = np.concatenate([[False], (felt_p != 0) & (felt_p != felt_v), [False]])
+                edges = np.flatnonzero(np.diff(false.astype(np.int8)))
+                for a, b in zip(edges[::2], edges[1::2], strict=True):
+                    lines.append(
+                        f"| {name} | {algorithm} | {channel} | {t[a]:.2f}-{t[b - 1]:.2f} | "
+                        f"{b - a} | {'+' if felt_p[a] > 0 else '-'} | {v[a] / thr:+.2f} to "
+                        f"{v[b - 1] / thr:+.2f} | {roll[a]:+.1f} to {roll[b - 1]:+.1f} |"
+                    )
+    return "\n".join(lines)
+
+
 if __name__ == "__main__":
     import sys
 
     if len(sys.argv) > 2 and sys.argv[2] == "prediction":
         print(prediction_errors(sys.argv[1]))
+    elif len(sys.argv) > 2 and sys.argv[2] == "intervals":
+        print(false_cue_intervals(*sys.argv[1:2], *sys.argv[3:4]))
     else:
         print(table(*sys.argv[1:3]) if len(sys.argv) > 1 else run())
