@@ -37,7 +37,7 @@ def register(sub: Any) -> None:
         help="probe torque: multisine (periodic, averaged) or chirp (default multisine)",
     )
     parser.add_argument(
-        "--amplitude", type=float, default=3.0, help="probe's peak torque [N*m] (default 3)"
+        "--amplitude", type=float, default=10.0, help="probe's peak torque [N*m] (default 10)"
     )
     parser.add_argument("--band", default="0.1:5", help="probe band LOW:HIGH [Hz] (default 0.1:5)")
     parser.add_argument(
@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if not (math.isfinite(args.amplitude) and 0.01 <= args.amplitude <= 200.0):
         raise MotosimError(
-            f"--amplitude {args.amplitude!r}; expected a chirp torque of 0.01 to 200 N*m"
+            f"--amplitude {args.amplitude!r}; expected a probe torque of 0.01 to 200 N*m"
         )
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
