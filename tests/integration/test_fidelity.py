@@ -89,6 +89,15 @@ def test_fidelity_command_chirp_still_there(capsys: pytest.CaptureFixture[str]) 
     assert len(payload["frequency_hz"]) == len(payload["magnitude_error_db"]) > 10
 
 
+def test_a_probe_within_the_dry_friction_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    # 1 N*m against the packaged handlebar's 1.73 N*m of dry friction: it never moves, and
+    # the stuck handlebar leaves the rider's torque unobservable (the estimate stays at 0)
+    assert main(["fidelity", "--amplitude", "1", "--period", "10", "--periods", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "the handlebar did not move, held by its dry friction (1.73 N*m)" in err
+    assert err.count("\n") == 1
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -136,6 +136,13 @@ def run(args: argparse.Namespace) -> int:
         feel = periodic_feel(*signals, args.speed, probe=probe, band=band)
     else:
         feel = rendered_feel(*signals, args.speed, band=band)
+    if not np.all(np.abs(feel.rendered) > 0.0):
+        friction = inputs.true_handlebar.beta_s if scenario.handlebar.friction else 0.0
+        raise MotosimError(
+            f"--amplitude {args.amplitude:g}: the handlebar did not move, held by its dry "
+            f"friction ({friction:.3g} N*m) with the rider's torque unobservable; expected a "
+            "probe that breaks it away"
+        )
     low, high = max(band[0], _TARGET_BAND[0]), min(band[1], _TARGET_BAND[1])
     magnitude, phase = feel.worst(low, high)
     payload = {
