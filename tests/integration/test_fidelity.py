@@ -63,7 +63,7 @@ def test_friction_free_stack_measured_as_the_linear_analysis_predicts() -> None:
     )  # fmt: skip
     loop = stack_loop(build_stack(inputs), inputs.true_handlebar, 20.0)
     ratio = feel.rendered / loop.response(feel.frequency, loop.angle, 0)
-    # measured: within 0.01 dB and 0.1 deg at every line
+    # measured: within 0.007 dB and 0.05 deg at every line (periods of 10 and 20 s)
     assert np.max(np.abs(20 * np.log10(np.abs(ratio)))) < 1.0
     assert np.max(np.abs(np.degrees(np.angle(ratio)))) < 5.0
     magnitude, phase = feel.worst(0.1, 3.0)
