@@ -182,6 +182,12 @@ DESCRIPTIONS: dict[str, str] = {
     "profile.chirp.f1": "End frequency at the end of the run [Hz].",
     "profile.chirp.start": "Start time [s].",
     "profile.chirp.offset": "Constant added.",
+    "profile.multisine.amplitude": "Peak of the sum (each line has the same amplitude).",
+    "profile.multisine.f0": "Lowest line [Hz], at least 1 / period.",
+    "profile.multisine.f1": "Highest line [Hz].",
+    "profile.multisine.period": "Period [s]: the lines are its harmonics.",
+    "profile.multisine.per_decade": "Lines per decade, log-spaced (fewer where sparse).",
+    "profile.multisine.start": "Start time [s]; zero before.",
     "profile.csv.file": "A CSV log (relative to the scenario), sampled and held.",
     "profile.csv.column": "Its column.",
     # paths

@@ -678,8 +678,11 @@ def _commands(tmp: Path, result: Path) -> dict[str, Command]:
             ("motosim.io.runs.resolve",),
             {
                 "--speed": "number",
+                "--excitation": "text",
                 "--amplitude": "number",
                 "--band": "text",
+                "--period": "number",
+                "--periods": "int",
                 "--duration": "number",
                 "--plot": "out",
             },

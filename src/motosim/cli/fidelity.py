@@ -7,6 +7,8 @@ from typing import Any
 from motosim.cli._common import check_figure_path, print_json, save_figure, warn_atypical
 from motosim.errors import MotosimError
 
+EXCITATIONS = ("multisine", "chirp")  # motosim.sim.fidelity.EXCITATIONS, without importing SciPy
+
 __all__ = ["register"]
 
 _TARGET_BAND = (0.1, 3.0)  # Hz, where the rendered feel is judged
@@ -18,21 +20,40 @@ def register(sub: Any) -> None:
         "fidelity",
         help="the steering feel a design renders, against the virtual motorcycle's",
         description=(
-            "Simulate a feel measurement (the virtual rider holds a straight while a chirp "
+            "Simulate a feel measurement (the virtual rider holds a straight while a probe "
             "torque is added to the rider's) with the handlebar, estimator, controller and "
             "rates of SCENARIO (the defaults without one), and compare the rendered response "
             "theta_h / tau_r with the motorcycle's delta / tau_r at the speed: magnitude "
-            "error [dB] and phase error [deg] over frequency."
+            "error [dB] and phase error [deg] over frequency. The probe is a periodic "
+            "multisine averaged over whole periods (default), or a linear chirp analysed by "
+            "Welch's method, which is biased below 0.3 Hz."
         ),
     )
     parser.add_argument("scenario", nargs="?", help="scenario TOML file (default: built-in)")
     parser.add_argument("--speed", type=float, default=20.0, help="speed [m/s] (default 20)")
     parser.add_argument(
-        "--amplitude", type=float, default=3.0, help="chirp torque amplitude [N*m] (default 3)"
+        "--excitation",
+        default=EXCITATIONS[0],
+        help="probe torque: multisine (periodic, averaged) or chirp (default multisine)",
     )
-    parser.add_argument("--band", default="0.1:5", help="chirp band LOW:HIGH [Hz] (default 0.1:5)")
     parser.add_argument(
-        "--duration", type=float, default=60.0, help="length of the chirp [s] (default 60)"
+        "--amplitude", type=float, default=10.0, help="probe's peak torque [N*m] (default 10)"
+    )
+    parser.add_argument("--band", default="0.1:5", help="probe band LOW:HIGH [Hz] (default 0.1:5)")
+    parser.add_argument(
+        "--period",
+        type=float,
+        default=20.0,
+        help="multisine's period [s], at least 1/LOW (default 20: lines every 0.05 Hz)",
+    )
+    parser.add_argument(
+        "--periods",
+        type=int,
+        default=4,
+        help="multisine periods averaged, after one that settles (default 4)",
+    )
+    parser.add_argument(
+        "--duration", type=float, default=None, help="length of the chirp [s] (default 60)"
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument("--plot", metavar="FILE", help="save the Bode figure (.png, .svg, .pdf)")
@@ -58,43 +79,81 @@ def run(args: argparse.Namespace) -> int:
 
     from motosim.io.runs import load_scenario, resolve
     from motosim.sim import simulate
-    from motosim.sim.fidelity import feel_scenario, rendered_feel
-    from motosim.sim.scenario import Scenario
+    from motosim.sim.fidelity import feel_scenario, periodic_feel, rendered_feel
+    from motosim.sim.scenario import MultisineProfile, Scenario
 
     if not (math.isfinite(args.speed) and 3.0 <= args.speed <= 60.0):
         raise MotosimError(
             f"--speed {args.speed!r}; expected 3 to 60 m/s (the virtual rider's schedule)"
         )
-    if not (math.isfinite(args.duration) and 10.0 <= args.duration <= 600.0):
-        raise MotosimError(f"--duration {args.duration!r}; expected 10 to 600 s")
+    if args.excitation not in EXCITATIONS:
+        raise MotosimError(
+            f"--excitation {args.excitation!r}; expected one of {', '.join(EXCITATIONS)}"
+        )
+    chirp = args.excitation == "chirp"
+    if not chirp and args.duration is not None:
+        raise MotosimError(
+            f"--duration {args.duration!r} is the chirp's length; expected --period and "
+            "--periods with --excitation multisine (it lasts (periods + 1) x period)"
+        )
+    duration = 60.0 if args.duration is None else args.duration
+    if not (math.isfinite(duration) and 10.0 <= duration <= 600.0):
+        raise MotosimError(f"--duration {duration!r}; expected 10 to 600 s")
+    if not (math.isfinite(args.period) and 1.0 <= args.period <= 300.0):
+        raise MotosimError(f"--period {args.period!r}; expected 1 to 300 s")
+    if not 1 <= args.periods <= 100:
+        raise MotosimError(f"--periods {args.periods!r}; expected 1 to 100")
+    if not chirp and (args.periods + 1) * args.period > 1800.0:
+        raise MotosimError(
+            f"--period {args.period:g} x (--periods {args.periods} + 1) = "
+            f"{(args.periods + 1) * args.period:g} s; expected a run of at most 1800 s"
+        )
     if not (math.isfinite(args.amplitude) and 0.01 <= args.amplitude <= 200.0):
         raise MotosimError(
-            f"--amplitude {args.amplitude!r}; expected a chirp torque of 0.01 to 200 N*m"
+            f"--amplitude {args.amplitude!r}; expected a probe torque of 0.01 to 200 N*m"
         )
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     band = _band(args.band)
+    if not chirp and band[0] > 0 and args.period * band[0] < 1.0 - 1e-9:
+        raise MotosimError(
+            f"--period {args.period:g} with --band {args.band}; expected a period of at least "
+            f"1 / LOW = {1.0 / band[0]:g} s (the lowest line is 1 / period)"
+        )
     base = load_scenario(args.scenario) if args.scenario else Scenario(name="default")
     folder = Path(args.scenario).parent if args.scenario else Path(".")
     scenario = feel_scenario(
-        base, speed=args.speed, amplitude=args.amplitude, band=band, duration=args.duration
-    )
+        base, speed=args.speed, amplitude=args.amplitude, band=band, duration=duration,
+        excitation="chirp" if chirp else "multisine", period=args.period, periods=args.periods,
+    )  # fmt: skip
     for option in ("--speed", "--duration", "--amplitude"):
         warn_atypical("fidelity", option, getattr(args, option[2:]))
     inputs = resolve(scenario, folder)
     result = simulate(inputs, rng=np.random.default_rng(scenario.seed), keep=True)
-    feel = rendered_feel(
-        result.t, result["tau_r"], result["theta_h"], result["delta"], inputs.sharp,
-        args.speed, band=band,
-    )  # fmt: skip
+    signals = (result.t, result["tau_r"], result["theta_h"], result["delta"], inputs.sharp)
+    probe = scenario.rider.probe
+    if isinstance(probe, MultisineProfile):
+        feel = periodic_feel(*signals, args.speed, probe=probe, band=band)
+    else:
+        feel = rendered_feel(*signals, args.speed, band=band)
+    if not np.all(np.abs(feel.rendered) > 0.0):
+        friction = inputs.true_handlebar.beta_s if scenario.handlebar.friction else 0.0
+        raise MotosimError(
+            f"--amplitude {args.amplitude:g}: the handlebar did not move, held by its dry "
+            f"friction ({friction:.3g} N*m) with the rider's torque unobservable; expected a "
+            "probe that breaks it away"
+        )
     low, high = max(band[0], _TARGET_BAND[0]), min(band[1], _TARGET_BAND[1])
     magnitude, phase = feel.worst(low, high)
     payload = {
         "speed": args.speed,
+        "excitation": probe.kind if probe is not None else "",
         "band_hz": list(band),
         "worst_in": [low, high],
         "worst_magnitude_error_db": magnitude,
         "worst_phase_error_deg": phase,
+        "median_magnitude_error_db": feel.median(low, high)[0],
+        "median_phase_error_deg": feel.median(low, high)[1],
         "frequency_hz": feel.frequency.tolist(),
         "magnitude_error_db": feel.magnitude_error_db.tolist(),
         "phase_error_deg": feel.phase_error_deg.tolist(),
@@ -108,8 +167,14 @@ def run(args: argparse.Namespace) -> int:
         print_json(payload)
         return 0
     print(f"rendered steering feel at {args.speed:g} m/s: theta_h / tau_r against delta / tau_r")
+    print(
+        f"  {payload['excitation']} of {args.amplitude:g} N*m peak over {band[0]:g}-{band[1]:g} Hz"
+    )
     print(f"  worst over {low:g}-{high:g} Hz: {magnitude:.2f} dB, {phase:.1f} deg")
-    print(f"  {'f [Hz]':>7} {'error [dB]':>11} {'error [deg]':>12} {'coherence':>10}")
+    median = feel.median(low, high)
+    print(f"  median over {low:g}-{high:g} Hz: {median[0]:.2f} dB, {median[1]:.1f} deg")
+    title = "coherence" if chirp else "periodic"
+    print(f"  {'f [Hz]':>7} {'error [dB]':>11} {'error [deg]':>12} {title:>10}")
     for k in range(0, feel.frequency.size, max(1, feel.frequency.size // 12)):
         print(
             f"  {feel.frequency[k]:7.2f} {feel.magnitude_error_db[k]:11.2f} "

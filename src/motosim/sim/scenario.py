@@ -33,7 +33,9 @@ so that an error is one line naming the key, the value and what was expected. Th
 
 Profiles (rider torque, drive, brake, wind) are tables with ``kind``: ``constant`` (value),
 ``steps`` (times, values: the value after each time), ``square`` (low, high, period, start),
-``chirp`` (amplitude, f0, f1, start, offset) or ``csv`` (file, column; sampled and held).
+``chirp`` (amplitude, f0, f1, start, offset), ``multisine`` (amplitude, f0, f1, period,
+per_decade, start: a periodic sum of log-spaced sines) or ``csv`` (file, column; sampled and
+held).
 Paths have ``kind``: ``straight``, ``lane_change`` (offset, length, start), ``slalom``
 (amplitude, wavelength, cycles, start), ``turn`` (radius, angle, start, transition),
 ``avoidance`` (offset, length, hold, start), ``opendrive`` (file, road: the reference line
@@ -76,6 +78,7 @@ __all__ = [
     "LaneChangePath",
     "Measurement",
     "Motorcycle",
+    "MultisineProfile",
     "OpenDrivePath",
     "PathSpec",
     "Profile",
@@ -206,6 +209,58 @@ class ChirpProfile:
 
 
 @dataclass(frozen=True, slots=True)
+class MultisineProfile:
+    """A periodic multisine of peak ``amplitude`` with log-spaced lines in ``f0``-``f1`` [Hz].
+
+    The lines are harmonics of 1 / ``period``, about ``per_decade`` per decade, each of the
+    same amplitude with Schroeder's phases (a low crest factor), the sum scaled to the peak
+    ``amplitude``; zero before ``start`` [s]. Periodic, so that a response can be averaged over
+    whole periods without leakage (Pintelon & Schoukens, *System Identification: A Frequency
+    Domain Approach*, 2nd ed., 2012, sections 2.5 and 3.4).
+    """
+
+    amplitude: float
+    f0: float
+    f1: float
+    period: float
+    per_decade: int = 12
+    start: float = 0.0
+    kind: ClassVar[str] = "multisine"
+
+    def __post_init__(self) -> None:
+        _check("amplitude", self.amplitude)
+        _check("period", self.period, low=0.0, low_open=True, high=3600.0, unit="s")
+        _check("f0", self.f0, low=1.0 / self.period, unit="Hz")
+        _check("f1", self.f1, low=self.f0, low_open=True, high=1e4, unit="Hz")
+        _check("per_decade", self.per_decade, low=1, high=1000)
+        _check("start", self.start, unit="s")
+
+    def frequencies(self) -> Array:
+        """The excited lines [Hz]: distinct harmonics of 1 / ``period`` nearest a log grid."""
+        n = max(2, math.ceil(self.per_decade * math.log10(self.f1 / self.f0)) + 1)
+        k = np.unique(np.round(np.geomspace(self.f0, self.f1, n) * self.period))
+        k = k[(k >= math.ceil(self.f0 * self.period - 1e-9)) & (k > 0)]
+        return np.asarray(k / self.period, dtype=np.float64)
+
+    def _wave(self, t: Array) -> Array:
+        f = self.frequencies()
+        k = np.arange(1, f.size + 1)
+        phase = -np.pi * k * (k - 1) / f.size  # Schroeder's phases
+        return np.asarray(np.cos(2 * np.pi * np.outer(t, f) + phase).sum(axis=1), dtype=float)
+
+    def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
+        """Values at the times ``t`` [s]."""
+        grid = np.linspace(0.0, self.period, 4096, endpoint=False)
+        peak = float(np.max(np.abs(self._wave(grid))))
+        tt = np.asarray(t, dtype=float) - self.start
+        wave = np.zeros_like(tt)
+        on = tt >= 0.0
+        for chunk in np.array_split(np.flatnonzero(on), max(1, on.sum() // 20000)):
+            wave[chunk] = self._wave(tt[chunk])
+        return np.asarray(self.amplitude * wave / peak, dtype=np.float64)
+
+
+@dataclass(frozen=True, slots=True)
 class CsvProfile:
     """The column ``column`` of the CSV log ``file`` (relative to the scenario), held."""
 
@@ -224,11 +279,20 @@ class CsvProfile:
         return np.asarray(log[self.column][idx], dtype=np.float64)
 
 
-Profile = ConstantProfile | StepsProfile | SquareProfile | ChirpProfile | CsvProfile
+Profile = (
+    ConstantProfile | StepsProfile | SquareProfile | ChirpProfile | MultisineProfile | CsvProfile
+)
 """A signal of time, tagged by its ``kind``."""
 PROFILES: dict[str, type[Profile]] = {
     cls.kind: cls
-    for cls in (ConstantProfile, StepsProfile, SquareProfile, ChirpProfile, CsvProfile)
+    for cls in (
+        ConstantProfile,
+        StepsProfile,
+        SquareProfile,
+        ChirpProfile,
+        MultisineProfile,
+        CsvProfile,
+    )
 }
 """Profile types by ``kind``."""
 
@@ -619,6 +683,8 @@ def _profile_peak(profile: Any) -> float:
         return max(abs(profile.low), abs(profile.high))
     if isinstance(profile, ChirpProfile):
         return abs(profile.amplitude) + abs(profile.offset)
+    if isinstance(profile, MultisineProfile):
+        return abs(profile.amplitude)
     if isinstance(profile, StepsProfile):
         return max((abs(v) for v in profile.values), default=0.0)
     return 0.0
