@@ -183,9 +183,9 @@ def table(runs: str, thresholds: str = "telban", causal: bool = True) -> str:
         r = load_result(folder)
         series = TimeSeries(r.t, r.data, r.names)
         road = result_road(r.metadata, origin=name)
-        for algorithm, preview in (("washout", None), ("mpc", None), ("mpc", road)):
-            if algorithm == "mpc" and preview is None and road is not None and not causal:
-                continue
+        causal_mpc = [("mpc", None)] if causal or road is None else []
+        with_road = [("mpc", road)] if road is not None else []
+        for algorithm, preview in [("washout", None), *causal_mpc, *with_road]:
             run = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0,  # type: ignore[arg-type]
                       road=preview)  # fmt: skip
             s = run.score
@@ -278,6 +278,7 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
 
     from motosim.cueing import cue
     from motosim.io.results import load_result
+    from motosim.sim.road import result_road
 
     cfg = load_platform("simacom_platform")
     model = TELBAN_CARDULLO_2005
@@ -289,8 +290,11 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
     for name in names.split(","):
         r = load_result(Path(runs) / name)
         series = TimeSeries(r.t, r.data, r.names)
-        for algorithm in ("washout", "mpc"):
-            run = cue(cfg, series, model, algorithm=algorithm, rate=100.0)  # type: ignore[arg-type]
+        road = result_road(r.metadata, origin=name)
+        with_road = [("mpc", road)] if road is not None else []
+        for algorithm, preview in [("washout", None), ("mpc", None), *with_road]:
+            run = cue(cfg, series, model, algorithm=algorithm, rate=100.0, road=preview)  # type: ignore[arg-type]
+            how = algorithm + (", road preview" if preview is not None else "")
             t, roll = run.commands.t, np.degrees(run.commands["phi_s"])
             for i, channel in enumerate(run.perceived_vehicle.names):
                 thr = model.thresholds[i]
@@ -301,7 +305,7 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
                 edges = np.flatnonzero(np.diff(false.astype(np.int8)))
                 for a, b in zip(edges[::2], edges[1::2], strict=True):
                     lines.append(
-                        f"| {name} | {algorithm} | {channel} | {t[a]:.2f}-{t[b - 1]:.2f} | "
+                        f"| {name} | {how} | {channel} | {t[a]:.2f}-{t[b - 1]:.2f} | "
                         f"{b - a} | {'+' if felt_p[a] > 0 else '-'} | {v[a] / thr:+.2f} to "
                         f"{v[b - 1] / thr:+.2f} | {roll[a]:+.1f} to {roll[b - 1]:+.1f} |"
                     )

@@ -6,16 +6,21 @@ road's curvature ``kappa`` at the arc length reached ``tau`` seconds ahead is::
 
     phi_p(tau) = atan(v^2 kappa(s + v (tau + lead)) / g)
 
-(the steady-turn balance of a thin-tyred motorcycle, e.g. Cossalter, *Motorcycle Dynamics*,
-2nd ed., 2006, ch. 4), with ``lead`` the time by which the rider's lean leads the road's
-curvature under the wheels (a fitted constant, :data:`LEAD`). Its derivatives in ``tau`` give
-the predicted roll rate at the head ``p = phi_p'`` and lateral specific force ``f_y = h
-phi_p'' + x v^2 kappa'(s)`` (the head's tangential acceleration about the roll axis and the
-yaw acceleration at the head's offset ``x`` ahead of the rear contact, the rigid-body
-kinematics of :mod:`motosim.cueing.head`; in the steady turn's lean the centripetal
-acceleration and gravity balance, so no imbalance is predicted). The MPC
-(:meth:`motosim.cueing.mpc.MpcCueing.step`) plans the roll axis with this prediction, the
-difference between the present measured motion and the preview fading over its first steps.
+(the roll equilibrium of a steady turn of a thin-tyred motorcycle, e.g. Cossalter,
+*Motorcycle Dynamics*, 2nd ed., 2006, on steady turning), with ``lead`` the time by which
+the rider's lean leads the road's curvature under the wheels (a fitted constant,
+:data:`LEAD`). Its derivatives in ``tau`` (central differences of :data:`SMOOTHING`) give
+the predicted roll rate at the head ``p = phi_p'`` and lateral specific force ``f_y =
+SWAY_HEIGHT phi_p'' + SWAY_X psi_p''`` with ``psi_p' = v kappa``: the head's tangential
+accelerations from the roll and the yaw (rigid-body kinematics, :mod:`motosim.cueing.head`),
+with lengths fitted on recorded runs (:data:`SWAY_HEIGHT`, :data:`SWAY_X`); in the steady
+turn's lean the centripetal acceleration and gravity balance, so no imbalance is predicted.
+The MPC (:meth:`motosim.cueing.mpc.MpcCueing.step`) plans the roll axis with this
+prediction, the difference between the present measured motion and the preview fading over
+its first steps. MPC cueing for a vehicle on a predefined path predicts its references the
+same way (the MPMCA of Drop & Olivari, predictivecueing.com); an oracle prediction of the
+future reference lowers the cueing's delay and raises its correlation against a constant
+one (*SIMULATION*, SAGE, doi:10.1177/0037549718815972).
 
 This module knows a road only as arrays (positions and curvature every ``ds`` metres of arc
 length): the scenario's path is built where it is known (:mod:`motosim.sim` and the
@@ -46,13 +51,13 @@ Array = NDArray[np.float64]
 
 GRAVITY = 9.81  # [m/s^2]
 LEAD = 0.1
-"""Time [s] by which the rider's lean leads the curvature of the road under the wheels: the
-lead of least RMS roll-rate error (0, 0.05, ..., 0.4 s) on the lane change, slalom,
-obstacle avoidance and turn of docs/guide/cueing.md (0.1 s on each)."""
+"""Time [s] by which the rider's lean leads the curvature of the road under the wheels: of
+0, 0.05, ..., 0.2 s, the least RMS roll-rate error 1 s ahead summed over the lane change,
+slalom, obstacle avoidance and turn of docs/guide/cueing.md (each 0.05 or 0.1 s)."""
 SMOOTHING = 0.2
 """Half-width [s] of the finite differences that give the lean's rate and acceleration:
-they smooth the road's curvature as a rider's lean does (0.02 to 0.3 s measured; 0.2 s
-gives the least lateral-force error on the lane change and the obstacle avoidance)."""
+they smooth the road's curvature as a rider's lean does (0.02, 0.05, 0.1, 0.2 s measured;
+0.2 s gives the least lateral-force error on the lane change and the obstacle avoidance)."""
 SWAY_HEIGHT = 0.70
 """Lateral specific force at the head per unit roll acceleration [m]: least squares of the
 recorded head force on the roll and yaw accelerations on the lane change at 20 m/s (0.70;

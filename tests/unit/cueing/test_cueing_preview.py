@@ -27,7 +27,7 @@ def _road(kappa: np.ndarray, ds: float = 0.05) -> Road:
 
 def test_steady_turn_and_curvature_ramp_against_the_steady_turn_lean() -> None:
     # the lean of a steady turn phi = atan(v^2 kappa / g) (Cossalter, Motorcycle Dynamics,
-    # 2006, ch. 4) on a curvature ramp kappa = c s: its rate in the time ahead is
+    # 2006, steady turning) on a curvature ramp kappa = c s: its rate in the time ahead is
     # d phi / d tau = (v^3 c / g) / (1 + (v^2 kappa / g)^2), and no force in a steady turn
     s = 0.05 * np.arange(40_000)
     c, v = 1e-5, 20.0
