@@ -682,7 +682,17 @@ def apply_mpc(
     -------
     targets, rates : ndarray, shape (n, 3)
         Platform roll, pitch, yaw targets [rad] and their planned rates [rad/s].
+
+    Raises
+    ------
+    MotosimError
+        If ``preview`` is not one horizon per sample; if osqp is missing.
     """
+    N = design.axes[0].P.shape[0]
+    if preview is not None and preview.shape != (vehicle.t.size, N + 1, 2):
+        raise MotosimError(
+            f"road preview of shape {preview.shape}; expected {(vehicle.t.size, N + 1, 2)}"
+        )
     mpc = MpcCueing(design)
     motion = np.column_stack([vehicle[name] for name in MOTION_INPUTS])
     ref = np.asarray(reference, dtype=np.float64)

@@ -84,6 +84,15 @@ def test_the_plan_follows_the_previewed_roll_and_no_preview_is_the_causal_plan()
     assert out[1][0] > 1.1 * out[0][0] > 0.0
     assert out[1][0] > 1.1 * out[2][0]  # the causal plan's roll rate fades instead
     np.testing.assert_array_equal(out[3], out[2])
+    from motosim.cueing.head import vehicle_motion
+    from motosim.cueing.mpc import apply_mpc
+
+    t = np.arange(0.0, 0.1, 0.01)
+    still = TimeSeries(t, np.column_stack([20 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t]),
+                       ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))  # fmt: skip
+    with pytest.raises(MotosimError, match=r"road preview of shape \(10, 20, 2\)"):
+        apply_mpc(design, vehicle_motion(still, cfg.rider), np.zeros((10, 3)),
+                  preview=np.zeros((10, 20, 2)))  # fmt: skip
 
 
 def test_cue_needs_the_positions_for_a_road() -> None:
