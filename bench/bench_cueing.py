@@ -77,6 +77,20 @@ def run() -> dict[str, float]:
         times.append(time.perf_counter() - start)
         cpu.append(time.thread_time() - start_cpu)
     ms, cpu_ms = np.array(times) * 1e3, np.array(cpu) * 1e3
+    # the same ride with a road preview: a slalom's road of the ride's lean
+    from motosim.cueing.preview import Road, road_preview
+
+    s_road = np.arange(0.0, 2000.0, 0.05)
+    road = Road(0.05, s_road, 0 * s_road, 0.004 * np.sin(2 * np.pi * s_road / 60.0))
+    arc = np.cumsum(ride["v_x"]) * dt
+    ahead = road_preview(road, arc, ride["v_x"], horizon=cfg.mpc.horizon, step=cfg.mpc.step)
+    mpc.reset()
+    cpu_preview = []
+    for k in range(motion.shape[0]):
+        start_cpu = time.thread_time()
+        mpc.step(motion[k], np.zeros(3), None, ahead[k])
+        cpu_preview.append(time.thread_time() - start_cpu)
+    preview_ms = np.array(cpu_preview) * 1e3
 
     def _score() -> None:
         v = vehicle_motion(ride, cfg.rider)
@@ -92,7 +106,11 @@ def run() -> dict[str, float]:
         "MPC step median [ms]": float(np.median(ms)),
         "MPC step p99 [ms]": float(np.percentile(ms, 99)),
         "MPC step p99, thread CPU time [ms]": float(np.percentile(cpu_ms, 99)),
-        "MPC fallbacks in 6000 steps": float(mpc.fallbacks),
+        "MPC step with a road preview, median, thread CPU time [ms]": float(np.median(preview_ms)),
+        "MPC step with a road preview, p99, thread CPU time [ms]": float(
+            np.percentile(preview_ms, 99)
+        ),
+        "MPC fallbacks in 12000 steps": float(mpc.fallbacks),
         "head motion + score of a 60 s run at 100 Hz [s]": best(_score),
     }
 
@@ -134,18 +152,21 @@ OTHERS = ("turn_30", "straight_50_gust", "lane_change_30", "slalom_15")
 """Unseen checks: two scenarios of scenarios/ and two of bench/scenarios/ at other speeds."""
 
 
-def table(runs: str, thresholds: str = "telban") -> str:
+def table(runs: str, thresholds: str = "telban", causal: bool = True) -> str:
     """Markdown table washout vs MPC on result folders ``runs/NAME`` of `motosim simulate`.
 
     Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario
     (``bench/scenarios/NAME.toml`` for the last two of :data:`OTHERS`), then ``python
     bench/bench_cueing.py RUNS`` (``RUNS benson`` to score with the thresholds
-    of Benson et al. 1986, 1989; the MPC still plans with the default model's).
+    of Benson et al. 1986, 1989; the MPC still plans with the default model's). The MPC runs
+    from the present motion only, and, where the run has a path, with the road preview too
+    (``causal=False``: only with the preview there).
     """
     from pathlib import Path
 
     from motosim.cueing import cue
     from motosim.io.results import load_result
+    from motosim.sim.road import result_road
 
     cfg = load_platform("simacom_platform")
     deg = 180 / np.pi
@@ -161,8 +182,12 @@ def table(runs: str, thresholds: str = "telban") -> str:
             continue
         r = load_result(folder)
         series = TimeSeries(r.t, r.data, r.names)
-        for algorithm in ("washout", "mpc"):
-            run = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0)  # type: ignore[arg-type]
+        road = result_road(r.metadata, origin=name)
+        causal_mpc = [("mpc", None)] if causal or road is None else []
+        with_road = [("mpc", road)] if road is not None else []
+        for algorithm, preview in [("washout", None), *causal_mpc, *with_road]:
+            run = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0,  # type: ignore[arg-type]
+                      road=preview)  # fmt: skip
             s = run.score
             if thresholds == "benson":
                 s = score(BENSON_1986_1989, run.vehicle, run.platform, cfg.platform,
@@ -171,8 +196,9 @@ def table(runs: str, thresholds: str = "telban") -> str:
             false = 100 * np.mean([c.false_cue_share for c in ch.values()])
             missing = 100 * np.mean([c.missing_cue_share for c in ch.values()])
             label = name + ("" if name in TRAINING else " (not training)")
+            how = algorithm + (", road preview" if preview is not None else "")
             lines.append(
-                f"| {label} | {algorithm} | {s.violations} | {false:.1f} | {missing:.1f} | "
+                f"| {label} | {how} | {s.violations} | {false:.1f} | {missing:.1f} | "
                 f"{ch['roll'].rms_error * deg:.2f} | {ch['pitch'].rms_error * deg:.2f} | "
                 f"{ch['yaw'].rms_error * deg:.2f} | {ch['sway'].rms_error:.2f} | "
                 f"{ch['surge'].rms_error:.2f} |"
@@ -252,6 +278,7 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
 
     from motosim.cueing import cue
     from motosim.io.results import load_result
+    from motosim.sim.road import result_road
 
     cfg = load_platform("simacom_platform")
     model = TELBAN_CARDULLO_2005
@@ -263,8 +290,11 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
     for name in names.split(","):
         r = load_result(Path(runs) / name)
         series = TimeSeries(r.t, r.data, r.names)
-        for algorithm in ("washout", "mpc"):
-            run = cue(cfg, series, model, algorithm=algorithm, rate=100.0)  # type: ignore[arg-type]
+        road = result_road(r.metadata, origin=name)
+        with_road = [("mpc", road)] if road is not None else []
+        for algorithm, preview in [("washout", None), ("mpc", None), *with_road]:
+            run = cue(cfg, series, model, algorithm=algorithm, rate=100.0, road=preview)  # type: ignore[arg-type]
+            how = algorithm + (", road preview" if preview is not None else "")
             t, roll = run.commands.t, np.degrees(run.commands["phi_s"])
             for i, channel in enumerate(run.perceived_vehicle.names):
                 thr = model.thresholds[i]
@@ -275,7 +305,7 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
                 edges = np.flatnonzero(np.diff(false.astype(np.int8)))
                 for a, b in zip(edges[::2], edges[1::2], strict=True):
                     lines.append(
-                        f"| {name} | {algorithm} | {channel} | {t[a]:.2f}-{t[b - 1]:.2f} | "
+                        f"| {name} | {how} | {channel} | {t[a]:.2f}-{t[b - 1]:.2f} | "
                         f"{b - a} | {'+' if felt_p[a] > 0 else '-'} | {v[a] / thr:+.2f} to "
                         f"{v[b - 1] / thr:+.2f} | {roll[a]:+.1f} to {roll[b - 1]:+.1f} |"
                     )

@@ -694,6 +694,7 @@ def _commands(tmp: Path, result: Path) -> dict[str, Command]:
                 "(positional)": "in_dir",
                 "--platform": "in",
                 "--algorithm": "text",
+                "--preview": "text",
                 "--rate": "number",
                 "--out": "out_dir",
             },

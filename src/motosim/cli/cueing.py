@@ -17,6 +17,9 @@ __all__ = ["ALGORITHMS", "register", "score_summary"]
 ALGORITHMS = ("washout", "mpc")
 """The choices of ``--algorithm``: :data:`motosim.cueing.ALGORITHMS`, written out so that the
 parser is built without importing SciPy (a unit test checks that they are equal)."""
+PREVIEWS = ("road", "none")
+"""The choices of ``--preview``: the MPC plans with the road ahead of the run's virtual rider
+(:mod:`motosim.cueing.preview`), or from the present motion only."""
 
 
 def register(sub: Any) -> None:
@@ -38,6 +41,13 @@ def register(sub: Any) -> None:
         "--platform", default="simacom_platform", help="packaged platform or TOML file"
     )
     parser.add_argument("--algorithm", choices=ALGORITHMS, default="washout")
+    parser.add_argument(
+        "--preview",
+        choices=PREVIEWS,
+        default="road",
+        help="the MPC's prediction: the road ahead of the run's virtual rider (when the run "
+        "has a path), or none (the present motion only)",
+    )
     parser.add_argument(
         "--rate", type=float, default=100.0, help="loop rate [Hz], divides the run's (100)"
     )
@@ -89,12 +99,18 @@ def run(args: argparse.Namespace) -> int:
     series = TimeSeries(result.t, result.data, result.names)
     model = TELBAN_CARDULLO_2005
     warn_atypical("cueing", "--rate", args.rate)
-    outcome = cue(config, series, model, algorithm=args.algorithm, rate=args.rate)
+    road = None
+    if args.algorithm == "mpc" and args.preview == "road":
+        from motosim.sim.road import result_road
+
+        road = result_road(result.metadata, origin=str(args.result))
+    outcome = cue(config, series, model, algorithm=args.algorithm, rate=args.rate, road=road)
     folder = Path(args.out)
     metadata = {
         "source": str(args.result),
         "algorithm": args.algorithm,
         "rate": args.rate,
+        "preview": "road" if road is not None else "none",
         "platform": config,
         "vestibular": model,
     }
@@ -114,10 +130,14 @@ def run(args: argparse.Namespace) -> int:
         str(folder / "commands.png"),
     )
     summary = score_summary(outcome.score)
+    preview = "road" if road is not None else "none"
     if args.json:
-        print_json({"out": str(folder), "algorithm": args.algorithm, "score": summary})
+        print_json(
+            {"out": str(folder), "algorithm": args.algorithm, "preview": preview, "score": summary}
+        )
     else:
-        print(f"{name}: {args.algorithm} commands in {folder} ({summary['violations']} violations)")
+        how = f"{args.algorithm}, road preview" if road is not None else args.algorithm
+        print(f"{name}: {how} commands in {folder} ({summary['violations']} violations)")
         print(f"  {'channel':<8} {'rms':>9} {'corr':>6} {'lag s':>6} {'false %':>8} {'miss %':>7}")
         for channel, cs in outcome.score.channels.items():
             print(

@@ -67,6 +67,17 @@ velocity is turned into the rate each axis must give with the head-frame kinemat
 psi_dot sin(phi) cos(theta)`` means a rolled platform that yaws already gives pitch rate,
 which the pitch plan does not add again (and likewise for roll and yaw).
 
+With a road preview (:mod:`motosim.cueing.preview`: the roll rate and lateral force at
+the head predicted from the road ahead, as a rider sees it), the roll plan's vehicle inputs
+are the previewed ones plus their difference from the present ones, fading over
+``prediction_time``; of the lateral force, the part that the roll and yaw accelerations
+explain (``SWAY_HEIGHT phi_ddot + SWAY_X psi_ddot``) is in that difference and the rest
+(a gust's side force) is held. Each step's mean previewed input drives the vestibular
+models from rest (``T_canal``, ``T_otolith``), added to the free response, and the force
+band's slack costs ``preview_force_false_cue_weight``: the lane change's false lateral cues
+come from not knowing when the rider ends a roll (docs/guide/cueing.md), which the road
+ahead tells.
+
 The condensed QP (``N`` variables) has a constant Hessian and constraint matrix; each step
 updates its linear term and bounds and warm-starts OSQP (Stellato et al., *OSQP: an operator
 splitting solver for quadratic programs*, Math. Prog. Comp. 12, 2020). The first
@@ -88,6 +99,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.cueing.platform import CueingConfig
+from motosim.cueing.preview import SWAY_HEIGHT, SWAY_X
 from motosim.cueing.vestibular import VestibularModel, canal_tf, otolith_tf
 from motosim.errors import MotosimError
 from motosim.timeseries import TimeSeries
@@ -146,6 +158,12 @@ class AxisPlan:
         Height [m] of the rider's head above the motorcycle's roll axis (the ground) for the
         roll plan, whose lateral force has a part ``head_height * roll acceleration`` that
         fades; 0 for pitch and yaw.
+    T_canal, T_otolith : ndarray, shape (N, N)
+        The vehicle's perceived rotation and specific force at steps 1..N per unit input
+        held over each step, from rest (the response to a previewed input, roll only).
+    band_lin_preview : ndarray
+        ``band_lin`` with the force's slack weighted by ``preview_force_false_cue_weight``
+        (used on the steps planned with a preview).
     """
 
     A_loop: Array
@@ -169,6 +187,9 @@ class AxisPlan:
     band_steps: tuple[NDArray[np.intp], ...]
     limits: tuple[float, float, float]
     head_height: float
+    T_canal: Array
+    T_otolith: Array
+    band_lin_preview: Array
 
 
 @dataclass(frozen=True, slots=True)
@@ -216,6 +237,17 @@ def _vehicle_prediction(A: Array, B: Array, C: Array, h: float, N: int, tau: flo
     for k in range(N):
         power = E @ power
         out[k] = C @ power[:n]
+    return out
+
+
+def _forced_response(A: Array, B: Array, C: Array, h: float, N: int) -> Array:
+    """Outputs at steps 1..N of a model from rest, the input held over each step: (N, N)."""
+    Ad, Bd = _discrete(A, B, h)
+    out = np.zeros((N, N))
+    x = Bd.copy()
+    for lag in range(N):  # step k responds to the input of step k - 1 - lag
+        out[np.arange(lag, N), np.arange(N - lag)] = C @ x
+        x = Ad @ x
     return out
 
 
@@ -275,6 +307,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
     band_M, band_E, band_thr = [], [], []
     Nb = min(N, tuning.false_cue_steps)
     band_quad, band_lin, band_steps = [], [], []
+    band_lin_preview = []
     for C, w, ref in rows:
         M = np.einsum("i,kij->kj", C, Gam)  # (N outputs, N inputs)
         E = np.einsum("i,kij->kj", C, Phi)
@@ -294,6 +327,10 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
             lin = (tuning.false_cue_weight if ref == 0 else tuning.force_false_cue_weight) / thr
             band_quad.append(np.full(nk, quad))
             band_lin.append(np.full(nk, lin))
+            lin_p = (
+                tuning.false_cue_weight if ref == 0 else tuning.preview_force_false_cue_weight
+            ) / thr
+            band_lin_preview.append(np.full(nk, lin_p))
         P += w * M.T @ M
         F += w * M.T @ E
         Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
@@ -331,6 +368,9 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         band_steps=tuple(band_steps),
         limits=(limits.angle, rate, limits.accel),
         head_height=config.rider.height if axis == 0 else 0.0,
+        T_canal=_forced_response(Ac, Bc, Cc, h, N),
+        T_otolith=_forced_response(Ao, Bo, Co, h, N),
+        band_lin_preview=np.concatenate(band_lin_preview),
     )
 
 
@@ -394,6 +434,7 @@ class MpcCueing:
         self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
         self._feed = np.zeros(3)
         self._roll_rate = math.nan  # the last step's roll rate, for the roll acceleration
+        self._yaw_rate = math.nan  # the last step's yaw rate, for the previewed plan
         self._feed_canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
         self._maps = [self._stack(plan) for plan in design.axes]
         self.fallbacks = 0
@@ -493,8 +534,15 @@ class MpcCueing:
         for x in (*self._state, *self._canal, *self._otolith, self._feed, *self._feed_canal):
             x[:] = 0.0
         self._roll_rate = math.nan
+        self._yaw_rate = math.nan
 
-    def step(self, motion: Array, reference: Array, onset: Array | None = None) -> Array:
+    def step(
+        self,
+        motion: Array,
+        reference: Array,
+        onset: Array | None = None,
+        preview: Array | None = None,
+    ) -> Array:
         """One loop step.
 
         Parameters
@@ -510,6 +558,10 @@ class MpcCueing:
             Row 0: roll, pitch and yaw angles [rad] fed through to the targets beside the
             plan (the suspension's pitch onset); row 1: the motorcycle's head-frame angular
             velocity [rad/s] they render, which the plan then leaves out of its tracking.
+        preview : ndarray, shape (N + 1, 2), optional
+            The roll rate [rad/s] and lateral specific force [m/s^2] at the head predicted
+            from the road at 0, h, ..., N h ahead (:func:`motosim.cueing.preview.road_preview`);
+            the roll plan then follows it (module docstring). None: from the present motion.
 
         Returns
         -------
@@ -547,12 +599,34 @@ class MpcCueing:
                 [x0, self._canal[j], (0.0, w_c), self._otolith[j], (held, fading),
                  self._feed_canal[j], (0.0, feed_rate), (reference[j] - feed,)]
             )  # fmt: skip
-            y = K @ v
             N = plan.P.shape[0]
             nb = plan.band_M.shape[0]
+            band_lin = plan.band_lin
+            if j == 0 and preview is not None:
+                # the previewed input plus the difference from the present one, fading; of
+                # the lateral force, the part the previewed motion explains fades too, the
+                # rest (a gust's side force) is held
+                yaw_accel = (motion[2] - self._yaw_rate) / self.design.dt
+                dynamic = SWAY_HEIGHT * (alpha if math.isfinite(alpha) else 0.0) + SWAY_X * (
+                    yaw_accel if math.isfinite(yaw_accel) else 0.0
+                )
+                vp = v.copy()
+                c_fade, o_held = x0.size + nc + 1, x0.size + nc + no + 2
+                vp[c_fade - 1 : c_fade + 1] = 0.0, w_c - preview[0, 0]
+                vp[o_held : o_held + 2] = w_o - dynamic, dynamic - preview[0, 1]
+                y = K @ vp
+                mid = 0.5 * (preview[:-1] + preview[1:])  # each step's mean input
+                tc, to = plan.T_canal @ mid[:, 0], plan.T_otolith @ mid[:, 1]
+                y[:N] -= plan.W_canal @ tc + plan.W_otolith @ to
+                nr = plan.band_steps[0].size
+                y[N : N + nr] += tc[plan.band_steps[0]]
+                y[N + nr : N + nb] += to[plan.band_steps[1]]
+                band_lin = plan.band_lin_preview
+            else:
+                y = K @ v
             r_b = y[N : N + nb]
             felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
-            q = np.concatenate([y[:N], plan.band_lin])
+            q = np.concatenate([y[:N], band_lin])
             lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], y[3 * N + nb :], felt)
             nxt = U @ v
             self._canal[j], self._otolith[j] = nxt[:nc], nxt[nc : nc + no]
@@ -577,11 +651,16 @@ class MpcCueing:
             self._state[j] = plan.A_loop @ x0 + plan.B_loop * u
             out[j] = self._state[j][0] + feed
             self.rates[j] = self._state[j][1] + feed_rate
+        self._yaw_rate = float(motion[2])
         return out
 
 
 def apply_mpc(
-    design: MpcDesign, vehicle: TimeSeries, reference: Array, onset: Array | None = None
+    design: MpcDesign,
+    vehicle: TimeSeries,
+    reference: Array,
+    onset: Array | None = None,
+    preview: Array | None = None,
 ) -> tuple[Array, Array]:
     """Run the MPC cueing over a whole series from rest.
 
@@ -596,17 +675,34 @@ def apply_mpc(
         Angle references [rad] (see :meth:`MpcCueing.step`).
     onset : ndarray, shape (n, 2, 3), optional
         The onsets fed through, per sample (see :meth:`MpcCueing.step`).
+    preview : ndarray, shape (n, N + 1, 2), optional
+        The road preview per sample (see :meth:`MpcCueing.step`).
 
     Returns
     -------
     targets, rates : ndarray, shape (n, 3)
         Platform roll, pitch, yaw targets [rad] and their planned rates [rad/s].
+
+    Raises
+    ------
+    MotosimError
+        If ``preview`` is not one horizon per sample; if osqp is missing.
     """
+    N = design.axes[0].P.shape[0]
+    if preview is not None and preview.shape != (vehicle.t.size, N + 1, 2):
+        raise MotosimError(
+            f"road preview of shape {preview.shape}; expected {(vehicle.t.size, N + 1, 2)}"
+        )
     mpc = MpcCueing(design)
     motion = np.column_stack([vehicle[name] for name in MOTION_INPUTS])
     ref = np.asarray(reference, dtype=np.float64)
     targets, rates = np.empty((motion.shape[0], 3)), np.empty((motion.shape[0], 3))
     for k in range(motion.shape[0]):
-        targets[k] = mpc.step(motion[k], ref[k], None if onset is None else onset[k])
+        targets[k] = mpc.step(
+            motion[k],
+            ref[k],
+            None if onset is None else onset[k],
+            None if preview is None else preview[k],
+        )
         rates[k] = mpc.rates
     return targets, rates

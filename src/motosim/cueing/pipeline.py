@@ -14,6 +14,7 @@ from motosim.cueing.filters import run_section
 from motosim.cueing.head import check_rate, platform_motion, vehicle_motion
 from motosim.cueing.limits import actuator_response, apply_limits, design_limits
 from motosim.cueing.platform import CueingConfig
+from motosim.cueing.preview import Road, arc_length, road_preview
 from motosim.cueing.vestibular import CueingScore, VestibularModel, perceive, score
 from motosim.cueing.washout import WASHOUT_OUTPUTS, apply_washout, design_washout
 from motosim.errors import MotosimError
@@ -82,6 +83,7 @@ def cue(
     algorithm: Literal["washout", "mpc"] = "washout",
     rate: float | None = None,
     params: SharpParameters | None = None,
+    road: Road | None = None,
 ) -> CueingRun:
     """Cue the platform from a recorded run and score it.
 
@@ -99,6 +101,11 @@ def cue(
         Loop rate [Hz], an integer divisor of the run's rate; default the run's rate.
     params : SharpParameters, optional
         The motorcycle, for eq. (2) when the run has ``tau_d`` and ``tau_b``.
+    road : Road, optional
+        The road the run's rider follows: the MPC then plans its roll with the motion
+        predicted from the road ahead of the run's position ``x``, ``y``
+        (:mod:`motosim.cueing.preview`); without it the MPC plans from the present motion
+        only. Ignored by the washout.
 
     Returns
     -------
@@ -108,7 +115,8 @@ def cue(
     Raises
     ------
     MotosimError
-        On an unknown algorithm, a bad rate or missing signals.
+        On an unknown algorithm, a bad rate or missing signals (``x`` and ``y`` with a
+        ``road``).
     """
     if algorithm not in ALGORITHMS:
         raise MotosimError(
@@ -130,7 +138,23 @@ def cue(
         onset = np.zeros((targets.shape[0], 2, 3))
         onset[:, 0, 1] = run_section(np.asarray(washout.pitch_onset), vehicle["theta"])
         onset[:, 1, 1] = vehicle["theta_dot"] * np.cos(run["phi"])
-        targets, rates = apply_mpc(design_mpc(config, model, dt), vehicle, targets, onset)
+        preview = None
+        if road is not None:
+            missing = [name for name in ("x", "y") if name not in run.names]
+            if missing:
+                raise MotosimError(
+                    f"road preview of a run without {' and '.join(missing)}; expected the "
+                    "positions of a `motosim simulate` result"
+                )
+            tuning = config.mpc
+            preview = road_preview(
+                road,
+                arc_length(road, run["x"], run["y"]),
+                run["v_x"],
+                horizon=tuning.horizon,
+                step=tuning.step,
+            )
+        targets, rates = apply_mpc(design_mpc(config, model, dt), vehicle, targets, onset, preview)
     limited = apply_limits(design_limits(config.platform, dt), targets, rates)
     horizon = horizon_gain * run["phi"] - limited[:, 0]
     commands = TimeSeries(run.t, np.column_stack([limited, horizon]), COMMAND_SIGNALS)

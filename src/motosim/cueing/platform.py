@@ -228,6 +228,9 @@ class MpcTuning:
     force_false_cue_weight : float
         Weight of the slack of the specific-force false-cue constraints (linear, divided by
         the threshold), over the whole horizon.
+    preview_force_false_cue_weight : float
+        The same for the roll axis on a road preview (:mod:`motosim.cueing.preview`): the
+        predicted lateral force is better known, and a heavier band costs less roll.
     """
 
     horizon: int
@@ -244,6 +247,7 @@ class MpcTuning:
     false_cue_weight: float
     false_cue_steps: int
     force_false_cue_weight: float
+    preview_force_false_cue_weight: float
 
     def __post_init__(self) -> None:
         if (
@@ -263,6 +267,7 @@ class MpcTuning:
             "pitch_angle_weight",
             "false_cue_weight",
             "force_false_cue_weight",
+            "preview_force_false_cue_weight",
         ):
             _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
         steps = self.false_cue_steps
@@ -326,6 +331,7 @@ _MPC_KEYS = {
     "pitch_angle_weight": 1.0,
     "false_cue_weight": 1.0,
     "force_false_cue_weight": 1.0,
+    "preview_force_false_cue_weight": 1.0,
 }
 
 
@@ -430,10 +436,11 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
             raise MotosimError(f"{origin}: missing key 'false_cue_steps' in [mpc]")
         steps = mpc_table.pop("false_cue_steps")
         (step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge, pitch_angle,
-         false_cue, force_false_cue) = _numbers(mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
+         false_cue, force_false_cue, preview_force) = _numbers(
+            mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
         mpc = MpcTuning(
             horizon, step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge,
-            pitch_angle, false_cue, steps, force_false_cue,
+            pitch_angle, false_cue, steps, force_false_cue, preview_force,
         )  # fmt: skip
     except MotosimError as err:
         message = str(err)

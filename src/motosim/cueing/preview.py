@@ -1,0 +1,192 @@
+"""Road preview: the motorcycle's motion at the head predicted from the road ahead.
+
+A training scenario's road is known in advance, as a rider sees it ahead. From the arc length
+``s`` the motorcycle has reached and its present speed ``v``, the lean of a steady turn of the
+road's curvature ``kappa`` at the arc length reached ``tau`` seconds ahead is::
+
+    phi_p(tau) = atan(v^2 kappa(s + v (tau + lead)) / g)
+
+(the roll equilibrium of a steady turn of a thin-tyred motorcycle, e.g. Cossalter,
+*Motorcycle Dynamics*, 2nd ed., 2006, on steady turning), with ``lead`` the time by which
+the rider's lean leads the road's curvature under the wheels (a fitted constant,
+:data:`LEAD`). Its derivatives in ``tau`` (central differences of :data:`SMOOTHING`) give
+the predicted roll rate at the head ``p = phi_p'`` and lateral specific force ``f_y =
+SWAY_HEIGHT phi_p'' + SWAY_X psi_p''`` with ``psi_p' = v kappa``: the head's tangential
+accelerations from the roll and the yaw (rigid-body kinematics, :mod:`motosim.cueing.head`),
+with lengths fitted on recorded runs (:data:`SWAY_HEIGHT`, :data:`SWAY_X`); in the steady
+turn's lean the centripetal acceleration and gravity balance, so no imbalance is predicted.
+The MPC (:meth:`motosim.cueing.mpc.MpcCueing.step`) plans the roll axis with this
+prediction, the difference between the present measured motion and the preview fading over
+its first steps. MPC cueing for a vehicle on a predefined path predicts its references the
+same way (the MPMCA of Drop & Olivari, predictivecueing.com); an oracle prediction of the
+future reference lowers the cueing's delay and raises its correlation against a constant
+one (*SIMULATION*, SAGE, doi:10.1177/0037549718815972).
+
+This module knows a road only as arrays (positions and curvature every ``ds`` metres of arc
+length): the scenario's path is built where it is known (:mod:`motosim.sim` and the
+``motosim cueing`` command), and passed in. A rider who leaves the road's line (a free ride,
+a rider-torque scenario) breaks the preview: there is none.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim.errors import MotosimError
+
+__all__ = [
+    "LEAD",
+    "PREVIEW_SIGNALS",
+    "SMOOTHING",
+    "SWAY_HEIGHT",
+    "SWAY_X",
+    "Road",
+    "arc_length",
+    "road_preview",
+]
+
+Array = NDArray[np.float64]
+
+GRAVITY = 9.81  # [m/s^2]
+LEAD = 0.1
+"""Time [s] by which the rider's lean leads the curvature of the road under the wheels: of
+0, 0.05, ..., 0.2 s, the least RMS roll-rate error 1 s ahead summed over the lane change,
+slalom, obstacle avoidance and turn of docs/guide/cueing.md (each 0.05 or 0.1 s)."""
+SMOOTHING = 0.2
+"""Half-width [s] of the finite differences that give the lean's rate and acceleration:
+they smooth the road's curvature as a rider's lean does (0.02, 0.05, 0.1, 0.2 s measured;
+0.2 s gives the least lateral-force error on the lane change and the obstacle avoidance)."""
+SWAY_HEIGHT = 0.70
+"""Lateral specific force at the head per unit roll acceleration [m]: least squares of the
+recorded head force on the roll and yaw accelerations on the lane change at 20 m/s (0.70;
+0.71-0.76 on the lane change at 30 m/s, the slalom and the obstacle avoidance). Below the
+head's height (1.45 m): the tyres' side force that rolls the motorcycle also pushes the
+contact point sideways, so the head moves as if the roll axis were 0.75 m up."""
+SWAY_X = 0.90
+"""Lateral specific force at the head per unit yaw acceleration [m]: the same fit (0.89-0.91
+on the four runs; the head's offset ahead of the rear contact is 1.0 m)."""
+PREVIEW_SIGNALS = ("omega_x", "f_y")
+"""What :func:`road_preview` predicts, in order: roll rate [rad/s] and lateral specific
+force [m/s^2] at the head."""
+
+
+@dataclass(frozen=True, slots=True)
+class Road:
+    """A road's line sampled every ``ds`` metres of arc length (SAE axes seen from above).
+
+    Attributes
+    ----------
+    ds : float
+        Spacing [m].
+    x, y : ndarray, shape (n,)
+        Position [m] of the line at ``s = k ds``.
+    kappa : ndarray, shape (n,)
+        Curvature [1/m] (positive turning right).
+    """
+
+    ds: float
+    x: Array
+    y: Array
+    kappa: Array
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.ds) and self.ds > 0):
+            raise MotosimError(f"road ds = {self.ds!r}; expected a finite spacing > 0 [m]")
+        n = self.kappa.size
+        if n < 2 or self.x.shape != (n,) or self.y.shape != (n,):
+            raise MotosimError(
+                f"road of {self.x.size}, {self.y.size}, {n} samples of x, y, kappa; "
+                "expected the same number, at least 2"
+            )
+        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.y))
+                and np.all(np.isfinite(self.kappa))):  # fmt: skip
+            raise MotosimError("road with a non-finite position or curvature; expected finite")
+
+
+def arc_length(road: Road, x: Array, y: Array) -> Array:
+    """Arc length [m] of the road's sample nearest to each position, searched forward.
+
+    Parameters
+    ----------
+    road : Road
+        The road.
+    x, y : ndarray, shape (m,)
+        The motorcycle's positions [m] in the road's frame, in time order.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        The arc length reached at each position.
+    """
+    out = np.empty(x.size)
+    k = 0
+    n = road.x.size
+    window = 400  # samples searched ahead of the last match (20 m at 0.05 m)
+    for i in range(x.size):
+        lo, hi = max(k - 20, 0), min(k + window, n)
+        d = (road.x[lo:hi] - x[i]) ** 2 + (road.y[lo:hi] - y[i]) ** 2
+        k = lo + int(np.argmin(d))
+        out[i] = k * road.ds
+    return out
+
+
+def road_preview(
+    road: Road,
+    arc: Array,
+    speed: Array,
+    *,
+    horizon: int,
+    step: float,
+    lead: float = LEAD,
+    smoothing: float = SMOOTHING,
+) -> Array:
+    """The motion at the head predicted from the road ahead, at each sample.
+
+    Parameters
+    ----------
+    road : Road
+        The road the rider follows.
+    arc : ndarray, shape (m,)
+        Arc length [m] reached at each sample (:func:`arc_length`).
+    speed : ndarray, shape (m,)
+        Forward speed [m/s] at each sample, held over the horizon.
+    horizon, step : int, float
+        The prediction: ``horizon`` steps of ``step`` [s] (the MPC's).
+    lead : float, optional
+        Time [s] by which the lean leads the road's curvature under the wheels.
+    smoothing : float, optional
+        Half-width [s] of the finite differences of the lean (:data:`SMOOTHING`).
+
+    Returns
+    -------
+    ndarray, shape (m, horizon + 1, 2)
+        :data:`PREVIEW_SIGNALS` at ``tau = 0, step, ..., horizon * step`` ahead: the lean's
+        rate and ``SWAY_HEIGHT * phi'' + SWAY_X * psi''`` with ``psi' = v kappa``.
+
+    Raises
+    ------
+    MotosimError
+        If ``smoothing`` is not positive or ``arc`` and ``speed`` differ in length.
+    """
+    if not (math.isfinite(smoothing) and smoothing > 0):
+        raise MotosimError(f"preview smoothing = {smoothing!r} s; expected a finite number > 0")
+    if arc.shape != speed.shape:
+        raise MotosimError(
+            f"preview of {arc.size} arc lengths and {speed.size} speeds; expected as many"
+        )
+    tau = np.arange(horizon + 1) * step
+    v = speed[:, None]
+    s = road.ds * np.arange(road.kappa.size)
+
+    def lean(offset: float) -> tuple[Array, Array]:
+        kappa = np.interp(arc[:, None] + v * (tau[None, :] + offset), s, road.kappa)
+        return np.arctan(v**2 * kappa / GRAVITY), kappa
+
+    d = smoothing
+    (phi_m, k_m), (phi_0, _), (phi_p, k_p) = (lean(lead + e) for e in (-d, 0.0, d))
+    rate = (phi_p - phi_m) / (2 * d)
+    accel = (phi_p - 2 * phi_0 + phi_m) / d**2
+    yaw_accel = v * (k_p - k_m) / (2 * d)
+    return np.stack([rate, SWAY_HEIGHT * accel + SWAY_X * yaw_accel], axis=-1)

@@ -1,0 +1,105 @@
+"""The road preview: the steady-turn lean of the road ahead, and the MPC planning with it."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
+from motosim.cueing.preview import (
+    LEAD,
+    SWAY_HEIGHT,
+    SWAY_X,
+    Road,
+    arc_length,
+    road_preview,
+)
+from motosim.errors import MotosimError
+from motosim.timeseries import TimeSeries
+
+G = 9.81
+
+
+def _road(kappa: np.ndarray, ds: float = 0.05) -> Road:
+    s = ds * np.arange(kappa.size)
+    return Road(ds, s.copy(), np.zeros_like(s), kappa)
+
+
+def test_steady_turn_and_curvature_ramp_against_the_steady_turn_lean() -> None:
+    # the lean of a steady turn phi = atan(v^2 kappa / g) (Cossalter, Motorcycle Dynamics,
+    # 2006, steady turning) on a curvature ramp kappa = c s: its rate in the time ahead is
+    # d phi / d tau = (v^3 c / g) / (1 + (v^2 kappa / g)^2), and no force in a steady turn
+    s = 0.05 * np.arange(40_000)
+    c, v = 1e-5, 20.0
+    ramp = _road(c * s)
+    arc, speed = np.array([100.0, 500.0]), np.full(2, v)
+    ahead = road_preview(ramp, arc, speed, horizon=20, step=0.05)
+    tau = 0.05 * np.arange(21)
+    lean_arg = v**2 * c * (arc[:, None] + v * (tau + LEAD)) / G
+    expected = (v**3 * c / G) / (1.0 + lean_arg**2)
+    np.testing.assert_allclose(ahead[..., 0], expected, rtol=1e-3)
+    # the force: SWAY_HEIGHT phi'' + SWAY_X v^2 c (yaw acceleration of the ramp)
+    phi_ddot = -2 * lean_arg * (v**3 * c / G) * (v**3 * c / G) / (1 + lean_arg**2) ** 2
+    np.testing.assert_allclose(
+        ahead[..., 1], SWAY_HEIGHT * phi_ddot + SWAY_X * v**2 * c, rtol=1e-3, atol=1e-6
+    )
+    turn = road_preview(_road(np.full(s.size, 0.01)), arc, speed, horizon=20, step=0.05)
+    np.testing.assert_allclose(turn, 0.0, atol=1e-9)
+
+
+def test_arc_length_follows_the_road_and_bad_roads_are_refused() -> None:
+    road = _road(np.zeros(4001))
+    x = np.linspace(0.0, 150.0, 301)
+    np.testing.assert_allclose(arc_length(road, x, np.full(x.size, 0.3)), x, atol=0.025)
+    with pytest.raises(MotosimError, match="road ds = 0"):
+        Road(0.0, np.zeros(3), np.zeros(3), np.zeros(3))
+    with pytest.raises(MotosimError, match="expected the same number"):
+        Road(0.05, np.zeros(3), np.zeros(2), np.zeros(3))
+    with pytest.raises(MotosimError, match="smoothing = 0"):
+        road_preview(road, x, x, horizon=2, step=0.05, smoothing=0.0)
+
+
+def test_the_plan_follows_the_previewed_roll_and_no_preview_is_the_causal_plan() -> None:
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+
+    cfg = load_platform("simacom_platform")
+    # the same force band's weight with and without the preview: only the prediction differs
+    tuning = dataclasses.replace(cfg.mpc, preview_force_false_cue_weight=0.5)
+    design = design_mpc(dataclasses.replace(cfg, mpc=tuning), TELBAN_CARDULLO_2005, 0.01)
+    rate = np.radians(10.0)
+    motion = np.array([rate, 0.0, 0.0, 0.0, 0.0])  # the motorcycle rolls at 10 deg/s
+    held = np.tile([rate, 0.0], (tuning.horizon + 1, 1))  # the road: the roll goes on
+    ends = held.copy()
+    ends[4:] = 0.0  # the road: the roll ends 0.2 s ahead
+    plans = [MpcCueing(design) for _ in range(4)]
+    for _ in range(10):
+        out = [
+            plans[0].step(motion, np.zeros(3), None, held),
+            plans[1].step(motion, np.zeros(3), None, ends),
+            plans[2].step(motion, np.zeros(3)),
+            plans[3].step(motion, np.zeros(3), None, None),
+        ]
+    # a roll that goes on is spread over the platform's travel; one that ends is given now
+    assert out[1][0] > 1.1 * out[0][0] > 0.0
+    assert out[1][0] > 1.1 * out[2][0]  # the causal plan's roll rate fades instead
+    np.testing.assert_array_equal(out[3], out[2])
+    from motosim.cueing.head import vehicle_motion
+    from motosim.cueing.mpc import apply_mpc
+
+    t = np.arange(0.0, 0.1, 0.01)
+    still = TimeSeries(t, np.column_stack([20 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t]),
+                       ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))  # fmt: skip
+    with pytest.raises(MotosimError, match=r"road preview of shape \(10, 20, 2\)"):
+        apply_mpc(design, vehicle_motion(still, cfg.rider), np.zeros((10, 3)),
+                  preview=np.zeros((10, 20, 2)))  # fmt: skip
+
+
+def test_cue_needs_the_positions_for_a_road() -> None:
+    t = np.arange(0.0, 1.0, 0.01)
+    ride = TimeSeries(t, np.column_stack([20 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t]),
+                      ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))  # fmt: skip
+    cfg = load_platform("simacom_platform")
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    with pytest.raises(MotosimError, match="road preview of a run without x and y"):
+        cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=_road(np.zeros(10)))
