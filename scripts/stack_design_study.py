@@ -101,6 +101,8 @@ CANDIDATES = [
     Candidate("observer beta x0.85", beta_obs=0.85),
     Candidate("observer J x1.25", inertia_obs=1.25),
     Candidate("observer beta x0.85, J x1.25", beta_obs=0.85, inertia_obs=1.25),
+    Candidate("observer beta x0.8, J x1.25", beta_obs=0.8, inertia_obs=1.25),
+    Candidate("observer beta x0.85, J x1.5", beta_obs=0.85, inertia_obs=1.5),
     Candidate("cancel 0.7", cancellation=0.7, rates=(100.0,)),
     Candidate("cancel 0.6", cancellation=0.6, rates=(100.0,)),
     Candidate("cancel 0.4", cancellation=0.4, rates=(100.0,)),
