@@ -53,7 +53,9 @@ DELTA_RATE = 3  # index of the steer rate delta' in the motorcycle's lateral sta
 
 @dataclass(frozen=True)
 class Candidate:
-    """One design: every field left at its default is today's design."""
+    """One design: every field left at its default is the design before this study, the
+    observer on the nominal handlebar (the default now is "observer beta x0.85, J x1.25",
+    :meth:`motosim.estimation.walcott_zak.ObserverSettings.for_stack`)."""
 
     name: str
     cancellation: float = 1.0  # feedforward[0]: share of the estimated rider torque cancelled
@@ -70,7 +72,7 @@ class Candidate:
 
 
 CANDIDATES = [
-    Candidate("today"),
+    Candidate("before"),
     Candidate("cancel 0.8", cancellation=0.8),
     Candidate("cancel 0.5", cancellation=0.5),
     Candidate("cancel 0", cancellation=0.0),
