@@ -205,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
         rate=args.rate,
         n_starts=args.starts,
     )
-    settings = ObserverSettings.for_stack(1.0 / args.rate)
+    settings = ObserverSettings.for_step(1.0 / args.rate)
     obs = design_with(hb, settings)
     paper = analyse_loop(hb, PAPER_CONTROLLER, rate=args.rate)
     report: dict[str, Any] = {

@@ -151,18 +151,15 @@ def build_stack(inputs: RunInputs) -> StackModel:
     """Design the stack of a run: estimator, differentiator, controller, motorcycle.
 
     The estimator is the scenario's, designed for the nominal handlebar at the measurement
-    step; a Walcott-Zak observer takes the design file's settings when the run has them, else
-    :meth:`~motosim.estimation.walcott_zak.ObserverSettings.for_stack` when the feedback
-    cancels the estimated rider torque (:meth:`~.ObserverSettings.for_step` otherwise).
+    step; a Walcott-Zak observer takes the design file's settings when the run has them.
     """
     sc = inputs.scenario
     h_meas = 1.0 / sc.rates.measurement
     est = sc.estimator
     if est.name == "walcott_zak":
-        cancels = _feedback(sc) and "rider" in (sc.controller.feedforward or ())
-        default = (ObserverSettings.for_stack if cancels else ObserverSettings.for_step)(h_meas)
         settings = dataclasses.replace(
-            inputs.observer or default, friction_compensation=est.friction_compensation
+            inputs.observer or ObserverSettings.for_step(h_meas),
+            friction_compensation=est.friction_compensation,
         )
         gains = design_with(inputs.nominal_handlebar, settings)
         kernel = WalcottZakObserver(gains, h_meas, stick_projection=est.stick_projection).kernel
