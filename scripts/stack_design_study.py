@@ -53,9 +53,8 @@ DELTA_RATE = 3  # index of the steer rate delta' in the motorcycle's lateral sta
 
 @dataclass(frozen=True)
 class Candidate:
-    """One design: every field left at its default is the design before this study, the
-    observer on the nominal handlebar (the default now is "observer beta x0.85, J x1.25",
-    :meth:`motosim.estimation.walcott_zak.ObserverSettings.for_stack`)."""
+    """One design: every field left at its default is the default design, the observer on the
+    nominal handlebar ("before" in the design guide's table)."""
 
     name: str
     cancellation: float = 1.0  # feedforward[0]: share of the estimated rider torque cancelled

@@ -110,20 +110,13 @@ def test_nominal_stack_at_100hz_is_stable_with_margins(speed):
 
 def test_the_10_hz_design_lacks_margins_at_100hz():
     """Why the default bandwidth depends on the rate: the 1 kHz default (10 Hz) at 100 Hz
-    leaves the whole stack below 6 dB and 45 deg with the observer designed on the nominal
-    handlebar (the estimate's lag feeds the rider-torque cancellation back near 20 Hz), and
-    with the default observer (``ObserverSettings.for_stack``) within 0.5 of the critical
-    point (min abs(1 + L) 0.11; the 20 Hz design keeps 1.3)."""
-    from motosim.estimation.walcott_zak import ObserverSettings
-
+    leaves the whole stack below 6 dB and 45 deg (the estimate's lag feeds the rider-torque
+    cancellation back near 20 Hz)."""
     inputs = _inputs(100.0, 15.0)
     sc = inputs.scenario
     slow = dataclasses.replace(sc, controller=dataclasses.replace(sc.controller, bandwidth=10.0))
     inputs = resolve(slow, ".")
     a = analyse_stack(build_stack(inputs), inputs.true_handlebar, 15.0)
-    assert a.modulus_margin < 0.5
-    nominal = dataclasses.replace(inputs, observer=ObserverSettings.for_step(0.01))
-    a = analyse_stack(build_stack(nominal), inputs.true_handlebar, 15.0)
     assert a.gain_margin_db < 6.0 or a.phase_margin_deg < 45.0
 
 
@@ -134,18 +127,19 @@ def _with_margins(model, handlebar, speed: float) -> int:
     )
 
 
-@pytest.mark.parametrize(("rate", "count", "before"), [(1000.0, 20, 17), (100.0, 14, 11)])
-def test_the_biased_observer_keeps_margins_on_more_of_the_grid(rate, count, before):
-    """The stack's default observer is designed with 0.85 beta_eq and 1.25 J_eq
-    (``ObserverSettings.for_stack``): over the +/-50 % J_eq, beta_eq, +/-30 % N k_t grid at
-    20 m/s it keeps 6 dB and 45 deg (Skogestad & Postlethwaite, section 2.4) on more
-    handlebars than the observer designed on the nominal handlebar. The counts are those of
-    ``scripts/stack_design_study.py`` and ``motosim design --speeds 20``."""
+@pytest.mark.parametrize(("rate", "count", "default"), [(1000.0, 20, 17), (100.0, 14, 11)])
+def test_a_biased_observer_keeps_margins_on_more_of_the_grid(rate, count, default):
+    """An observer designed with 0.85 beta_eq and 1.25 J_eq (``damping_factor``,
+    ``inertia_factor``): over the +/-50 % J_eq, beta_eq, +/-30 % N k_t grid at 20 m/s it keeps
+    6 dB and 45 deg (Skogestad & Postlethwaite, section 2.4) on more handlebars than the
+    default observer, designed on the nominal handlebar. The counts are those of
+    ``scripts/stack_design_study.py``."""
     from motosim.estimation.walcott_zak import ObserverSettings
 
     inputs = _inputs(rate)
-    model = build_stack(inputs)
-    assert model.estimator.p[0] > 0.0
-    assert _with_margins(model, inputs.true_handlebar, 20.0) == count
-    nominal = dataclasses.replace(inputs, observer=ObserverSettings.for_step(1.0 / rate))
-    assert _with_margins(build_stack(nominal), inputs.true_handlebar, 20.0) == before
+    assert _with_margins(build_stack(inputs), inputs.true_handlebar, 20.0) == default
+    settings = dataclasses.replace(
+        ObserverSettings.for_step(1.0 / rate), damping_factor=0.85, inertia_factor=1.25
+    )
+    biased = dataclasses.replace(inputs, observer=settings)
+    assert _with_margins(build_stack(biased), inputs.true_handlebar, 20.0) == count

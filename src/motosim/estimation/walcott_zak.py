@@ -49,8 +49,6 @@ from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
     "OUTPUT_ROWS",
-    "STACK_DAMPING_FACTOR",
-    "STACK_INERTIA_FACTOR",
     "ObserverSettings",
     "WalcottZakGains",
     "WalcottZakObserver",
@@ -192,7 +190,9 @@ class ObserverSettings:
         Subtract the nominal dry friction.
     damping_factor, inertia_factor : float
         The beta_eq and J_eq the observer is designed with, as factors of the handlebar's
-        (1: the identified handlebar; see :meth:`for_stack`).
+        (1: the identified handlebar). 0.85 and 1.25 keep the closed-loop stack's margins over
+        more of the +/-50 % J_eq, beta_eq, +/-30 % N k_t handlebars
+        (``scripts/stack_design_study.py``; not the default, see the design guide).
     """
 
     poles: tuple[float, float] = (-0.1, -60.0)
@@ -220,33 +220,6 @@ class ObserverSettings:
             injection_bandwidth=min(800.0, 0.8 / dt), friction_compensation=friction_compensation
         )
 
-    @classmethod
-    def for_stack(cls, dt: float, *, friction_compensation: bool = True) -> "ObserverSettings":
-        """:meth:`for_step` for the closed-loop stack that cancels the estimated rider torque.
-
-        The observer is designed with :data:`STACK_DAMPING_FACTOR` beta_eq and
-        :data:`STACK_INERTIA_FACTOR` J_eq: it then reads the handlebar's damping excess as a
-        steering damper of (1 - 0.85) beta_eq on the virtual motorcycle, which keeps the loop
-        stable with margins over more of the +/-50 % J_eq, beta_eq, +/-30 % N k_t handlebars
-        (:func:`motosim.sim.loop_analysis.robustness_grid`).
-        """
-        return dataclasses.replace(
-            cls.for_step(dt, friction_compensation=friction_compensation),
-            damping_factor=STACK_DAMPING_FACTOR,
-            inertia_factor=STACK_INERTIA_FACTOR,
-        )
-
-
-STACK_DAMPING_FACTOR = 0.85
-"""beta_eq of the stack's observer, a factor of the handlebar's (``ObserverSettings.for_stack``).
-
-Measured with ``scripts/stack_design_study.py`` on the packaged handlebar (whole sampled stack,
-27 handlebars at 10/20/30 m/s): with 0.85 and :data:`STACK_INERTIA_FACTOR` 1.25 the loop
-keeps 6 dB and 45 deg on 23/20/17 of them at 1 kHz (1 and 1: 21/17/14) and on 14/14/13 at
-100 Hz (11/11/9), the nominal handlebar keeping 25.6 dB and 118 deg at 1 kHz, and renders the
-motorcycle within 0.7 dB and 7 deg over 0.1-3 Hz at 20 m/s, 1 kHz."""
-STACK_INERTIA_FACTOR = 1.25
-"""J_eq of the stack's observer, a factor of the handlebar's (see :data:`STACK_DAMPING_FACTOR`)."""
 
 _DEFAULT = ObserverSettings()
 
