@@ -15,6 +15,28 @@ def test_the_written_design_reads_back() -> None:
     assert design.rate == 1000.0 and design.controller.n_states == 2
 
 
+def test_observer_factors_default_to_one_and_read_back(tmp_path: Path) -> None:
+    """A design file written before the observer's beta_eq and J_eq factors existed is read
+    with factors 1 (the observer it was written with); given factors are kept."""
+    text = DESIGN.read_text(encoding="utf-8")
+    old = tmp_path / "old.toml"
+    old.write_text(
+        text.replace("damping_factor = 1.0\n", "").replace("inertia_factor = 1.0\n", ""),
+        encoding="utf-8",
+    )
+    settings = read_design(old).observer
+    assert (settings.damping_factor, settings.inertia_factor) == (1.0, 1.0)
+    path = tmp_path / "d.toml"
+    path.write_text(
+        text.replace("damping_factor = 1.0", "damping_factor = 0.85").replace(
+            "inertia_factor = 1.0", "inertia_factor = 1.25"
+        ),
+        encoding="utf-8",
+    )
+    settings = read_design(path).observer
+    assert (settings.damping_factor, settings.inertia_factor) == (0.85, 1.25)
+
+
 @pytest.mark.parametrize(
     ("old", "new", "message"),
     [
@@ -27,6 +49,11 @@ def test_the_written_design_reads_back() -> None:
             "the sampled injection loop is unstable",
         ),
         ("friction_compensation = true", "friction_compensation = 'yes'", "expected true or"),
+        (
+            "damping_factor = 1.0",
+            "damping_factor = 0.0",
+            "damping_factor = 0.0; expected a finite number > 0",
+        ),
         ("rate = 1000.0", "rate = 1e300", "expected a number of magnitude <= 1e+15"),
         ("rate = 1000.0", "rate = 5.0", "rate = 5.0; expected a finite number >= 10"),
         ("J_eq = 0.0415", "J_eq = [0.0415]", "J_eq = [0.0415] is a list"),

@@ -118,3 +118,28 @@ def test_the_10_hz_design_lacks_margins_at_100hz():
     inputs = resolve(slow, ".")
     a = analyse_stack(build_stack(inputs), inputs.true_handlebar, 15.0)
     assert a.gain_margin_db < 6.0 or a.phase_margin_deg < 45.0
+
+
+def _with_margins(model, handlebar, speed: float) -> int:
+    return sum(
+        a.stable and a.gain_margin_db >= 6.0 and a.phase_margin_deg >= 45.0
+        for _, a in robustness_grid(model, handlebar, speed)
+    )
+
+
+@pytest.mark.parametrize(("rate", "count", "default"), [(1000.0, 20, 17), (100.0, 14, 11)])
+def test_a_biased_observer_keeps_margins_on_more_of_the_grid(rate, count, default):
+    """An observer designed with 0.85 beta_eq and 1.25 J_eq (``damping_factor``,
+    ``inertia_factor``): over the +/-50 % J_eq, beta_eq, +/-30 % N k_t grid at 20 m/s it keeps
+    6 dB and 45 deg (Skogestad & Postlethwaite, section 2.4) on more handlebars than the
+    default observer, designed on the nominal handlebar. The counts are those of
+    ``scripts/stack_design_study.py``."""
+    from motosim.estimation.walcott_zak import ObserverSettings
+
+    inputs = _inputs(rate)
+    assert _with_margins(build_stack(inputs), inputs.true_handlebar, 20.0) == default
+    settings = dataclasses.replace(
+        ObserverSettings.for_step(1.0 / rate), damping_factor=0.85, inertia_factor=1.25
+    )
+    biased = dataclasses.replace(inputs, observer=settings)
+    assert _with_margins(build_stack(biased), inputs.true_handlebar, 20.0) == count

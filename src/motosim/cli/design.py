@@ -232,6 +232,8 @@ def run(args: argparse.Namespace) -> int:
         "stack": _stack_analysis(hb, settings, ctrl.controller_zoh, args.rate, speeds),
         "observer": {
             "poles": list(settings.poles),
+            "damping_factor": settings.damping_factor,
+            "inertia_factor": settings.inertia_factor,
             "eta": obs.eta,
             "epsilon": obs.epsilon,
             "L": obs.L.tolist(),

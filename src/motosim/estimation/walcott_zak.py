@@ -29,6 +29,7 @@ dead zone (Remark 5.2) and a tanh edge (Remark 3.3). While the handlebar sticks,
 torque below beta_s is not observable from the motion and the estimate reads tau_r + tau_p.
 """
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -187,6 +188,11 @@ class ObserverSettings:
         Velocity dead zone (Remark 5.2) and tanh width of the friction compensation [rad/s].
     friction_compensation : bool
         Subtract the nominal dry friction.
+    damping_factor, inertia_factor : float
+        The beta_eq and J_eq the observer is designed with, as factors of the handlebar's
+        (1: the identified handlebar). 0.85 and 1.25 keep the closed-loop stack's margins over
+        more of the +/-50 % J_eq, beta_eq, +/-30 % N k_t handlebars
+        (``scripts/stack_design_study.py``; not the default, see the design guide).
     """
 
     poles: tuple[float, float] = (-0.1, -60.0)
@@ -196,6 +202,12 @@ class ObserverSettings:
     dead_zone: float = 0.05
     friction_width: float = 0.05
     friction_compensation: bool = True
+    damping_factor: float = 1.0
+    inertia_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("damping_factor", "inertia_factor"):
+            check_number(getattr(self, name), where=name, lower=0.0, lower_closed=False, upper=10.0)
 
     @classmethod
     def for_step(cls, dt: float, *, friction_compensation: bool = True) -> "ObserverSettings":
@@ -213,7 +225,16 @@ _DEFAULT = ObserverSettings()
 
 
 def design_with(hb: HandlebarParameters, settings: ObserverSettings) -> "WalcottZakGains":
-    """:func:`design` with the recorded ``settings`` (eq. (15) outputs, consistent sign)."""
+    """:func:`design` with the recorded ``settings`` (eq. (15) outputs, consistent sign).
+
+    The observer's handlebar is ``hb`` with beta_eq and J_eq scaled by the settings' factors.
+    """
+    if settings.damping_factor != 1.0 or settings.inertia_factor != 1.0:
+        hb = dataclasses.replace(
+            hb,
+            beta_eq=settings.damping_factor * hb.beta_eq,
+            J_eq=settings.inertia_factor * hb.J_eq,
+        )
     return design(
         hb,
         poles=settings.poles,

@@ -228,6 +228,12 @@ def _observer(
         raise MotosimError(
             f"{where} friction_compensation = {short_repr(compensation)}; expected true or false"
         )
+    factor = {  # absent from the design files written before they existed: 1
+        key: check_number(
+            table.get(key, 1.0), where=f"{where} {key}", lower=0.0, lower_closed=False, upper=10.0
+        )
+        for key in ("damping_factor", "inertia_factor")
+    }
     settings = ObserverSettings(
         poles=(
             check_number(poles[0], where=f"{where} poles[0]", upper=0.0, upper_closed=False),
@@ -239,6 +245,8 @@ def _observer(
         dead_zone=number["dead_zone"],
         friction_width=number["friction_width"],
         friction_compensation=compensation,
+        damping_factor=factor["damping_factor"],
+        inertia_factor=factor["inertia_factor"],
     )
     for key in ("L", "P"):  # informative copies of what the settings rebuild
         if key in table and _matrix(table[key], f"{where} {key}").shape != (2, 2):
