@@ -223,6 +223,9 @@ def test_a_stop_signal_between_the_two_files_waits_for_the_block(
         write_all(fd, data)
 
     monkeypatch.setattr(results, "_write_all", signalled_first)
+    # Ctrl-C is held only where Python's own handler is installed (not where the test runner
+    # was started with SIGINT ignored, or another handler was left): install it here
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     folder = tmp_path / "run"
 
     def run() -> None:
@@ -230,8 +233,11 @@ def test_a_stop_signal_between_the_two_files_waits_for_the_block(
             w.append(_block(0, 5))
             w.append(_block(5, 5))  # not reached
 
-    with pytest.raises(KeyboardInterrupt, match=stop.name):
-        run()
+    try:
+        with pytest.raises(KeyboardInterrupt, match=stop.name):
+            run()
+    finally:
+        signal.signal(signal.SIGINT, previous)
     with h5py.File(folder / "result.h5", "r") as h5:
         assert h5["signals"].shape[0] == 5 and not h5.attrs["complete"]
     with (folder / "result.partial.csv").open(newline="") as handle:
