@@ -48,6 +48,7 @@ __all__ = [
     "build_rig",
     "build_stack",
     "prepare",
+    "route_length",
     "run_metadata",
     "simulate",
 ]
@@ -246,6 +247,13 @@ class RigData(NamedTuple):
 
 
 @functools.lru_cache(maxsize=8)
+def route_length(scenario: Scenario) -> float:
+    """Length of the virtual rider's path built for ``scenario`` [m]: the distance it could
+    ride at its speed (at least 20 m/s) over its duration, with half again and 200 m to
+    spare."""
+    return max(scenario.motorcycle.speed, 20.0) * scenario.duration * 1.5 + 200.0
+
+
 def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array:
     """``profile`` at the ``n * n_sub`` plant sub-steps of a run, read-only.
 
@@ -278,7 +286,7 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
     else:
         assert rider.path is not None
         profile = np.zeros(1)
-        route = rider.path.build(max(sc.motorcycle.speed, 20.0) * sc.duration * 1.5 + 200.0)
+        route = rider.path.build(route_length(sc))
         path_arr, path_ds = np.vstack([route.x, route.y, route.psi, route.kappa]), route.ds
         gains = design_rider(
             inputs.sharp,

@@ -9,6 +9,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from motosim.cueing.preview import Road
+from motosim.sim.closed_loop import route_length
 from motosim.sim.scenario import Scenario, scenario_from_dict
 
 __all__ = ["result_road", "scenario_road"]
@@ -30,8 +31,7 @@ def scenario_road(scenario: Scenario) -> Road | None:
     path = scenario.rider.path
     if scenario.rider.kind != "virtual" or path is None:
         return None
-    # the length motosim.sim.closed_loop.prepare builds
-    route = path.build(max(scenario.motorcycle.speed, 20.0) * scenario.duration * 1.5 + 200.0)
+    route = path.build(route_length(scenario))
     return Road(route.ds, route.x, route.y, route.kappa)
 
 
