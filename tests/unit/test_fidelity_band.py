@@ -14,3 +14,19 @@ def test_worst_includes_a_bin_that_rounds_below_the_band_edge():
     feel = FeelResponse(f, rendered, model, model, np.ones(3))
     magnitude, _ = feel.worst(0.1, 3.0)
     assert abs(magnitude - 8.0) < 1e-9
+
+
+def test_plot_feel_marks_a_multisine_lines_and_not_a_welch_grid() -> None:
+    """A multisine's ~20 lines are marked (the lines between them are not measured); a
+    Welch estimate's hundreds of bins are drawn as curves."""
+    from motosim.plotting.closed_loop import plot_feel
+    from motosim.sim.fidelity import FeelResponse
+
+    for m, marked in ((20, True), (300, False)):
+        f = np.geomspace(0.1, 3.0, m)
+        h = 1.0 / (1.0 + 2j * np.pi * f)
+        feel = FeelResponse(f, h, h, h, np.ones(m))
+        lines = plot_feel(feel, speed=20.0).axes[0].get_lines()
+        assert [line.get_marker() not in ("None", None, "") for line in lines] == [
+            False, marked, marked,
+        ]  # fmt: skip

@@ -492,14 +492,17 @@ def plot_spectrum(
 def plot_feel(feel: Any, *, speed: float) -> Figure:
     """Bode plot of the rendered feel theta_h / tau_r against the motorcycle's delta / tau_r.
 
-    ``feel`` is a :class:`motosim.sim.fidelity.FeelResponse`.
+    ``feel`` is a :class:`motosim.sim.fidelity.FeelResponse`. The measured responses are
+    marked at each frequency when there are few (a multisine's lines), so that the lines
+    drawn between them are not read as measured.
     """
     fig = Figure(figsize=(9.0, 6.0), layout="constrained")
     mag, phase = fig.subplots(2, 1, sharex=True)
+    marks = {"marker": "o", "ms": 3.5} if feel.frequency.size <= 100 else {}
     curves = (
         (feel.model, "motorcycle model delta / tau_r", {"color": "k", "lw": 1.5}),
-        (feel.steer, "virtual motorcycle in the run", {"color": "tab:blue", "ls": "--"}),
-        (feel.rendered, "handlebar theta_h / tau_r (rendered)", {"color": "tab:red"}),
+        (feel.steer, "virtual motorcycle in the run", {"color": "tab:blue", "ls": "--", **marks}),
+        (feel.rendered, "handlebar theta_h / tau_r (rendered)", {"color": "tab:red", **marks}),
     )
     for values, label, style in curves:
         mag.semilogx(feel.frequency, 20 * np.log10(np.abs(values)), label=label, **style)
