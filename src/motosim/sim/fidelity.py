@@ -87,25 +87,22 @@ class FeelResponse:
         """Phase of rendered / model, wrapped to (-180, 180] [deg]."""
         return np.asarray(np.degrees(np.angle(self.rendered / self.model)), dtype=np.float64)
 
-    def median(self, low: float, high: float) -> tuple[float, float]:
-        """Median |magnitude error| [dB] and |phase error| [deg] over ``low``-``high`` [Hz]."""
+    def _band(self, low: float, high: float) -> tuple[Array, Array]:
+        """|magnitude error| [dB] and |phase error| [deg] at the frequencies in the band."""
         band = _within(self.frequency, low, high)
         if not band.any():
             raise MotosimError(f"no frequency of the response within {low:g}-{high:g} Hz")
-        return (
-            float(np.median(np.abs(self.magnitude_error_db[band]))),
-            float(np.median(np.abs(self.phase_error_deg[band]))),
-        )
+        return np.abs(self.magnitude_error_db[band]), np.abs(self.phase_error_deg[band])
+
+    def median(self, low: float, high: float) -> tuple[float, float]:
+        """Median |magnitude error| [dB] and |phase error| [deg] over ``low``-``high`` [Hz]."""
+        magnitude, phase = self._band(low, high)
+        return float(np.median(magnitude)), float(np.median(phase))
 
     def worst(self, low: float, high: float) -> tuple[float, float]:
         """Largest |magnitude error| [dB] and |phase error| [deg] over ``low``-``high`` [Hz]."""
-        band = _within(self.frequency, low, high)
-        if not band.any():
-            raise MotosimError(f"no frequency of the response within {low:g}-{high:g} Hz")
-        return (
-            float(np.max(np.abs(self.magnitude_error_db[band]))),
-            float(np.max(np.abs(self.phase_error_deg[band]))),
-        )
+        magnitude, phase = self._band(low, high)
+        return float(np.max(magnitude)), float(np.max(phase))
 
 
 def feel_scenario(
