@@ -105,12 +105,13 @@ def run(args: argparse.Namespace) -> int:
 
         road = result_road(result.metadata, origin=str(args.result))
     outcome = cue(config, series, model, algorithm=args.algorithm, rate=args.rate, road=road)
+    preview = "road" if road is not None else "none"
     folder = Path(args.out)
     metadata = {
         "source": str(args.result),
         "algorithm": args.algorithm,
         "rate": args.rate,
-        "preview": "road" if road is not None else "none",
+        "preview": preview,
         "platform": config,
         "vestibular": model,
     }
@@ -130,7 +131,6 @@ def run(args: argparse.Namespace) -> int:
         str(folder / "commands.png"),
     )
     summary = score_summary(outcome.score)
-    preview = "road" if road is not None else "none"
     if args.json:
         print_json(
             {"out": str(folder), "algorithm": args.algorithm, "preview": preview, "score": summary}

@@ -145,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
         )
     low, high = max(band[0], _TARGET_BAND[0]), min(band[1], _TARGET_BAND[1])
     magnitude, phase = feel.worst(low, high)
+    median = feel.median(low, high)
     payload = {
         "speed": args.speed,
         "excitation": probe.kind if probe is not None else "",
@@ -152,8 +153,8 @@ def run(args: argparse.Namespace) -> int:
         "worst_in": [low, high],
         "worst_magnitude_error_db": magnitude,
         "worst_phase_error_deg": phase,
-        "median_magnitude_error_db": feel.median(low, high)[0],
-        "median_phase_error_deg": feel.median(low, high)[1],
+        "median_magnitude_error_db": median[0],
+        "median_phase_error_deg": median[1],
         "frequency_hz": feel.frequency.tolist(),
         "magnitude_error_db": feel.magnitude_error_db.tolist(),
         "phase_error_deg": feel.phase_error_deg.tolist(),
@@ -171,7 +172,6 @@ def run(args: argparse.Namespace) -> int:
         f"  {payload['excitation']} of {args.amplitude:g} N*m peak over {band[0]:g}-{band[1]:g} Hz"
     )
     print(f"  worst over {low:g}-{high:g} Hz: {magnitude:.2f} dB, {phase:.1f} deg")
-    median = feel.median(low, high)
     print(f"  median over {low:g}-{high:g} Hz: {median[0]:.2f} dB, {median[1]:.1f} deg")
     title = "coherence" if chirp else "periodic"
     print(f"  {'f [Hz]':>7} {'error [dB]':>11} {'error [deg]':>12} {title:>10}")
