@@ -98,6 +98,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.cueing.head import GRAVITY
 from motosim.cueing.platform import CueingConfig
 from motosim.cueing.preview import SWAY_HEIGHT, SWAY_X
 from motosim.cueing.vestibular import VestibularModel, canal_tf, otolith_tf
@@ -108,7 +109,6 @@ __all__ = ["MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "
 
 Array = NDArray[np.float64]
 
-GRAVITY = 9.81  # [m/s^2]
 MAX_ITER = 50
 """OSQP's iteration budget per step: a warm-started iterate that stops there is still used
 (measured on the scenarios of the comparison table: the same wins as with 100, at a p99 step

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.cueing.head import GRAVITY
 from motosim.errors import MotosimError
 
 __all__ = [
@@ -49,7 +50,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-GRAVITY = 9.81  # [m/s^2]
 LEAD = 0.1
 """Time [s] by which the rider's lean leads the curvature of the road under the wheels: of
 0, 0.05, ..., 0.2 s, the least RMS roll-rate error 1 s ahead summed over the lane change,
