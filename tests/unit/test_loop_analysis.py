@@ -1,6 +1,7 @@
 """The linearised sampled stack (motosim.sim.loop_analysis) against the compiled simulator."""
 
 import dataclasses
+import itertools
 
 import numpy as np
 import pytest
@@ -143,3 +144,87 @@ def test_a_biased_observer_keeps_margins_on_more_of_the_grid(rate, count, defaul
     )
     biased = dataclasses.replace(inputs, observer=settings)
     assert _with_margins(build_stack(biased), inputs.true_handlebar, 20.0) == count
+
+
+def _half_inertia(handlebar, torque_constant: float = 1.0):
+    return dataclasses.replace(
+        handlebar, J_eq=0.5 * handlebar.J_eq, k_t=torque_constant * handlebar.k_t, J_m=0.0,
+        beta_vm=0.0,
+    )  # fmt: skip
+
+
+def _gain_margin(loop_gain: np.ndarray) -> float:
+    """-20 log10 |L| at the crossing of the negative real axis nearest the critical point."""
+    crossings = []
+    for a, b in itertools.pairwise(loop_gain):
+        if a.imag * b.imag < 0.0:
+            x = a.real - a.imag * (b.real - a.real) / (b.imag - a.imag)
+            if x < 0.0:
+                crossings.append(-20.0 * np.log10(-x))
+    return min(crossings, key=abs)
+
+
+@pytest.mark.parametrize("torque_constant", [1.0, 1.3])
+def test_cancellation_bound_predicts_the_half_inertia_margin_at_1khz(torque_constant):
+    """A handlebar of half the inertia: the estimate reads (J_hat - J) theta'' as rider torque
+    and the cancellation feeds it back, 1 + F Delta with Delta -> (k / k_hat)(J_hat / J) - 1
+    = 1 (1.6 with N k_t +30 %). The bound from the estimate filter F alone (its Notes) must
+    match the cancellation loop's own margin computed on the whole linear stack within 1.2 dB
+    where F Delta crosses the negative real axis (140-200 Hz, far above the feedback's
+    bandwidth), and the whole stack's margin at the motor current (``motosim design``'s) must
+    lie below it by the feedback's own loop gain there, at most 5 dB. Numbers from
+    scripts/grid_failures.py: bound 23.7 / 19.3 dB, cancellation loop 23.5 / 18.2 dB, motor
+    current 20.0 / 15.7 dB."""
+    from motosim.sim.loop_analysis import (
+        cancellation_bound,
+        cancellation_loop_gain,
+        estimate_filter,
+    )
+
+    inputs = _inputs(1000.0)
+    model = build_stack(inputs)
+    hb = inputs.true_handlebar
+    true = _half_inertia(hb, torque_constant)
+    f = np.geomspace(50.0, 500.0, 1500)
+    bound = cancellation_bound(estimate_filter(model, hb, 20.0, f), f, hb, true, 1e-3)
+    assert 140.0 < bound.frequency < 200.0
+    assert 15.0 < bound.gain_margin_db < 25.0
+    loop = stack_loop(model, true, 20.0)
+    inner = _gain_margin(cancellation_loop_gain(loop, f))
+    assert abs(inner - bound.gain_margin_db) < 1.2
+    design = analyse_stack(model, true, 20.0)
+    assert design.stable
+    assert 0.0 < bound.gain_margin_db - design.gain_margin_db < 5.0
+
+
+def test_at_100hz_the_estimate_filter_amplifies_and_half_inertia_is_unstable():
+    """At the paper's 100 Hz the estimate filter F is no low-pass: |F| is above 1.5 where its
+    phase reaches -180 deg (about 19 Hz) and 2 at the Nyquist frequency, so the bound
+    predicts the half-inertia handlebar's cancellation loop unstable at 50 Hz
+    (-1.4 dB, scripts/grid_failures.py), and the whole stack is indeed unstable."""
+    from motosim.sim.loop_analysis import cancellation_bound, estimate_filter
+
+    inputs = _inputs(100.0)
+    model = build_stack(inputs)
+    hb = inputs.true_handlebar
+    f = np.append(np.geomspace(0.1, 49.9, 2000), 50.0)
+    F = estimate_filter(model, hb, 20.0, f)
+    assert abs(F[-1]) > 1.5
+    bound = cancellation_bound(F, f, hb, _half_inertia(hb), 1e-2)
+    assert bound.gain_margin_db < 0.0
+    assert bound.frequency == pytest.approx(50.0)
+    assert not analyse_stack(model, _half_inertia(hb), 20.0).stable
+
+
+def test_the_estimate_does_not_read_the_current_on_the_nominal_handlebar():
+    """On the handlebar the observer was designed for, the estimate is F tau_r whatever the
+    current: the cancellation loop's gain is small (below -20 dB) at 1 kHz, and F is 1 at
+    low frequency (the estimate converges to a constant rider torque)."""
+    from motosim.sim.loop_analysis import cancellation_loop_gain, estimate_filter
+
+    inputs = _inputs(1000.0)
+    model = build_stack(inputs)
+    hb = inputs.true_handlebar
+    f = np.geomspace(0.1, 499.0, 400)
+    assert np.max(np.abs(cancellation_loop_gain(stack_loop(model, hb, 20.0), f))) < 0.1
+    assert abs(estimate_filter(model, hb, 20.0, np.array([0.1]))[0] - 1.0) < 0.01
