@@ -403,6 +403,10 @@ class StackLoopAnalysis:
         the loop gain, up or down, that reaches the critical point.
     modulus_margin : float
         min |1 + L| over frequency, the distance of the loop to the critical point.
+    cancellation_gain_margin_db, cancellation_phase_margin_deg : float
+        Of the rider-torque cancellation's own loop, broken at the estimate it reads
+        (:func:`cancellation_loop_gain`), which the break at the motor current leaves closed
+        (inf without cancellation or crossing) [dB, deg].
     feel_magnitude_db, feel_phase_deg : float
         Largest error of the rendered feel (rider torque to handlebar angle) against the
         motorcycle's own rider torque to steer angle over :data:`FEEL_BAND` [dB, deg].
@@ -419,6 +423,8 @@ class StackLoopAnalysis:
     gain_margin_db: float
     phase_margin_deg: float
     modulus_margin: float
+    cancellation_gain_margin_db: float
+    cancellation_phase_margin_deg: float
     feel_magnitude_db: float
     feel_phase_deg: float
     limit_cycles: tuple[LimitCycle, ...]
@@ -485,6 +491,7 @@ def analyse_stack(
     stable = _unstable_count(eig) <= _unstable_count(own)
     # the motor adds u to the command: the loop gain of a negative-feedback loop is -(i/u)
     gain_margin, phase_margin, modulus = _margins(-loop.response(f, loop.current, 1))
+    inner_gain, inner_phase, _ = _margins(cancellation_loop_gain(loop, f))
 
     band = np.geomspace(FEEL_BAND[0], FEEL_BAND[1], 60)
     rendered = loop.response(band, loop.angle, 0)
@@ -526,6 +533,8 @@ def analyse_stack(
         gain_margin_db=float(gain_margin),
         phase_margin_deg=float(phase_margin),
         modulus_margin=modulus,
+        cancellation_gain_margin_db=float(inner_gain),
+        cancellation_phase_margin_deg=float(inner_phase),
         feel_magnitude_db=feel_db,
         feel_phase_deg=feel_deg,
         limit_cycles=tuple(cycles) if handlebar.beta_s > 0.0 else (),
