@@ -68,6 +68,13 @@ def crossings(L: np.ndarray, f: np.ndarray) -> tuple[float, float, float, float]
             p = 180.0 - abs(math.degrees(np.angle(a)))
             if p < pm:
                 pm, fp = p, f[k]
+    last = L[-1]
+    if (
+        abs(last.imag) <= 1e-9 * abs(last)
+        and last.real < 0.0
+        and abs(20 * math.log10(-last.real)) < gm
+    ):
+        gm, fg = abs(20.0 * math.log10(-last.real)), f[-1]  # real at the Nyquist frequency
     return gm, fg, pm, fp
 
 
@@ -109,7 +116,7 @@ def rows(rate: float, speed: float, show_all: bool) -> None:
                 if ok and not show_all:
                     continue
                 loop = stack_loop(model, true, speed)
-                gm, fg, pm, fp = crossings(-loop.response(f, loop.current, 1), f)
+                gm, fg, pm, fp = crossings(loop.loop_gain(f, 1), f)
                 mode = "-"
                 if not a.stable:
                     eig = np.linalg.eigvals(loop.A)

@@ -105,12 +105,29 @@ class StackLoop:
     motorcycle_input: Array
 
     def response(self, frequencies: Array, row: Array, column: int) -> CArray:
-        """Response from input ``column`` to the output ``row`` at ``frequencies`` [Hz]."""
+        """Closed-loop response from input ``column`` to the output ``row`` at ``frequencies``
+        [Hz]."""
         n = self.A.shape[0]
         z = np.exp(2j * math.pi * np.asarray(frequencies, dtype=float) * self.dt)
         return np.array(
             [row @ np.linalg.solve(zk * np.eye(n) - self.A, self.B[:, column]) for zk in z]
         )
+
+    def loop_gain(self, frequencies: Array, column: int) -> CArray:
+        """Open-loop gain L (negative-feedback convention) of the loop broken at an input.
+
+        ``column`` 1 breaks it at the motor current (L from the current applied to the
+        commanded one), 2 at the estimate the rider-torque cancellation reads. The loop is
+        opened by taking that signal's own feedback out of A: with the break's input b and
+        output row c, A_open = A - b c and L = -c (zI - A_open)^-1 b. (The closed-loop
+        response from the same input, c (zI - A)^-1 b = -L / (1 + L), is not the loop gain.)
+        """
+        row = {1: self.current, 2: self.estimate}[column]
+        n = self.A.shape[0]
+        b = self.B[:, column]
+        A_open = self.A - np.outer(b, row)
+        z = np.exp(2j * math.pi * np.asarray(frequencies, dtype=float) * self.dt)
+        return np.array([-(row @ np.linalg.solve(zk * np.eye(n) - A_open, b)) for zk in z])
 
 
 def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) -> StackLoop:
@@ -261,7 +278,7 @@ def cancellation_loop_gain(loop: StackLoop, frequencies: Array) -> CArray:
     ndarray of complex
         L at ``frequencies`` (zero without cancellation) [-].
     """
-    return -loop.response(frequencies, loop.estimate, 2)
+    return loop.loop_gain(frequencies, 2)
 
 
 @dataclass(frozen=True, slots=True)
@@ -462,6 +479,9 @@ def _margins(loop_gain: CArray) -> tuple[float, float, float]:
             s = (1.0 - magnitude[k]) / (magnitude[k + 1] - magnitude[k])
             ph = phase[k] + s * (np.angle(b / a))
             phase_margin = min(phase_margin, math.degrees(math.pi - abs(ph)))
+    last = loop_gain[-1]
+    if abs(last.imag) <= 1e-9 * abs(last) and last.real < 0.0:  # real at the Nyquist frequency
+        gain_margin = min(gain_margin, abs(20.0 * math.log10(-last.real)))
     return gain_margin, phase_margin, float(np.min(np.abs(1.0 + loop_gain)))
 
 
@@ -485,12 +505,12 @@ def analyse_stack(
     """
     loop = stack_loop(model, handlebar, speed)
     nyquist = 0.5 / loop.dt
-    f = np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS)
+    f = np.append(np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS - 1), nyquist)
     eig = np.linalg.eigvals(loop.A)
     own = np.linalg.eigvals(zoh(loop.motorcycle, np.zeros((8, 1)), loop.dt)[0])
     stable = _unstable_count(eig) <= _unstable_count(own)
-    # the motor adds u to the command: the loop gain of a negative-feedback loop is -(i/u)
-    gain_margin, phase_margin, modulus = _margins(-loop.response(f, loop.current, 1))
+    # broken at the motor current: the motor carries u, the estimator is told u
+    gain_margin, phase_margin, modulus = _margins(loop.loop_gain(f, 1))
     inner_gain, inner_phase, _ = _margins(cancellation_loop_gain(loop, f))
 
     band = np.geomspace(FEEL_BAND[0], FEEL_BAND[1], 60)
