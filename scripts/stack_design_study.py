@@ -64,6 +64,7 @@ class Candidate:
     bandwidth: float | None = None  # controller bandwidth [Hz]; None: default_bandwidth(rate)
     order: int = 1
     injection: float | None = None  # observer injection bandwidth [1/s]; None: for_step
+    filter_time_constant: float | None = None  # the estimate's low-pass [s]; None: for_step
     beta_obs: float = 1.0  # the observer's beta_eq, as a factor of the nominal
     inertia_obs: float = 1.0  # the observer's J_eq, as a factor of the nominal
     compensate: bool = False  # give (beta_nom - beta_obs) delta' back to the motorcycle
@@ -112,6 +113,12 @@ CANDIDATES = [
     Candidate("cancel 0.6, 10 Hz", cancellation=0.6, bandwidth=10.0, rates=(100.0,)),
     Candidate("cancel 0.5, injection 0.75x", cancellation=0.5, injection=0.75, rates=(100.0,)),
     Candidate("cancel 0.5, observer J x1.5", cancellation=0.5, inertia_obs=1.5, rates=(100.0,)),
+    Candidate(
+        "10 Hz, estimate filter 40 ms", bandwidth=10.0, filter_time_constant=0.04, rates=(100.0,)
+    ),
+    Candidate(
+        "10 Hz, estimate filter 60 ms", bandwidth=10.0, filter_time_constant=0.06, rates=(100.0,)
+    ),
 ]
 
 
@@ -128,16 +135,24 @@ def _controller(hb: HandlebarParameters, bandwidth: float, order: int, rate: flo
     return _controllers[key]
 
 
-def build(c: Candidate, hb: HandlebarParameters, rate: float, speed: float) -> StackModel:
-    """The stack of candidate ``c`` for the nominal handlebar ``hb`` at ``rate`` [Hz]."""
-    sharp = load_parameters("sharp1971", "sharp")
-    bandwidth = default_bandwidth(rate) if c.bandwidth is None else c.bandwidth
-    controller = _controller(hb, bandwidth, c.order, rate)
+def _settings(c: Candidate, rate: float) -> ObserverSettings:
+    """The observer's settings of candidate ``c`` at ``rate`` [Hz]."""
     settings = ObserverSettings.for_step(1.0 / rate)
     if c.injection is not None:
         settings = dataclasses.replace(
             settings, injection_bandwidth=c.injection * settings.injection_bandwidth
         )
+    if c.filter_time_constant is not None:
+        settings = dataclasses.replace(settings, filter_time_constant=c.filter_time_constant)
+    return settings
+
+
+def build(c: Candidate, hb: HandlebarParameters, rate: float, speed: float) -> StackModel:
+    """The stack of candidate ``c`` for the nominal handlebar ``hb`` at ``rate`` [Hz]."""
+    sharp = load_parameters("sharp1971", "sharp")
+    bandwidth = default_bandwidth(rate) if c.bandwidth is None else c.bandwidth
+    controller = _controller(hb, bandwidth, c.order, rate)
+    settings = _settings(c, rate)
     observed = dataclasses.replace(
         hb, beta_eq=c.beta_obs * hb.beta_eq, J_eq=c.inertia_obs * hb.J_eq
     )
@@ -248,12 +263,9 @@ def runs(c: Candidate, rates: list[float]) -> None:
         reference = build_stack(dataclasses.replace(inputs, controller=controller))
         model = build(c, hb, rate, sc.motorcycle.speed)
         est = sc.estimator
-        settings = ObserverSettings.for_step(1.0 / rate)
-        if c.injection is not None:
-            settings = dataclasses.replace(
-                settings, injection_bandwidth=c.injection * settings.injection_bandwidth
-            )
-        settings = dataclasses.replace(settings, friction_compensation=est.friction_compensation)
+        settings = dataclasses.replace(
+            _settings(c, rate), friction_compensation=est.friction_compensation
+        )
         observed = dataclasses.replace(
             hb, beta_eq=c.beta_obs * hb.beta_eq, J_eq=c.inertia_obs * hb.J_eq
         )

@@ -118,6 +118,8 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
         "gain_margin_db": a.gain_margin_db,
         "phase_margin_deg": a.phase_margin_deg,
         "modulus_margin": a.modulus_margin,
+        "cancellation_gain_margin_db": a.cancellation_gain_margin_db,
+        "cancellation_phase_margin_deg": a.cancellation_phase_margin_deg,
         "feel_error_db": a.feel_magnitude_db,
         "feel_error_deg": a.feel_phase_deg,
         "friction_limit_cycles": [
@@ -333,6 +335,11 @@ def _print(report: dict[str, Any]) -> None:
             f"{g['points'] - g['unstable']}/{g['points']} stable "
             f"({g['with_margins']} with 6 dB, 45 deg), worst GM "
             f"{g['worst_gain_margin_db']:.3g} dB, PM {g['worst_phase_margin_deg']:.3g} deg"
+        )
+        print(
+            f"         the rider-torque cancellation's own loop (broken at the estimate): "
+            f"GM {a['cancellation_gain_margin_db']:.3g} dB, "
+            f"PM {a['cancellation_phase_margin_deg']:.3g} deg"
         )
         for c in a["friction_limit_cycles"]:
             print(

@@ -39,12 +39,16 @@ from motosim.sim.stack import StackModel, design_stack
 __all__ = [
     "FEEL_BAND",
     "MARGINS",
+    "CancellationBound",
     "GridSummary",
     "LimitCycle",
     "StackLoop",
     "StackLoopAnalysis",
     "analyse_design",
     "analyse_stack",
+    "cancellation_bound",
+    "cancellation_loop_gain",
+    "estimate_filter",
     "robustness_grid",
     "stack_loop",
 ]
@@ -62,21 +66,26 @@ _GRID_POINTS = 600  # frequencies of the margin and limit-cycle search
 
 @dataclass(frozen=True, slots=True)
 class StackLoop:
-    """The linearised sampled loop: x+ = A x + B [tau_r, u], at the measurement step.
+    """The linearised sampled loop: x+ = A x + B [tau_r, u, w], at the measurement step.
 
     Attributes
     ----------
     A : ndarray, shape (n, n)
-        Closed loop (the motor carries the commanded current, u = 0).
-    B : ndarray, shape (n, 2)
-        Inputs: rider torque tau_r [N*m] on the handlebar, and a current u [A] added to the
-        command at the motor (the loop's break point).
+        Closed loop (the motor carries the commanded current, u = 0, w = 0).
+    B : ndarray, shape (n, 3)
+        Inputs: rider torque tau_r [N*m] on the handlebar; a current u [A] added to the
+        command at the motor (the loop's break point); a torque w [N*m] added to the
+        estimate that the rider-torque cancellation reads (the cancellation loop's break
+        point; a zero column without cancellation).
     current : ndarray, shape (n,)
         Row giving the commanded current i [A] from the state.
     rate : ndarray, shape (n,)
         Row giving the handlebar rate theta_h' [rad/s] (the true one) from the state.
     angle : ndarray, shape (n,)
         Row giving the handlebar angle theta_h [rad].
+    estimate : ndarray, shape (n,)
+        Row giving the estimate tau_r_hat [N*m] that the next command cancels (the one
+        held from the previous sample).
     dt : float
         The step h [s].
     motorcycle : ndarray, shape (8, 8)
@@ -90,17 +99,35 @@ class StackLoop:
     current: Array
     rate: Array
     angle: Array
+    estimate: Array
     dt: float
     motorcycle: Array
     motorcycle_input: Array
 
     def response(self, frequencies: Array, row: Array, column: int) -> CArray:
-        """Response from input ``column`` to the output ``row`` at ``frequencies`` [Hz]."""
+        """Closed-loop response from input ``column`` to the output ``row`` at ``frequencies``
+        [Hz]."""
         n = self.A.shape[0]
         z = np.exp(2j * math.pi * np.asarray(frequencies, dtype=float) * self.dt)
         return np.array(
             [row @ np.linalg.solve(zk * np.eye(n) - self.A, self.B[:, column]) for zk in z]
         )
+
+    def loop_gain(self, frequencies: Array, column: int) -> CArray:
+        """Open-loop gain L (negative-feedback convention) of the loop broken at an input.
+
+        ``column`` 1 breaks it at the motor current (L from the current applied to the
+        commanded one), 2 at the estimate the rider-torque cancellation reads. The loop is
+        opened by taking that signal's own feedback out of A: with the break's input b and
+        output row c, A_open = A - b c and L = -c (zI - A_open)^-1 b. (The closed-loop
+        response from the same input, c (zI - A)^-1 b = -L / (1 + L), is not the loop gain.)
+        """
+        row = {1: self.current, 2: self.estimate}[column]
+        n = self.A.shape[0]
+        b = self.B[:, column]
+        A_open = self.A - np.outer(b, row)
+        z = np.exp(2j * math.pi * np.asarray(frequencies, dtype=float) * self.dt)
+        return np.array([-(row @ np.linalg.solve(zk * np.eye(n) - A_open, b)) for zk in z])
 
 
 def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) -> StackLoop:
@@ -173,11 +200,14 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     E = injection * (g[0] * (rate_used - x0) + g[1] * (theta - x1))
     estimate = held + alpha * (E - held)
 
+    # the cancellation's break point: a torque w added to the estimate it reads
+    cancel = -ff[0] / ff[5] if ff[0] > 0.0 else 0.0
+
     A = np.zeros((n, n))
-    B = np.zeros((n, 2))
+    B = np.zeros((n, 3))
     for r in range(2):
         A[start["plant"] + r] = Ap[r, 0] * rate + Ap[r, 1] * theta + Bp[r, 0] * command
-        B[start["plant"] + r] = (Bp[r, 1], Bp[r, 0])
+        B[start["plant"] + r] = (Bp[r, 1], Bp[r, 0], Bp[r, 0] * cancel)
     A[start["theta_prev"]] = theta
     A[start["rate_prev"]] = z1
     for r in range(2):
@@ -186,6 +216,7 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
             + Gamma[r, 2] * theta + Gamma[r, 3] * E
         )  # fmt: skip
         B[start["observer"] + r, 1] = Gamma[r, 0]  # the estimator is told the measured current
+        B[start["observer"] + r, 2] = Gamma[r, 0] * cancel
     A[start["estimate"]] = estimate
     for r in range(nc):
         row = model.Bd[r, 0] * error
@@ -194,7 +225,164 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
         A[start["controller"] + r] = row
     m0 = start["motorcycle"]
     A[m0 : m0 + 8] = Am @ eye[m0 : m0 + 8] + np.outer(Bm[:, 0], estimate)
-    return StackLoop(A, B, command, rate, theta, h, Av, model.Bv.copy())
+    return StackLoop(A, B, command, rate, theta, held, h, Av, model.Bv.copy())
+
+
+def estimate_filter(
+    model: StackModel, handlebar: HandlebarParameters, speed: float, frequencies: Array
+) -> CArray:
+    """F(z): from the rider's torque to the estimate the cancellation reads, sample hold included.
+
+    On the handlebar the observer was designed for, the estimate does not depend on the
+    motor current (the observer's model is the handlebar's own), so tau_r_hat = F(z) tau_r
+    whatever the loop does; F is the estimator's filter (injection, the estimate's low-pass,
+    the differentiator) and the one-sample hold before the command reads it.
+
+    Parameters
+    ----------
+    model : StackModel
+        The designed stack (Walcott-Zak estimator).
+    handlebar : HandlebarParameters
+        The handlebar the observer was designed for.
+    speed : float
+        Forward speed [m/s] (F does not depend on it).
+    frequencies : ndarray
+        [Hz], below the Nyquist frequency of the measurement step.
+
+    Returns
+    -------
+    ndarray of complex
+        F at ``frequencies`` [-].
+    """
+    loop = stack_loop(model, handlebar, speed)
+    return loop.response(frequencies, loop.estimate, 0)
+
+
+def cancellation_loop_gain(loop: StackLoop, frequencies: Array) -> CArray:
+    """The rider-torque cancellation's own loop gain, broken at the estimate it reads.
+
+    The loop broken at the motor current (:func:`analyse_stack`'s margins) leaves this inner
+    loop closed: on a perturbed handlebar the estimate reads part of the motor's own torque
+    as rider torque, and the cancellation feeds it back. Negative-feedback convention: the
+    loop is stable with margins when 1 + L keeps away from 0.
+
+    Parameters
+    ----------
+    loop : StackLoop
+        The stack around a (perturbed) handlebar.
+    frequencies : ndarray
+        [Hz].
+
+    Returns
+    -------
+    ndarray of complex
+        L at ``frequencies`` (zero without cancellation) [-].
+    """
+    return loop.loop_gain(frequencies, 2)
+
+
+@dataclass(frozen=True, slots=True)
+class CancellationBound:
+    """The cancellation loop's gain margin predicted from the estimate filter F alone.
+
+    Attributes
+    ----------
+    gain_margin_db : float
+        Smallest -20 log10 |F Delta| where F Delta crosses the negative real axis, the
+        Nyquist frequency included (inf when it does not; negative: the loop is unstable)
+        [dB].
+    frequency : float
+        Where [Hz] (nan when there is no crossing).
+    low_frequency_db : float
+        -20 log10 |Delta(0)| when Delta(0) = (k / k_hat)(beta_hat / beta) - 1 is negative,
+        else inf [dB]: the margin left where F is 1 (the feel band) and the feedback's input
+        sensitivity 1 / (1 - k K G) has zero phase and unit gain.
+    """
+
+    gain_margin_db: float
+    frequency: float
+    low_frequency_db: float
+
+
+def cancellation_bound(
+    F: CArray,
+    frequencies: Array,
+    nominal: HandlebarParameters,
+    true: HandlebarParameters,
+    dt: float,
+) -> CancellationBound:
+    """Predict the cancellation loop's gain margin from F and the handlebar's error.
+
+    Parameters
+    ----------
+    F : ndarray of complex
+        :func:`estimate_filter` at ``frequencies``.
+    frequencies : ndarray
+        [Hz], up to the Nyquist frequency 1 / (2 ``dt``) at most.
+    nominal : HandlebarParameters
+        The handlebar the observer and the cancellation were designed for (J_hat, beta_hat,
+        k_hat = N k_t).
+    true : HandlebarParameters
+        The real one (J, beta, k).
+    dt : float
+        The measurement step h [s].
+
+    Returns
+    -------
+    CancellationBound
+
+    Notes
+    -----
+    The true handlebar obeys J theta'' + beta theta' = tau_r + k i (k = N k_t); the observer
+    believes J_hat, beta_hat and k_hat, and so estimates tau_r_hat = F [tau_r + (J_hat - J)
+    theta'' + (beta_hat - beta) theta' + (k - k_hat) i]. Sampled with the current held, the
+    angle is theta = G(z) (tau_r + k i) with G the zero-order-hold transfer of
+    1 / (J s^2 + beta s), and on the nominal handlebar the estimate does not depend on i, so
+    the motor's current comes back into the estimate as F k_hat Delta i with
+
+        Delta(z) = (k / k_hat) G(z) / G_hat(z) - 1,
+
+    which tends to (k / k_hat)(J_hat / J) - 1 between the handlebar's pole beta / J and the
+    Nyquist frequency, and to (k / k_hat)(beta_hat / beta) - 1 below it. The cancellation,
+    i = -tau_r_hat / k_hat + ..., closes the loop 1 + F Delta. The feedback K around the
+    handlebar multiplies it by its input sensitivity 1 / (1 - k K G), which is close to 1
+    only above the feedback's bandwidth: the bound is the cancellation loop's margin where
+    F Delta crosses the negative real axis well above it.
+    """
+    f = np.asarray(frequencies, dtype=float)
+    z = np.exp(2j * math.pi * f * dt)
+
+    def angle_per_torque(hb: HandlebarParameters) -> CArray:
+        m = matrices(hb)
+        Phi, Gamma = zoh(m.A, m.D[:, None], dt)
+        return np.array([m.C @ np.linalg.solve(zk * np.eye(2) - Phi, Gamma[:, 0]) for zk in z])
+
+    ratio = true.torque_per_amp / nominal.torque_per_amp
+    delta = ratio * angle_per_torque(true) / angle_per_torque(nominal) - 1.0
+    loop = np.asarray(F) * delta
+    crossing = _phase_crossings(loop, f)
+    if abs(f[-1] * dt - 0.5) < 1e-9 and loop[-1].real < 0.0:  # real at the Nyquist frequency
+        crossing.append((float(f[-1]), -20.0 * math.log10(-loop[-1].real)))
+    low = ratio * nominal.beta_eq / true.beta_eq - 1.0
+    low_db = -20.0 * math.log10(-low) if low < 0.0 else math.inf
+    if not crossing:
+        return CancellationBound(math.inf, math.nan, low_db)
+    where, gain = min(crossing, key=lambda c: c[1])
+    return CancellationBound(gain, where, low_db)
+
+
+def _phase_crossings(loop_gain: CArray, frequencies: Array) -> list[tuple[float, float]]:
+    """Where a loop gain crosses the negative real axis: (frequency [Hz], -20 log10 |L| [dB])."""
+    out = []
+    for k in range(loop_gain.size - 1):
+        a, b = loop_gain[k], loop_gain[k + 1]
+        if a.imag * b.imag < 0.0:
+            s = a.imag / (a.imag - b.imag)
+            x = a.real + s * (b.real - a.real)
+            if x < 0.0:
+                f = frequencies[k] + s * (frequencies[k + 1] - frequencies[k])
+                out.append((float(f), -20.0 * math.log10(-x)))
+    return out
 
 
 @dataclass(frozen=True, slots=True)
@@ -232,6 +420,10 @@ class StackLoopAnalysis:
         the loop gain, up or down, that reaches the critical point.
     modulus_margin : float
         min |1 + L| over frequency, the distance of the loop to the critical point.
+    cancellation_gain_margin_db, cancellation_phase_margin_deg : float
+        Of the rider-torque cancellation's own loop, broken at the estimate it reads
+        (:func:`cancellation_loop_gain`), which the break at the motor current leaves closed
+        (inf without cancellation or crossing) [dB, deg].
     feel_magnitude_db, feel_phase_deg : float
         Largest error of the rendered feel (rider torque to handlebar angle) against the
         motorcycle's own rider torque to steer angle over :data:`FEEL_BAND` [dB, deg].
@@ -248,6 +440,8 @@ class StackLoopAnalysis:
     gain_margin_db: float
     phase_margin_deg: float
     modulus_margin: float
+    cancellation_gain_margin_db: float
+    cancellation_phase_margin_deg: float
     feel_magnitude_db: float
     feel_phase_deg: float
     limit_cycles: tuple[LimitCycle, ...]
@@ -285,6 +479,9 @@ def _margins(loop_gain: CArray) -> tuple[float, float, float]:
             s = (1.0 - magnitude[k]) / (magnitude[k + 1] - magnitude[k])
             ph = phase[k] + s * (np.angle(b / a))
             phase_margin = min(phase_margin, math.degrees(math.pi - abs(ph)))
+    last = loop_gain[-1]
+    if abs(last.imag) <= 1e-9 * abs(last) and last.real < 0.0:  # real at the Nyquist frequency
+        gain_margin = min(gain_margin, abs(20.0 * math.log10(-last.real)))
     return gain_margin, phase_margin, float(np.min(np.abs(1.0 + loop_gain)))
 
 
@@ -308,12 +505,13 @@ def analyse_stack(
     """
     loop = stack_loop(model, handlebar, speed)
     nyquist = 0.5 / loop.dt
-    f = np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS)
+    f = np.append(np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS - 1), nyquist)
     eig = np.linalg.eigvals(loop.A)
     own = np.linalg.eigvals(zoh(loop.motorcycle, np.zeros((8, 1)), loop.dt)[0])
     stable = _unstable_count(eig) <= _unstable_count(own)
-    # the motor adds u to the command: the loop gain of a negative-feedback loop is -(i/u)
-    gain_margin, phase_margin, modulus = _margins(-loop.response(f, loop.current, 1))
+    # broken at the motor current: the motor carries u, the estimator is told u
+    gain_margin, phase_margin, modulus = _margins(loop.loop_gain(f, 1))
+    inner_gain, inner_phase, _ = _margins(cancellation_loop_gain(loop, f))
 
     band = np.geomspace(FEEL_BAND[0], FEEL_BAND[1], 60)
     rendered = loop.response(band, loop.angle, 0)
@@ -355,6 +553,8 @@ def analyse_stack(
         gain_margin_db=float(gain_margin),
         phase_margin_deg=float(phase_margin),
         modulus_margin=modulus,
+        cancellation_gain_margin_db=float(inner_gain),
+        cancellation_phase_margin_deg=float(inner_phase),
         feel_magnitude_db=feel_db,
         feel_phase_deg=feel_deg,
         limit_cycles=tuple(cycles) if handlebar.beta_s > 0.0 else (),
