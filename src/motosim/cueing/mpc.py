@@ -113,7 +113,15 @@ from motosim.cueing.vestibular import VestibularModel, canal_tf, otolith_tf
 from motosim.errors import MotosimError
 from motosim.timeseries import TimeSeries
 
-__all__ = ["COAST_TIMES", "MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "design_mpc"]
+__all__ = [
+    "COAST_TIMES",
+    "MOTION_INPUTS",
+    "AxisPlan",
+    "MpcCueing",
+    "MpcDesign",
+    "apply_mpc",
+    "design_mpc",
+]
 
 Array = NDArray[np.float64]
 
