@@ -3,7 +3,7 @@
 Issue 13's target on the training scenario the causal MPC missed, the lane change at 20 m/s,
 and on the unseen one at 30 m/s that the preview first missed too (the comparison table of
 docs/guide/cueing.md, ``python bench/bench_cueing.py RUNS``: with the road preview at 20 m/s
-2.12 against 2.42 % false cues, 3.04 against 4.36 deg/s roll, 0.24 against 0.50 deg/s pitch;
+2.10 against 2.42 % false cues, 3.04 against 4.36 deg/s roll, 0.24 against 0.50 deg/s pitch;
 at 30 m/s 2.49 against 2.73 %, 3.22 against 4.25 deg/s, 0.18 against 0.34 deg/s; from the
 present motion only 2.6 and 3.2 % false cues, above the washout's). Run through ``motosim
 cueing``, whose ``--preview road`` is the default: the test fails without the preview (the
