@@ -76,7 +76,15 @@ explain (``SWAY_HEIGHT phi_ddot + SWAY_X psi_ddot``) is in that difference and t
 models from rest (``T_canal``, ``T_otolith``), added to the free response, and the force
 band's slack costs ``preview_force_false_cue_weight``: the lane change's false lateral cues
 come from not knowing when the rider ends a roll (docs/guide/cueing.md), which the road
-ahead tells.
+ahead tells. The force band then also covers what the horizon cannot see: the otolith's
+response to a held tilt peaks 1.9 s after it, so the tilt the plan ends with is felt mostly
+after the horizon. Three more rows band the lateral force of the terminal tilt held,
+:data:`COAST_TIMES` (0.5, 1 and 2 s) after the horizon, against the motorcycle's predicted
+perception at the horizon's end (on a straight road ahead, none): without them the plan
+ended a lane change's return roll with a counter-tilt past neutral, which quenched the
+lingering force of the lean's tilt and was itself felt 0.5 to 0.8 s later
+(docs/guide/cueing.md). Without a preview these rows' slack is free (the causal plan is
+unchanged: its prediction of the motion after the horizon is too poor to band it).
 
 The condensed QP (``N`` variables) has a constant Hessian and constraint matrix; each step
 updates its linear term and bounds and warm-starts OSQP (Stellato et al., *OSQP: an operator
@@ -105,7 +113,15 @@ from motosim.cueing.vestibular import VestibularModel, canal_tf, otolith_tf
 from motosim.errors import MotosimError
 from motosim.timeseries import TimeSeries
 
-__all__ = ["MOTION_INPUTS", "AxisPlan", "MpcCueing", "MpcDesign", "apply_mpc", "design_mpc"]
+__all__ = [
+    "COAST_TIMES",
+    "MOTION_INPUTS",
+    "AxisPlan",
+    "MpcCueing",
+    "MpcDesign",
+    "apply_mpc",
+    "design_mpc",
+]
 
 Array = NDArray[np.float64]
 
@@ -117,6 +133,12 @@ BAND_MARGIN = 0.9
 """The band of the false-cue constraints, as a fraction of the perception threshold."""
 MOTION_INPUTS = ("omega_x", "omega_y", "omega_z", "f_x", "f_y")
 """What :meth:`MpcCueing.step` reads, in order."""
+COAST_TIMES = (0.5, 1.0, 2.0)
+"""Times [s] after the horizon at which the roll plan on a road preview bands the lateral
+force of its terminal tilt held (the platform at rest at its last planned angle): the
+otolith's response to a held tilt peaks 1.9 s after it (Young & Meiry's model of
+:mod:`motosim.cueing.vestibular`: 63 % of the peak at 0.5 s, 89 % at 1 s), so a tilt planned
+within the horizon is felt mostly after it."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -151,7 +173,9 @@ class AxisPlan:
     band_thr, band_quad, band_lin : ndarray
         Their thresholds and the quadratic and linear weights of their slacks.
     band_steps : tuple of ndarray
-        The banded prediction steps of the rotation and of the force (roll and pitch).
+        The banded prediction steps of the rotation and of the force (roll and pitch); for
+        roll, the force's last three rows are the terminal tilt held :data:`COAST_TIMES`
+        after the horizon, banded against the prediction at its last step.
     limits : tuple of float
         ``(X, V, A)``.
     head_height : float
@@ -336,6 +360,23 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
         G.append(_vehicle_prediction(Av, Bv, Cv, h, N, tuning.prediction_time))
         W.append(w * M.T)
+    if axis == 0:
+        # the lateral force of the terminal tilt held, felt after the horizon: banded at
+        # COAST_TIMES on a road preview (the slack is free without one), against the
+        # motorcycle's predicted perception at the horizon's end
+        from scipy.linalg import expm
+
+        rest = np.eye(nx)
+        rest[1, 1] = 0.0  # the commanded rate stopped: the platform held at its last angle
+        for t_c in COAST_TIMES:
+            coast = C_oto @ expm(A * t_c) @ rest
+            band_M.append((coast @ Gam[N - 1])[None])
+            band_E.append((coast @ Phi[N - 1])[None])
+            band_thr.append(np.array([thr_o]))
+            band_quad.append(np.zeros(1))
+            band_lin.append(np.zeros(1))
+            band_lin_preview.append(np.array([tuning.preview_force_false_cue_weight / thr_o]))
+            band_steps[1] = np.append(band_steps[1], N - 1)
     w_angle = (tuning.pitch_angle_weight if axis == 1 else tuning.angle_weight) / limits.angle**2
     for e, w in ((e_angle, w_angle),
                  (e_rate, tuning.rate_weight / rate**2)):  # fmt: skip

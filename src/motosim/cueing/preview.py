@@ -4,12 +4,16 @@ A training scenario's road is known in advance, as a rider sees it ahead. From t
 ``s`` the motorcycle has reached and its present speed ``v``, the lean of a steady turn of the
 road's curvature ``kappa`` at the arc length reached ``tau`` seconds ahead is::
 
-    phi_p(tau) = atan(v^2 kappa(s + v (tau + lead)) / g)
+    phi_p(tau) = atan(v^2 kappa(s + lead + v tau) / g)
 
 (the roll equilibrium of a steady turn of a thin-tyred motorcycle, e.g. Cossalter,
-*Motorcycle Dynamics*, 2nd ed., 2006, on steady turning), with ``lead`` the time by which
-the rider's lean leads the road's curvature under the wheels (a fitted constant,
-:data:`LEAD`). Its derivatives in ``tau`` (central differences of :data:`SMOOTHING`) give
+*Motorcycle Dynamics*, 2nd ed., 2006, on steady turning), with ``lead`` the distance by
+which the rider's lean leads the road's curvature under the rear contact point, whose
+position the run records (a fitted constant, :data:`LEAD_DISTANCE`). A distance, not a time:
+the rear contact's path follows the front wheel's, which the steering turns, a wheelbase
+behind (small angles: ``kappa_front = kappa_rear + w d kappa_rear / ds``, a lag in distance),
+and the lean, which balances the turn of the mass centre ahead of the rear contact, leads
+it likewise. Its derivatives in ``tau`` (central differences of :data:`SMOOTHING`) give
 the predicted roll rate at the head ``p = phi_p'`` and lateral specific force ``f_y =
 SWAY_HEIGHT phi_p'' + SWAY_X psi_p''`` with ``psi_p' = v kappa``: the head's tangential
 accelerations from the roll and the yaw (rigid-body kinematics, :mod:`motosim.cueing.head`),
@@ -38,7 +42,7 @@ from motosim.cueing.head import GRAVITY
 from motosim.errors import MotosimError
 
 __all__ = [
-    "LEAD",
+    "LEAD_DISTANCE",
     "PREVIEW_SIGNALS",
     "SMOOTHING",
     "SWAY_HEIGHT",
@@ -50,10 +54,14 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-LEAD = 0.1
-"""Time [s] by which the rider's lean leads the curvature of the road under the wheels: of
-0, 0.05, ..., 0.2 s, the least RMS roll-rate error 1 s ahead summed over the lane change,
-slalom, obstacle avoidance and turn of docs/guide/cueing.md (each 0.05 or 0.1 s)."""
+LEAD_DISTANCE = 1.0
+"""Distance [m] by which the rider's lean leads the curvature of the road under the rear
+contact point: of 0.6, 0.8, ..., 1.4 m, the least RMS roll-rate error 1 s ahead summed over
+the training lane change (20 m/s), slalom (10 m/s), obstacle avoidance (15 m/s) and turn
+(30 m/s) of docs/guide/cueing.md, 12.97 deg/s against 13.64 for the constant time lead of
+0.1 s it replaces (a time lead's best value fell with the speed: 0.1 s at 10 and 15 m/s,
+0.05 s at 20 and 30 m/s). Between the mass centre's 0.59 m ahead of the rear contact and
+the wheelbase, 1.41 m (Sharp 1971's standard machine)."""
 SMOOTHING = 0.2
 """Half-width [s] of the finite differences that give the lean's rate and acceleration:
 they smooth the road's curvature as a rider's lean does (0.02, 0.05, 0.1, 0.2 s measured;
@@ -139,7 +147,7 @@ def road_preview(
     *,
     horizon: int,
     step: float,
-    lead: float = LEAD,
+    lead: float = LEAD_DISTANCE,
     smoothing: float = SMOOTHING,
 ) -> Array:
     """The motion at the head predicted from the road ahead, at each sample.
@@ -155,7 +163,8 @@ def road_preview(
     horizon, step : int, float
         The prediction: ``horizon`` steps of ``step`` [s] (the MPC's).
     lead : float, optional
-        Time [s] by which the lean leads the road's curvature under the wheels.
+        Distance [m] by which the lean leads the road's curvature under the rear contact
+        (:data:`LEAD_DISTANCE`).
     smoothing : float, optional
         Half-width [s] of the finite differences of the lean (:data:`SMOOTHING`).
 
@@ -181,11 +190,11 @@ def road_preview(
     s = road.ds * np.arange(road.kappa.size)
 
     def lean(offset: float) -> tuple[Array, Array]:
-        kappa = np.interp(arc[:, None] + v * (tau[None, :] + offset), s, road.kappa)
+        kappa = np.interp(arc[:, None] + lead + v * (tau[None, :] + offset), s, road.kappa)
         return np.arctan(v**2 * kappa / GRAVITY), kappa
 
     d = smoothing
-    (phi_m, k_m), (phi_0, _), (phi_p, k_p) = (lean(lead + e) for e in (-d, 0.0, d))
+    (phi_m, k_m), (phi_0, _), (phi_p, k_p) = (lean(e) for e in (-d, 0.0, d))
     rate = (phi_p - phi_m) / (2 * d)
     accel = (phi_p - 2 * phi_0 + phi_m) / d**2
     yaw_accel = v * (k_p - k_m) / (2 * d)

@@ -7,7 +7,7 @@ import pytest
 
 from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
 from motosim.cueing.preview import (
-    LEAD,
+    LEAD_DISTANCE,
     SWAY_HEIGHT,
     SWAY_X,
     Road,
@@ -35,7 +35,7 @@ def test_steady_turn_and_curvature_ramp_against_the_steady_turn_lean() -> None:
     arc, speed = np.array([100.0, 500.0]), np.full(2, v)
     ahead = road_preview(ramp, arc, speed, horizon=20, step=0.05)
     tau = 0.05 * np.arange(21)
-    lean_arg = v**2 * c * (arc[:, None] + v * (tau + LEAD)) / G
+    lean_arg = v**2 * c * (arc[:, None] + LEAD_DISTANCE + v * tau) / G
     expected = (v**3 * c / G) / (1.0 + lean_arg**2)
     np.testing.assert_allclose(ahead[..., 0], expected, rtol=1e-3)
     # the force: SWAY_HEIGHT phi'' + SWAY_X v^2 c (yaw acceleration of the ramp)
@@ -103,3 +103,62 @@ def test_cue_needs_the_positions_for_a_road() -> None:
     pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
     with pytest.raises(MotosimError, match="road preview of a run without x and y"):
         cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=_road(np.zeros(10)))
+
+
+def test_the_terminal_rows_band_the_held_tilt_as_the_otolith_feels_it() -> None:
+    # the roll plan's last three force rows are the lateral force of the terminal tilt held,
+    # COAST_TIMES after the horizon: for a platform at rest at a tilt a from t = 0 (otolith
+    # at rest), -g a times the step response of Young & Meiry's otolith (the transfer
+    # function of motosim.cueing.vestibular, evaluated by scipy.signal) at N h + t_c
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from scipy.signal import step
+
+    from motosim.cueing.head import GRAVITY
+    from motosim.cueing.mpc import COAST_TIMES, design_mpc
+    from motosim.cueing.vestibular import otolith_tf
+
+    cfg = load_platform("simacom_platform")
+    roll = design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01).axes[0]
+    a = np.radians(2.0)
+    x0 = np.zeros(roll.A_loop.shape[0])
+    x0[0] = x0[2] = a  # commanded and achieved angle, rate and vestibular states at rest
+    end = cfg.mpc.horizon * cfg.mpc.step
+    grid = np.linspace(0.0, 4.0, 4001)
+    _, response = step(otolith_tf(TELBAN_CARDULLO_2005), T=grid)
+    rows = roll.band_E[-len(COAST_TIMES) :] @ x0
+    expected = -GRAVITY * a * np.interp([end + t for t in COAST_TIMES], grid, response)
+    np.testing.assert_allclose(rows, expected, rtol=1e-4)
+    # their slack costs the force band's weight on a road preview only
+    thr = TELBAN_CARDULLO_2005.thresholds[4]
+    np.testing.assert_array_equal(roll.band_lin[-len(COAST_TIMES) :], 0.0)
+    np.testing.assert_allclose(
+        roll.band_lin_preview[-len(COAST_TIMES) :], cfg.mpc.preview_force_false_cue_weight / thr
+    )
+
+
+def test_a_tilt_drawn_after_the_road_straightens_is_felt_less_with_the_terminal_rows(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the mechanism of the 30 m/s lane change (docs/guide/cueing.md): on a straight road
+    # ahead, the angle reference holds a tilt of 1.5 deg (the washout's onset after a return
+    # roll); the perceived lateral force of the platform's tilt peaks about 1.9 s after it,
+    # beyond the 1 s horizon, so without the terminal rows the plan holds more of it
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    import motosim.cueing.mpc as mpc
+    from motosim.cueing import perceive, platform_motion
+
+    cfg = load_platform("simacom_platform")
+    straight = np.zeros((cfg.mpc.horizon + 1, 2))
+    reference = np.array([np.radians(1.5), 0.0, 0.0])
+    n = 400
+    t = 0.01 * np.arange(n)
+    peaks = []
+    for coast in (mpc.COAST_TIMES, ()):
+        monkeypatch.setattr(mpc, "COAST_TIMES", coast)
+        plan = mpc.MpcCueing(mpc.design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01))
+        roll = np.array([plan.step(np.zeros(5), reference, None, straight)[0] for _ in t])
+        motion = platform_motion(t, roll, 0 * t, 0 * t, cfg.platform)
+        sway = perceive(TELBAN_CARDULLO_2005, motion)["sway"]
+        peaks.append(float(np.max(np.abs(sway))) / TELBAN_CARDULLO_2005.thresholds[4])
+    # 1.09 against 1.19 thresholds
+    assert peaks[0] < 0.95 * peaks[1], peaks
