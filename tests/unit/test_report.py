@@ -1,6 +1,7 @@
 """Closed-loop figures (smoke tests on a tiny result) and the HTML report."""
 
 import base64
+import json
 from collections.abc import Callable
 from pathlib import Path
 
@@ -129,3 +130,18 @@ def test_report_of_an_interrupted_run(tmp_path: Path) -> None:
 def test_report_without_result(tmp_path: Path) -> None:
     with pytest.raises(MotosimError, match=r"no result\.h5"):
         build_report(tmp_path)
+
+
+def test_report_of_a_realtime_run_stopped_by_a_safety_fault(tmp_path: Path) -> None:
+    # motosim run closes the rows marked partial and writes the fault beside them
+    with pytest.raises(RuntimeError):
+        _write(tmp_path, interrupt=True)
+    timing = {"state": "FAULT", "fault": "ESTOP_CAN", "fault_reason": "emergency stop (t = 3 s)"}
+    (tmp_path / "timing.json").write_text(json.dumps(timing), encoding="utf-8")
+    text = build_report(tmp_path).read_text(encoding="utf-8")
+    assert "run failed: safety fault: emergency stop (t = 3 s)" in text
+    assert "interrupted: partial result" not in text
+    (tmp_path / "timing.json").write_text(json.dumps(timing | {"fault": "NONE"}), "utf-8")
+    assert "interrupted: partial result" in build_report(tmp_path).read_text(encoding="utf-8")
+    (tmp_path / "timing.json").write_text("{not json", encoding="utf-8")  # the rows still count
+    assert "interrupted: partial result" in build_report(tmp_path).read_text(encoding="utf-8")

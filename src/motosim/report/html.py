@@ -194,6 +194,22 @@ def _table(header: tuple[str, ...], rows: list[tuple[str, ...]], numeric: int = 
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
 
 
+def _safety_fault(folder: Path) -> str | None:
+    """The safety fault that stopped a real-time run, from the ``timing.json`` that
+    ``motosim run`` writes beside its rows (None without one, or without a fault).
+
+    Its rows are closed marked partial, like an interrupted run's; the fault is said here.
+    """
+    timing = folder / "timing.json"
+    try:
+        recorded = json.loads(timing.read_text(encoding="utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None  # no real-time run, or a damaged file: the rows still tell the run
+    if not isinstance(recorded, dict) or recorded.get("fault") in (None, "NONE"):
+        return None
+    return f"safety fault: {recorded.get('fault_reason') or recorded['fault']}"
+
+
 def build_report(folder: str | Path) -> Path:
     """Write ``folder/report.html`` from the result saved in ``folder``.
 
@@ -220,7 +236,7 @@ def build_report(folder: str | Path) -> Path:
     run_rows = _run_rows(result, source)
     scenario = next((v for k, v in run_rows if k == "scenario"), source.name or str(source))
     title = f"motosim run: {scenario}"
-    failed = result.summary.get("failure")
+    failed = result.summary.get("failure") or _safety_fault(source)
     if failed:
         status = f'<span class="status interrupted">run failed: {_esc(str(failed))}</span>'
     elif result.complete:
