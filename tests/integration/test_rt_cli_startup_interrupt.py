@@ -95,3 +95,22 @@ def test_ctrl_c_once_the_runner_is_built_releases_its_shared_ring(
     assert code == 130, capsys.readouterr().err
     with pytest.raises(FileNotFoundError):  # unlinked, not left to the resource tracker
         shared_memory.SharedMemory(name=names[0])
+
+
+def test_ctrl_c_while_the_rig_is_built_stops_it(
+    python_sigint: None, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import motosim.rt.rig
+
+    rig_class = motosim.rt.rig.VirtualRig
+
+    def interrupted_rig(*args: object, **kwargs: object) -> object:
+        _press_ctrl_c_inside_a_c_callback()
+        return rig_class(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(motosim.rt.rig, "VirtualRig", interrupted_rig)
+    code = main(["rig", str(SCENARIOS / "realtime_square.toml"), "--bus", "virtual",
+                 "--duration", "5", "--json"])  # fmt: skip
+    out, err = capsys.readouterr()
+    assert code == 130, err
+    assert out == "" and "interrupted" in err  # stopped before its first tick
