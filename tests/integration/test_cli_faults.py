@@ -6,7 +6,6 @@ speeds. Each ends with its exit code and one line; no result is lost or left unr
 """
 
 import csv
-import json
 import os
 import signal
 import subprocess
@@ -242,22 +241,3 @@ def test_a_lane_change_outside_the_riders_speeds_is_refused(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "expected 3 to 60 m/s with the virtual rider" in err
     assert not os.path.exists(tmp_path / "out")
-
-
-def test_a_failed_run_still_prints_its_metrics_with_json(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    # a script reading --json got nothing on stdout for a run that fell (exit 3)
-    path = tmp_path / "push.toml"
-    path.write_text(
-        '[scenario]\nname = "push"\nduration = 10.0\n[rider]\nkind = "torque"\n'
-        'profile = { kind = "constant", value = 20.0 }\n',
-        encoding="utf-8",
-    )  # 20 N*m held with nobody balancing: the machine falls within 2 s
-    out = tmp_path / "run"
-    code = main(["simulate", str(path), "--out", str(out), "--json", "--no-report"])
-    captured = capsys.readouterr()
-    assert code == 3 and captured.err.count("\n") == 1, captured.err
-    payload = json.loads(captured.out)
-    assert payload["out"] == str(out) and payload["metrics"]["flag_fall"] == 1.0
-    assert "fell at t" in payload["metrics"]["failure"]
