@@ -43,3 +43,20 @@ def test_bad_platform_is_one_line_exit_2(run_dir: Path, tmp_path: Path, capsys) 
     assert main(["cueing", str(run_dir), "--platform", str(bad), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "missing table [axes]" in err
+
+
+def test_a_run_with_skipped_periods_is_refused_naming_the_folder_and_why(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # motosim run records one row per period served: a missed deadline leaves a gap
+    t = np.delete(np.arange(0.0, 2.0, 0.001), np.arange(500, 508))
+    names = ("t", "v_x", "v_y", "psi_dot", "phi_dot", "phi")
+    data = np.column_stack([t, 15.0 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t])
+    folder = tmp_path / "rt"
+    with ResultWriter(folder, names, {"scenario": {"name": "rt"}}) as writer:
+        writer.append(data)
+        writer.close({})
+    assert main(["cueing", str(folder), "--out", str(tmp_path / "cue")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(folder) in err
+    assert "0.009 s" in err and "missed deadlines" in err

@@ -303,7 +303,8 @@ def test_a_run_that_falls_is_a_failure_with_its_result_kept(
         '[rider]\nkind = "torque"\nprofile = { kind = "constant", value = 20.0 }\n'
     )
     code, out, err = _run(capsys, "simulate", str(path), "--out", str(tmp_path / "r"), "--json")
-    assert code == 3 and out == ""
+    assert code == 3 and json.loads(out)["metrics"]["flag_fall"] == 1.0  # what a script reads
+    assert "fell at t" in json.loads(out)["metrics"]["failure"]
     assert err.startswith("motosim: run failed: fall: the motorcycle fell") and err.count("\n") == 1
     result = load_result(tmp_path / "r")
     assert result.complete and result.summary["flag_fall"] == 1.0

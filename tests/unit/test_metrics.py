@@ -49,3 +49,31 @@ def test_fractions_of_the_peaks() -> None:
     assert math.isclose(m["tracking_rms_fraction"], 0.001 / np.max(np.abs(delta)), rel_tol=1e-9)
     assert math.isclose(m["estimate_rms_fraction"], 0.05, rel_tol=1e-9)
     assert math.isnan(_metrics(delta=np.zeros(1), theta_h=np.zeros(1))["tracking_rms_fraction"])
+
+
+def test_slow_steering_in_the_last_seconds_is_no_buzz() -> None:
+    # a slalom's current at 0.3 Hz: not a whole number of periods in the last 2 s, so a
+    # plain FFT high-pass of that window spreads the slow swing above 3 Hz (leakage)
+    t = np.arange(0.0, 14.0, 1e-3)
+    slow = _metrics_at(t, i_m=5.0 * np.sin(2 * np.pi * 0.3 * t), tau_r=np.zeros(1))
+    assert slow["buzz_current_p2p"] < 0.05
+    assert slow["flag_oscillation"] == 0.0
+    buzz = 0.5 * np.sin(2 * np.pi * 9.0 * t)  # the same swing carrying 1 A p-p at 9 Hz
+    both = _metrics_at(t, i_m=5.0 * np.sin(2 * np.pi * 0.3 * t) + buzz, tau_r=np.zeros(1))
+    assert math.isclose(both["buzz_current_p2p"], 1.0, rel_tol=0.05)
+    assert math.isclose(both["buzz_frequency"], 9.0, rel_tol=0.06)
+
+
+def test_buzz_while_the_rider_holds_a_steady_turn_is_flagged() -> None:
+    # a steady turn: the rider holds 3 N*m and asks for no change; a 1 A buzz is felt
+    t = np.arange(0.0, 4.0, 1e-3)
+    buzz = 0.5 * np.sin(2 * np.pi * 9.0 * t)
+    held = _metrics_at(t, i_m=1.0 + buzz, tau_r=3.0 + 0.2 * np.sin(2 * np.pi * 0.2 * t))
+    assert held["flag_oscillation"] == 1.0
+    turning = _metrics_at(t, i_m=1.0 + buzz, tau_r=3.0 * np.sin(2 * np.pi * 0.4 * t))
+    assert turning["flag_oscillation"] == 0.0  # the rider is steering: not judged
+
+
+def _metrics_at(t: np.ndarray, **columns: np.ndarray) -> dict[str, float]:
+    full = {name: np.broadcast_to(values, t.shape).copy() for name, values in columns.items()}
+    return run_metrics(t, full.get, complete=True, max_current=30.0)

@@ -98,3 +98,16 @@ def test_implausible_scenarios_warn_once(
 def test_implausible_lists_nothing_for_a_default_scenario() -> None:
     assert implausible(Scenario(name="x")) == []
     assert len(implausible(Scenario(name="x", motorcycle=Motorcycle(speed=60.0)))) == 1
+
+
+def test_a_turn_of_more_than_a_full_circle_warns_that_the_angle_is_in_radians() -> None:
+    # angle = 90 written in degrees: 90 rad is 14 circles, ridden without a word
+    from motosim.sim.scenario import Rider, TurnPath
+
+    def turn(angle: float) -> Scenario:
+        path = TurnPath(radius=-60.0, angle=angle, start=30.0, transition=20.0)
+        return Scenario(name="x", rider=Rider(kind="virtual", path=path))
+
+    lines = implausible(turn(90.0))
+    assert len(lines) == 1 and "angle = 90 rad" in lines[0] and "radians" in lines[0]
+    assert implausible(turn(3.14159 / 2)) == [] and implausible(turn(-6.0)) == []

@@ -1,6 +1,7 @@
 """Closed-loop figures (smoke tests on a tiny result) and the HTML report."""
 
 import base64
+import json
 from collections.abc import Callable
 from pathlib import Path
 
@@ -129,3 +130,37 @@ def test_report_of_an_interrupted_run(tmp_path: Path) -> None:
 def test_report_without_result(tmp_path: Path) -> None:
     with pytest.raises(MotosimError, match=r"no result\.h5"):
         build_report(tmp_path)
+
+
+def test_report_of_a_realtime_run_stopped_by_a_safety_fault(tmp_path: Path) -> None:
+    # motosim run closes the rows marked partial and writes the fault beside them
+    with pytest.raises(RuntimeError):
+        _write(tmp_path, interrupt=True)
+    timing = {"state": "FAULT", "fault": "ESTOP_CAN", "fault_reason": "emergency stop (t = 3 s)"}
+    (tmp_path / "timing.json").write_text(json.dumps(timing), encoding="utf-8")
+    text = build_report(tmp_path).read_text(encoding="utf-8")
+    assert "run failed: safety fault: emergency stop (t = 3 s)" in text
+    assert "interrupted: partial result" not in text
+    (tmp_path / "timing.json").write_text(json.dumps(timing | {"fault": "NONE"}), "utf-8")
+    assert "interrupted: partial result" in build_report(tmp_path).read_text(encoding="utf-8")
+    (tmp_path / "timing.json").write_text("{not json", encoding="utf-8")  # the rows still count
+    assert "interrupted: partial result" in build_report(tmp_path).read_text(encoding="utf-8")
+
+
+def test_report_of_a_cueing_result_shows_its_figures_and_claims_no_flag_check(
+    tmp_path: Path,
+) -> None:
+    # motosim cueing writes the platform's commands and its figures, no closed-loop signal
+    t = np.arange(0.0, 1.0, 0.01)
+    names = ("t", "phi_s", "theta_s", "psi_s", "phi_vis")
+    with ResultWriter(tmp_path, names, {"algorithm": "mpc"}) as writer:
+        writer.append(np.column_stack([t, *(0.01 * np.sin(t + k) for k in range(4))]))
+        writer.close({"violations": 0})
+    png = b"\x89PNG\r\n\x1a\n" + b"\x00" * 16
+    for name in ("perception.png", "commands.png"):
+        (tmp_path / name).write_bytes(png)
+    text = build_report(tmp_path).read_text(encoding="utf-8")
+    assert "no buzz, no saturation, no fall" not in text  # none of it was checked
+    images = text.split('src="data:image/png;base64,')[1:]
+    assert len(images) == 2
+    assert all(base64.b64decode(i.split('"', 1)[0]) == png for i in images)

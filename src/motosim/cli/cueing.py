@@ -90,12 +90,21 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
         raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
     check_output_folder(args.out, overwrite=args.overwrite)
+    import numpy as np
+
     from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
     from motosim.io.results import load_result
     from motosim.timeseries import TimeSeries
 
     config = load_platform(args.platform)
     result = load_result(args.result)
+    steps = np.diff(result.t)
+    if steps.size and steps.max() - steps.min() > 1e-6 * steps.max():
+        raise MotosimError(
+            f"{args.result}: sample period from {steps.min():g} to {steps.max():g} s; expected "
+            "a constant rate (a result of motosim run skips its missed deadlines: its platform "
+            "commands are those motosim run sends with --platform-udp or --platform-can)"
+        )
     series = TimeSeries(result.t, result.data, result.names)
     model = TELBAN_CARDULLO_2005
     warn_atypical("cueing", "--rate", args.rate)

@@ -75,6 +75,18 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
+    from motosim.cli.run import _Presses
+
+    presses = _Presses()  # Ctrl-C while the rig starts: counted, not lost in a C callback
+    previous = signal.signal(signal.SIGINT, presses)
+    try:
+        return _run(args, presses)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _run(args: argparse.Namespace, presses: Any) -> int:
+    """:func:`run`, with Ctrl-C counted by ``presses`` until the loop takes it over."""
     import numpy as np
 
     from motosim.cli.run import check_rt_options, load_realtime, rig_settings
@@ -156,6 +168,7 @@ def run(args: argparse.Namespace) -> int:
         previous = signal.signal(signal.SIGINT, lambda signum, frame: loop.stop())
         freeze_gc()
         try:
+            presses.check()  # Ctrl-C while the rig was built: no run
             loop.run(tick, periods=periods)
         finally:
             thaw_gc()

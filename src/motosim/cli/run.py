@@ -400,8 +400,41 @@ def _keyboard(runner: Any) -> None:
         return
 
 
+class _Presses:
+    """A SIGINT handler that counts the presses of Ctrl-C and raises nothing.
+
+    While ``motosim run`` starts, numba and llvmlite call back into Python from C as they
+    load and link the compiled stack (10-15 s); Python's own handler raises
+    KeyboardInterrupt wherever the signal lands, and one raised in such a callback is printed
+    ("Exception ignored") and lost: the run started anyway and drove the handlebar. Counted
+    here, the press is acted on at :meth:`check`, outside any callback.
+    """
+
+    def __init__(self) -> None:
+        self.count = 0
+
+    def __call__(self, signum: int, frame: object) -> None:
+        self.count += 1
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if Ctrl-C was pressed."""
+        if self.count:
+            raise KeyboardInterrupt
+
+
 def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
+    presses = _Presses()
+    previous = signal.signal(signal.SIGINT, presses)
+    try:
+        return _run(args, presses, previous)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
+    """:func:`run`, with Ctrl-C counted by ``presses`` until the loop takes it over, and
+    given back to the handler ``sigint`` once the loop has ended."""
     import numpy as np
 
     from motosim.io.can import handlebar_codecs, open_link
@@ -496,12 +529,18 @@ def run(args: argparse.Namespace) -> int:
                 "duration": duration,
             }
         }
+        try:
+            presses.check()  # Ctrl-C while the stack was built: no run
+        except KeyboardInterrupt:
+            runner.ring.close()  # the loop would have: its shared memory
+            raise
         # a partial result is kept beside a complete one already there (--overwrite):
         # the timing and the report go where the rows went
         stats, privileges, summary, folder = _loop(
             args, runner, clock, rate, periods, folder, metadata,
             inputs.nominal_handlebar.torque_per_amp, view, telemetry,
         )  # fmt: skip
+        signal.signal(signal.SIGINT, sigint)  # the files are closed: Ctrl-C as before
         counters = runner.counters()
     finally:
         link.close()
@@ -658,6 +697,8 @@ def _loop(
     # from here to the end Ctrl-C is ours: a stop, then an E-stop; never an exception that
     # would leave the writer and the shared ring behind
     previous = signal.signal(signal.SIGINT, on_sigint)
+    if isinstance(previous, _Presses) and previous.count:
+        on_sigint(signal.SIGINT, None)  # pressed since motosim run checked: stop at once
     ctx = multiprocessing.get_context("spawn")
     ours, theirs = ctx.Pipe()
     buttons = None

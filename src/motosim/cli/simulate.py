@@ -86,10 +86,20 @@ def run(args: argparse.Namespace) -> int:
         print(f"motosim: interrupted; the partial result is in {kept}", file=sys.stderr)
         return 130
     except RunFailedError:
-        if args.report and is_complete_result(folder):  # written whole, flagged: its report
-            from motosim.report import build_report
+        report = None
+        if is_complete_result(folder):  # written whole, flagged: its report and metrics
+            if args.report:
+                from motosim.report import build_report
 
-            build_report(folder)
+                report = build_report(folder)
+            if args.json:  # what a script reads, failure included; the reason on stderr
+                from motosim.io.results import load_result
+
+                summary = load_result(folder).summary
+                print_json(
+                    {"out": str(folder), "report": str(report) if report else None,
+                     "metrics": summary}
+                )  # fmt: skip
         raise
     for line in warnings(summary):
         print(f"motosim: warning: {line}", file=sys.stderr)

@@ -235,6 +235,7 @@ def read_log(
     required: Sequence[str],
     min_samples: int = 10,
     columns: Mapping[str, ColumnSpec] | None = None,
+    remedy: str | None = None,
 ) -> TimeSeries:
     """Read and validate a CSV log, converting its columns to SI.
 
@@ -250,6 +251,9 @@ def read_log(
     columns : mapping of str to ColumnSpec, optional
         Signal -> column of the file and unit (:func:`parse_columns`); signals not mapped are
         taken from the column of their own name.
+    remedy : str, optional
+        What the message of a missing column advises (default: the ``--columns`` option of
+        the commands that read logs).
 
     Returns
     -------
@@ -304,7 +308,8 @@ def read_log(
         raise MotosimError(
             f"{path}: missing column {missing[0]!r}; expected columns "
             f"{', '.join(('t', *required))} (found {', '.join(names) or 'no header'}; "
-            f"map yours with --columns {missing[0]}=NAME[:UNIT])"
+            + (remedy or f"map yours with --columns {missing[0]}=NAME[:UNIT]")
+            + ")"
         )
     rows = list(csv.reader([text for _, text in lines[1:]], delimiter=delimiter))
     data = np.empty((len(rows), len(names)))

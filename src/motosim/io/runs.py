@@ -117,7 +117,10 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     for profile in profiles:
         if isinstance(profile, CsvProfile):
             tables[profile.file] = read_log(
-                folder / profile.file, required=(profile.column,), min_samples=2
+                folder / profile.file,
+                required=(profile.column,),
+                min_samples=2,
+                remedy=f"the file's header must name t and the column = {profile.column!r}",
             )
     c = scenario.controller
     controller, observer = None, None

@@ -63,6 +63,10 @@ _METRICS: dict[str, _Metric] = {
     "buzz_frequency": _Metric("its strongest frequency", "Hz", 1.0, "Hz"),
     "saturated_share": _Metric("time at the current limit", "", 100.0, "%"),
 }
+_SAVED_FIGURES = (
+    ("perception.png", "Perceived motion, motorcycle against platform (motosim cueing)"),
+    ("commands.png", "Platform commands against their limits (motosim cueing)"),
+)
 _FLAGS = {
     "flag_oscillation": "sustained oscillation: the motor current buzzes above 3 Hz",
     "flag_saturation": "the motor current was at its limit more than half the time",
@@ -194,6 +198,22 @@ def _table(header: tuple[str, ...], rows: list[tuple[str, ...]], numeric: int = 
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
 
 
+def _safety_fault(folder: Path) -> str | None:
+    """The safety fault that stopped a real-time run, from the ``timing.json`` that
+    ``motosim run`` writes beside its rows (None without one, or without a fault).
+
+    Its rows are closed marked partial, like an interrupted run's; the fault is said here.
+    """
+    timing = folder / "timing.json"
+    try:
+        recorded = json.loads(timing.read_text(encoding="utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None  # no real-time run, or a damaged file: the rows still tell the run
+    if not isinstance(recorded, dict) or recorded.get("fault") in (None, "NONE"):
+        return None
+    return f"safety fault: {recorded.get('fault_reason') or recorded['fault']}"
+
+
 def build_report(folder: str | Path) -> Path:
     """Write ``folder/report.html`` from the result saved in ``folder``.
 
@@ -220,7 +240,7 @@ def build_report(folder: str | Path) -> Path:
     run_rows = _run_rows(result, source)
     scenario = next((v for k, v in run_rows if k == "scenario"), source.name or str(source))
     title = f"motosim run: {scenario}"
-    failed = result.summary.get("failure")
+    failed = result.summary.get("failure") or _safety_fault(source)
     if failed:
         status = f'<span class="status interrupted">run failed: {_esc(str(failed))}</span>'
     elif result.complete:
@@ -231,11 +251,18 @@ def build_report(folder: str | Path) -> Path:
     metric_rows, note = _metric_rows(result)
     values = {**metrics(result), **result.summary}
     raised = [text for key, text in _FLAGS.items() if values.get(key)]
-    flags = (
-        "".join(f'<p class="status interrupted">warning: {_esc(text)}</p>' for text in raised)
-        if raised
-        else '<p class="note">No flag: no buzz, no saturation, no fall, speed within range.</p>'
-    )
+    checked = [key for key in _FLAGS if key in values]
+    if raised:
+        flags = "".join(
+            f'<p class="status interrupted">warning: {_esc(text)}</p>' for text in raised
+        )
+    elif len(checked) == len(_FLAGS):
+        flags = '<p class="note">No flag: no buzz, no saturation, no fall, speed within range.</p>'
+    elif checked:
+        flags = f'<p class="note">No flag raised of those checked: {", ".join(checked)}.</p>'
+    else:
+        flags = '<p class="note">No flag checked: the result has none of their signals.</p>'
+
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
@@ -259,6 +286,15 @@ def build_report(folder: str | Path) -> Path:
             parts.append(
                 f'<figure><img alt="{_esc(caption)}" src="data:image/png;base64,'
                 f'{_png(figure)}"><figcaption>{_esc(caption)}</figcaption></figure>'
+            )
+            drawn += 1
+    for name, caption in _SAVED_FIGURES:  # written beside the result by its command
+        saved = source / name
+        if source.is_dir() and saved.is_file():
+            image = base64.b64encode(saved.read_bytes()).decode("ascii")
+            parts.append(
+                f'<figure><img alt="{_esc(caption)}" src="data:image/png;base64,{image}">'
+                f"<figcaption>{_esc(caption)}</figcaption></figure>"
             )
             drawn += 1
     if not drawn:

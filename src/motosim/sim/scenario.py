@@ -727,6 +727,12 @@ def implausible(scenario: "Scenario") -> list[str]:
             f"[measurement] encoder_bits = {bits} is legal but coarser than any handlebar "
             f"encoder ({360 / 2**bits:.2g} deg a count; the paper's has 14 bits)"
         )
+    path = scenario.rider.path
+    if isinstance(path, TurnPath) and abs(path.angle) > 2.0 * math.pi:
+        lines.append(
+            f"[rider] path angle = {path.angle:g} rad ({math.degrees(path.angle):.0f} deg) is "
+            "legal but more than a full circle; the angle is in radians (90 deg = 1.571)"
+        )
     if scenario.rider.profile is not None:
         peak = _profile_peak(scenario.rider.profile)
         if peak > TYPICAL_RIDER_TORQUE:
