@@ -101,8 +101,8 @@ DESCRIPTIONS: dict[str, str] = {
     ),
     "controller.design": "A design file of `motosim design --out` (relative to the scenario).",
     "controller.bandwidth": (
-        "Tracking bandwidth of the designed controller [Hz]; by default 10 Hz, 20 Hz at "
-        "measurement rates from 100 to 200 Hz."
+        "Tracking bandwidth of the designed controller [Hz]; by default 10 Hz, a fifth of the "
+        "measurement rate below 50 Hz."
     ),
     "controller.order": "Order of the tuned K_s (0 to 3).",
     "controller.discretization": (

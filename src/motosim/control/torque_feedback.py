@@ -13,11 +13,9 @@ shaped plant G_s = G_h W1 a crossover at the chosen tracking bandwidth omega_c
 returns exactly to delta whatever constant torque the rider applies; W2 = 1 (a single,
 clean angle measurement). A controller K_s of fixed order is tuned on G_s for the four-block
 objective of eq. (25) (HIFOO-like), beside the full-order optimum gamma_min; the implemented
-controller is K = W1 K_s W2. The default bandwidth (:func:`default_bandwidth`) depends on the
-rate: 10 Hz at 200 Hz and faster, which follows the weave (up to 3.5 Hz) closely and is a
-decade under the 1 kHz control rate; 20 Hz from 100 to 200 Hz (the paper's CAN loop runs at
-100 Hz), where the stack's estimate, and so its cancellation of the rider's torque, lags by
-several samples and the feedback must correct what the cancellation misses.
+controller is K = W1 K_s W2. The default bandwidth (:func:`default_bandwidth`) is 10 Hz, which
+follows the weave (up to 3.5 Hz) closely and is a decade under the 1 kHz control rate, or a
+fifth of a slower rate.
 """
 
 import math
@@ -42,8 +40,6 @@ __all__ = [
     "PAPER_CONTROLLER",
     "PAPER_DEN",
     "PAPER_NUM",
-    "SLOW_RATE",
-    "SLOW_RATE_BANDWIDTH",
     "LoopAnalysis",
     "TorqueFeedbackDesign",
     "analyse_loop",
@@ -59,12 +55,7 @@ __all__ = [
 Array = NDArray[np.float64]
 
 DEFAULT_BANDWIDTH = 10.0
-"""Tracking bandwidth at control rates of :data:`SLOW_RATE` and above [Hz]."""
-SLOW_RATE = 200.0
-"""Control rate below which the default bandwidth is :data:`SLOW_RATE_BANDWIDTH` [Hz]: a
-sample period beyond 5 ms, half the 10 ms filter of the rider-torque estimate."""
-SLOW_RATE_BANDWIDTH = 20.0
-"""Tracking bandwidth at control rates from 100 Hz to :data:`SLOW_RATE` [Hz]."""
+"""Tracking bandwidth at control rates of 50 Hz and above [Hz]."""
 MAX_ORDER = 3
 """Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
 controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
@@ -274,17 +265,15 @@ def analyse_loop(hb: HandlebarParameters, controller: StateSpace, *, rate: float
 def default_bandwidth(rate: float) -> float:
     """The default tracking bandwidth at a control rate [Hz].
 
-    :data:`DEFAULT_BANDWIDTH` (10 Hz) at :data:`SLOW_RATE` (200 Hz) and faster;
-    :data:`SLOW_RATE_BANDWIDTH` (20 Hz) from 100 to 200 Hz; below 100 Hz 10 Hz again, or a
-    fifth of ``rate`` if less (the most :func:`check_options` admits). The rule comes from the
-    whole sampled stack (:func:`motosim.sim.loop_analysis.analyse_stack`, observer,
-    differentiator and feedforward inside), at 15 m/s: at 100 Hz the 10 Hz design keeps
-    2.8 dB and 12 deg at the motor current, the estimate's lag letting the rider-torque
-    cancellation feed the loop near 20 Hz and the Nyquist frequency; 20 Hz gives no gain
-    crossing of the negative real axis and 72 deg (120 Hz 66 deg, 150 Hz 65 deg, 175 Hz
-    68 deg, 190 Hz 72 deg), where a fifth of the rate would not (190 Hz, 38 Hz: 3 deg). At
-    200 Hz the 10 Hz design already keeps 10.6 dB and 146 deg. At 80 Hz neither holds: 10 Hz
-    keeps 1.4 dB and 4.6 deg, 16 Hz is unstable.
+    :data:`DEFAULT_BANDWIDTH` (10 Hz), or a fifth of ``rate`` if less (the most
+    :func:`check_options` admits). The rule comes from the whole sampled stack's margins at
+    the motor current (:func:`motosim.sim.loop_analysis.analyse_stack`: observer,
+    differentiator, feedforward and motorcycle inside; 20 m/s): 10 Hz keeps the most at every
+    rate tried, 25.0 dB and 76 deg at 1 kHz, 12.8 dB and 65 deg at 200 Hz, 10.7 dB and
+    56 deg at 150 Hz, 8.0 dB and 47 deg at 120 Hz, 5.5 dB and 37 deg at 100 Hz (20 Hz:
+    12.5/52, 7.7/44, 4.1/37, 1.3 dB and 33 deg), 2.7 dB and 23 deg at 80 Hz (16 Hz is
+    unstable there). Below about 120 Hz the rider-torque estimate's gain above 1 (2 near 16 Hz
+    at 100 Hz), fed back by the cancellation, leaves less than 6 dB and 45 deg.
 
     Parameters
     ----------
@@ -298,8 +287,6 @@ def default_bandwidth(rate: float) -> float:
     """
     if not (math.isfinite(rate) and rate > 0):
         raise MotosimError(f"rate = {rate!r}; expected a control rate > 0 [Hz]")
-    if 100.0 <= rate < SLOW_RATE:
-        return SLOW_RATE_BANDWIDTH
     return min(DEFAULT_BANDWIDTH, rate / 5.0)
 
 

@@ -26,8 +26,8 @@ so that an error is one line naming the key, the value and what was expected. Th
     [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman",
                    friction_compensation = true, lipschitz = 300
     [controller]   kind = "ours" | "paper" | "none", design = "DESIGN.toml" (optional),
-                   bandwidth [Hz] (default: 10 Hz; 20 Hz at measurement rates from 100 to
-                   200 Hz), order = 1, discretization = "zoh" | "tustin",
+                   bandwidth [Hz] (default: 10 Hz, a fifth of the measurement rate below
+                   50 Hz), order = 1, discretization = "zoh" | "tustin",
                    max_current = 30 [A], feedforward = ["rider", "reference"] for ours,
                    [] for the paper's (the terms of :func:`motosim.sim.stack.step`)
 
@@ -585,7 +585,7 @@ class Controller:
     """The torque-feedback controller.
 
     ``bandwidth`` None: :func:`motosim.control.torque_feedback.default_bandwidth` of the
-    measurement rate (10 Hz; 20 Hz from 100 to 200 Hz).
+    measurement rate (10 Hz, a fifth of the rate below 50 Hz).
     """
 
     kind: Literal["ours", "paper", "none"] = "ours"

@@ -77,13 +77,13 @@ def test_bad_options(handlebar: HandlebarParameters) -> None:
 
 
 def test_default_bandwidth_depends_on_the_rate() -> None:
-    """10 Hz at 200 Hz and faster (the 1 kHz design unchanged); 20 Hz from 100 to 200 Hz;
-    below, 10 Hz or a fifth of the rate, the most the design admits (the whole stack's
-    margins at 100 Hz are in tests/unit/test_loop_analysis.py)."""
+    """10 Hz, or a fifth of the rate below 50 Hz, the most the design admits (the whole
+    stack's margins at 100 Hz, where 10 Hz keeps more than 20 Hz, are in
+    tests/unit/test_loop_analysis.py)."""
     assert default_bandwidth(1000.0) == 10.0
     assert default_bandwidth(200.0) == 10.0
-    assert default_bandwidth(190.0) == 20.0  # not a fifth of the rate: 38 Hz keeps 3 deg
-    assert default_bandwidth(100.0) == 20.0
+    assert default_bandwidth(190.0) == 10.0
+    assert default_bandwidth(100.0) == 10.0
     assert default_bandwidth(80.0) == 10.0  # 16 Hz is unstable there
     assert default_bandwidth(40.0) == pytest.approx(8.0)
     with pytest.raises(MotosimError, match="rate"):
