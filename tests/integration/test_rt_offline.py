@@ -321,3 +321,16 @@ def test_leaving_the_models_range_fades_the_torque_out_and_ends_the_run(
     envelope = np.clip(1.0 - (np.arange(rows.shape[0] - first) + 1) / 100.0, 0.0, 1.0)
     assert np.all(np.abs(i_safe[first:]) <= envelope * np.max(np.abs(rows[:, col["i_cmd"]])) + 1e-9)
     assert runner.counters().fault == "NONE" and not runner.stop_requested
+
+
+def test_the_stack_row_before_the_first_step_is_the_motorcycle_at_its_speed() -> None:
+    """The rows a real-time run records before the drive's first status frame are the
+    stack's initial row: the motorcycle upright and straight at the scenario's speed (they
+    were all zeros, v_x included, which made a run's minimum speed 0 m/s)."""
+    inputs = _inputs(1000.0)
+    model = build_stack(inputs)  # type: ignore[arg-type]
+    row = CompiledStack(model).row()
+    names = list(CompiledStack.names)
+    speed = inputs.scenario.motorcycle.speed  # type: ignore[attr-defined]
+    assert row[names.index("v_x")] == speed > 0.0
+    assert not np.any(np.delete(row, names.index("v_x")))

@@ -343,8 +343,8 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     row[14] = r[R_STACK_TIME]
     r[R_CALLS] += 1.0
     n_loop = q[Q_LOOP_COLUMNS]
-    for j in range(a.stack_row.size):
-        row[n_loop + j] = a.stack_row[j] if started else 0.0
+    for j in range(a.stack_row.size):  # before the stack starts: its initial row
+        row[n_loop + j] = a.stack_row[j]
     if state == 3.0:  # FAULT
         r[R_AFTER_FAULT] += 1.0
         carry_on = r[R_AFTER_FAULT] < r[R_LINGER]

@@ -80,6 +80,8 @@ class CompiledStack:
         self.state = np.zeros(2)
         """The period's index and the last command [A] (what :func:`stack_period` keeps)."""
         self._row = np.zeros(len(STACK_SIGNALS))
+        # before its first step: the motorcycle upright and straight at its speed, as reset
+        self._row[STACK_SIGNALS.index("v_x")] = model.speed
         args = (model, self.data, self.force, self.side_force, self.state, self._row, 0.0, 0.0)
         self._step = compiled(stack_period, *args)
         self._reset = compiled(stack_reset, *args[:5], 0.0, 0.0)
@@ -97,7 +99,8 @@ class CompiledStack:
         return command
 
     def row(self) -> Array:
-        """The values of :data:`STACK_SIGNALS` after the last step."""
+        """The values of :data:`STACK_SIGNALS` after the last step (before the first: the
+        motorcycle upright and straight at its speed, every other value 0)."""
         return self._row
 
 
