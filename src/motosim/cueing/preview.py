@@ -30,6 +30,16 @@ This module knows a road only as arrays (positions and curvature every ``ds`` me
 length): the scenario's path is built where it is known (:mod:`motosim.sim` and the
 ``motosim cueing`` command), and passed in. A rider who leaves the road's line (a free ride,
 a rider-torque scenario) breaks the preview: there is none.
+
+The preview assumes the rider is on the road's line. Where the motorcycle is off it (a swerve
+overshot), its coming motion is the rider's way back, not the road's. :func:`preview_trust`
+weighs the preview by the distance ``e`` to the line: fully within :data:`TRUST_DISTANCE`,
+the normal line keeping of the training runs, not at all beyond twice it, linearly between;
+the MPC scales the previewed motion by it, and plans from the present motion alone where it
+is zero (:meth:`motosim.cueing.mpc.MpcCueing.step`). It is an option of
+:func:`motosim.cueing.cue` (``trust_distance``), off by default: on the one run measured where
+the rider leaves the line (an obstacle avoidance at 35 m/s overshot by 2.6 m) it gave more
+false lateral cues than the preview trusted throughout (docs/guide/cueing.md).
 """
 
 import math
@@ -47,8 +57,10 @@ __all__ = [
     "SMOOTHING",
     "SWAY_HEIGHT",
     "SWAY_X",
+    "TRUST_DISTANCE",
     "Road",
     "arc_length",
+    "preview_trust",
     "road_preview",
 ]
 
@@ -75,6 +87,11 @@ contact point sideways, so the head moves as if the roll axis were 0.75 m up."""
 SWAY_X = 0.90
 """Lateral specific force at the head per unit yaw acceleration [m]: the same fit (0.89-0.91
 on the four runs; the head's offset ahead of the rear contact is 1.0 m)."""
+TRUST_DISTANCE = 0.5
+"""Distance [m] from the road's line up to which the preview is fully trusted (none beyond
+twice it): above the largest distance of the training runs of docs/guide/cueing.md, 0.47 m
+on the crosswind at 30 m/s (0.19-0.32 m on the lane change, slalom and obstacle avoidance,
+0.22 m on the turn), so that a rider's normal line keeping keeps the whole preview."""
 PREVIEW_SIGNALS = ("omega_x", "f_y")
 """What :func:`road_preview` predicts, in order: roll rate [rad/s] and lateral specific
 force [m/s^2] at the head."""
@@ -138,6 +155,44 @@ def arc_length(road: Road, x: Array, y: Array) -> Array:
         k = lo + int(np.argmin(d))
         out[i] = k * road.ds
     return out
+
+
+def preview_trust(
+    road: Road, x: Array, y: Array, arc: Array, *, distance: float = TRUST_DISTANCE
+) -> Array:
+    """How far the road preview is trusted at each sample, by the distance to the road's line.
+
+    Parameters
+    ----------
+    road : Road
+        The road.
+    x, y : ndarray, shape (m,)
+        The motorcycle's positions [m] in the road's frame.
+    arc : ndarray, shape (m,)
+        Arc length [m] reached at each position (:func:`arc_length`).
+    distance : float, optional
+        Distance [m] to the line within which the trust is full (:data:`TRUST_DISTANCE`).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        ``clip(2 - e / distance, 0, 1)`` with ``e`` [m] the distance from the position to
+        the line's sample at ``arc``: 1 on the line, 0 beyond ``2 distance``.
+
+    Raises
+    ------
+    MotosimError
+        If ``distance`` is not positive or the arrays differ in length.
+    """
+    if not (math.isfinite(distance) and distance > 0):
+        raise MotosimError(f"preview trust distance = {distance!r} m; expected a finite number > 0")
+    if not x.shape == y.shape == arc.shape:
+        raise MotosimError(
+            f"preview trust of {x.size}, {y.size}, {arc.size} x, y, arc; expected as many"
+        )
+    k = np.clip(np.rint(arc / road.ds).astype(np.int64), 0, road.x.size - 1)
+    error = np.hypot(x - road.x[k], y - road.y[k])
+    return np.clip(2.0 - error / distance, 0.0, 1.0)
 
 
 def road_preview(

@@ -162,3 +162,50 @@ def test_a_tilt_drawn_after_the_road_straightens_is_felt_less_with_the_terminal_
         peaks.append(float(np.max(np.abs(sway))) / TELBAN_CARDULLO_2005.thresholds[4])
     # 1.09 against 1.19 thresholds
     assert peaks[0] < 0.95 * peaks[1], peaks
+
+
+def test_the_preview_fades_with_the_distance_and_far_off_the_line_is_the_causal_plan() -> None:
+    from motosim.cueing.preview import TRUST_DISTANCE, preview_trust
+
+    road = _road(np.zeros(4001))  # a straight line along x
+    x = np.full(5, 50.0)  # 50 m along the line, off it by 0, 1, 1.5, 2 and 10 TRUST_DISTANCE
+    off = TRUST_DISTANCE * np.array([0.0, 1.0, 1.5, 2.0, 10.0])
+    trust = preview_trust(road, x, off, x)
+    np.testing.assert_allclose(trust, [1.0, 1.0, 0.5, 0.0, 0.0], atol=1e-12)
+    with pytest.raises(MotosimError, match="trust distance = 0"):
+        preview_trust(road, x, off, x, distance=0.0)
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+
+    cfg = load_platform("simacom_platform")
+    design = design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01)
+    rate = np.radians(10.0)
+    motion = np.array([rate, 0.0, 0.0, 0.0, 0.5])
+    ends = np.tile([rate, 0.0], (cfg.mpc.horizon + 1, 1))
+    ends[4:] = 0.0  # the road says the roll ends 0.2 s ahead
+    plans = [MpcCueing(design) for _ in range(3)]
+    for _ in range(10):
+        out = [
+            plans[0].step(motion, np.zeros(3)),  # causal
+            plans[1].step(motion, np.zeros(3), None, ends, 0.0),  # far off the line
+            plans[2].step(motion, np.zeros(3), None, ends),  # on the line
+        ]
+    np.testing.assert_array_equal(out[1], out[0])  # exactly the causal plan
+    assert out[2][0] > 1.01 * out[0][0], out  # the roll that ends is given now
+    # a whole run 5 m beside a curving road's line: cue with the faded preview is the causal
+    # MPC's run exactly
+    t = np.arange(0.0, 2.0, 0.01)
+    phi = 0.2 * np.sin(2 * np.pi * 0.5 * t)
+    ride = TimeSeries(
+        t,
+        np.column_stack([20 + 0 * t, 0 * t, 9.81 * np.tan(phi) / 20, np.gradient(phi, t), phi,
+                         20 * t, 5.0 + 0 * t]),
+        ("v_x", "v_y", "psi_dot", "phi_dot", "phi", "x", "y"),
+    )  # fmt: skip
+    curving = _road(0.01 * np.sin(0.05 * 0.05 * np.arange(4001)))
+    runs = [
+        cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=road, trust_distance=d)
+        for road, d in ((None, None), (curving, TRUST_DISTANCE), (curving, None))
+    ]
+    np.testing.assert_array_equal(runs[1].commands.data, runs[0].commands.data)
+    assert not np.array_equal(runs[2].commands.data, runs[0].commands.data)
