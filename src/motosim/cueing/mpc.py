@@ -606,7 +606,7 @@ class MpcCueing:
             the roll plan then follows it (module docstring). None: from the present motion.
         trust : float, optional
             Weight in [0, 1] of the preview (:func:`motosim.cueing.preview.preview_trust`:
-            by the distance to the road's line): the previewed motion is scaled by it; at 0
+            by the lean the road asks for): the previewed motion is scaled by it; at 0
             the plan is the one from the present motion, as without a preview.
 
         Returns

@@ -84,7 +84,6 @@ def cue(
     rate: float | None = None,
     params: SharpParameters | None = None,
     road: Road | None = None,
-    trust_distance: float | None = None,
 ) -> CueingRun:
     """Cue the platform from a recorded run and score it.
 
@@ -104,15 +103,9 @@ def cue(
         The motorcycle, for eq. (2) when the run has ``tau_d`` and ``tau_b``.
     road : Road, optional
         The road the run's rider follows: the MPC then plans its roll with the motion
-        predicted from the road ahead of the run's position ``x``, ``y``
-        (:mod:`motosim.cueing.preview`); without it the MPC plans from the present motion
-        only. Ignored by the washout.
-    trust_distance : float, optional
-        With a ``road``: fade the preview out with the distance [m] to the road's line,
-        fully trusted within it, not at all beyond twice it
-        (:func:`motosim.cueing.preview.preview_trust`, e.g.
-        :data:`~motosim.cueing.preview.TRUST_DISTANCE`). Default: trusted everywhere (the
-        fading was measured not to help, docs/guide/cueing.md).
+        predicted from the road ahead of the run's position ``x``, ``y``, trusted by the
+        lean the road asks for (:mod:`motosim.cueing.preview`); without it the MPC plans
+        from the present motion only. Ignored by the washout.
 
     Returns
     -------
@@ -156,8 +149,7 @@ def cue(
             tuning = config.mpc
             arc = arc_length(road, run["x"], run["y"])
             preview = road_preview(road, arc, run["v_x"], horizon=tuning.horizon, step=tuning.step)
-            if trust_distance is not None:
-                trust = preview_trust(road, run["x"], run["y"], arc, distance=trust_distance)
+            trust = preview_trust(road, arc, run["v_x"], ahead=tuning.horizon * tuning.step)
         targets, rates = apply_mpc(
             design_mpc(config, model, dt), vehicle, targets, onset, preview, trust
         )

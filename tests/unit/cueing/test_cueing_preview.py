@@ -164,16 +164,21 @@ def test_a_tilt_drawn_after_the_road_straightens_is_felt_less_with_the_terminal_
     assert peaks[0] < 0.95 * peaks[1], peaks
 
 
-def test_the_preview_fades_with_the_distance_and_far_off_the_line_is_the_causal_plan() -> None:
-    from motosim.cueing.preview import TRUST_DISTANCE, preview_trust
+def test_the_preview_fades_with_the_lean_asked_and_where_untrusted_is_the_causal_plan() -> None:
+    from motosim.cueing.preview import LEAN_LIMIT, LEAN_TRUSTED, preview_trust
 
-    road = _road(np.zeros(4001))  # a straight line along x
-    x = np.full(5, 50.0)  # 50 m along the line, off it by 0, 1, 1.5, 2 and 10 TRUST_DISTANCE
-    off = TRUST_DISTANCE * np.array([0.0, 1.0, 1.5, 2.0, 10.0])
-    trust = preview_trust(road, x, off, x)
-    np.testing.assert_allclose(trust, [1.0, 1.0, 0.5, 0.0, 0.0], atol=1e-12)
-    with pytest.raises(MotosimError, match="trust distance = 0"):
-        preview_trust(road, x, off, x, distance=0.0)
+    # a road whose curvature asks, at 20 m/s, for steady-turn leans atan(v^2 kappa / g) of
+    # 0, LEAN_TRUSTED, halfway to LEAN_LIMIT, and LEAN_LIMIT, 100 m each (Cossalter, 2006)
+    v = 20.0
+    leans = [0.0, LEAN_TRUSTED, 0.5 * (LEAN_TRUSTED + LEAN_LIMIT), LEAN_LIMIT]
+    road = _road(np.repeat([np.tan(a) * G / v**2 for a in leans], 2000))
+    arc = np.array([10.0, 110.0, 210.0, 310.0, 60.0])  # the last sees 61-81 m: straight
+    trust = preview_trust(road, arc, np.full(5, v), ahead=1.0, lead=1.0)
+    np.testing.assert_allclose(trust, [1.0, 1.0, 0.5, 0.0, 1.0], atol=1e-9)
+    trust = preview_trust(road, np.array([290.0]), np.array([v]), ahead=1.0, lead=1.0)
+    np.testing.assert_allclose(trust, 0.0, atol=1e-9)  # LEAN_LIMIT in sight, 291-311 m
+    with pytest.raises(MotosimError, match="expected 0 <= trusted < limit"):
+        preview_trust(road, arc, arc, ahead=1.0, trusted=1.0, limit=0.5)
     pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
     from motosim.cueing.mpc import MpcCueing, design_mpc
 
@@ -187,25 +192,25 @@ def test_the_preview_fades_with_the_distance_and_far_off_the_line_is_the_causal_
     for _ in range(10):
         out = [
             plans[0].step(motion, np.zeros(3)),  # causal
-            plans[1].step(motion, np.zeros(3), None, ends, 0.0),  # far off the line
-            plans[2].step(motion, np.zeros(3), None, ends),  # on the line
+            plans[1].step(motion, np.zeros(3), None, ends, 0.0),  # a road not trusted
+            plans[2].step(motion, np.zeros(3), None, ends),  # trusted
         ]
     np.testing.assert_array_equal(out[1], out[0])  # exactly the causal plan
     assert out[2][0] > 1.01 * out[0][0], out  # the roll that ends is given now
-    # a whole run 5 m beside a curving road's line: cue with the faded preview is the causal
-    # MPC's run exactly
+    # a whole run on a road asking for a 60 deg lean: cue with it is the causal MPC's run
     t = np.arange(0.0, 2.0, 0.01)
     phi = 0.2 * np.sin(2 * np.pi * 0.5 * t)
     ride = TimeSeries(
         t,
-        np.column_stack([20 + 0 * t, 0 * t, 9.81 * np.tan(phi) / 20, np.gradient(phi, t), phi,
-                         20 * t, 5.0 + 0 * t]),
+        np.column_stack([v + 0 * t, 0 * t, G * np.tan(phi) / v, np.gradient(phi, t), phi,
+                         v * t, 0 * t]),
         ("v_x", "v_y", "psi_dot", "phi_dot", "phi", "x", "y"),
     )  # fmt: skip
-    curving = _road(0.01 * np.sin(0.05 * 0.05 * np.arange(4001)))
+    wavy = np.sin(0.05 * np.arange(4001) / 15.0)
     runs = [
-        cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=road, trust_distance=d)
-        for road, d in ((None, None), (curving, TRUST_DISTANCE), (curving, None))
-    ]
+        cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=road)
+        for road in (None, _road(np.tan(np.radians(60)) * G / v**2 * wavy),
+                     _road(np.tan(np.radians(20)) * G / v**2 * wavy))
+    ]  # fmt: skip
     np.testing.assert_array_equal(runs[1].commands.data, runs[0].commands.data)
     assert not np.array_equal(runs[2].commands.data, runs[0].commands.data)
