@@ -150,18 +150,19 @@ TRAINING = (
 )  # fmt: skip
 OTHERS = (
     "turn_30", "straight_50_gust", "lane_change_30", "slalom_15", "lane_change_25", "avoidance_22",
-    "opendrive_curve_25",
+    "opendrive_curve_25", "avoidance_35",
 )  # fmt: skip
-"""Unseen checks: two scenarios of scenarios/ and five of bench/scenarios/ at other speeds and
-sizes (the last three added after the 30 m/s lane change's diagnosis, before their cueing was
-looked at)."""
+"""Unseen checks: two scenarios of scenarios/ and six of bench/scenarios/ at other speeds and
+sizes (lane_change_25, avoidance_22 and opendrive_curve_25 added after the 30 m/s lane
+change's diagnosis, before their cueing was looked at; avoidance_35, the QA's, a road the
+rider cannot follow, docs/guide/cueing.md)."""
 
 
 def table(runs: str, thresholds: str = "telban", causal: bool = True) -> str:
     """Markdown table washout vs MPC on result folders ``runs/NAME`` of `motosim simulate`.
 
     Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario
-    (``bench/scenarios/NAME.toml`` for the last five of :data:`OTHERS`), then ``python
+    (``bench/scenarios/NAME.toml`` for the last six of :data:`OTHERS`), then ``python
     bench/bench_cueing.py RUNS`` (``RUNS benson`` to score with the thresholds
     of Benson et al. 1986, 1989; the MPC still plans with the default model's). The MPC runs
     from the present motion only, and, where the run has a path, with the road preview too

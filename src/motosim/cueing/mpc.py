@@ -583,6 +583,7 @@ class MpcCueing:
         reference: Array,
         onset: Array | None = None,
         preview: Array | None = None,
+        trust: float = 1.0,
     ) -> Array:
         """One loop step.
 
@@ -603,6 +604,10 @@ class MpcCueing:
             The roll rate [rad/s] and lateral specific force [m/s^2] at the head predicted
             from the road at 0, h, ..., N h ahead (:func:`motosim.cueing.preview.road_preview`);
             the roll plan then follows it (module docstring). None: from the present motion.
+        trust : float, optional
+            Weight in [0, 1] of the preview (:func:`motosim.cueing.preview.preview_trust`:
+            by the lean the road asks for): the previewed motion is scaled by it; at 0
+            the plan is the one from the present motion, as without a preview.
 
         Returns
         -------
@@ -643,7 +648,8 @@ class MpcCueing:
             N = plan.P.shape[0]
             nb = plan.band_M.shape[0]
             band_lin = plan.band_lin
-            if j == 0 and preview is not None:
+            if j == 0 and preview is not None and trust > 0.0:
+                preview = trust * preview if trust < 1.0 else preview
                 # the previewed input plus the difference from the present one, fading; of
                 # the lateral force, the part the previewed motion explains fades too, the
                 # rest (a gust's side force) is held
@@ -702,6 +708,7 @@ def apply_mpc(
     reference: Array,
     onset: Array | None = None,
     preview: Array | None = None,
+    trust: Array | None = None,
 ) -> tuple[Array, Array]:
     """Run the MPC cueing over a whole series from rest.
 
@@ -718,6 +725,8 @@ def apply_mpc(
         The onsets fed through, per sample (see :meth:`MpcCueing.step`).
     preview : ndarray, shape (n, N + 1, 2), optional
         The road preview per sample (see :meth:`MpcCueing.step`).
+    trust : ndarray, shape (n,), optional
+        The preview's weight per sample (see :meth:`MpcCueing.step`); default 1.
 
     Returns
     -------
@@ -744,6 +753,7 @@ def apply_mpc(
             ref[k],
             None if onset is None else onset[k],
             None if preview is None else preview[k],
+            1.0 if trust is None else float(trust[k]),
         )
         rates[k] = mpc.rates
     return targets, rates

@@ -14,7 +14,7 @@ from motosim.cueing.filters import run_section
 from motosim.cueing.head import check_rate, platform_motion, vehicle_motion
 from motosim.cueing.limits import actuator_response, apply_limits, design_limits
 from motosim.cueing.platform import CueingConfig
-from motosim.cueing.preview import Road, arc_length, road_preview
+from motosim.cueing.preview import Road, arc_length, preview_trust, road_preview
 from motosim.cueing.vestibular import CueingScore, VestibularModel, perceive, score
 from motosim.cueing.washout import WASHOUT_OUTPUTS, apply_washout, design_washout
 from motosim.errors import MotosimError
@@ -103,9 +103,9 @@ def cue(
         The motorcycle, for eq. (2) when the run has ``tau_d`` and ``tau_b``.
     road : Road, optional
         The road the run's rider follows: the MPC then plans its roll with the motion
-        predicted from the road ahead of the run's position ``x``, ``y``
-        (:mod:`motosim.cueing.preview`); without it the MPC plans from the present motion
-        only. Ignored by the washout.
+        predicted from the road ahead of the run's position ``x``, ``y``, trusted by the
+        lean the road asks for (:mod:`motosim.cueing.preview`); without it the MPC plans
+        from the present motion only. Ignored by the washout.
 
     Returns
     -------
@@ -138,7 +138,7 @@ def cue(
         onset = np.zeros((targets.shape[0], 2, 3))
         onset[:, 0, 1] = run_section(np.asarray(washout.pitch_onset), vehicle["theta"])
         onset[:, 1, 1] = vehicle["theta_dot"] * np.cos(run["phi"])
-        preview = None
+        preview = trust = None
         if road is not None:
             missing = [name for name in ("x", "y") if name not in run.names]
             if missing:
@@ -147,14 +147,12 @@ def cue(
                     "positions of a `motosim simulate` result"
                 )
             tuning = config.mpc
-            preview = road_preview(
-                road,
-                arc_length(road, run["x"], run["y"]),
-                run["v_x"],
-                horizon=tuning.horizon,
-                step=tuning.step,
-            )
-        targets, rates = apply_mpc(design_mpc(config, model, dt), vehicle, targets, onset, preview)
+            arc = arc_length(road, run["x"], run["y"])
+            preview = road_preview(road, arc, run["v_x"], horizon=tuning.horizon, step=tuning.step)
+            trust = preview_trust(road, arc, run["v_x"], ahead=tuning.horizon * tuning.step)
+        targets, rates = apply_mpc(
+            design_mpc(config, model, dt), vehicle, targets, onset, preview, trust
+        )
     limited = apply_limits(design_limits(config.platform, dt), targets, rates)
     horizon = horizon_gain * run["phi"] - limited[:, 0]
     commands = TimeSeries(run.t, np.column_stack([limited, horizon]), COMMAND_SIGNALS)

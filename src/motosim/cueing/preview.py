@@ -30,6 +30,17 @@ This module knows a road only as arrays (positions and curvature every ``ds`` me
 length): the scenario's path is built where it is known (:mod:`motosim.sim` and the
 ``motosim cueing`` command), and passed in. A rider who leaves the road's line (a free ride,
 a rider-torque scenario) breaks the preview: there is none.
+
+The preview assumes the rider can ride the road's line. Where the road asks for a lean the
+motorcycle does not reach (an obstacle avoidance taken too fast: a 63 deg lean asked at
+35 m/s, 18 deg ridden), the rider leaves the line and the preview misleads the plan:
+:func:`preview_trust` weighs the preview by the largest steady-turn lean it asks for over the
+horizon, fully trusted up to :data:`LEAN_TRUSTED` (above the training runs' leans), not at
+all from :data:`LEAN_LIMIT` (a lateral acceleration of 1 g, the grip of a road tyre), linearly
+between; the MPC scales the previewed motion by it, and plans from the present motion alone
+where it is zero (:meth:`motosim.cueing.mpc.MpcCueing.step`). Fading it by the distance to
+the line instead (the rider is off it after the fact) was measured to add false cues
+(docs/guide/cueing.md).
 """
 
 import math
@@ -43,12 +54,15 @@ from motosim.errors import MotosimError
 
 __all__ = [
     "LEAD_DISTANCE",
+    "LEAN_LIMIT",
+    "LEAN_TRUSTED",
     "PREVIEW_SIGNALS",
     "SMOOTHING",
     "SWAY_HEIGHT",
     "SWAY_X",
     "Road",
     "arc_length",
+    "preview_trust",
     "road_preview",
 ]
 
@@ -75,6 +89,15 @@ contact point sideways, so the head moves as if the roll axis were 0.75 m up."""
 SWAY_X = 0.90
 """Lateral specific force at the head per unit yaw acceleration [m]: the same fit (0.89-0.91
 on the four runs; the head's offset ahead of the rear contact is 1.0 m)."""
+LEAN_TRUSTED = math.radians(30.0)
+"""Largest steady-turn lean [rad] over the horizon up to which the preview is fully trusted:
+above the largest the road asks for on the training runs of docs/guide/cueing.md, 24.7 deg on
+the turn at 30 m/s (12.9-22.7 deg on the lane change, slalom and obstacle avoidance; 27.4 deg
+ridden on the turn), and on the unseen runs of that page (up to 22.8 deg)."""
+LEAN_LIMIT = math.radians(45.0)
+"""Steady-turn lean [rad] from which the preview is not trusted: ``tan(phi) = a_y / g = 1``, a
+lateral acceleration at a road tyre's grip on dry asphalt (friction coefficient about 1,
+Pacejka, *Tire and Vehicle Dynamics*, 3rd ed., 2012): a road the rider cannot follow."""
 PREVIEW_SIGNALS = ("omega_x", "f_y")
 """What :func:`road_preview` predicts, in order: roll rate [rad/s] and lateral specific
 force [m/s^2] at the head."""
@@ -138,6 +161,67 @@ def arc_length(road: Road, x: Array, y: Array) -> Array:
         k = lo + int(np.argmin(d))
         out[i] = k * road.ds
     return out
+
+
+def preview_trust(
+    road: Road,
+    arc: Array,
+    speed: Array,
+    *,
+    ahead: float,
+    lead: float = LEAD_DISTANCE,
+    trusted: float = LEAN_TRUSTED,
+    limit: float = LEAN_LIMIT,
+) -> Array:
+    """How far the road preview is trusted at each sample, by the lean the road asks for.
+
+    Parameters
+    ----------
+    road : Road
+        The road.
+    arc : ndarray, shape (m,)
+        Arc length [m] reached at each sample (:func:`arc_length`).
+    speed : ndarray, shape (m,)
+        Forward speed [m/s] at each sample, held over the horizon.
+    ahead : float
+        The preview's horizon [s].
+    lead : float, optional
+        Distance [m] by which the lean leads the road's curvature (:data:`LEAD_DISTANCE`).
+    trusted, limit : float, optional
+        Leans [rad] up to which the trust is full and from which it is zero
+        (:data:`LEAN_TRUSTED`, :data:`LEAN_LIMIT`).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        ``clip((limit - phi_max) / (limit - trusted), 0, 1)`` with ``phi_max`` the largest
+        ``|atan(v^2 kappa / g)|`` of the road from ``s + lead`` to ``s + lead + v ahead``.
+
+    Raises
+    ------
+    MotosimError
+        If the leans are not ``0 <= trusted < limit``, ``ahead`` is negative, or ``arc``
+        and ``speed`` differ in length.
+    """
+    if not (0.0 <= trusted < limit and math.isfinite(limit)):
+        raise MotosimError(
+            f"preview trust leans {trusted!r}, {limit!r} rad; expected 0 <= trusted < limit"
+        )
+    if not (math.isfinite(ahead) and ahead >= 0):
+        raise MotosimError(f"preview trust ahead = {ahead!r} s; expected a finite number >= 0")
+    if arc.shape != speed.shape:
+        raise MotosimError(
+            f"preview trust of {arc.size} arc lengths and {speed.size} speeds; expected as many"
+        )
+    s = road.ds * np.arange(road.kappa.size)
+    v = speed[:, None]
+    # the road over the distance ahead, every 0.25 m (or its spacing, if coarser)
+    reach = float(np.max(speed, initial=0.0)) * ahead
+    steps = np.linspace(0.0, 1.0, max(2, math.ceil(reach / max(road.ds, 0.25)) + 1))
+    kappa = np.interp(arc[:, None] + lead + v * ahead * steps[None, :], s, road.kappa)
+    lean: Array = np.max(np.abs(np.arctan(v**2 * kappa / GRAVITY)), axis=1)
+    trust: Array = np.clip((limit - lean) / (limit - trusted), 0.0, 1.0)
+    return trust
 
 
 def road_preview(

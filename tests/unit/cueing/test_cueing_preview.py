@@ -162,3 +162,55 @@ def test_a_tilt_drawn_after_the_road_straightens_is_felt_less_with_the_terminal_
         peaks.append(float(np.max(np.abs(sway))) / TELBAN_CARDULLO_2005.thresholds[4])
     # 1.09 against 1.19 thresholds
     assert peaks[0] < 0.95 * peaks[1], peaks
+
+
+def test_the_preview_fades_with_the_lean_asked_and_where_untrusted_is_the_causal_plan() -> None:
+    from motosim.cueing.preview import LEAN_LIMIT, LEAN_TRUSTED, preview_trust
+
+    # a road whose curvature asks, at 20 m/s, for steady-turn leans atan(v^2 kappa / g) of
+    # 0, LEAN_TRUSTED, halfway to LEAN_LIMIT, and LEAN_LIMIT, 100 m each (Cossalter, 2006)
+    v = 20.0
+    leans = [0.0, LEAN_TRUSTED, 0.5 * (LEAN_TRUSTED + LEAN_LIMIT), LEAN_LIMIT]
+    road = _road(np.repeat([np.tan(a) * G / v**2 for a in leans], 2000))
+    arc = np.array([10.0, 110.0, 210.0, 310.0, 60.0])  # the last sees 61-81 m: straight
+    trust = preview_trust(road, arc, np.full(5, v), ahead=1.0, lead=1.0)
+    np.testing.assert_allclose(trust, [1.0, 1.0, 0.5, 0.0, 1.0], atol=1e-9)
+    trust = preview_trust(road, np.array([290.0]), np.array([v]), ahead=1.0, lead=1.0)
+    np.testing.assert_allclose(trust, 0.0, atol=1e-9)  # LEAN_LIMIT in sight, 291-311 m
+    with pytest.raises(MotosimError, match="expected 0 <= trusted < limit"):
+        preview_trust(road, arc, arc, ahead=1.0, trusted=1.0, limit=0.5)
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    from motosim.cueing.mpc import MpcCueing, design_mpc
+
+    cfg = load_platform("simacom_platform")
+    design = design_mpc(cfg, TELBAN_CARDULLO_2005, 0.01)
+    rate = np.radians(10.0)
+    motion = np.array([rate, 0.0, 0.0, 0.0, 0.5])
+    ends = np.tile([rate, 0.0], (cfg.mpc.horizon + 1, 1))
+    ends[4:] = 0.0  # the road says the roll ends 0.2 s ahead
+    plans = [MpcCueing(design) for _ in range(3)]
+    for _ in range(10):
+        out = [
+            plans[0].step(motion, np.zeros(3)),  # causal
+            plans[1].step(motion, np.zeros(3), None, ends, 0.0),  # a road not trusted
+            plans[2].step(motion, np.zeros(3), None, ends),  # trusted
+        ]
+    np.testing.assert_array_equal(out[1], out[0])  # exactly the causal plan
+    assert out[2][0] > 1.01 * out[0][0], out  # the roll that ends is given now
+    # a whole run on a road asking for a 60 deg lean: cue with it is the causal MPC's run
+    t = np.arange(0.0, 2.0, 0.01)
+    phi = 0.2 * np.sin(2 * np.pi * 0.5 * t)
+    ride = TimeSeries(
+        t,
+        np.column_stack([v + 0 * t, 0 * t, G * np.tan(phi) / v, np.gradient(phi, t), phi,
+                         v * t, 0 * t]),
+        ("v_x", "v_y", "psi_dot", "phi_dot", "phi", "x", "y"),
+    )  # fmt: skip
+    wavy = np.sin(0.05 * np.arange(4001) / 15.0)
+    runs = [
+        cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=road)
+        for road in (None, _road(np.tan(np.radians(60)) * G / v**2 * wavy),
+                     _road(np.tan(np.radians(20)) * G / v**2 * wavy))
+    ]  # fmt: skip
+    np.testing.assert_array_equal(runs[1].commands.data, runs[0].commands.data)
+    assert not np.array_equal(runs[2].commands.data, runs[0].commands.data)
