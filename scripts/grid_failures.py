@@ -32,6 +32,7 @@ from motosim.sim.loop_analysis import (
     cancellation_bound,
     cancellation_loop_gain,
     estimate_filter,
+    negative_real_crossings,
     stack_loop,
 )
 from motosim.sim.stack import StackModel, design_stack
@@ -56,16 +57,13 @@ def default_stack(hb: HandlebarParameters, rate: float, speed: float) -> StackMo
 def crossings(L: np.ndarray, f: np.ndarray) -> tuple[float, float, float, float]:
     """(gain margin [dB], its frequency, phase margin [deg], its frequency) of 1 + L."""
     gm, fg, pm, fp = math.inf, math.nan, math.inf, math.nan
+    for _, where, x in negative_real_crossings(L, f):
+        if abs(20.0 * math.log10(-x)) < gm:
+            gm, fg = abs(20.0 * math.log10(-x)), where
     mag = np.abs(L)
     for k in range(L.size - 1):
-        a, b = L[k], L[k + 1]
-        if a.imag * b.imag < 0.0:
-            s = a.imag / (a.imag - b.imag)
-            x = a.real + s * (b.real - a.real)
-            if x < 0.0 and abs(20.0 * math.log10(-x)) < gm:
-                gm, fg = abs(20.0 * math.log10(-x)), f[k] + s * (f[k + 1] - f[k])
         if (mag[k] - 1.0) * (mag[k + 1] - 1.0) < 0.0:
-            p = 180.0 - abs(math.degrees(np.angle(a)))
+            p = 180.0 - abs(math.degrees(np.angle(L[k])))
             if p < pm:
                 pm, fp = p, f[k]
     last = L[-1]

@@ -163,6 +163,13 @@ def arc_length(road: Road, x: Array, y: Array) -> Array:
     return out
 
 
+def _steady_lean(road: Road, at: Array, speed: Array) -> tuple[Array, Array]:
+    """The lean ``atan(v^2 kappa / g)`` [rad] of the steady turn of the road's curvature
+    ``kappa`` [1/m] at arc lengths ``at`` [m], at ``speed`` [m/s] (broadcast), and ``kappa``."""
+    kappa = np.interp(at, road.ds * np.arange(road.kappa.size), road.kappa)
+    return np.arctan(speed**2 * kappa / GRAVITY), kappa
+
+
 def preview_trust(
     road: Road,
     arc: Array,
@@ -213,13 +220,12 @@ def preview_trust(
         raise MotosimError(
             f"preview trust of {arc.size} arc lengths and {speed.size} speeds; expected as many"
         )
-    s = road.ds * np.arange(road.kappa.size)
     v = speed[:, None]
     # the road over the distance ahead, every 0.25 m (or its spacing, if coarser)
     reach = float(np.max(speed, initial=0.0)) * ahead
     steps = np.linspace(0.0, 1.0, max(2, math.ceil(reach / max(road.ds, 0.25)) + 1))
-    kappa = np.interp(arc[:, None] + lead + v * ahead * steps[None, :], s, road.kappa)
-    lean: Array = np.max(np.abs(np.arctan(v**2 * kappa / GRAVITY)), axis=1)
+    phi, _ = _steady_lean(road, arc[:, None] + lead + v * ahead * steps[None, :], v)
+    lean: Array = np.max(np.abs(phi), axis=1)
     trust: Array = np.clip((limit - lean) / (limit - trusted), 0.0, 1.0)
     return trust
 
@@ -271,14 +277,10 @@ def road_preview(
         )
     tau = np.arange(horizon + 1) * step
     v = speed[:, None]
-    s = road.ds * np.arange(road.kappa.size)
-
-    def lean(offset: float) -> tuple[Array, Array]:
-        kappa = np.interp(arc[:, None] + lead + v * (tau[None, :] + offset), s, road.kappa)
-        return np.arctan(v**2 * kappa / GRAVITY), kappa
-
     d = smoothing
-    (phi_m, k_m), (phi_0, _), (phi_p, k_p) = (lean(e) for e in (-d, 0.0, d))
+    (phi_m, k_m), (phi_0, _), (phi_p, k_p) = (
+        _steady_lean(road, arc[:, None] + lead + v * (tau[None, :] + e), v) for e in (-d, 0.0, d)
+    )
     rate = (phi_p - phi_m) / (2 * d)
     accel = (phi_p - 2 * phi_0 + phi_m) / d**2
     yaw_accel = v * (k_p - k_m) / (2 * d)

@@ -49,6 +49,7 @@ __all__ = [
     "cancellation_bound",
     "cancellation_loop_gain",
     "estimate_filter",
+    "negative_real_crossings",
     "robustness_grid",
     "stack_loop",
 ]
@@ -360,7 +361,7 @@ def cancellation_bound(
     ratio = true.torque_per_amp / nominal.torque_per_amp
     delta = ratio * angle_per_torque(true) / angle_per_torque(nominal) - 1.0
     loop = np.asarray(F) * delta
-    crossing = _phase_crossings(loop, f)
+    crossing = [(fk, -20.0 * math.log10(-x)) for _, fk, x in negative_real_crossings(loop, f)]
     if abs(f[-1] * dt - 0.5) < 1e-9 and loop[-1].real < 0.0:  # real at the Nyquist frequency
         crossing.append((float(f[-1]), -20.0 * math.log10(-loop[-1].real)))
     low = ratio * nominal.beta_eq / true.beta_eq - 1.0
@@ -371,17 +372,31 @@ def cancellation_bound(
     return CancellationBound(gain, where, low_db)
 
 
-def _phase_crossings(loop_gain: CArray, frequencies: Array) -> list[tuple[float, float]]:
-    """Where a loop gain crosses the negative real axis: (frequency [Hz], -20 log10 |L| [dB])."""
+def negative_real_crossings(response: CArray, frequencies: Array) -> list[tuple[int, float, float]]:
+    """Where a frequency response crosses the negative real axis between two of its samples.
+
+    Parameters
+    ----------
+    response : ndarray of complex, shape (n,)
+        The response at ``frequencies``.
+    frequencies : ndarray, shape (n,)
+        Increasing frequencies [Hz].
+
+    Returns
+    -------
+    list of (int, float, float)
+        For each crossing: the sample before it, the frequency [Hz] and the real part (< 0)
+        there, both interpolated linearly between the two samples.
+    """
     out = []
-    for k in range(loop_gain.size - 1):
-        a, b = loop_gain[k], loop_gain[k + 1]
+    for k in range(response.size - 1):
+        a, b = response[k], response[k + 1]
         if a.imag * b.imag < 0.0:
             s = a.imag / (a.imag - b.imag)
             x = a.real + s * (b.real - a.real)
             if x < 0.0:
                 f = frequencies[k] + s * (frequencies[k + 1] - frequencies[k])
-                out.append((float(f), -20.0 * math.log10(-x)))
+                out.append((k, float(f), float(x)))
     return out
 
 
@@ -462,22 +477,21 @@ def _unstable_count(eigenvalues: NDArray[np.generic], tol: float = 1e-9) -> int:
     return int(np.sum(np.abs(eigenvalues) > 1.0 + tol))
 
 
-def _margins(loop_gain: CArray) -> tuple[float, float, float]:
-    """Gain and phase margins and modulus margin of a negative-feedback loop gain G."""
-    gain_margin, phase_margin = math.inf, math.inf
+def _margins(loop_gain: CArray, frequencies: Array) -> tuple[float, float, float]:
+    """Gain and phase margins and modulus margin of a negative-feedback loop gain G at
+    ``frequencies`` [Hz]."""
+    # phase crossovers: the gain may rise (|x| < 1) or fall (|x| > 1) this much
+    gain_margin = min(
+        (abs(20.0 * math.log10(-x)) for _, _, x in negative_real_crossings(loop_gain, frequencies)),
+        default=math.inf,
+    )
+    phase_margin = math.inf
     phase = np.angle(loop_gain)
     magnitude = np.abs(loop_gain)
     for k in range(loop_gain.size - 1):
-        # phase crossover: G crosses the negative real axis
-        a, b = loop_gain[k], loop_gain[k + 1]
-        if a.imag * b.imag < 0.0:
-            s = a.imag / (a.imag - b.imag)
-            x = a.real + s * (b.real - a.real)
-            if x < 0.0:  # the gain may rise (|x| < 1) or fall (|x| > 1) this much
-                gain_margin = min(gain_margin, abs(20.0 * math.log10(-x)))
         if (magnitude[k] - 1.0) * (magnitude[k + 1] - 1.0) < 0.0:
             s = (1.0 - magnitude[k]) / (magnitude[k + 1] - magnitude[k])
-            ph = phase[k] + s * (np.angle(b / a))
+            ph = phase[k] + s * (np.angle(loop_gain[k + 1] / loop_gain[k]))
             phase_margin = min(phase_margin, math.degrees(math.pi - abs(ph)))
     last = loop_gain[-1]
     if abs(last.imag) <= 1e-9 * abs(last) and last.real < 0.0:  # real at the Nyquist frequency
@@ -510,8 +524,8 @@ def analyse_stack(
     own = np.linalg.eigvals(zoh(loop.motorcycle, np.zeros((8, 1)), loop.dt)[0])
     stable = _unstable_count(eig) <= _unstable_count(own)
     # broken at the motor current: the motor carries u, the estimator is told u
-    gain_margin, phase_margin, modulus = _margins(loop.loop_gain(f, 1))
-    inner_gain, inner_phase, _ = _margins(cancellation_loop_gain(loop, f))
+    gain_margin, phase_margin, modulus = _margins(loop.loop_gain(f, 1), f)
+    inner_gain, inner_phase, _ = _margins(cancellation_loop_gain(loop, f), f)
 
     band = np.geomspace(FEEL_BAND[0], FEEL_BAND[1], 60)
     rendered = loop.response(band, loop.angle, 0)
@@ -537,15 +551,10 @@ def analyse_stack(
         ]
     )
     cycles = []
-    for k in range(f.size - 1):
-        a, b = admittance[k], admittance[k + 1]
-        if a.imag * b.imag < 0.0:
-            s = a.imag / (a.imag - b.imag)
-            x = a.real + s * (b.real - a.real)
-            fk = f[k] + s * (f[k + 1] - f[k])
-            if x < 0.0 and own_admittance[k].real > 0.0:
-                rate_amplitude = 4.0 * handlebar.beta_s * (-x) / math.pi
-                cycles.append(LimitCycle(float(fk), rate_amplitude / (2.0 * math.pi * fk)))
+    for k, fk, x in negative_real_crossings(admittance, f):
+        if own_admittance[k].real > 0.0:
+            rate_amplitude = 4.0 * handlebar.beta_s * (-x) / math.pi
+            cycles.append(LimitCycle(fk, rate_amplitude / (2.0 * math.pi * fk)))
     return StackLoopAnalysis(
         speed=float(speed),
         stable=bool(stable),
