@@ -166,6 +166,8 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     # 2 s at 1 kHz, then the torque fades out over the 0.5 s fade_in (never a step to zero)
     assert timing["periods"] > 2000 and 2.4 < result.t[-1]
     assert result["i_m"][-1] == 0.0 and payload["state"] == "IDLE"
+    # the buzz judged while the stack's command ran unfaded, not over the fade-out
+    assert result.summary["buzz_current_p2p"] < 0.3 and result.summary["flag_oscillation"] == 0.0
     # offline, this scenario commands up to 12.7 mA and moves the handlebar by 0.045 rad,
     # and the estimate reaches 2.67 N*m of the rider's 3 N*m (motosim simulate, seed 0)
     assert np.max(np.abs(result["i_m"])) > 0.005

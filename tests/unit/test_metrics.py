@@ -77,3 +77,29 @@ def test_buzz_while_the_rider_holds_a_steady_turn_is_flagged() -> None:
 def _metrics_at(t: np.ndarray, **columns: np.ndarray) -> dict[str, float]:
     full = {name: np.broadcast_to(values, t.shape).copy() for name, values in columns.items()}
     return run_metrics(t, full.get, complete=True, max_current=30.0)
+
+
+def test_a_real_time_run_is_judged_while_running_not_over_its_stop() -> None:
+    # a real-time run: 6 s at 3 A while the rider holds steady, then an emergency stop (zero
+    # torque from the next period on); no true rider torque recorded, only the estimate
+    t = np.arange(0.0, 6.5, 1e-3)
+    running = t < 6.0
+    fade = running.astype(float)
+    estimate = np.full(t.shape, 2.0)
+    steady = {"i_m": 3.0 * fade, "tau_r_hat": estimate}
+    whole = run_metrics(t, steady.get, complete=False)
+    assert whole["buzz_current_p2p"] > 1.0  # the stop's step read as content above 3 Hz
+    judged = run_metrics(t, steady.get, complete=False, running=running)
+    assert judged["buzz_current_p2p"] < 0.01 and judged["flag_oscillation"] == 0.0
+    # a 1 A buzz while running swings the estimate above 3 Hz too: still a held handlebar
+    buzz = 0.5 * np.sin(2 * np.pi * 9.0 * t)
+    buzzing = {"i_m": (3.0 + buzz) * fade, "tau_r_hat": estimate + 3.0 * buzz}
+    flagged = run_metrics(t, buzzing.get, complete=False, running=running)
+    assert math.isclose(flagged["buzz_current_p2p"], 1.0, rel_tol=0.05)
+    assert flagged["flag_oscillation"] == 1.0
+    # the rider steering (the estimate's slow swing) is not judged
+    steering = {"i_m": (3.0 + buzz) * fade, "tau_r_hat": 10.0 * np.sin(2 * np.pi * 0.4 * t)}
+    assert run_metrics(t, steering.get, complete=False, running=running)["flag_oscillation"] == 0.0
+    # no running rows (a run stopped during its fade-in): nothing judged
+    none = run_metrics(t, buzzing.get, complete=False, running=np.zeros(t.shape, dtype=bool))
+    assert "buzz_current_p2p" not in none

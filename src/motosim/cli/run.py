@@ -302,6 +302,7 @@ def _writer_main(
     stop_relay = _start_relay(ring, names, telemetry, rate)
     conn.send(("ready", url))
     blocks: list[np.ndarray] = []
+    states: list[np.ndarray] = []  # the safety stage's state of each row, for the metrics
     pending: list[np.ndarray] = []
     stamps: list[np.ndarray] = []  # the loop's profile columns, for timing.json
     stamp_names = ("compute", "done_read", "done_control", "done_send", "stack")
@@ -314,6 +315,7 @@ def _writer_main(
         if rows.shape[0]:
             block = result_block(rows, names, torque_per_amp)
             blocks.append(block)
+            states.append(rows[:, col_state])
             if stamp_cols:
                 stamps.append(rows[:, stamp_cols])
             pending.append(block)
@@ -337,8 +339,12 @@ def _writer_main(
             flush(write=True)
             rows = np.vstack(blocks) if blocks else np.zeros((0, len(RESULT_SIGNALS)))
             col = {name: j for j, name in enumerate(RESULT_SIGNALS)}
+            running = np.concatenate(states) == State.RUNNING if states else None
             summary = run_metrics(
-                rows[:, 0], lambda n: rows[:, col[n]] if n in col else None, complete=complete
+                rows[:, 0],
+                lambda n: rows[:, col[n]] if n in col else None,
+                complete=complete,
+                running=running,
             )
             summary |= extra
             summary["ring_dropped"] = float(ring.dropped)

@@ -132,6 +132,7 @@ def run_metrics(
     *,
     complete: bool,
     max_current: float | None = None,
+    running: NDArray[np.bool_] | None = None,
 ) -> dict[str, float]:
     """Summary numbers and flags of a run, in SI units.
 
@@ -146,6 +147,13 @@ def run_metrics(
         Whether the run reached its end.
     max_current : float, optional
         The controller's current limit [A], for the saturation share.
+    running : ndarray of bool, shape (n,), optional
+        Rows where the command reached the handlebar unfaded (a real-time run's RUNNING
+        state). The buzz is then judged on the last two seconds of the last such span, not
+        on a fade-in or a fade-out, whose ramp to zero is no oscillation; and, when the
+        true rider torque is not recorded, the rider is taken as holding the handlebar
+        steady from the estimate ``tau_r_hat`` below :data:`BUZZ_CUTOFF` (the buzz itself
+        swings the estimate above it).
 
     Returns
     -------
@@ -227,24 +235,43 @@ def run_metrics(
             out["stick_share"] = float(1.0 - np.mean(moving))
             out["rms_tau_r_error_moving"] = _rms(error[moving])
     current = signal("i_m")
-    if current is not None and t.size > 8:
-        tail = t >= t[-1] - _TAIL
+    span = _last_span(running) if running is not None else slice(0, t.size)
+    t_run = t[span]
+    if current is not None and t_run.size > 8:
+        current, end = current[span], t_run[-1]
+        tail = t_run >= end - _TAIL
         # filtered with a second before the tail, so that only the run's end is an edge
-        window = t >= t[-1] - _TAIL - _LEAD
-        buzz = highpass(t[window], current[window], BUZZ_CUTOFF)[tail[window]]
+        window = t_run >= end - _TAIL - _LEAD
+        buzz = highpass(t_run[window], current[window], BUZZ_CUTOFF)[tail[window]]
         out["buzz_current_p2p"] = float(np.ptp(buzz))
         spectrum = np.abs(np.fft.rfft(buzz))
         freqs = np.fft.rfftfreq(buzz.size, float(t[1] - t[0]))
         out["buzz_frequency"] = float(freqs[int(np.argmax(spectrum))])
         # a buzz is current the rider does not ask for: judged while the rider holds the
         # handlebar steady, upright or in a steady turn (a constant torque asks for no change)
-        quiet = tau is None or float(np.ptp(tau[tail])) <= 2.0 * QUIET_TORQUE
+        held = None
+        if tau is not None:
+            held = tau[span][tail]
+        elif tau_hat is not None and running is not None:
+            slow = tau_hat[span][window]
+            held = (slow - highpass(t_run[window], slow, BUZZ_CUTOFF))[tail[window]]
+        quiet = held is None or float(np.ptp(held)) <= 2.0 * QUIET_TORQUE
         out["flag_oscillation"] = float(quiet and out["buzz_current_p2p"] > BUZZ_LIMIT)
         if max_current is not None:
             share = float(np.mean(np.abs(current) >= 0.999 * max_current))
             out["saturated_share"] = share
             out["flag_saturation"] = float(share > _SATURATED_SHARE)
     return out
+
+
+def _last_span(running: NDArray[np.bool_]) -> slice:
+    """The rows of the last run of True in ``running`` (empty when there is none)."""
+    on = np.flatnonzero(running)
+    if on.size == 0:
+        return slice(0, 0)
+    end = int(on[-1]) + 1
+    gaps = np.flatnonzero(~running[:end])
+    return slice(int(gaps[-1]) + 1 if gaps.size else 0, end)
 
 
 def failure(metrics: dict[str, float]) -> str | None:
