@@ -125,7 +125,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-_EXP = {"lift": 1.0, "erode": 0.0, "oracle": 0.0, "rw": 0.0, "rwc": 0.0, "onesided": 0.0, "cap": 0.0, "capall": 0.0}
 MAX_ITER = 50
 """OSQP's iteration budget per step: a warm-started iterate that stops there is still used
 (measured on the scenarios of the comparison table: the same wins as with 100, at a p99 step
@@ -475,7 +474,6 @@ class MpcCueing:
         self._canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
         self._otolith = [np.zeros(plan.vehicle_otolith[0].shape[0]) for plan in design.axes]
         self._feed = np.zeros(3)
-        self._slack = [np.zeros(plan.band_M.shape[0]) for plan in design.axes]
         self._roll_rate = math.nan  # the last step's roll rate, for the roll acceleration
         self._yaw_rate = math.nan  # the last step's yaw rate, for the previewed plan
         self._feed_canal = [np.zeros(plan.vehicle_canal[0].shape[0]) for plan in design.axes]
@@ -559,19 +557,13 @@ class MpcCueing:
         return K, U, nc, no
 
     @staticmethod
-    def _bounds(plan: AxisPlan, pred: Array, free: Array, felt: Array, rb: Array | None = None) -> tuple[Array, Array]:
+    def _bounds(plan: AxisPlan, pred: Array, free: Array, felt: Array) -> tuple[Array, Array]:
         X, V, A = plan.limits
         N = plan.P.shape[0]
         thr = BAND_MARGIN * plan.band_thr
         big = np.full(free.size, 1e9)
         band_hi = np.where(felt > 0, big, thr - free)  # not perceived the other way
         band_lo = np.where(felt < 0, -big, -thr - free)
-        cap = _EXP["cap"]
-        if cap > 0 and rb is not None:
-            nr = plan.band_steps[0].size
-            force = np.arange(free.size) >= nr
-            band_hi = np.where(force & (felt > 0), cap * np.abs(rb) - free, band_hi)
-            band_lo = np.where(force & (felt < 0), -cap * np.abs(rb) - free, band_lo)
         upper = np.concatenate([np.full(N, A), X - pred[:N], V - pred[N:], band_hi, big, big])
         lower = np.concatenate(
             [np.full(N, -A), -X - pred[:N], -V - pred[N:], -big, band_lo, np.zeros(free.size)]
@@ -680,28 +672,9 @@ class MpcCueing:
             else:
                 y = K @ v
             r_b = y[N : N + nb]
-            lift = _EXP["lift"] if band_lin is plan.band_lin_preview else 1.0
-            felt = np.where(np.abs(r_b) > lift * plan.band_thr, np.sign(r_b), 0.0)
-            m = int(_EXP["erode"])
-            if m and band_lin is plan.band_lin_preview:
-                nr = plan.band_steps[0].size
-                f = felt[nr : nr + N].copy()
-                if _EXP["onesided"]:
-                    pad = np.concatenate([np.full(m, f[0]), f])
-                    win = np.lib.stride_tricks.sliding_window_view(pad, m + 1)
-                else:
-                    pad = np.concatenate([np.full(m, f[0]), f, np.full(m, f[-1])])
-                    win = np.lib.stride_tricks.sliding_window_view(pad, 2 * m + 1)
-                felt[nr : nr + N] = np.where(np.all(win == f[:, None], axis=1), f, 0.0)
-                felt[nr + N :] = np.where(felt[nr + N :] == felt[nr + N - 1], felt[nr + N :], 0.0)
-            eps = _EXP["rw"]
-            if eps > 0 and (band_lin is plan.band_lin_preview or _EXP["rwc"]):
-                prev = self._slack[j]
-                band_lin = band_lin * np.where(
-                    plan.band_quad > 0, 1.0, eps / (np.maximum(prev, 0.0) / plan.band_thr + eps)
-                )
+            felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
             q = np.concatenate([y[:N], band_lin])
-            lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], y[3 * N + nb :], felt, r_b if (_EXP['capall'] or band_lin is plan.band_lin_preview) else None)
+            lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], y[3 * N + nb :], felt)
             nxt = U @ v
             self._canal[j], self._otolith[j] = nxt[:nc], nxt[nc : nc + no]
             self._feed_canal[j] = nxt[nc + no :]
@@ -719,7 +692,6 @@ class MpcCueing:
                 result = solver.solve(raise_error=False)
             if result.info.status_val in self._usable and math.isfinite(result.x[0]):
                 u = float(result.x[0])
-                self._slack[j] = result.x[N:].copy()
             else:  # not solved in the iteration budget: brake
                 u = -math.copysign(plan.limits[2], x0[1]) if x0[1] else 0.0
             u = min(plan.limits[2], max(-plan.limits[2], u))
@@ -773,24 +745,6 @@ def apply_mpc(
         )
     mpc = MpcCueing(design)
     motion = np.column_stack([vehicle[name] for name in MOTION_INPUTS])
-    if _EXP.get("oracle") and preview is not None:
-        dtv = design.dt
-        alpha = np.gradient(motion[:, 0], dtv)
-        yacc = np.gradient(motion[:, 2], dtv)
-        imb = motion[:, 4] - SWAY_HEIGHT * alpha - SWAY_X * yacc
-        from scipy.signal import savgol_filter
-        imb = savgol_filter(imb, 31, 2)
-        per = round(design.axes[0].P.shape[0] and 0.05 / dtv)
-        idx = np.arange(N + 1) * per
-        preview = preview.copy()
-        for k in range(motion.shape[0]):
-            j = np.minimum(k + idx, motion.shape[0] - 1)
-            if _EXP["oracle"] == 2:
-                held = motion[k, 4] - (SWAY_HEIGHT * alpha[k] + SWAY_X * yacc[k])
-                preview[k, :, 0] = motion[j, 0]
-                preview[k, :, 1] = motion[j, 4] - held
-            else:
-                preview[k, :, 1] += _EXP["oracle"] * (imb[j] - imb[k])
     ref = np.asarray(reference, dtype=np.float64)
     targets, rates = np.empty((motion.shape[0], 3)), np.empty((motion.shape[0], 3))
     for k in range(motion.shape[0]):
