@@ -125,8 +125,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-import os
-PRE = float(os.environ.get('PRE', '-1'))
 MAX_ITER = 50
 """OSQP's iteration budget per step: a warm-started iterate that stops there is still used
 (measured on the scenarios of the comparison table: the same wins as with 100, at a p99 step
@@ -677,17 +675,6 @@ class MpcCueing:
             felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
             q = np.concatenate([y[:N], band_lin])
             lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], y[3 * N + nb :], felt)
-            if band_lin is plan.band_lin_preview and preview is not None and PRE >= 0:
-                fast = np.flatnonzero(np.abs(preview[:, 0]) > plan.band_thr[0])
-                if fast.size:
-                    nr = plan.band_steps[0].size
-                    free_r = y[3 * N + nb : 3 * N + nb + nr]
-                    bound = PRE * plan.band_thr[:nr]
-                    a = 3 * N
-                    if preview[fast[0], 0] > 0:
-                        lo[a + nb : a + nb + nr] = np.maximum(lo[a + nb : a + nb + nr], -bound - free_r)
-                    else:
-                        hi[a : a + nr] = np.minimum(hi[a : a + nr], bound - free_r)
             nxt = U @ v
             self._canal[j], self._otolith[j] = nxt[:nc], nxt[nc : nc + no]
             self._feed_canal[j] = nxt[nc + no :]
