@@ -150,19 +150,20 @@ TRAINING = (
 )  # fmt: skip
 OTHERS = (
     "turn_30", "straight_50_gust", "lane_change_30", "slalom_15", "lane_change_25", "avoidance_22",
-    "opendrive_curve_25", "avoidance_35",
+    "opendrive_curve_25", "avoidance_35", "avoidance_18", "long_turn_22",
 )  # fmt: skip
-"""Unseen checks: two scenarios of scenarios/ and six of bench/scenarios/ at other speeds and
+"""Unseen checks: two scenarios of scenarios/ and eight of bench/scenarios/ at other speeds and
 sizes (lane_change_25, avoidance_22 and opendrive_curve_25 added after the 30 m/s lane
 change's diagnosis, before their cueing was looked at; avoidance_35, the QA's, a road the
-rider cannot follow, docs/guide/cueing.md)."""
+rider cannot follow; avoidance_18 and long_turn_22 added with the diagnosis of the misses on
+avoidance_22 and opendrive_curve_25, before their cueing was looked at; docs/guide/cueing.md)."""
 
 
 def table(runs: str, thresholds: str = "telban", causal: bool = True) -> str:
     """Markdown table washout vs MPC on result folders ``runs/NAME`` of `motosim simulate`.
 
     Reproduce: ``motosim simulate scenarios/NAME.toml --out RUNS/NAME`` for each scenario
-    (``bench/scenarios/NAME.toml`` for the last six of :data:`OTHERS`), then ``python
+    (``bench/scenarios/NAME.toml`` for the last eight of :data:`OTHERS`), then ``python
     bench/bench_cueing.py RUNS`` (``RUNS benson`` to score with the thresholds
     of Benson et al. 1986, 1989; the MPC still plans with the default model's). The MPC runs
     from the present motion only, and, where the run has a path, with the road preview too
