@@ -180,8 +180,9 @@ def run(args: argparse.Namespace) -> int:
         default_bandwidth,
         design_torque_feedback,
     )
-    from motosim.estimation.walcott_zak import ObserverSettings, design_with
+    from motosim.estimation.walcott_zak import design_with
     from motosim.io.design_file import dump_design
+    from motosim.sim.closed_loop import observer_settings
 
     bandwidth = default_bandwidth(args.rate) if args.bandwidth is None else args.bandwidth
     check_options(bandwidth=bandwidth, rate=args.rate)
@@ -207,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
         rate=args.rate,
         n_starts=args.starts,
     )
-    settings = ObserverSettings.for_step(1.0 / args.rate)
+    settings = observer_settings(args.rate)
     obs = design_with(hb, settings)
     paper = analyse_loop(hb, PAPER_CONTROLLER, rate=args.rate)
     report: dict[str, Any] = {
