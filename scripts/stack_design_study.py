@@ -53,8 +53,10 @@ DELTA_RATE = 3  # index of the steer rate delta' in the motorcycle's lateral sta
 
 @dataclass(frozen=True)
 class Candidate:
-    """One design: every field left at its default is the default design, the observer on the
-    nominal handlebar ("before" in the design guide's table)."""
+    """One design: every field left at its default is the default design at 1 kHz, the
+    observer on the nominal handlebar ("before" in the design guide's table); below 200 Hz
+    the default observer is designed for more inertia (at 100 Hz: "observer J x2",
+    :func:`motosim.sim.closed_loop.observer_settings`)."""
 
     name: str
     cancellation: float = 1.0  # feedforward[0]: share of the estimated rider torque cancelled
@@ -89,6 +91,7 @@ CANDIDATES = [
     Candidate("injection 0.5x", injection=0.5),
     Candidate("injection 0.25x", injection=0.25),
     Candidate("observer J x1.5", inertia_obs=1.5),
+    Candidate("observer J x2 (the default below 200 Hz: 2 at 100 Hz)", inertia_obs=2.0),
     Candidate("observer J x0.5", inertia_obs=0.5),
     Candidate("observer beta x0.75", beta_obs=0.75),
     Candidate("observer beta x0.5", beta_obs=0.5),
