@@ -149,22 +149,27 @@ STACK_OBSERVER_INERTIA = (200.0, 2.0)
 min(largest, rate / measurement rate) times the handlebar's J_eq (:func:`observer_settings`)."""
 
 
-def observer_settings(measurement_rate: float) -> ObserverSettings:
+def observer_settings(measurement_rate: float, *, cancellation: bool = True) -> ObserverSettings:
     """The rider-torque observer's default settings inside the stack at ``measurement_rate``.
 
-    Those of :meth:`ObserverSettings.for_step`, with the observer designed for
-    ``inertia_factor`` = min(2, max(1, 200 Hz / measurement_rate)) times the handlebar's
-    J_eq: 2 at 100 Hz, 1.33 at 150 Hz, 1 from 200 Hz. Believing the handlebar heavier than it
-    is, the observer reads the excess J_eq theta_h'' as rider torque, which the rider-torque
-    cancellation takes off the motor: the sampled loop's gain and phase margins at 100 Hz
-    rise from 5.5 dB and 37 deg to 7.8 dB and 55 deg (20 m/s, the packaged handlebar;
-    :func:`motosim.sim.loop_analysis.analyse_stack`), the rendered feel over 0.1-3 Hz
-    unchanged within 0.02 dB and 0.1 deg. From 500 Hz the bias costs margins, hence 1 there.
+    Those of :meth:`ObserverSettings.for_step`; with the rider-torque cancellation on, the
+    observer designed for ``inertia_factor`` = min(2, max(1, 200 Hz / measurement_rate))
+    times the handlebar's J_eq: 2 at 100 Hz, 1.33 at 150 Hz, 1 from 200 Hz. Believing the
+    handlebar heavier than it is, the observer reads the excess J_eq theta_h'' as rider
+    torque, which the cancellation takes off the motor, and its estimate filter (rider torque
+    to estimate) keeps a gain within 1.15 where it would reach 2 near 16 Hz: the sampled
+    loop's margins at 100 Hz rise from 5.5 dB and 37 deg to 7.8 dB and 55 deg (20 m/s, the
+    packaged handlebar; :func:`motosim.sim.loop_analysis.analyse_stack`), the rendered feel
+    over 0.1-3 Hz unchanged within 0.15 dB and 1 deg. From 500 Hz the bias costs margins,
+    hence 1 there; without the cancellation it would only add J_eq theta_h'' to the
+    estimate.
 
     Parameters
     ----------
     measurement_rate : float
         [Hz].
+    cancellation : bool
+        Whether the stack cancels the estimated rider torque (feedforward ``"rider"``).
 
     Returns
     -------
@@ -175,11 +180,12 @@ def observer_settings(measurement_rate: float) -> ObserverSettings:
     >>> [observer_settings(r).inertia_factor for r in (100.0, 200.0, 1000.0)]
     [2.0, 1.0, 1.0]
     """
+    settings = ObserverSettings.for_step(1.0 / measurement_rate)
+    if not cancellation:
+        return settings
     rate, largest = STACK_OBSERVER_INERTIA
     factor = min(largest, max(1.0, rate / measurement_rate))
-    return dataclasses.replace(
-        ObserverSettings.for_step(1.0 / measurement_rate), inertia_factor=factor
-    )
+    return dataclasses.replace(settings, inertia_factor=factor)
 
 
 def _feedback(scenario: Scenario) -> bool:
@@ -197,7 +203,11 @@ def build_stack(inputs: RunInputs) -> StackModel:
     est = sc.estimator
     if est.name == "walcott_zak":
         settings = dataclasses.replace(
-            inputs.observer or observer_settings(sc.rates.measurement),
+            inputs.observer
+            or observer_settings(
+                sc.rates.measurement,
+                cancellation=_feedback(sc) and "rider" in (sc.controller.feedforward or ()),
+            ),
             friction_compensation=est.friction_compensation,
         )
         gains = design_with(inputs.nominal_handlebar, settings)
