@@ -68,6 +68,7 @@ __all__ = [
     "begin",
     "context_period",
     "context_warm",
+    "context_warm_until",
     "finish",
     "fused_period",
     "monotonic_ns",
@@ -472,8 +473,48 @@ def context_warm(c: Any) -> None:
 
 
 @njit(cache=True)
-def context_period(c: Any, frames: int, k: int, t: float, woke: float, done_read: float) -> int:
-    """:func:`fused_period` with the arguments held by ``c``, a :class:`PeriodContext`."""
+def context_warm_until(c: Any, due_ns: int) -> int:
+    """:func:`context_warm` again and again until ``due_ns`` on :func:`monotonic_ns`'s clock
+    [ns]; the number of warm-ups run (0 before the stack has started).
+
+    The spin phase of the loop's wait, spent keeping the stack hot: one warm-up always, then
+    another as long as it should end before ``due_ns`` (the last one's time taken as the
+    next's), so that the last one ends within about a warm-up's time (1-2 us) of the
+    deadline. Each warm-up steps a fresh copy of the stack's state: the stack itself is not
+    changed. A time already past (or no clock: :func:`monotonic_ns` -1) gives one warm-up.
+    The loop calls it through :func:`context_period` (its ``warm_until``), so that the
+    warm-ups run the very machine code of the step that follows.
+    """
+    if c.arrays.runner[R_STARTED] == 0.0:
+        return 0
+    n = 0
+    start = monotonic_ns()
+    while True:
+        context_warm(c)
+        n += 1
+        end = monotonic_ns()
+        if start < 0 or end + (end - start) >= due_ns:
+            return n
+        start = end
+
+
+@njit(cache=True)
+def context_period(
+    c: Any, frames: int, k: int, t: float, woke: float, done_read: float, warm_until: int
+) -> int:
+    """:func:`fused_period` with the arguments held by ``c``, a :class:`PeriodContext`; or,
+    with ``warm_until`` >= 0, no period but the stack's warm-ups until then
+    (:func:`context_warm_until`, ``warm_until`` [ns] on :func:`monotonic_ns`'s clock; their
+    number is returned).
+
+    Why both in one function: numba compiles, into each function called from Python, its own
+    copy of every compiled function it calls (the stack's step included); warm-ups called
+    through another function would warm another copy of the step's machine code (other
+    addresses in the instruction cache and the branch predictors) and only the data the step
+    shares. Through this one, the warm-ups and the period run the same copy.
+    """
+    if warm_until >= 0:
+        return context_warm_until(c, warm_until)
     return fused_period(
         c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
         done_read,
