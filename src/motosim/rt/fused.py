@@ -63,6 +63,7 @@ from motosim.rt.stack import stack_period, stack_reset
 
 __all__ = [
     "RUNNER_STATE_SIZE",
+    "WARM_MARGIN_NS",
     "PeriodArrays",
     "PeriodContext",
     "begin",
@@ -116,6 +117,10 @@ RX_FRAMES = 64
 RX_BYTES = 512
 """The largest datagram kept [bytes] (python-can's frame of 8 data bytes takes about 170)."""
 
+
+WARM_MARGIN_NS = 2000
+"""How long before its time :func:`context_warm_until` ends its last warm-up, at the
+latest [ns]."""
 
 _CLOCK_MONOTONIC = {"linux": 1, "darwin": 6}.get(sys.platform)
 """``CLOCK_MONOTONIC``'s id in ``<time.h>`` (None: no ``clock_gettime`` here)."""
@@ -478,9 +483,10 @@ def context_warm_until(c: Any, due_ns: int) -> int:
     [ns]; the number of warm-ups run (0 before the stack has started).
 
     The spin phase of the loop's wait, spent keeping the stack hot: one warm-up always, then
-    another as long as it should end before ``due_ns`` (the last one's time taken as the
-    next's), so that the last one ends within about a warm-up's time (1-2 us) of the
-    deadline. Each warm-up steps a fresh copy of the stack's state: the stack itself is not
+    another as long as it should end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's
+    time taken as the next's), so that the last one ends 2-4 us before the deadline (the
+    return to the interpreter and its last clock reads fit in the margin: the wake-up is not
+    delayed). Each warm-up steps a fresh copy of the stack's state: the stack itself is not
     changed. A time already past (or no clock: :func:`monotonic_ns` -1) gives one warm-up.
     The loop calls it through :func:`context_period` (its ``warm_until``), so that the
     warm-ups run the very machine code of the step that follows.
@@ -493,7 +499,7 @@ def context_warm_until(c: Any, due_ns: int) -> int:
         context_warm(c)
         n += 1
         end = monotonic_ns()
-        if start < 0 or end + (end - start) >= due_ns:
+        if start < 0 or end + (end - start) + WARM_MARGIN_NS >= due_ns:
             return n
         start = end
 
