@@ -347,3 +347,34 @@ def test_the_stack_row_before_the_first_step_is_the_motorcycle_at_its_speed() ->
     speed = inputs.scenario.motorcycle.speed  # type: ignore[attr-defined]
     assert row[names.index("v_x")] == speed > 0.0
     assert not np.any(np.delete(row, names.index("v_x")))
+
+
+def test_the_virtual_rider_is_compiled_before_the_run() -> None:
+    # The rider at the rig steers from the run's first state row on: its compiled controller
+    # is compiled (or loaded from numba's cache) when the rider is made, not on that row
+    # (a stall of the rig's status frames then tripped the run's watchdog at its start).
+    from motosim.io.runs import load_run
+    from motosim.rt.rig import VirtualRider
+    from motosim.rt.stack import STACK_SIGNALS
+    from motosim.sim import rider
+
+    inputs = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
+    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
+
+    class OneRow:  # a state stream with one row waiting: upright at 20 m/s on the path
+        row = np.zeros(len(STACK_SIGNALS))
+        row[STACK_SIGNALS.index("v_x")] = 20.0
+        row[STACK_SIGNALS.index("x")] = world.path[0, 0]
+        row[STACK_SIGNALS.index("y")] = world.path[1, 0]
+        row[STACK_SIGNALS.index("psi")] = world.path[2, 0]
+
+        def poll(self) -> bool:
+            return True
+
+    virtual = VirtualRider(world, OneRow())  # type: ignore[arg-type]
+    rider.rider_torque.disable_compile()  # a compile (or cache load) now raises
+    try:
+        torque = virtual()
+    finally:
+        rider.rider_torque.disable_compile(False)
+    assert np.isfinite(torque) and torque == virtual.torque
