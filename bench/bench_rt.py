@@ -118,7 +118,7 @@ def _replay(
         a.rx[0, : frames.shape[1]] = frames[k]
         a.rx_length[0] = frames.shape[1]
         a.rx_id[0] = status_id
-        context_period(c, 1, k, k * 1e-3, np.nan, np.nan)
+        context_period(c, 1, k, k * 1e-3, np.nan, np.nan, -1)
         a.ring_head[0] += 1
         sent[k] = a.command_frame
 
@@ -199,7 +199,7 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         a.rx_length[0] = st.length
         a.rx_id[0] = st.frame_id
         t0 = clock()
-        kernel(context, 1, k, k * 1e-3, nan, nan)
+        kernel(context, 1, k, k * 1e-3, nan, nan, -1)
         times[k] = clock() - t0
         a.ring_head[0] += 1
         sent[k] = a.command_frame

@@ -10,6 +10,7 @@ explains.
 """
 
 import dataclasses
+import time
 from pathlib import Path
 
 import numpy as np
@@ -198,7 +199,7 @@ class _StackInPython:
 
 
 def _run_both_ways(
-    fused: bool, rate: float = 1000.0, *, warm: bool = False
+    fused: bool, rate: float = 1000.0, *, warm: str = ""
 ) -> tuple[RealtimeRunner, np.ndarray]:
     inputs = _inputs(rate)
     sc = inputs.scenario  # type: ignore[attr-defined]
@@ -232,8 +233,18 @@ def _run_both_ways(
                 runner.request_stop()  # a fade-out to the end
             return runner.period(k, t)
 
-        loop = RateLoop(rate, clock, warm=runner.warm if warm else None)
+        warmups: list[int] = []
+
+        def until_due(deadline: float) -> None:
+            # the loop's spin phase on a lab's clock: warm-ups until 50 us from now (real
+            # time: how many fit varies from run to run, and must not matter)
+            warmups.append(runner.warm(time.monotonic() + 50e-6))
+
+        warm_up = {"": None, "once": runner.warm, "until": until_due}[warm]
+        loop = RateLoop(rate, clock, warm=warm_up)
         loop.run(period, periods=round(sc.duration * rate))
+        if warm == "until":
+            assert max(warmups) > 1  # the stack warmed again and again in each period
     return runner, runner.ring.drain()
 
 
@@ -258,11 +269,13 @@ def test_the_fused_period_is_the_period_around_a_python_stack() -> None:
     assert same.state == "IDLE" and same.fault == "NONE"
 
 
-def test_warming_the_stack_before_each_deadline_changes_nothing() -> None:
-    # RealtimeRunner.warm steps a copy of the stack's state (to bring its code and data into
-    # the caches): the rows are those of a run without it, to the last bit
+@pytest.mark.parametrize("warm", ["once", "until"])
+def test_warming_the_stack_before_each_deadline_changes_nothing(warm: str) -> None:
+    # RealtimeRunner.warm steps a copy of the stack's state through the period's own compiled
+    # function (to bring its code and data into the caches), once or again and again until
+    # the deadline: the rows are those of a run without it, to the last bit
     _, rows = _run_both_ways(True)
-    warmed, rows_warm = _run_both_ways(True, warm=True)
+    warmed, rows_warm = _run_both_ways(True, warm=warm)
     col = {name: j for j, name in enumerate(warmed.names)}
     rows[:, col["stack"]] = rows_warm[:, col["stack"]] = 0.0
     assert rows.shape == rows_warm.shape and np.array_equal(rows, rows_warm, equal_nan=True)
@@ -334,3 +347,34 @@ def test_the_stack_row_before_the_first_step_is_the_motorcycle_at_its_speed() ->
     speed = inputs.scenario.motorcycle.speed  # type: ignore[attr-defined]
     assert row[names.index("v_x")] == speed > 0.0
     assert not np.any(np.delete(row, names.index("v_x")))
+
+
+def test_the_virtual_rider_is_compiled_before_the_run() -> None:
+    # The rider at the rig steers from the run's first state row on: its compiled controller
+    # is compiled (or loaded from numba's cache) when the rider is made, not on that row
+    # (a stall of the rig's status frames then tripped the run's watchdog at its start).
+    from motosim.io.runs import load_run
+    from motosim.rt.rig import VirtualRider
+    from motosim.rt.stack import STACK_SIGNALS
+    from motosim.sim import rider
+
+    inputs = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
+    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
+
+    class OneRow:  # a state stream with one row waiting: upright at 20 m/s on the path
+        row = np.zeros(len(STACK_SIGNALS))
+        row[STACK_SIGNALS.index("v_x")] = 20.0
+        row[STACK_SIGNALS.index("x")] = world.path[0, 0]
+        row[STACK_SIGNALS.index("y")] = world.path[1, 0]
+        row[STACK_SIGNALS.index("psi")] = world.path[2, 0]
+
+        def poll(self) -> bool:
+            return True
+
+    virtual = VirtualRider(world, OneRow())  # type: ignore[arg-type]
+    rider.rider_torque.disable_compile()  # a compile (or cache load) now raises
+    try:
+        torque = virtual()
+    finally:
+        rider.rider_torque.disable_compile(False)
+    assert np.isfinite(torque) and torque == virtual.torque

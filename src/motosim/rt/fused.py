@@ -63,11 +63,13 @@ from motosim.rt.stack import stack_period, stack_reset
 
 __all__ = [
     "RUNNER_STATE_SIZE",
+    "WARM_MARGIN_NS",
     "PeriodArrays",
     "PeriodContext",
     "begin",
     "context_period",
     "context_warm",
+    "context_warm_until",
     "finish",
     "fused_period",
     "monotonic_ns",
@@ -115,6 +117,10 @@ RX_FRAMES = 64
 RX_BYTES = 512
 """The largest datagram kept [bytes] (python-can's frame of 8 data bytes takes about 170)."""
 
+
+WARM_MARGIN_NS = 2000
+"""How long before its time :func:`context_warm_until` ends its last warm-up, at the
+latest [ns]."""
 
 _CLOCK_MONOTONIC = {"linux": 1, "darwin": 6}.get(sys.platform)
 """``CLOCK_MONOTONIC``'s id in ``<time.h>`` (None: no ``clock_gettime`` here)."""
@@ -472,8 +478,49 @@ def context_warm(c: Any) -> None:
 
 
 @njit(cache=True)
-def context_period(c: Any, frames: int, k: int, t: float, woke: float, done_read: float) -> int:
-    """:func:`fused_period` with the arguments held by ``c``, a :class:`PeriodContext`."""
+def context_warm_until(c: Any, due_ns: int) -> int:
+    """:func:`context_warm` again and again until ``due_ns`` on :func:`monotonic_ns`'s clock
+    [ns]; the number of warm-ups run (0 before the stack has started).
+
+    The spin phase of the loop's wait, spent keeping the stack hot: one warm-up always, then
+    another as long as it should end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's
+    time taken as the next's), so that the last one ends 2-4 us before the deadline (the
+    return to the interpreter and its last clock reads fit in the margin: the wake-up is not
+    delayed). Each warm-up steps a fresh copy of the stack's state: the stack itself is not
+    changed. A time already past (or no clock: :func:`monotonic_ns` -1) gives one warm-up.
+    The loop calls it through :func:`context_period` (its ``warm_until``), so that the
+    warm-ups run the very machine code of the step that follows.
+    """
+    if c.arrays.runner[R_STARTED] == 0.0:
+        return 0
+    n = 0
+    start = monotonic_ns()
+    while True:
+        context_warm(c)
+        n += 1
+        end = monotonic_ns()
+        if start < 0 or end + (end - start) + WARM_MARGIN_NS >= due_ns:
+            return n
+        start = end
+
+
+@njit(cache=True)
+def context_period(
+    c: Any, frames: int, k: int, t: float, woke: float, done_read: float, warm_until: int
+) -> int:
+    """:func:`fused_period` with the arguments held by ``c``, a :class:`PeriodContext`; or,
+    with ``warm_until`` >= 0, no period but the stack's warm-ups until then
+    (:func:`context_warm_until`, ``warm_until`` [ns] on :func:`monotonic_ns`'s clock; their
+    number is returned).
+
+    Why both in one function: numba compiles, into each function called from Python, its own
+    copy of every compiled function it calls (the stack's step included); warm-ups called
+    through another function would warm another copy of the step's machine code (other
+    addresses in the instruction cache and the branch predictors) and only the data the step
+    shares. Through this one, the warm-ups and the period run the same copy.
+    """
+    if warm_until >= 0:
+        return context_warm_until(c, warm_until)
     return fused_period(
         c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
         done_read,

@@ -130,9 +130,10 @@ class RateLoop:
     capacity : int
         Steps whose timing is kept (a ring: the last ``capacity`` steps are summarised).
     warm : callable, optional
-        Called ``WARM_LEAD`` before each deadline (within the clock's spin: the wake-up is
-        not delayed) to bring the step's code and data into the CPU's caches
-        (:meth:`motosim.rt.run.RealtimeRunner.warm`).
+        ``warm(deadline)``, called ``WARM_LEAD`` before each deadline (within the clock's
+        spin: the wake-up is not delayed) to bring the step's code and data into the CPU's
+        caches and keep them there until ``deadline`` [s]
+        (:meth:`motosim.rt.run.RealtimeRunner.warm`); it must return before ``deadline``.
 
     Examples
     --------
@@ -152,7 +153,7 @@ class RateLoop:
         clock: Clock,
         *,
         capacity: int = 1 << 17,
-        warm: Callable[[], None] | None = None,
+        warm: Callable[[float], object] | None = None,
     ) -> None:
         if not (np.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -214,7 +215,7 @@ class RateLoop:
             deadline = t0 + k * period
             if warm is not None:
                 sleep_until(deadline - WARM_LEAD)
-                warm()
+                warm(deadline)
             sleep_until(deadline)
             woke = now()
             carry_on = step(k, deadline)

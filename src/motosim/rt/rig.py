@@ -302,7 +302,11 @@ class VirtualRig:
         self._idle = np.zeros(1)
         self._held = np.zeros(1)
         self._started = False
-        _plant_steps(self.x.copy(), 0.0, self._idle, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4)
+        for tau_r in (self._idle, tau):  # each type the run's start will pass (a read-only
+            # profile is another one): compiled, or loaded from numba's cache, now rather
+            # than on the run's first enabled command, a stall of the status frames that
+            # tripped the run's watchdog at its start
+            _plant_steps(self.x.copy(), 0.0, tau_r, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4)
         self.frames_sent = 0
         self.frames_dropped = 0
         self.frames_late = 0
@@ -501,6 +505,8 @@ class VirtualRider:
         self._k_path = 0
         self.torque = 0.0
         self.lateral_error = 0.0
+        self._steer(world.path[0, 0], world.path[1, 0], world.path[2, 0])  # compiled now,
+        # not on the run's first state row (a stall of the rig's frames at the run's start)
 
     def __call__(self) -> float:
         """The rider's torque now [N*m]."""
@@ -515,6 +521,17 @@ class VirtualRider:
             )  # fmt: skip
             self.torque = float(tau)
         return self.torque
+
+    def _steer(self, x: float, y: float, psi: float) -> float:
+        """The rider's torque [N*m] upright on the path at ``x``, ``y`` [m], heading ``psi``
+        [rad], at the schedule's first speed; nothing kept (the compiled rider loaded)."""
+        w = self.world
+        tau, _, _ = rider_torque(
+            np.zeros(8), float(w.rider_speeds[0]), psi, x, y, 0, w.path, w.path_ds,
+            w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss, w.rider_limits[0],
+            w.rider_limits[1],
+        )  # fmt: skip
+        return float(tau)
 
 
 class LockstepLink:

@@ -288,33 +288,54 @@ class RealtimeRunner:
         self._begin = compiled(fused.begin, a, 0, 0.0)
         self._finish = compiled(fused.finish, a, 0.0, 0, 0.0, 0.0, 0.0)
         self._kernel: Callable[..., int] | None = None
-        self._warm: Callable[[object], None] | None = None
         self._context: object = None
+        self._warms = False  # whether the kernel warms (compiled, its stack compiled)
         if isinstance(self.stepper, CompiledStack):
             st = self.stepper
             stack_args = (st.model, st.data, st.force, st.side_force, st.state)
             if hasattr(fused.context_period, "compile"):  # one argument unboxed per call
                 shadow = (new_data(st.model), st.state.copy(), a.stack_row.copy())
                 self._context = fused.PeriodContext(*stack_args, a, *shadow)
-                self._kernel = compiled(fused.context_period, self._context, 0, 0, 0.0, 0.0, 0.0)
-                self._warm = compiled(fused.context_warm, self._context)
+                self._kernel = compiled(
+                    fused.context_period, self._context, 0, 0, 0.0, 0.0, 0.0, -1
+                )
+                self._warms = True
             else:  # without numba's JIT: the plain function on the arrays
                 self._context = (*stack_args, a)
-                self._kernel = lambda c, *rest: fused.fused_period(*c, *rest)
+                self._kernel = lambda c, *rest: fused.fused_period(*c, *rest[:-1])
         self._send_command = self._sender(a.command_frame, self.codecs.command.frame_id)
         self._send_heartbeat = self._sender(a.heartbeat_frame, self.codecs.heartbeat.frame_id)
 
-    def warm(self) -> None:
-        """Bring the stack's code and data into the CPU's caches for the next period: one
-        stack step on a copy of its state, thrown away (a fused runner only; nothing changes).
+    def warm(self, until: float | None = None) -> int:
+        """Bring the stack's code and data into the CPU's caches for the next period: stack
+        steps on a copy of its state, thrown away (a fused runner only; nothing changes).
 
-        The loop calls it just before each deadline (:meth:`~motosim.rt.loop.RateLoop.run`'s
-        ``warm``): between two periods the interpreter's wait and the system calls evict the
-        stack from the caches, and its step would run several times slower than in a
-        compiled loop.
+        The loop calls it in the spin phase of its wait, ``WARM_LEAD`` before each deadline
+        (:meth:`~motosim.rt.loop.RateLoop.run`'s ``warm``), with the deadline: between two
+        periods the interpreter's wait and the system calls evict the stack from the caches,
+        and its step would run several times slower than in a compiled loop.
+
+        Parameters
+        ----------
+        until : float, optional
+            Keep warming, one copy of the stack's step after the other in one compiled call
+            (:func:`~motosim.rt.fused.context_period`'s ``warm_until``: the period's own
+            machine code), until this time on the machine's
+            monotonic clock [s] (:class:`~motosim.rt.clock.MonotonicClock`'s, i.e.
+            ``time.monotonic``): the last warm-up then ends within about one step's time of
+            it. None, or a time already past (a simulated clock's): one warm-up.
+
+        Returns
+        -------
+        int
+            The warm-ups run (0 before the stack has started, or for a stack in Python).
         """
-        if self._warm is not None:
-            self._warm(self._context)
+        if not self._warms:
+            return 0
+        assert self._kernel is not None
+        due = 0 if until is None else max(0, int(until * 1e9))  # 0: in the past, one warm-up
+        n: int = self._kernel(self._context, 0, 0, 0.0, 0.0, 0.0, due)
+        return n
 
     def _sender(self, frame: NDArray[np.uint8], frame_id: int) -> Callable[[], bool]:
         """A function sending ``frame``'s bytes as they are when it is called."""
@@ -468,7 +489,7 @@ class RealtimeRunner:
         done_read = now() if now is not None else math.nan
         a = self._arrays
         if self._kernel is not None:
-            flags: int = self._kernel(self._context, frames, k, t, woke, done_read)
+            flags: int = self._kernel(self._context, frames, k, t, woke, done_read, -1)
         else:
             flags = self._stack_period(a, frames, k, t, woke, done_read)
         done_control = now() if now is not None else math.nan

@@ -187,9 +187,10 @@ def test_bus_paced_loop_refuses_bad_settings(rate: float, timeout: float) -> Non
 
 def test_the_warm_up_runs_just_before_each_deadline() -> None:
     clock = SimulatedClock()
-    calls: list[float] = []
-    loop = RateLoop(100.0, clock, warm=lambda: calls.append(clock.now()))
+    calls: list[tuple[float, float]] = []
+    loop = RateLoop(100.0, clock, warm=lambda until: calls.append((clock.now(), until)))
     steps: list[float] = []
     assert loop.run(lambda k, t: steps.append(t) is None, periods=3) == 3
-    assert calls == pytest.approx([t - WARM_LEAD for t in steps])
+    assert [c[0] for c in calls] == pytest.approx([t - WARM_LEAD for t in steps])
+    assert [c[1] for c in calls] == pytest.approx(steps)  # told the deadline to warm until
     assert steps == pytest.approx([0.01, 0.02, 0.03])  # the deadlines unchanged

@@ -190,3 +190,29 @@ def test_parse_rig_checks_keys_and_types() -> None:
         parse_rig({"loss": 1.5}, base=base)
     with pytest.raises(MotosimError, match="multiple of"):
         parse_rig({"status_rate": 3000.0}, base=base)
+
+
+def test_nothing_is_compiled_when_the_run_starts() -> None:
+    # The run's first enabled command starts the rider's profile. The rig compiles (or loads
+    # from numba's cache) its plant for the profile's own type when it is made: compiling it
+    # then stalled the rig's status frames for milliseconds and tripped the run's 3-period
+    # watchdog at its start. A read-only profile (as build_rig gives it) is another type.
+    from motosim.rt import rig as rig_module
+
+    profile = np.full(100_000, 3.0)
+    profile.flags.writeable = False
+    link = FakeLink()
+    settings = RigSettings(
+        plant_rate=10_000.0, status_rate=1000.0, encoder_bits=14, current_noise=0.0,
+        max_current=30.0,
+    )  # fmt: skip
+    rig = VirtualRig(HB, settings, CODECS, link, profile, np.random.default_rng(0))
+    rig_module._plant_steps.disable_compile()  # a compile (or cache load) now raises
+    try:
+        rig.advance_to(0.01)  # the drive idle, from power-on: no rider yet
+        assert rig.x[0] == 0.0
+        link.inbox.append(_command(0.0))  # the run's first enabled command
+        rig.advance_to(0.02)
+    finally:
+        rig_module._plant_steps.disable_compile(False)
+    assert rig.x[0] > 0.0  # the rider's 3 N*m turned the handlebar

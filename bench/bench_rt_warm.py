@@ -1,0 +1,257 @@
+"""What makes the stack's step slower inside the real-time loop than step after step.
+
+Controlled experiments on the stack's period as ``motosim run`` calls it (the fused period,
+:func:`motosim.rt.fused.context_period`, on a :class:`~motosim.rt.run.RealtimeRunner`'s
+context, the stack timed from compiled code as in every run: the ``stack`` column), paced
+at 1 kHz on absolute deadlines, in one process under the loop's privileges (SCHED_FIFO 80,
+CPU 1, mlockall; refused and reported without root), each variant in three rounds of
+``--periods`` periods, p50 and p99 of each round [us]:
+
+- ``offline``: the stack's period in a compiled loop, step after step (the baseline of
+  ``bench/bench_rt.py``, measured in the same run);
+- ``compiled wait``: the fused period in a compiled loop, a compiled busy wait between two
+  periods (no interpreter, no system call): with no warm-up; with one warm-up
+  ``WARM_LEAD`` before the deadline; with warm-ups until the deadline
+  (:func:`~motosim.rt.fused.context_warm_until`);
+- ``python wait``: the loop as ``motosim run`` waits (:class:`~motosim.rt.clock.MonotonicClock`:
+  a sleep, then a spin in Python, :meth:`RealtimeRunner.warm` called ``WARM_LEAD`` before
+  the deadline), the period called from Python: no warm-up, one warm-up (before this
+  work), warm-ups until the deadline (after); each also with the bus read of
+  ``motosim run`` between the wake-up and the period (a datagram sent over loopback at the
+  start of the period, read by ``poll``/``recv_into``/``poll`` as
+  :meth:`~motosim.io.can.UdpMulticastLink.receive_datagrams` does).
+
+Run: ``python bench/bench_rt_warm.py [--periods 2000]``.
+"""
+
+import argparse
+import os
+import select
+import socket
+import tomllib
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from bench_rt import SCENARIO, _Quiet, _steps, _us, safety_table
+from motosim.control.torque_feedback import PAPER_CONTROLLER
+from motosim.io.can import handlebar_codecs
+from motosim.params import load_parameters
+from motosim.rt import fused
+from motosim.rt.clock import MonotonicClock
+from motosim.rt.config import parse_safety
+from motosim.rt.fused import context_period, context_warm, context_warm_until, monotonic_ns
+from motosim.rt.loop import WARM_LEAD
+from motosim.rt.privileges import apply_privileges
+from motosim.rt.run import RealtimeRunner
+from motosim.rt.stack import CompiledStack, compiled
+from motosim.sim import build_stack, parse_scenario, prepare
+
+
+@njit(cache=False)
+def _compiled_loop(
+    c: Any, frames: Any, status_id: int, out: Any, gap_ns: int, lead_ns: int, mode: int
+) -> None:  # fmt: skip
+    """The fused period at ``gap_ns`` on absolute deadlines, a compiled busy wait between
+    two: ``mode`` 0 no warm-up, 1 one warm-up ``lead_ns`` before the deadline, 2 warm-ups
+    from then until the deadline; the stack's time of each period into ``out`` [s]."""
+    a = c.arrays
+    due = monotonic_ns() + gap_ns
+    for k in range(out.size):
+        if mode > 0:
+            while monotonic_ns() < due - lead_ns:
+                pass
+            context_period(c, 0, 0, 0.0, 0.0, 0.0, 0 if mode == 1 else due)
+        while monotonic_ns() < due:
+            pass
+        a.rx[0, : frames.shape[1]] = frames[k]
+        a.rx_length[0] = frames.shape[1]
+        a.rx_id[0] = status_id
+        context_period(c, 1, k, k * 1e-3, np.nan, np.nan, -1)
+        a.ring_head[0] += 1
+        out[k] = a.runner[fused.R_STACK_TIME]
+        due += gap_ns
+
+
+@njit(cache=False)
+def _decay(c: Any, frames: Any, status_id: int, out: Any, gap_ns: int, warm: int) -> None:
+    """The fused period again and again, ``gap_ns`` of busy wait before each: ``warm`` 1,
+    after one warm-up through :func:`context_period`; 2, then warm-ups for 50 us until the
+    period; the stack's time of each period into ``out`` [s]."""
+    a = c.arrays
+    for k in range(out.size):
+        if warm == 1:
+            context_period(c, 0, 0, 0.0, 0.0, 0.0, 0)
+        due = monotonic_ns() + gap_ns
+        while monotonic_ns() < due:
+            pass
+        if warm == 2:
+            context_period(c, 0, 0, 0.0, 0.0, 0.0, monotonic_ns() + 50_000)
+        a.rx[0, : frames.shape[1]] = frames[k]
+        a.rx_length[0] = frames.shape[1]
+        a.rx_id[0] = status_id
+        context_period(c, 1, k, k * 1e-3, np.nan, np.nan, -1)
+        a.ring_head[0] += 1
+        out[k] = a.runner[fused.R_STACK_TIME]
+
+
+def main(periods: int) -> None:
+    """Measure and print."""
+    privileges = apply_privileges(priority=80, cpus=[1], mlock=True)
+    print("privileges:", ", ".join(f"{p.name} {'applied' if p.applied else 'refused'}"
+                                   for p in privileges))  # fmt: skip
+    text = SCENARIO.format(duration=10.0, control=1000.0) + safety_table(3)
+    data = {k: v for k, v in tomllib.loads(text).items() if k != "realtime"}
+    sc = parse_scenario(data, origin="bench")
+    hb = load_parameters("simacom_handlebar", "handlebar")
+    inputs = prepare(
+        sc, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
+        nominal_handlebar=hb, controller=PAPER_CONTROLLER,
+    )  # fmt: skip
+    model = build_stack(inputs)
+    codecs = handlebar_codecs()
+    limits = parse_safety(tomllib.loads(safety_table(3))["realtime"]["safety"], origin="bench")
+    st = codecs.status
+    n = periods
+    values = np.zeros(len(st.names))
+    theta = 0.01 * np.sin(np.arange(n) * 1e-3 * 6.0)
+    frames = np.zeros((n, st.length), dtype=np.uint8)
+    for k in range(n):
+        values[codecs.position(st, "angle")] = theta[k]
+        values[codecs.position(st, "counter")] = k & 0xF
+        frames[k] = np.frombuffer(st.encode(values), dtype=np.uint8)
+
+    def runner() -> RealtimeRunner:
+        return RealtimeRunner(CompiledStack(model), _Quiet(), codecs, limits, rate=1000.0,
+                              capacity=1 << 12, handlebar=hb)  # fmt: skip
+
+    rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    rx.bind(("127.0.0.1", 0))
+    rx.setblocking(False)
+    tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    target = rx.getsockname()
+    poll = select.poll()
+    poll.register(rx, select.POLLIN)
+    datagram = bytes(72)  # about a python-can udp_multicast frame
+    buffer = memoryview(bytearray(512))
+    clock = MonotonicClock()
+    lead = WARM_LEAD
+
+    def python_loop(warm: int, read: bool, entry: str = "period") -> np.ndarray:
+        r = runner()
+        a, kernel, context = r._arrays, r._kernel, r._context
+        assert kernel is not None
+        if entry == "period":  # the warm-ups through the period's own function (this work)
+            warm_up = r.warm
+        else:  # through functions of their own (before): another copy of the step's code
+            once = compiled(context_warm, context)
+            until = compiled(context_warm_until, context, 0)
+
+            def warm_up(deadline: float | None) -> int:
+                if deadline is None:
+                    once(context)
+                    return 1
+                n: int = until(context, int(deadline * 1e9))
+                return n
+
+        out = np.empty(n)
+        t0 = clock.now() + 1e-3
+        for k in range(n):
+            deadline = t0 + k * 1e-3
+            if read:
+                tx.sendto(datagram, target)  # the drive's frame, waiting at the wake-up
+            if warm:
+                clock.sleep_until(deadline - lead)
+                warm_up(deadline if warm == 2 else None)
+            clock.sleep_until(deadline)
+            if read:
+                got = 0
+                while poll.poll(0):
+                    try:
+                        got += rx.recv_into(buffer)
+                    except BlockingIOError:
+                        break
+            a.rx[0, : st.length] = frames[k]
+            a.rx_length[0] = st.length
+            a.rx_id[0] = st.frame_id
+            kernel(context, 1, k, deadline, float("nan"), float("nan"), -1)
+            a.ring_head[0] += 1
+            out[k] = a.runner[fused.R_STACK_TIME]
+        return out
+
+    def compiled_loop(mode: int) -> np.ndarray:
+        r = runner()
+        out = np.empty(n)
+        _compiled_loop(r._context, frames, st.frame_id, out, 1_000_000, int(lead * 1e9), mode)
+        return out
+
+    def offline() -> np.ndarray:
+        s = CompiledStack(model)
+        out = np.empty(n)
+        args = (s.model, s.data, s.force, s.side_force, s.state, s.row())
+        _steps(*args, theta[:n], out, 0, np.zeros(0))
+        return out
+
+    def decay(gap_us: float, warm: int) -> np.ndarray:
+        r = runner()
+        out = np.empty(n)
+        _decay(r._context, frames, st.frame_id, out, int(gap_us * 1e3), warm)
+        return out
+
+    variants = {
+        "offline, step after step": offline,
+        "fused period after period": lambda: decay(0, 0),
+        **{
+            f"fused period, {g:g} us busy wait before": (lambda g=g: decay(g, 0))
+            for g in (3, 30, 100, 300, 950)
+        },
+        "fused period after a warm-up, no wait": lambda: decay(0, 1),
+        **{
+            f"fused period after a warm-up, then {g:g} us busy wait": (lambda g=g: decay(g, 1))
+            for g in (3, 30, 100)
+        },
+        **{
+            f"fused period, {g:g} us busy wait, then warm-ups for 50 us": (lambda g=g: decay(g, 2))
+            for g in (0, 30, 100, 300, 950)
+        },
+        "compiled wait, no warm-up": lambda: compiled_loop(0),
+        "compiled wait, one warm-up 50 us before": lambda: compiled_loop(1),
+        "compiled wait, warm-ups until the deadline": lambda: compiled_loop(2),
+        "python wait, no warm-up": lambda: python_loop(0, False),
+        "python wait, warm-ups until the deadline": lambda: python_loop(2, False),
+        "python wait + bus read, no warm-up": lambda: python_loop(0, True),
+        "python wait + bus read, one warm-up 50 us before, own function (before)": lambda: (
+            python_loop(1, True, "own")
+        ),
+        "python wait + bus read, warm-ups until the deadline, own function": lambda: python_loop(
+            2, True, "own"
+        ),
+        "python wait + bus read, one warm-up 50 us before, the period's function": lambda: (
+            python_loop(1, True)
+        ),
+        "python wait + bus read, warm-ups until the deadline, the period's function (now)": (
+            lambda: python_loop(2, True)
+        ),
+    }
+    small = n
+    n = 20
+    for run in variants.values():  # compile everything
+        run()
+    n = small
+    results: dict[str, list[str]] = {name: [] for name in variants}
+    for _ in range(3):
+        for name, run in variants.items():
+            t = run()
+            t = t[20:][np.isfinite(t[20:])]  # the stack's first periods left out
+            results[name].append(f"{_us(float(np.median(t)))}/{_us(float(np.percentile(t, 99)))}")
+    load = " ".join(f"{x:.1f}" for x in os.getloadavg())
+    print(f"stack step p50/p99 us, three rounds; load {load}")
+    for name, rounds in results.items():
+        print(f"  {name:<80} {'  '.join(rounds)}")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--periods", type=int, default=2000, help="periods per variant")
+    main(parser.parse_args().periods)
