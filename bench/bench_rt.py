@@ -40,14 +40,15 @@ import sys
 import tempfile
 import time
 import tomllib
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER
-from motosim.io.can import handlebar_codecs
+from motosim.io.can import HandlebarCodecs, handlebar_codecs
 from motosim.params import load_parameters
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
@@ -57,6 +58,8 @@ from motosim.rt.privileges import apply_privileges
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.stack import CompiledStack, stack_period
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
+from motosim.sim.closed_loop import RunInputs
+from motosim.sim.stack import StackModel
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests" / "integration"))
 from rt_tables import safety_table
@@ -153,11 +156,20 @@ CHUNK = 50
 resolution and overhead)."""
 
 
-def _stack_speed(n: int = 20_000) -> dict[str, float]:
-    """The same compiled work called once per period from Python (as the loop does) and in
-    a compiled loop over the same recorded inputs: the fused period (frame decoded, safety
-    stage, stack, command encoded, row kept) and the stack's period alone; with the offline
-    closed loop's period (``motosim simulate``, plant included) for reference."""
+class BenchSetup(NamedTuple):
+    """The 1 kHz bench run of :func:`bench_setup`."""
+
+    inputs: RunInputs
+    model: StackModel
+    codecs: HandlebarCodecs
+    theta: np.ndarray  # the handlebar angle of each period [rad]
+    frames: np.ndarray  # (n, status length) uint8: the drive's status frame of each period
+    runner: Callable[[], RealtimeRunner]  # a fresh runner, each the same start
+
+
+def bench_setup(n: int) -> BenchSetup:
+    """The bench's 1 kHz run (the paper's controller on the packaged handlebar), its stack,
+    and ``n`` status frames of a steered handlebar with its counter moving."""
     text = SCENARIO.format(duration=10.0, control=1000.0) + safety_table(3)
     data = {k: v for k, v in tomllib.loads(text).items() if k != "realtime"}
     sc = parse_scenario(data, origin="bench")
@@ -166,10 +178,6 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         sc, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
         nominal_handlebar=hb, controller=PAPER_CONTROLLER,
     )  # fmt: skip
-    simulate(inputs, rng=np.random.default_rng(0))  # warm
-    start = time.perf_counter()
-    simulate(inputs, rng=np.random.default_rng(0))
-    offline = (time.perf_counter() - start) / 10_000
     model = build_stack(inputs)
     codecs = handlebar_codecs()
     limits = parse_safety(tomllib.loads(safety_table(3))["realtime"]["safety"], origin="bench")
@@ -177,7 +185,7 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
     values = np.zeros(len(st.names))
     theta = 0.01 * np.sin(np.arange(n) * 1e-3 * 6.0)
     frames = np.zeros((n, st.length), dtype=np.uint8)
-    for k in range(n):  # the drive's status frames: a steered handlebar, counter moving
+    for k in range(n):
         values[codecs.position(st, "angle")] = theta[k]
         values[codecs.position(st, "counter")] = k & 0xF
         frames[k] = np.frombuffer(st.encode(values), dtype=np.uint8)
@@ -186,6 +194,20 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         return RealtimeRunner(CompiledStack(model), _Quiet(), codecs, limits, rate=1000.0,
                               capacity=1 << 12, handlebar=hb)  # fmt: skip
 
+    return BenchSetup(inputs, model, codecs, theta, frames, runner)
+
+
+def _stack_speed(n: int = 20_000) -> dict[str, float]:
+    """The same compiled work called once per period from Python (as the loop does) and in
+    a compiled loop over the same recorded inputs: the fused period (frame decoded, safety
+    stage, stack, command encoded, row kept) and the stack's period alone; with the offline
+    closed loop's period (``motosim simulate``, plant included) for reference."""
+    b = bench_setup(n)
+    model, theta, frames, runner, st = b.model, b.theta, b.frames, b.runner, b.codecs.status
+    simulate(b.inputs, rng=np.random.default_rng(0))  # warm
+    start = time.perf_counter()
+    simulate(b.inputs, rng=np.random.default_rng(0))
+    offline = (time.perf_counter() - start) / 10_000
     one, loop = runner(), runner()  # the same start
     kernel = one._kernel
     assert kernel is not None

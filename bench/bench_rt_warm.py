@@ -28,25 +28,18 @@ import argparse
 import os
 import select
 import socket
-import tomllib
 from typing import Any
 
 import numpy as np
 from numba import njit
 
-from bench_rt import SCENARIO, _Quiet, _steps, _us, safety_table
-from motosim.control.torque_feedback import PAPER_CONTROLLER
-from motosim.io.can import handlebar_codecs
-from motosim.params import load_parameters
+from bench_rt import _steps, _us, bench_setup
 from motosim.rt import fused
 from motosim.rt.clock import MonotonicClock
-from motosim.rt.config import parse_safety
 from motosim.rt.fused import context_period, context_warm, context_warm_until, monotonic_ns
 from motosim.rt.loop import WARM_LEAD
 from motosim.rt.privileges import apply_privileges
-from motosim.rt.run import RealtimeRunner
 from motosim.rt.stack import CompiledStack, compiled
-from motosim.sim import build_stack, parse_scenario, prepare
 
 
 @njit(cache=False)
@@ -101,31 +94,9 @@ def main(periods: int) -> None:
     privileges = apply_privileges(priority=80, cpus=[1], mlock=True)
     print("privileges:", ", ".join(f"{p.name} {'applied' if p.applied else 'refused'}"
                                    for p in privileges))  # fmt: skip
-    text = SCENARIO.format(duration=10.0, control=1000.0) + safety_table(3)
-    data = {k: v for k, v in tomllib.loads(text).items() if k != "realtime"}
-    sc = parse_scenario(data, origin="bench")
-    hb = load_parameters("simacom_handlebar", "handlebar")
-    inputs = prepare(
-        sc, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
-        nominal_handlebar=hb, controller=PAPER_CONTROLLER,
-    )  # fmt: skip
-    model = build_stack(inputs)
-    codecs = handlebar_codecs()
-    limits = parse_safety(tomllib.loads(safety_table(3))["realtime"]["safety"], origin="bench")
-    st = codecs.status
     n = periods
-    values = np.zeros(len(st.names))
-    theta = 0.01 * np.sin(np.arange(n) * 1e-3 * 6.0)
-    frames = np.zeros((n, st.length), dtype=np.uint8)
-    for k in range(n):
-        values[codecs.position(st, "angle")] = theta[k]
-        values[codecs.position(st, "counter")] = k & 0xF
-        frames[k] = np.frombuffer(st.encode(values), dtype=np.uint8)
-
-    def runner() -> RealtimeRunner:
-        return RealtimeRunner(CompiledStack(model), _Quiet(), codecs, limits, rate=1000.0,
-                              capacity=1 << 12, handlebar=hb)  # fmt: skip
-
+    b = bench_setup(n)
+    model, theta, frames, runner, st = b.model, b.theta, b.frames, b.runner, b.codecs.status
     rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     rx.bind(("127.0.0.1", 0))
     rx.setblocking(False)
