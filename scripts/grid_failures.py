@@ -23,9 +23,10 @@ import math
 import numpy as np
 
 from motosim.control.torque_feedback import default_bandwidth, design_torque_feedback
-from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
+from motosim.estimation.walcott_zak import WalcottZakObserver, design_with
 from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
+from motosim.sim.closed_loop import observer_settings
 from motosim.sim.loop_analysis import (
     MARGINS,
     analyse_stack,
@@ -46,7 +47,7 @@ def default_stack(hb: HandlebarParameters, rate: float, speed: float) -> StackMo
     controller = design_torque_feedback(
         hb, rng=np.random.default_rng(0), bandwidth=default_bandwidth(rate), order=1, rate=rate
     ).controller_zoh
-    kernel = WalcottZakObserver(design_with(hb, ObserverSettings.for_step(1.0 / rate)), 1.0 / rate)
+    kernel = WalcottZakObserver(design_with(hb, observer_settings(rate)), 1.0 / rate)
     return design_stack(
         sharp, kernel.kernel, controller, control_rate=rate, measurement_rate=rate,
         lipschitz=300.0, max_current=30.0, speed=speed, handlebar=hb, rider_feedforward=True,

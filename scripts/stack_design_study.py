@@ -38,11 +38,11 @@ import numpy as np
 from motosim.control.statespace import StateSpace
 from motosim.control.torque_feedback import default_bandwidth, design_torque_feedback
 from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
-from motosim.io.runs import load_run
+from motosim.io.runs import load_run, load_scenario, resolve
 from motosim.model import sharp as sharp_model
 from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
-from motosim.sim import loop_analysis, simulate
+from motosim.sim import RunInputs, loop_analysis, simulate
 from motosim.sim.closed_loop import build_stack
 from motosim.sim.loop_analysis import MARGINS, StackLoop, StackLoopAnalysis, analyse_stack
 from motosim.sim.metrics import run_metrics
@@ -121,6 +121,19 @@ CANDIDATES = [
     ),
     Candidate(
         "10 Hz, estimate filter 60 ms", bandwidth=10.0, filter_time_constant=0.06, rates=(100.0,)
+    ),
+    Candidate("J x2, bandwidth 5 Hz", inertia_obs=2.0, bandwidth=5.0, rates=(100.0,)),
+    Candidate("J x2, bandwidth 7 Hz", inertia_obs=2.0, bandwidth=7.0, rates=(100.0,)),
+    Candidate("J x2, bandwidth 8.5 Hz", inertia_obs=2.0, bandwidth=8.5, rates=(100.0,)),
+    Candidate("J x2, injection 0.5x", inertia_obs=2.0, injection=0.5, rates=(100.0,)),
+    Candidate("J x2, injection 0.25x", inertia_obs=2.0, injection=0.25, rates=(100.0,)),
+    Candidate("J x2, cancel 0.8", inertia_obs=2.0, cancellation=0.8, rates=(100.0,)),
+    Candidate(
+        "J x2, 7 Hz, injection 0.5x",
+        inertia_obs=2.0,
+        bandwidth=7.0,
+        injection=0.5,
+        rates=(100.0,),
     ),
 ]
 
@@ -253,10 +266,28 @@ RUNS = (
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
 
-def runs(c: Candidate, rates: list[float]) -> None:
-    """Closed-loop runs of candidate ``c``: one Markdown row per scenario."""
-    for name, rate in RUNS:
-        inputs = load_run(SCENARIOS / name)
+TRAINING = (
+    "lane_change_20.toml", "crosswind_30.toml", "obstacle_avoidance_15.toml", "turn_30.toml",
+    "opendrive_curve.toml", "slalom_10.toml", "paper/fig15_riding.toml",
+)  # fmt: skip
+"""The closed-loop training scenarios ``--runs ... --at RATE`` simulates at RATE."""
+
+
+def _inputs(name: str, rate: float | None) -> RunInputs:
+    """The scenario's run inputs, at its own rates or (``rate``) at that one for both."""
+    if rate is None:
+        return load_run(SCENARIOS / name)
+    sc = load_scenario(SCENARIOS / name)
+    rates = dataclasses.replace(sc.rates, control=rate, measurement=rate)
+    return resolve(dataclasses.replace(sc, rates=rates), (SCENARIOS / name).parent)
+
+
+def runs(c: Candidate, rates: list[float], at: float | None = None) -> None:
+    """Closed-loop runs of candidate ``c``: one Markdown row per scenario; ``at``: every
+    training scenario at that rate instead of :data:`RUNS` at theirs."""
+    plan = RUNS if at is None else tuple((name, at) for name in TRAINING)
+    for name, rate in plan:
+        inputs = _inputs(name, at)
         sc = inputs.scenario
         if sc.rates.measurement != rate or rate not in c.rates or rate not in rates:
             continue
@@ -348,6 +379,9 @@ def main() -> int:
     parser.add_argument("--only", nargs="*", help="candidate names (default: all)")
     parser.add_argument("--wobble", action="store_true")
     parser.add_argument("--runs", nargs="+", metavar="NAME", help="simulate these candidates")
+    parser.add_argument(
+        "--at", type=float, metavar="RATE", help="with --runs: every training scenario at RATE"
+    )
     args = parser.parse_args()
     speeds = [float(s) for s in args.speeds.split(",")]
     if args.runs:
@@ -355,7 +389,7 @@ def main() -> int:
         print("|---|---|---|---|---|---|---|")
         for c in CANDIDATES:
             if c.name in args.runs:
-                runs(c, [float(r) for r in args.rates.split(",")])
+                runs(c, [float(r) for r in args.rates.split(",")], args.at)
         return 0
     if args.wobble:
         wobble(speeds)
