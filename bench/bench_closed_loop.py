@@ -17,6 +17,7 @@ import subprocess
 import sys
 import time
 import tomllib
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -25,7 +26,7 @@ from numba import njit
 from motosim.control.torque_feedback import design_torque_feedback
 from motosim.params import load_parameters
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
-from motosim.sim.stack import new_data, reset, step
+from motosim.sim.stack import StackModel, new_data, reset, step
 
 SCENARIO = """
 [scenario]
@@ -204,21 +205,19 @@ def _drive_stack(model, data, theta, torque):  # type: ignore[no-untyped-def]
     return total
 
 
-def _projection_ratio(duration: float, repeats: int = 7) -> float:
-    """Time of the stack step with the observer's stick projection on over off.
+def _ratio(duration: float, variant: Callable[[StackModel], StackModel], repeats: int = 7) -> float:
+    """Time of the default stack's step over that of ``variant(stack)``.
 
     The step alone (no plant: the handlebar's stick-slip would make the two runs' worlds
     differ), fed the angle and rider torque of one recorded run, interleaved so that the
-    machine's load falls on both alike.
+    machine's load falls on both alike; best of ``repeats`` each.
     """
     inputs = _inputs(duration)
     recorded = simulate(inputs, rng=np.random.default_rng(0))
     theta = np.ascontiguousarray(recorded["theta_h_meas"])
     torque = np.ascontiguousarray(recorded["tau_r"])
     on = build_stack(inputs)
-    settings = on.estimator.p.copy()
-    settings[9] = 0.0
-    off = on._replace(estimator=on.estimator._replace(p=settings))
+    off = variant(on)
     best = {"on": float("inf"), "off": float("inf")}
     for _ in range(repeats):
         for name, model in (("on", on), ("off", off)):
@@ -230,9 +229,25 @@ def _projection_ratio(duration: float, repeats: int = 7) -> float:
     return best["on"] / best["off"]
 
 
+def _without_projection(model: StackModel) -> StackModel:
+    """The stack with the observer's stick projection off."""
+    settings = model.estimator.p.copy()
+    settings[9] = 0.0
+    return model._replace(estimator=model.estimator._replace(p=settings))
+
+
+def _without_feedforward(model: StackModel) -> StackModel:
+    """The stack with neither feedforward term (rider-torque cancellation, reference inverse
+    dynamics): the step skips their code, as it did before they existed."""
+    ff = model.feedforward.copy()
+    ff[:2] = 0.0
+    return model._replace(feedforward=ff)
+
+
 def run() -> dict[str, float]:
     """Steps per second of each, the ratios, and the campaign's wall time."""
-    projection = _projection_ratio(20.0)
+    projection = _ratio(20.0, _without_projection)
+    feedforward = _ratio(20.0, _without_feedforward)
     compiled = max(_compiled(60.0) for _ in range(3))
     plain = _plain_python(0.5)
     blocks = _python_control(0.5, blocks=True)
@@ -247,5 +262,6 @@ def run() -> dict[str, float]:
         "compiled / python-control blocks": compiled / blocks,
         "compiled / python-control one nlsys": compiled / single,
         "stick projection on / off (time of a run)": projection,
+        "both feedforward terms on / off (time of a run)": feedforward,
         "1000 perturbed 10 s runs at 1 kHz, 2 processes [s]": campaign,
     }
