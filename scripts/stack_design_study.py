@@ -4,10 +4,10 @@
         [--only NAME ...] [--wobble]
 
 Each candidate design (the rider-torque cancellation gain, the reference inverse-dynamics
-terms, the controller's bandwidth and order, the observer's injection bandwidth and the
-J_eq, beta_eq it is designed with, and whether the extra damping of an observer whose beta_eq
-is below the nominal one is given back to the virtual motorcycle) is built for the packaged
-handlebar as ``motosim design`` builds it, and analysed by
+terms, the controller's bandwidth, order and integral corner, the observer's injection
+bandwidth and the J_eq, beta_eq it is designed with, and whether the extra damping of an
+observer whose beta_eq is below the nominal one is given back to the virtual motorcycle) is
+built for the packaged handlebar as ``motosim design`` builds it, and analysed by
 :func:`motosim.sim.loop_analysis.analyse_stack` at each rate and speed: the nominal loop's
 margins and rendered-feel error over 0.1-3 Hz, and how many of the 27 handlebars of
 :func:`motosim.sim.loop_analysis.robustness_grid` (J_eq, beta_eq x0.5/1/1.5, N k_t
@@ -36,7 +36,11 @@ from pathlib import Path
 import numpy as np
 
 from motosim.control.statespace import StateSpace
-from motosim.control.torque_feedback import default_bandwidth, design_torque_feedback
+from motosim.control.torque_feedback import (
+    INTEGRAL_CORNER,
+    default_bandwidth,
+    design_torque_feedback,
+)
 from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
 from motosim.io.runs import load_run, load_scenario, resolve
 from motosim.model import sharp as sharp_model
@@ -65,6 +69,7 @@ class Candidate:
     reference_damping: float = 1.0  # its beta_eq, as a factor of the nominal
     bandwidth: float | None = None  # controller bandwidth [Hz]; None: default_bandwidth(rate)
     order: int = 1
+    integral_corner: float = INTEGRAL_CORNER  # W1's corner, a fraction of the bandwidth
     injection: float | None = None  # observer injection bandwidth [1/s]; None: for_step
     filter_time_constant: float | None = None  # the estimate's low-pass [s]; None: for_step
     beta_obs: float = 1.0  # the observer's beta_eq, as a factor of the nominal
@@ -122,6 +127,10 @@ CANDIDATES = [
     Candidate(
         "10 Hz, estimate filter 60 ms", bandwidth=10.0, filter_time_constant=0.06, rates=(100.0,)
     ),
+    Candidate("integral corner 0.14", integral_corner=1 / 7),
+    Candidate("integral corner 0.2", integral_corner=0.2),
+    Candidate("J x2, integral corner 0.14", inertia_obs=2.0, integral_corner=1 / 7, rates=(100.0,)),
+    Candidate("J x2, integral corner 0.2", inertia_obs=2.0, integral_corner=0.2, rates=(100.0,)),
     Candidate("J x2, bandwidth 5 Hz", inertia_obs=2.0, bandwidth=5.0, rates=(100.0,)),
     Candidate("J x2, bandwidth 7 Hz", inertia_obs=2.0, bandwidth=7.0, rates=(100.0,)),
     Candidate("J x2, bandwidth 8.5 Hz", inertia_obs=2.0, bandwidth=8.5, rates=(100.0,)),
@@ -138,15 +147,17 @@ CANDIDATES = [
 ]
 
 
-_controllers: dict[tuple[float, int, float], StateSpace] = {}
+_controllers: dict[tuple[float, int, float, float], StateSpace] = {}
 
 
-def _controller(hb: HandlebarParameters, bandwidth: float, order: int, rate: float) -> StateSpace:
-    key = (bandwidth, order, rate)
+def _controller(hb: HandlebarParameters, c: Candidate, rate: float) -> StateSpace:
+    bandwidth = default_bandwidth(rate) if c.bandwidth is None else c.bandwidth
+    key = (bandwidth, c.order, rate, c.integral_corner)
     if key not in _controllers:
         design = design_torque_feedback(
-            hb, rng=np.random.default_rng(0), bandwidth=bandwidth, order=order, rate=rate
-        )
+            hb, rng=np.random.default_rng(0), bandwidth=bandwidth, order=c.order, rate=rate,
+            integral_corner=c.integral_corner,
+        )  # fmt: skip
         _controllers[key] = design.controller_zoh
     return _controllers[key]
 
@@ -166,8 +177,7 @@ def _settings(c: Candidate, rate: float) -> ObserverSettings:
 def build(c: Candidate, hb: HandlebarParameters, rate: float, speed: float) -> StackModel:
     """The stack of candidate ``c`` for the nominal handlebar ``hb`` at ``rate`` [Hz]."""
     sharp = load_parameters("sharp1971", "sharp")
-    bandwidth = default_bandwidth(rate) if c.bandwidth is None else c.bandwidth
-    controller = _controller(hb, bandwidth, c.order, rate)
+    controller = _controller(hb, c, rate)
     settings = _settings(c, rate)
     observed = dataclasses.replace(
         hb, beta_eq=c.beta_obs * hb.beta_eq, J_eq=c.inertia_obs * hb.J_eq
@@ -292,8 +302,7 @@ def runs(c: Candidate, rates: list[float], at: float | None = None) -> None:
         if sc.rates.measurement != rate or rate not in c.rates or rate not in rates:
             continue
         hb = inputs.nominal_handlebar
-        bandwidth = default_bandwidth(rate) if c.bandwidth is None else c.bandwidth
-        controller = _controller(hb, bandwidth, c.order, rate)
+        controller = _controller(hb, c, rate)
         reference = build_stack(dataclasses.replace(inputs, controller=controller))
         model = build(c, hb, rate, sc.motorcycle.speed)
         est = sc.estimator

@@ -62,6 +62,7 @@ def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
     [
         (["design", "--bandwidth", "500"], "at most a fifth of the 1000 Hz control rate"),
         (["design", "--order", "-1"], "--order -1; expected an integer from 0 to 3"),
+        (["design", "--integral-corner", "0"], "integral_corner = 0.0; expected a fraction"),
         (["design", "--speeds", "100"], "--speeds"),
         (["design", "--handlebar", "sharp1971"], "expected a handlebar parameter set"),
     ],

@@ -56,7 +56,7 @@ def test_options_refused_before_the_work_import_nothing_heavy() -> None:
 
 def test_choices_written_out_in_the_commands_equal_their_sources() -> None:
     from motosim.cli import cueing, design, estimate, identify
-    from motosim.control.torque_feedback import MAX_ORDER
+    from motosim.control.torque_feedback import INTEGRAL_CORNER, MAX_ORDER
     from motosim.cueing import ALGORITHMS
     from motosim.estimation import ESTIMATORS
     from motosim.identification import METHODS
@@ -64,6 +64,7 @@ def test_choices_written_out_in_the_commands_equal_their_sources() -> None:
 
     assert cueing.ALGORITHMS == ALGORITHMS
     assert design.MAX_ORDER == MAX_ORDER
+    assert design.INTEGRAL_CORNER == INTEGRAL_CORNER
     assert estimate.ESTIMATORS == tuple(ESTIMATORS)
     assert identify.METHODS == METHODS
     assert identify.DRIVES == DRIVES

@@ -70,6 +70,7 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
         (MINIMAL.replace("profile = ", "# no profile "), "missing profile"),
         (MINIMAL + "[estimator]\nname = 'oracle'\n", "name = 'oracle'; expected one of"),
         (MINIMAL + "[controller]\nkind = 'pid'\n", "kind = 'pid'"),
+        (MINIMAL + "[controller]\nintegral_corner = 0.7\n", "integral_corner = 0.7"),
         (MINIMAL + "[handlebar]\ninertia_factor = 0.0\n", "inertia_factor = 0.0"),
         (MINIMAL + "[measurement]\nencoder_bits = 40\n", "encoder_bits = 40"),
         (

@@ -29,8 +29,11 @@ MAX_SPEEDS = 20
 SPEED_RANGE = (3.0, 60.0)
 """Speeds of Sharp's tables [m/s], where the analysis is meant."""
 
-__all__ = ["MAX_ORDER", "MAX_STARTS", "register"]
+__all__ = ["INTEGRAL_CORNER", "MAX_ORDER", "MAX_STARTS", "register"]
 
+INTEGRAL_CORNER = 0.1
+""":data:`motosim.control.torque_feedback.INTEGRAL_CORNER`, written out as :data:`MAX_ORDER`
+is."""
 MAX_ORDER = 3
 """Highest order of the tuned controller: :data:`motosim.control.torque_feedback.MAX_ORDER`,
 written out so that the parser is built without importing SciPy (a unit test checks that they
@@ -71,7 +74,17 @@ def register(sub: Any) -> None:
         "--bandwidth",
         type=float,
         default=None,
-        help="tracking bandwidth [Hz] (10; 20 from 100 to 200 Hz --rate)",
+        help="tracking bandwidth [Hz] (10; a fifth of --rate below 50 Hz)",
+    )
+    parser.add_argument(
+        "--integral-corner",
+        type=float,
+        default=INTEGRAL_CORNER,
+        help=(
+            "the loop-shaping weight's integral corner as a fraction of the bandwidth, "
+            f"0-0.5 ({INTEGRAL_CORNER:g}; more tracks tighter below the bandwidth, with "
+            "less phase margin)"
+        ),
     )
     parser.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (1000)")
     parser.add_argument(
@@ -185,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
     from motosim.sim.closed_loop import observer_settings
 
     bandwidth = default_bandwidth(args.rate) if args.bandwidth is None else args.bandwidth
-    check_options(bandwidth=bandwidth, rate=args.rate)
+    check_options(bandwidth=bandwidth, rate=args.rate, integral_corner=args.integral_corner)
     speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
     for speed in speeds:
         check_number(
@@ -207,6 +220,7 @@ def run(args: argparse.Namespace) -> int:
         order=args.order,
         rate=args.rate,
         n_starts=args.starts,
+        integral_corner=args.integral_corner,
     )
     settings = observer_settings(args.rate)
     obs = design_with(hb, settings)

@@ -36,6 +36,7 @@ from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
     "DEFAULT_BANDWIDTH",
+    "INTEGRAL_CORNER",
     "MAX_ORDER",
     "PAPER_CONTROLLER",
     "PAPER_DEN",
@@ -56,6 +57,8 @@ Array = NDArray[np.float64]
 
 DEFAULT_BANDWIDTH = 10.0
 """Tracking bandwidth at control rates of 50 Hz and above [Hz]."""
+INTEGRAL_CORNER = 0.1
+"""W1's integral corner by default, as a fraction of the bandwidth: a decade below it."""
 MAX_ORDER = 3
 """Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
 controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
@@ -290,14 +293,22 @@ def default_bandwidth(rate: float) -> float:
     return min(DEFAULT_BANDWIDTH, rate / 5.0)
 
 
-def check_options(*, bandwidth: float, rate: float) -> None:
-    """Raise :class:`MotosimError` unless 0 < bandwidth <= rate / 5 [Hz] and rate > 0 [Hz]."""
+def check_options(
+    *, bandwidth: float, rate: float, integral_corner: float = INTEGRAL_CORNER
+) -> None:
+    """Raise :class:`MotosimError` unless 0 < bandwidth <= rate / 5 [Hz], rate > 0 [Hz] and
+    0 < integral_corner <= 0.5."""
     if not (math.isfinite(rate) and rate > 0):
         raise MotosimError(f"rate = {rate!r}; expected a control rate > 0 [Hz]")
     if not (math.isfinite(bandwidth) and 0 < bandwidth <= rate / 5):
         raise MotosimError(
             f"bandwidth = {bandwidth!r} Hz; expected > 0 and at most a fifth of the "
             f"{rate:g} Hz control rate"
+        )
+    if not (math.isfinite(integral_corner) and 0 < integral_corner <= 0.5):
+        raise MotosimError(
+            f"integral_corner = {integral_corner!r}; expected a fraction of the bandwidth "
+            "in (0, 0.5]"
         )
 
 
@@ -354,11 +365,12 @@ def _shaped_synthesis(
     bandwidth: float,
     order: int,
     n_starts: int,
+    integral_corner: float,
 ) -> tuple[float, float, StateSpace, FixedOrderResult]:
     """W1's gain and corner [rad/s], the shaped plant G_s = G_h W1 and K_s tuned on it."""
     G_h, _ = handlebar_plants(hb)
     omega_c = 2 * math.pi * bandwidth
-    corner = omega_c / 10.0
+    corner = omega_c * integral_corner
     unit = abs(frequency_response(series(_weight(1.0, corner), G_h), omega_c)[0, 0])
     gain = 1.0 / unit
     G_s = series(_weight(gain, corner), G_h)
@@ -376,6 +388,7 @@ def synthesize_controller(
     order: int = 1,
     rate: float = 1000.0,
     n_starts: int = 8,
+    integral_corner: float = INTEGRAL_CORNER,
 ) -> StateSpace:
     """The controller K = W1 K_s of :func:`design_torque_feedback`, without its analysis.
 
@@ -390,10 +403,11 @@ def synthesize_controller(
     """
     if bandwidth is None:
         bandwidth = default_bandwidth(rate)
-    check_options(bandwidth=bandwidth, rate=rate)
+    check_options(bandwidth=bandwidth, rate=rate, integral_corner=integral_corner)
     gain, corner, _, tuned = _shaped_synthesis(
-        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts
-    )
+        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts,
+        integral_corner=integral_corner,
+    )  # fmt: skip
     return series(tuned.controller, _weight(gain, corner))
 
 
@@ -405,6 +419,7 @@ def design_torque_feedback(
     order: int = 1,
     rate: float = 1000.0,
     n_starts: int = 8,
+    integral_corner: float = INTEGRAL_CORNER,
 ) -> TorqueFeedbackDesign:
     """Design the handlebar's torque-feedback controller by loop shaping and fixed order.
 
@@ -423,6 +438,11 @@ def design_torque_feedback(
         Control rate [Hz].
     n_starts : int
         Starts of the fixed-order search.
+    integral_corner : float
+        W1's corner as a fraction of the bandwidth, in (0, 0.5]: W1 = gain (s + corner) / s
+        with corner = 2 pi ``bandwidth`` ``integral_corner`` [rad/s]. Above the default 0.1
+        the loop gains stiffness below the bandwidth (the tracking error from the rider
+        torque's estimate) and loses phase at the crossover.
 
     Returns
     -------
@@ -435,10 +455,11 @@ def design_torque_feedback(
     """
     if bandwidth is None:
         bandwidth = default_bandwidth(rate)
-    check_options(bandwidth=bandwidth, rate=rate)
+    check_options(bandwidth=bandwidth, rate=rate, integral_corner=integral_corner)
     gain, corner, G_s, tuned = _shaped_synthesis(
-        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts
-    )
+        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts,
+        integral_corner=integral_corner,
+    )  # fmt: skip
     full = ncfsyn(G_s.A, G_s.B, G_s.C, G_s.D)
     K = series(tuned.controller, _weight(gain, corner))
     num, den = ss2tf(K.A, K.B, K.C, K.D)

@@ -98,7 +98,8 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     The controller is the scenario's: none, the paper's eq. (26), the one of a design file
     (whose observer settings the run then uses too), or ours synthesised for the nominal
     handlebar at the scenario's bandwidth (by default
-    :func:`~motosim.control.torque_feedback.default_bandwidth` of the measurement rate) and order.
+    :func:`~motosim.control.torque_feedback.default_bandwidth` of the measurement rate), order
+    and integral corner.
 
     Raises
     ------
@@ -142,6 +143,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
             order=c.order,
             rate=scenario.rates.measurement,
             n_starts=4,
+            integral_corner=c.integral_corner,
         )
     return prepare(
         scenario,

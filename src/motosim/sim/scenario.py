@@ -27,7 +27,8 @@ so that an error is one line naming the key, the value and what was expected. Th
                    friction_compensation = true, lipschitz = 300
     [controller]   kind = "ours" | "paper" | "none", design = "DESIGN.toml" (optional),
                    bandwidth [Hz] (default: 10 Hz, a fifth of the measurement rate below
-                   50 Hz), order = 1, discretization = "zoh" | "tustin",
+                   50 Hz), order = 1, integral_corner = 0.1 (W1's corner over the
+                   bandwidth), discretization = "zoh" | "tustin",
                    max_current = 30 [A], feedforward = ["rider", "reference"] for ours,
                    [] for the paper's (the terms of :func:`motosim.sim.stack.step`)
 
@@ -55,7 +56,7 @@ from typing import Any, ClassVar, Literal, Union, get_args, get_origin, get_type
 import numpy as np
 from numpy.typing import NDArray
 
-from motosim.control.torque_feedback import MAX_ORDER
+from motosim.control.torque_feedback import INTEGRAL_CORNER, MAX_ORDER
 from motosim.errors import MotosimError
 from motosim.estimation.registry import ESTIMATORS
 from motosim.params.checks import check_number, short_repr
@@ -585,13 +586,16 @@ class Controller:
     """The torque-feedback controller.
 
     ``bandwidth`` None: :func:`motosim.control.torque_feedback.default_bandwidth` of the
-    measurement rate (10 Hz, a fifth of the rate below 50 Hz).
+    measurement rate (10 Hz, a fifth of the rate below 50 Hz). ``integral_corner``: the
+    loop-shaping weight's corner as a fraction of the bandwidth
+    (:func:`motosim.control.torque_feedback.design_torque_feedback`).
     """
 
     kind: Literal["ours", "paper", "none"] = "ours"
     design: str | None = None
     bandwidth: float | None = None
     order: int = 1
+    integral_corner: float = INTEGRAL_CORNER
     discretization: Literal["zoh", "tustin"] = "zoh"
     max_current: float = 30.0
     feedforward: tuple[str, ...] | None = None
@@ -610,6 +614,7 @@ class Controller:
             _check("bandwidth", self.bandwidth, low=0.0, low_open=True, high=1000.0, unit="Hz")
         if not 0 <= self.order <= MAX_ORDER:
             raise MotosimError(f"order = {self.order}; expected an integer from 0 to {MAX_ORDER}")
+        _check("integral_corner", self.integral_corner, low=0.0, low_open=True, high=0.5)
         _check("max_current", self.max_current, low=0.0, low_open=True, high=1000.0, unit="A")
 
 

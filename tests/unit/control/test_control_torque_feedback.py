@@ -74,6 +74,24 @@ def test_bad_options(handlebar: HandlebarParameters) -> None:
         design_torque_feedback(handlebar, rng=np.random.default_rng(0), bandwidth=300.0)
     with pytest.raises(MotosimError, match="rate"):
         design_torque_feedback(handlebar, rng=np.random.default_rng(0), rate=-1.0)
+    for corner in (0.0, 0.6, math.nan):
+        with pytest.raises(MotosimError, match="integral_corner"):
+            design_torque_feedback(handlebar, rng=np.random.default_rng(0), integral_corner=corner)
+
+
+def test_integral_corner_trades_phase_for_stiffness(design, handlebar: HandlebarParameters) -> None:  # type: ignore[no-untyped-def]
+    """W1 = g (s + a) / s: moving a from a tenth to a fifth of the crossover raises the loop
+    gain below it by up to |1 + 2 j w_c / (10 w)| / |1 + j w_c / (10 w)| (1.58 at 1 Hz for a
+    10 Hz crossover) and takes atan(0.2) - atan(0.1) = 5.6 deg of phase at the crossover."""
+    stiff = design_torque_feedback(
+        handlebar, rng=np.random.default_rng(0), n_starts=4, integral_corner=0.2
+    )
+    assert stiff.weight_corner == pytest.approx(2.0 * design.weight_corner, rel=1e-12)
+    assert stiff.analysis.tracking_error_1hz < 0.75 * design.analysis.tracking_error_1hz
+    assert stiff.analysis.compliance_1hz < 0.75 * design.analysis.compliance_1hz
+    lost = design.analysis.phase_margin_deg - stiff.analysis.phase_margin_deg
+    assert 2.0 < lost < 10.0
+    assert stiff.analysis.phase_margin_deg > 45.0
 
 
 def test_default_bandwidth_depends_on_the_rate() -> None:
