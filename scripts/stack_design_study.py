@@ -131,6 +131,12 @@ CANDIDATES = [
     Candidate("integral corner 0.2", integral_corner=0.2),
     Candidate("J x2, integral corner 0.14", inertia_obs=2.0, integral_corner=1 / 7, rates=(100.0,)),
     Candidate("J x2, integral corner 0.2", inertia_obs=2.0, integral_corner=0.2, rates=(100.0,)),
+    Candidate(
+        "J x2, estimate filter 5 ms", inertia_obs=2.0, filter_time_constant=0.005, rates=(100.0,)
+    ),
+    Candidate(
+        "J x2, estimate filter 2 ms", inertia_obs=2.0, filter_time_constant=0.002, rates=(100.0,)
+    ),
     Candidate("J x2, bandwidth 5 Hz", inertia_obs=2.0, bandwidth=5.0, rates=(100.0,)),
     Candidate("J x2, bandwidth 7 Hz", inertia_obs=2.0, bandwidth=7.0, rates=(100.0,)),
     Candidate("J x2, bandwidth 8.5 Hz", inertia_obs=2.0, bandwidth=8.5, rates=(100.0,)),
