@@ -86,6 +86,17 @@ lingering force of the lean's tilt and was itself felt 0.5 to 0.8 s later
 (docs/guide/cueing.md). Without a preview these rows' slack is free (the causal plan is
 unchanged: its prediction of the motion after the horizon is too poor to band it).
 
+How heavy that band is depends on the road beyond the horizon. In a transient (a swerve, a
+lane change, a slalom) the motorcycle's lean changes side within seconds and a tilt's lateral
+force, felt for about 2 s after it, is a false cue to avoid; in one long curve the lean is
+held, and the tilt that renders the roll into it is the sustained roll of the washout (Reid &
+Nahon 1985), whose force the band would wash out at the cost of the roll rate into and out of
+the curve (docs/guide/cueing.md). So on a preview the force rows' slack weight is blended from
+``preview_force_false_cue_weight`` to ``sustained_force_false_cue_weight`` by the persistence
+of the curve (:func:`motosim.cueing.preview.curve_persistence`: the road's steady-turn lean
+one-signed over the horizon and the last coast time, ahead and behind), an input of
+:meth:`MpcCueing.step` computed from the road like the preview.
+
 The condensed QP (``N`` variables) has a constant Hessian and constraint matrix; each step
 updates its linear term and bounds and warm-starts OSQP (Stellato et al., *OSQP: an operator
 splitting solver for quadratic programs*, Math. Prog. Comp. 12, 2020). The first
@@ -188,6 +199,9 @@ class AxisPlan:
     band_lin_preview : ndarray
         ``band_lin`` with the force's slack weighted by ``preview_force_false_cue_weight``
         (used on the steps planned with a preview).
+    band_lin_sustained : ndarray
+        ``band_lin`` with the force's slack weighted by ``sustained_force_false_cue_weight``
+        (blended in on a preview by the persistence of the curve ahead).
     """
 
     A_loop: Array
@@ -214,6 +228,7 @@ class AxisPlan:
     T_canal: Array
     T_otolith: Array
     band_lin_preview: Array
+    band_lin_sustained: Array
 
 
 @dataclass(frozen=True, slots=True)
@@ -331,7 +346,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
     band_M, band_E, band_thr = [], [], []
     Nb = min(N, tuning.false_cue_steps)
     band_quad, band_lin, band_steps = [], [], []
-    band_lin_preview = []
+    band_lin_preview, band_lin_sustained = [], []
     for C, w, ref in rows:
         M = np.einsum("i,kij->kj", C, Gam)  # (N outputs, N inputs)
         E = np.einsum("i,kij->kj", C, Phi)
@@ -355,6 +370,10 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
                 tuning.false_cue_weight if ref == 0 else tuning.preview_force_false_cue_weight
             ) / thr
             band_lin_preview.append(np.full(nk, lin_p))
+            lin_s = (
+                tuning.false_cue_weight if ref == 0 else tuning.sustained_force_false_cue_weight
+            ) / thr
+            band_lin_sustained.append(np.full(nk, lin_s))
         P += w * M.T @ M
         F += w * M.T @ E
         Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
@@ -376,6 +395,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
             band_quad.append(np.zeros(1))
             band_lin.append(np.zeros(1))
             band_lin_preview.append(np.array([tuning.preview_force_false_cue_weight / thr_o]))
+            band_lin_sustained.append(np.array([tuning.sustained_force_false_cue_weight / thr_o]))
             band_steps[1] = np.append(band_steps[1], N - 1)
     w_angle = (tuning.pitch_angle_weight if axis == 1 else tuning.angle_weight) / limits.angle**2
     for e, w in ((e_angle, w_angle),
@@ -412,6 +432,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         T_canal=_forced_response(Ac, Bc, Cc, h, N),
         T_otolith=_forced_response(Ao, Bo, Co, h, N),
         band_lin_preview=np.concatenate(band_lin_preview),
+        band_lin_sustained=np.concatenate(band_lin_sustained),
     )
 
 
@@ -584,6 +605,7 @@ class MpcCueing:
         onset: Array | None = None,
         preview: Array | None = None,
         trust: float = 1.0,
+        persistence: float = 0.0,
     ) -> Array:
         """One loop step.
 
@@ -608,6 +630,11 @@ class MpcCueing:
             Weight in [0, 1] of the preview (:func:`motosim.cueing.preview.preview_trust`:
             by the lean the road asks for): the previewed motion is scaled by it; at 0
             the plan is the one from the present motion, as without a preview.
+        persistence : float, optional
+            How sustained the curve ahead is, in [0, 1]
+            (:func:`motosim.cueing.preview.curve_persistence`): on a preview the roll plan's
+            force band weight is blended from ``preview_force_false_cue_weight`` (0) to
+            ``sustained_force_false_cue_weight`` (1) by it.
 
         Returns
         -------
@@ -669,6 +696,8 @@ class MpcCueing:
                 y[N : N + nr] += tc[plan.band_steps[0]]
                 y[N + nr : N + nb] += to[plan.band_steps[1]]
                 band_lin = plan.band_lin_preview
+                if persistence > 0.0:
+                    band_lin = band_lin + persistence * (plan.band_lin_sustained - band_lin)
             else:
                 y = K @ v
             r_b = y[N : N + nb]
@@ -709,6 +738,7 @@ def apply_mpc(
     onset: Array | None = None,
     preview: Array | None = None,
     trust: Array | None = None,
+    persistence: Array | None = None,
 ) -> tuple[Array, Array]:
     """Run the MPC cueing over a whole series from rest.
 
@@ -727,6 +757,9 @@ def apply_mpc(
         The road preview per sample (see :meth:`MpcCueing.step`).
     trust : ndarray, shape (n,), optional
         The preview's weight per sample (see :meth:`MpcCueing.step`); default 1.
+    persistence : ndarray, shape (n,), optional
+        The persistence of the curve ahead per sample (see :meth:`MpcCueing.step`);
+        default 0.
 
     Returns
     -------
@@ -754,6 +787,7 @@ def apply_mpc(
             None if onset is None else onset[k],
             None if preview is None else preview[k],
             1.0 if trust is None else float(trust[k]),
+            0.0 if persistence is None else float(persistence[k]),
         )
         rates[k] = mpc.rates
     return targets, rates

@@ -14,7 +14,13 @@ from motosim.cueing.filters import run_section
 from motosim.cueing.head import check_rate, platform_motion, vehicle_motion
 from motosim.cueing.limits import actuator_response, apply_limits, design_limits
 from motosim.cueing.platform import CueingConfig
-from motosim.cueing.preview import Road, arc_length, preview_trust, road_preview
+from motosim.cueing.preview import (
+    Road,
+    arc_length,
+    curve_persistence,
+    preview_trust,
+    road_preview,
+)
 from motosim.cueing.vestibular import CueingScore, VestibularModel, perceive, score
 from motosim.cueing.washout import WASHOUT_OUTPUTS, apply_washout, design_washout
 from motosim.errors import MotosimError
@@ -131,14 +137,14 @@ def cue(
     targets = apply_washout(washout, inputs)[:, :3]
     rates = None
     if algorithm == "mpc":  # the washout's commands are the MPC's angle reference
-        from motosim.cueing.mpc import apply_mpc, design_mpc
+        from motosim.cueing.mpc import COAST_TIMES, apply_mpc, design_mpc
 
         # the suspension pitch's onset is fed through (the washout's high-passed pitch):
         # [angle fed through, the vehicle's head-frame pitch rate it renders]
         onset = np.zeros((targets.shape[0], 2, 3))
         onset[:, 0, 1] = run_section(np.asarray(washout.pitch_onset), vehicle["theta"])
         onset[:, 1, 1] = vehicle["theta_dot"] * np.cos(run["phi"])
-        preview = trust = None
+        preview = trust = persistence = None
         if road is not None:
             missing = [name for name in ("x", "y") if name not in run.names]
             if missing:
@@ -150,8 +156,11 @@ def cue(
             arc = arc_length(road, run["x"], run["y"])
             preview = road_preview(road, arc, run["v_x"], horizon=tuning.horizon, step=tuning.step)
             trust = preview_trust(road, arc, run["v_x"], ahead=tuning.horizon * tuning.step)
+            # the horizon and the time its terminal tilt is felt after it, ahead and behind
+            window = tuning.horizon * tuning.step + COAST_TIMES[-1]
+            persistence = curve_persistence(road, arc, run["v_x"], ahead=window, behind=window)
         targets, rates = apply_mpc(
-            design_mpc(config, model, dt), vehicle, targets, onset, preview, trust
+            design_mpc(config, model, dt), vehicle, targets, onset, preview, trust, persistence
         )
     limited = apply_limits(design_limits(config.platform, dt), targets, rates)
     horizon = horizon_gain * run["phi"] - limited[:, 0]

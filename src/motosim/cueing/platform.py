@@ -231,6 +231,12 @@ class MpcTuning:
     preview_force_false_cue_weight : float
         The same for the roll axis on a road preview (:mod:`motosim.cueing.preview`): the
         predicted lateral force is better known, and a heavier band costs less roll.
+    sustained_force_false_cue_weight : float
+        The same on a road preview where the curve ahead is sustained, one-signed over the
+        horizon and the time its terminal tilt is felt after it
+        (:func:`motosim.cueing.preview.curve_persistence`); the weight is blended from
+        ``preview_force_false_cue_weight`` (a transient road: a swerve, a lane change) to
+        this one (a long curve) by that persistence.
     """
 
     horizon: int
@@ -248,6 +254,7 @@ class MpcTuning:
     false_cue_steps: int
     force_false_cue_weight: float
     preview_force_false_cue_weight: float
+    sustained_force_false_cue_weight: float
 
     def __post_init__(self) -> None:
         if (
@@ -268,6 +275,7 @@ class MpcTuning:
             "false_cue_weight",
             "force_false_cue_weight",
             "preview_force_false_cue_weight",
+            "sustained_force_false_cue_weight",
         ):
             _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
         steps = self.false_cue_steps
@@ -332,6 +340,7 @@ _MPC_KEYS = {
     "false_cue_weight": 1.0,
     "force_false_cue_weight": 1.0,
     "preview_force_false_cue_weight": 1.0,
+    "sustained_force_false_cue_weight": 1.0,
 }
 
 
@@ -436,11 +445,11 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
             raise MotosimError(f"{origin}: missing key 'false_cue_steps' in [mpc]")
         steps = mpc_table.pop("false_cue_steps")
         (step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge, pitch_angle,
-         false_cue, force_false_cue, preview_force) = _numbers(
+         false_cue, force_false_cue, preview_force, sustained_force) = _numbers(
             mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
         mpc = MpcTuning(
             horizon, step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge,
-            pitch_angle, false_cue, steps, force_false_cue, preview_force,
+            pitch_angle, false_cue, steps, force_false_cue, preview_force, sustained_force,
         )  # fmt: skip
     except MotosimError as err:
         message = str(err)

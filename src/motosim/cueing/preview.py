@@ -56,12 +56,14 @@ __all__ = [
     "LEAD_DISTANCE",
     "LEAN_LIMIT",
     "LEAN_TRUSTED",
+    "PERSISTENCE_FLOOR",
     "PREVIEW_SIGNALS",
     "SMOOTHING",
     "SWAY_HEIGHT",
     "SWAY_X",
     "Road",
     "arc_length",
+    "curve_persistence",
     "preview_trust",
     "road_preview",
 ]
@@ -98,6 +100,12 @@ LEAN_LIMIT = math.radians(45.0)
 """Steady-turn lean [rad] from which the preview is not trusted: ``tan(phi) = a_y / g = 1``, a
 lateral acceleration at a road tyre's grip on dry asphalt (friction coefficient about 1,
 Pacejka, *Tire and Vehicle Dynamics*, 3rd ed., 2012): a road the rider cannot follow."""
+PERSISTENCE_FLOOR = math.asin(0.17 / GRAVITY)
+"""Mean steady-turn lean [rad] below which the road ahead is not a sustained curve for
+:func:`curve_persistence`: a platform tilt of that angle gives a lateral specific force of
+0.17 m/s^2, the otolith's threshold of the score (:mod:`motosim.cueing.vestibular`), so a
+lean below it held as a tilt is not felt and there is no trade-off to schedule (about
+1 deg)."""
 PREVIEW_SIGNALS = ("omega_x", "f_y")
 """What :func:`road_preview` predicts, in order: roll rate [rad/s] and lateral specific
 force [m/s^2] at the head."""
@@ -228,6 +236,83 @@ def preview_trust(
     lean: Array = np.max(np.abs(phi), axis=1)
     trust: Array = np.clip((limit - lean) / (limit - trusted), 0.0, 1.0)
     return trust
+
+
+def curve_persistence(
+    road: Road,
+    arc: Array,
+    speed: Array,
+    *,
+    ahead: float,
+    behind: float = 0.0,
+    lead: float = LEAD_DISTANCE,
+    floor: float = PERSISTENCE_FLOOR,
+) -> Array:
+    """How sustained the curve ahead is: 1 for one long curve, 0 for an S or a straight.
+
+    Parameters
+    ----------
+    road : Road
+        The road.
+    arc : ndarray, shape (m,)
+        Arc length [m] reached at each sample (:func:`arc_length`).
+    speed : ndarray, shape (m,)
+        Forward speed [m/s] at each sample, held over the window.
+    ahead : float
+        The window [s]: the MPC's horizon and the time after it over which the tilt it ends
+        with is felt (:data:`motosim.cueing.mpc.COAST_TIMES`).
+    behind : float, optional
+        The part of the window [s] behind the present position: a lean is sustained by how
+        long it has lasted as well as by how long it will last.
+    lead : float, optional
+        Distance [m] by which the lean leads the road's curvature (:data:`LEAD_DISTANCE`).
+    floor : float, optional
+        Mean lean [rad] below which the road is not a curve (:data:`PERSISTENCE_FLOOR`).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        ``|mean(phi)| / max(mean(|phi|), floor)`` over the steady-turn leans ``phi =
+        atan(v^2 kappa / g)`` of the road from ``s + lead - v behind`` to ``s + lead + v
+        ahead``, in
+        [0, 1]: the lean is one-signed over the window (a turn, a curve, entering or leaving
+        it) at 1, changes side (a swerve, a lane change, a slalom) towards 0, and a straight
+        road (the mean lean under ``floor``) is at most ``mean / floor``.
+
+    Raises
+    ------
+    MotosimError
+        If ``ahead`` is not positive, ``floor`` not positive, or ``arc`` and ``speed``
+        differ in length.
+
+    Notes
+    -----
+    A tilt's lateral force is felt for seconds after it (the otolith's response to a held
+    tilt peaks 1.9 s after it), so whether holding a tilt now is a false cue or the
+    rendering of a lean depends on the road over the horizon and beyond it: in a long curve
+    the rider holds the lean (the washout's sustained roll, Reid & Nahon 1985), in a swerve
+    the lean changes side before the tilt's force fades.
+    """
+    if not (math.isfinite(ahead) and ahead > 0):
+        raise MotosimError(f"curve persistence ahead = {ahead!r} s; expected a finite number > 0")
+    if not (math.isfinite(behind) and behind >= 0):
+        raise MotosimError(
+            f"curve persistence behind = {behind!r} s; expected a finite number >= 0"
+        )
+    if not (math.isfinite(floor) and floor > 0):
+        raise MotosimError(f"curve persistence floor = {floor!r} rad; expected a number > 0")
+    if arc.shape != speed.shape:
+        raise MotosimError(
+            f"curve persistence of {arc.size} arc lengths and {speed.size} speeds; expected as many"
+        )
+    v = speed[:, None]
+    span = ahead + behind
+    reach = float(np.max(speed, initial=0.0)) * span
+    steps = np.linspace(-behind, ahead, max(2, math.ceil(reach / max(road.ds, 0.25)) + 1))
+    phi, _ = _steady_lean(road, arc[:, None] + lead + v * steps[None, :], v)
+    held = np.abs(np.mean(phi, axis=1))
+    persistence: Array = held / np.maximum(np.mean(np.abs(phi), axis=1), floor)
+    return persistence
 
 
 def road_preview(
