@@ -139,7 +139,7 @@ class RateLoop:
         (:meth:`motosim.rt.run.RealtimeRunner.wait_period`: the wait's end, the bus read and
         the period in one compiled call): the loop then sleeps only until ``WARM_LEAD``
         before each deadline and calls the step, and ``woke()`` gives the time the step woke
-        up on the clock [s] (:attr:`~motosim.rt.run.RealtimeRunner.woke`), for the wake-up
+        up on the clock [s] (:meth:`~motosim.rt.run.RealtimeRunner.woke`), for the wake-up
         latency and the compute time. ``warm`` is then not called.
 
     Examples

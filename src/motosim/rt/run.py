@@ -534,7 +534,6 @@ class RealtimeRunner:
         flags: int = self._cycle(self._context, self._fd, k, t)
         return self._send(flags, k, t, self._r[fused.R_WOKE])
 
-    @property
     def woke(self) -> float:
         """When the last :meth:`wait_period` woke up [s on the monotonic clock]."""
         return float(self._r[fused.R_WOKE])
