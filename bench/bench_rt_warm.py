@@ -28,7 +28,7 @@ CPU 1, mlockall; refused and reported without root), each variant in three round
   compiled code (sent at the start of the period), the period.
 
 Run: ``python bench/bench_rt_warm.py [--periods 2000] [--only TEXT]`` (``--only``: the
-variants whose name has TEXT, and the offline baseline).
+variants whose name has one of the comma-separated TEXTs, and the offline baseline).
 """
 
 import argparse
@@ -231,7 +231,10 @@ def main(periods: int, only: str = "") -> None:
         "compiled cycle: warm-ups, spin, recv and the period in one compiled call": cycle_loop,
     }
     if only:
-        variants = {k: v for k, v in variants.items() if only in k or k.startswith("offline")}
+        parts = only.split(",")
+        variants = {
+            k: v for k, v in variants.items() if k.startswith("offline") or any(p in k for p in parts)
+        }
     small = n
     n = 20
     for run in variants.values():  # compile everything
@@ -252,6 +255,6 @@ def main(periods: int, only: str = "") -> None:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--periods", type=int, default=2000, help="periods per variant")
-    parser.add_argument("--only", default="", help="only the variants whose name has this")
+    parser.add_argument("--only", default="", help="only the variants whose name has one of these (comma-separated)")
     args = parser.parse_args()
     main(args.periods, args.only)

@@ -242,6 +242,16 @@ def test_wait_period_needs_compile_wait() -> None:
     codecs = handlebar_codecs()
     link = _PairLink()
     runner = RealtimeRunner(_stack(), link, codecs, LIMITS, rate=RATE)
+    assert not runner.waits_compiled
     with pytest.raises(MotosimError, match="compile_wait"):
         runner.wait_period(0, 1.0)
+    assert runner.compile_wait() and runner.waits_compiled
     link.close()
+
+
+def test_other_links_keep_the_python_wait() -> None:
+    # python-can's link (here its virtual bus) has no socket read from compiled code
+    codecs = handlebar_codecs()
+    with open_link("virtual:compiled_wait") as link:
+        runner = RealtimeRunner(_stack(), link, codecs, LIMITS, rate=RATE)
+        assert not runner.compile_wait() and not runner.waits_compiled

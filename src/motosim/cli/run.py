@@ -565,6 +565,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     timing = stats.as_dict()
     report = {
         "pace": args.pace,
+        "wait": "compiled" if runner.waits_compiled else "python",
         "timing": timing,
         "profile": summary.get("profile", {}),
         "state_stream": summary.get("state_stream", {}),

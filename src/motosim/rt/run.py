@@ -363,6 +363,11 @@ class RealtimeRunner:
         self._cycle = compiled(fused.context_cycle, self._context, self._fd, 0, 0.0)
         return True
 
+    @property
+    def waits_compiled(self) -> bool:
+        """Whether :meth:`compile_wait` made :meth:`wait_period` available."""
+        return self._cycle is not None
+
     def _sender(self, frame: NDArray[np.uint8], frame_id: int) -> Callable[[], bool]:
         """A function sending ``frame``'s bytes as they are when it is called."""
         link = self.link
