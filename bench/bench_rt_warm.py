@@ -233,7 +233,9 @@ def main(periods: int, only: str = "") -> None:
     if only:
         parts = only.split(",")
         variants = {
-            k: v for k, v in variants.items() if k.startswith("offline") or any(p in k for p in parts)
+            k: v
+            for k, v in variants.items()
+            if k.startswith("offline") or any(p in k for p in parts)
         }
     small = n
     n = 20
@@ -255,6 +257,8 @@ def main(periods: int, only: str = "") -> None:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--periods", type=int, default=2000, help="periods per variant")
-    parser.add_argument("--only", default="", help="only the variants whose name has one of these (comma-separated)")
+    parser.add_argument(
+        "--only", default="", help="only the variants whose name has one of these (comma-separated)"
+    )
     args = parser.parse_args()
     main(args.periods, args.only)

@@ -28,6 +28,12 @@ numba unboxes one pointer per call instead of the stack's model and data records
 array of :class:`PeriodArrays` (about 20 arrays: 4.6 us per call against 0.4 us, measured
 with empty functions of the same arguments).
 
+On the clock with the fast ``udp_multicast`` link (Linux), the runner's
+:meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead,
+which also ends the loop's wait and reads the socket (:func:`receive_datagrams`: the C
+library's ``recv`` called from compiled code) before the period: no interpreter between the
+stack's last warm-up and its step.
+
 A runner whose stack is not a :class:`~motosim.rt.stack.CompiledStack` (a test double in
 Python) calls :func:`take_frames`, :func:`begin` and :func:`finish` one by one around its
 stack's ``step``: the same compiled functions, so both ways behave the same.
