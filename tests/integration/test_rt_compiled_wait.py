@@ -15,6 +15,7 @@ import socket
 import time
 from typing import Any
 
+import numba
 import numpy as np
 import pytest
 
@@ -33,6 +34,9 @@ pytest.importorskip("can", reason="python-can is in the rt and dev dependency gr
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 if not fused.RECV_AVAILABLE:
     pytest.skip("the compiled socket read is Linux only", allow_module_level=True)
+if numba.config.DISABLE_JIT:
+    pytest.skip("the compiled wait needs numba's JIT (without it: the Python path)",
+                allow_module_level=True)  # fmt: skip
 
 from motosim.io.can import HandlebarCodecs, UdpMulticastLink, handlebar_codecs, open_link
 
