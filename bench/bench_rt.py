@@ -20,8 +20,10 @@ mlockall: applied as root, refused otherwise, and reported):
    process over ``udp_multicast`` for 60 s, and at 100 Hz (control and status) for 20 s,
    each with python-can's link (``--link python-can``: the "before") and with the fast link
    (``--link fast``, the default: the "after"), in the same run, and at 1 kHz paced by the
-   rig's status frames (``--pace bus``), reading each run's ``timing.json``; the load
-   average at each run's start is printed with its figures.
+   rig's status frames (``--pace bus``), and at 1 kHz on the clock with the wait's end and
+   the bus read in Python (``--wait python``: the "before" of the compiled wait, the
+   default), reading each run's ``timing.json``; the load average at each run's start is
+   printed with its figures.
 
 Each run's ``timing.json`` also says where the compute time went (the loop's time stamps
 in the ring: the bus read, the stack and safety stage, the send, the rest), printed as p50/p99.
@@ -294,7 +296,7 @@ BUS = "udp_multicast:239.74.163.131"  # a group of its own (other users of the m
 
 
 def _run_against_rig(
-    control: float, seconds: float, *, link: str = "fast", pace: str = "clock"
+    control: float, seconds: float, *, link: str = "fast", pace: str = "clock", wait: str = ""
 ) -> dict[str, object]:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench_rt.toml"
@@ -306,7 +308,8 @@ def _run_against_rig(
         time.sleep(5.0)
         load = os.getloadavg()
         run = _motosim("run", str(path), "--bus", BUS, "--out", f"{tmp}/out", "--json",
-                       "--no-report", "--link", link, "--pace", pace, *RT)  # fmt: skip
+                       "--no-report", "--link", link, "--pace", pace, *RT,
+                       *(("--wait", wait) if wait else ()))  # fmt: skip
         out, err = run.communicate()
         rig.send_signal(signal.SIGINT)
         rig.communicate(timeout=30)
@@ -365,9 +368,12 @@ def run(seconds: float = 60.0, *, quick: bool = False) -> dict[str, object]:
         "rt-check 1 kHz missed": check["missed"],
     }
     out |= {f"stack {k}": v for k, v in _stack_speed().items()}
-    cases = [  # (rate, seconds, link, pace): python-can's link before, the fast link after
+    cases = [  # (rate, seconds, link, pace): python-can's link before, the fast link after;
+        # "clock" ends each wait, reads the bus and runs the period in one compiled call
+        # (--wait compiled, the default), "clock-python" in Python (--wait python, before)
         (1000.0, seconds, "python-can", "clock"),
         (1000.0, seconds, "fast", "clock"),
+        (1000.0, seconds, "fast", "clock-python"),
         (1000.0, seconds, "fast", "bus"),
         (100.0, seconds / 3, "python-can", "clock"),
         (100.0, seconds / 3, "fast", "clock"),
@@ -375,9 +381,13 @@ def run(seconds: float = 60.0, *, quick: bool = False) -> dict[str, object]:
     if quick:
         cases = [case for case in cases if case[0] == 1000.0 and case[2] == "fast"]
     for control, length, link, pace in cases:
-        figures = _run_against_rig(control, length, link=link, pace=pace)
+        clock, _, wait = pace.partition("-")
+        figures = _run_against_rig(control, length, link=link, pace=clock, wait=wait)
         out |= {f"run {control:g} Hz {link} {pace} {k}": v for k, v in figures.items()}
     inside = out.get("run 1000 Hz fast clock stack step in the loop, p50 us")
+    before = out.get("run 1000 Hz fast clock-python stack step in the loop, p50 us")
+    if isinstance(inside, float) and isinstance(before, float):
+        out["stack step in the loop: compiled wait / Python wait, p50"] = round(inside / before, 2)
     for name, key in (("offline", "stack step in a compiled loop (offline), timed inside, p50 us"),
                       ("offline paced at 1 kHz", "stack step in a compiled loop paced at 1 kHz "
                        "(busy wait), p50 us")):  # fmt: skip

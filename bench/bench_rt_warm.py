@@ -19,9 +19,16 @@ CPU 1, mlockall; refused and reported without root), each variant in three round
   work), warm-ups until the deadline (after); each also with the bus read of
   ``motosim run`` between the wake-up and the period (a datagram sent over loopback at the
   start of the period, read by ``poll``/``recv_into``/``poll`` as
-  :meth:`~motosim.io.can.UdpMulticastLink.receive_datagrams` does).
+  :meth:`~motosim.io.can.UdpMulticastLink.receive_datagrams` does);
+- ``compiled cycle``: the loop as ``motosim run`` waits since the compiled wait
+  (``--wait compiled``, :meth:`RealtimeRunner.wait_period`): the sleep and Python's spin
+  until ``WARM_LEAD`` before the deadline, then one compiled call
+  (:func:`~motosim.rt.fused.context_cycle`): warm-ups until about 2 us before the deadline,
+  a compiled spin to it, the status frame read from a loopback socket by ``recv`` from
+  compiled code (sent at the start of the period), the period.
 
-Run: ``python bench/bench_rt_warm.py [--periods 2000]``.
+Run: ``python bench/bench_rt_warm.py [--periods 2000] [--only TEXT]`` (``--only``: the
+variants whose name has one of the comma-separated TEXTs, and the offline baseline).
 """
 
 import argparse
@@ -89,7 +96,7 @@ def _decay(c: Any, frames: Any, status_id: int, out: Any, gap_ns: int, warm: int
         out[k] = a.runner[fused.R_STACK_TIME]
 
 
-def main(periods: int) -> None:
+def main(periods: int, only: str = "") -> None:
     """Measure and print."""
     privileges = apply_privileges(priority=80, cpus=[1], mlock=True)
     print("privileges:", ", ".join(f"{p.name} {'applied' if p.applied else 'refused'}"
@@ -151,6 +158,23 @@ def main(periods: int) -> None:
             out[k] = a.runner[fused.R_STACK_TIME]
         return out
 
+    def cycle_loop() -> np.ndarray:
+        r = runner()
+        a, context = r._arrays, r._context
+        fd = rx.fileno()
+        cycle = compiled(fused.context_cycle, context, fd, 0, 0.0)
+        out = np.empty(n)
+        t0 = clock.now() + 1e-3
+        for k in range(n):
+            deadline = t0 + k * 1e-3
+            tx.sendto(frames[k].tobytes(), target)  # the drive's frame, waiting at the wake-up
+            clock.sleep_until(deadline - lead)
+            a.rx_id[0] = st.frame_id  # a raw frame (this runner's link is no udp_multicast)
+            cycle(context, fd, k, deadline)
+            a.ring_head[0] += 1
+            out[k] = a.runner[fused.R_STACK_TIME]
+        return out
+
     def compiled_loop(mode: int) -> np.ndarray:
         r = runner()
         out = np.empty(n)
@@ -204,7 +228,15 @@ def main(periods: int) -> None:
         "python wait + bus read, warm-ups until the deadline, the period's function (now)": (
             lambda: python_loop(2, True)
         ),
+        "compiled cycle: warm-ups, spin, recv and the period in one compiled call": cycle_loop,
     }
+    if only:
+        parts = only.split(",")
+        variants = {
+            k: v
+            for k, v in variants.items()
+            if k.startswith("offline") or any(p in k for p in parts)
+        }
     small = n
     n = 20
     for run in variants.values():  # compile everything
@@ -225,4 +257,8 @@ def main(periods: int) -> None:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--periods", type=int, default=2000, help="periods per variant")
-    main(parser.parse_args().periods)
+    parser.add_argument(
+        "--only", default="", help="only the variants whose name has one of these (comma-separated)"
+    )
+    args = parser.parse_args()
+    main(args.periods, args.only)

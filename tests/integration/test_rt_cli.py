@@ -150,6 +150,8 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     assert proc.returncode == 0, stderr
     payload = json.loads(stdout)
     assert payload["fault"] == "NONE" and payload["counters"]["status_frames"] >= 150
+    # on the clock over the fast link: the wait's end and the bus read in compiled code
+    assert payload["wait"] == "compiled" and payload["counters"]["bus_errors"] == 0
     result = load_result(out)
     report = json.loads((out / "timing.json").read_text())
     timing = report["timing"]

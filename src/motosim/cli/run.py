@@ -64,6 +64,14 @@ def register(sub: Any) -> None:
         "the measurement rate; the watchdog still trips if the frames stop)",
     )
     parser.add_argument(
+        "--wait",
+        choices=("compiled", "python"),
+        default="compiled",
+        help="how a clock-paced loop ends its wait: 'compiled' (default) spins to the "
+        "deadline, reads the bus and runs the period in one compiled call (the fast "
+        "udp_multicast link, on Linux; Python elsewhere); 'python' spins and reads in Python",
+    )
+    parser.add_argument(
         "--telemetry",
         default="127.0.0.1:47474",
         metavar="HOST:PORT",
@@ -557,6 +565,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     timing = stats.as_dict()
     report = {
         "pace": args.pace,
+        "wait": "compiled" if runner.waits_compiled else "python",
         "timing": timing,
         "profile": summary.get("profile", {}),
         "state_stream": summary.get("state_stream", {}),
@@ -738,12 +747,17 @@ def _loop(
         margin = math.ceil(runner.safety.limits.fade_in * rate) + 4  # the fade-out at the end
         capacity = max(1, min(periods + margin, 1 << 22))
         loop: RateLoop | FramePacedLoop
+        step = runner.period
         if args.pace == "bus":
             loop = FramePacedLoop(
                 rate, clock, runner.wait_status, timeout=runner.watchdog_time,
                 first_timeout=runner.first_timeout, capacity=capacity,
                 received=lambda: runner.status_frames,
             )  # fmt: skip
+        elif args.wait == "compiled" and runner.compile_wait():
+            # the wait's end, the bus read and the period in one compiled call
+            loop = RateLoop(rate, clock, capacity=capacity, woke=runner.woke)
+            step = runner.wait_period
         else:  # the stack warmed in the caches just before each deadline
             loop = RateLoop(rate, clock, capacity=capacity, warm=runner.warm)
         if sys.stdin is not None and sys.stdin.isatty():
@@ -758,12 +772,12 @@ def _loop(
         freeze_gc()
         runner.discard_pending()  # frames queued while the writer started are stale
         try:
-            loop.run(runner.period, periods=periods)
+            loop.run(step, periods=periods)
             complete = runner.safety.fault.name == "NONE" and loop.stats().periods >= periods
             fade = runner.finish() if complete else 0
             if fade:  # the duration is over: the torque fades out, never a step to zero;
                 # the run ends when it is out (missed deadlines do not shorten the fade)
-                loop.run(runner.period, periods=10 * fade)
+                loop.run(step, periods=10 * fade)
         finally:
             thaw_gc()
         stats = loop.stats()

@@ -820,6 +820,12 @@ class UdpMulticastLink:
             n += 1
         return n
 
+    def fileno(self) -> int:
+        """The receiving socket's file descriptor (non-blocking), for a read from compiled
+        code (:func:`motosim.rt.fused.receive_datagrams`)."""
+        fd: int = self._sock.fileno()
+        return fd
+
     def readable(self, timeout: float) -> bool:
         """Wait up to ``timeout`` [s] for a datagram; whether one is waiting."""
         return bool(self._select([self._sock], (), (), timeout)[0])

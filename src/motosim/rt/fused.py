@@ -28,6 +28,12 @@ numba unboxes one pointer per call instead of the stack's model and data records
 array of :class:`PeriodArrays` (about 20 arrays: 4.6 us per call against 0.4 us, measured
 with empty functions of the same arguments).
 
+On the clock with the fast ``udp_multicast`` link (Linux), the runner's
+:meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead,
+which also ends the loop's wait and reads the socket (:func:`receive_datagrams`: the C
+library's ``recv`` called from compiled code) before the period: no interpreter between the
+stack's last warm-up and its step.
+
 A runner whose stack is not a :class:`~motosim.rt.stack.CompiledStack` (a test double in
 Python) calls :func:`take_frames`, :func:`begin` and :func:`finish` one by one around its
 stack's ``step``: the same compiled functions, so both ways behave the same.
@@ -36,7 +42,9 @@ All the runner's state is in the arrays of :class:`PeriodArrays`; ``R_*`` are th
 in its ``runner`` array, ``Q_*`` those in ``positions``.
 """
 
+import errno
 import math
+import socket
 import sys
 from typing import Any, NamedTuple
 
@@ -62,17 +70,20 @@ from motosim.rt.safety import (
 from motosim.rt.stack import stack_period, stack_reset
 
 __all__ = [
+    "RECV_AVAILABLE",
     "RUNNER_STATE_SIZE",
     "WARM_MARGIN_NS",
     "PeriodArrays",
     "PeriodContext",
     "begin",
+    "context_cycle",
     "context_period",
     "context_warm",
     "context_warm_until",
     "finish",
     "fused_period",
     "monotonic_ns",
+    "receive_datagrams",
     "stack_warm",
     "take_frames",
 ]
@@ -86,9 +97,9 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME,
-) = range(32)  # fmt: skip
-RUNNER_STATE_SIZE = 32
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS,
+) = range(34)  # fmt: skip
+RUNNER_STATE_SIZE = 34
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
 the angle of the period before, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
@@ -99,7 +110,9 @@ whether the received frames are python-can datagrams (1) or id, length and bytes
 virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]), where the
 stack's row holds its roll and speed (-1: nowhere); and whether, when (since the first
 deadline [s]), at which roll [rad] and speed [m/s] the motorcycle left that range; the
-stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did not step)."""
+stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did not step);
+the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
+errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`)."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -163,6 +176,56 @@ def monotonic_ns() -> int:
     True
     """
     return _clock_gettime_ns()  # type: ignore[call-arg]  # numba's typing context
+
+
+RECV_AVAILABLE = sys.platform == "linux"
+"""Whether :func:`receive_datagrams` can read a socket from compiled code here (Linux: the C
+library's ``recv`` with ``MSG_DONTWAIT`` and its ``errno`` through ``__errno_location``)."""
+
+_MSG_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
+_EAGAIN, _EWOULDBLOCK, _EINTR = errno.EAGAIN, errno.EWOULDBLOCK, errno.EINTR
+
+
+@intrinsic
+def _recv(typingctx: Any, fd: Any, buffer: Any, size: Any) -> Any:
+    """``recv(fd, buffer, size, MSG_DONTWAIT)`` called from compiled code: the bytes read,
+    or minus ``errno`` where it failed (``-EAGAIN``: nothing waiting). ``buffer`` is a
+    C-contiguous ``uint8`` array of at least ``size`` bytes (Linux only)."""
+    if not (
+        isinstance(fd, types.Integer)
+        and isinstance(size, types.Integer)
+        and isinstance(buffer, types.Array)
+        and buffer.dtype == types.uint8
+        and buffer.layout == "C"
+    ):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        i32, i64 = ir.IntType(32), ir.IntType(64)
+        i8p = ir.IntType(8).as_pointer()
+        fd_type, buffer_type, size_type = signature.args
+        handle = context.cast(builder, args[0], fd_type, types.int64)
+        count = context.cast(builder, args[2], size_type, types.int64)
+        data = builder.bitcast(context.make_array(buffer_type)(context, builder, args[1]).data, i8p)
+        module = builder.module
+        recv = module.globals.get("recv") or ir.Function(
+            module, ir.FunctionType(i64, [i32, i8p, i64, i32]), "recv"
+        )
+        where = module.globals.get("__errno_location") or ir.Function(
+            module, ir.FunctionType(i32.as_pointer(), []), "__errno_location"
+        )
+        got = builder.call(
+            recv, [builder.trunc(handle, i32), data, count, ir.Constant(i32, _MSG_DONTWAIT)]
+        )
+        failed = builder.icmp_signed("<", got, ir.Constant(i64, 0))
+        code = builder.sext(builder.load(builder.call(where, [])), i64)
+        return builder.select(failed, builder.neg(code), got)
+
+    return types.int64(fd, buffer, size), codegen
+
+
+_read: Any = _recv
+""":func:`_recv` as compiled code calls it (numba's typing context fills ``typingctx``)."""
 
 
 class PeriodArrays(NamedTuple):
@@ -247,6 +310,35 @@ def take_frames(a: PeriodArrays, first: int, end: int) -> int:
             ok = decode_frame(a.estop, a.rx[j], start, length, values)
             safety_estop_frame(s, ok, values[q[Q_ESTOP]] > 0.5)
     return count
+
+
+@njit(cache=True)
+def receive_datagrams(fd: int, a: PeriodArrays) -> int:
+    """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``a.rx``'s rows and
+    their sizes into ``a.rx_length``, at most ``RX_FRAMES``; the number read.
+
+    The compiled twin of :meth:`motosim.io.can.UdpMulticastLink.receive_datagrams` (what
+    :class:`~motosim.rt.run.RealtimeRunner` calls otherwise): a datagram longer than a row
+    is cut to it, as ``recv_into`` cuts it; an interrupted read is tried again (as Python
+    does, PEP 475); "nothing waiting" (``EAGAIN``) ends the read, any other error too, and
+    counts in the runner's ``R_RECV_ERRORS`` (the link's ``errors`` in the Python path).
+    Linux only (:data:`RECV_AVAILABLE`).
+    """
+    rx, lengths = a.rx, a.rx_length
+    size = rx.shape[1]
+    n = 0
+    while n < rx.shape[0]:
+        got = _read(fd, rx[n], size)
+        if got >= 0:
+            lengths[n] = got
+            n += 1
+        elif got == -_EINTR:
+            continue
+        else:
+            if got != -_EAGAIN and got != -_EWOULDBLOCK:
+                a.runner[R_RECV_ERRORS] += 1.0
+            break
+    return n
 
 
 @njit(cache=True)
@@ -521,6 +613,35 @@ def context_period(
     """
     if warm_until >= 0:
         return context_warm_until(c, warm_until)
+    return fused_period(
+        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
+        done_read,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def context_cycle(c: Any, fd: int, k: int, t: float) -> int:
+    """The wait's end, the bus read and the period, in one compiled call: :func:`fused_period`
+    of the datagrams waiting on socket ``fd`` at the deadline ``t`` [s] of period ``k`` (on
+    the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
+
+    In order, without returning to the interpreter: the stack's warm-ups until about 2 us
+    before ``t`` (:func:`context_warm_until`, none before the stack has started), a spin on
+    the clock until ``t`` has passed (the test of
+    :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float`` seconds), the
+    wake-up kept in the runner's ``R_WOKE`` [s], the datagrams read
+    (:func:`receive_datagrams`), the period. The caller sleeps until shortly before ``t``
+    (:class:`~motosim.rt.loop.RateLoop` with ``woke``) and sends the frames after. A ``t``
+    already past (a simulated clock's) neither waits nor warms more than once.
+    """
+    r = c.arrays.runner
+    context_warm_until(c, max(0, int(t * 1e9)))
+    woke = monotonic_ns() / 1e9
+    while woke < t:
+        woke = monotonic_ns() / 1e9
+    r[R_WOKE] = woke
+    frames = receive_datagrams(fd, c.arrays)
+    done_read = monotonic_ns() / 1e9
     return fused_period(
         c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
         done_read,

@@ -134,6 +134,13 @@ class RateLoop:
         spin: the wake-up is not delayed) to bring the step's code and data into the CPU's
         caches and keep them there until ``deadline`` [s]
         (:meth:`motosim.rt.run.RealtimeRunner.warm`); it must return before ``deadline``.
+    woke : callable, optional
+        For a step that waits for its deadline itself
+        (:meth:`motosim.rt.run.RealtimeRunner.wait_period`: the wait's end, the bus read and
+        the period in one compiled call): the loop then sleeps only until ``WARM_LEAD``
+        before each deadline and calls the step, and ``woke()`` gives the time the step woke
+        up on the clock [s] (:meth:`~motosim.rt.run.RealtimeRunner.woke`), for the wake-up
+        latency and the compute time. ``warm`` is then not called.
 
     Examples
     --------
@@ -154,6 +161,7 @@ class RateLoop:
         *,
         capacity: int = 1 << 17,
         warm: Callable[[float], object] | None = None,
+        woke: Callable[[], float] | None = None,
     ) -> None:
         if not (np.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -170,6 +178,7 @@ class RateLoop:
         self._periods = 0
         self._stop = False
         self._warm = warm
+        self._woke = woke
 
     @property
     def period(self) -> float:
@@ -203,6 +212,7 @@ class RateLoop:
         now = clock.now
         sleep_until = clock.sleep_until
         warm = self._warm
+        woken = self._woke
         wake, compute = self._wake, self._compute
         cap = wake.size
         period = self._period
@@ -213,12 +223,17 @@ class RateLoop:
         k = 0
         while k < periods and not self._stop:
             deadline = t0 + k * period
-            if warm is not None:
+            if woken is not None:  # the step's own compiled wait ends at the deadline
                 sleep_until(deadline - WARM_LEAD)
-                warm(deadline)
-            sleep_until(deadline)
-            woke = now()
-            carry_on = step(k, deadline)
+                carry_on = step(k, deadline)
+                woke = woken()
+            else:
+                if warm is not None:
+                    sleep_until(deadline - WARM_LEAD)
+                    warm(deadline)
+                sleep_until(deadline)
+                woke = now()
+                carry_on = step(k, deadline)
             done = now()
             slot = served % cap
             wake[slot] = woke - deadline

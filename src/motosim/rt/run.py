@@ -303,6 +303,8 @@ class RealtimeRunner:
             else:  # without numba's JIT: the plain function on the arrays
                 self._context = (*stack_args, a)
                 self._kernel = lambda c, *rest: fused.fused_period(*c, *rest[:-1])
+        self._cycle: Callable[..., int] | None = None
+        self._fd = -1
         self._send_command = self._sender(a.command_frame, self.codecs.command.frame_id)
         self._send_heartbeat = self._sender(a.heartbeat_frame, self.codecs.heartbeat.frame_id)
 
@@ -336,6 +338,35 @@ class RealtimeRunner:
         due = 0 if until is None else max(0, int(until * 1e9))  # 0: in the past, one warm-up
         n: int = self._kernel(self._context, 0, 0, 0.0, 0.0, 0.0, due)
         return n
+
+    def compile_wait(self) -> bool:
+        """Make :meth:`wait_period` available: the wait's end, the bus read and the period
+        in one compiled call (:func:`~motosim.rt.fused.context_cycle`, compiled, or loaded
+        from numba's cache, now: before the first deadline).
+
+        Only a runner whose stack is compiled, on a
+        :class:`~motosim.io.can.UdpMulticastLink` (its socket read by
+        :func:`~motosim.rt.fused.receive_datagrams`), with numba's JIT on, on Linux; the
+        others keep :meth:`period`, which does the same in Python.
+
+        Returns
+        -------
+        bool
+            Whether :meth:`wait_period` can be used.
+        """
+        if self._cycle is not None:
+            return True
+        link = self.link
+        if not (self._warms and fused.RECV_AVAILABLE and isinstance(link, UdpMulticastLink)):
+            return False
+        self._fd = link.fileno()
+        self._cycle = compiled(fused.context_cycle, self._context, self._fd, 0, 0.0)
+        return True
+
+    @property
+    def waits_compiled(self) -> bool:
+        """Whether :meth:`compile_wait` made :meth:`wait_period` available."""
+        return self._cycle is not None
 
     def _sender(self, frame: NDArray[np.uint8], frame_id: int) -> Callable[[], bool]:
         """A function sending ``frame``'s bytes as they are when it is called."""
@@ -487,11 +518,36 @@ class RealtimeRunner:
         woke = now() if now is not None else math.nan
         frames = self._read_bus()
         done_read = now() if now is not None else math.nan
-        a = self._arrays
         if self._kernel is not None:
             flags: int = self._kernel(self._context, frames, k, t, woke, done_read, -1)
         else:
-            flags = self._stack_period(a, frames, k, t, woke, done_read)
+            flags = self._stack_period(self._arrays, frames, k, t, woke, done_read)
+        return self._send(flags, k, t, woke)
+
+    def wait_period(self, k: int, t: float) -> bool:
+        """:meth:`period` that waits for its deadline ``t`` [s] on the machine's monotonic
+        clock itself (:class:`~motosim.rt.clock.MonotonicClock`'s): called shortly before
+        it (:class:`~motosim.rt.loop.RateLoop` with ``woke=runner.woke``), it warms the
+        stack, spins until ``t``, reads the bus and runs the period in one compiled call
+        (:func:`~motosim.rt.fused.context_cycle`; :meth:`compile_wait` first), then sends
+        the frames and stamps the row as :meth:`period` does. The rows are those of
+        :meth:`period` (the time stamps aside); a socket error of the read counts in the
+        link's ``errors`` (by :meth:`counters`), as there.
+        """
+        if self._cycle is None:
+            raise MotosimError("wait_period needs compile_wait() first (and its True)")
+        flags: int = self._cycle(self._context, self._fd, k, t)
+        return self._send(flags, k, t, self._r[fused.R_WOKE])
+
+    def woke(self) -> float:
+        """When the last :meth:`wait_period` woke up [s on the monotonic clock]."""
+        return float(self._r[fused.R_WOKE])
+
+    def _send(self, flags: int, k: int, t: float, woke: float) -> bool:
+        """The end of a period: the frames sent, the telemetry, the row's stamps; whether
+        the run goes on (``flags``: the compiled period's value)."""
+        now = self._now
+        a = self._arrays
         done_control = now() if now is not None else math.nan
         if not self._send_command():
             self.send_errors += 1
@@ -537,7 +593,8 @@ class RealtimeRunner:
 
     def counters(self) -> RunCounters:
         """What happened on the bus and in the safety stage so far."""
-        bad = int(self._r[fused.R_BAD])  # datagrams that were no frames: the link's errors
+        # datagrams that were no frames, and the compiled reads' socket errors: the link's
+        bad = int(self._r[fused.R_BAD] + self._r[fused.R_RECV_ERRORS])
         if bad > self._bad_reported and hasattr(self.link, "errors"):
             self.link.errors += bad - self._bad_reported
             self._bad_reported = bad
