@@ -178,6 +178,19 @@ def _steady_lean(road: Road, at: Array, speed: Array) -> tuple[Array, Array]:
     return np.arctan(speed**2 * kappa / GRAVITY), kappa
 
 
+def _window_leans(
+    road: Road, arc: Array, speed: Array, lead: float, behind: float, ahead: float
+) -> Array:
+    """The steady-turn leans [rad] of the road from ``s + lead - v behind`` to ``s + lead + v
+    ahead`` (``behind``, ``ahead`` [s]), every 0.25 m or the road's spacing if coarser: one
+    row per sample of ``arc`` [m] and ``speed`` [m/s]."""
+    v = speed[:, None]
+    reach = float(np.max(speed, initial=0.0)) * (behind + ahead)
+    steps = np.linspace(-behind, ahead, max(2, math.ceil(reach / max(road.ds, 0.25)) + 1))
+    phi, _ = _steady_lean(road, arc[:, None] + lead + v * steps[None, :], v)
+    return phi
+
+
 def preview_trust(
     road: Road,
     arc: Array,
@@ -228,12 +241,7 @@ def preview_trust(
         raise MotosimError(
             f"preview trust of {arc.size} arc lengths and {speed.size} speeds; expected as many"
         )
-    v = speed[:, None]
-    # the road over the distance ahead, every 0.25 m (or its spacing, if coarser)
-    reach = float(np.max(speed, initial=0.0)) * ahead
-    steps = np.linspace(0.0, 1.0, max(2, math.ceil(reach / max(road.ds, 0.25)) + 1))
-    phi, _ = _steady_lean(road, arc[:, None] + lead + v * ahead * steps[None, :], v)
-    lean: Array = np.max(np.abs(phi), axis=1)
+    lean: Array = np.max(np.abs(_window_leans(road, arc, speed, lead, 0.0, ahead)), axis=1)
     trust: Array = np.clip((limit - lean) / (limit - trusted), 0.0, 1.0)
     return trust
 
@@ -305,11 +313,7 @@ def curve_persistence(
         raise MotosimError(
             f"curve persistence of {arc.size} arc lengths and {speed.size} speeds; expected as many"
         )
-    v = speed[:, None]
-    span = ahead + behind
-    reach = float(np.max(speed, initial=0.0)) * span
-    steps = np.linspace(-behind, ahead, max(2, math.ceil(reach / max(road.ds, 0.25)) + 1))
-    phi, _ = _steady_lean(road, arc[:, None] + lead + v * steps[None, :], v)
+    phi = _window_leans(road, arc, speed, lead, behind, ahead)
     held = np.abs(np.mean(phi, axis=1))
     persistence: Array = held / np.maximum(np.mean(np.abs(phi), axis=1), floor)
     return persistence
