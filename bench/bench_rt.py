@@ -112,20 +112,28 @@ class _Quiet:
         return None
 
 
+@njit(cache=False, inline="always")
+def replay_period(c: Any, frames: Any, status_id: int, k: int) -> None:
+    """Period ``k`` of recorded status frames in a compiled loop: its frame put where the bus
+    read puts it, the fused period (:func:`context_period`), the ring's row kept. Inlined,
+    so each loop calls its own compiled copy of the period, as the loop does."""
+    a = c.arrays
+    a.rx[0, : frames.shape[1]] = frames[k]
+    a.rx_length[0] = frames.shape[1]
+    a.rx_id[0] = status_id
+    context_period(c, 1, k, k * 1e-3, np.nan, np.nan, -1)
+    a.ring_head[0] += 1
+
+
 @njit(cache=False)
 def _replay(
     c: Any, frames: Any, status_id: int, sent: Any, first: int, end: int
 ) -> None:  # fmt: skip
     """The fused period over recorded status frames, in a compiled loop (the "offline" way):
     the same :func:`context_period` on the same :class:`PeriodContext` as the loop calls."""
-    a = c.arrays
     for k in range(first, end):
-        a.rx[0, : frames.shape[1]] = frames[k]
-        a.rx_length[0] = frames.shape[1]
-        a.rx_id[0] = status_id
-        context_period(c, 1, k, k * 1e-3, np.nan, np.nan, -1)
-        a.ring_head[0] += 1
-        sent[k] = a.command_frame
+        replay_period(c, frames, status_id, k)
+        sent[k] = c.arrays.command_frame
 
 
 @njit(cache=False)

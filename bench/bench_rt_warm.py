@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from bench_rt import _steps, _us, bench_setup
+from bench_rt import _steps, _us, bench_setup, replay_period
 from motosim.rt import fused
 from motosim.rt.clock import MonotonicClock
 from motosim.rt.fused import context_period, context_warm, context_warm_until, monotonic_ns
@@ -65,11 +65,7 @@ def _compiled_loop(
             context_period(c, 0, 0, 0.0, 0.0, 0.0, 0 if mode == 1 else due)
         while monotonic_ns() < due:
             pass
-        a.rx[0, : frames.shape[1]] = frames[k]
-        a.rx_length[0] = frames.shape[1]
-        a.rx_id[0] = status_id
-        context_period(c, 1, k, k * 1e-3, np.nan, np.nan, -1)
-        a.ring_head[0] += 1
+        replay_period(c, frames, status_id, k)
         out[k] = a.runner[fused.R_STACK_TIME]
         due += gap_ns
 
@@ -88,11 +84,7 @@ def _decay(c: Any, frames: Any, status_id: int, out: Any, gap_ns: int, warm: int
             pass
         if warm == 2:
             context_period(c, 0, 0, 0.0, 0.0, 0.0, monotonic_ns() + 50_000)
-        a.rx[0, : frames.shape[1]] = frames[k]
-        a.rx_length[0] = frames.shape[1]
-        a.rx_id[0] = status_id
-        context_period(c, 1, k, k * 1e-3, np.nan, np.nan, -1)
-        a.ring_head[0] += 1
+        replay_period(c, frames, status_id, k)
         out[k] = a.runner[fused.R_STACK_TIME]
 
 
