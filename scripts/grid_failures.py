@@ -14,6 +14,9 @@ x0.5/1/1.5, N k_t x0.7/1/1.3) that is not stable with 6 dB and 45 deg (or every 
   (:func:`cancellation_loop_gain`): its gain and phase margins and where;
 - the gain margin that :func:`cancellation_bound` predicts from the estimate filter F alone,
   and where F Delta crosses the negative real axis.
+
+Above the rows, F (rider torque to estimate, :func:`estimate_filter`) where its phase
+reaches -180 deg, its largest gain, and at 1 Hz its gain and its lag as a delay.
 """
 
 import argparse
@@ -87,10 +90,14 @@ def rows(rate: float, speed: float, show_all: bool) -> None:
     model = default_stack(hb, rate, speed)
     f = np.append(np.geomspace(0.05, 0.999 * 0.5 * rate, POINTS - 1), 0.5 * rate)
     F = estimate_filter(model, hb, speed, f)
-    k180 = int(np.argmax(np.unwrap(np.angle(F)) < -math.pi))
+    phase = np.unwrap(np.angle(F))
+    k180 = int(np.argmax(phase < -math.pi))
+    one = int(np.argmin(np.abs(f - 1.0)))
+    delay = -phase[one] / (2 * math.pi * f[one])  # F's lag at 1 Hz as a delay [s]
     print(
         f"\n{rate:g} Hz, {speed:g} m/s: F = {abs(F[k180]):.3f} where its phase reaches -180 deg "
         f"({f[k180]:.1f} Hz); max |F| {np.max(np.abs(F)):.3f} at {f[np.argmax(np.abs(F))]:.1f} Hz"
+        f"; at 1 Hz |F| {abs(F[one]):.3f}, a delay of {delay * 1e3:.1f} ms"
     )
     print(
         "\n| J, beta, N k_t | stack at the motor current: GM; PM | unstable mode "
