@@ -56,8 +56,8 @@ def test_every_speed_duration_rate_noise_option_has_a_typical_range(command: str
 @pytest.mark.parametrize(
     ("argv", "warned"),
     [
-        (["modes", "--speeds", "1,80"], "--speeds 1, 80 m/s are legal but outside the typical 3"),
-        (["modes", "--range", "56:58:2"], "--range 56, 58 m/s are legal but outside"),
+        (["modes", "--speeds", "1,80"], "--speeds 1, 80 m/s are legal but outside the typical 2"),
+        (["modes", "--range", "58:64:2"], "--range 62, 64 m/s are legal but outside"),
         (["rt-check", "--rate", "50", "--duration", "0.01"], "--rate 50 Hz is legal"),
     ],
 )

@@ -55,6 +55,10 @@ _SPEEDS = Typical(
     3.0, 55.0, "m/s", "of a ride the model represents (Sharp 1971: the machine falls below 3, "
     "wobble is unstable above 55)"
 )  # fmt: skip
+_MODES_SWEEP = Typical(
+    2.0, 60.0, "m/s", "of a modes sweep (the weave unstable at walking pace, the wobble above "
+    "55 m/s)"
+)  # fmt: skip
 _LOOP_RATE = Typical(100.0, 10_000.0, "Hz", "of a handlebar loop (100 Hz over the paper's CAN "
                      "link, up to a drive's 10 kHz)")  # fmt: skip
 _REPLAY = Typical(0.1, 10.0, "", "replay speeds a person follows")
@@ -66,8 +70,8 @@ TYPICAL_OPTIONS: dict[tuple[str, str], Typical] = {
         0.0, 1.0, "A", "of a current sensor's noise (tens of mA)"
     ),
     ("excite", "--amplitude"): Typical(0.1, 48.0, "V", "of a handlebar motor's supply"),
-    ("modes", "--speeds"): _SPEEDS,
-    ("modes", "--range"): _SPEEDS,
+    ("modes", "--speeds"): _MODES_SWEEP,
+    ("modes", "--range"): _MODES_SWEEP,
     ("design", "--speeds"): _SPEEDS,
     ("design", "--rate"): _LOOP_RATE,
     ("design", "--bandwidth"): Typical(
