@@ -56,8 +56,8 @@ def parse_safety(table: Any, *, origin: str) -> SafetyLimits:
     where = f"{origin}: [realtime.safety]"
     if table is None:
         raise MotosimError(
-            f"{where} is missing; the run needs the handlebar's safety limits "
-            "(see the README, 'Running in real time')"
+            f"{where} is missing; the run needs the handlebar's safety limits (the SIMACOM "
+            "handlebar's are in scenarios/realtime_square.toml; see the real-time guide)"
         )
     if not isinstance(table, Mapping):
         raise MotosimError(f"{where} must be a table")
