@@ -52,7 +52,7 @@ class SpringStack:
     def reset(self, theta: float, current: float) -> None:
         self.resets.append((theta, current))
 
-    def step(self, theta_meas: float, i_meas: float) -> float:
+    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
         command = -self.gain * theta_meas
         self._row[0], self._row[1] = theta_meas, command
         return command

@@ -452,7 +452,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     import numpy as np
 
     from motosim.io.can import handlebar_codecs, open_link
-    from motosim.rt.config import parse_safety
+    from motosim.rt.config import parse_safety, within_safety
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
     from motosim.sim import build_rig, build_stack, run_metadata
@@ -469,6 +469,8 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             'expected "estimate" for a real-time run'
         )
     limits = parse_safety(realtime.get("safety"), origin=args.scenario)
+    inputs = within_safety(inputs, limits)  # the stack saturates where the clamp cuts
+    sc = inputs.scenario
     duration = sc.duration if args.duration is None else args.duration
     if not (np.isfinite(duration) and 0.0 < duration <= 86_400.0):
         raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")

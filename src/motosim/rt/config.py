@@ -20,13 +20,16 @@ handlebar on the bench and must be written down for it.
 """
 
 from collections.abc import Mapping
-from dataclasses import fields
-from typing import Any
+from dataclasses import fields, replace
+from typing import TYPE_CHECKING, Any
 
 from motosim.errors import MotosimError
 from motosim.rt.safety import SafetyLimits
 
-__all__ = ["parse_safety", "split_realtime"]
+if TYPE_CHECKING:
+    from motosim.sim import RunInputs
+
+__all__ = ["parse_safety", "split_realtime", "within_safety"]
 
 
 def split_realtime(
@@ -80,3 +83,19 @@ def parse_safety(table: Any, *, origin: str) -> SafetyLimits:
         else:
             values[key] = float(value)
     return SafetyLimits(**values)
+
+
+def within_safety(inputs: "RunInputs", limits: SafetyLimits) -> "RunInputs":
+    """The run with its controller's current limit lowered to the safety stage's clamp.
+
+    The stack saturates its command where the safety stage would clamp it, so its
+    estimator is told the current the drive carries, not a command the clamp cuts: told
+    more than the drive carries, it reads the difference as rider torque until the next
+    status frame, and with 100 Hz frames under a 1 kHz loop that sustains an 8 Hz limit
+    cycle at the clamp (measured on the lane change at 20 m/s with a 10 A clamp).
+    """
+    controller = inputs.scenario.controller
+    if limits.max_current >= controller.max_current:
+        return inputs
+    clamped = replace(controller, max_current=limits.max_current)
+    return replace(inputs, scenario=replace(inputs.scenario, controller=clamped))

@@ -63,6 +63,7 @@ from motosim.rt.safety import (
     safety_enable,
     safety_estop_frame,
     safety_request_stop,
+    safety_scale,
     safety_status_frame,
     safety_step,
     safety_trip,
@@ -348,8 +349,7 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
     r, s = a.runner, a.safety
     if r[R_T0] != r[R_T0]:
         r[R_T0] = t
-    fresh = r[R_FRESH] != 0.0
-    r[R_FRESH] = 0.0
+    fresh = r[R_FRESH] != 0.0  # cleared by finish: the stack reads it in between
     started = r[R_STARTED] != 0.0
     if not started and k >= r[R_START_TIMEOUT]:
         safety_trip(s, 8)  # NO_DRIVE
@@ -380,6 +380,7 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     advances the ring's head).
     """
     r, q, s = a.runner, a.positions, a.safety
+    r[R_FRESH] = 0.0
     started = r[R_STARTED] != 0.0
     theta_now = r[R_THETA]
     rate_at, tau_at = int(r[R_S_RATE]), int(r[R_S_TAU])
@@ -479,8 +480,9 @@ def fused_period(
     if r[R_STARTED] != 0.0:
         start = monotonic_ns()
         command = stack_period(
-            model, data, force, side_force, stack_state, a.stack_row, r[R_THETA], r[R_CURRENT]
-        )
+            model, data, force, side_force, stack_state, a.stack_row, r[R_THETA], r[R_CURRENT],
+            r[R_FRESH] != 0.0, safety_scale(a.safety, a.limits),
+        )  # fmt: skip
         if start >= 0:
             r[R_STACK_TIME] = (monotonic_ns() - start) * 1e-9
     return finish(a, command, k, t, woke, done_read)
@@ -501,7 +503,9 @@ def stack_warm(
     shadow.held[:] = data.held
     shadow.periods[:] = data.periods
     shadow_state[:] = stack_state
-    stack_period(model, shadow, force, side_force, shadow_state, shadow_row, theta, current)
+    stack_period(
+        model, shadow, force, side_force, shadow_state, shadow_row, theta, current, True, 1.0
+    )
 
 
 @structref.register

@@ -38,7 +38,7 @@ from motosim.rt import fused
 from motosim.rt.clock import Clock
 from motosim.rt.fused import PeriodArrays
 from motosim.rt.ring import SampleRing
-from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State
+from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State, safety_scale
 from motosim.rt.stack import CompiledStack, compiled
 from motosim.sim.metrics import range_reason
 from motosim.sim.stack import new_data
@@ -86,8 +86,11 @@ class StackStepper(Protocol):
         """Start every state at the measured angle [rad] and current [A]."""
         ...
 
-    def step(self, theta_meas: float, i_meas: float) -> float:
-        """One control period: the motor current command [A]."""
+    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
+        """One control period: the motor current command [A]; ``fresh``: the measurement
+        came in a new status frame this period (the last valid one is given otherwise);
+        ``scale``: the share of the command the safety stage will pass
+        (:func:`~motosim.rt.safety.safety_scale`)."""
         ...
 
     def row(self) -> Array:
@@ -574,7 +577,10 @@ class RealtimeRunner:
             self.stepper.reset(float(r[fused.R_THETA]), float(r[fused.R_CURRENT]))
         command = 0.0
         if r[fused.R_STARTED]:
-            command = self.stepper.step(float(r[fused.R_THETA]), float(r[fused.R_CURRENT]))
+            command = self.stepper.step(
+                float(r[fused.R_THETA]), float(r[fused.R_CURRENT]), bool(r[fused.R_FRESH]),
+                float(safety_scale(a.safety, a.limits)),
+            )  # fmt: skip
             a.stack_row[:] = self.stepper.row()
         flags: int = self._finish(a, float(command), k, t, woke, done_read)
         return flags

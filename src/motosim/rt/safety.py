@@ -503,6 +503,12 @@ class SafetyStage:
         return float(self._s[S_ENVELOPE])
 
     @property
+    def scale(self) -> float:
+        """The share of its command the stage will pass in the next period, as far as it is
+        known before the command (:func:`safety_scale`) [-]."""
+        return float(safety_scale(self._s, self._p))
+
+    @property
     def frames_lost(self) -> int:
         """Status frames lost (alive counter jumps)."""
         return int(self._s[S_LOST])
@@ -591,6 +597,25 @@ class SafetyStage:
             safety_step(self._s, self._p, float(command), float(theta), float(omega),
                         float(tau_hat), t)
         )  # fmt: skip
+
+
+@njit(cache=True)
+def safety_scale(s: NDArray[np.float64], p: NDArray[np.float64]) -> float:
+    """The share of its command the stage will pass in the coming period [-], as far as it
+    is known before the command: the fade envelope (its ramp taken) times the hands-off
+    gain while nobody holds the handlebar; 0 while the stage is idle or faulted. The clamp,
+    the slew and the speed and end-stop limits, which depend on the command, are not in it.
+    """
+    state = s[S_STATE]
+    envelope = s[S_ENVELOPE]
+    ramp = p[P_DT] / p[P_FADE_IN]
+    if state == 1.0:  # FADE_IN
+        envelope = min(1.0, envelope + ramp)
+    elif state == 4.0:  # STOPPING
+        envelope = max(0.0, envelope - ramp)
+    elif state != 2.0:  # IDLE, FAULT: the drive is disabled
+        envelope = 0.0
+    return float(envelope * (p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else 1.0))
 
 
 @njit(cache=True)

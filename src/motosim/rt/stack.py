@@ -5,13 +5,20 @@
 and :func:`~motosim.sim.stack.step` that the offline simulator calls; it adds only the
 bookkeeping of the real-time loop:
 
-- the current the stack is told about is the measured one: ``step`` takes the measured minus
-  the commanded current (``current_error``), and the command the drive carried over the last
-  period is the one the stack gave then, so ``current_error = i_meas - i_cmd(previous)``
-  (zero in an ideal, noise-free loop, as offline);
+- the current the stack is told about is the measured one and what the safety stage will
+  pass: the step takes the share of its command the drive will carry (``scale``: the fade
+  and the hands-off gain) and the measured minus the expected current (``current_error =
+  i_meas - scale * i_cmd`` of the last period; zero in an ideal, noise-free loop, as
+  offline), so a clamp or a slew reaches the estimator at the next status frame;
 - the longitudinal force of eq. (2) comes from the scenario's profiles, one value per period;
 - the true rider torque is unknown in real time (0: a ``motorcycle.input = "true"`` run is a
-  simulation-only reference and is refused by ``motosim run``).
+  simulation-only reference and is refused by ``motosim run``);
+- where the drive's status frames come slower than the control periods (the paper's 100 Hz
+  CAN link under a 1 kHz loop), the stack takes its measurement in the period a new frame
+  arrives, not on its own count: the drive's clock is not the loop's, and a count would read
+  a frame up to a frame period old, or one frame twice and skip the next, which the
+  observer's fixed step reads as motion (a lost frame: the last one, 1.5 frame periods
+  after it).
 
 :func:`result_block` turns the loop's rows into the columns of the result files that
 ``motosim simulate`` writes, so that ``motosim report`` reads a real-time run as it is.
@@ -24,7 +31,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.sim.stack import StackData, StackModel, new_data, reset, step
+from motosim.sim.stack import StackData, StackModel, new_data, reset, step_scaled
 
 __all__ = [
     "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "compiled", "result_block", "stack_period",
@@ -77,24 +84,30 @@ class CompiledStack:
         self.data = new_data(model)
         self.force = _series(force, "force")
         self.side_force = _series(side_force, "side_force")
-        self.state = np.zeros(2)
-        """The period's index and the last command [A] (what :func:`stack_period` keeps)."""
+        self.state = np.zeros(3)
+        """The period's index, the current the drive was expected to carry in the last
+        period [A] and the periods since the last measurement (what :func:`stack_period`
+        keeps)."""
         self._row = np.zeros(len(STACK_SIGNALS))
         # before its first step: the motorcycle upright and straight at its speed, as reset
         self._row[STACK_SIGNALS.index("v_x")] = model.speed
         args = (model, self.data, self.force, self.side_force, self.state, self._row, 0.0, 0.0)
-        self._step = compiled(stack_period, *args)
+        self._step = compiled(stack_period, *args, True, 1.0)
         self._reset = compiled(stack_reset, *args[:5], 0.0, 0.0)
 
     def reset(self, theta: float, current: float) -> None:
         """Start the stack at the measured angle [rad] and current [A]."""
         self._reset(self.model, self.data, self.force, self.side_force, self.state, theta, current)
 
-    def step(self, theta_meas: float, i_meas: float) -> float:
-        """One period of the compiled stack: the motor current command [A]."""
+    def step(
+        self, theta_meas: float, i_meas: float, fresh: bool = True, scale: float = 1.0
+    ) -> float:
+        """One period of the compiled stack (:func:`stack_period`): the motor current
+        command [A]; ``fresh``: a new status frame came this period, ``scale``: the share of
+        the command the safety stage will pass."""
         command: float = self._step(
             self.model, self.data, self.force, self.side_force, self.state, self._row,
-            theta_meas, i_meas,
+            theta_meas, i_meas, fresh, scale,
         )  # fmt: skip
         return command
 
@@ -119,6 +132,7 @@ def stack_reset(
     reset(model, data, theta, current)
     state[0] = 0.0
     state[1] = current
+    state[2] = 0.0
 
 
 @njit(cache=True)
@@ -131,18 +145,33 @@ def stack_period(
     row: Array,
     theta_meas: float,
     i_meas: float,
+    fresh: bool,
+    scale: float,
 ) -> float:
     """One period of the stack in the loop: the motor current command [A].
 
-    :func:`~motosim.sim.stack.step` with this period's forces (the last ones held) and
-    ``current_error`` the measured current minus the last command (``state[1]``); the
-    stack's row (:data:`STACK_SIGNALS`) into ``row``.
+    :func:`~motosim.sim.stack.step_scaled` with this period's forces (the last ones held),
+    ``scale`` the share of the command the safety stage will pass
+    (:func:`~motosim.rt.safety.safety_scale`) and ``current_error`` the measured current
+    minus the one expected in the last period (``state[1]``); the stack's row
+    (:data:`STACK_SIGNALS`) into ``row``. With a measurement every
+    ``model.measure_every`` > 1 periods, the stack measures in the period a ``fresh``
+    status frame came, or 1.5 measurement periods after the last one if none came (the
+    last frame again); in no other.
     """
+    every = model.measure_every
+    if every > 1:
+        if fresh or state[2] >= every + every // 2:
+            data.periods[0] = 0
+            state[2] = 0.0
+        elif data.periods[0] % every == 0:
+            data.periods[0] += 1  # the frame is late: wait for it
+        state[2] += 1.0
     k = int(state[0])
     f = force[k] if k < force.size else force[-1]
     fy = side_force[k] if k < side_force.size else side_force[-1]
-    command = step(model, data, theta_meas, i_meas - state[1], 0.0, f, fy)
-    state[1] = command
+    command = step_scaled(model, data, theta_meas, i_meas - state[1], 0.0, f, fy, scale)
+    state[1] = scale * command
     state[0] = k + 1
     held, z = data.held, data.motorcycle
     row[0], row[1], row[2], row[3] = held[3], held[0], held[2], command

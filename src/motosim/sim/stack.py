@@ -353,11 +353,30 @@ def step(
 ) -> float:
     """Advance the stack by one period; return the motor current command [A].
 
+    :func:`step_scaled` with the command carried whole (``current_scale`` 1): the offline
+    loop's step; its parameters and value are those below.
+    """
+    return step_scaled(model, data, theta_meas, current_error, rider_torque, force, side_force, 1.0)
+
+
+@njit(cache=True, inline="always")
+def step_scaled(
+    model: StackModel,
+    data: StackData,
+    theta_meas: float,
+    current_error: float,
+    rider_torque: float,
+    force: float,
+    side_force: float,
+    current_scale: float,
+) -> float:
+    """Advance the stack by one period; return the motor current command [A].
+
     On a measurement period: the controller commands the current from the measured angle
     and the motorcycle's steer angle, the differentiator and the estimator take the sample,
-    told that the command plus ``current_error`` is what the motor carries over the coming
-    period. Between measurements the outputs are held. Then the virtual motorcycle advances
-    one period under the estimated rider torque.
+    told that ``current_scale`` times the command plus ``current_error`` is what the motor
+    carries over the coming period. Between measurements the outputs are held. Then the
+    virtual motorcycle advances one period under the estimated rider torque.
 
     Parameters
     ----------
@@ -376,6 +395,10 @@ def step(
         Longitudinal force of eq. (2), (tau_d - tau_b) / r_D + F_wx [N].
     side_force : float
         Side force on the motorcycle (a side wind), to the right [N].
+    current_scale : float
+        The share of the command the drive will carry [-]: 1 offline; in the real-time
+        loop the safety stage's fade and hands-off gain, which the estimator must be told
+        of (the measured current tells it only at the next status frame).
 
     Returns
     -------
@@ -394,7 +417,7 @@ def step(
         data.differentiator[1] = z1
         held[2] = z1
         held[3] = step_kernel(
-            model.estimator, data.estimator, theta_meas, z1, held[1] + current_error
+            model.estimator, data.estimator, theta_meas, z1, current_scale * held[1] + current_error
         )
     data.periods[0] += 1
     steer = rider_torque if model.true_torque else held[3]

@@ -239,3 +239,22 @@ def test_frozen_sensor_monitor_rests_during_a_stops_fade_out() -> None:
     d.stage.request_stop()
     out = [d.period(10.0, theta=0.1) for _ in range(600)]
     assert out[-1] == 0.0 and d.stage.state == State.IDLE and d.stage.fault == Fault.NONE
+
+
+def test_the_scale_told_to_the_stack_is_the_share_the_stage_passes() -> None:
+    # what the stack's estimator is told the drive will carry (the fade and the hands-off
+    # gain): the stage's output over its command, in every period but the one in which
+    # the hands-off flag itself changes (decided on that period's estimate)
+    lim = LIMITS.__class__(**{**_fields(LIMITS), "hands_off_torque": 0.5})
+    d = Driver(lim, rate=100.0)
+    assert d.stage.scale == 0.0 and d.period(command=2.0) == 0.0  # idle: nothing passes
+    d.stage.enable()
+    flips = 0
+    for k in range(120):  # the fade-in, the rider holding, then nobody (hands-off at 0.2 s)
+        predicted, before = d.stage.scale, d.stage.hands_off
+        out = d.period(command=2.0, tau_hat=5.0 if k < 80 else 0.0, theta=1e-3 * (k % 2))
+        if d.stage.hands_off != before:
+            flips += 1
+            continue
+        assert out == pytest.approx(2.0 * predicted), k
+    assert flips == 1 and d.stage.hands_off and d.stage.scale == pytest.approx(0.25)
