@@ -296,3 +296,39 @@ def test_low_frequency_bound_limits_the_weak_motor_damped_handlebar():
     assert bound.low_frequency_db == pytest.approx(-20.0 * np.log10(1.0 - 0.7 / 1.5), abs=1e-9)
     inner = _gain_margin(cancellation_loop_gain(stack_loop(model, true, 20.0), f))
     assert abs(inner - bound.low_frequency_db) < 0.5
+
+
+def test_the_measurement_column_reproduces_an_angle_added_to_the_encoder():
+    """Column 3 of the linear loop is an angle added to the measured one. Without dry
+    friction, a 0.02 mrad step added to the angle the compiled stack reads (the handlebar
+    advanced exactly between samples, no rider torque) must move the true handlebar as the
+    linear loop predicts, to a small fraction of the response; its loop gain broken there
+    (:meth:`StackLoop.loop_gain`, column 3) closes back to the loop's own dynamics."""
+    from motosim.model.handlebar import step_exact
+    from motosim.sim.stack import new_data, reset, step
+
+    inputs = _inputs(1000.0)
+    model = build_stack(inputs)
+    hb = inputs.true_handlebar
+    loop = stack_loop(model, hb, 20.0)
+    data = new_data(model)
+    reset(model, data, 0.0, 0.0)
+    offset, n = 2e-5, 500
+    theta, omega = 0.0, 0.0
+    x = np.zeros(loop.A.shape[0])
+    simulated, linear = np.zeros(n), np.zeros(n)
+    for k in range(n):
+        added = offset if k >= 10 else 0.0
+        simulated[k], linear[k] = theta, loop.angle @ x
+        current = step(model, data, theta + added, 0.0, 0.0, 0.0, 0.0)
+        x = loop.A @ x + loop.B[:, 3] * added
+        theta, omega = step_exact(
+            theta, omega, hb.torque_per_amp * current, hb.J_eq, hb.beta_eq, 0.0, model.dt
+        )
+    scale = np.max(np.abs(simulated))
+    assert scale > 0.2 * offset
+    assert np.max(np.abs(linear - simulated)) < 0.02 * scale
+    # closing L at the break gives the response from the added angle to the true one
+    f = np.array([1.0, 12.0])
+    L = loop.loop_gain(f, 3)
+    np.testing.assert_allclose(loop.response(f, loop.angle, 3), -L / (1.0 + L), rtol=1e-9)

@@ -72,12 +72,14 @@ class StackLoop:
     Attributes
     ----------
     A : ndarray, shape (n, n)
-        Closed loop (the motor carries the commanded current, u = 0, w = 0).
-    B : ndarray, shape (n, 3)
+        Closed loop (the motor carries the commanded current, u = 0, w = 0, n = 0).
+    B : ndarray, shape (n, 4)
         Inputs: rider torque tau_r [N*m] on the handlebar; a current u [A] added to the
         command at the motor (the loop's break point); a torque w [N*m] added to the
         estimate that the rider-torque cancellation reads (the cancellation loop's break
-        point; a zero column without cancellation).
+        point; a zero column without cancellation); an angle n [rad] added to the measured
+        angle that the controller, the differentiator and the observer read (an encoder's
+        rounding error; the break point at the measurement).
     current : ndarray, shape (n,)
         Row giving the commanded current i [A] from the state.
     rate : ndarray, shape (n,)
@@ -118,12 +120,16 @@ class StackLoop:
         """Open-loop gain L (negative-feedback convention) of the loop broken at an input.
 
         ``column`` 1 breaks it at the motor current (L from the current applied to the
-        commanded one), 2 at the estimate the rider-torque cancellation reads. The loop is
+        commanded one), 2 at the estimate the rider-torque cancellation reads, 3 at the
+        measured angle (L from the measured angle to the true one: where it is real and
+        negative beyond -1 / 1.27, a rounding quantiser's describing function, whose gain
+        lies between 0 and 4 / pi, can meet -1 / L and an encoder can sustain a limit
+        cycle of about one count). The loop is
         opened by taking that signal's own feedback out of A: with the break's input b and
         output row c, A_open = A - b c and L = -c (zI - A_open)^-1 b. (The closed-loop
         response from the same input, c (zI - A)^-1 b = -L / (1 + L), is not the loop gain.)
         """
-        row = {1: self.current, 2: self.estimate}[column]
+        row = {1: self.current, 2: self.estimate, 3: self.angle}[column]
         n = self.A.shape[0]
         b = self.B[:, column]
         A_open = self.A - np.outer(b, row)
@@ -177,14 +183,15 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     for name, size in sizes.items():
         start[name] = n
         n += size
-    eye = np.eye(n)
+    eye = np.eye(n + 1)  # the last coordinate: the angle n added to the measurement
 
     def state(name: str, k: int = 0) -> Array:
         return np.asarray(eye[start[name] + k], dtype=float)
 
     theta, rate = state("plant", 1), state("plant", 0)
     delta, delta_rate = state("motorcycle", 5), state("motorcycle", 3)
-    error = theta - delta
+    measured = theta + eye[n]
+    error = measured - delta
     command = model.Dd[0, 0] * error
     for j in range(nc):
         command = command + model.Cd[0, j] * state("controller", j)
@@ -195,26 +202,26 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
         torque = torque + ff[2] * steer_acc + ff[3] * delta_rate
     if ff[0] > 0.0 or ff[1] > 0.0:
         command = command + torque / ff[5]
-    z1 = (theta - state("theta_prev")) / h
+    z1 = (measured - state("theta_prev")) / h
     rate_used = z1 + w * (z1 - state("rate_prev"))
     x0, x1 = state("observer", 0), state("observer", 1)
-    E = injection * (g[0] * (rate_used - x0) + g[1] * (theta - x1))
+    E = injection * (g[0] * (rate_used - x0) + g[1] * (measured - x1))
     estimate = held + alpha * (E - held)
 
     # the cancellation's break point: a torque w added to the estimate it reads
     cancel = -ff[0] / ff[5] if ff[0] > 0.0 else 0.0
 
-    A = np.zeros((n, n))
-    B = np.zeros((n, 3))
+    A = np.zeros((n, n + 1))  # rows over the states and the measurement's n
+    B = np.zeros((n, 4))
     for r in range(2):
         A[start["plant"] + r] = Ap[r, 0] * rate + Ap[r, 1] * theta + Bp[r, 0] * command
-        B[start["plant"] + r] = (Bp[r, 1], Bp[r, 0], Bp[r, 0] * cancel)
-    A[start["theta_prev"]] = theta
+        B[start["plant"] + r, :3] = (Bp[r, 1], Bp[r, 0], Bp[r, 0] * cancel)
+    A[start["theta_prev"]] = measured
     A[start["rate_prev"]] = z1
     for r in range(2):
         A[start["observer"] + r] = (
             Phi[r, 0] * x0 + Phi[r, 1] * x1 + Gamma[r, 0] * command + Gamma[r, 1] * rate_used
-            + Gamma[r, 2] * theta + Gamma[r, 3] * E
+            + Gamma[r, 2] * measured + Gamma[r, 3] * E
         )  # fmt: skip
         B[start["observer"] + r, 1] = Gamma[r, 0]  # the estimator is told the measured current
         B[start["observer"] + r, 2] = Gamma[r, 0] * cancel
@@ -226,7 +233,10 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
         A[start["controller"] + r] = row
     m0 = start["motorcycle"]
     A[m0 : m0 + 8] = Am @ eye[m0 : m0 + 8] + np.outer(Bm[:, 0], estimate)
-    return StackLoop(A, B, command, rate, theta, held, h, Av, model.Bv.copy())
+    B[:, 3] = A[:, n]
+    return StackLoop(
+        A[:, :n].copy(), B, command[:n], rate[:n], theta[:n], held[:n], h, Av, model.Bv.copy()
+    )
 
 
 def estimate_filter(
