@@ -35,7 +35,7 @@ from motosim.model.sharp import bike_rk4
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 
-__all__ = ["StackData", "StackModel", "design_stack", "new_data", "reset", "step"]
+__all__ = ["StackData", "StackModel", "design_stack", "new_data", "reset", "step", "step_scaled"]
 
 Array = NDArray[np.float64]
 
