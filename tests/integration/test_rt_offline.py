@@ -24,7 +24,7 @@ from motosim.rt.rig import RigSettings, VirtualRig
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits, State
 from motosim.rt.stack import CompiledStack
-from motosim.sim import build_rig, build_stack, parse_scenario, prepare, simulate
+from motosim.sim import RunInputs, build_rig, build_stack, parse_scenario, prepare, simulate
 from motosim.sim.scenario import Scenario
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
@@ -136,40 +136,51 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     assert np.max(np.abs(rows[:, col["delta"]] - offline["delta"])) < 1e-3  # rad
 
 
-def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
-    # lane_change_20 (the repository's scenario), shortened: the rider at the rig reads the
-    # run's state stream over UDP and must change lane as the offline rider does.
-    from motosim.io.runs import load_run
+def _with_virtual_rider(
+    inputs: RunInputs, limits: SafetyLimits, settings: RigSettings, channel: str
+) -> RealtimeRunner:
+    """The run ``inputs`` in lock-step against the rig, whose virtual rider steers by the
+    state stream the runner publishes over UDP; the runner after the run."""
     from motosim.rt.rig import VirtualRider
     from motosim.rt.telemetry import StateReceiver, StateSender
 
-    full = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
-    inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, duration=6.0))
     sc = inputs.scenario
-    offline = simulate(inputs, rng=np.random.default_rng(0))
     model = build_stack(inputs)
     world = build_rig(inputs, rng=np.random.default_rng(0))
     rate = sc.rates.control
-    settings = _rig_settings(sc)
     codecs = handlebar_codecs()
     receiver = StateReceiver(("127.0.0.1", 0))
     sender = StateSender(receiver.address)
-    rider = VirtualRider(world, receiver)
-    with open_link("virtual:rt_rider") as host, open_link("virtual:rt_rider") as drive:
+    with open_link(channel) as host, open_link(channel) as drive:
         rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, drive, rider, np.random.default_rng(0),
-            rider_on_enable=False,
+            inputs.true_handlebar, settings, codecs, drive, VirtualRider(world, receiver),
+            np.random.default_rng(0), rider_on_enable=False,
         )  # fmt: skip
         stack = CompiledStack(model, force=world.force, side_force=world.side_force)
         runner = RealtimeRunner(
-            stack, host, codecs, _limits(rate), rate=rate,
-            periods_per_frame=model.measure_every, telemetry=sender.send,
+            stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
+            telemetry=sender.send,
         )  # fmt: skip
         clock = SimulatedClock(-1.0 / rate)
         clock.listen(rig.advance_to)
         RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
     sender.close()
     receiver.close()
+    return runner
+
+
+def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
+    # lane_change_20 (the repository's scenario), shortened: the rider at the rig reads the
+    # run's state stream over UDP and must change lane as the offline rider does.
+    from motosim.io.runs import load_run
+
+    full = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
+    inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, duration=6.0))
+    sc = inputs.scenario
+    offline = simulate(inputs, rng=np.random.default_rng(0))
+    runner = _with_virtual_rider(
+        inputs, _limits(sc.rates.control), _rig_settings(sc), "virtual:rt_rider"
+    )
     rows = runner.ring.drain()
     y = rows[:, runner.names.index("y")]
     assert runner.counters().fault == "NONE"
@@ -205,41 +216,18 @@ def test_the_lane_change_over_100_hz_frames_holds_within_the_safety_clamp() -> N
 
     from motosim.io.runs import load_run
     from motosim.rt.config import parse_safety, within_safety
-    from motosim.rt.rig import VirtualRider
-    from motosim.rt.telemetry import StateReceiver, StateSender
 
     root = Path(__file__).parents[2]
     full = load_run(root / "scenarios" / "lane_change_20.toml")
-    sc = full.scenario
-    rates = dataclasses.replace(sc.rates, measurement=100.0)
+    rates = dataclasses.replace(full.scenario.rates, measurement=100.0)
     table = tomllib.loads((root / "scenarios" / "realtime_square.toml").read_text())
     limits = parse_safety(table["realtime"]["safety"], origin="realtime_square.toml")
     inputs = within_safety(
-        dataclasses.replace(full, scenario=dataclasses.replace(sc, rates=rates)), limits
+        dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, rates=rates)),
+        limits,
     )
-    sc = inputs.scenario
-    model = build_stack(inputs)
-    world = build_rig(inputs, rng=np.random.default_rng(0))
-    rate = sc.rates.control
-    settings = dataclasses.replace(_rig_settings(sc), latency=5e-4, jitter=2e-4)
-    codecs = handlebar_codecs()
-    receiver = StateReceiver(("127.0.0.1", 0))
-    sender = StateSender(receiver.address)
-    with open_link("virtual:rt_clamp") as host, open_link("virtual:rt_clamp") as drive:
-        rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, drive, VirtualRider(world, receiver),
-            np.random.default_rng(0), rider_on_enable=False,
-        )  # fmt: skip
-        stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-        runner = RealtimeRunner(
-            stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
-            telemetry=sender.send,
-        )  # fmt: skip
-        clock = SimulatedClock(-1.0 / rate)
-        clock.listen(rig.advance_to)
-        RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
-    sender.close()
-    receiver.close()
+    settings = dataclasses.replace(_rig_settings(inputs.scenario), latency=5e-4, jitter=2e-4)
+    runner = _with_virtual_rider(inputs, limits, settings, "virtual:rt_clamp")
     rows = runner.ring.drain()
     t, current = rows[:, 0], rows[:, runner.names.index("i_safe")]
     assert runner.counters().fault == "NONE"
@@ -270,9 +258,9 @@ def _run_both_ways(
     fused: bool, rate: float = 1000.0, *, warm: str = ""
 ) -> tuple[RealtimeRunner, np.ndarray]:
     inputs = _inputs(rate)
-    sc = inputs.scenario  # type: ignore[attr-defined]
-    model = build_stack(inputs)  # type: ignore[arg-type]
-    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
+    sc = inputs.scenario
+    model = build_stack(inputs)
+    world = build_rig(inputs, rng=np.random.default_rng(0))
     limits = SafetyLimits(  # limits that bind: slew, speed, clamp, hands-off, a 0.5 s fade
         max_current=0.1, max_slew=400.0, max_speed=1.0, speed_band=2.0, soft_stop=0.05,
         hard_stop=5.0, end_stop_gain=20.0, hands_off_torque=0.5, hands_off_time=0.05,
@@ -364,9 +352,9 @@ def test_leaving_the_models_range_fades_the_torque_out_and_ends_the_run(
     # the safety stage fades the torque out over its fade_in, then the run ends (no fault).
     rate = 1000.0
     inputs = _inputs(rate)
-    sc = inputs.scenario  # type: ignore[attr-defined]
-    model = build_stack(inputs)  # type: ignore[arg-type]
-    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
+    sc = inputs.scenario
+    model = build_stack(inputs)
+    world = build_rig(inputs, rng=np.random.default_rng(0))
     limits = dataclasses.replace(_limits(rate), fade_in=0.1)
     settings = _rig_settings(sc)
     codecs = handlebar_codecs()
