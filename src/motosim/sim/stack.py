@@ -282,7 +282,7 @@ def design_stack(
     if (rider_feedforward or reference_feedforward) and handlebar is None:
         raise MotosimError("feedforward needs the nominal handlebar; give handlebar=")
     on = controller is not None
-    prediction = np.zeros(7)
+    prediction = np.zeros(8)
     if on and rider_feedforward and prediction_lead != 0.0:
         prediction = _prediction(prediction_lead, h_meas)
     ff = np.zeros(7)
@@ -481,8 +481,9 @@ def step(
             model.estimator, data.estimator, theta_meas, z1, held[1] + current_error
         )
         c = model.prediction
-        if c[0] > 0.0:  # the estimate's rate through the notch and the low-pass (both in
-            x = (estimate - held[3]) / p[0]  # transposed direct form II)
+        if c[0] > 0.0:
+            # the estimate's rate through the notch and the low-pass (transposed form II)
+            x = (estimate - held[3]) / p[0]
             y = c[3] * x + held[5]
             held[5] = c[4] * x - c[6] * y + held[6]
             held[6] = c[5] * x - c[7] * y
