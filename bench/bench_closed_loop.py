@@ -237,11 +237,11 @@ def _without_projection(model: StackModel) -> StackModel:
 
 
 def _without_feedforward(model: StackModel) -> StackModel:
-    """The stack with neither feedforward term (rider-torque cancellation, reference inverse
-    dynamics): the step skips their code, as it did before they existed."""
+    """The stack with neither feedforward term (rider-torque cancellation, predicted or not,
+    reference inverse dynamics): the step skips their code, as it did before they existed."""
     ff = model.feedforward.copy()
     ff[:2] = 0.0
-    return model._replace(feedforward=ff)
+    return model._replace(feedforward=ff, prediction=np.zeros_like(model.prediction))
 
 
 def run() -> dict[str, float]:

@@ -1,7 +1,7 @@
 """Regenerate the closed-loop table of the simulate guide: every training scenario, the feel.
 
     .venv/bin/python scripts/closed_loop_table.py [SCENARIO.toml ...] [--rate HZ]
-        [--handlebar FILE]
+        [--handlebar FILE] [--no-prediction]
 
 Each scenario (by default every file in ``scenarios/`` and the paper's riding run) is
 simulated as ``motosim simulate`` would, and the run metrics of
@@ -10,7 +10,8 @@ tracking and estimate errors as fractions of the peak steer angle and peak rider
 share of time the handlebar sticks, the current's content above 3 Hz over the last 2 s (the
 buzz) and the flags. ``--rate`` runs each at that control and measurement rate instead of its
 own, ``--handlebar`` on another handlebar (a parameter file, the true and the nominal one:
-the stack is designed for it), as the guide's unseen checks do.
+the stack is designed for it), as the guide's unseen checks do; ``--no-prediction`` with the
+plain rider-torque cancellation (``[controller] prediction = false``).
 """
 
 import argparse
@@ -34,11 +35,18 @@ def _percent(metrics: dict[str, float], key: str) -> str:
     return "-" if value is None or not math.isfinite(value) else f"{100 * value:.1f} %"
 
 
-def _inputs(path: Path, rate: float | None, handlebar: str | None) -> RunInputs:
-    """The scenario's run, at ``rate`` [Hz] and on ``handlebar`` where given."""
-    if rate is None and handlebar is None:
+def _inputs(
+    path: Path, rate: float | None, handlebar: str | None, plain: bool = False
+) -> RunInputs:
+    """The scenario's run, at ``rate`` [Hz] and on ``handlebar`` where given; ``plain``: with
+    the plain rider-torque cancellation."""
+    if rate is None and handlebar is None and not plain:
         return load_run(path)
     sc = load_scenario(path)
+    if plain:
+        sc = dataclasses.replace(
+            sc, controller=dataclasses.replace(sc.controller, prediction=False)
+        )
     if rate is not None:
         sc = dataclasses.replace(
             sc, rates=dataclasses.replace(sc.rates, control=rate, measurement=rate)
@@ -54,6 +62,7 @@ def main() -> int:
     parser.add_argument("scenarios", nargs="*", help="scenario files (default: the examples)")
     parser.add_argument("--rate", type=float, help="control and measurement rate [Hz]")
     parser.add_argument("--handlebar", help="handlebar parameter file (true and nominal)")
+    parser.add_argument("--no-prediction", action="store_true", help="the plain cancellation")
     args = parser.parse_args()
     suffix = f" ({Path(args.handlebar).stem})" if args.handlebar else ""
     paths = [Path(p) for p in args.scenarios] or [
@@ -66,7 +75,7 @@ def main() -> int:
     )
     print("|---|---|---|---|---|---|---|---|---|")
     for path in paths:
-        inputs = _inputs(path, args.rate, args.handlebar)
+        inputs = _inputs(path, args.rate, args.handlebar, args.no_prediction)
         sc = inputs.scenario
         run = simulate(inputs, rng=np.random.default_rng(sc.seed))
         m = run_metrics(run.t, run.get, complete=True, max_current=sc.controller.max_current)

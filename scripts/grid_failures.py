@@ -1,11 +1,13 @@
 """Which handlebars of the robustness grid lose the margins, where, and what the bound says.
 
     .venv/bin/python scripts/grid_failures.py [--rates 1000,100] [--speed 20] [--all]
+        [--no-prediction]
 
-For the default design (``motosim design`` on the packaged handlebar) at each rate and the
-speed, every handlebar of :func:`motosim.sim.loop_analysis.robustness_grid` (J_eq, beta_eq
-x0.5/1/1.5, N k_t x0.7/1/1.3) that is not stable with 6 dB and 45 deg (or every one with
-``--all``) gets one Markdown row:
+For the default design (``motosim design`` on the packaged handlebar; ``--no-prediction``:
+with the plain rider-torque cancellation) at each rate and the speed, every handlebar of
+:func:`motosim.sim.loop_analysis.robustness_grid` (J_eq, beta_eq x0.5/1/1.5, N k_t
+x0.7/1/1.3) that is not stable with 6 dB and 45 deg (or every one with ``--all``) gets one
+Markdown row:
 
 - the whole stack's margins, broken at the motor current (:func:`analyse_stack`, what
   ``motosim design`` counts), with the frequencies of the crossings that set them;
@@ -15,8 +17,10 @@ x0.5/1/1.5, N k_t x0.7/1/1.3) that is not stable with 6 dB and 45 deg (or every 
 - the gain margin that :func:`cancellation_bound` predicts from the estimate filter F alone,
   and where F Delta crosses the negative real axis.
 
-Above the rows, F (rider torque to estimate, :func:`estimate_filter`) where its phase
-reaches -180 deg, its largest gain, and at 1 Hz its gain and its lag as a delay.
+Above the rows, F (rider torque to the torque the cancellation reads, :func:`estimate_filter`)
+where its phase reaches -180 deg, its largest gain, and at 1 Hz its gain and its lag as a
+delay; with the prediction, its lead T_d (the plain estimate's delay at 1 Hz,
+:func:`prediction_lead`).
 """
 
 import argparse
@@ -37,25 +41,36 @@ from motosim.sim.loop_analysis import (
     cancellation_loop_gain,
     estimate_filter,
     negative_real_crossings,
+    prediction_lead,
     stack_loop,
 )
-from motosim.sim.stack import StackModel, design_stack
+from motosim.sim.stack import StackModel, default_prediction, design_stack
 
 POINTS = 4000  # frequencies of the crossing search
 
 
-def default_stack(hb: HandlebarParameters, rate: float, speed: float) -> StackModel:
-    """The stack ``motosim design`` analyses: default bandwidth, order 1, both feedforwards."""
+def default_stack(
+    hb: HandlebarParameters, rate: float, speed: float, prediction: bool | None = None
+) -> StackModel:
+    """The stack ``motosim design`` analyses: default bandwidth, order 1, both feedforwards,
+    the predicted cancellation where :func:`default_prediction` says (or ``prediction``)."""
     sharp = load_parameters("sharp1971", "sharp")
     controller = design_torque_feedback(
         hb, rng=np.random.default_rng(0), bandwidth=default_bandwidth(rate), order=1, rate=rate
     ).controller_zoh
     kernel = WalcottZakObserver(design_with(hb, observer_settings(rate)), 1.0 / rate)
-    return design_stack(
-        sharp, kernel.kernel, controller, control_rate=rate, measurement_rate=rate,
-        lipschitz=300.0, max_current=30.0, speed=speed, handlebar=hb, rider_feedforward=True,
-        reference_feedforward=True,
-    )  # fmt: skip
+
+    def build(lead: float = 0.0) -> StackModel:
+        return design_stack(
+            sharp, kernel.kernel, controller, control_rate=rate, measurement_rate=rate,
+            lipschitz=300.0, max_current=30.0, speed=speed, handlebar=hb,
+            rider_feedforward=True, reference_feedforward=True, prediction_lead=lead,
+        )  # fmt: skip
+
+    model = build()
+    if default_prediction(rate) if prediction is None else prediction:
+        model = build(prediction_lead(model, hb))
+    return model
 
 
 def crossings(L: np.ndarray, f: np.ndarray) -> tuple[float, float, float, float]:
@@ -84,10 +99,10 @@ def _cell(value: float, where: float, unit: str) -> str:
     return "none" if math.isinf(value) else f"{value:.1f}{unit} at {where:.1f} Hz"
 
 
-def rows(rate: float, speed: float, show_all: bool) -> None:
+def rows(rate: float, speed: float, show_all: bool, prediction: bool | None) -> None:
     """Print the Markdown rows of one rate."""
     hb = load_parameters("simacom_handlebar", "handlebar")
-    model = default_stack(hb, rate, speed)
+    model = default_stack(hb, rate, speed, prediction)
     f = np.append(np.geomspace(0.05, 0.999 * 0.5 * rate, POINTS - 1), 0.5 * rate)
     F = estimate_filter(model, hb, speed, f)
     phase = np.unwrap(np.angle(F))
@@ -98,6 +113,7 @@ def rows(rate: float, speed: float, show_all: bool) -> None:
         f"\n{rate:g} Hz, {speed:g} m/s: F = {abs(F[k180]):.3f} where its phase reaches -180 deg "
         f"({f[k180]:.1f} Hz); max |F| {np.max(np.abs(F)):.3f} at {f[np.argmax(np.abs(F))]:.1f} Hz"
         f"; at 1 Hz |F| {abs(F[one]):.3f}, a delay of {delay * 1e3:.1f} ms"
+        + (f" (predicted {model.prediction[0] * 1e3:.1f} ms ahead)" if model.prediction[0] else "")
     )
     print(
         "\n| J, beta, N k_t | stack at the motor current: GM; PM | unstable mode "
@@ -153,9 +169,10 @@ def main() -> int:
     parser.add_argument("--rates", default="1000,100")
     parser.add_argument("--speed", type=float, default=20.0)
     parser.add_argument("--all", action="store_true", help="every handlebar, not only failing")
+    parser.add_argument("--no-prediction", action="store_true", help="the plain cancellation")
     args = parser.parse_args()
     for rate in (float(r) for r in args.rates.split(",")):
-        rows(rate, args.speed, args.all)
+        rows(rate, args.speed, args.all, False if args.no_prediction else None)
     return 0
 
 

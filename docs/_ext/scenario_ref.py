@@ -119,6 +119,12 @@ DESCRIPTIONS: dict[str, str] = {
         '`"reference"` (the nominal handlebar\'s inverse dynamics along the steer angle); '
         "default both for ours, none for the paper's."
     ),
+    "controller.prediction": (
+        "Cancel the rider torque predicted over the estimate's lag, tau_r_hat + T_d r (T_d the "
+        "estimate filter's delay, r the estimate's rate through a 10 Hz notch and a 3 Hz "
+        'low-pass); needs `"rider"` and the Walcott-Zak observer. Default: on with them '
+        "from a 1 kHz measurement rate."
+    ),
     # [realtime.safety]
     "realtime.safety.max_current": "Current clamp [A], > 0.",
     "realtime.safety.max_slew": "Largest change of the command [A/s], > 0.",

@@ -44,6 +44,9 @@ def test_design_json_and_file(capsys: pytest.CaptureFixture[str], tmp_path: Path
         assert a["stable"]
         assert a["gain_margin_db"] >= 6.0 and a["phase_margin_deg"] >= 45.0
         assert a["grid"]["points"] == 27
+        # the predicted cancellation, the default at 1 kHz: T_d the estimate filter's delay
+        # at 1 Hz (11.7 ms, scripts/grid_failures.py)
+        assert 0.011 < a["prediction_lead_s"] < 0.0125
 
 
 def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
@@ -55,6 +58,7 @@ def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
     assert report["controller"]["analysis"]["discrete_stable"]["zoh"]
     (stack,) = report["stack"]
     assert stack["speed"] == 15.0 and stack["stable"]
+    assert stack["prediction_lead_s"] == 0.0  # the plain cancellation by default at 100 Hz
 
 
 @pytest.mark.parametrize(

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motosim.io.runs import load_run
+from motosim.io.runs import load_run, load_scenario, resolve
 from motosim.sim import RunInputs, build_stack, simulate
 from motosim.sim.stack import StackModel
 
@@ -68,6 +68,45 @@ def test_signals_unchanged(name: str) -> None:
     for signal, rms in pinned["rms"].items():
         got = np.sqrt(np.mean(result[signal] ** 2))
         np.testing.assert_allclose(got, rms, rtol=1e-7 if fixed else 1e-2, err_msg=signal)
+
+
+CANCELLATION = json.loads(
+    (ROOT / "tests" / "data" / "cancellation_golden.json").read_text(encoding="utf-8")
+)
+"""The same samples of the lane change (1 kHz, the controller of ``tests/data/
+design_simacom.toml``) and of Fig. 15's run (100 Hz measurements, the paper's eq. (26)), both
+feedforward terms on: controllers that no optimiser designs at run time, so that the numbers
+do not depend on the machine's. Written by the stack as it stood before the predicted
+cancellation (commit f33d0e7); ``[controller] prediction = false`` reproduced them exactly
+(differences 0.0) on the machine that added it."""
+
+
+def _cancelling(name: str) -> RunInputs:
+    """The run of ``name`` with the plain rider-torque cancellation (and the reference's)."""
+    if name == "lane_change_20":
+        sc = load_scenario(ROOT / FILES[name])
+        c = dataclasses.replace(
+            sc.controller, design=str(ROOT / "tests" / "data" / "design_simacom.toml")
+        )
+    else:
+        sc = load_scenario(ROOT / "scenarios" / "paper" / "fig15_riding.toml")
+        c = dataclasses.replace(sc.controller, kind="paper", feedforward=("rider", "reference"))
+    c = dataclasses.replace(c, prediction=False)
+    return resolve(dataclasses.replace(sc, controller=c), ROOT / "scenarios")
+
+
+@pytest.mark.parametrize("name", sorted(CANCELLATION))
+def test_plain_cancellation_unchanged(name: str) -> None:
+    pinned = CANCELLATION[name]
+    run = _cancelling(name)
+    result = simulate(run, rng=np.random.default_rng(run.scenario.seed))
+    idx = np.linspace(0, result.t.size - 1, 41).astype(int)
+    np.testing.assert_allclose(result.t[idx], pinned["t"], rtol=0, atol=1e-12)
+    for signal, rms in pinned["rms"].items():
+        np.testing.assert_allclose(
+            result[signal][idx], pinned[signal], rtol=1e-7, atol=1e-9, err_msg=signal
+        )
+        np.testing.assert_allclose(np.sqrt(np.mean(result[signal] ** 2)), rms, rtol=1e-7)
 
 
 def test_short_run_reproduces_the_pinned_start() -> None:

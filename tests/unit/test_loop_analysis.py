@@ -15,11 +15,19 @@ from motosim.sim.scenario import parse_scenario
 STEP_TORQUE = 0.5  # a rider-torque step small enough for the linear regions [N*m]
 
 
-def _inputs(rate: float, speed: float = 20.0, bandwidth: float | None = None):
-    controller = {} if bandwidth is None else {"controller": {"bandwidth": bandwidth}}
+def _inputs(
+    rate: float,
+    speed: float = 20.0,
+    bandwidth: float | None = None,
+    prediction: bool | None = None,
+):
+    """The default stack at ``rate`` [Hz]; ``prediction`` False: the plain cancellation."""
+    controller: dict = {} if prediction is None else {"prediction": prediction}
+    if bandwidth is not None:
+        controller["bandwidth"] = bandwidth
     scenario = parse_scenario(
         {
-            **controller,
+            "controller": controller,
             "scenario": {"name": "linear_check", "duration": 1.0},
             "rates": {"control": rate, "measurement": rate},
             "measurement": {"encoder_bits": 24, "current_noise": 0.0},
@@ -35,14 +43,17 @@ def _inputs(rate: float, speed: float = 20.0, bandwidth: float | None = None):
     return resolve(scenario, ".")
 
 
+@pytest.mark.parametrize("prediction", [True, False])
 @pytest.mark.parametrize("rate", [100.0, 1000.0])
-def test_linear_loop_reproduces_the_simulated_step(rate):
+def test_linear_loop_reproduces_the_simulated_step(rate, prediction):
     """Without dry friction, with a fine encoder and a small torque step, the differentiator
     slides and the observer stays in its boundary layer: the linear loop is then exact, and
     its step response must match the compiled simulation of the same stack (the plant at
-    10 kHz, the motorcycle by RK4) to a small fraction of the response."""
-    inputs = _inputs(rate)
+    10 kHz, the motorcycle by RK4) to a small fraction of the response, with the predicted
+    cancellation (its notch and low-pass on the estimate's rate) or the plain one."""
+    inputs = _inputs(rate, prediction=prediction)
     model = build_stack(inputs)
+    assert (model.prediction[0] > 0.0) == prediction
     run = simulate(inputs, rng=np.random.default_rng(0))
     loop = stack_loop(model, inputs.true_handlebar, inputs.scenario.motorcycle.speed)
     every = round(inputs.scenario.rates.control / rate)
@@ -102,12 +113,15 @@ def test_nominal_stack_at_100hz_keeps_the_margins(speed):
     """The default stack at the paper's 100 Hz (10 Hz feedback, the observer designed for
     2 J_eq: :func:`motosim.sim.closed_loop.observer_settings`) adds no unstable mode and its
     loop gain broken at the motor current keeps the 6 dB and 45 deg of Skogestad &
-    Postlethwaite, section 2.4 (7.8 dB, 54-55 deg); the observer on the handlebar's own J_eq
-    keeps 5.5 dB and 36-38 deg, short of them, with the same rendered feel over 0.1-3 Hz."""
-    inputs = _inputs(100.0, speed)
-    a = analyse_stack(build_stack(inputs), inputs.true_handlebar, speed)
-    assert a.stable
-    assert 7.0 < a.gain_margin_db < 8.5 and 50.0 < a.phase_margin_deg < 60.0
+    Postlethwaite, section 2.4 (7.8 dB, 54-55 deg with the plain cancellation, 7.8 dB, 53 deg
+    with the predicted one); with the plain cancellation, the observer on the handlebar's own
+    J_eq keeps 5.5 dB and 36-38 deg, short of them, with the same rendered feel over 0.1-3
+    Hz."""
+    for prediction in (True, False):
+        inputs = _inputs(100.0, speed, prediction=prediction)
+        a = analyse_stack(build_stack(inputs), inputs.true_handlebar, speed)
+        assert a.stable
+        assert 7.0 < a.gain_margin_db < 8.5 and 50.0 < a.phase_margin_deg < 60.0
     b = analyse_stack(build_stack(_unbiased(inputs)), inputs.true_handlebar, speed)
     assert b.stable
     assert 4.5 < b.gain_margin_db < 6.0 and 30.0 < b.phase_margin_deg < 45.0
@@ -119,8 +133,10 @@ def test_a_20_hz_design_keeps_less_at_100hz():
     """20 Hz at 100 Hz (the default before the margins were read on the loop gain) keeps
     about 1.3 dB and 33 deg with the observer on the handlebar's J_eq, 2.6 dB with the
     default 2 J_eq: less than the default 10 Hz on both counts with either observer, which is
-    what :func:`motosim.control.torque_feedback.default_bandwidth` is pinned on."""
-    for observed in (_inputs(100.0, 15.0), _unbiased(_inputs(100.0, 15.0))):
+    what :func:`motosim.control.torque_feedback.default_bandwidth` is pinned on (measured with
+    the plain cancellation)."""
+    plain = _inputs(100.0, 15.0, prediction=False)
+    for observed in (plain, _unbiased(plain)):
         default = analyse_stack(build_stack(observed), observed.true_handlebar, 15.0)
         sc = observed.scenario
         fast = dataclasses.replace(
@@ -224,10 +240,11 @@ def test_at_100hz_the_estimate_filter_amplifies(bandwidth, unstable):
     the half-inertia handlebar's cancellation loop unstable at 50 Hz (-1.4 dB,
     scripts/grid_failures.py), and the whole stack is indeed unstable; with 10 Hz the bound
     keeps 12.9 dB (19.5 Hz) and it is stable. The default observer at 100 Hz, designed for
-    2 J_eq (:func:`motosim.sim.closed_loop.observer_settings`), keeps |F| within 1.15."""
+    2 J_eq (:func:`motosim.sim.closed_loop.observer_settings`), keeps |F| within 1.15. (F
+    of the plain cancellation: the estimate as it is.)"""
     from motosim.sim.loop_analysis import cancellation_bound, estimate_filter
 
-    default = _inputs(100.0, bandwidth=bandwidth)
+    default = _inputs(100.0, bandwidth=bandwidth, prediction=False)
     inputs = _unbiased(default)
     model = build_stack(inputs)
     hb = inputs.true_handlebar

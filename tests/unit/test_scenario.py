@@ -71,6 +71,15 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
         (MINIMAL + "[estimator]\nname = 'oracle'\n", "name = 'oracle'; expected one of"),
         (MINIMAL + "[controller]\nkind = 'pid'\n", "kind = 'pid'"),
         (MINIMAL + "[controller]\nintegral_corner = 0.7\n", "integral_corner = 0.7"),
+        (
+            MINIMAL + "[controller]\nprediction = true\nfeedforward = ['reference']\n",
+            'prediction = true predicts the rider-torque cancellation; expected "rider"',
+        ),
+        (
+            MINIMAL + "[controller]\nprediction = true\n[estimator]\nname = 'kalman'\n",
+            "prediction = true with [estimator] name = 'kalman'; expected \"walcott_zak\"",
+        ),
+        (MINIMAL + "[controller]\nprediction = 1\n", "prediction = 1; expected true or false"),
         (MINIMAL + "[handlebar]\ninertia_factor = 0.0\n", "inertia_factor = 0.0"),
         (MINIMAL + "[measurement]\nencoder_bits = 40\n", "encoder_bits = 40"),
         (

@@ -88,6 +88,14 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (1000)")
     parser.add_argument(
+        "--no-prediction",
+        action="store_true",
+        help=(
+            "analyse the stack with the plain rider-torque cancellation (by default it is "
+            "predicted over the estimate's lag from a 1 kHz rate, as a scenario's default)"
+        ),
+    )
+    parser.add_argument(
         "--starts", type=int, default=8, help=f"starts of the search, 1-{MAX_STARTS} (8)"
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the starts (0)")
@@ -135,6 +143,7 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
         "cancellation_phase_margin_deg": a.cancellation_phase_margin_deg,
         "feel_error_db": a.feel_magnitude_db,
         "feel_error_deg": a.feel_phase_deg,
+        "prediction_lead_s": a.prediction_lead,
         "friction_limit_cycles": [
             {"frequency_hz": c.frequency, "amplitude_rad": c.amplitude} for c in a.limit_cycles
         ],
@@ -143,7 +152,7 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
 
 def _stack_analysis(
     hb: HandlebarParameters, settings: "ObserverSettings", controller: "StateSpace", rate: float,
-    speeds: list[float],
+    speeds: list[float], prediction: bool | None,
 ) -> list[dict[str, Any]]:  # fmt: skip
     """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid."""
     from motosim.estimation.walcott_zak import WalcottZakObserver, design_with
@@ -152,7 +161,9 @@ def _stack_analysis(
     kernel = WalcottZakObserver(design_with(hb, settings), 1.0 / rate).kernel
     sharp = load_parameters("sharp1971", "sharp")
     out = []
-    for nominal, grid in analyse_design(sharp, kernel, controller, hb, rate=rate, speeds=speeds):
+    for nominal, grid in analyse_design(
+        sharp, kernel, controller, hb, rate=rate, speeds=speeds, prediction=prediction
+    ):
         entry = _stack(nominal)
         entry["grid"] = {
             "points": grid.points,
@@ -246,7 +257,14 @@ def run(args: argparse.Namespace) -> int:
             "gamma": paper.four_block_gamma,
             "analysis": _analysis(paper),
         },
-        "stack": _stack_analysis(hb, settings, ctrl.controller_zoh, args.rate, speeds),
+        "stack": _stack_analysis(
+            hb,
+            settings,
+            ctrl.controller_zoh,
+            args.rate,
+            speeds,
+            False if args.no_prediction else None,
+        ),
         "observer": {
             "poles": list(settings.poles),
             "damping_factor": settings.damping_factor,
@@ -351,8 +369,10 @@ def _print(report: dict[str, Any]) -> None:
             f"({g['with_margins']} with 6 dB, 45 deg), worst GM "
             f"{g['worst_gain_margin_db']:.3g} dB, PM {g['worst_phase_margin_deg']:.3g} deg"
         )
+        lead = a["prediction_lead_s"]
         print(
-            f"         the rider-torque cancellation's own loop (broken at the estimate): "
+            f"         the rider-torque cancellation's own loop (broken at the estimate"
+            f"{f', predicted {1e3 * lead:.3g} ms ahead' if lead > 0 else ''}): "
             f"GM {a['cancellation_gain_margin_db']:.3g} dB, "
             f"PM {a['cancellation_phase_margin_deg']:.3g} deg"
         )

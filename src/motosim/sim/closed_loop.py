@@ -35,9 +35,18 @@ from motosim.model.handlebar import perturbed, step_exact
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
+from motosim.sim.loop_analysis import prediction_lead
 from motosim.sim.rider import design_rider, rider_torque
 from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
-from motosim.sim.stack import StackData, StackModel, design_stack, new_data, reset, step
+from motosim.sim.stack import (
+    StackData,
+    StackModel,
+    default_prediction,
+    design_stack,
+    new_data,
+    reset,
+    step,
+)
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -196,7 +205,11 @@ def build_stack(inputs: RunInputs) -> StackModel:
     """Design the stack of a run: estimator, differentiator, controller, motorcycle.
 
     The estimator is the scenario's, designed for the nominal handlebar at the measurement
-    step; a Walcott-Zak observer takes the design file's settings when the run has them.
+    step; a Walcott-Zak observer takes the design file's settings when the run has them. With
+    the predicted cancellation (``[controller] prediction``, by default
+    :func:`~motosim.sim.stack.default_prediction` with the Walcott-Zak observer), the stack is
+    designed twice: its lead T_d is the first one's estimate filter's delay
+    (:func:`~motosim.sim.loop_analysis.prediction_lead`) on the nominal handlebar.
     """
     sc = inputs.scenario
     h_meas = 1.0 / sc.rates.measurement
@@ -217,22 +230,33 @@ def build_stack(inputs: RunInputs) -> StackModel:
             inputs.nominal_handlebar, h_meas, friction_compensation=est.friction_compensation
         )
         kernel = stepper.kernel
-    return design_stack(
-        inputs.sharp,
-        kernel,
-        inputs.controller if _feedback(sc) else None,
-        control_rate=sc.rates.control,
-        measurement_rate=sc.rates.measurement,
-        lipschitz=est.lipschitz,
-        discretization=sc.controller.discretization,
-        max_current=sc.controller.max_current,
-        speed=sc.motorcycle.speed,
-        true_torque=sc.motorcycle.input == "true",
-        handlebar=inputs.nominal_handlebar,
-        rider_feedforward="rider" in (sc.controller.feedforward or ()),
-        reference_feedforward="reference" in (sc.controller.feedforward or ()),
-        side_force_height=sc.motorcycle.side_wind_height,
-    )
+
+    def build(lead: float = 0.0) -> StackModel:
+        return design_stack(
+            inputs.sharp,
+            kernel,
+            inputs.controller if _feedback(sc) else None,
+            control_rate=sc.rates.control,
+            measurement_rate=sc.rates.measurement,
+            lipschitz=est.lipschitz,
+            discretization=sc.controller.discretization,
+            max_current=sc.controller.max_current,
+            speed=sc.motorcycle.speed,
+            true_torque=sc.motorcycle.input == "true",
+            handlebar=inputs.nominal_handlebar,
+            rider_feedforward="rider" in (sc.controller.feedforward or ()),
+            reference_feedforward="reference" in (sc.controller.feedforward or ()),
+            prediction_lead=lead,
+            side_force_height=sc.motorcycle.side_wind_height,
+        )
+
+    model = build()
+    predict = sc.controller.prediction
+    if predict is None:
+        predict = est.name == "walcott_zak" and default_prediction(sc.rates.measurement)
+    if predict and model.feedforward[0] > 0.0:
+        model = build(prediction_lead(model, inputs.nominal_handlebar))
+    return model
 
 
 class RigModel(NamedTuple):

@@ -34,7 +34,7 @@ from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
-from motosim.sim.stack import StackModel, design_stack
+from motosim.sim.stack import StackModel, default_prediction, design_stack
 
 __all__ = [
     "FEEL_BAND",
@@ -50,6 +50,7 @@ __all__ = [
     "cancellation_loop_gain",
     "estimate_filter",
     "negative_real_crossings",
+    "prediction_lead",
     "robustness_grid",
     "stack_loop",
 ]
@@ -87,8 +88,9 @@ class StackLoop:
     angle : ndarray, shape (n,)
         Row giving the handlebar angle theta_h [rad].
     estimate : ndarray, shape (n,)
-        Row giving the estimate tau_r_hat [N*m] that the next command cancels (the one
-        held from the previous sample).
+        Row giving the torque [N*m] that the next command cancels: the estimate tau_r_hat
+        held from the previous sample, plus T_d times its filtered rate with the prediction
+        (:attr:`motosim.sim.stack.StackModel.prediction`).
     dt : float
         The step h [s].
     motorcycle : ndarray, shape (8, 8)
@@ -177,8 +179,10 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     Av = model.A0 + speed * model.A1
     Am, Bm = zoh(Av, model.Bv[:, None], h)
     nc = model.Ad.shape[0]
+    c = model.prediction
+    predicted = ff[0] > 0.0 and c[0] > 0.0
     sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "estimate": 1,
-             "controller": nc, "motorcycle": 8}  # fmt: skip
+             "prediction": 4 if predicted else 0, "controller": nc, "motorcycle": 8}  # fmt: skip
     start, n = {}, 0
     for name, size in sizes.items():
         start[name] = n
@@ -196,7 +200,8 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     for j in range(nc):
         command = command + model.Cd[0, j] * state("controller", j)
     held = state("estimate")  # the command uses the previous sample's estimate
-    torque = -ff[0] * held
+    cancelled = held + c[0] * state("prediction") if predicted else held
+    torque = -ff[0] * cancelled
     if ff[1] > 0.0:  # the friction term's tanh is left out with the friction itself
         steer_acc = model.Bv[3] * held + Av[3] @ eye[start["motorcycle"] : start["motorcycle"] + 8]
         torque = torque + ff[2] * steer_acc + ff[3] * delta_rate
@@ -226,6 +231,14 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
         B[start["observer"] + r, 1] = Gamma[r, 0]  # the estimator is told the measured current
         B[start["observer"] + r, 2] = Gamma[r, 0] * cancel
     A[start["estimate"]] = estimate
+    if predicted:  # the estimate's rate through the notch, the low-pass (as step does)
+        x = (estimate - held) / h
+        y = c[3] * x + state("prediction", 1)
+        rate_filtered = c[1] * y + state("prediction", 3)
+        A[start["prediction"]] = rate_filtered
+        A[start["prediction"] + 1] = c[4] * x - c[6] * y + state("prediction", 2)
+        A[start["prediction"] + 2] = c[5] * x - c[7] * y
+        A[start["prediction"] + 3] = c[1] * y + c[2] * rate_filtered
     for r in range(nc):
         row = model.Bd[r, 0] * error
         for j in range(nc):
@@ -235,8 +248,9 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     A[m0 : m0 + 8] = Am @ eye[m0 : m0 + 8] + np.outer(Bm[:, 0], estimate)
     B[:, 3] = A[:, n]
     return StackLoop(
-        A[:, :n].copy(), B, command[:n], rate[:n], theta[:n], held[:n], h, Av, model.Bv.copy()
-    )
+        A[:, :n].copy(), B, command[:n], rate[:n], theta[:n], cancelled[:n], h, Av,
+        model.Bv.copy(),
+    )  # fmt: skip
 
 
 def estimate_filter(
@@ -267,6 +281,36 @@ def estimate_filter(
     """
     loop = stack_loop(model, handlebar, speed)
     return loop.response(frequencies, loop.estimate, 0)
+
+
+PREDICTION_FREQUENCY = 1.0
+"""Where :func:`prediction_lead` reads the estimate filter's delay [Hz]: in the rider's band,
+where F is an almost pure delay (gain 0.99-1.00 up to 3 Hz)."""
+
+
+def prediction_lead(model: StackModel, handlebar: HandlebarParameters) -> float:
+    """T_d of the predicted cancellation: the estimate filter's delay [s].
+
+    The lag of F (:func:`estimate_filter`, the stack without prediction) at
+    :data:`PREDICTION_FREQUENCY`, -arg F / (2 pi f), at the stack's speed: 11.7 ms at 1 kHz,
+    28 ms at 100 Hz for the default design on the packaged handlebar.
+
+    Parameters
+    ----------
+    model : StackModel
+        The designed stack (Walcott-Zak estimator).
+    handlebar : HandlebarParameters
+        The handlebar the observer was designed for.
+
+    Returns
+    -------
+    float
+        [s].
+    """
+    plain = model._replace(prediction=np.zeros_like(model.prediction))
+    f = np.array([PREDICTION_FREQUENCY])
+    F = estimate_filter(plain, handlebar, model.speed, f)[0]
+    return float(-np.angle(F) / (2.0 * math.pi * f[0]))
 
 
 def cancellation_loop_gain(loop: StackLoop, frequencies: Array) -> CArray:
@@ -452,6 +496,8 @@ class StackLoopAnalysis:
     feel_magnitude_db, feel_phase_deg : float
         Largest error of the rendered feel (rider torque to handlebar angle) against the
         motorcycle's own rider torque to steer angle over :data:`FEEL_BAND` [dB, deg].
+    prediction_lead : float
+        T_d of the stack's predicted cancellation [s] (0: it cancels the estimate as it is).
     limit_cycles : tuple of LimitCycle
         Where the rendered handlebar admittance is not passive but the motorcycle's is, and
         crosses the negative real axis: Coulomb friction of ``handlebar.beta_s`` sustains an
@@ -469,6 +515,7 @@ class StackLoopAnalysis:
     cancellation_phase_margin_deg: float
     feel_magnitude_db: float
     feel_phase_deg: float
+    prediction_lead: float
     limit_cycles: tuple[LimitCycle, ...]
 
 
@@ -576,6 +623,7 @@ def analyse_stack(
         cancellation_phase_margin_deg=float(inner_phase),
         feel_magnitude_db=feel_db,
         feel_phase_deg=feel_deg,
+        prediction_lead=float(model.prediction[0]) if model.feedforward[0] > 0.0 else 0.0,
         limit_cycles=tuple(cycles) if handlebar.beta_s > 0.0 else (),
     )
 
@@ -644,20 +692,30 @@ def analyse_design(
     *,
     rate: float,
     speeds: list[float],
+    prediction: bool | None = None,
 ) -> list[tuple[StackLoopAnalysis, GridSummary]]:
     """A designed observer and controller as the rider would hold them, at each speed.
 
     The stack of a scenario's defaults (both feedforward terms on, control and measurement at
-    ``rate`` [Hz]) around the nominal ``handlebar``, analysed by :func:`analyse_stack`, and
-    the worst of its :func:`robustness_grid`.
+    ``rate`` [Hz]; the predicted cancellation where ``prediction`` says, by default where
+    :func:`~motosim.sim.stack.default_prediction` does, with :func:`prediction_lead`) around
+    the nominal ``handlebar``, analysed by :func:`analyse_stack`, and the worst of its
+    :func:`robustness_grid`.
     """
-    out = []
-    for speed in speeds:
-        model = design_stack(
+
+    def build(speed: float, lead: float = 0.0) -> StackModel:
+        return design_stack(
             sharp, estimator, controller, control_rate=rate, measurement_rate=rate,
             lipschitz=300.0, max_current=30.0, speed=speed, handlebar=handlebar,
-            rider_feedforward=True, reference_feedforward=True,
+            rider_feedforward=True, reference_feedforward=True, prediction_lead=lead,
         )  # fmt: skip
+
+    out = []
+    predict = default_prediction(rate) if prediction is None else prediction
+    for speed in speeds:
+        model = build(speed)
+        if predict:
+            model = build(speed, prediction_lead(model, handlebar))
         grid = [a for _, a in robustness_grid(model, handlebar, speed)]
         summary = GridSummary(
             points=len(grid),

@@ -30,7 +30,10 @@ so that an error is one line naming the key, the value and what was expected. Th
                    50 Hz), order = 1, integral_corner = 0.1 (W1's corner over the
                    bandwidth), discretization = "zoh" | "tustin",
                    max_current = 30 [A], feedforward = ["rider", "reference"] for ours,
-                   [] for the paper's (the terms of :func:`motosim.sim.stack.step`)
+                   [] for the paper's (the terms of :func:`motosim.sim.stack.step`),
+                   prediction = true | false (cancel the rider torque predicted over the
+                   estimate's lag; default: on with "rider" and the Walcott-Zak observer
+                   from a 1 kHz measurement rate)
 
 Profiles (rider torque, drive, brake, wind) are tables with ``kind``: ``constant`` (value),
 ``steps`` (times, values: the value after each time), ``square`` (low, high, period, start),
@@ -588,7 +591,11 @@ class Controller:
     ``bandwidth`` None: :func:`motosim.control.torque_feedback.default_bandwidth` of the
     measurement rate (10 Hz, a fifth of the rate below 50 Hz). ``integral_corner``: the
     loop-shaping weight's corner as a fraction of the bandwidth
-    (:func:`motosim.control.torque_feedback.design_torque_feedback`).
+    (:func:`motosim.control.torque_feedback.design_torque_feedback`). ``prediction``: the
+    rider-torque cancellation reads tau_r_hat + T_d times its filtered rate, T_d the estimate
+    filter's delay (:func:`motosim.sim.stack.design_stack`); None: on where
+    :func:`motosim.sim.stack.default_prediction` says, with the cancellation and the
+    Walcott-Zak observer.
     """
 
     kind: Literal["ours", "paper", "none"] = "ours"
@@ -599,6 +606,7 @@ class Controller:
     discretization: Literal["zoh", "tustin"] = "zoh"
     max_current: float = 30.0
     feedforward: tuple[str, ...] | None = None
+    prediction: bool | None = None
 
     def __post_init__(self) -> None:
         if self.feedforward is None:
@@ -609,6 +617,11 @@ class Controller:
         if unknown:
             raise MotosimError(
                 f"feedforward has {unknown[0]!r}; expected some of {', '.join(FEEDFORWARD)}"
+            )
+        if self.prediction and "rider" not in self.feedforward:
+            raise MotosimError(
+                'prediction = true predicts the rider-torque cancellation; expected "rider" in '
+                "feedforward"
             )
         if self.bandwidth is not None:
             _check("bandwidth", self.bandwidth, low=0.0, low_open=True, high=1000.0, unit="Hz")
@@ -663,6 +676,12 @@ class Scenario:
             )
         if self.seed < 0:
             raise MotosimError(f"seed = {self.seed}; expected an integer >= 0")
+        if self.controller.prediction and self.estimator.name != "walcott_zak":
+            raise MotosimError(
+                f"[controller] prediction = true with [estimator] name = "
+                f'{self.estimator.name!r}; expected "walcott_zak" (the lead is its estimate '
+                "filter's delay)"
+            )
 
 
 # --- plausibility: legal values that no real ride has ---------------------------------------
