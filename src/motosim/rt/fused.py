@@ -491,11 +491,14 @@ def fused_period(
 @njit(cache=True)
 def stack_warm(
     model: Any, data: Any, shadow: Any, force: Array, side_force: Array, stack_state: Array,
-    shadow_state: Array, shadow_row: Array, theta: float, current: float,
+    shadow_state: Array, shadow_row: Array, theta: float, current: float, fresh: bool,
+    scale: float,
 ) -> None:  # fmt: skip
     """One stack period on ``shadow``, a copy of the stack's ``data`` and ``stack_state``
     made now, whose result is thrown away: the stack's code and data are then in the CPU's
-    caches for the next period's real step."""
+    caches for the next period's real step. ``fresh`` and ``scale`` are computed as the
+    period computes them (constants would be typed apart and compile another copy of the
+    step)."""
     shadow.estimator[:] = data.estimator
     shadow.differentiator[:] = data.differentiator
     shadow.controller[:] = data.controller
@@ -504,7 +507,7 @@ def stack_warm(
     shadow.periods[:] = data.periods
     shadow_state[:] = stack_state
     stack_period(
-        model, shadow, force, side_force, shadow_state, shadow_row, theta, current, True, 1.0
+        model, shadow, force, side_force, shadow_state, shadow_row, theta, current, fresh, scale
     )
 
 
@@ -569,7 +572,8 @@ def context_warm(c: Any) -> None:
     if r[R_STARTED] != 0.0:
         stack_warm(
             c.model, c.data, c.shadow, c.force, c.side_force, c.stack_state, c.shadow_state,
-            c.shadow_row, r[R_THETA], r[R_CURRENT],
+            c.shadow_row, r[R_THETA], r[R_CURRENT], r[R_FRESH] != 0.0,
+            safety_scale(c.arrays.safety, c.arrays.limits),
         )  # fmt: skip
 
 
