@@ -353,15 +353,11 @@ def safety_step(
             i *= p[P_HANDS_OFF_GAIN]
     # clamp, fade, slew
     i = min(max(i, -p[P_MAX_CURRENT]), p[P_MAX_CURRENT])
-    ramp = dt / p[P_FADE_IN]
-    if state == 4.0:  # STOPPING
-        s[S_ENVELOPE] = max(0.0, s[S_ENVELOPE] - ramp)
-        if s[S_ENVELOPE] == 0.0:
-            s[S_STATE] = 0.0
-    elif state == 1.0:  # FADE_IN
-        s[S_ENVELOPE] = min(1.0, s[S_ENVELOPE] + ramp)
-        if s[S_ENVELOPE] >= 1.0:
-            s[S_STATE] = 2.0
+    s[S_ENVELOPE] = _ramped_envelope(s, p)
+    if state == 4.0 and s[S_ENVELOPE] == 0.0:  # STOPPING, faded out
+        s[S_STATE] = 0.0
+    elif state == 1.0 and s[S_ENVELOPE] >= 1.0:  # FADE_IN, faded in
+        s[S_STATE] = 2.0
     i *= s[S_ENVELOPE]
     step = p[P_MAX_SLEW] * dt
     last = s[S_LAST]
@@ -606,16 +602,21 @@ def safety_scale(s: NDArray[np.float64], p: NDArray[np.float64]) -> float:
     gain while nobody holds the handlebar; 0 while the stage is idle or faulted. The clamp,
     the slew and the speed and end-stop limits, which depend on the command, are not in it.
     """
-    state = s[S_STATE]
-    envelope = s[S_ENVELOPE]
+    if s[S_STATE] == 0.0 or s[S_STATE] == 3.0:  # IDLE, FAULT: the drive is disabled
+        return 0.0
+    return float(_ramped_envelope(s, p) * (p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else 1.0))
+
+
+@njit(cache=True)
+def _ramped_envelope(s: NDArray[np.float64], p: NDArray[np.float64]) -> float:
+    """The fade envelope after this period's ramp: up while fading in, down while stopping,
+    as it is otherwise."""
     ramp = p[P_DT] / p[P_FADE_IN]
-    if state == 1.0:  # FADE_IN
-        envelope = min(1.0, envelope + ramp)
-    elif state == 4.0:  # STOPPING
-        envelope = max(0.0, envelope - ramp)
-    elif state != 2.0:  # IDLE, FAULT: the drive is disabled
-        envelope = 0.0
-    return float(envelope * (p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else 1.0))
+    if s[S_STATE] == 1.0:  # FADE_IN
+        return float(min(1.0, s[S_ENVELOPE] + ramp))
+    if s[S_STATE] == 4.0:  # STOPPING
+        return float(max(0.0, s[S_ENVELOPE] - ramp))
+    return float(s[S_ENVELOPE])
 
 
 @njit(cache=True)
