@@ -191,6 +191,14 @@ def _window_leans(
     return phi
 
 
+def _check_samples(what: str, arc: Array, speed: Array) -> None:
+    """As many speeds as arc lengths, or a one-line error naming ``what`` needs them."""
+    if arc.shape != speed.shape:
+        raise MotosimError(
+            f"{what} of {arc.size} arc lengths and {speed.size} speeds; expected as many"
+        )
+
+
 def preview_trust(
     road: Road,
     arc: Array,
@@ -237,10 +245,7 @@ def preview_trust(
         )
     if not (math.isfinite(ahead) and ahead >= 0):
         raise MotosimError(f"preview trust ahead = {ahead!r} s; expected a finite number >= 0")
-    if arc.shape != speed.shape:
-        raise MotosimError(
-            f"preview trust of {arc.size} arc lengths and {speed.size} speeds; expected as many"
-        )
+    _check_samples("preview trust", arc, speed)
     lean: Array = np.max(np.abs(_window_leans(road, arc, speed, lead, 0.0, ahead)), axis=1)
     trust: Array = np.clip((limit - lean) / (limit - trusted), 0.0, 1.0)
     return trust
@@ -309,10 +314,7 @@ def curve_persistence(
         )
     if not (math.isfinite(floor) and floor > 0):
         raise MotosimError(f"curve persistence floor = {floor!r} rad; expected a number > 0")
-    if arc.shape != speed.shape:
-        raise MotosimError(
-            f"curve persistence of {arc.size} arc lengths and {speed.size} speeds; expected as many"
-        )
+    _check_samples("curve persistence", arc, speed)
     phi = _window_leans(road, arc, speed, lead, behind, ahead)
     held = np.abs(np.mean(phi, axis=1))
     persistence: Array = held / np.maximum(np.mean(np.abs(phi), axis=1), floor)
