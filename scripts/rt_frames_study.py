@@ -1,0 +1,122 @@
+"""The lane change over 100 Hz status frames, in lock-step against the rig, with bus latency.
+
+    .venv/bin/python scripts/rt_frames_study.py [--bus LATENCY:JITTER,...] [--no-clamp]
+
+``scenarios/lane_change_20.toml`` with the drive's status frames at the paper's 100 Hz under
+the 1 kHz loop, its virtual rider at the rig steering by the state stream, run by the
+real-time loop on a simulated clock (deterministic) for each bus latency and jitter [s]
+(default 0:0, 0.5:0.2, 2:0.5, 5:1 and 9.5:1 ms), twice: with safety limits
+that never bind ("free") and with the SIMACOM handlebar's of
+``scenarios/realtime_square.toml`` (a 10 A clamp, hands-off detection). One Markdown row
+each: the current's peak to peak after the manoeuvre (6-9 s), its largest value, the
+tracking error's RMS and the lateral position at the end. An 8 Hz limit cycle at the clamp
+shows as 20 A peak to peak. ``--no-clamp`` builds the stack with the controller's own
+current limit instead of the safety clamp (what ``motosim run`` did before
+:func:`motosim.rt.config.within_safety`); the real-time guide quotes these rows.
+"""
+
+import argparse
+import dataclasses
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from motosim.io.can import handlebar_codecs, open_link
+from motosim.io.runs import load_run
+from motosim.rt.clock import SimulatedClock
+from motosim.rt.config import parse_safety, within_safety
+from motosim.rt.loop import RateLoop
+from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
+from motosim.rt.run import RealtimeRunner
+from motosim.rt.safety import SafetyLimits
+from motosim.rt.stack import CompiledStack
+from motosim.rt.telemetry import StateReceiver, StateSender
+from motosim.sim import RunInputs, build_rig, build_stack
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _free(rate: float) -> SafetyLimits:
+    """Limits that never bind, and a one-period fade-in."""
+    return SafetyLimits(
+        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
+        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
+        hands_off_gain=1.0, fade_in=1.0 / rate,
+    )  # fmt: skip
+
+
+def _row(inputs: RunInputs, limits: SafetyLimits, latency: float, jitter: float) -> str:
+    """One lock-step run's figures as a Markdown row's cells."""
+    sc = inputs.scenario
+    model = build_stack(inputs)
+    world = build_rig(inputs, rng=np.random.default_rng(0))
+    rate = sc.rates.control
+    settings = RigSettings(
+        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
+        encoder_bits=sc.measurement.encoder_bits, current_noise=0.0,
+        max_current=sc.controller.max_current, latency=latency, jitter=jitter,
+    )  # fmt: skip
+    codecs = handlebar_codecs()
+    receiver = StateReceiver(("127.0.0.1", 0))
+    sender = StateSender(receiver.address)
+    with open_link("virtual:rt_frames") as host, open_link("virtual:rt_frames") as drive:
+        rig = VirtualRig(
+            inputs.true_handlebar, settings, codecs, drive, VirtualRider(world, receiver),
+            np.random.default_rng(0), rider_on_enable=False,
+        )  # fmt: skip
+        stack = CompiledStack(model, force=world.force, side_force=world.side_force)
+        runner = RealtimeRunner(
+            stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
+            telemetry=sender.send,
+        )  # fmt: skip
+        clock = SimulatedClock(-1.0 / rate)
+        clock.listen(rig.advance_to)
+        RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
+    sender.close()
+    receiver.close()
+    rows = runner.ring.drain()
+    col = runner.names.index
+    t, current = rows[:, 0], rows[:, col("i_safe")]
+    theta = np.nan_to_num(rows[:, col("theta_h_meas")])
+    error = np.sqrt(np.mean((theta - rows[:, col("delta")]) ** 2))
+    hold = (t > 6.0) & (t < 9.0)
+    return (
+        f"{np.ptp(current[hold]):.2f} A | {np.max(np.abs(current)):.1f} A | "
+        f"{1e3 * error:.2f} mrad | {rows[-1, col('y')]:.2f} m | {runner.counters().fault}"
+    )
+
+
+def main() -> int:
+    """Print the Markdown table."""
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument(
+        "--bus",
+        default="0:0,0.0005:0.0002,0.002:0.0005,0.005:0.001,0.0095:0.001",
+        help="latency:jitter pairs [s], comma-separated",
+    )
+    parser.add_argument(
+        "--no-clamp", action="store_true", help="the stack at its own current limit"
+    )
+    args = parser.parse_args()
+    full = load_run(ROOT / "scenarios" / "lane_change_20.toml")
+    rates = dataclasses.replace(full.scenario.rates, measurement=100.0)
+    inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, rates=rates))
+    table = tomllib.loads((ROOT / "scenarios" / "realtime_square.toml").read_text())
+    simacom = parse_safety(table["realtime"]["safety"], origin="realtime_square.toml")
+    print(
+        "| latency, jitter | limits | current p-p 6-9 s | largest current | tracking RMS "
+        "| y at the end | fault |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for pair in args.bus.split(","):
+        latency, jitter = (float(x) for x in pair.split(":"))
+        for name, limits in (("free", _free(rates.control)), ("SIMACOM", simacom)):
+            run = inputs if args.no_clamp else within_safety(inputs, limits)
+            cells = _row(run, limits, latency, jitter)
+            print(f"| {1e3 * latency:g}, {1e3 * jitter:g} ms | {name} | {cells} |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
