@@ -13,11 +13,11 @@ import pytest
 
 from motosim.cueing import TELBAN_CARDULLO_2005, load_platform
 from motosim.cueing.mpc import design_mpc
-from motosim.cueing.platform import parse_platform
+from motosim.cueing.platform import CueingConfig, parse_platform
 from motosim.errors import MotosimError
 
 
-def _config(corner: float):  # type: ignore[no-untyped-def]
+def _config(corner: float) -> CueingConfig:
     cfg = load_platform("simacom_platform")
     return dataclasses.replace(cfg, mpc=dataclasses.replace(cfg.mpc, roll_canal_corner=corner))
 
