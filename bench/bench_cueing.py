@@ -364,10 +364,143 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
     return "\n".join(lines)
 
 
+def corner_sweep(runs: str, names: str, corners: str = "0,4", weights: str = "") -> str:
+    """The roll canal error's Huber corner against the washout, on result folders.
+
+    For each comma-separated scenario of :func:`table`'s folders and each comma-separated
+    ``roll_canal_corner`` (0: the squared cost) and ``canal_weight`` (default the platform
+    file's), the MPC with the road preview where the run has a path: violations, false cues
+    %, roll and pitch rate RMS [deg/s], the target met, the relative margins in false cues
+    and roll error, the false samples per channel and the lateral force's per second.
+    Reproduce: ``python bench/bench_cueing.py RUNS corner NAMES [CORNERS] [WEIGHTS]``
+    (docs/guide/cueing.md, *The roll-rate error's Huber cost*); each row is printed as it is
+    measured.
+    """
+    import dataclasses
+    from pathlib import Path
+
+    from motosim.cueing import cue
+    from motosim.io.results import load_result
+    from motosim.sim.road import result_road
+
+    cfg = load_platform("simacom_platform")
+    model = TELBAN_CARDULLO_2005
+    lines = [
+        "| scenario | corner | canal weight | violations | false cues % | roll RMS | pitch RMS "
+        "| target | margins (false cues, roll) | false samples per channel | lateral force's "
+        "per second |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    print("\n".join(lines), flush=True)
+    for name in names.split(","):
+        r = load_result(Path(runs) / name)
+        series = TimeSeries(r.t, r.data, r.names)
+        road = result_road(r.metadata, origin=name)
+        variants = [("washout", "", "")] + [
+            ("mpc", c, w) for c in corners.split(",") for w in (weights or "").split(",")
+        ]
+        base = (0, 0.0, 0.0, 0.0)
+        for algorithm, corner, weight in variants:
+            tuning = cfg.mpc
+            if algorithm == "mpc":
+                tuning = dataclasses.replace(
+                    tuning,
+                    roll_canal_corner=float(corner),
+                    canal_weight=float(weight) if weight else tuning.canal_weight,
+                )
+            run = cue(dataclasses.replace(cfg, mpc=tuning), series, model,  # type: ignore[arg-type]
+                      algorithm=algorithm, rate=100.0, road=road)  # type: ignore[arg-type]  # fmt: skip
+            ch = run.score.channels
+            false = 100 * float(np.mean([c.false_cue_share for c in ch.values()]))
+            roll, pitch = np.degrees(ch["roll"].rms_error), np.degrees(ch["pitch"].rms_error)
+            counts, per_second = [], np.zeros(0, dtype=int)
+            for i, channel in enumerate(run.perceived_vehicle.names):
+                thr = model.thresholds[i]
+                v, p = run.perceived_vehicle[channel], run.perceived_platform[channel]
+                felt_v = np.where(np.abs(v) > thr, np.sign(v), 0.0)
+                felt_p = np.where(np.abs(p) > thr, np.sign(p), 0.0)
+                wrong = (felt_p != 0) & (felt_p != felt_v)
+                counts.append(f"{channel} {int(wrong.sum())}")
+                if channel == "sway":
+                    t = run.commands.t
+                    per_second = np.bincount(np.floor(t[wrong]).astype(int),
+                                             minlength=int(t[-1]) + 1)  # fmt: skip
+            if algorithm == "washout":
+                base, met, margins = (run.score.violations, false, roll, pitch), "", ""
+            else:
+                ok = (
+                    run.score.violations == 0
+                    and round(false, 2) < round(base[1], 2)
+                    and round(roll, 2) <= round(base[2], 2)
+                    and round(pitch, 2) <= round(base[3], 2)
+                )
+                met = "met" if ok else "missed"
+                margins = ", ".join(
+                    f"{(b - f) / b:+.3f}" if b else "-" for f, b in ((false, base[1]),
+                                                                     (roll, base[2]))
+                )  # fmt: skip
+            lines.append(
+                f"| {name} | {corner or algorithm} | {weight or ''} | {run.score.violations} | "
+                f"{false:.2f} | {roll:.2f} | {pitch:.2f} | {met} | {margins} | "
+                f"{', '.join(counts)} | {' '.join(map(str, per_second))} |"
+            )
+            print(lines[-1], flush=True)  # a row as soon as it is measured
+    return "\n".join(lines)
+
+
+def step_times(corners: str = "0,4", repeats: int = 3) -> str:
+    """The MPC step's thread CPU time with each ``roll_canal_corner``, alternated in one process.
+
+    The ride and road of :func:`run` (the preview's path with the band's blend at persistence
+    0.5, and the causal step). Reproduce: ``python bench/bench_cueing.py steps [CORNERS]
+    [REPEATS]``; each line is printed as it is measured.
+    """
+    import dataclasses
+
+    from motosim.cueing.preview import Road, road_preview
+
+    cfg = load_platform("simacom_platform")
+    dt = 0.01
+    ride = _ride(60.0, 100.0)
+    vm = vehicle_motion(ride, cfg.rider)
+    motion = np.column_stack([vm[c] for c in ("omega_x", "omega_y", "omega_z", "f_x", "f_y")])
+    s_road = np.arange(0.0, 2000.0, 0.05)
+    road = Road(0.05, s_road, 0 * s_road, 0.004 * np.sin(2 * np.pi * s_road / 60.0))
+    arc = np.cumsum(ride["v_x"]) * dt
+    ahead = road_preview(road, arc, ride["v_x"], horizon=cfg.mpc.horizon, step=cfg.mpc.step)
+    lines = []
+    for _ in range(repeats):
+        for corner in corners.split(","):
+            tuning = dataclasses.replace(cfg.mpc, roll_canal_corner=float(corner))
+            mpc = MpcCueing(design_mpc(dataclasses.replace(cfg, mpc=tuning),
+                                       TELBAN_CARDULLO_2005, dt))  # fmt: skip
+            times: dict[str, list[float]] = {"causal": [], "preview": []}
+            for label in times:
+                mpc.reset()
+                for k in range(motion.shape[0]):
+                    start = time.thread_time()
+                    if label == "causal":
+                        mpc.step(motion[k], np.zeros(3))
+                    else:
+                        mpc.step(motion[k], np.zeros(3), None, ahead[k], 1.0, 0.5)
+                    times[label].append(time.thread_time() - start)
+            cells = [
+                f"{label} median {np.median(ms):.2f} p99 {np.percentile(ms, 99):.2f} ms"
+                for label, ms in ((k, np.array(v) * 1e3) for k, v in times.items())
+            ]
+            lines.append(f"corner {corner}: " + "; ".join(cells))
+            print(lines[-1], flush=True)
+    return "\n".join(lines)
+
+
 if __name__ == "__main__":
     import sys
 
-    if len(sys.argv) > 2 and sys.argv[2] == "prediction":
+    if len(sys.argv) > 1 and sys.argv[1] == "steps":
+        step_times(*sys.argv[2:3], *(int(a) for a in sys.argv[3:4]))
+    elif len(sys.argv) > 3 and sys.argv[2] == "corner":
+        corner_sweep(sys.argv[1], *sys.argv[3:6])
+    elif len(sys.argv) > 2 and sys.argv[2] == "prediction":
         print(prediction_errors(sys.argv[1]))
     elif len(sys.argv) > 2 and sys.argv[2] == "intervals":
         print(false_cue_intervals(*sys.argv[1:2], *sys.argv[3:4]))

@@ -18,8 +18,14 @@ Over ``N`` steps of ``h`` (the input held over each) the plan minimises::
 
           + w_f sum_k ((s_k / thr_c)^2 + s_k / thr_c) + w_F sum_k S_k / thr_o
 
-subject to ``|angle_k| <= X``, ``|rate_k| <= V`` (for pitch, the smaller of ``V`` and the
-tuning's ``pitch_rate``, the tilt's rate below the pitch threshold), ``|u_k| <= A``, and the
+(for roll, the canal term is the Huber function of the error in thresholds, Huber, *Ann.
+Math. Statist.* 35(1), 1964: ``e^2`` up to the tuning's corner ``c`` = ``roll_canal_corner``,
+``2 c |e| - c^2`` beyond, so that a roll rate the platform cannot render, a swerve's 67 deg/s
+against its 30, costs linearly and does not buy false lateral cues; in the QP, ``w_c (a_k^2
++ 2 c b_k)`` with ``|e_k| <= a_k + b_k``, ``b_k >= 0``, two variables per step, the standard
+epigraph form, exact at the optimum) subject to ``|angle_k| <= X``, ``|rate_k| <= V`` (for
+pitch, the smaller of ``V`` and the tuning's ``pitch_rate``, the tilt's rate below the pitch
+threshold), ``|u_k| <= A``, and the
 false-cue constraints ``L_k - s_k <= y_k <= U_k + s_k``, ``s_k >= 0``, on two perceived
 signals ``y``: the rotation (canal, slack ``s``) over the first ``false_cue_steps`` steps,
 and, for roll and pitch, the specific force (otolith, slack ``S``: lateral for roll,
@@ -202,6 +208,12 @@ class AxisPlan:
     band_lin_sustained : ndarray
         ``band_lin`` with the force's slack weighted by ``sustained_force_false_cue_weight``
         (blended in on a preview by the persistence of the curve ahead).
+    huber_M, huber_E : ndarray, shape (n_h, N) and (n_h, nx)
+        The perceived rotation at steps 1..N per unit input and per unit initial state, in
+        thresholds, where its error's cost is a Huber function (roll with a corner: ``n_h =
+        N``; else ``n_h = 0`` and the squared cost is in ``P`` and ``F``).
+    huber_weight, huber_corner, huber_thr : float
+        Its weight (``canal_weight``), corner [thresholds] (0: none) and threshold [rad/s].
     """
 
     A_loop: Array
@@ -229,6 +241,11 @@ class AxisPlan:
     T_otolith: Array
     band_lin_preview: Array
     band_lin_sustained: Array
+    huber_M: Array
+    huber_E: Array
+    huber_weight: float
+    huber_corner: float
+    huber_thr: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -347,6 +364,9 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
     Nb = min(N, tuning.false_cue_steps)
     band_quad, band_lin, band_steps = [], [], []
     band_lin_preview, band_lin_sustained = [], []
+    # the roll canal error's cost: squared within the corner, linear beyond (Huber)
+    huber = axis == 0 and tuning.roll_canal_corner > 0.0
+    huber_M, huber_E, huber_w = np.zeros((0, N)), np.zeros((0, nx)), 0.0
     for C, w, ref in rows:
         M = np.einsum("i,kij->kj", C, Gam)  # (N outputs, N inputs)
         E = np.einsum("i,kij->kj", C, Phi)
@@ -374,10 +394,14 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
                 tuning.false_cue_weight if ref == 0 else tuning.sustained_force_false_cue_weight
             ) / thr
             band_lin_sustained.append(np.full(nk, lin_s))
-        P += w * M.T @ M
-        F += w * M.T @ E
         Av, Bv, Cv = (Ac, Bc, Cc) if ref == 0 else (Ao, Bo, Co)
         G.append(_vehicle_prediction(Av, Bv, Cv, h, N, tuning.prediction_time))
+        if ref == 0 and huber:
+            huber_M, huber_E, huber_w = M / thr_c, E / thr_c, tuning.canal_weight
+            W.append(np.zeros_like(M.T))
+            continue
+        P += w * M.T @ M
+        F += w * M.T @ E
         W.append(w * M.T)
     if axis == 0:
         # the lateral force of the terminal tilt held, felt after the horizon: banded at
@@ -433,6 +457,11 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
         T_otolith=_forced_response(Ao, Bo, Co, h, N),
         band_lin_preview=np.concatenate(band_lin_preview),
         band_lin_sustained=np.concatenate(band_lin_sustained),
+        huber_M=huber_M,
+        huber_E=huber_E,
+        huber_weight=huber_w,
+        huber_corner=tuning.roll_canal_corner if huber else 0.0,
+        huber_thr=thr_c,
     )
 
 
@@ -507,20 +536,34 @@ class MpcCueing:
             solver = osqp.OSQP()
             n = plan.P.shape[0]
             nb = plan.band_M.shape[0]
-            P = np.zeros((n + nb, n + nb))
+            nh = plan.huber_M.shape[0]
+            nv = n + nb + 2 * nh
+            P = np.zeros((nv, nv))
             P[:n, :n] = plan.P
-            P[n:, n:] = np.diag(plan.band_quad)
-            A_con = np.zeros((3 * n + 3 * nb, n + nb))
+            P[n : n + nb, n : n + nb] = np.diag(plan.band_quad)
+            P[n + nb : n + nb + nh, n + nb : n + nb + nh] = plan.huber_weight * np.eye(nh)
+            A_con = np.zeros((3 * n + 3 * nb + 3 * nh, nv))
             A_con[: 3 * n, :n] = plan.A_con
             A_con[3 * n : 3 * n + nb, :n] = plan.band_M  # p - s <= U
-            A_con[3 * n : 3 * n + nb, n:] = -np.eye(nb)
+            A_con[3 * n : 3 * n + nb, n : n + nb] = -np.eye(nb)
             A_con[3 * n + nb : 3 * n + 2 * nb, :n] = plan.band_M  # p + s >= L
-            A_con[3 * n + nb : 3 * n + 2 * nb, n:] = np.eye(nb)
-            A_con[3 * n + 2 * nb :, n:] = np.eye(nb)  # s >= 0
+            A_con[3 * n + nb : 3 * n + 2 * nb, n : n + nb] = np.eye(nb)
+            A_con[3 * n + 2 * nb : 3 * n + 3 * nb, n : n + nb] = np.eye(nb)  # s >= 0
+            if nh:
+                # Huber: e - a - b <= 0, e + a + b >= 0, b >= 0 (e the canal error)
+                r0, a0, b0 = 3 * n + 3 * nb, n + nb, n + nb + nh
+                A_con[r0 : r0 + nh, :n] = plan.huber_M
+                A_con[r0 : r0 + nh, a0:b0] = -np.eye(nh)
+                A_con[r0 : r0 + nh, b0:] = -np.eye(nh)
+                A_con[r0 + nh : r0 + 2 * nh, :n] = plan.huber_M
+                A_con[r0 + nh : r0 + 2 * nh, a0:b0] = np.eye(nh)
+                A_con[r0 + nh : r0 + 2 * nh, b0:] = np.eye(nh)
+                A_con[r0 + 2 * nh :, b0:] = np.eye(nh)
             lo, hi = self._bounds(plan, np.zeros(2 * n), np.zeros(nb), np.zeros(nb))
+            lo, hi = self._huber_bounds(plan, lo, hi, np.zeros(nh))
             solver.setup(
                 sparse.csc_matrix(np.triu(P)),
-                np.zeros(n + nb),
+                np.zeros(nv),
                 sparse.csc_matrix(A_con),
                 lo,
                 hi,
@@ -558,7 +601,8 @@ class MpcCueing:
         c, o, f, r = nx, nx + nc + 2, nx + nc + no + 4, nx + 2 * nc + no + 6
         rows_c, rows_o = (*plan.band_steps, np.arange(0))[:2]
         nb, nr = plan.band_M.shape[0], rows_c.size
-        K = np.zeros((N + nb + 2 * N + nb, r + 1))
+        nh = plan.huber_M.shape[0]
+        K = np.zeros((N + nb + 2 * N + nb + nh, r + 1))
         K[:N, :nx] = plan.F
         K[:N, c:o] = -plan.W_canal @ plan.G_canal
         K[:N, o:f] = -plan.W_otolith @ plan.G_otolith
@@ -566,8 +610,11 @@ class MpcCueing:
         K[N : N + nr, c:o] = plan.G_canal[rows_c]
         K[N + nr : N + nb, o:f] = plan.G_otolith[rows_o]
         K[N + nb : 3 * N + nb, :nx] = plan.H
-        K[3 * N + nb :, :nx] = plan.band_E
+        K[3 * N + nb : 3 * N + 2 * nb, :nx] = plan.band_E
         K[3 * N + nb : 3 * N + nb + nr, f:r] = plan.G_canal[rows_c]
+        if nh:  # the canal error's free part, in thresholds
+            K[3 * N + 2 * nb :, :nx] = plan.huber_E
+            K[3 * N + 2 * nb :, c:o] = -plan.G_canal / plan.huber_thr
         (Ac, Bc), (Ao, Bo) = plan.vehicle_canal, plan.vehicle_otolith
         U = np.zeros((2 * nc + no, r + 1))
         U[:nc, c : c + nc], U[:nc, c + nc], U[:nc, c + nc + 1] = Ac, Bc, Bc
@@ -590,6 +637,18 @@ class MpcCueing:
             [np.full(N, -A), -X - pred[:N], -V - pred[N:], -big, band_lo, np.zeros(free.size)]
         )
         return lower, upper
+
+    @staticmethod
+    def _huber_bounds(plan: AxisPlan, lo: Array, hi: Array, free: Array) -> tuple[Array, Array]:
+        """``lo``, ``hi`` with the Huber rows' bounds appended (``free``: the canal error's
+        part that does not depend on the plan, in thresholds; empty: no rows)."""
+        nh = free.size
+        if not nh:
+            return lo, hi
+        big = np.full(nh, 1e9)
+        lo = np.concatenate([lo, -big, -free, np.zeros(nh)])
+        hi = np.concatenate([hi, -free, big, big])
+        return lo, hi
 
     def reset(self) -> None:
         """Back to neutral rest, vestibular states at zero."""
@@ -695,6 +754,8 @@ class MpcCueing:
                 nr = plan.band_steps[0].size
                 y[N : N + nr] += tc[plan.band_steps[0]]
                 y[N + nr : N + nb] += to[plan.band_steps[1]]
+                if plan.huber_M.shape[0]:
+                    y[3 * N + 2 * nb :] -= tc / plan.huber_thr
                 band_lin = plan.band_lin_preview
                 if persistence > 0.0:
                     band_lin = band_lin + persistence * (plan.band_lin_sustained - band_lin)
@@ -702,8 +763,13 @@ class MpcCueing:
                 y = K @ v
             r_b = y[N : N + nb]
             felt = np.where(np.abs(r_b) > plan.band_thr, np.sign(r_b), 0.0)
-            q = np.concatenate([y[:N], band_lin])
-            lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], y[3 * N + nb :], felt)
+            # the Huber split of the roll canal error (if any): a_k quadratic, b_k linear
+            nh = plan.huber_M.shape[0]
+            b_cost = np.full(nh, plan.huber_weight * plan.huber_corner)
+            q = np.concatenate([y[:N], band_lin, np.zeros(nh), b_cost])
+            free = y[3 * N + nb : 3 * N + 2 * nb]
+            lo, hi = self._bounds(plan, y[N + nb : 3 * N + nb], free, felt)
+            lo, hi = self._huber_bounds(plan, lo, hi, y[3 * N + 2 * nb :])
             nxt = U @ v
             self._canal[j], self._otolith[j] = nxt[:nc], nxt[nc : nc + no]
             self._feed_canal[j] = nxt[nc + no :]

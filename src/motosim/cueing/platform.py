@@ -237,6 +237,11 @@ class MpcTuning:
         (:func:`motosim.cueing.preview.curve_persistence`); the weight is blended from
         ``preview_force_false_cue_weight`` (a transient road: a swerve, a lane change) to
         this one (a long curve) by that persistence.
+    roll_canal_corner : float
+        Corner of the roll plan's perceived roll-rate error cost, in perception thresholds:
+        the error's cost is squared up to it and grows linearly beyond (the Huber function,
+        of the same slope at the corner), so that a roll rate the platform cannot render
+        does not buy false lateral cues; 0 for the squared cost throughout.
     """
 
     horizon: int
@@ -255,6 +260,7 @@ class MpcTuning:
     force_false_cue_weight: float
     preview_force_false_cue_weight: float
     sustained_force_false_cue_weight: float
+    roll_canal_corner: float
 
     def __post_init__(self) -> None:
         if (
@@ -276,6 +282,7 @@ class MpcTuning:
             "force_false_cue_weight",
             "preview_force_false_cue_weight",
             "sustained_force_false_cue_weight",
+            "roll_canal_corner",
         ):
             _check("mpc", name, getattr(self, name), lower=0.0, closed=True)
         steps = self.false_cue_steps
@@ -341,6 +348,7 @@ _MPC_KEYS = {
     "force_false_cue_weight": 1.0,
     "preview_force_false_cue_weight": 1.0,
     "sustained_force_false_cue_weight": 1.0,
+    "roll_canal_corner": 1.0,
 }
 
 
@@ -445,11 +453,12 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
             raise MotosimError(f"{origin}: missing key 'false_cue_steps' in [mpc]")
         steps = mpc_table.pop("false_cue_steps")
         (step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge, pitch_angle,
-         false_cue, force_false_cue, preview_force, sustained_force) = _numbers(
+         false_cue, force_false_cue, preview_force, sustained_force, roll_corner) = _numbers(
             mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
         mpc = MpcTuning(
             horizon, step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge,
             pitch_angle, false_cue, steps, force_false_cue, preview_force, sustained_force,
+            roll_corner,
         )  # fmt: skip
     except MotosimError as err:
         message = str(err)

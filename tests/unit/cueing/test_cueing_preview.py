@@ -144,10 +144,17 @@ def test_a_tilt_drawn_after_the_road_straightens_is_felt_less_with_the_terminal_
     # roll); the perceived lateral force of the platform's tilt peaks about 1.9 s after it,
     # beyond the 1 s horizon, so without the terminal rows the plan holds more of it
     pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    import dataclasses
+
     import motosim.cueing.mpc as mpc
     from motosim.cueing import perceive, platform_motion
 
-    cfg = load_platform("simacom_platform")
+    # with the squared roll canal cost: the Huber corner is not reached here (0.19 of the
+    # roll threshold), but its two variables per step change the 50-iteration iterate
+    # (1.16 against 1.21 thresholds); converged, the rows lower the peak less (1.22 against
+    # 1.24, OSQP with 4000 iterations; docs/guide/cueing.md)
+    cfg0 = load_platform("simacom_platform")
+    cfg = dataclasses.replace(cfg0, mpc=dataclasses.replace(cfg0.mpc, roll_canal_corner=0.0))
     straight = np.zeros((cfg.mpc.horizon + 1, 2))
     reference = np.array([np.radians(1.5), 0.0, 0.0])
     n = 400
