@@ -1,6 +1,7 @@
 """The lane change over 100 Hz status frames, in lock-step against the rig, with bus latency.
 
     .venv/bin/python scripts/rt_frames_study.py [--bus LATENCY:JITTER,...] [--no-clamp]
+        [--delay bus|SECONDS] [--limits free,SIMACOM]
 
 ``scenarios/lane_change_20.toml`` with the drive's status frames at the paper's 100 Hz under
 the 1 kHz loop, its virtual rider at the rig steering by the state stream, run by the
@@ -9,8 +10,13 @@ real-time loop on a simulated clock (deterministic) for each bus latency and jit
 that never bind ("free") and with the SIMACOM handlebar's of
 ``scenarios/realtime_square.toml`` (a 10 A clamp, hands-off detection). One Markdown row
 each: the current's peak to peak after the manoeuvre (6-9 s), its largest value, the
-tracking error's RMS and the lateral position at the end. An 8 Hz limit cycle at the clamp
-shows as 20 A peak to peak. ``--no-clamp`` builds the stack with the controller's own
+tracking error's RMS, the rider-torque estimate's error RMS against the rider's torque at
+the rig (and as a share of its peak) and the lateral position at the end. An 8 Hz limit
+cycle at the clamp shows as 20 A peak to peak. The stack accounts for the frame's age
+(:func:`motosim.sim.stack.account_for_delay`): by default (``--delay bus``) the frame's mean
+age when the loop reads it, the bus latency and half a control period (0 without latency,
+where the lock-step loop reads the frame in the period it is sampled); ``--delay 0`` is the
+stack designed for a fresh sample, as before. ``--no-clamp`` builds the stack with the controller's own
 current limit instead of the safety clamp (what ``motosim run`` did before
 :func:`motosim.rt.config.within_safety`); the real-time guide quotes these rows.
 """
@@ -33,6 +39,7 @@ from motosim.rt.safety import SafetyLimits
 from motosim.rt.stack import CompiledStack
 from motosim.rt.telemetry import StateReceiver, StateSender
 from motosim.sim import RunInputs, build_rig, build_stack
+from motosim.sim.stack import account_for_delay
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -46,10 +53,18 @@ def _free(rate: float) -> SafetyLimits:
     )  # fmt: skip
 
 
-def _row(inputs: RunInputs, limits: SafetyLimits, latency: float, jitter: float) -> str:
-    """One lock-step run's figures as a Markdown row's cells."""
+def _row(
+    inputs: RunInputs, limits: SafetyLimits, latency: float, jitter: float, delay: float | None
+) -> str:
+    """One lock-step run's figures as a Markdown row's cells; ``delay`` the stack's
+    measurement delay [s] (None: the bus latency and half a control period)."""
     sc = inputs.scenario
     model = build_stack(inputs)
+    if delay is None:  # the frame's mean age when the loop reads it
+        d = min(latency + 0.5 / sc.rates.control, 1.0 / sc.rates.measurement) if latency else 0.0
+    else:
+        d = delay
+    model = account_for_delay(model, d, inputs.nominal_handlebar)
     world = build_rig(inputs, rng=np.random.default_rng(0))
     rate = sc.rates.control
     settings = RigSettings(
@@ -61,9 +76,16 @@ def _row(inputs: RunInputs, limits: SafetyLimits, latency: float, jitter: float)
     receiver = StateReceiver(("127.0.0.1", 0))
     sender = StateSender(receiver.address)
     with open_link("virtual:rt_frames") as host, open_link("virtual:rt_frames") as drive:
+        rider = VirtualRider(world, receiver)
+        torques: list[tuple[float, float]] = []
+
+        def policy() -> float:
+            torques.append((rig.t, rider()))
+            return torques[-1][1]
+
         rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, drive, VirtualRider(world, receiver),
-            np.random.default_rng(0), rider_on_enable=False,
+            inputs.true_handlebar, settings, codecs, drive, policy, np.random.default_rng(0),
+            rider_on_enable=False,
         )  # fmt: skip
         stack = CompiledStack(model, force=world.force, side_force=world.side_force)
         runner = RealtimeRunner(
@@ -81,9 +103,14 @@ def _row(inputs: RunInputs, limits: SafetyLimits, latency: float, jitter: float)
     theta = np.nan_to_num(rows[:, col("theta_h_meas")])
     error = np.sqrt(np.mean((theta - rows[:, col("delta")]) ** 2))
     hold = (t > 6.0) & (t < 9.0)
+    log = np.array(torques)
+    true = log[np.clip(np.searchsorted(log[:, 0], t, side="right") - 1, 0, None), 1]
+    estimate = np.sqrt(np.mean((rows[:, col("tau_r_hat")] - true) ** 2))
+    share = 100 * estimate / np.max(np.abs(true))
     return (
         f"{np.ptp(current[hold]):.2f} A | {np.max(np.abs(current)):.1f} A | "
-        f"{1e3 * error:.2f} mrad | {rows[-1, col('y')]:.2f} m | {runner.counters().fault}"
+        f"{1e3 * error:.2f} mrad | {estimate:.2f} N*m ({share:.1f} %) | "
+        f"{rows[-1, col('y')]:.2f} m | {runner.counters().fault}"
     )
 
 
@@ -98,7 +125,10 @@ def main() -> int:
     parser.add_argument(
         "--no-clamp", action="store_true", help="the stack at its own current limit"
     )
+    parser.add_argument("--delay", default="bus", help="bus, or the stack's delay [s]")
+    parser.add_argument("--limits", default="free,SIMACOM")
     args = parser.parse_args()
+    delay = None if args.delay == "bus" else float(args.delay)
     full = load_run(ROOT / "scenarios" / "lane_change_20.toml")
     rates = dataclasses.replace(full.scenario.rates, measurement=100.0)
     inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, rates=rates))
@@ -106,14 +136,16 @@ def main() -> int:
     simacom = parse_safety(table["realtime"]["safety"], origin="realtime_square.toml")
     print(
         "| latency, jitter | limits | current p-p 6-9 s | largest current | tracking RMS "
-        "| y at the end | fault |"
+        "| estimate RMS | y at the end | fault |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for pair in args.bus.split(","):
         latency, jitter = (float(x) for x in pair.split(":"))
         for name, limits in (("free", _free(rates.control)), ("SIMACOM", simacom)):
+            if name not in args.limits:
+                continue
             run = inputs if args.no_clamp else within_safety(inputs, limits)
-            cells = _row(run, limits, latency, jitter)
+            cells = _row(run, limits, latency, jitter, delay)
             print(f"| {1e3 * latency:g}, {1e3 * jitter:g} ms | {name} | {cells} |")
     return 0
 
