@@ -544,6 +544,9 @@ class StackLoopAnalysis:
         motorcycle's own rider torque to steer angle over :data:`FEEL_BAND` [dB, deg].
     prediction_lead : float
         T_d of the stack's predicted cancellation [s] (0: it cancels the estimate as it is).
+    measurement_delay : float
+        The measurement's age d analysed [s] (the stack may or may not account for it:
+        :attr:`~motosim.sim.stack.StackModel.delay`).
     limit_cycles : tuple of LimitCycle
         Where the rendered handlebar admittance is not passive but the motorcycle's is, and
         crosses the negative real axis: Coulomb friction of ``handlebar.beta_s`` sustains an
@@ -562,6 +565,7 @@ class StackLoopAnalysis:
     feel_magnitude_db: float
     feel_phase_deg: float
     prediction_lead: float
+    measurement_delay: float
     limit_cycles: tuple[LimitCycle, ...]
 
 
@@ -603,7 +607,7 @@ def _margins(loop_gain: CArray, frequencies: Array) -> tuple[float, float, float
 
 
 def analyse_stack(
-    model: StackModel, handlebar: HandlebarParameters, speed: float
+    model: StackModel, handlebar: HandlebarParameters, speed: float, *, delay: float | None = None
 ) -> StackLoopAnalysis:
     """Margins, stability, rendered feel and friction limit cycles of the sampled stack.
 
@@ -615,12 +619,15 @@ def analyse_stack(
         The true handlebar.
     speed : float
         Forward speed [m/s].
+    delay : float, optional
+        The measurement's true age [s] (:func:`stack_loop`); by default the one the stack
+        accounts for.
 
     Returns
     -------
     StackLoopAnalysis
     """
-    loop = stack_loop(model, handlebar, speed)
+    loop = stack_loop(model, handlebar, speed, delay=delay)
     nyquist = 0.5 / loop.dt
     f = np.append(np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS - 1), nyquist)
     eig = np.linalg.eigvals(loop.A)
@@ -670,6 +677,7 @@ def analyse_stack(
         feel_magnitude_db=feel_db,
         feel_phase_deg=feel_deg,
         prediction_lead=float(model.prediction[0]) if model.feedforward[0] > 0.0 else 0.0,
+        measurement_delay=float(model.delay[0]) if delay is None else float(delay),
         limit_cycles=tuple(cycles) if handlebar.beta_s > 0.0 else (),
     )
 
@@ -682,11 +690,13 @@ def robustness_grid(
     inertia: tuple[float, ...] = (0.5, 1.0, 1.5),
     damping: tuple[float, ...] = (0.5, 1.0, 1.5),
     torque_constant: tuple[float, ...] = (0.7, 1.0, 1.3),
+    delay: float | None = None,
 ) -> list[tuple[tuple[float, float, float], StackLoopAnalysis]]:
     """:func:`analyse_stack` with the true handlebar's J_eq, beta_eq and N k_t scaled.
 
     The stack keeps its nominal design; each true handlebar has J_eq, beta_eq and k_t
-    multiplied by one factor of each tuple.
+    multiplied by one factor of each tuple; ``delay`` is the measurement's true age [s]
+    (by default the one the stack accounts for).
 
     Returns
     -------
@@ -704,7 +714,7 @@ def robustness_grid(
                     J_m=0.0,
                     beta_vm=0.0,
                 )
-                out.append(((fj, fb, fk), analyse_stack(model, true, speed)))
+                out.append(((fj, fb, fk), analyse_stack(model, true, speed, delay=delay)))
     return out
 
 
@@ -739,6 +749,8 @@ def analyse_design(
     rate: float,
     speeds: list[float],
     prediction: bool | None = None,
+    delay: float = 0.0,
+    account: bool = True,
 ) -> list[tuple[StackLoopAnalysis, GridSummary]]:
     """A designed observer and controller as the rider would hold them, at each speed.
 
@@ -746,7 +758,10 @@ def analyse_design(
     ``rate`` [Hz]; the predicted cancellation where ``prediction`` says, by default where
     :func:`~motosim.sim.stack.default_prediction` does, with :func:`prediction_lead`) around
     the nominal ``handlebar``, analysed by :func:`analyse_stack`, and the worst of its
-    :func:`robustness_grid`.
+    :func:`robustness_grid`. ``delay`` is the measurement's age when the stack reads it [s]
+    (a status frame's latency; 0 to ``1 / rate``); with ``account`` the stack accounts for
+    it (:func:`~motosim.sim.stack.account_for_delay`), else it is the stack designed for a
+    fresh sample, read ``delay`` old.
     """
 
     def build(speed: float, lead: float = 0.0) -> StackModel:
@@ -754,6 +769,7 @@ def analyse_design(
             sharp, estimator, controller, control_rate=rate, measurement_rate=rate,
             lipschitz=300.0, max_current=30.0, speed=speed, handlebar=handlebar,
             rider_feedforward=True, reference_feedforward=True, prediction_lead=lead,
+            measurement_delay=delay if account else 0.0,
         )  # fmt: skip
 
     out = []
@@ -762,7 +778,7 @@ def analyse_design(
         model = build(speed)
         if predict:
             model = build(speed, prediction_lead(model, handlebar))
-        grid = [a for _, a in robustness_grid(model, handlebar, speed)]
+        grid = [a for _, a in robustness_grid(model, handlebar, speed, delay=delay)]
         summary = GridSummary(
             points=len(grid),
             unstable=sum(not a.stable for a in grid),
@@ -774,5 +790,5 @@ def analyse_design(
             phase_margin_deg=min(a.phase_margin_deg for a in grid),
             modulus_margin=min(a.modulus_margin for a in grid),
         )
-        out.append((analyse_stack(model, handlebar, speed), summary))
+        out.append((analyse_stack(model, handlebar, speed, delay=delay), summary))
     return out
