@@ -23,6 +23,7 @@ current limit instead of the safety clamp (what ``motosim run`` did before
 
 import argparse
 import dataclasses
+import math
 import tomllib
 from pathlib import Path
 
@@ -113,7 +114,8 @@ def _row(
     estimate = np.sqrt(np.mean((rows[:, col("tau_r_hat")] - true) ** 2))
     share = 100 * estimate / np.max(np.abs(true))
     return (
-        f"{np.ptp(current[hold]):.2f} A | {np.max(np.abs(current)):.1f} A | "
+        f"{np.ptp(current[hold]) if hold.any() else math.nan:.2f} A | "
+        f"{np.max(np.abs(current)):.1f} A | "
         f"{1e3 * error:.2f} mrad | {1e3 * true_error:.2f} mrad | "
         f"{estimate:.2f} N*m ({share:.1f} %) | "
         f"{rows[-1, col('y')]:.2f} m | {runner.counters().fault}"
@@ -131,12 +133,15 @@ def main() -> int:
     parser.add_argument(
         "--no-clamp", action="store_true", help="the stack at its own current limit"
     )
-    parser.add_argument("--delay", default="bus", help="bus, or the stack's delay [s]")
-    parser.add_argument("--limits", default="free,SIMACOM")
+    parser.add_argument(
+        "--delay", default="bus", help="bus (the frame's mean age), or the stack's delay [s]"
+    )
+    parser.add_argument("--frames", type=float, default=100.0, help="status frames [Hz] (100)")
+    parser.add_argument("--limits", default="free,SIMACOM", help="free, SIMACOM or both")
     args = parser.parse_args()
     delay = None if args.delay == "bus" else float(args.delay)
     full = load_run(ROOT / "scenarios" / "lane_change_20.toml")
-    rates = dataclasses.replace(full.scenario.rates, measurement=100.0)
+    rates = dataclasses.replace(full.scenario.rates, measurement=args.frames)
     inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, rates=rates))
     table = tomllib.loads((ROOT / "scenarios" / "realtime_square.toml").read_text())
     simacom = parse_safety(table["realtime"]["safety"], origin="realtime_square.toml")

@@ -355,8 +355,8 @@ def test_the_measurement_column_reproduces_an_angle_added_to_the_encoder():
 def test_a_measurement_read_old_is_accounted_for_by_the_stack(delay):
     """The 100 Hz stack is designed for a fresh sample; a status frame read ``delay`` old
     (a bus's latency) costs the loop its margins, from half a sample on its stability
-    (measured in lock-step against the rig: an 8 Hz limit cycle at the safety clamp from
-    2 ms of latency, scripts/rt_frames_study.py). Accounting for the age (the angle
+    (in lock-step against the rig, the lane change cycles from 5 ms of latency,
+    scripts/rt_frames_study.py --delay 0). Accounting for the age (the angle
     predicted over it, the observer told the current carried) keeps the loop stable, and
     with the 6 dB and 45 deg of MARGINS up to half a sample."""
     from motosim.sim.loop_analysis import MARGINS
