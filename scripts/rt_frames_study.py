@@ -1,7 +1,7 @@
-"""The lane change over 100 Hz status frames, in lock-step against the rig, with bus latency.
+"""The lane change over slow status frames, in lock-step against the rig, with bus latency.
 
     .venv/bin/python scripts/rt_frames_study.py [--bus LATENCY:JITTER,...] [--no-clamp]
-        [--delay bus|SECONDS] [--limits free,SIMACOM]
+        [--delay bus|SECONDS] [--frames HZ] [--limits free,SIMACOM]
 
 ``scenarios/lane_change_20.toml`` with the drive's status frames at the paper's 100 Hz under
 the 1 kHz loop, its virtual rider at the rig steering by the state stream, run by the
@@ -16,9 +16,10 @@ cycle at the clamp shows as 20 A peak to peak. The stack accounts for the frame'
 (:func:`motosim.sim.stack.account_for_delay`): by default (``--delay bus``) the frame's mean
 age when the loop reads it, the bus latency and half a control period (0 without latency,
 where the lock-step loop reads the frame in the period it is sampled); ``--delay 0`` is the
-stack designed for a fresh sample, as before. ``--no-clamp`` builds the stack with the controller's own
-current limit instead of the safety clamp (what ``motosim run`` did before
-:func:`motosim.rt.config.within_safety`); the real-time guide quotes these rows.
+stack designed for a fresh sample, as before. ``--frames`` sets the status frames' rate
+(100 Hz). ``--no-clamp`` builds the stack with the controller's own current limit instead of
+the safety clamp (what ``motosim run`` did before :func:`motosim.rt.config.within_safety`);
+the real-time guide quotes these rows.
 """
 
 import argparse

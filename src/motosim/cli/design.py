@@ -173,6 +173,7 @@ def _stack_analysis(
 
     kernel = WalcottZakObserver(design_with(hb, settings), 1.0 / rate).kernel
     sharp = load_parameters("sharp1971", "sharp")
+
     def analysed(account: bool) -> list[dict[str, Any]]:
         entries = []
         for nominal, grid in analyse_design(

@@ -25,7 +25,7 @@ age (:func:`frame_age`, :func:`motosim.sim.stack.account_for_delay`).
 
 import math
 from collections.abc import Mapping
-from dataclasses import fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any
 
 from motosim.errors import MotosimError
@@ -34,8 +34,10 @@ from motosim.rt.safety import SafetyLimits
 if TYPE_CHECKING:
     from motosim.sim import RunInputs
 
-__all__ = ["MAX_LATENCY", "frame_age", "parse_latency", "parse_safety", "split_realtime",
-           "within_safety"]  # fmt: skip
+__all__ = [
+    "MAX_LATENCY", "RealtimeOptions", "frame_age", "parse_latency", "parse_safety",
+    "split_realtime", "within_safety",
+]  # fmt: skip
 
 MAX_LATENCY = 1.0
 """Largest ``status_latency`` read [s]; the stack accounts for up to one frame period."""
@@ -64,6 +66,21 @@ def split_realtime(
     return rest, dict(table)
 
 
+@dataclass(frozen=True, slots=True)
+class RealtimeOptions:
+    """The keys of the ``[realtime]`` table itself (beside its ``safety`` and ``rig`` tables).
+
+    Attributes
+    ----------
+    status_latency : float
+        The drive's status frames' latency on the bus, from the drive's sample of the angle
+        and current to the frame's arrival at the host [s], 0 to :data:`MAX_LATENCY`; 0: a
+        fresh sample, what the stack was designed for.
+    """
+
+    status_latency: float = 0.0
+
+
 def parse_latency(table: Mapping[str, Any], *, origin: str) -> float:
     """``status_latency`` of the ``[realtime]`` table [s] (0 when absent).
 
@@ -81,7 +98,7 @@ def parse_latency(table: Mapping[str, Any], *, origin: str) -> float:
         raise MotosimError(
             f"{origin}: [realtime] status_latency = {value!r} s; expected 0 to {MAX_LATENCY:g} s"
         )
-    return float(value)
+    return RealtimeOptions(status_latency=float(value)).status_latency
 
 
 def frame_age(
