@@ -13,6 +13,7 @@ import types
 import typing
 from typing import Any, Literal, get_args, get_origin
 
+from motosim.rt.config import RealtimeOptions
 from motosim.rt.rig import RigFaults, RigSettings
 from motosim.rt.safety import SafetyLimits
 from motosim.sim import scenario as sc
@@ -27,6 +28,7 @@ TABLES: dict[str, type] = {
     "handlebar": sc.Handlebar,
     "estimator": sc.Estimator,
     "controller": sc.Controller,
+    "realtime": RealtimeOptions,
     "realtime.safety": SafetyLimits,
     "realtime.rig": RigSettings,
     "realtime.rig.faults": RigFaults,
@@ -124,6 +126,12 @@ DESCRIPTIONS: dict[str, str] = {
         "estimate filter's delay, r the estimate's rate through a 10 Hz notch and a 3 Hz "
         'low-pass); needs `"rider"` and the Walcott-Zak observer. Default: on with them '
         "from a 1 kHz measurement rate."
+    ),
+    # [realtime]
+    "realtime.status_latency": (
+        "The status frames' latency on the bus, from the drive's sample to the frame's "
+        "arrival at the host [s]; the stack accounts for the frame's age (the real-time "
+        "guide). 0: a fresh sample."
     ),
     # [realtime.safety]
     "realtime.safety.max_current": "Current clamp [A], > 0.",

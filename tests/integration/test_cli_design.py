@@ -61,6 +61,24 @@ def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
     assert stack["prediction_lead_s"] == 0.0  # the plain cancellation by default at 100 Hz
 
 
+def test_design_with_a_latency_shows_the_margins_kept(capsys: pytest.CaptureFixture[str]) -> None:
+    # 100 Hz status frames read 5.5 ms old (5 ms on the bus, half a 1 kHz loop's period):
+    # the stack designed for a fresh sample loses its margins (unstable, PM 7 deg, in the
+    # sampled loop analysis); accounting for the age keeps 7.6 dB and 49 deg at 20 m/s
+    code, out, _ = _run(
+        capsys, "design", "--json", "--starts", "1", "--rate", "100", "--speeds", "20",
+        "--latency", "0.0055",
+    )  # fmt: skip
+    assert code == 0
+    (stack,) = json.loads(out)["stack"]
+    assert stack["measurement_delay_s"] == 0.0055
+    assert stack["stable"] and stack["gain_margin_db"] >= 6.0
+    assert stack["phase_margin_deg"] >= 45.0
+    fresh = stack["unaccounted"]
+    assert fresh["measurement_delay_s"] == 0.0055
+    assert not fresh["stable"] or fresh["phase_margin_deg"] < 45.0
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
@@ -69,6 +87,7 @@ def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
         (["design", "--integral-corner", "0"], "integral_corner = 0.0; expected a fraction"),
         (["design", "--speeds", "100"], "--speeds"),
         (["design", "--handlebar", "sharp1971"], "expected a handlebar parameter set"),
+        (["design", "--latency", "0.002"], "--latency"),  # beyond one 1 kHz period
     ],
 )
 def test_bad_options(capsys: pytest.CaptureFixture[str], argv: list[str], message: str) -> None:

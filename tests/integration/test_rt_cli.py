@@ -70,6 +70,18 @@ def test_rt_check_json(capsys: pytest.CaptureFixture[str]) -> None:
         ("", "[realtime.safety] is missing"),
         ("[realtime.safety]\nmax_current = 1.0\n", "missing max_slew"),
         ("[realtime]\nbus = 1\n", "unknown key 'bus' in [realtime]"),
+        (
+            "[realtime]\nstatus_latency = -0.001\n" + safety_table(100),
+            "[realtime] status_latency = -0.001 s; expected 0 to 1 s",
+        ),
+        (
+            "[realtime]\nstatus_latency = '2 ms'\n" + safety_table(100),
+            "status_latency = '2 ms': expected a number of seconds",
+        ),
+        (  # 9.8 ms and half of the 1 kHz loop's period: older than a 100 Hz frame period
+            "[realtime]\nstatus_latency = 0.0098\n" + safety_table(100),
+            "the stack accounts for up to one frame period (10 ms at 100 Hz)",
+        ),
     ],
 )
 def test_run_refuses_bad_realtime_tables(

@@ -181,3 +181,32 @@ def test_the_predicted_cancellation_lags_less_on_a_ramp() -> None:
     lag_predicted = _ramp_lag(predicted, hb)
     assert 0.010 < lag_plain < 0.013
     assert abs(lag_predicted) < 0.1 * lag_plain
+
+
+@pytest.mark.parametrize("delay", [0.0005, 0.005, 0.01])
+def test_the_prediction_over_a_measurements_age_is_the_handlebars_own(delay: float) -> None:
+    # eq. (5) without friction, J theta'' + beta theta' = tau: from a rate r0 the angle
+    # moves r0 (1 - exp(-a d)) / a in d (a = beta / J), under a held torque tau it moves
+    # tau / beta (d - (1 - exp(-a d)) / a): closed forms, against the record's matrix
+    # exponentials; a handlebar sliding steadily (tau = beta r0) moves r0 d
+    from motosim.sim.stack import account_for_delay
+
+    model = account_for_delay(_stack(measurement=100.0), delay, HB)
+    a = HB.beta_eq / HB.J_eq
+    per_rate = -np.expm1(-a * delay) / a
+    assert model.delay[0] == delay and model.delay[1] == pytest.approx(delay / 0.01)
+    assert model.delay[2] == pytest.approx(per_rate, rel=1e-12)
+    assert model.delay[3] == pytest.approx((delay - per_rate) / HB.beta_eq, rel=1e-9)
+    assert model.delay[2] + HB.beta_eq * model.delay[3] == pytest.approx(delay, rel=1e-12)
+
+
+def test_a_fresh_measurement_and_a_delay_beyond_one_step() -> None:
+    from motosim.errors import MotosimError
+    from motosim.sim.stack import account_for_delay
+
+    model = _stack(measurement=100.0)
+    assert not np.any(model.delay)  # designed for a fresh sample: nothing is predicted
+    assert not np.any(account_for_delay(model, 0.0, HB).delay)
+    for bad in (-1e-3, 0.011, float("nan")):
+        with pytest.raises(MotosimError, match="expected 0 to one measurement step"):
+            account_for_delay(model, bad, HB)

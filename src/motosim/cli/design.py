@@ -96,6 +96,16 @@ def register(sub: Any) -> None:
         ),
     )
     parser.add_argument(
+        "--latency",
+        type=float,
+        default=0.0,
+        help=(
+            "age of the measurement when the stack reads it [s], 0 to one period of --rate "
+            "(0): a status frame's latency on the bus; the stack is analysed accounting for "
+            "it, beside the stack designed for a fresh sample read as old"
+        ),
+    )
+    parser.add_argument(
         "--starts", type=int, default=8, help=f"starts of the search, 1-{MAX_STARTS} (8)"
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the starts (0)")
@@ -144,6 +154,7 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
         "feel_error_db": a.feel_magnitude_db,
         "feel_error_deg": a.feel_phase_deg,
         "prediction_lead_s": a.prediction_lead,
+        "measurement_delay_s": a.measurement_delay,
         "friction_limit_cycles": [
             {"frequency_hz": c.frequency, "amplitude_rad": c.amplitude} for c in a.limit_cycles
         ],
@@ -152,28 +163,39 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
 
 def _stack_analysis(
     hb: HandlebarParameters, settings: "ObserverSettings", controller: "StateSpace", rate: float,
-    speeds: list[float], prediction: bool | None,
+    speeds: list[float], prediction: bool | None, latency: float = 0.0,
 ) -> list[dict[str, Any]]:  # fmt: skip
-    """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid."""
+    """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid;
+    with a ``latency`` [s], accounting for it, and (``unaccounted``) the stack designed for
+    a fresh sample read as old."""
     from motosim.estimation.walcott_zak import WalcottZakObserver, design_with
     from motosim.sim.loop_analysis import analyse_design
 
     kernel = WalcottZakObserver(design_with(hb, settings), 1.0 / rate).kernel
     sharp = load_parameters("sharp1971", "sharp")
-    out = []
-    for nominal, grid in analyse_design(
-        sharp, kernel, controller, hb, rate=rate, speeds=speeds, prediction=prediction
-    ):
-        entry = _stack(nominal)
-        entry["grid"] = {
-            "points": grid.points,
-            "unstable": grid.unstable,
-            "with_margins": grid.with_margins,
-            "worst_gain_margin_db": grid.gain_margin_db,
-            "worst_phase_margin_deg": grid.phase_margin_deg,
-            "worst_modulus_margin": grid.modulus_margin,
-        }
-        out.append(entry)
+
+    def analysed(account: bool) -> list[dict[str, Any]]:
+        entries = []
+        for nominal, grid in analyse_design(
+            sharp, kernel, controller, hb, rate=rate, speeds=speeds, prediction=prediction,
+            delay=latency, account=account,
+        ):  # fmt: skip
+            entry = _stack(nominal)
+            entry["grid"] = {
+                "points": grid.points,
+                "unstable": grid.unstable,
+                "with_margins": grid.with_margins,
+                "worst_gain_margin_db": grid.gain_margin_db,
+                "worst_phase_margin_deg": grid.phase_margin_deg,
+                "worst_modulus_margin": grid.modulus_margin,
+            }
+            entries.append(entry)
+        return entries
+
+    out = analysed(True)
+    if latency > 0.0:
+        for entry, fresh in zip(out, analysed(False), strict=True):
+            entry["unaccounted"] = fresh
     return out
 
 
@@ -193,6 +215,7 @@ def run(args: argparse.Namespace) -> int:
             f"--seed {short_repr(args.seed)}; expected an integer from 0 to 2^63 - 1"
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
+    check_number(args.latency, where="--latency", lower=0.0, upper=1.0 / args.rate, unit="s")
     import numpy as np
 
     from motosim.control.torque_feedback import (
@@ -264,6 +287,7 @@ def run(args: argparse.Namespace) -> int:
             args.rate,
             speeds,
             False if args.no_prediction else None,
+            args.latency,
         ),
         "observer": {
             "poles": list(settings.poles),
@@ -351,9 +375,11 @@ def _print(report: dict[str, Any]) -> None:
         f"stable over +/-50 % J_eq, beta_eq: {a['robust_over_50_percent']}"
     )
     print(f"  paper controller four-block gamma (W = 1): {report['paper_controller']['gamma']:.4f}")
+    latency = report["stack"][0]["measurement_delay_s"] if report["stack"] else 0.0
+    read = f", the measurement read {1e3 * latency:.3g} ms old and accounted for" if latency else ""
     print(
         f"whole stack at {report['rate']:g} Hz (observer, feedforward, motorcycle; sampled, "
-        "linearised without dry friction):"
+        f"linearised without dry friction{read}):"
     )
     print(
         f"  {'speed':>6} {'stable':>7} {'GM [dB]':>8} {'PM [deg]':>9} {'|1+L| min':>10} "
@@ -376,6 +402,16 @@ def _print(report: dict[str, Any]) -> None:
             f"GM {a['cancellation_gain_margin_db']:.3g} dB, "
             f"PM {a['cancellation_phase_margin_deg']:.3g} deg"
         )
+        fresh = a.get("unaccounted")
+        if fresh is not None:
+            g = fresh["grid"]
+            print(
+                f"         designed for a fresh sample, read {1e3 * latency:.3g} ms old: "
+                f"stable {fresh['stable']}, GM {fresh['gain_margin_db']:.3g} dB, "
+                f"PM {fresh['phase_margin_deg']:.3g} deg; grid "
+                f"{g['points'] - g['unstable']}/{g['points']} stable "
+                f"({g['with_margins']} with 6 dB, 45 deg)"
+            )
         for c in a["friction_limit_cycles"]:
             print(
                 f"         dry friction can sustain a limit cycle at {c['frequency_hz']:.3g} Hz, "

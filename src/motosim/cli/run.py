@@ -155,7 +155,7 @@ def load_realtime(path: str, *, safety: bool = False) -> tuple["RunInputs", dict
     resolved (which designs its controller: seconds).
     """
     from motosim.io.runs import resolve
-    from motosim.rt.config import parse_safety, split_realtime
+    from motosim.rt.config import parse_latency, parse_safety, split_realtime
     from motosim.sim import parse_scenario
     from motosim.sim.scenario import implausible
 
@@ -171,6 +171,7 @@ def load_realtime(path: str, *, safety: bool = False) -> tuple["RunInputs", dict
     # other command uses is refused now, not when that command runs
     if "safety" in realtime or safety:
         parse_safety(realtime.get("safety"), origin=str(path))
+    parse_latency(realtime, origin=str(path))
     rig_settings(scenario, realtime, origin=str(path))
     return resolve(scenario, source.parent), realtime
 
@@ -452,11 +453,12 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     import numpy as np
 
     from motosim.io.can import handlebar_codecs, open_link
-    from motosim.rt.config import parse_safety, within_safety
+    from motosim.rt.config import frame_age, parse_latency, parse_safety, within_safety
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
     from motosim.sim import build_rig, build_stack, run_metadata
     from motosim.sim.metrics import validity_limits
+    from motosim.sim.stack import account_for_delay
 
     check_rt_options(args)
     if not 0 <= args.view_port < 65536:
@@ -483,12 +485,18 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     clock = clock_from_args(args)
     rate = sc.rates.control
     periods = round(duration * rate)
+    latency = parse_latency(realtime, origin=args.scenario)
+    age = frame_age(
+        latency, pace=args.pace, control_rate=rate, measurement_rate=sc.rates.measurement,
+        origin=args.scenario,
+    )  # fmt: skip
     model = build_stack(inputs)
     if args.pace == "bus" and model.measure_every != 1:
         raise MotosimError(
             f"--pace bus with control = {rate:g} Hz and measurement = "
             f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"
         )
+    model = account_for_delay(model, age, inputs.nominal_handlebar)  # the frames' age
     world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
     codecs = handlebar_codecs()
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
@@ -541,6 +549,8 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             "realtime": {
                 "bus": args.bus,
                 "pace": args.pace,
+                "status_latency": latency,
+                "measurement_delay": age,
                 "safety": limits,
                 "duration": duration,
             }

@@ -3,6 +3,8 @@
 A scenario file that ``motosim run`` and ``motosim rig`` take is a scenario of
 :mod:`motosim.sim.scenario` plus one table, ignored by ``motosim simulate``::
 
+    [realtime]          status_latency = 0 [s]: the drive's status frames' latency on the
+                        bus, from the drive's sample to the frame's arrival at the host
     [realtime.safety]   max_current [A], max_slew [A/s], max_speed [rad/s],
                         speed_band [rad/s], soft_stop [rad], hard_stop [rad],
                         end_stop_gain [A/rad], hands_off_torque [N*m], hands_off_time [s],
@@ -16,11 +18,14 @@ A scenario file that ``motosim run`` and ``motosim rig`` take is a scenario of
 
 The safety limits have no defaults but the fade-in, the watchdog and the frozen-sensor
 monitor's angle: they belong to the
-handlebar on the bench and must be written down for it.
+handlebar on the bench and must be written down for it. The status latency defaults to 0 (a
+fresh sample, what the stack was designed for); given, the stack accounts for the frame's
+age (:func:`frame_age`, :func:`motosim.sim.stack.account_for_delay`).
 """
 
+import math
 from collections.abc import Mapping
-from dataclasses import fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any
 
 from motosim.errors import MotosimError
@@ -29,7 +34,13 @@ from motosim.rt.safety import SafetyLimits
 if TYPE_CHECKING:
     from motosim.sim import RunInputs
 
-__all__ = ["parse_safety", "split_realtime", "within_safety"]
+__all__ = [
+    "MAX_LATENCY", "RealtimeOptions", "frame_age", "parse_latency", "parse_safety",
+    "split_realtime", "within_safety",
+]  # fmt: skip
+
+MAX_LATENCY = 1.0
+"""Largest ``status_latency`` read [s]; the stack accounts for up to one frame period."""
 
 
 def split_realtime(
@@ -46,12 +57,83 @@ def split_realtime(
     table = data.get("realtime", {})
     if not isinstance(table, Mapping):
         raise MotosimError(f"{origin}: [realtime] must be a table")
-    unknown = set(table) - {"safety", "rig"}
+    unknown = set(table) - {"safety", "rig", "status_latency"}
     if unknown:
         raise MotosimError(
-            f"{origin}: unknown key {sorted(unknown)[0]!r} in [realtime]; expected safety, rig"
+            f"{origin}: unknown key {sorted(unknown)[0]!r} in [realtime]; expected "
+            "status_latency, safety, rig"
         )
     return rest, dict(table)
+
+
+@dataclass(frozen=True, slots=True)
+class RealtimeOptions:
+    """The keys of the ``[realtime]`` table itself (beside its ``safety`` and ``rig`` tables).
+
+    Attributes
+    ----------
+    status_latency : float
+        The drive's status frames' latency on the bus, from the drive's sample of the angle
+        and current to the frame's arrival at the host [s], 0 to :data:`MAX_LATENCY`; 0: a
+        fresh sample, what the stack was designed for.
+    """
+
+    status_latency: float = 0.0
+
+
+def parse_latency(table: Mapping[str, Any], *, origin: str) -> float:
+    """``status_latency`` of the ``[realtime]`` table [s] (0 when absent).
+
+    Examples
+    --------
+    >>> parse_latency({"status_latency": 0.002}, origin="x.toml"), parse_latency({}, origin="x")
+    (0.002, 0.0)
+    """
+    value = table.get("status_latency", 0.0)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise MotosimError(
+            f"{origin}: [realtime] status_latency = {value!r}: expected a number of seconds"
+        )
+    if not (math.isfinite(value) and 0.0 <= value <= MAX_LATENCY):
+        raise MotosimError(
+            f"{origin}: [realtime] status_latency = {value!r} s; expected 0 to {MAX_LATENCY:g} s"
+        )
+    return RealtimeOptions(status_latency=float(value)).status_latency
+
+
+def frame_age(
+    latency: float, *, pace: str, control_rate: float, measurement_rate: float, origin: str
+) -> float:
+    """The status frame's age when the stack reads it [s], from its latency on the bus.
+
+    Paced by the frames (``pace`` "bus") the loop runs when a frame arrives: the age is the
+    latency. Paced by its clock (``pace`` "clock") the frame waits for the next period, half
+    a control period on average. A latency of 0 is the stack's design (a fresh sample): 0.
+
+    Raises
+    ------
+    MotosimError
+        If the age exceeds one frame period (the stack accounts for up to one).
+
+    Examples
+    --------
+    >>> kw = {"control_rate": 1000.0, "measurement_rate": 100.0, "origin": "x.toml"}
+    >>> frame_age(0.005, pace="clock", **kw), frame_age(0.005, pace="bus", **kw)
+    (0.0055, 0.005)
+    """
+    if latency == 0.0:
+        return 0.0
+    age = latency + (0.5 / control_rate if pace == "clock" else 0.0)
+    period = 1.0 / measurement_rate
+    if age > period * (1.0 + 1e-9):
+        wait = ", and half a control period waiting for the clock," if pace == "clock" else ""
+        raise MotosimError(
+            f"{origin}: [realtime] status_latency = {latency:g} s{wait} makes the status "
+            f"frame {1e3 * age:.3g} ms old; the stack accounts for up to one frame period "
+            f"({1e3 * period:.3g} ms at {measurement_rate:g} Hz): lower the latency or the "
+            "frame rate"
+        )
+    return age
 
 
 def parse_safety(table: Any, *, origin: str) -> SafetyLimits:

@@ -371,21 +371,26 @@ class VirtualRig:
             live = self.enabled and silent <= s.command_timeout
             if self._let_go and (not self.enabled or silent > _RUN_GONE):
                 self._k_rider = -1  # the run has ended: the rider lets go
-            n = self._sub - self.k % self._sub  # up to the next status sample
+            # up to the next status sample, not beyond t: a command received by then is
+            # carried from then, as a drive does (a plant run ahead to the next status sample
+            # carried it only from there: a command delay of up to a status period)
+            n = min(self._sub - self.k % self._sub, max(1, math.ceil(t / self.h - self.k - 1e-9)))
             rider, k0 = self.rider_torque, self.k - self._k_rider
             if self._k_rider < 0:
                 rider, k0 = self._idle, 0
             elif self._policy is not None:
-                self._held[0] = self._policy()
+                if self.k % self._sub == 0:
+                    self._held[0] = self._policy()  # the rider acts once per status period
                 rider, k0 = self._held, 0
             _plant_steps(
                 self.x, self.i_cmd if live else 0.0, rider, k0, n, hb.J_eq, hb.beta_eq,
                 hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h,
             )  # fmt: skip
             self.k += n
-            self._sample()
+            if self.k % self._sub == 0:
+                self._sample()
             if catch_up:
-                self._deliver(min(self.t, t))  # the plant may run ahead of t; the bus may not
+                self._deliver(min(self.t, t))
         self._deliver(t, newest_status=not catch_up)
 
     def _sample(self) -> None:

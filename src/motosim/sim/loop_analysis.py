@@ -97,6 +97,9 @@ class StackLoop:
         The motorcycle's own lateral matrix A_v at the speed [1/s].
     motorcycle_input : ndarray, shape (8,)
         Its steer-torque input B_v.
+    measured : ndarray, shape (n,)
+        Row giving the angle the stack measures [rad]: ``angle``, or with a measurement
+        delay d the angle d before the sample.
     """
 
     A: Array
@@ -108,6 +111,7 @@ class StackLoop:
     dt: float
     motorcycle: Array
     motorcycle_input: Array
+    measured: Array
 
     def response(self, frequencies: Array, row: Array, column: int) -> CArray:
         """Closed-loop response from input ``column`` to the output ``row`` at ``frequencies``
@@ -131,7 +135,7 @@ class StackLoop:
         output row c, A_open = A - b c and L = -c (zI - A_open)^-1 b. (The closed-loop
         response from the same input, c (zI - A)^-1 b = -L / (1 + L), is not the loop gain.)
         """
-        row = {1: self.current, 2: self.estimate, 3: self.angle}[column]
+        row = {1: self.current, 2: self.estimate, 3: self.measured}[column]
         n = self.A.shape[0]
         b = self.B[:, column]
         A_open = self.A - np.outer(b, row)
@@ -139,7 +143,9 @@ class StackLoop:
         return np.array([-(row @ np.linalg.solve(zk * np.eye(n) - A_open, b)) for zk in z])
 
 
-def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) -> StackLoop:
+def stack_loop(
+    model: StackModel, handlebar: HandlebarParameters, speed: float, *, delay: float | None = None
+) -> StackLoop:
     """Write the stack of ``model`` around the true ``handlebar`` as one linear sampled loop.
 
     Parameters
@@ -150,25 +156,44 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
         The true handlebar (possibly perturbed from the nominal one the stack was built for).
     speed : float
         Forward speed at which the motorcycle is linearised [m/s].
+    delay : float, optional
+        The measurement's true age d [s], 0 to the measurement step; by default the one the
+        stack accounts for (``model.delay[0]``).
 
     Returns
     -------
     StackLoop
         States: handlebar [theta_h', theta_h], the previous angle and differentiated rate,
         the observer [theta_h'_hat, theta_h_hat], its estimate (the filtered injection), the
-        controller and the motorcycle's eight lateral states.
+        controller and the motorcycle's eight lateral states; with a measurement delay d
+        (:attr:`~motosim.sim.stack.StackModel.delay`), the handlebar's state d before the
+        sample (what the stack measures) and the current carried since the last sample.
+
+    Notes
+    -----
+    With a measurement delay d (0 < d <= h) the stack reads at sample k the angle of
+    t_k - d, x(t_k - d) = Phi(h - d) x_{k-1} + Gamma(h - d) [i_{k-1}, tau_r], over which
+    the current i_{k-1} was carried (the command changes at the samples); as
+    :func:`motosim.sim.stack.step_scaled` does, the controller reads that angle predicted
+    over d and the observer is told the current carried over its step, the previous
+    command for d and the new one for h - d.
 
     Raises
     ------
     MotosimError
-        If the stack's estimator is not the Walcott-Zak observer.
+        If the stack's estimator is not the Walcott-Zak observer, or ``delay`` is out of
+        range.
     """
+    h = model.dt * model.measure_every
+    dl = model.delay
+    bus = float(dl[0]) if delay is None else float(delay)
+    if not (math.isfinite(bus) and 0.0 <= bus <= h * (1.0 + 1e-12)):
+        raise MotosimError(f"delay = {delay!r} s; expected 0 to one measurement step ({h:g} s)")
     if model.estimator.kind != WALCOTT_ZAK:
         raise MotosimError(
             f"estimator kind {model.estimator.kind}; the loop analysis needs the Walcott-Zak "
             "observer"
         )
-    h = model.dt * model.measure_every
     est = model.estimator
     Phi, Gamma, g, p = est.Phi[:2, :2], est.Gamma[:2, :4], est.gain[:2], est.p
     injection = p[2] * p[0] / p[1]
@@ -181,8 +206,10 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     nc = model.Ad.shape[0]
     c = model.prediction
     predicted = ff[0] > 0.0 and c[0] > 0.0
+    delayed = dl[0] > 0.0  # the stack accounts for a delay
     sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "estimate": 1,
-             "prediction": 4 if predicted else 0, "controller": nc, "motorcycle": 8}  # fmt: skip
+             "prediction": 4 if predicted else 0, "controller": nc, "motorcycle": 8,
+             "before": 2 if bus > 0.0 else 0, "carried": 1 if delayed else 0}  # fmt: skip
     start, n = {}, 0
     for name, size in sizes.items():
         start[name] = n
@@ -194,12 +221,18 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
 
     theta, rate = state("plant", 1), state("plant", 0)
     delta, delta_rate = state("motorcycle", 5), state("motorcycle", 3)
-    measured = theta + eye[n]
+    measured = (state("before", 1) if bus > 0.0 else theta) + eye[n]
+    held = state("estimate")  # the command uses the previous sample's estimate
+    z1 = (measured - state("theta_prev")) / h
+    rate_used = z1 + w * (z1 - state("rate_prev"))
     error = measured - delta
+    if delayed:  # the angle predicted over d, by the carried current and the estimate
+        carried = state("carried")
+        error = error + dl[2] * (z1 + 0.5 * (z1 - state("rate_prev")))
+        error = error + dl[3] * (dl[5] * carried + held)
     command = model.Dd[0, 0] * error
     for j in range(nc):
         command = command + model.Cd[0, j] * state("controller", j)
-    held = state("estimate")  # the command uses the previous sample's estimate
     cancelled = held + c[0] * state("prediction") if predicted else held
     torque = -ff[0] * cancelled
     if ff[1] > 0.0:  # the friction term's tanh is left out with the friction itself
@@ -207,8 +240,6 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
         torque = torque + ff[2] * steer_acc + ff[3] * delta_rate
     if ff[0] > 0.0 or ff[1] > 0.0:
         command = command + torque / ff[5]
-    z1 = (measured - state("theta_prev")) / h
-    rate_used = z1 + w * (z1 - state("rate_prev"))
     x0, x1 = state("observer", 0), state("observer", 1)
     E = injection * (g[0] * (rate_used - x0) + g[1] * (measured - x1))
     estimate = held + alpha * (E - held)
@@ -221,15 +252,30 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     for r in range(2):
         A[start["plant"] + r] = Ap[r, 0] * rate + Ap[r, 1] * theta + Bp[r, 0] * command
         B[start["plant"] + r, :3] = (Bp[r, 1], Bp[r, 0], Bp[r, 0] * cancel)
+    told, share = command, 1.0  # the current the observer is told, and the new command's share
+    if bus > 0.0:
+        if h - bus > 1e-12 * h:
+            Ab, Bb = zoh(hb.A, np.column_stack([hb.B, hb.D]), h - bus)
+        else:
+            Ab, Bb = np.eye(2), np.zeros((2, 2))
+        for r in range(2):
+            A[start["before"] + r] = Ab[r, 0] * rate + Ab[r, 1] * theta + Bb[r, 0] * command
+            B[start["before"] + r, :3] = (Bb[r, 1], Bb[r, 0], Bb[r, 0] * cancel)
+    if delayed:
+        A[start["carried"]] = command
+        B[start["carried"], 1:3] = (1.0, cancel)
+        share = 1.0 - dl[1]
+        told = share * command + dl[1] * carried
     A[start["theta_prev"]] = measured
     A[start["rate_prev"]] = z1
     for r in range(2):
         A[start["observer"] + r] = (
-            Phi[r, 0] * x0 + Phi[r, 1] * x1 + Gamma[r, 0] * command + Gamma[r, 1] * rate_used
+            Phi[r, 0] * x0 + Phi[r, 1] * x1 + Gamma[r, 0] * told + Gamma[r, 1] * rate_used
             + Gamma[r, 2] * measured + Gamma[r, 3] * E
         )  # fmt: skip
-        B[start["observer"] + r, 1] = Gamma[r, 0]  # the estimator is told the measured current
-        B[start["observer"] + r, 2] = Gamma[r, 0] * cancel
+        # the estimator is told the measured current
+        B[start["observer"] + r, 1] = Gamma[r, 0] * share
+        B[start["observer"] + r, 2] = Gamma[r, 0] * cancel * share
     A[start["estimate"]] = estimate
     if predicted:  # the estimate's rate through the notch, the low-pass (as step does)
         x = (estimate - held) / h
@@ -249,7 +295,7 @@ def stack_loop(model: StackModel, handlebar: HandlebarParameters, speed: float) 
     B[:, 3] = A[:, n]
     return StackLoop(
         A[:, :n].copy(), B, command[:n], rate[:n], theta[:n], cancelled[:n], h, Av,
-        model.Bv.copy(),
+        model.Bv.copy(), measured[:n],
     )  # fmt: skip
 
 
@@ -498,6 +544,9 @@ class StackLoopAnalysis:
         motorcycle's own rider torque to steer angle over :data:`FEEL_BAND` [dB, deg].
     prediction_lead : float
         T_d of the stack's predicted cancellation [s] (0: it cancels the estimate as it is).
+    measurement_delay : float
+        The measurement's age d analysed [s] (the stack may or may not account for it:
+        :attr:`~motosim.sim.stack.StackModel.delay`).
     limit_cycles : tuple of LimitCycle
         Where the rendered handlebar admittance is not passive but the motorcycle's is, and
         crosses the negative real axis: Coulomb friction of ``handlebar.beta_s`` sustains an
@@ -516,6 +565,7 @@ class StackLoopAnalysis:
     feel_magnitude_db: float
     feel_phase_deg: float
     prediction_lead: float
+    measurement_delay: float
     limit_cycles: tuple[LimitCycle, ...]
 
 
@@ -557,7 +607,7 @@ def _margins(loop_gain: CArray, frequencies: Array) -> tuple[float, float, float
 
 
 def analyse_stack(
-    model: StackModel, handlebar: HandlebarParameters, speed: float
+    model: StackModel, handlebar: HandlebarParameters, speed: float, *, delay: float | None = None
 ) -> StackLoopAnalysis:
     """Margins, stability, rendered feel and friction limit cycles of the sampled stack.
 
@@ -569,12 +619,15 @@ def analyse_stack(
         The true handlebar.
     speed : float
         Forward speed [m/s].
+    delay : float, optional
+        The measurement's true age [s] (:func:`stack_loop`); by default the one the stack
+        accounts for.
 
     Returns
     -------
     StackLoopAnalysis
     """
-    loop = stack_loop(model, handlebar, speed)
+    loop = stack_loop(model, handlebar, speed, delay=delay)
     nyquist = 0.5 / loop.dt
     f = np.append(np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS - 1), nyquist)
     eig = np.linalg.eigvals(loop.A)
@@ -624,6 +677,7 @@ def analyse_stack(
         feel_magnitude_db=feel_db,
         feel_phase_deg=feel_deg,
         prediction_lead=float(model.prediction[0]) if model.feedforward[0] > 0.0 else 0.0,
+        measurement_delay=float(model.delay[0]) if delay is None else float(delay),
         limit_cycles=tuple(cycles) if handlebar.beta_s > 0.0 else (),
     )
 
@@ -636,11 +690,13 @@ def robustness_grid(
     inertia: tuple[float, ...] = (0.5, 1.0, 1.5),
     damping: tuple[float, ...] = (0.5, 1.0, 1.5),
     torque_constant: tuple[float, ...] = (0.7, 1.0, 1.3),
+    delay: float | None = None,
 ) -> list[tuple[tuple[float, float, float], StackLoopAnalysis]]:
     """:func:`analyse_stack` with the true handlebar's J_eq, beta_eq and N k_t scaled.
 
     The stack keeps its nominal design; each true handlebar has J_eq, beta_eq and k_t
-    multiplied by one factor of each tuple.
+    multiplied by one factor of each tuple; ``delay`` is the measurement's true age [s]
+    (by default the one the stack accounts for).
 
     Returns
     -------
@@ -658,7 +714,7 @@ def robustness_grid(
                     J_m=0.0,
                     beta_vm=0.0,
                 )
-                out.append(((fj, fb, fk), analyse_stack(model, true, speed)))
+                out.append(((fj, fb, fk), analyse_stack(model, true, speed, delay=delay)))
     return out
 
 
@@ -693,6 +749,8 @@ def analyse_design(
     rate: float,
     speeds: list[float],
     prediction: bool | None = None,
+    delay: float = 0.0,
+    account: bool = True,
 ) -> list[tuple[StackLoopAnalysis, GridSummary]]:
     """A designed observer and controller as the rider would hold them, at each speed.
 
@@ -700,7 +758,10 @@ def analyse_design(
     ``rate`` [Hz]; the predicted cancellation where ``prediction`` says, by default where
     :func:`~motosim.sim.stack.default_prediction` does, with :func:`prediction_lead`) around
     the nominal ``handlebar``, analysed by :func:`analyse_stack`, and the worst of its
-    :func:`robustness_grid`.
+    :func:`robustness_grid`. ``delay`` is the measurement's age when the stack reads it [s]
+    (a status frame's latency; 0 to ``1 / rate``); with ``account`` the stack accounts for
+    it (:func:`~motosim.sim.stack.account_for_delay`), else it is the stack designed for a
+    fresh sample, read ``delay`` old.
     """
 
     def build(speed: float, lead: float = 0.0) -> StackModel:
@@ -708,6 +769,7 @@ def analyse_design(
             sharp, estimator, controller, control_rate=rate, measurement_rate=rate,
             lipschitz=300.0, max_current=30.0, speed=speed, handlebar=handlebar,
             rider_feedforward=True, reference_feedforward=True, prediction_lead=lead,
+            measurement_delay=delay if account else 0.0,
         )  # fmt: skip
 
     out = []
@@ -716,7 +778,7 @@ def analyse_design(
         model = build(speed)
         if predict:
             model = build(speed, prediction_lead(model, handlebar))
-        grid = [a for _, a in robustness_grid(model, handlebar, speed)]
+        grid = [a for _, a in robustness_grid(model, handlebar, speed, delay=delay)]
         summary = GridSummary(
             points=len(grid),
             unstable=sum(not a.stable for a in grid),
@@ -728,5 +790,5 @@ def analyse_design(
             phase_margin_deg=min(a.phase_margin_deg for a in grid),
             modulus_margin=min(a.modulus_margin for a in grid),
         )
-        out.append((analyse_stack(model, handlebar, speed), summary))
+        out.append((analyse_stack(model, handlebar, speed, delay=delay), summary))
     return out
