@@ -11,9 +11,11 @@
   [s], or ENABLE 0, and the drive stops the torque (its own STO);
 - the status frame at ``status_rate`` [Hz]: the angle quantised by the encoder
   (``encoder_bits`` per handlebar revolution) and by the DBC scaling, the current with noise;
-- the bus: a latency with jitter (truncated normal), random frame loss (Bernoulli) and
-  bursts (a two-state Gilbert-Elliott channel), stale frames (the previous frame sent again,
-  counter unchanged) and duplicated frames, a bus-off window (nothing sent);
+- the bus: a latency with jitter (truncated normal; a frame never overtakes an earlier one
+  of the same identifier, as on CAN, where one node sends them in order), random frame
+  loss (Bernoulli) and bursts (a two-state Gilbert-Elliott channel), stale frames (the
+  previous frame sent again, counter unchanged) and duplicated frames, a bus-off window
+  (nothing sent);
 - injected faults from a given time after the run's first enabled command: frozen encoder,
   sign flip of the angle, an offset on the current sensor, a frame with a wrong checksum, an
   E-stop frame, the drive's fault flag.
@@ -87,7 +89,8 @@ class RigSettings:
         The drive's current limit [A], its current loop's time constant [s] (0: ideal) and
         how long it keeps the last command without a new one [s].
     latency, jitter : float
-        Mean one-way delay of a status frame [s] and its standard deviation [s].
+        Mean one-way delay of a status frame [s] and its standard deviation [s]; a frame
+        delayed less than the one sent before it with the same identifier waits for it.
     loss : float
         Probability that a frame is lost, independently.
     burst_enter, burst_leave : float
@@ -281,6 +284,7 @@ class VirtualRig:
         self._last_command = -math.inf
         self._queue: list[tuple[float, int, int, bytes]] = []
         self._seq = 0
+        self._last_due: dict[int, float] = {}
         self._counter = 0
         self._estop_counter = 0
         self._previous: bytes | None = None
@@ -452,9 +456,10 @@ class VirtualRig:
         delay = s.latency
         if s.jitter > 0.0:
             delay += s.jitter * float(self.rng.standard_normal())
-        due = t + max(delay, 0.0)
         if frame_id is None:
             frame_id = self.codecs.status.frame_id
+        due = max(t + max(delay, 0.0), self._last_due.get(frame_id, -math.inf))
+        self._last_due[frame_id] = due
         heapq.heappush(self._queue, (due, self._seq, frame_id, frame))
         self._seq += 1
 

@@ -15,7 +15,11 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
 - a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request;
 - a communication watchdog: no valid status frame for ``watchdog_periods`` periods -> zero
   command and a latched fault; a status frame is valid when its checksum is right and its
-  alive counter has moved (a stale or duplicated frame does not feed the watchdog);
+  alive counter has moved forward, by 1 to 7 of its 16 values (a stale or duplicated frame,
+  or an older one delivered after a newer, does not feed the watchdog and is not used: the
+  counter's window of AUTOSAR's E2E profiles, *Specification of SW-C End-to-End
+  Communication Protection Library*, R4.0; after 7 or more frames lost in a row, which
+  trip the default watchdog long before, the counter is taken up again within 9 frames);
 - guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
@@ -183,6 +187,10 @@ class SafetyLimits:
             )
 
 
+MAX_COUNTER_STEP = 7
+"""The largest forward step of a status frame's 4-bit alive counter taken as new (up to 6
+frames lost); a larger one is an older frame delivered after a newer."""
+
 # --- the compiled stage ---------------------------------------------------------------
 # The stage's state and limits are two float64 arrays so that compiled code (the fused
 # period of :mod:`motosim.rt.fused`) and :class:`SafetyStage` run the very same functions.
@@ -257,11 +265,12 @@ def safety_status_frame(
         return False
     c = int(counter) & 0xF
     last = int(s[S_COUNTER])
-    if c == last:
-        s[S_STALE] += 1.0
+    step = (c - last) & 0xF
+    if last >= 0 and (step == 0 or step > MAX_COUNTER_STEP):
+        s[S_STALE] += 1.0  # the same frame again, or an older one after a newer
         return False
     if last >= 0:
-        s[S_LOST] += (c - last - 1) & 0xF
+        s[S_LOST] += step - 1
     s[S_COUNTER] = c
     if drive_fault:
         safety_trip(s, 6)  # DRIVE_FAULT
@@ -511,7 +520,8 @@ class SafetyStage:
 
     @property
     def frames_stale(self) -> int:
-        """Status frames whose alive counter had not moved (stale or duplicated)."""
+        """Status frames whose alive counter had not moved (stale or duplicated) or went
+        back (an older frame delivered after a newer)."""
         return int(self._s[S_STALE])
 
     def describe(self) -> str:
@@ -548,8 +558,10 @@ class SafetyStage:
         """Check a received status frame; True if it is valid and fresh (use its values).
 
         A wrong checksum trips CHECKSUM; a drive fault flag trips DRIVE_FAULT; a counter
-        that has not moved (a stale or duplicated frame) makes the frame invalid; a counter
-        that jumped counts the lost frames.
+        that has not moved (a stale or duplicated frame) or went back (an older frame
+        delivered after a newer: more than :data:`MAX_COUNTER_STEP` ahead on the 4-bit
+        circle) makes the frame invalid; a counter that jumped by up to
+        :data:`MAX_COUNTER_STEP` counts the lost frames.
         """
         return bool(safety_status_frame(self._s, bool(checksum_ok), float(counter),
                                         bool(drive_fault)))  # fmt: skip

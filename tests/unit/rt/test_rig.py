@@ -155,6 +155,21 @@ def test_latency_delays_delivery() -> None:
     assert len(link.sent) == 1
 
 
+def test_jitter_never_reorders_one_identifier() -> None:
+    # 1 kHz status frames with 2 ms of latency and 0.5 ms of jitter: delays differ by more
+    # than a frame period, yet the frames arrive in the order sent, as one CAN node sends
+    # them, with their arrivals spread out (not all at the latency)
+    rig, link = _rig(latency=0.002, jitter=0.0005)
+    arrivals = []
+    for k in range(1, 2001):
+        before = len(link.sent)
+        rig.advance_to(k * 1e-4)
+        arrivals += [k * 1e-4] * (len(link.sent) - before)
+    counters = _status(link)[:, ST.index("COUNTER")]
+    assert counters.size > 190 and np.all(np.diff(counters) % 16 == 1)
+    assert np.ptp(np.diff(arrivals)) > 1.5e-3
+
+
 def test_a_late_tick_sends_the_newest_status_frame_not_a_backlog() -> None:
     # the rig's process ticking at the status rate; a tick 2.5 periods late (not catching
     # up): of the frames sampled at 7, 8 and 9 ms (due 0.3 ms later), only the newest due

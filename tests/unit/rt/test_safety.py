@@ -258,3 +258,28 @@ def test_the_scale_told_to_the_stack_is_the_share_the_stage_passes() -> None:
             continue
         assert out == pytest.approx(2.0 * predicted), k
     assert flips == 1 and d.stage.hands_off and d.stage.scale == pytest.approx(0.25)
+
+
+def test_an_older_frame_after_a_newer_is_not_used() -> None:
+    # A frame whose 4-bit alive counter is behind the last one (delivered out of order) is
+    # not fresh and not counted as 15 lost frames: the window of AUTOSAR's E2E profiles.
+    d = Driver().running()
+    newest = d.counter
+    for back in (1, 2, 8):
+        older = (newest - back) & 0xF
+        assert not d.stage.status_frame(checksum_ok=True, counter=older, drive_fault=False)
+    assert d.stage.frames_stale == 3 and d.stage.frames_lost == 0
+    assert d.stage.status_frame(checksum_ok=True, counter=(newest + 7) & 0xF, drive_fault=False)
+    assert d.stage.frames_lost == 6
+
+
+def test_a_long_gap_is_taken_up_again() -> None:
+    # After 8 frames lost the counter has stepped 9 ahead, read as an older frame; the
+    # following frames are taken up again within 9 frames (the gap itself is the watchdog's).
+    d = Driver().running()
+    start = d.counter
+    fresh = [
+        d.stage.status_frame(checksum_ok=True, counter=(start + k) & 0xF, drive_fault=False)
+        for k in range(9, 18)
+    ]
+    assert fresh == [False] * 8 + [True]  # +9 to +15: older; +16: the last counter again
