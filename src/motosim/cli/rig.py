@@ -195,6 +195,7 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
             "datagrams": twin.frames,
             "can": bool(args.platform_can),
             "lost": twin.lost,
+            "late": twin.late,
             "bad": twin.bad,
             "watchdog_timeouts": twin.timeouts,
             "achieved_deg": [float(np.degrees(a)) for a in twin.achieved],

@@ -67,7 +67,7 @@ from motosim.cueing.platform import CueingConfig, Platform
 from motosim.cueing.washout import WASHOUT_STATE_SIZE, design_washout, washout_step
 from motosim.errors import MotosimError
 from motosim.io.can import PlatformCodecs
-from motosim.rt.safety import State
+from motosim.rt.safety import MAX_COUNTER_STEP, State
 
 __all__ = [
     "PLATFORM_FRAME",
@@ -424,7 +424,8 @@ class PlatformTwin:
     Each datagram's command passes through the limit manager of the platform (so a wrong
     command never exceeds the platform's limits, as a drive's own limits would ensure) and
     each axis then follows it through its first-order position loop at its bandwidth, both at
-    ``dt``. Lost datagrams (sequence gaps) and bad ones are counted; the last good command is
+    ``dt``. Lost datagrams (sequence gaps), late ones (older than the last taken: delivered
+    out of order, not used) and bad ones are counted; the last good command is
     held for ``watchdog`` seconds, then the platform goes back to neutral (braked by its
     limits) until datagrams come again, as a platform controller must do when its host stops.
 
@@ -472,6 +473,7 @@ class PlatformTwin:
         self._received = -math.inf
         self.frames = 0
         self.lost = 0
+        self.late = 0
         self.bad = 0
         self.last: PlatformFrame | None = None
         self._socket: socket.socket | None = None
@@ -500,7 +502,11 @@ class PlatformTwin:
             self.bad += 1
             return
         if self.last is not None:
-            self.lost += max(0, (frame.sequence - self.last.sequence - 1) & 0xFFFFFFFF)
+            step = (frame.sequence - self.last.sequence) & 0xFFFFFFFF
+            if step == 0 or step >= 1 << 31:  # the same or an older datagram
+                self.late += 1
+                return
+            self.lost += step - 1
         self.frames += 1
         self._received = self.t
         self.last = frame
@@ -510,7 +516,8 @@ class PlatformTwin:
         """Take one CAN frame; False if it is not a ``PF_COMMAND`` (or there are no codecs).
 
         A frame with a wrong length or checksum, or non-finite angles, counts as bad; a
-        counter gap counts the frames lost (modulo 16).
+        counter gap of up to 7 counts the frames lost (modulo 16); a counter that did not move
+        or went back (more than 7 ahead) counts as late and is not used.
         """
         if self.codecs is None or frame_id != self.codecs.command.frame_id:
             return False
@@ -521,7 +528,11 @@ class PlatformTwin:
             return True
         counter = int(v[c.command.counter_index])
         if self._counter >= 0:
-            self.lost += (counter - self._counter - 1) & 0xF
+            step = (counter - self._counter) & 0xF
+            if step == 0 or step > MAX_COUNTER_STEP:
+                self.late += 1
+                return True
+            self.lost += step - 1
         self._counter = counter
         self.frames += 1
         self._received = self.t

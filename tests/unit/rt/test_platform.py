@@ -157,3 +157,17 @@ def test_twin_goes_to_neutral_when_the_datagrams_stop(config: CueingConfig) -> N
         twin.step()
     np.testing.assert_allclose(twin.achieved, 0.0, atol=1e-3)
     assert twin.timeouts == 1
+
+
+def test_twin_ignores_a_datagram_older_than_the_last(config: CueingConfig) -> None:
+    # UDP may deliver out of order: an older datagram is counted late and not used (before,
+    # it was applied and its sequence's wrap counted as 4 billion datagrams lost)
+    twin = PlatformTwin(config.platform, 0.01, watchdog=10.0)
+    values = np.array([0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    twin.receive(encode_platform(5, 0.05, State.RUNNING, 0, True, values))
+    twin.receive(encode_platform(4, 0.04, State.RUNNING, 0, True, -values))
+    twin.receive(encode_platform(5, 0.05, State.RUNNING, 0, True, -values))
+    assert twin.late == 2 and twin.lost == 0 and twin.frames == 1
+    np.testing.assert_allclose(twin.command, [0.2, 0.0, 0.0], atol=1e-6)
+    twin.receive(encode_platform(8, 0.08, State.RUNNING, 0, True, values))
+    assert twin.lost == 2 and twin.frames == 2

@@ -57,6 +57,8 @@ def test_the_twin_follows_can_commands_counts_losses_and_answers() -> None:
             assert twin.receive_frame(frame_id, data)
         twin.advance_to(0.01 * (k + 1))
     assert twin.frames == 199 and twin.lost == 1 and twin.bad == 0
+    assert twin.receive_frame(frame_id, data) and twin.late == 1  # the last one again
+    assert twin.frames == 199
     assert twin.achieved[0] == pytest.approx(math.radians(5.0), abs=1e-4)
     frame_id, data = twin.status_frame()
     status = load_dbc().get_message_by_name("PF_STATUS").decode(data)
