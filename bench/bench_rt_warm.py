@@ -35,8 +35,9 @@ CPU 1, mlockall; refused and reported without root), each variant in three round
 ``cyclictest`` does) during the measurement: an idle CPU then polls instead of halting (in a
 VM: no exit to the host while the loop sleeps).
 
-Run: ``python bench/bench_rt_warm.py [--periods 2000] [--only TEXT] [--poll-idle]`` (``--only``: the
-variants whose name has one of the comma-separated TEXTs, and the offline baseline).
+Run: ``python bench/bench_rt_warm.py [--periods 2000] [--only TEXT] [--poll-idle]``
+(``--only``: the variants whose name has one of the comma-separated TEXTs, and the offline
+baseline).
 """
 
 import argparse
