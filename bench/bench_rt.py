@@ -32,8 +32,9 @@ Run alone: ``python bench/bench_rt.py [--seconds 60] [--quick]``; the machine's 
 shows in the figures (a 2-core VM shared with other work misses deadlines that a quiet lab
 PC does not).
 
-``python bench/bench_rt.py --ab ROUNDS [--seconds 30] [--wait python]``: the stack's
-warm-ups before each deadline on and off (``motosim run --warm on|off``), interleaved in the
+``python bench/bench_rt.py --ab ROUNDS [--seconds 30] [--wait python] [--ab-what poll-idle]``:
+the stack's warm-ups before each deadline on and off (``motosim run --warm on|off``; or,
+the warm-ups on, a 0 us CPU latency request held or not: idle CPUs polling), interleaved in the
 same session (the order alternating from round to round): each round a 1 kHz clock-paced run
 against the rig with each, the offline step (step after step, and paced at 1 kHz) measured
 before each run; each run's step in the loop, wake-up, compute and misses, and the medians.
@@ -398,11 +399,14 @@ AB_KEYS = {
 }
 
 
-def ab(rounds: int, seconds: float, wait: str = "") -> None:
-    """The warm-ups on and off (``motosim run --warm on|off``), interleaved: ``rounds``
-    rounds of a 1 kHz clock-paced run against the rig over the fast link with each (the
-    order alternating from round to round), the offline references measured in each round;
-    each round's figures and the medians over the rounds are printed."""
+def ab(rounds: int, seconds: float, wait: str = "", what: str = "warm") -> None:
+    """The warm-ups on and off (``motosim run --warm on|off``; ``what`` "poll-idle": the
+    warm-ups on, and a CPU latency request of 0 us held by this process or not:
+    ``/dev/cpu_dma_latency``, for the whole machine, as ``cyclictest`` holds it; idle CPUs
+    then poll instead of halting), interleaved: ``rounds`` rounds of a 1 kHz
+    clock-paced run against the rig over the fast link with each (the order alternating from
+    round to round), the offline references measured in each round; each round's figures and
+    the medians over the rounds are printed."""
     b = bench_setup(20_000)
     _offline_steps(b)  # compile
     rows: dict[str, list[dict[str, object]]] = {"on": [], "off": []}
@@ -410,12 +414,24 @@ def ab(rounds: int, seconds: float, wait: str = "") -> None:
         order = ("on", "off") if j % 2 == 0 else ("off", "on")
         for warm in order:
             offline = _offline_steps(b)
-            figures = _run_against_rig(1000.0, seconds, wait=wait, warm=warm)
+            if what == "poll-idle":  # a 0 us CPU latency request held by this process
+                qos = os.open("/dev/cpu_dma_latency", os.O_WRONLY) if warm == "on" else -1
+                if qos >= 0:
+                    os.write(qos, (0).to_bytes(4, "little"))  # for the whole machine
+                try:
+                    figures = _run_against_rig(1000.0, seconds, wait=wait)
+                finally:
+                    if qos >= 0:
+                        os.close(qos)  # the request ends with the file
+            else:
+                figures = _run_against_rig(1000.0, seconds, wait=wait, warm=warm)
             figures |= offline
             rows[warm].append(figures)
             shown = {v: figures.get(k) for k, v in AB_KEYS.items()}
             load = figures.get("load average (1, 5, 15 min) at the start")
-            print(f"round {j + 1} warm {warm}: {shown}; {offline}; load {load}", flush=True)
+            given = figures.get("privileges")
+            print(f"round {j + 1} {what} {warm}: {shown}; {offline}; load {load}; {given}",
+                  flush=True)  # fmt: skip
     print(f"medians over {rounds} rounds ({seconds:g} s runs, 1 kHz, fast link, "
           f"{wait or 'compiled'} wait):")  # fmt: skip
     for warm, runs in rows.items():
@@ -430,7 +446,7 @@ def ab(rounds: int, seconds: float, wait: str = "") -> None:
         if loop and after and paced:
             med["loop / step after step"] = round(loop / after, 2)
             med["loop / paced"] = round(loop / paced, 2)
-        print(f"  warm {warm}: {med}")
+        print(f"  {what} {warm}: {med}")
 
 
 def run(seconds: float = 60.0, *, quick: bool = False) -> dict[str, object]:
@@ -500,10 +516,17 @@ if __name__ == "__main__":
         help="the warm-ups on and off, interleaved, ROUNDS rounds of --seconds at 1 kHz",
     )
     parser.add_argument("--wait", default="", help="with --ab: motosim run's --wait")
+    parser.add_argument(
+        "--ab-what",
+        choices=("warm", "poll-idle"),
+        default="warm",
+        help="with --ab: --warm on against off (default), or a 0 us CPU latency request "
+        "(/dev/cpu_dma_latency: idle CPUs poll) held or not",
+    )
     args = parser.parse_args()
     BUS = args.bus
     if args.ab:
-        ab(args.ab, args.seconds, args.wait)
+        ab(args.ab, args.seconds, args.wait, args.ab_what)
         sys.exit(0)
     if args.stack_only:
         for key, value in _stack_speed().items():

@@ -243,13 +243,15 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
             out[k] = a.runner[fused.R_STACK_TIME]
         return out
 
+    wakes: dict[tuple[int, bool], list[np.ndarray]] = {}  # the cycle variants' wake-ups
+
     def variant_loop(mode: int, read: bool) -> np.ndarray:
         """The compiled cycle of ``motosim run`` with the warm-ups of ``mode``
         (:func:`_cycle_variant`), the frame read from a loopback socket or given."""
         r = runner()
         a, context = r._arrays, r._context
         fd = rx.fileno() if read else -1
-        out = np.empty(n)
+        out, late = np.empty(n), np.empty(n)
         t0 = clock.now() + 1e-3
         for k in range(n):
             deadline = t0 + k * 1e-3
@@ -263,6 +265,8 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
             _cycle_variant(context, fd, k, deadline, mode)
             a.ring_head[0] += 1
             out[k] = a.runner[fused.R_STACK_TIME]
+            late[k] = a.runner[fused.R_WOKE] - deadline
+        wakes.setdefault((mode, read), []).append(late[20:].copy())
         return out
 
     def compiled_loop(mode: int) -> np.ndarray:
@@ -347,6 +351,15 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
     print(f"stack step p50/p99 us, three rounds; load {load}")
     for name, rounds in results.items():
         print(f"  {name:<80} {'  '.join(rounds)}")
+    if wakes:
+        print("the cycle variants' wake-up after the deadline p50/p99/p99.9/max us, three rounds")
+        what = ("no warm-up", "warm-ups", "data only", "code only")
+        for (mode, read), rounds_w in wakes.items():
+            figures = "  ".join(
+                "/".join(str(_us(float(x))) for x in (*np.percentile(w, (50, 99, 99.9)), w.max()))
+                for w in rounds_w[-3:]
+            )
+            print(f"  {what[mode]}, {'recv' if read else 'frame given':<12} {figures}")
 
 
 if __name__ == "__main__":
