@@ -31,6 +31,13 @@ in the ring: the bus read, the stack and safety stage, the send, the rest), prin
 Run alone: ``python bench/bench_rt.py [--seconds 60] [--quick]``; the machine's other load
 shows in the figures (a 2-core VM shared with other work misses deadlines that a quiet lab
 PC does not).
+
+``python bench/bench_rt.py --ab ROUNDS [--seconds 30] [--wait python] [--ab-what poll-idle]``:
+the stack's warm-ups before each deadline on and off (``motosim run --warm on|off``; or,
+the warm-ups on, a 0 us CPU latency request held or not: idle CPUs polling), interleaved in the
+same session (the order alternating from round to round): each round a 1 kHz clock-paced run
+against the rig with each, the offline step (step after step, and paced at 1 kHz) measured
+before each run; each run's step in the loop, wake-up, compute and misses, and the medians.
 """
 
 import argparse
@@ -304,7 +311,13 @@ BUS = "udp_multicast:239.74.163.131"  # a group of its own (other users of the m
 
 
 def _run_against_rig(
-    control: float, seconds: float, *, link: str = "fast", pace: str = "clock", wait: str = ""
+    control: float,
+    seconds: float,
+    *,
+    link: str = "fast",
+    pace: str = "clock",
+    wait: str = "",
+    warm: str = "",
 ) -> dict[str, object]:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench_rt.toml"
@@ -317,7 +330,8 @@ def _run_against_rig(
         load = os.getloadavg()
         run = _motosim("run", str(path), "--bus", BUS, "--out", f"{tmp}/out", "--json",
                        "--no-report", "--link", link, "--pace", pace, *RT,
-                       *(("--wait", wait) if wait else ()))  # fmt: skip
+                       *(("--wait", wait) if wait else ()),
+                       *(("--warm", warm) if warm else ()))  # fmt: skip
         out, err = run.communicate()
         rig.send_signal(signal.SIGINT)
         rig.communicate(timeout=30)
@@ -355,6 +369,84 @@ def _run_against_rig(
             f"{p['name']} {'applied' if p['applied'] else 'refused'}" for p in payload["privileges"]
         ),
     }
+
+
+def _offline_steps(b: BenchSetup) -> dict[str, float]:
+    """The offline references of the step in the loop, as :func:`_stack_speed` measures them:
+    the stack's period in a compiled loop step after step, and paced at 1 kHz by a compiled
+    busy wait (p50 and p99 [us])."""
+    other = CompiledStack(b.model)
+    args = (other.model, other.data, other.force, other.side_force, other.state, other.row())
+    nothing = np.zeros(0)
+    out: dict[str, float] = {}
+    for name, n, gap in (("step after step", 20_000, 0), ("paced at 1 kHz", 3000, 1_000_000)):
+        times = np.empty(n)
+        other.reset(0.0, 0.0)
+        _steps(*args, b.theta[:n], times, gap, nothing)
+        out[f"offline {name} p50 us"] = _us(float(np.median(times)))
+        out[f"offline {name} p99 us"] = _us(float(np.percentile(times, 99)))
+    return out
+
+
+AB_KEYS = {
+    "stack step in the loop, p50 us": "loop p50",
+    "stack step in the loop, p99 us": "loop p99",
+    "wake_p50_us": "wake p50",
+    "wake_p99_us": "wake p99",
+    "compute_p50_us": "compute p50",
+    "compute_p99_us": "compute p99",
+    "missed_percent": "missed %",
+}
+
+
+def ab(rounds: int, seconds: float, wait: str = "", what: str = "warm") -> None:
+    """The warm-ups on and off (``motosim run --warm on|off``; ``what`` "poll-idle": the
+    warm-ups on, and a CPU latency request of 0 us held by this process or not:
+    ``/dev/cpu_dma_latency``, for the whole machine, as ``cyclictest`` holds it; idle CPUs
+    then poll instead of halting), interleaved: ``rounds`` rounds of a 1 kHz
+    clock-paced run against the rig over the fast link with each (the order alternating from
+    round to round), the offline references measured in each round; each round's figures and
+    the medians over the rounds are printed."""
+    b = bench_setup(20_000)
+    _offline_steps(b)  # compile
+    rows: dict[str, list[dict[str, object]]] = {"on": [], "off": []}
+    for j in range(rounds):
+        order = ("on", "off") if j % 2 == 0 else ("off", "on")
+        for warm in order:
+            offline = _offline_steps(b)
+            if what == "poll-idle":  # a 0 us CPU latency request held by this process
+                qos = os.open("/dev/cpu_dma_latency", os.O_WRONLY) if warm == "on" else -1
+                if qos >= 0:
+                    os.write(qos, (0).to_bytes(4, "little"))  # for the whole machine
+                try:
+                    figures = _run_against_rig(1000.0, seconds, wait=wait)
+                finally:
+                    if qos >= 0:
+                        os.close(qos)  # the request ends with the file
+            else:
+                figures = _run_against_rig(1000.0, seconds, wait=wait, warm=warm)
+            figures |= offline
+            rows[warm].append(figures)
+            shown = {v: figures.get(k) for k, v in AB_KEYS.items()}
+            load = figures.get("load average (1, 5, 15 min) at the start")
+            given = figures.get("privileges")
+            print(f"round {j + 1} {what} {warm}: {shown}; {offline}; load {load}; {given}",
+                  flush=True)  # fmt: skip
+    print(f"medians over {rounds} rounds ({seconds:g} s runs, 1 kHz, fast link, "
+          f"{wait or 'compiled'} wait):")  # fmt: skip
+    for warm, runs in rows.items():
+        keys = [*AB_KEYS, *runs[0]] if runs else []
+        med = {}
+        for key in keys:
+            values = [r[key] for r in runs if isinstance(r.get(key), (int, float))]
+            if values and key not in med:
+                med[AB_KEYS.get(key, key)] = round(float(np.median(values)), 3)
+        loop, after = med.get("loop p50"), med.get("offline step after step p50 us")
+        paced = med.get("offline paced at 1 kHz p50 us")
+        if loop and after and paced:
+            med["loop / step after step"] = round(loop / after, 2)
+            med["loop / paced"] = round(loop / paced, 2)
+        print(f"  {what} {warm}: {med}")
 
 
 def run(seconds: float = 60.0, *, quick: bool = False) -> dict[str, object]:
@@ -416,8 +508,26 @@ if __name__ == "__main__":
     parser.add_argument("--quick", action="store_true", help="only the fast link at 1 kHz")
     parser.add_argument("--bus", default=BUS, help=f"the bus of the runs (default {BUS})")
     parser.add_argument("--stack-only", action="store_true", help="only the in-loop/offline speed")
+    parser.add_argument(
+        "--ab",
+        type=int,
+        default=0,
+        metavar="ROUNDS",
+        help="the warm-ups on and off, interleaved, ROUNDS rounds of --seconds at 1 kHz",
+    )
+    parser.add_argument("--wait", default="", help="with --ab: motosim run's --wait")
+    parser.add_argument(
+        "--ab-what",
+        choices=("warm", "poll-idle"),
+        default="warm",
+        help="with --ab: --warm on against off (default), or a 0 us CPU latency request "
+        "(/dev/cpu_dma_latency: idle CPUs poll) held or not",
+    )
     args = parser.parse_args()
     BUS = args.bus
+    if args.ab:
+        ab(args.ab, args.seconds, args.wait, args.ab_what)
+        sys.exit(0)
     if args.stack_only:
         for key, value in _stack_speed().items():
             print(f"  {key:<52} {value}")

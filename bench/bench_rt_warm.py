@@ -25,10 +25,19 @@ CPU 1, mlockall; refused and reported without root), each variant in three round
   until ``WARM_LEAD`` before the deadline, then one compiled call
   (:func:`~motosim.rt.fused.context_cycle`): warm-ups until about 2 us before the deadline,
   a compiled spin to it, the status frame read from a loopback socket by ``recv`` from
-  compiled code (sent at the start of the period), the period.
+  compiled code (sent at the start of the period), the period;
+- ``cycle variant``: the same compiled cycle with its warm-ups replaced by none, the
+  loop's, their copies of the stack's data only (no step: the step's code left cold), or
+  their step only (the copy stepped on its own state: the stack's own data left cold); the
+  frame read by ``recv`` or given (no system call between the last warm-up and the step).
 
-Run: ``python bench/bench_rt_warm.py [--periods 2000] [--only TEXT]`` (``--only``: the
-variants whose name has one of the comma-separated TEXTs, and the offline baseline).
+``--poll-idle`` holds a CPU latency request of 0 us (``/dev/cpu_dma_latency``, as
+``cyclictest`` does) during the measurement: an idle CPU then polls instead of halting (in a
+VM: no exit to the host while the loop sleeps).
+
+Run: ``python bench/bench_rt_warm.py [--periods 2000] [--only TEXT] [--poll-idle]``
+(``--only``: the variants whose name has one of the comma-separated TEXTs, and the offline
+baseline).
 """
 
 import argparse
@@ -46,7 +55,8 @@ from motosim.rt.clock import MonotonicClock
 from motosim.rt.fused import context_period, context_warm, context_warm_until, monotonic_ns
 from motosim.rt.loop import WARM_LEAD
 from motosim.rt.privileges import apply_privileges
-from motosim.rt.stack import CompiledStack, compiled
+from motosim.rt.safety import safety_scale
+from motosim.rt.stack import CompiledStack, compiled, stack_period
 
 
 @njit(cache=False)
@@ -88,8 +98,74 @@ def _decay(c: Any, frames: Any, status_id: int, out: Any, gap_ns: int, warm: int
         out[k] = a.runner[fused.R_STACK_TIME]
 
 
-def main(periods: int, only: str = "") -> None:
-    """Measure and print."""
+@njit(cache=False)
+def _copy_only(c: Any) -> None:
+    """What a warm-up reads and writes of the stack's data without its step: the copies of
+    :func:`~motosim.rt.fused.stack_warm` (the real data read, the copy's written)."""
+    d, shadow = c.data, c.shadow
+    shadow.estimator[:] = d.estimator
+    shadow.differentiator[:] = d.differentiator
+    shadow.controller[:] = d.controller
+    shadow.motorcycle[:] = d.motorcycle
+    shadow.held[:] = d.held
+    shadow.periods[:] = d.periods
+    c.shadow_state[:] = c.stack_state
+
+
+@njit(cache=False)
+def _step_only(c: Any) -> None:
+    """A warm-up's step without its copies: the copy of the stack stepped on its own state
+    (the stack's code, its model and the copy's data warmed; the stack's own data not)."""
+    r = c.arrays.runner
+    if c.shadow_state[0] == 0.0:  # the copy starts from the stack once
+        _copy_only(c)
+    stack_period(
+        c.model, c.shadow, c.force, c.side_force, c.shadow_state, c.shadow_row, r[fused.R_THETA],
+        r[fused.R_CURRENT], r[fused.R_FRESH] != 0.0, safety_scale(c.arrays.safety, c.arrays.limits),
+    )  # fmt: skip
+
+
+@njit(cache=False)
+def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> int:
+    """:func:`~motosim.rt.fused.context_cycle` with its warm-ups replaced by ``mode``'s:
+    0 none (a spin only), 1 the warm-ups (the loop's), 2 the warm-ups' copies of the stack's
+    data only (no step: its code cold), 3 their step only (the copy stepped on its own
+    state: the stack's own data cold); until about 2 us before ``t`` [s]. ``fd`` < 0: no
+    socket read (no system call), the frame already in the period's arrays."""
+    r = c.arrays.runner
+    due = max(0, int(t * 1e9))
+    if mode == 1:
+        fused.context_warm_until(c, due)
+    elif mode > 1 and r[fused.R_STARTED] != 0.0:
+        start = monotonic_ns()
+        while True:
+            if mode == 2:
+                _copy_only(c)
+            else:
+                _step_only(c)
+            end = monotonic_ns()
+            if end + (end - start) + fused.WARM_MARGIN_NS >= due:
+                break
+            start = end
+    woke = monotonic_ns() / 1e9
+    while woke < t:
+        woke = monotonic_ns() / 1e9
+    r[fused.R_WOKE] = woke
+    frames = fused.receive_datagrams(fd, c.arrays) if fd >= 0 else 1
+    done_read = monotonic_ns() / 1e9
+    return fused.fused_period(
+        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
+        done_read,
+    )  # fmt: skip
+
+
+def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
+    """Measure and print; ``poll_idle``: hold a CPU latency request of 0 us
+    (``/dev/cpu_dma_latency``) meanwhile."""
+    if poll_idle:
+        qos = os.open("/dev/cpu_dma_latency", os.O_WRONLY)
+        os.write(qos, (0).to_bytes(4, "little"))  # held until the process ends
+        print("CPU latency request: 0 us (idle CPUs poll instead of halting)")
     privileges = apply_privileges(priority=80, cpus=[1], mlock=True)
     print("privileges:", ", ".join(f"{p.name} {'applied' if p.applied else 'refused'}"
                                    for p in privileges))  # fmt: skip
@@ -167,6 +243,32 @@ def main(periods: int, only: str = "") -> None:
             out[k] = a.runner[fused.R_STACK_TIME]
         return out
 
+    wakes: dict[tuple[int, bool], list[np.ndarray]] = {}  # the cycle variants' wake-ups
+
+    def variant_loop(mode: int, read: bool) -> np.ndarray:
+        """The compiled cycle of ``motosim run`` with the warm-ups of ``mode``
+        (:func:`_cycle_variant`), the frame read from a loopback socket or given."""
+        r = runner()
+        a, context = r._arrays, r._context
+        fd = rx.fileno() if read else -1
+        out, late = np.empty(n), np.empty(n)
+        t0 = clock.now() + 1e-3
+        for k in range(n):
+            deadline = t0 + k * 1e-3
+            if read:
+                tx.sendto(frames[k].tobytes(), target)  # waiting at the wake-up
+            else:
+                a.rx[0, : st.length] = frames[k]
+                a.rx_length[0] = st.length
+            a.rx_id[0] = st.frame_id
+            clock.sleep_until(deadline - lead)
+            _cycle_variant(context, fd, k, deadline, mode)
+            a.ring_head[0] += 1
+            out[k] = a.runner[fused.R_STACK_TIME]
+            late[k] = a.runner[fused.R_WOKE] - deadline
+        wakes.setdefault((mode, read), []).append(late[20:].copy())
+        return out
+
     def compiled_loop(mode: int) -> np.ndarray:
         r = runner()
         out = np.empty(n)
@@ -221,6 +323,11 @@ def main(periods: int, only: str = "") -> None:
             lambda: python_loop(2, True)
         ),
         "compiled cycle: warm-ups, spin, recv and the period in one compiled call": cycle_loop,
+        **{
+            f"cycle variant: {what}, {how}": (lambda m=m, read=read: variant_loop(m, read))
+            for m, what in enumerate(("no warm-up", "warm-ups", "data only", "code only"))
+            for read, how in ((True, "recv"), (False, "frame given"))
+        },
     }
     if only:
         parts = only.split(",")
@@ -244,6 +351,15 @@ def main(periods: int, only: str = "") -> None:
     print(f"stack step p50/p99 us, three rounds; load {load}")
     for name, rounds in results.items():
         print(f"  {name:<80} {'  '.join(rounds)}")
+    if wakes:
+        print("the cycle variants' wake-up after the deadline p50/p99/p99.9/max us, three rounds")
+        what = ("no warm-up", "warm-ups", "data only", "code only")
+        for (mode, read), rounds_w in wakes.items():
+            figures = "  ".join(
+                "/".join(str(_us(float(x))) for x in (*np.percentile(w, (50, 99, 99.9)), w.max()))
+                for w in rounds_w[-3:]
+            )
+            print(f"  {what[mode]}, {'recv' if read else 'frame given':<12} {figures}")
 
 
 if __name__ == "__main__":
@@ -252,5 +368,8 @@ if __name__ == "__main__":
     parser.add_argument(
         "--only", default="", help="only the variants whose name has one of these (comma-separated)"
     )
+    parser.add_argument(
+        "--poll-idle", action="store_true", help="hold /dev/cpu_dma_latency at 0 us meanwhile"
+    )
     args = parser.parse_args()
-    main(args.periods, args.only)
+    main(args.periods, args.only, args.poll_idle)

@@ -164,6 +164,7 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     assert payload["fault"] == "NONE" and payload["counters"]["status_frames"] >= 150
     # on the clock over the fast link: the wait's end and the bus read in compiled code
     assert payload["wait"] == "compiled" and payload["counters"]["bus_errors"] == 0
+    assert payload["warm"] is True  # the stack warmed before each deadline (--warm on)
     result = load_result(out)
     report = json.loads((out / "timing.json").read_text())
     timing = report["timing"]

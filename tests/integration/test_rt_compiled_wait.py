@@ -133,19 +133,31 @@ def _recording(codecs: HandlebarCodecs, n: int) -> list[list[bytes]]:
     return periods
 
 
-def _run(compiled_wait: bool, recording: list[list[bytes]]) -> tuple[RealtimeRunner, Any]:
+def _run(
+    compiled_wait: bool, recording: list[list[bytes]], *, warm: bool = True, live: bool = False
+) -> tuple[RealtimeRunner, Any]:
     codecs = handlebar_codecs()
     link = _PairLink()
     runner = RealtimeRunner(
-        _stack(), link, codecs, LIMITS, rate=RATE, capacity=4096, now=time.monotonic
+        _stack(), link, codecs, LIMITS, rate=RATE, capacity=4096, now=time.monotonic, warm=warm
     )
     assert runner.compile_wait()  # compiled stack, the fast link, Linux, numba's JIT
     step = runner.wait_period if compiled_wait else runner.period
+    start = time.monotonic() + 1e-3 if live else 1.0
     for k, waiting in enumerate(recording):
         for datagram in waiting:
             link.peer.send(datagram)
-        # a deadline long past on the monotonic clock: no wait, one warm-up, a row for each
-        if not step(k, 1.0 + k / RATE):
+        # not live: a deadline long past on the monotonic clock (no wait, one warm-up, a row
+        # for each); live: every 1 ms on it, slept for until WARM_LEAD before as the loop
+        # does (never a deadline skipped: a late one is served at once)
+        due = start + k / RATE
+        if live:
+            time.sleep(max(0.0, due - WARM_LEAD - time.monotonic()))
+            if not compiled_wait:
+                runner.warm(due)
+                while time.monotonic() < due:
+                    pass
+        if not step(k, due):
             break
     link.close()
     return runner, (runner.ring.drain(), link.sent)
@@ -170,6 +182,30 @@ def test_the_compiled_wait_gives_the_rows_and_frames_of_the_python_path() -> Non
     # the compiled path stamps its wake-up and bus read from compiled code
     col = names.index("done_read")
     assert np.all(rows_c[:, col] >= 0.0) and np.all(rows_c[:, names.index("wake")] > 0.0)
+
+
+def test_the_warm_ups_before_each_deadline_change_nothing_and_can_be_turned_off() -> None:
+    # at 1 kHz on the machine's clock, the compiled wait steps a copy of the stack (its
+    # state copied, the step run on the copy, its result thrown away) again and again from
+    # WARM_LEAD until about 2 us before each deadline (how many times varies from period to
+    # period and run to run, and must not matter); with warm=False (motosim run --warm off)
+    # it only spins. The rows and the frames sent are those of the Python path (here warmed
+    # too) to the last bit, the warm-ups on or off; only the clock's times differ
+    recording = _recording(handlebar_codecs(), 900)
+    python, (rows, sent) = _run(False, recording, live=True)
+    keep = [j for j in _timeless(python) if python.names[j] not in ("t", "t_clock")]
+    t = python.names.index("t")
+    for warm in (True, False):
+        runner, (rows_w, sent_w) = _run(True, recording, warm=warm, live=True)
+        assert runner.warms is warm
+        assert np.array_equal(rows[:, keep], rows_w[:, keep], equal_nan=True)
+        assert np.allclose(rows[:, t], rows_w[:, t], rtol=0.0, atol=1e-9)
+        assert sent == sent_w
+        # the copy the warm-ups step: its period index follows the stack's, or never moved
+        assert runner._shadow is not None
+        shadow = runner._shadow[1]  # the stack's state (its period index first)
+        assert shadow[0] > 800.0 if warm else np.all(shadow == 0.0)
+        assert (runner.warm(time.monotonic() + 50e-6) > 1) is warm  # again and again, or none
 
 
 def test_a_socket_error_is_counted_and_the_watchdog_trips_as_in_the_python_path() -> None:

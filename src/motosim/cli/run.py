@@ -72,6 +72,14 @@ def register(sub: Any) -> None:
         "udp_multicast link, on Linux; Python elsewhere); 'python' spins and reads in Python",
     )
     parser.add_argument(
+        "--warm",
+        choices=("on", "off"),
+        default="on",
+        help="a clock-paced loop steps a copy of the stack, thrown away, in the last 50 us "
+        "before each deadline, so that its step finds its code and data in the CPU's caches: "
+        "'on' (default) or 'off' (the wait only spins; the rows are the same)",
+    )
+    parser.add_argument(
         "--telemetry",
         default="127.0.0.1:47474",
         metavar="HOST:PORT",
@@ -544,6 +552,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             clock=clock,
             handlebar=inputs.nominal_handlebar,
             validity=validity_limits(sc.motorcycle.speed),
+            warm=args.warm == "on",
         )
         metadata = run_metadata(inputs) | {
             "realtime": {
@@ -578,6 +587,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     report = {
         "pace": args.pace,
         "wait": "compiled" if runner.waits_compiled else "python",
+        "warm": runner.warms and args.pace == "clock",
         "timing": timing,
         "profile": summary.get("profile", {}),
         "state_stream": summary.get("state_stream", {}),
@@ -770,8 +780,9 @@ def _loop(
             # the wait's end, the bus read and the period in one compiled call
             loop = RateLoop(rate, clock, capacity=capacity, woke=runner.woke)
             step = runner.wait_period
-        else:  # the stack warmed in the caches just before each deadline
-            loop = RateLoop(rate, clock, capacity=capacity, warm=runner.warm)
+        else:  # the stack warmed in the caches just before each deadline (--warm on)
+            warm = runner.warm if runner.warms else None
+            loop = RateLoop(rate, clock, capacity=capacity, warm=warm)
         if sys.stdin is not None and sys.stdin.isatty():
             threading.Thread(target=_keyboard, args=(runner,), daemon=True).start()
             print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=sys.stderr)

@@ -98,9 +98,9 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS,
-) = range(34)  # fmt: skip
-RUNNER_STATE_SIZE = 34
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM,
+) = range(35)  # fmt: skip
+RUNNER_STATE_SIZE = 35
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
 the angle of the period before, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
@@ -113,7 +113,8 @@ stack's row holds its roll and speed (-1: nowhere); and whether, when (since the
 deadline [s]), at which roll [rad] and speed [m/s] the motorcycle left that range; the
 stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did not step);
 the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
-errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`)."""
+errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`); and
+whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0)."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -591,7 +592,8 @@ def context_warm_until(c: Any, due_ns: int) -> int:
     The loop calls it through :func:`context_period` (its ``warm_until``), so that the
     warm-ups run the very machine code of the step that follows.
     """
-    if c.arrays.runner[R_STARTED] == 0.0:
+    r = c.arrays.runner
+    if r[R_STARTED] == 0.0 or r[R_WARM] == 0.0:
         return 0
     n = 0
     start = monotonic_ns()
@@ -634,7 +636,8 @@ def context_cycle(c: Any, fd: int, k: int, t: float) -> int:
     the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
 
     In order, without returning to the interpreter: the stack's warm-ups until about 2 us
-    before ``t`` (:func:`context_warm_until`, none before the stack has started), a spin on
+    before ``t`` (:func:`context_warm_until`, none before the stack has started or with the
+    warm-ups off), a spin on
     the clock until ``t`` has passed (the test of
     :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float`` seconds), the
     wake-up kept in the runner's ``R_WOKE`` [s], the datagrams read

@@ -173,6 +173,10 @@ class RealtimeRunner:
         :func:`motosim.sim.metrics.validity_limits`), read from the stack's ``phi`` and
         ``v_x``: beyond it the torque fades out and the run ends, as offline ``simulate``
         stops there; :attr:`left_range` says why. Without it the run goes on.
+    warm : bool
+        Warm the stack before each deadline (:meth:`warm`, and the compiled wait of
+        :meth:`wait_period`): True by default; False, the wait only spins (``motosim run
+        --warm off``). The rows are the same either way.
     """
 
     def __init__(
@@ -195,6 +199,7 @@ class RealtimeRunner:
         clock: Clock | None = None,
         handlebar: HandlebarParameters | None = None,
         validity: tuple[float, float, float] | None = None,
+        warm: bool = True,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
@@ -214,6 +219,7 @@ class RealtimeRunner:
         self._arrays = self._allocate(stepper, link, codecs, rate, linger, start_timeout)
         self._r = self._arrays.runner
         self._r[fused.R_ARMED] = 0.0 if wait_for_arm else 1.0
+        self._r[fused.R_WARM] = 1.0 if warm else 0.0
         self._validity = validity
         if validity is not None:
             self._r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = validity
@@ -293,11 +299,13 @@ class RealtimeRunner:
         self._kernel: Callable[..., int] | None = None
         self._context: object = None
         self._warms = False  # whether the kernel warms (compiled, its stack compiled)
+        self._shadow: tuple[object, Array, Array] | None = None  # what the warm-ups step
         if isinstance(self.stepper, CompiledStack):
             st = self.stepper
             stack_args = (st.model, st.data, st.force, st.side_force, st.state)
             if hasattr(fused.context_period, "compile"):  # one argument unboxed per call
                 shadow = (new_data(st.model), st.state.copy(), a.stack_row.copy())
+                self._shadow = shadow
                 self._context = fused.PeriodContext(*stack_args, a, *shadow)
                 self._kernel = compiled(
                     fused.context_period, self._context, 0, 0, 0.0, 0.0, 0.0, -1
@@ -333,9 +341,10 @@ class RealtimeRunner:
         Returns
         -------
         int
-            The warm-ups run (0 before the stack has started, or for a stack in Python).
+            The warm-ups run (0 before the stack has started, for a stack in Python, or with
+            the warm-ups off: :attr:`warms`).
         """
-        if not self._warms:
+        if not self.warms:
             return 0
         assert self._kernel is not None
         due = 0 if until is None else max(0, int(until * 1e9))  # 0: in the past, one warm-up
@@ -365,6 +374,12 @@ class RealtimeRunner:
         self._fd = link.fileno()
         self._cycle = compiled(fused.context_cycle, self._context, self._fd, 0, 0.0)
         return True
+
+    @property
+    def warms(self) -> bool:
+        """Whether :meth:`warm` (and :meth:`wait_period`) warm the stack: a compiled stack
+        with its warm-ups on."""
+        return self._warms and bool(self._r[fused.R_WARM])
 
     @property
     def waits_compiled(self) -> bool:
