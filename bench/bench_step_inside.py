@@ -388,16 +388,43 @@ def run(rounds: int = 1, seconds: float = 30.0, repeats: int = 3) -> dict[str, o
             for case, text in realtime if j % 2 == 0 else realtime[::-1]:
                 for key, value in _realtime(case, text, seconds).items():
                     figures[case.name].setdefault(key, []).append(value)
+    return _table(figures, rounds)
+
+
+COLUMNS = (  # (heading, p50 key, p99 key)
+    ("step after step", "after p50", "after p99"),
+    ("inside the offline simulator", "inside p50", "inside p99"),
+    ("differential (mean)", "differential", ""),
+    ("stack period after step (motosim run's)", "period after p50", "period after p99"),
+    ("paced at 1 kHz", "period paced p50", "period paced p99"),
+    ("inside motosim run", "loop p50", "loop p99"),
+)
+
+
+def _table(figures: dict[str, dict[str, list[float]]], rounds: int) -> dict[str, object]:
+    """Print the figures as a Markdown table (range over the rounds and median, p50 then
+    p99) with the ratios of the medians; return them."""
+    print(f"\nstack step p50 / p99 [us], range over {rounds} rounds (median):\n")
+    print("| run | " + " | ".join(c[0] for c in COLUMNS) + " | ratios of the p50 medians |")
+    print("|---" * (len(COLUMNS) + 2) + "|")
     summary: dict[str, object] = {}
-    print(f"range (median) over {rounds} rounds, us:")
     for name, values in figures.items():
-        line = {k: _spread(v) for k, v in values.items() if v}
-        f = {k: float(np.median(v)) for k, v in values.items() if v}
-        for top in ("inside p50", "period after p50"):
-            if "loop p50" in f:
-                line[f"loop / {top}"] = f"{f['loop p50'] / f[top]:.2f} (medians)"
-        summary[name] = line
-        print(f"  {name}: " + "; ".join(f"{k} {v}" for k, v in line.items()))
+        med = {k: float(np.median(v)) for k, v in values.items() if v}
+        cells = []
+        for _, p50, p99 in COLUMNS:
+            cell = _spread(values[p50]) if values.get(p50) else ""
+            if cell and p99 and values.get(p99):
+                cell += " / " + _spread(values[p99])
+            cells.append(cell)
+        ratios = [f"inside / after {med['inside p50'] / med['after p50']:.2f}"]
+        for top, label in (("after p50", "after"), ("inside p50", "inside"),
+                           ("period after p50", "period after")):  # fmt: skip
+            if "loop p50" in med and top in med:
+                ratios.append(f"loop / {label} {med['loop p50'] / med[top]:.2f}")
+        if "missed %" in med:
+            ratios.append(f"missed {_spread(values['missed %'])} %")
+        print(f"| {name} | " + " | ".join(cells) + " | " + ", ".join(ratios) + " |")
+        summary[name] = {k: _spread(v) for k, v in values.items() if v}
     return summary
 
 
