@@ -318,12 +318,17 @@ def _run_against_rig(
     pace: str = "clock",
     wait: str = "",
     warm: str = "",
+    text: str = "",
 ) -> dict[str, object]:
+    """``motosim run`` against ``motosim rig`` in another process: the bench's scenario at
+    ``control`` [Hz] for ``seconds``, or the scenario TOML ``text`` as it is (its rates and
+    duration; its ``[realtime]`` tables, if any, followed by the bench's safety table)."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench_rt.toml"
         # the watchdog is lenient here so that a VM stall shows up in the figures rather
         # than ending the run; the tests check the 3-period watchdog itself
-        path.write_text(SCENARIO.format(duration=seconds, control=control) + safety_table(1000))
+        scenario = text or SCENARIO.format(duration=seconds, control=control)
+        path.write_text(scenario + safety_table(1000))
         rig = _motosim("rig", str(path), "--bus", BUS, "--duration", "36000",
                        "--rate", f"{control:g}", "--link", link, *RIG)  # fmt: skip
         time.sleep(5.0)
