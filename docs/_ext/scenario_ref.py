@@ -125,7 +125,7 @@ DESCRIPTIONS: dict[str, str] = {
         "Cancel the rider torque predicted over the estimate's lag, tau_r_hat + T_d r (T_d the "
         "estimate filter's delay, r the estimate's rate through a 10 Hz notch and a 3 Hz "
         'low-pass); needs `"rider"` and the Walcott-Zak observer. Default: on with them '
-        "from a 1 kHz measurement rate."
+        "from a 1 kHz measurement rate and at the paper's 100 Hz."
     ),
     # [realtime]
     "realtime.status_latency": (

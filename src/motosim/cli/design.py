@@ -92,7 +92,8 @@ def register(sub: Any) -> None:
         action="store_true",
         help=(
             "analyse the stack with the plain rider-torque cancellation (by default it is "
-            "predicted over the estimate's lag from a 1 kHz rate, as a scenario's default)"
+            "predicted over the estimate's lag from a 1 kHz rate and at 100 Hz, as a "
+            "scenario's default)"
         ),
     )
     parser.add_argument(

@@ -33,7 +33,7 @@ so that an error is one line naming the key, the value and what was expected. Th
                    [] for the paper's (the terms of :func:`motosim.sim.stack.step`),
                    prediction = true | false (cancel the rider torque predicted over the
                    estimate's lag; default: on with "rider" and the Walcott-Zak observer
-                   from a 1 kHz measurement rate)
+                   from a 1 kHz measurement rate and at 100 Hz)
 
 Profiles (rider torque, drive, brake, wind) are tables with ``kind``: ``constant`` (value),
 ``steps`` (times, values: the value after each time), ``square`` (low, high, period, start),
