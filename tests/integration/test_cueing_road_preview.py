@@ -89,6 +89,39 @@ def test_unseen_swerve_at_18_mps_mpc_with_road_preview_beats_the_washout(
     assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
 
 
+def _against_the_washout(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    name: str,
+    key: str,
+    packaged: str,
+    variant: str,
+) -> dict[str, tuple[float, float, float]]:
+    """Mean false-cue share, roll and pitch RMS errors of ``bench/scenarios/NAME.toml`` cued
+    by the washout, by the MPC with the road preview ("road") and by the MPC with the
+    packaged platform file's ``key = packaged`` set to ``variant`` ("variant")."""
+    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    run = tmp_path / "run"
+    scenario = ROOT / f"bench/scenarios/{name}.toml"
+    assert main(["simulate", str(scenario), "--out", str(run), "--no-report"]) == 0
+    capsys.readouterr()
+    text = (ROOT / "src/motosim/cueing/data/simacom_platform.toml").read_text()
+    assert f"{key} = {packaged}\n" in text
+    changed = tmp_path / "variant.toml"
+    changed.write_text(text.replace(f"{key} = {packaged}\n", f"{key} = {variant}\n"))
+    scores = {}
+    for label, extra in (
+        ("washout", ()),
+        ("road", ("--algorithm", "mpc")),
+        ("variant", ("--algorithm", "mpc", "--platform", str(changed))),
+    ):
+        s = _cue(run, tmp_path / label, capsys, *extra)["score"]
+        assert s["violations"] == 0
+        false = float(np.mean([s[f"{c}_false_cue_share"] for c in CHANNELS]))
+        scores[label] = (false, s["roll_rms_error"], s["pitch_rms_error"])
+    return scores
+
+
 def test_long_curve_mpc_with_the_band_scheduled_by_persistence_beats_the_washout(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -98,29 +131,11 @@ def test_long_curve_mpc_with_the_band_scheduled_by_persistence_beats_the_washout
     scheduled by the curve's persistence 6.87 against 8.01 % false cues, 1.78 against 2.08
     deg/s roll, 0.90 against 0.94 deg/s pitch; not scheduled, the platform file's
     ``sustained_force_false_cue_weight`` set to the transient 1.5: 2.84 deg/s roll)."""
-    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
-    run = tmp_path / "run"
-    scenario = ROOT / "bench/scenarios/opendrive_curve_25.toml"
-    assert main(["simulate", str(scenario), "--out", str(run), "--no-report"]) == 0
-    capsys.readouterr()
-    packaged = ROOT / "src/motosim/cueing/data/simacom_platform.toml"
-    unscheduled = tmp_path / "unscheduled.toml"
-    text = packaged.read_text()
-    assert "sustained_force_false_cue_weight = 0.0\n" in text
-    unscheduled.write_text(text.replace("sustained_force_false_cue_weight = 0.0\n",
-                                        "sustained_force_false_cue_weight = 1.5\n"))  # fmt: skip
-    scores = {}
-    for label, extra in (
-        ("washout", ()),
-        ("road", ("--algorithm", "mpc")),
-        ("unscheduled", ("--algorithm", "mpc", "--platform", str(unscheduled))),
-    ):
-        s = _cue(run, tmp_path / label, capsys, *extra)["score"]
-        assert s["violations"] == 0
-        false = np.mean([s[f"{c}_false_cue_share"] for c in CHANNELS])
-        scores[label] = (false, s["roll_rms_error"], s["pitch_rms_error"])
+    scores = _against_the_washout(
+        tmp_path, capsys, "opendrive_curve_25", "sustained_force_false_cue_weight", "0.0", "1.5"
+    )
     assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
-    assert scores["unscheduled"][1] > scores["washout"][1], scores  # the miss before
+    assert scores["variant"][1] > scores["washout"][1], scores  # the miss before
 
 
 def test_unseen_swerve_at_22_mps_mpc_with_the_huber_roll_cost_beats_the_washout(
@@ -132,25 +147,8 @@ def test_unseen_swerve_at_22_mps_mpc_with_the_huber_roll_cost_beats_the_washout(
     bench/bench_cueing.py RUNS``: with the roll canal error's Huber cost, corner 4 thresholds
     chosen on the training runs, 3.64 against 4.18 % false cues, 14.38 against 15.99 deg/s
     roll, 1.19 against 1.77 deg/s pitch; squared, ``roll_canal_corner = 0.0``, 4.29 %)."""
-    pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
-    run = tmp_path / "run"
-    scenario = ROOT / "bench/scenarios/avoidance_22.toml"
-    assert main(["simulate", str(scenario), "--out", str(run), "--no-report"]) == 0
-    capsys.readouterr()
-    packaged = ROOT / "src/motosim/cueing/data/simacom_platform.toml"
-    squared = tmp_path / "squared.toml"
-    text = packaged.read_text()
-    assert "roll_canal_corner = 4.0\n" in text
-    squared.write_text(text.replace("roll_canal_corner = 4.0\n", "roll_canal_corner = 0.0\n"))
-    scores = {}
-    for label, extra in (
-        ("washout", ()),
-        ("road", ("--algorithm", "mpc")),
-        ("squared", ("--algorithm", "mpc", "--platform", str(squared))),
-    ):
-        s = _cue(run, tmp_path / label, capsys, *extra)["score"]
-        assert s["violations"] == 0
-        false = np.mean([s[f"{c}_false_cue_share"] for c in CHANNELS])
-        scores[label] = (false, s["roll_rms_error"], s["pitch_rms_error"])
+    scores = _against_the_washout(
+        tmp_path, capsys, "avoidance_22", "roll_canal_corner", "4.0", "0.0"
+    )
     assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
-    assert scores["squared"][0] > scores["washout"][0], scores  # the miss before
+    assert scores["variant"][0] > scores["washout"][0], scores  # the miss before
