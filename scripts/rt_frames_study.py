@@ -30,10 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
+from motosim.errors import MotosimError
 from motosim.io.can import handlebar_codecs, open_link
 from motosim.io.runs import load_run
 from motosim.rt.clock import SimulatedClock
-from motosim.rt.config import parse_safety, within_safety
+from motosim.rt.config import frame_age, parse_safety, within_safety
 from motosim.rt.loop import RateLoop
 from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
 from motosim.rt.run import RealtimeRunner
@@ -62,8 +63,11 @@ def _row(
     measurement delay [s] (None: the bus latency and half a control period)."""
     sc = inputs.scenario
     model = build_stack(inputs)
-    if delay is None:  # the frame's mean age when the loop reads it
-        d = min(latency + 0.5 / sc.rates.control, 1.0 / sc.rates.measurement) if latency else 0.0
+    if delay is None:  # the frame's mean age when the loop reads it, as motosim run takes it
+        d = frame_age(
+            latency, pace="clock", control_rate=sc.rates.control,
+            measurement_rate=sc.rates.measurement, origin="rt_frames_study",
+        )  # fmt: skip
     else:
         d = delay
     model = account_for_delay(model, d, inputs.nominal_handlebar)
@@ -157,7 +161,10 @@ def main() -> int:
             if name not in args.limits:
                 continue
             run = inputs if args.no_clamp else within_safety(inputs, limits)
-            cells = _row(run, limits, latency, jitter, delay)
+            try:
+                cells = _row(run, limits, latency, jitter, delay)
+            except MotosimError as exc:  # e.g. an age beyond a frame period, as run refuses
+                cells = f"refused: {exc} |" + " |" * 7
             print(f"| {1e3 * latency:g}, {1e3 * jitter:g} ms | {name} | {cells} |")
     return 0
 

@@ -65,9 +65,10 @@ def test_design_at_the_can_rate(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_design_with_a_latency_shows_the_margins_kept(capsys: pytest.CaptureFixture[str]) -> None:
     # 100 Hz status frames read 5.5 ms old (5 ms on the bus, half a 1 kHz loop's period):
-    # the stack designed for a fresh sample loses its margins (unstable, PM 7 deg, in the
-    # sampled loop analysis); accounting for the age keeps 7.6 dB and 49 deg at 20 m/s with the
-    # plain cancellation, 6.9 dB and 48 deg with the predicted one, the default at 100 Hz
+    # the stack designed for a fresh sample loses its margins (unstable, in the sampled loop
+    # analysis; PM 24 deg, 7 deg with the plain cancellation); accounting for the age keeps
+    # 7.6 dB and 49 deg at 20 m/s with the plain cancellation, 6.9 dB and 48 deg with the
+    # predicted one, the default at 100 Hz
     code, out, _ = _run(
         capsys, "design", "--json", "--starts", "1", "--rate", "100", "--speeds", "20",
         "--latency", "0.0055",

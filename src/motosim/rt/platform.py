@@ -425,7 +425,8 @@ class PlatformTwin:
     command never exceeds the platform's limits, as a drive's own limits would ensure) and
     each axis then follows it through its first-order position loop at its bandwidth, both at
     ``dt``. Lost datagrams (sequence gaps), late ones (older than the last taken: delivered
-    out of order, not used) and bad ones are counted; the last good command is
+    out of order, not used; after the watchdog's time without a command any sequence starts
+    a new stream, the next run's) and bad ones are counted; the last good command is
     held for ``watchdog`` seconds, then the platform goes back to neutral (braked by its
     limits) until datagrams come again, as a platform controller must do when its host stops.
 
@@ -490,6 +491,10 @@ class PlatformTwin:
         host, port = self._socket.getsockname()[:2]
         return str(host), int(port)
 
+    def _stream_ended(self) -> bool:
+        """No command for longer than the watchdog: the next one may start a new stream."""
+        return self._received > -math.inf and self.t - self._received > self.watchdog
+
     def receive(self, data: bytes) -> None:
         """Take one datagram."""
         try:
@@ -501,6 +506,8 @@ class PlatformTwin:
         if not all(math.isfinite(v) for v in values):
             self.bad += 1
             return
+        if self._stream_ended():
+            self.last = None  # a new sender (the next run) starts its own sequence
         if self.last is not None:
             step = (frame.sequence - self.last.sequence) & 0xFFFFFFFF
             if step == 0 or step >= 1 << 31:  # the same or an older datagram
@@ -527,6 +534,8 @@ class PlatformTwin:
             self.bad += 1
             return True
         counter = int(v[c.command.counter_index])
+        if self._stream_ended():
+            self._counter = -1
         if self._counter >= 0:
             step = (counter - self._counter) & 0xF
             if step == 0 or step > MAX_COUNTER_STEP:
@@ -555,8 +564,7 @@ class PlatformTwin:
         v = self._status
         v[c.status.counter_index] = self._status_counter
         self._status_counter = (self._status_counter + 1) & 0xF
-        v[c.watchdog] = 1.0 if self._received > -math.inf and (
-            self.t - self._received > self.watchdog) else 0.0  # fmt: skip
+        v[c.watchdog] = 1.0 if self._stream_ended() else 0.0
         for j, i in enumerate(c.status_angles):
             v[i] = self.achieved[j]
         return c.status.frame_id, c.status.encode(v)
@@ -574,7 +582,7 @@ class PlatformTwin:
     def step(self) -> Array:
         """Read waiting datagrams, advance one ``dt``; the achieved angles [rad]."""
         self._poll()
-        if self._received > -math.inf and self.t - self._received > self.watchdog:
+        if self._stream_ended():
             if np.any(self.command):
                 self.timeouts += 1
             self.command[:] = 0.0

@@ -19,7 +19,8 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   or an older one delivered after a newer, does not feed the watchdog and is not used: the
   counter's window of AUTOSAR's E2E profiles, *Specification of SW-C End-to-End
   Communication Protection Library*, R4.0; after 7 or more frames lost in a row, which
-  trip the default watchdog long before, the counter is taken up again within 9 frames);
+  trip the default watchdog long before, the counter is taken up again after up to 9
+  frames);
 - guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
@@ -263,6 +264,8 @@ def safety_status_frame(
     if not checksum_ok:
         safety_trip(s, 3)  # CHECKSUM
         return False
+    if drive_fault:  # whatever its counter: a drive that reports a fault is believed
+        safety_trip(s, 6)  # DRIVE_FAULT
     c = int(counter) & 0xF
     last = int(s[S_COUNTER])
     step = (c - last) & 0xF
@@ -272,8 +275,6 @@ def safety_status_frame(
     if last >= 0:
         s[S_LOST] += step - 1
     s[S_COUNTER] = c
-    if drive_fault:
-        safety_trip(s, 6)  # DRIVE_FAULT
     s[S_FRESH] = 1.0
     return True
 

@@ -171,3 +171,18 @@ def test_twin_ignores_a_datagram_older_than_the_last(config: CueingConfig) -> No
     np.testing.assert_allclose(twin.command, [0.2, 0.0, 0.0], atol=1e-6)
     twin.receive(encode_platform(8, 0.08, State.RUNNING, 0, True, values))
     assert twin.lost == 2 and twin.frames == 2
+
+
+def test_twin_follows_the_next_run_from_sequence_zero(config: CueingConfig) -> None:
+    # one rig, two runs: after the first run's stream ends (the watchdog's time without a
+    # datagram) the second run's sequence starts at 0 again and is followed, not taken late
+    twin = PlatformTwin(config.platform, 0.01, watchdog=0.1)
+    values = np.array([0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    for k in range(50):
+        twin.receive(encode_platform(k, 0.01 * k, State.RUNNING, 0, True, values))
+        twin.step()
+    for _ in range(20):  # 0.2 s without a datagram: neutral
+        twin.step()
+    twin.receive(encode_platform(0, 0.0, State.RUNNING, 0, True, -values))
+    assert twin.late == 0 and twin.frames == 51
+    np.testing.assert_allclose(twin.command, -values[:3], atol=1e-6)

@@ -283,3 +283,12 @@ def test_a_long_gap_is_taken_up_again() -> None:
         for k in range(9, 18)
     ]
     assert fresh == [False] * 8 + [True]  # +9 to +15: older; +16: the last counter again
+
+
+def test_a_drive_fault_counts_even_in_a_frame_not_used() -> None:
+    # a drive that restarts its counter (read as an older frame) while reporting a fault:
+    # the fault trips at once, not after the counter is taken up again
+    d = Driver().running()
+    older = (d.counter - 3) & 0xF
+    assert not d.stage.status_frame(checksum_ok=True, counter=older, drive_fault=True)
+    assert d.stage.fault == Fault.DRIVE_FAULT and d.period(frame=False) == 0.0
