@@ -44,7 +44,11 @@ def _roll_after(corner: float, roll_rate: float, monkeypatch: pytest.MonkeyPatch
     pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
     import motosim.cueing.mpc as mpc
 
-    monkeypatch.setattr(mpc, "MAX_ITER", 20_000)  # converged, to compare optima
+    # converged, to compare the optima: at the shipped iteration limit the two extra
+    # variables per step move the plan a little even within the corner (the terminal-rows
+    # test of test_cueing_preview.py runs the squared cost for that reason); the runs'
+    # verdicts are the same converged (docs/guide/cueing.md)
+    monkeypatch.setattr(mpc, "MAX_ITER", 20_000)
     plan = mpc.MpcCueing(design_mpc(_config(corner), TELBAN_CARDULLO_2005, 0.01))
     motion = np.array([roll_rate, 0.0, 0.0, 0.0, 0.0])
     for _ in range(20):
