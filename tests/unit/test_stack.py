@@ -210,3 +210,24 @@ def test_a_fresh_measurement_and_a_delay_beyond_one_step() -> None:
     for bad in (-1e-3, 0.011, float("nan")):
         with pytest.raises(MotosimError, match="expected 0 to one measurement step"):
             account_for_delay(model, bad, HB)
+
+
+def test_the_prediction_over_a_measurements_age_takes_the_observers_friction_width() -> None:
+    # the dry friction's tanh in the prediction is the observer's own (its friction_width),
+    # so that the two read the same rate as sliding; an estimator without one: the default
+    from motosim.estimation.walcott_zak import (
+        ObserverSettings,
+        WalcottZakObserver,
+        design_with,
+    )
+    from motosim.sim.stack import DELAY_FRICTION_WIDTH, account_for_delay
+
+    settings = dataclasses.replace(ObserverSettings.for_step(0.01), friction_width=0.02)
+    kernel = WalcottZakObserver(design_with(HB, settings), 0.01).kernel
+    model = design_stack(
+        BIKE, kernel, PAPER_CONTROLLER, control_rate=1000.0, measurement_rate=100.0,
+        lipschitz=300.0, max_current=30.0, speed=20.0,
+    )  # fmt: skip
+    assert account_for_delay(model, 0.005, HB).delay[6] == 0.02
+    other = account_for_delay(_stack(name="inverse_dynamics", measurement=100.0), 0.005, HB)
+    assert other.delay[6] == DELAY_FRICTION_WIDTH

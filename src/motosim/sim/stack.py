@@ -28,7 +28,7 @@ from motosim.control.statespace import StateSpace
 from motosim.control.torque_feedback import discretize
 from motosim.errors import MotosimError
 from motosim.estimation.differentiator import LAMBDA_0, LAMBDA_1, std_step
-from motosim.estimation.kernel import EstimatorKernel
+from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
 from motosim.estimation.registry import start_kernel, step_kernel
 from motosim.model import sharp as sharp_model
 from motosim.model.handlebar import matrices as handlebar_matrices
@@ -68,8 +68,9 @@ sticking. (At 0.02 rad/s the crosswind run's tracking error was 9 % of its peak 
 against 3 % at this width.)"""
 DELAY_FRICTION_WIDTH = 0.05
 """Rate scale of the tanh of the dry friction in the prediction over a measurement's age
-[rad/s]: the observer's friction width
-(:class:`~motosim.estimation.walcott_zak.ObserverSettings`)."""
+[rad/s] with an estimator that has none; with the Walcott-Zak observer its own
+``friction_width`` (:class:`~motosim.estimation.walcott_zak.ObserverSettings`, 0.05 by
+default)."""
 PREDICTION_RATE = 1000.0
 """Lowest measurement rate where the rider-torque cancellation is predicted by default [Hz]
 (and at :data:`PREDICTION_PAPER_RATE`)."""
@@ -346,7 +347,7 @@ def design_stack(
         motorcycle_substeps=max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9)),
         speed=float(speed),
         true_torque=bool(true_torque),
-        delay=_delay(measurement_delay, h_meas, handlebar),
+        delay=_delay(measurement_delay, h_meas, handlebar, estimator),
     )
 
 
@@ -394,13 +395,17 @@ def account_for_delay(
     (:func:`motosim.sim.loop_analysis.stack_loop` with ``delay``; with the predicted
     cancellation, the 100 Hz default: 7.8 dB and 53 deg, unstable, 6.9 dB and 48 deg).
     """
-    return model._replace(delay=_delay(delay, model.dt * model.measure_every, handlebar))
+    h = model.dt * model.measure_every
+    return model._replace(delay=_delay(delay, h, handlebar, model.estimator))
 
 
-def _delay(delay: float, h: float, handlebar: HandlebarParameters | None) -> Array:
+def _delay(
+    delay: float, h: float, handlebar: HandlebarParameters | None, estimator: EstimatorKernel
+) -> Array:
     """:attr:`StackModel.delay` for a measurement ``delay`` d [s] at the measurement step
-    ``h`` [s] on the nominal ``handlebar``; MotosimError if d is not in [0, h], or is
-    positive without a handlebar."""
+    ``h`` [s] on the nominal ``handlebar``, the friction's tanh as wide as the Walcott-Zak
+    ``estimator``'s (else :data:`DELAY_FRICTION_WIDTH`); MotosimError if d is not in [0, h],
+    or is positive without a handlebar."""
     out = np.zeros(7)
     if not (math.isfinite(delay) and 0.0 <= delay <= h * (1.0 + 1e-12)):
         raise MotosimError(
@@ -414,9 +419,17 @@ def _delay(delay: float, h: float, handlebar: HandlebarParameters | None) -> Arr
     phi, gamma = zoh(hb.A, hb.D[:, None], delay)
     out[:] = (
         delay, min(delay / h, 1.0), phi[1, 0], gamma[1, 0], handlebar.beta_s,
-        handlebar.torque_per_amp, DELAY_FRICTION_WIDTH,
+        handlebar.torque_per_amp, _friction_width(estimator),
     )  # fmt: skip
     return out
+
+
+def _friction_width(estimator: EstimatorKernel) -> float:
+    """The rate scale of the Walcott-Zak observer's friction tanh [rad/s] (its setting
+    ``friction_width``, ``p[5]`` of its kernel), else :data:`DELAY_FRICTION_WIDTH`."""
+    if estimator.kind == WALCOTT_ZAK and estimator.p[5] > 0.0:
+        return float(estimator.p[5])
+    return DELAY_FRICTION_WIDTH
 
 
 def _prediction(lead: float, h: float) -> Array:
