@@ -609,11 +609,11 @@ def step_scaled(
     if data.periods[0] % model.measure_every == 0:
         held[0] = theta_meas
         p = model.differentiator
+        z1_before = data.differentiator[1]
+        z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, p[0], p[1], p[2], True)
         if model.delay[0] > 0.0:  # a measurement d old: the angle now, predicted over d
             dl = model.delay
             previous = held[1]  # the command carried since the last measurement
-            z1_before = data.differentiator[1]
-            z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, p[0], p[1], p[2], True)
             rate = z1 + 0.5 * (z1 - z1_before)  # the backward difference, at the sample
             torque = dl[5] * current_scale * previous + held[3]
             slide = math.tanh(rate / dl[6])
@@ -624,9 +624,6 @@ def step_scaled(
             told = (1.0 - dl[1]) * held[1] + dl[1] * previous
         else:
             held[1] = _command(model, data, theta_meas)
-            z0, z1 = std_step(
-                data.differentiator[0], data.differentiator[1], theta_meas, p[0], p[1], p[2], True
-            )
             told = held[1]
         data.differentiator[0] = z0
         data.differentiator[1] = z1
