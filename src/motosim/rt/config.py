@@ -98,7 +98,7 @@ def parse_latency(table: Mapping[str, Any], *, origin: str) -> float:
         raise MotosimError(
             f"{origin}: [realtime] status_latency = {value!r} s; expected 0 to {MAX_LATENCY:g} s"
         )
-    return RealtimeOptions(status_latency=float(value)).status_latency
+    return float(value)
 
 
 def frame_age(
