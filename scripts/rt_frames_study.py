@@ -5,9 +5,9 @@
 
 ``scenarios/lane_change_20.toml`` with the drive's status frames at the paper's 100 Hz under
 the 1 kHz loop, its virtual rider at the rig steering by the state stream, run by the
-real-time loop on a simulated clock (deterministic) for each bus latency and jitter [s]
-(default 0:0, 0.5:0.2, 2:0.5, 5:1 and 9.5:1 ms), twice: with safety limits
-that never bind ("free") and with the SIMACOM handlebar's of
+real-time loop on a simulated clock (deterministic; :class:`motosim.rt.lockstep.Lockstep`)
+for each bus latency and jitter [s] (default 0:0, 0.5:0.2, 2:0.5, 5:1 and 9.5:1 ms), twice:
+with safety limits that never bind ("free") and with the SIMACOM handlebar's of
 ``scenarios/realtime_square.toml`` (a 10 A clamp, hands-off detection). One Markdown row
 each: the current's peak to peak after the manoeuvre (6-9 s), its largest value, the
 tracking error's RMS, the rider-torque estimate's error RMS against the rider's torque at
@@ -31,18 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from motosim.errors import MotosimError
-from motosim.io.can import handlebar_codecs, open_link
 from motosim.io.runs import load_run
-from motosim.rt.clock import SimulatedClock
 from motosim.rt.config import frame_age, parse_safety, within_safety
-from motosim.rt.loop import RateLoop
-from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.lockstep import Lockstep, ideal_rig
 from motosim.rt.safety import SafetyLimits
-from motosim.rt.stack import CompiledStack
-from motosim.rt.telemetry import StateReceiver, StateSender
-from motosim.sim import RunInputs, build_rig, build_stack
-from motosim.sim.stack import account_for_delay
+from motosim.sim import RunInputs
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -62,7 +55,6 @@ def _row(
     """One lock-step run's figures as a Markdown row's cells; ``delay`` the stack's
     measurement delay [s] (None: the bus latency and half a control period)."""
     sc = inputs.scenario
-    model = build_stack(inputs)
     if delay is None:  # the frame's mean age when the loop reads it, as motosim run takes it
         d = frame_age(
             latency, pace="clock", control_rate=sc.rates.control,
@@ -70,42 +62,12 @@ def _row(
         )  # fmt: skip
     else:
         d = delay
-    model = account_for_delay(model, d, inputs.nominal_handlebar)
-    world = build_rig(inputs, rng=np.random.default_rng(0))
-    rate = sc.rates.control
-    settings = RigSettings(
-        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
-        encoder_bits=sc.measurement.encoder_bits, current_noise=0.0,
-        max_current=sc.controller.max_current, latency=latency, jitter=jitter,
-    )  # fmt: skip
-    codecs = handlebar_codecs()
-    receiver = StateReceiver(("127.0.0.1", 0))
-    sender = StateSender(receiver.address)
-    with open_link("virtual:rt_frames") as host, open_link("virtual:rt_frames") as drive:
-        rider = VirtualRider(world, receiver)
-        torques: list[tuple[float, float]] = []
-
-        def policy() -> float:
-            torques.append((rig.t, rider()))
-            return torques[-1][1]
-
-        rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, drive, policy, np.random.default_rng(0),
-            rider_on_enable=False,
-        )  # fmt: skip
-        stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-        runner = RealtimeRunner(
-            stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
-            telemetry=sender.send,
-        )  # fmt: skip
-        clock = SimulatedClock(-1.0 / rate)
-        clock.listen(rig.advance_to)
-        angles: list[tuple[float, float]] = []
-        clock.listen(lambda now: angles.append((now, float(rig.x[0]))))
-        RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
-    sender.close()
-    receiver.close()
-    rows = runner.ring.drain()
+    settings = dataclasses.replace(ideal_rig(sc), latency=latency, jitter=jitter)
+    lock = Lockstep(inputs, limits, settings=settings, delay=d, channel="rt_frames")
+    angles: list[tuple[float, float]] = []  # the true angle, after the rig's advance
+    lock.clock.listen(lambda now: angles.append((now, float(lock.rig.x[0]))))
+    rows = lock.run()
+    runner = lock.runner
     col = runner.names.index
     t, current = rows[:, 0], rows[:, col("i_safe")]
     theta = np.nan_to_num(rows[:, col("theta_h_meas")])
@@ -114,7 +76,7 @@ def _row(
     at = np.clip(np.searchsorted(true_angle[:, 0], t + 1e-9, side="right") - 1, 0, None)
     true_error = np.sqrt(np.mean((true_angle[at, 1] - rows[:, col("delta")]) ** 2))
     hold = (t > 6.0) & (t < 9.0)
-    log = np.array(torques)
+    log = np.array(lock.rider_torques)
     true = log[np.clip(np.searchsorted(log[:, 0], t, side="right") - 1, 0, None), 1]
     estimate = np.sqrt(np.mean((rows[:, col("tau_r_hat")] - true) ** 2))
     share = 100 * estimate / np.max(np.abs(true))

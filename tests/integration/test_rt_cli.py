@@ -95,6 +95,64 @@ def test_run_refuses_bad_realtime_tables(
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
 
 
+EQUAL_RATES = "[rates]\nmeasurement = 100.0\ncontrol = 100.0"
+
+
+def _with_latency(latency: str, rates: str = "") -> str:
+    """SCENARIO with ``status_latency = latency`` and, given, ``rates`` for its [rates]."""
+    text = SCENARIO.replace("[rates]\nmeasurement = 100.0", rates) if rates else SCENARIO
+    base = text.split("[realtime.safety]")[0]
+    return f"{base}[realtime]\nstatus_latency = {latency}\n" + safety_table(100)
+
+
+@pytest.mark.parametrize(
+    ("rates", "latency", "pace"),
+    [
+        ("", "-0.001", "clock"),
+        # 9.8 ms and half of the 1 kHz loop's period: older than a 100 Hz frame period, and
+        # at these rates run takes no other pace
+        ("", "0.0098", "clock"),
+        # one period per frame: run --pace bus reads the frame as it arrives, 10.1 ms old
+        (EQUAL_RATES, "0.0101", "bus"),
+    ],
+)
+def test_rig_refuses_the_status_latency_that_every_run_refuses(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, rates: str, latency: str, pace: str
+) -> None:
+    # the rig reads the same scenario as run: it refuses a status_latency before it starts,
+    # in run's line (for the pace that accepts the oldest frame at the scenario's rates)
+    path = tmp_path / "s.toml"
+    path.write_text(_with_latency(latency, rates), encoding="utf-8")
+    out = str(tmp_path / "o")
+    refused = []
+    for argv in (
+        ["run", str(path), "--bus", "virtual", "--out", out, "--pace", pace],
+        ["rig", str(path), "--bus", "virtual", "--duration", "0.05"],
+    ):
+        code = main(argv)
+        err = capsys.readouterr().err
+        assert code == 2 and len(err.strip().splitlines()) == 1, (argv[0], err)
+        refused.append(err)
+    assert refused[0] == refused[1] and "status_latency" in refused[0]
+
+
+def test_rig_keeps_a_status_latency_that_run_takes_paced_by_the_bus(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # 6 ms at 100 Hz control and frames: paced by its clock, run refuses the frame (6 ms and
+    # half a 10 ms period: 11 ms old); paced by the frames (--pace bus) it takes it (6 ms),
+    # so the rig, which serves either, starts
+    path = tmp_path / "s.toml"
+    path.write_text(_with_latency("0.006", EQUAL_RATES), encoding="utf-8")
+    code = main(["run", str(path), "--bus", "virtual", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "and half a control period waiting for the clock, makes the status frame 11 ms" in err
+    code = main(["rig", str(path), "--bus", "virtual", "--duration", "0.05", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0 and json.loads(out)["commands"] == 0, err
+
+
 def test_run_refuses_a_view_port_out_of_range(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
@@ -360,9 +418,7 @@ def test_run_with_the_view_serves_live_rows_and_its_buttons_go_through_the_safet
     assert i[-1] == 0.0
 
 
-PACED = SCENARIO.replace(
-    "[rates]\nmeasurement = 100.0", "[rates]\nmeasurement = 100.0\ncontrol = 100.0"
-)
+PACED = SCENARIO.replace("[rates]\nmeasurement = 100.0", EQUAL_RATES)
 
 
 def test_pace_bus_needs_the_control_rate_of_the_status_frames(

@@ -20,17 +20,17 @@ from motosim.control.torque_feedback import PAPER_CONTROLLER
 from motosim.params import load_parameters
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
-from motosim.rt.rig import RigSettings, VirtualRig
+from motosim.rt.rig import VirtualRig
 from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits, State
 from motosim.rt.stack import CompiledStack
 from motosim.sim import RunInputs, build_rig, build_stack, parse_scenario, prepare, simulate
-from motosim.sim.scenario import Scenario
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
 from motosim.io.can import handlebar_codecs, open_link
+from motosim.rt.lockstep import Lockstep, ideal_rig
 
 SCENARIO = {
     "scenario": {"name": "rt_vs_offline", "description": "square torque", "duration": 2.0},
@@ -52,17 +52,6 @@ def _limits(rate: float) -> SafetyLimits:
     )  # fmt: skip
 
 
-def _rig_settings(sc: Scenario, current_noise: float = 0.0) -> RigSettings:
-    """The rig of scenario ``sc``: its plant and measurement rates, encoder and current limit."""
-    return RigSettings(
-        plant_rate=sc.rates.plant,
-        status_rate=sc.rates.measurement,
-        encoder_bits=sc.measurement.encoder_bits,
-        current_noise=current_noise,
-        max_current=sc.controller.max_current,
-    )
-
-
 def _inputs(measurement: float) -> object:
     data = {**SCENARIO, "rates": {**SCENARIO["rates"], "measurement": measurement}}
     scenario = parse_scenario(data, origin="test")
@@ -81,37 +70,15 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     inputs = _inputs(measurement)
     sc = inputs.scenario  # type: ignore[attr-defined]
     offline = simulate(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
-    model = build_stack(inputs)  # type: ignore[arg-type]
-    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
     rate = sc.rates.control
-    limits = _limits(rate)
-    settings = _rig_settings(sc)
-    codecs = handlebar_codecs()
-    channel = f"virtual:rt_vs_offline_{measurement:g}"
-    with open_link(channel) as host, open_link(channel) as drive:
-        rig = VirtualRig(
-            inputs.true_handlebar,  # type: ignore[attr-defined]
-            settings,
-            codecs,
-            drive,
-            world.rider_profile,
-            np.random.default_rng(0),
-            rider_on_enable=False,
-        )
-        clock = SimulatedClock(-1.0 / rate)  # the first deadline at t = 0, as offline
-        runner = RealtimeRunner(
-            CompiledStack(model, force=world.force, side_force=world.side_force),
-            host,
-            codecs,
-            limits,
-            rate=rate,
-            periods_per_frame=model.measure_every,
-            now=clock.now,
-        )
-        clock.listen(rig.advance_to)
-        n = round(sc.duration * rate)
-        RateLoop(rate, clock).run(runner.period, periods=n)
-    rows = runner.ring.drain()
+    lock = Lockstep(  # the first deadline at t = 0, as offline
+        inputs,  # type: ignore[arg-type]
+        _limits(rate),
+        channel=f"rt_vs_offline_{measurement:g}",
+    )
+    rows = lock.run()
+    runner = lock.runner
+    n = round(sc.duration * rate)
     col = {name: j for j, name in enumerate(runner.names)}
     assert rows.shape[0] == n and runner.counters().fault == "NONE"
     assert np.allclose(rows[:, col["t"]], offline.t, atol=1e-9)
@@ -136,45 +103,6 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     assert np.max(np.abs(rows[:, col["delta"]] - offline["delta"])) < 1e-3  # rad
 
 
-def _with_virtual_rider(
-    inputs: RunInputs,
-    limits: SafetyLimits,
-    settings: RigSettings,
-    channel: str,
-    delay: float = 0.0,
-) -> RealtimeRunner:
-    """The run ``inputs`` in lock-step against the rig, whose virtual rider steers by the
-    state stream the runner publishes over UDP, the stack accounting for measurements
-    ``delay`` old [s]; the runner after the run."""
-    from motosim.rt.rig import VirtualRider
-    from motosim.rt.telemetry import StateReceiver, StateSender
-    from motosim.sim.stack import account_for_delay
-
-    sc = inputs.scenario
-    model = account_for_delay(build_stack(inputs), delay, inputs.nominal_handlebar)
-    world = build_rig(inputs, rng=np.random.default_rng(0))
-    rate = sc.rates.control
-    codecs = handlebar_codecs()
-    receiver = StateReceiver(("127.0.0.1", 0))
-    sender = StateSender(receiver.address)
-    with open_link(channel) as host, open_link(channel) as drive:
-        rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, drive, VirtualRider(world, receiver),
-            np.random.default_rng(0), rider_on_enable=False,
-        )  # fmt: skip
-        stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-        runner = RealtimeRunner(
-            stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
-            telemetry=sender.send,
-        )  # fmt: skip
-        clock = SimulatedClock(-1.0 / rate)
-        clock.listen(rig.advance_to)
-        RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
-    sender.close()
-    receiver.close()
-    return runner
-
-
 def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
     # lane_change_20 (the repository's scenario), shortened: the rider at the rig reads the
     # run's state stream over UDP and must change lane as the offline rider does.
@@ -184,10 +112,10 @@ def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
     inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, duration=6.0))
     sc = inputs.scenario
     offline = simulate(inputs, rng=np.random.default_rng(0))
-    runner = _with_virtual_rider(
-        inputs, _limits(sc.rates.control), _rig_settings(sc), "virtual:rt_rider"
-    )
-    rows = runner.ring.drain()
+    # the rig's virtual rider steers by the state stream the runner publishes over UDP
+    lock = Lockstep(inputs, _limits(sc.rates.control), channel="rt_rider")
+    rows = lock.run()
+    runner = lock.runner
     y = rows[:, runner.names.index("y")]
     assert runner.counters().fault == "NONE"
     # the 3.5 m lane change (path: offset 3.5 m from 50 m to 110 m at 20 m/s) is made, and
@@ -253,11 +181,13 @@ def test_the_lane_change_over_a_5_ms_bus_holds_when_the_stack_accounts_for_the_f
         measurement_rate=sc.rates.measurement, origin="test",
     )  # fmt: skip
     assert age == pytest.approx(0.0055)
-    settings = dataclasses.replace(_rig_settings(sc), latency=5e-3, jitter=1e-3)
-    runner = _with_virtual_rider(
-        inputs, limits, settings, f"virtual:rt_age{account}", age if account else 0.0
-    )
-    rows = runner.ring.drain()
+    settings = dataclasses.replace(ideal_rig(sc), latency=5e-3, jitter=1e-3)
+    lock = Lockstep(
+        inputs, limits, settings=settings, delay=age if account else 0.0,
+        channel=f"rt_age{account}",
+    )  # fmt: skip
+    rows = lock.run()
+    runner = lock.runner
     col = runner.names.index
     t, current = rows[:, 0], rows[:, col("i_safe")]
     theta = np.nan_to_num(rows[:, col("theta_h_meas")])  # NaN before the first frame
@@ -279,9 +209,10 @@ def test_the_lane_change_over_100_hz_frames_holds_within_the_safety_clamp() -> N
     # of its command and saturated at the clamp, the current went into an 8 Hz limit cycle
     # of +/-10 A after the manoeuvre; now it holds as offline (1.8-2.4 A peak to peak)
     inputs, limits = _lane_change_at_the_clamp()
-    settings = dataclasses.replace(_rig_settings(inputs.scenario), latency=5e-4, jitter=2e-4)
-    runner = _with_virtual_rider(inputs, limits, settings, "virtual:rt_clamp")
-    rows = runner.ring.drain()
+    settings = dataclasses.replace(ideal_rig(inputs.scenario), latency=5e-4, jitter=2e-4)
+    lock = Lockstep(inputs, limits, settings=settings, channel="rt_clamp")
+    rows = lock.run()
+    runner = lock.runner
     t, current = rows[:, 0], rows[:, runner.names.index("i_safe")]
     assert runner.counters().fault == "NONE"
     assert rows[-1, runner.names.index("y")] == pytest.approx(3.5, abs=0.3)
@@ -319,7 +250,7 @@ def _run_both_ways(
         hard_stop=5.0, end_stop_gain=20.0, hands_off_torque=0.5, hands_off_time=0.05,
         hands_off_gain=0.5,
     )  # fmt: skip
-    settings = _rig_settings(sc, current_noise=0.01)
+    settings = dataclasses.replace(ideal_rig(sc), current_noise=0.01)
     codecs = handlebar_codecs()
     channel = f"virtual:rt_fused_{fused}_{warm}"
     stack = CompiledStack(model, force=world.force, side_force=world.side_force)
@@ -406,27 +337,16 @@ def test_leaving_the_models_range_fades_the_torque_out_and_ends_the_run(
     rate = 1000.0
     inputs = _inputs(rate)
     sc = inputs.scenario
-    model = build_stack(inputs)
-    world = build_rig(inputs, rng=np.random.default_rng(0))
     limits = dataclasses.replace(_limits(rate), fade_in=0.1)
-    settings = _rig_settings(sc)
-    codecs = handlebar_codecs()
-    channel = f"virtual:rt_range_{validity[0]}"
-    with open_link(channel) as host, open_link(channel) as drive:
-        rig = VirtualRig(
-            inputs.true_handlebar,  # type: ignore[attr-defined]
-            settings, codecs, drive, world.rider_profile, np.random.default_rng(0),
-            rider_on_enable=False,
-        )  # fmt: skip
-        clock = SimulatedClock(-1.0 / rate)
-        runner = RealtimeRunner(
-            CompiledStack(model, force=world.force, side_force=world.side_force),
-            host, codecs, limits, rate=rate, now=clock.now, validity=validity,
-        )  # fmt: skip
-        clock.listen(rig.advance_to)
-        n = round(sc.duration * rate)
-        RateLoop(rate, clock).run(runner.period, periods=n)
-    rows = runner.ring.drain()
+    lock = Lockstep(
+        inputs,  # type: ignore[arg-type]
+        limits,
+        channel=f"rt_range_{validity[0]}",
+        validity=validity,
+    )
+    rows = lock.run()
+    runner = lock.runner
+    n = round(sc.duration * rate)
     col = {name: j for j, name in enumerate(runner.names)}
     t, phi, speed = rows[:, col["t"]], rows[:, col["phi"]], rows[:, col["v_x"]]
     outside = (np.abs(phi) > validity[0]) | (speed < validity[1]) | (speed > validity[2])

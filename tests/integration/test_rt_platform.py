@@ -15,20 +15,15 @@ import numpy as np
 import pytest
 
 from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
-from motosim.rt.clock import SimulatedClock
-from motosim.rt.loop import RateLoop
 from motosim.rt.platform import PlatformCanSender, PlatformOutput, PlatformSender, PlatformTwin
-from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
-from motosim.rt.run import RealtimeRunner
 from motosim.rt.safety import SafetyLimits
 from motosim.rt.stack import CompiledStack
-from motosim.rt.telemetry import StateReceiver, StateSender
-from motosim.sim import build_rig, build_stack
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
-from motosim.io.can import handlebar_codecs, open_link, platform_codecs
+from motosim.io.can import platform_codecs
+from motosim.rt.lockstep import Lockstep
 
 
 @pytest.mark.parametrize("medium", ["udp", "can"])
@@ -38,14 +33,7 @@ def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None
     full = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
     inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, duration=5.0))
     sc = inputs.scenario
-    model = build_stack(inputs)
-    world = build_rig(inputs, rng=np.random.default_rng(0))
     rate = sc.rates.control
-    settings = RigSettings(
-        plant_rate=sc.rates.plant, status_rate=sc.rates.measurement,
-        encoder_bits=sc.measurement.encoder_bits, current_noise=0.0,
-        max_current=sc.controller.max_current,
-    )  # fmt: skip
     limits = SafetyLimits(
         max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
         hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
@@ -57,39 +45,24 @@ def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None
         config.platform, 1.0 / rate, None if can else ("127.0.0.1", 0),
         codecs=platform_codecs() if can else None,
     )  # fmt: skip
-    codecs = handlebar_codecs()
-    receiver = StateReceiver(("127.0.0.1", 0))
-    sender = StateSender(receiver.address)
-    rider = VirtualRider(world, receiver)
-    stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-    platform = PlatformOutput(config, 1.0 / rate, tuple(stack.names), send_every=10)
+    platform = PlatformOutput(config, 1.0 / rate, CompiledStack.names, send_every=10)
+    # the rig's virtual rider steers by the state stream the runner publishes over UDP
+    lock = Lockstep(inputs, limits, channel="rt_platform", platform=platform)
+    if can:
+        platform.sender = PlatformCanSender(lock.host, platform_codecs())
+        lock.rig.on_frame = twin.receive_frame
+    else:
+        assert twin.address is not None
+        platform.sender = PlatformSender(twin.address)
     achieved = []
 
-    def listen(t: float) -> None:
-        rig.advance_to(t)
+    def listen(t: float) -> None:  # after the rig's own advance
         twin.advance_to(t)
         achieved.append(twin.achieved.copy())
 
-    with open_link("virtual:rt_platform") as host, open_link("virtual:rt_platform") as drive:
-        rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, drive, rider, np.random.default_rng(0),
-            rider_on_enable=False,
-        )  # fmt: skip
-        if can:
-            platform.sender = PlatformCanSender(host, platform_codecs())
-            rig.on_frame = twin.receive_frame
-        else:
-            assert twin.address is not None
-            platform.sender = PlatformSender(twin.address)
-        runner = RealtimeRunner(
-            stack, host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
-            telemetry=sender.send, platform=platform,
-        )  # fmt: skip
-        clock = SimulatedClock(-1.0 / rate)
-        clock.listen(listen)
-        RateLoop(rate, clock).run(runner.period, periods=round(sc.duration * rate))
-    sender.close()
-    receiver.close()
+    lock.clock.listen(listen)
+    rows = lock.run()
+    runner = lock.runner
     twin.close()
     assert platform.sender is not None
     platform.sender.close()
@@ -97,7 +70,6 @@ def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None
     assert twin.frames == platform.sequence == round(sc.duration * 100) and twin.lost == 0
     # the loop's roll command is the offline washout of the same ride, within 0.05 deg (the
     # loop's backward difference for v_x' against the offline central one does not touch roll)
-    rows = runner.ring.drain()
     from motosim.timeseries import TimeSeries
 
     names = ("v_x", "v_y", "psi_dot", "phi_dot", "phi")

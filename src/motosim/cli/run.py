@@ -156,14 +156,25 @@ def check_rt_options(args: argparse.Namespace) -> None:
     check_privilege_options(args)
 
 
-def load_realtime(path: str, *, safety: bool = False) -> tuple["RunInputs", dict[str, Any]]:
+def load_realtime(
+    path: str, *, safety: bool = False, pace: str | None = None
+) -> tuple["RunInputs", dict[str, Any]]:
     """Read a scenario file: its resolved run and its ``[realtime]`` table.
 
     With ``safety``, a missing ``[realtime.safety]`` table is refused before the run is
-    resolved (which designs its controller: seconds).
+    resolved (which designs its controller: seconds). A ``status_latency`` that makes the
+    status frame older than the stack accounts for is refused then too, in the line
+    ``motosim run`` gives (:func:`motosim.rt.config.frame_age`): for ``motosim run`` at its
+    ``pace``; without a ``pace`` (``motosim rig``, which serves whichever run comes) at the
+    pace of ``run`` that reads the frame youngest at the scenario's rates
+    (:func:`motosim.rt.config.run_paces`), so that a lab learns it before starting the rig.
+    The rig thus keeps a latency that ``run --pace clock`` refuses and ``run --pace bus``
+    takes (equal control and measurement rates: up to a frame period against half a control
+    period less). The rig's own ``[realtime.rig]`` latency, the bus it emulates, is not
+    bounded by the frame period: a slow bus is what it is there to show ``run``.
     """
     from motosim.io.runs import resolve
-    from motosim.rt.config import parse_latency, parse_safety, split_realtime
+    from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, split_realtime
     from motosim.sim import parse_scenario
     from motosim.sim.scenario import implausible
 
@@ -179,7 +190,12 @@ def load_realtime(path: str, *, safety: bool = False) -> tuple["RunInputs", dict
     # other command uses is refused now, not when that command runs
     if "safety" in realtime or safety:
         parse_safety(realtime.get("safety"), origin=str(path))
-    parse_latency(realtime, origin=str(path))
+    rates = scenario.rates
+    frame_age(
+        parse_latency(realtime, origin=str(path)),
+        pace=pace or run_paces(rates.control, rates.measurement)[-1],
+        control_rate=rates.control, measurement_rate=rates.measurement, origin=str(path),
+    )  # fmt: skip
     rig_settings(scenario, realtime, origin=str(path))
     return resolve(scenario, source.parent), realtime
 
@@ -461,7 +477,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     import numpy as np
 
     from motosim.io.can import handlebar_codecs, open_link
-    from motosim.rt.config import frame_age, parse_latency, parse_safety, within_safety
+    from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, within_safety
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
     from motosim.sim import build_rig, build_stack, run_metadata
@@ -471,7 +487,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     check_rt_options(args)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
-    inputs, realtime = load_realtime(args.scenario, safety=True)
+    inputs, realtime = load_realtime(args.scenario, safety=True, pace=args.pace)
     sc = inputs.scenario
     if sc.motorcycle.input == "true":
         raise MotosimError(
@@ -499,7 +515,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
         origin=args.scenario,
     )  # fmt: skip
     model = build_stack(inputs)
-    if args.pace == "bus" and model.measure_every != 1:
+    if args.pace not in run_paces(rate, sc.rates.measurement):
         raise MotosimError(
             f"--pace bus with control = {rate:g} Hz and measurement = "
             f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"

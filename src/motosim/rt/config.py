@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MAX_LATENCY", "RealtimeOptions", "frame_age", "parse_latency", "parse_safety",
-    "split_realtime", "within_safety",
+    "run_paces", "split_realtime", "within_safety",
 ]  # fmt: skip
 
 MAX_LATENCY = 1.0
@@ -134,6 +134,22 @@ def frame_age(
             "frame rate"
         )
     return age
+
+
+def run_paces(control_rate: float, measurement_rate: float) -> tuple[str, ...]:
+    """The paces ``motosim run`` takes at these rates [Hz]: ``"clock"``, and ``"bus"``
+    when the loop has one period per status frame (equal rates).
+
+    The last is the one under which the status frame is youngest when the stack reads it
+    (:func:`frame_age`): a command that serves whichever run comes (``motosim rig``)
+    refuses, under it, what every run refuses.
+
+    Examples
+    --------
+    >>> run_paces(1000.0, 100.0), run_paces(100.0, 100.0)
+    (('clock',), ('clock', 'bus'))
+    """
+    return ("clock", "bus") if round(control_rate / measurement_rate) == 1 else ("clock",)
 
 
 def parse_safety(table: Any, *, origin: str) -> SafetyLimits:

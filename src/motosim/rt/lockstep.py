@@ -1,0 +1,225 @@
+"""A lock-step run: the stack against the virtual rig in one process, on a simulated clock.
+
+``motosim run`` and ``motosim rig`` run the stack and the virtual rig in two processes over a
+bus, on the machine's clock. :class:`Lockstep` builds the same pieces from a run's inputs
+in one process, over python-can's in-process ``virtual`` bus and on a
+:class:`~motosim.rt.clock.SimulatedClock` that advances the rig to each deadline before the
+loop's period: the run is deterministic and takes no longer than its computation. It is
+how the real-time tests and ``scripts/rt_frames_study.py`` check the loop against the
+offline simulator and study slow status frames and bus latency.
+"""
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motosim.errors import MotosimError
+from motosim.io.can import CanLink, UdpMulticastLink, handlebar_codecs, open_link
+from motosim.rt.clock import SimulatedClock
+from motosim.rt.loop import RateLoop
+from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
+from motosim.rt.run import RealtimeRunner
+from motosim.rt.safety import SafetyLimits
+from motosim.rt.stack import CompiledStack
+from motosim.rt.telemetry import StateReceiver, StateSender
+from motosim.sim import RunInputs, Scenario, build_rig, build_stack
+from motosim.sim.stack import account_for_delay
+
+if TYPE_CHECKING:
+    from motosim.rt.platform import PlatformOutput
+
+__all__ = ["Lockstep", "ideal_rig"]
+
+
+def ideal_rig(scenario: Scenario) -> RigSettings:
+    """The virtual rig of ``scenario`` over an ideal bus, without current noise.
+
+    Its plant and status frames at the scenario's plant and measurement rates [Hz], its
+    encoder, the drive's current limit at the controller's [A]; no latency, jitter, loss
+    or fault.
+
+    Examples
+    --------
+    >>> from motosim.sim import parse_scenario
+    >>> square = {"kind": "square", "low": -5.0, "high": 5.0, "period": 0.2}
+    >>> sc = parse_scenario({
+    ...     "scenario": {"name": "x"}, "rates": {"measurement": 100.0},
+    ...     "rider": {"kind": "torque", "profile": square},
+    ... }, origin="x")
+    >>> rig = ideal_rig(sc)
+    >>> rig.plant_rate, rig.status_rate, rig.current_noise, rig.latency
+    (10000.0, 100.0, 0.0, 0.0)
+    """
+    return RigSettings(
+        plant_rate=scenario.rates.plant,
+        status_rate=scenario.rates.measurement,
+        encoder_bits=scenario.measurement.encoder_bits,
+        current_noise=0.0,
+        max_current=scenario.controller.max_current,
+    )
+
+
+class Lockstep:
+    """The run ``inputs`` against the virtual rig, in lock-step on a simulated clock.
+
+    Builds the compiled stack of the run (:func:`~motosim.sim.build_stack`), accounting for
+    status frames ``delay`` old (:func:`~motosim.sim.stack.account_for_delay`); the
+    virtual rig of its true handlebar with the scenario's rider from the rig's t = 0: its
+    torque profile, or its virtual rider (:class:`~motosim.rt.rig.VirtualRider`) steering
+    by the stack's rows, which the runner publishes over UDP on localhost; the runner
+    (:class:`~motosim.rt.run.RealtimeRunner`) with ``limits``, stamping its rows on the
+    simulated clock; the two ends of the virtual bus ``channel``; and the clock, whose
+    first deadline is at t = 0 and which advances the rig to each deadline before the
+    loop's period. Unlike ``motosim run``, the runner has no frozen-sensor monitor (no
+    handlebar given) and goes on outside the model's range unless ``validity`` is given.
+
+    Parameters
+    ----------
+    inputs : RunInputs
+        The run (:func:`motosim.sim.prepare`, :func:`motosim.io.runs.load_run`).
+    limits : SafetyLimits
+        The safety stage's limits.
+    settings : RigSettings, optional
+        The rig's drive, sensors and bus; by default :func:`ideal_rig` of the scenario.
+    delay : float
+        The status frames' age the stack accounts for [s], >= 0; 0: the stack as designed,
+        for a fresh sample.
+    channel : str
+        The name of the python-can ``virtual`` channel (runs alive together need their own).
+    seed : int
+        The seed of the rig's noise, jitter and frame loss, and of the generator the run's
+        world is built with (:func:`~motosim.sim.build_rig`).
+    validity : tuple of float, optional
+        The runner's ``validity``: the virtual motorcycle's largest roll [rad], lowest and
+        highest speed [m/s], beyond which the torque fades out and the run ends.
+    platform : PlatformOutput, optional
+        The runner's motion platform stage.
+
+    Attributes
+    ----------
+    clock : SimulatedClock
+        The clock; more listeners (a platform twin, a recorder) run after the rig's.
+    host : CanLink
+        The runner's end of the bus.
+    rig : VirtualRig
+        The virtual rig.
+    runner : RealtimeRunner
+        The runner.
+    rider_torques : list of tuple of float
+        With a virtual rider, ``(t, tau_r)`` each time the rig asked for the rider's torque
+        (once per status frame): its time [s] and the torque [N*m]; empty with a profile.
+
+    Examples
+    --------
+    A square rider torque of 5 N*m on the SIMACOM handlebar with the paper's controller,
+    0.5 s at 1 kHz, safety limits that never bind:
+
+    >>> from motosim.control.torque_feedback import PAPER_CONTROLLER
+    >>> from motosim.params import load_parameters
+    >>> from motosim.sim import parse_scenario, prepare
+    >>> scenario = parse_scenario({
+    ...     "scenario": {"name": "square", "duration": 0.5},
+    ...     "rider": {"kind": "torque", "profile": {"kind": "square", "low": -5.0,
+    ...               "high": 5.0, "period": 0.2}},
+    ...     "controller": {"kind": "paper"},
+    ... }, origin="square")
+    >>> hb = load_parameters("simacom_handlebar", "handlebar")
+    >>> run = prepare(scenario, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
+    ...               nominal_handlebar=hb, controller=PAPER_CONTROLLER)
+    >>> free = SafetyLimits(
+    ...     max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
+    ...     hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
+    ...     hands_off_gain=1.0, fade_in=1e-3)
+    >>> lock = Lockstep(run, free, channel="doctest")
+    >>> rows = lock.run()
+    >>> rows.shape[0], lock.runner.counters().fault, float(rows[-1, 0])  # periods, fault, t [s]
+    (500, 'NONE', 0.499)
+    """
+
+    def __init__(
+        self,
+        inputs: RunInputs,
+        limits: SafetyLimits,
+        *,
+        settings: RigSettings | None = None,
+        delay: float = 0.0,
+        channel: str = "lockstep",
+        seed: int = 0,
+        validity: tuple[float, float, float] | None = None,
+        platform: "PlatformOutput | None" = None,
+    ) -> None:
+        if not (math.isfinite(delay) and delay >= 0.0):
+            raise MotosimError(f"delay = {delay!r} s: expected a non-negative time")
+        sc = inputs.scenario
+        self._rate = sc.rates.control
+        self._periods = round(sc.duration * self._rate)
+        model = account_for_delay(build_stack(inputs), delay, inputs.nominal_handlebar)
+        world = build_rig(inputs, rng=np.random.default_rng(seed))
+        codecs = handlebar_codecs()
+        self.clock = SimulatedClock(-1.0 / self._rate)  # the first deadline at t = 0
+        self.rider_torques: list[tuple[float, float]] = []
+        self._receiver: StateReceiver | None = None
+        self._sender: StateSender | None = None
+        self._links: list[CanLink | UdpMulticastLink] = []
+        try:
+            rider: NDArray[np.float64] | Callable[[], float] = world.rider_profile
+            if world.virtual_rider:
+                self._receiver = StateReceiver(("127.0.0.1", 0))
+                self._sender = StateSender(self._receiver.address)
+                virtual = VirtualRider(world, self._receiver)
+
+                def rider_now() -> float:
+                    self.rider_torques.append((self.rig.t, virtual()))
+                    return self.rider_torques[-1][1]
+
+                rider = rider_now
+            self.host = open_link(f"virtual:{channel}")
+            self._links.append(self.host)
+            drive = open_link(f"virtual:{channel}")
+            self._links.append(drive)
+            self.rig = VirtualRig(
+                inputs.true_handlebar, settings or ideal_rig(sc), codecs, drive, rider,
+                np.random.default_rng(seed), rider_on_enable=False,
+            )  # fmt: skip
+            self.runner = RealtimeRunner(
+                CompiledStack(model, force=world.force, side_force=world.side_force),
+                self.host, codecs, limits, rate=self._rate,
+                capacity=max(1 << 16, self._periods + 1),
+                periods_per_frame=model.measure_every,
+                telemetry=None if self._sender is None else self._sender.send,
+                platform=platform, now=self.clock.now, validity=validity,
+            )  # fmt: skip
+        except BaseException:
+            self.close()
+            raise
+        self.clock.listen(self.rig.advance_to)
+
+    def run(self) -> NDArray[np.float64]:
+        """Run the scenario's duration (until the runner ends the run), then close the bus
+        and the state stream; the rows.
+
+        Returns
+        -------
+        ndarray, shape (n_periods, n_signals)
+            The rows the runner recorded (its ``names``), drained from its ring.
+        """
+        if not self._links:
+            raise MotosimError("this lock-step run has run: build another")
+        try:
+            RateLoop(self._rate, self.clock).run(self.runner.period, periods=self._periods)
+        finally:
+            self.close()
+        return self.runner.ring.drain()
+
+    def close(self) -> None:
+        """Close the bus's two ends and the state stream (once the run has ended)."""
+        for link in self._links:
+            link.close()
+        self._links.clear()
+        for end in (self._sender, self._receiver):
+            if end is not None:
+                end.close()
+        self._sender = self._receiver = None
