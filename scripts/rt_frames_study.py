@@ -33,20 +33,11 @@ import numpy as np
 from motosim.errors import MotosimError
 from motosim.io.runs import load_run
 from motosim.rt.config import frame_age, parse_safety, within_safety
-from motosim.rt.lockstep import Lockstep, ideal_rig
+from motosim.rt.lockstep import Lockstep, free_limits, ideal_rig
 from motosim.rt.safety import SafetyLimits
 from motosim.sim import RunInputs
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _free(rate: float) -> SafetyLimits:
-    """Limits that never bind, and a one-period fade-in."""
-    return SafetyLimits(
-        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
-        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
-        hands_off_gain=1.0, fade_in=1.0 / rate,
-    )  # fmt: skip
 
 
 def _row(
@@ -119,7 +110,7 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|---|---|")
     for pair in args.bus.split(","):
         latency, jitter = (float(x) for x in pair.split(":"))
-        for name, limits in (("free", _free(rates.control)), ("SIMACOM", simacom)):
+        for name, limits in (("free", free_limits(rates.control)), ("SIMACOM", simacom)):
             if name not in args.limits:
                 continue
             run = inputs if args.no_clamp else within_safety(inputs, limits)

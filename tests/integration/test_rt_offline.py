@@ -30,7 +30,7 @@ pytest.importorskip("can", reason="python-can is in the rt and dev dependency gr
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
 from motosim.io.can import handlebar_codecs, open_link
-from motosim.rt.lockstep import Lockstep, ideal_rig
+from motosim.rt.lockstep import Lockstep, free_limits, ideal_rig
 
 SCENARIO = {
     "scenario": {"name": "rt_vs_offline", "description": "square torque", "duration": 2.0},
@@ -41,15 +41,6 @@ SCENARIO = {
     },
     "controller": {"kind": "paper"},
 }
-
-
-def _limits(rate: float) -> SafetyLimits:
-    """Limits that never bind, and a one-period fade-in: the loop as offline."""
-    return SafetyLimits(
-        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
-        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
-        hands_off_gain=1.0, fade_in=1.0 / rate,
-    )  # fmt: skip
 
 
 def _inputs(measurement: float) -> object:
@@ -73,7 +64,7 @@ def test_realtime_lockstep_matches_offline(measurement: float) -> None:
     rate = sc.rates.control
     lock = Lockstep(  # the first deadline at t = 0, as offline
         inputs,  # type: ignore[arg-type]
-        _limits(rate),
+        free_limits(rate),
         channel=f"rt_vs_offline_{measurement:g}",
     )
     rows = lock.run()
@@ -113,7 +104,7 @@ def test_virtual_rider_at_the_rig_steers_by_the_published_state() -> None:
     sc = inputs.scenario
     offline = simulate(inputs, rng=np.random.default_rng(0))
     # the rig's virtual rider steers by the state stream the runner publishes over UDP
-    lock = Lockstep(inputs, _limits(sc.rates.control), channel="rt_rider")
+    lock = Lockstep(inputs, free_limits(sc.rates.control), channel="rt_rider")
     rows = lock.run()
     runner = lock.runner
     y = rows[:, runner.names.index("y")]
@@ -337,7 +328,7 @@ def test_leaving_the_models_range_fades_the_torque_out_and_ends_the_run(
     rate = 1000.0
     inputs = _inputs(rate)
     sc = inputs.scenario
-    limits = dataclasses.replace(_limits(rate), fade_in=0.1)
+    limits = dataclasses.replace(free_limits(rate), fade_in=0.1)
     lock = Lockstep(
         inputs,  # type: ignore[arg-type]
         limits,

@@ -16,14 +16,13 @@ import pytest
 
 from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
 from motosim.rt.platform import PlatformCanSender, PlatformOutput, PlatformSender, PlatformTwin
-from motosim.rt.safety import SafetyLimits
 from motosim.rt.stack import CompiledStack
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
 from motosim.io.can import platform_codecs
-from motosim.rt.lockstep import Lockstep
+from motosim.rt.lockstep import Lockstep, free_limits
 
 
 @pytest.mark.parametrize("medium", ["udp", "can"])
@@ -34,11 +33,7 @@ def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None
     inputs = dataclasses.replace(full, scenario=dataclasses.replace(full.scenario, duration=5.0))
     sc = inputs.scenario
     rate = sc.rates.control
-    limits = SafetyLimits(
-        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
-        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
-        hands_off_gain=1.0, fade_in=1.0 / rate,
-    )  # fmt: skip
+    limits = free_limits(rate)
     config = load_platform("simacom_platform")
     can = medium == "can"  # PF_COMMAND frames on the run's bus, or UDP datagrams
     twin = PlatformTwin(

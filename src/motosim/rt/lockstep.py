@@ -31,7 +31,7 @@ from motosim.sim.stack import account_for_delay
 if TYPE_CHECKING:
     from motosim.rt.platform import PlatformOutput
 
-__all__ = ["Lockstep", "ideal_rig"]
+__all__ = ["Lockstep", "free_limits", "ideal_rig"]
 
 
 def ideal_rig(scenario: Scenario) -> RigSettings:
@@ -60,6 +60,24 @@ def ideal_rig(scenario: Scenario) -> RigSettings:
         current_noise=0.0,
         max_current=scenario.controller.max_current,
     )
+
+
+def free_limits(rate: float) -> SafetyLimits:
+    """Safety limits that never bind, with a fade-in of one period at ``rate`` [Hz]: the
+    safety stage passes the stack's command as it is, so the loop computes what the offline
+    simulator computes.
+
+    Examples
+    --------
+    >>> limits = free_limits(1000.0)
+    >>> limits.max_current, limits.fade_in
+    (1000.0, 0.001)
+    """
+    return SafetyLimits(
+        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
+        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
+        hands_off_gain=1.0, fade_in=1.0 / rate,
+    )  # fmt: skip
 
 
 class Lockstep:
@@ -129,11 +147,7 @@ class Lockstep:
     >>> hb = load_parameters("simacom_handlebar", "handlebar")
     >>> run = prepare(scenario, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
     ...               nominal_handlebar=hb, controller=PAPER_CONTROLLER)
-    >>> free = SafetyLimits(
-    ...     max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
-    ...     hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
-    ...     hands_off_gain=1.0, fade_in=1e-3)
-    >>> lock = Lockstep(run, free, channel="doctest")
+    >>> lock = Lockstep(run, free_limits(1000.0), channel="doctest")
     >>> rows = lock.run()
     >>> rows.shape[0], lock.runner.counters().fault, float(rows[-1, 0])  # periods, fault, t [s]
     (500, 'NONE', 0.499)
