@@ -364,17 +364,20 @@ def false_cue_intervals(runs: str, names: str = "lane_change_20,lane_change_30")
     return "\n".join(lines)
 
 
-def corner_sweep(runs: str, names: str, corners: str = "0,4", weights: str = "") -> str:
+def corner_sweep(
+    runs: str, names: str, corners: str = "0,4", weights: str = "", bands: str = ""
+) -> str:
     """The roll canal error's Huber corner against the washout, on result folders.
 
     For each comma-separated scenario of :func:`table`'s folders and each comma-separated
-    ``roll_canal_corner`` (0: the squared cost) and ``canal_weight`` (default the platform
-    file's), the MPC with the road preview where the run has a path: violations, false cues
-    %, roll and pitch rate RMS [deg/s], the target met, the relative margins in false cues
-    and roll error, the false samples per channel and the lateral force's per second.
-    Reproduce: ``python bench/bench_cueing.py RUNS corner NAMES [CORNERS] [WEIGHTS]``
-    (docs/guide/cueing.md, *The roll-rate error's Huber cost*); each row is printed as it is
-    measured.
+    ``roll_canal_corner`` (0: the squared cost), ``canal_weight`` and
+    ``preview_force_false_cue_weight`` (``bands``; both default the platform file's), the MPC
+    with the road preview where the run has a path: violations, false cues %, roll and pitch
+    rate RMS [deg/s], the target met, the relative margins in false cues and roll error, the
+    false samples per channel and the lateral force's per second. Reproduce: ``python
+    bench/bench_cueing.py RUNS corner NAMES [CORNERS] [WEIGHTS] [BANDS]``
+    (docs/guide/cueing.md, *The roll-rate error's Huber cost* and *The held-out swerve at 19
+    m/s*); each row is printed as it is measured.
     """
     import dataclasses
     from pathlib import Path
@@ -386,27 +389,33 @@ def corner_sweep(runs: str, names: str, corners: str = "0,4", weights: str = "")
     cfg = load_platform("simacom_platform")
     model = TELBAN_CARDULLO_2005
     lines = [
-        "| scenario | corner | canal weight | violations | false cues % | roll RMS | pitch RMS "
-        "| target | margins (false cues, roll) | false samples per channel | lateral force's "
-        "per second |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| scenario | corner | canal weight | band weight | violations | false cues % | roll RMS "
+        "| pitch RMS | target | margins (false cues, roll) | false samples per channel | "
+        "lateral force's per second |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     print("\n".join(lines), flush=True)
     for name in names.split(","):
         r = load_result(Path(runs) / name)
         series = TimeSeries(r.t, r.data, r.names)
         road = result_road(r.metadata, origin=name)
-        variants = [("washout", "", "")] + [
-            ("mpc", c, w) for c in corners.split(",") for w in (weights or "").split(",")
+        variants = [("washout", "", "", "")] + [
+            ("mpc", c, w, b)
+            for c in corners.split(",")
+            for w in (weights or "").split(",")
+            for b in (bands or "").split(",")
         ]
         base = (0, 0.0, 0.0, 0.0)
-        for algorithm, corner, weight in variants:
+        for algorithm, corner, weight, band in variants:
             tuning = cfg.mpc
             if algorithm == "mpc":
                 tuning = dataclasses.replace(
                     tuning,
                     roll_canal_corner=float(corner),
                     canal_weight=float(weight) if weight else tuning.canal_weight,
+                    preview_force_false_cue_weight=(
+                        float(band) if band else tuning.preview_force_false_cue_weight
+                    ),
                 )
             run = cue(dataclasses.replace(cfg, mpc=tuning), series, model,  # type: ignore[arg-type]
                       algorithm=algorithm, rate=100.0, road=road)  # type: ignore[arg-type]  # fmt: skip
@@ -440,7 +449,8 @@ def corner_sweep(runs: str, names: str, corners: str = "0,4", weights: str = "")
                                                                      (roll, base[2]))
                 )  # fmt: skip
             lines.append(
-                f"| {name} | {corner or algorithm} | {weight or ''} | {run.score.violations} | "
+                f"| {name} | {corner or algorithm} | {weight or ''} | {band or ''} | "
+                f"{run.score.violations} | "
                 f"{false:.2f} | {roll:.2f} | {pitch:.2f} | {met} | {margins} | "
                 f"{', '.join(counts)} | {' '.join(map(str, per_second))} |"
             )
@@ -499,7 +509,7 @@ if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "steps":
         step_times(*sys.argv[2:3], *(int(a) for a in sys.argv[3:4]))
     elif len(sys.argv) > 3 and sys.argv[2] == "corner":
-        corner_sweep(sys.argv[1], *sys.argv[3:6])
+        corner_sweep(sys.argv[1], *sys.argv[3:7])
     elif len(sys.argv) > 2 and sys.argv[2] == "prediction":
         print(prediction_errors(sys.argv[1]))
     elif len(sys.argv) > 2 and sys.argv[2] == "intervals":

@@ -93,22 +93,23 @@ def _against_the_washout(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     name: str,
-    key: str,
-    packaged: str,
-    variant: str,
+    *changes: tuple[str, str, str],
 ) -> dict[str, tuple[float, float, float]]:
     """Mean false-cue share, roll and pitch RMS errors of ``bench/scenarios/NAME.toml`` cued
-    by the washout, by the MPC with the road preview ("road") and by the MPC with the
-    packaged platform file's ``key = packaged`` set to ``variant`` ("variant")."""
+    by the washout, by the MPC with the road preview ("road") and by the MPC with, for each
+    of ``changes`` ``(key, packaged, variant)``, the packaged platform file's ``key =
+    packaged`` set to ``variant`` ("variant")."""
     pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
     run = tmp_path / "run"
     scenario = ROOT / f"bench/scenarios/{name}.toml"
     assert main(["simulate", str(scenario), "--out", str(run), "--no-report"]) == 0
     capsys.readouterr()
     text = (ROOT / "src/motosim/cueing/data/simacom_platform.toml").read_text()
-    assert f"{key} = {packaged}\n" in text
+    for key, packaged, variant in changes:
+        assert f"{key} = {packaged}\n" in text
+        text = text.replace(f"{key} = {packaged}\n", f"{key} = {variant}\n")
     changed = tmp_path / "variant.toml"
-    changed.write_text(text.replace(f"{key} = {packaged}\n", f"{key} = {variant}\n"))
+    changed.write_text(text)
     scores = {}
     for label, extra in (
         ("washout", ()),
@@ -130,9 +131,10 @@ def test_long_curve_mpc_with_the_band_scheduled_by_persistence_beats_the_washout
     (docs/guide/cueing.md table, ``python bench/bench_cueing.py RUNS``: with the band
     scheduled by the curve's persistence 6.87 against 8.01 % false cues, 1.78 against 2.08
     deg/s roll, 0.90 against 0.94 deg/s pitch; not scheduled, the platform file's
-    ``sustained_force_false_cue_weight`` set to the transient 1.5: 2.84 deg/s roll)."""
+    ``sustained_force_false_cue_weight`` set to the transient 1.5: 2.84 deg/s roll; with the
+    transient weight 2.25, scheduled 6.88 % and 1.79 deg/s, not scheduled 3.04 deg/s)."""
     scores = _against_the_washout(
-        tmp_path, capsys, "opendrive_curve_25", "sustained_force_false_cue_weight", "0.0", "1.5"
+        tmp_path, capsys, "opendrive_curve_25", ("sustained_force_false_cue_weight", "0.0", "2.25")
     )
     assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
     assert scores["variant"][1] > scores["washout"][1], scores  # the miss before
@@ -146,9 +148,31 @@ def test_unseen_swerve_at_22_mps_mpc_with_the_huber_roll_cost_beats_the_washout(
     cannot render, its roll-rate error squared; docs/guide/cueing.md table, ``python
     bench/bench_cueing.py RUNS``: with the roll canal error's Huber cost, corner 4 thresholds
     chosen on the training runs, 3.64 against 4.18 % false cues, 14.38 against 15.99 deg/s
-    roll, 1.19 against 1.77 deg/s pitch; squared, ``roll_canal_corner = 0.0``, 4.29 %)."""
+    roll, 1.19 against 1.77 deg/s pitch; squared, ``roll_canal_corner = 0.0``, 4.29 %). The
+    transient force band's weight, chosen again with the Huber cost (2.25, 1.5 before), is
+    set back too, the design before both: squared with 2.25 the swerve is met by 0.02 %
+    (4.16 against 4.18 %, *The held-out swerve at 19 m/s*)."""
     scores = _against_the_washout(
-        tmp_path, capsys, "avoidance_22", "roll_canal_corner", "4.0", "0.0"
+        tmp_path, capsys, "avoidance_22", ("roll_canal_corner", "4.0", "0.0"),
+        ("preview_force_false_cue_weight", "2.25", "1.5"),
+    )  # fmt: skip
+    assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
+    assert scores["variant"][0] > scores["washout"][0], scores  # the miss before
+
+
+def test_heldout_swerve_at_19_mps_mpc_with_the_band_weight_chosen_again_beats_the_washout(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 13's target on the held-out swerve at 19 m/s (``bench/scenarios/heldout/``), which
+    the MPC missed on the false cues with the transient force band's weight of 1.5 chosen for
+    the squared roll canal error: the plan let the lateral force of each half's tilt linger
+    after the lean, where the washout's return past neutral quenches it. With the weight
+    chosen again on the training runs with the Huber cost, 2.25 (docs/guide/cueing.md, *The
+    held-out swerve at 19 m/s*; table, ``python bench/bench_cueing.py RUNS``: 4.44 against
+    4.93 % false cues, 12.73 against 14.10 deg/s roll, 1.09 against 1.66 deg/s pitch; with
+    1.5, 5.20 %)."""
+    scores = _against_the_washout(
+        tmp_path, capsys, "heldout/avoidance_19", ("preview_force_false_cue_weight", "2.25", "1.5")
     )
     assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
     assert scores["variant"][0] > scores["washout"][0], scores  # the miss before
