@@ -315,9 +315,26 @@ def limit_margins(
     Returns
     -------
     margins : dict
-        ``{"angle": (roll, pitch, yaw), "rate": ..., "accel": ...}``, ``1 - max|x| / limit``.
+        ``{"angle": (roll, pitch, yaw), "rate": ..., "accel": ...}``, ``1 - max|x| / limit``;
+        0 for a peak at its limit within the violations' tolerance (the rounding of the rate
+        and acceleration differenced from the angles, about 1e-15 of the limit, is not
+        reported as a negative margin).
     violations : int
-        Samples beyond a limit by more than 1e-9 of it.
+        Samples beyond a limit by more than 1e-9 of it (and 1e-6 rad/s^2 for accelerations).
+
+    Examples
+    --------
+    A roll ramp at exactly the SIMACOM-like platform's roll rate limit, 0.2 s at 100 Hz
+    from rest (differenced, its rate is up to 1.6e-15 of the limit beyond it; its start is
+    an acceleration far beyond that limit, the one violation):
+
+    >>> from motosim.cueing import load_platform
+    >>> platform = load_platform("simacom_platform").platform
+    >>> ramp = np.zeros((20, 3))
+    >>> ramp[:, 0] = platform.axes[0].rate * 0.01 * np.arange(1, 21)
+    >>> margins, violations = limit_margins(platform, ramp, 0.01)
+    >>> margins["rate"][0], round(margins["angle"][0], 6), violations
+    (0.0, 0.7, 1)
     """
     x = np.asarray(commands, dtype=np.float64)
     padded = np.vstack([np.zeros((2, 3)), x])
@@ -328,12 +345,11 @@ def limit_margins(
     for key, values in (("angle", x), ("rate", v), ("accel", a)):
         limits = np.array([getattr(ax, key) for ax in platform.axes])
         peak = np.max(np.abs(values), axis=0) if values.size else np.zeros(3)
-        margins[key] = (
-            float(1 - peak[0] / limits[0]),
-            float(1 - peak[1] / limits[1]),
-            float(1 - peak[2] / limits[2]),
-        )
         slack = 1e-9 * limits + (1e-6 if key == "accel" else 0.0)
+        margin = np.where(
+            peak <= limits + slack, np.maximum(1 - peak / limits, 0.0), 1 - peak / limits
+        )
+        margins[key] = (float(margin[0]), float(margin[1]), float(margin[2]))
         violations += int(np.sum(np.abs(values) > limits + slack))
     return margins, violations
 
