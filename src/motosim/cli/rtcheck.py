@@ -117,7 +117,7 @@ def _table(stats: "TimingStats", privileges: tuple[Privilege, ...]) -> str:
         f"missed deadlines: {stats.missed} ({100.0 * stats.miss_ratio:.3f} %)",
     ]
     for p in privileges:
-        lines.append(f"{p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
+        lines.append(str(p))
     if not privileges:
         lines.append("no real-time privilege asked for (see --fifo, --cpu, --mlock)")
     return "\n".join(lines)

@@ -643,7 +643,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             + (f", {stats.gaps} frame periods without a frame" if args.pace == "bus" else "")
         )
         for p in privileges:
-            print(f"  {p.name}: {'applied' if p.applied else 'refused'} ({p.detail})")
+            print(f"  {p}")
         print(f"  state {counters.state}; {counters.fault_reason}")
         if counters.frames_lost > max(10, counters.status_frames // 10):
             print(

@@ -48,6 +48,18 @@ class Privilege:
     applied: bool
     detail: str
 
+    def __str__(self) -> str:
+        """``"NAME: applied"``, or ``"NAME: refused (DETAIL)"``.
+
+        Examples
+        --------
+        >>> str(Privilege("mlockall", True, "applied"))
+        'mlockall: applied'
+        >>> str(Privilege("SCHED_FIFO 80", False, "not permitted"))
+        'SCHED_FIFO 80: refused (not permitted)'
+        """
+        return f"{self.name}: applied" if self.applied else f"{self.name}: refused ({self.detail})"
+
 
 def set_fifo_priority(priority: int) -> Privilege:
     """Put this process under ``SCHED_FIFO`` at ``priority`` (1..99).
