@@ -486,6 +486,13 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
         raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
     folder = Path(args.out)
     refuse_special(folder, "--out", "a result folder")
+    if folder.exists() and not folder.is_dir():
+        raise MotosimError(f"--out {folder} is a file; expected a result folder")
+    if not folder.parent.is_dir():
+        raise MotosimError(
+            f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
+            "folder (create it first)"
+        )
     if (folder / "result.h5").exists() and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
     warn_atypical("run", "--duration", args.duration)

@@ -1,0 +1,40 @@
+"""Bad inputs found by a sweep of every command (s20): each refused in one line, exit 2.
+
+Each test gives the input a new user tried and checks the one line ``motosim: error: ...``
+naming the value and what was expected, and that nothing was written.
+"""
+
+from pathlib import Path
+
+import pytest
+
+from motosim.cli.main import main
+
+ROOT = Path(__file__).parents[2]
+REALTIME = ROOT / "scenarios" / "realtime_square.toml"
+
+
+def _refused(capsys: pytest.CaptureFixture[str], *expected: str) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("motosim: error: "), err
+    for text in expected:
+        assert text in err, err
+    return err
+
+
+@pytest.mark.parametrize("kind", ["missing parent", "a file"])
+def test_run_refuses_an_out_folder_it_cannot_use_before_the_bus(
+    kind: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # it created the missing parent (simulate and campaign refuse it), and a file was
+    # refused only after the --duration warning, in two lines
+    out = tmp_path / "no" / "run" if kind == "missing parent" else tmp_path / "x.csv"
+    if kind == "a file":
+        out.write_text("t\n", encoding="utf-8")
+    argv = ["run", str(REALTIME), "--bus", "virtual", "--out", str(out), "--duration", "0.2"]
+    assert main(argv) == 2
+    if kind == "missing parent":
+        _refused(capsys, f"--out {out}: the folder {out.parent} does not exist")
+        assert not out.parent.exists()
+    else:
+        _refused(capsys, f"--out {out} is a file; expected a result folder")
