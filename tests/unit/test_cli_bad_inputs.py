@@ -38,3 +38,27 @@ def test_run_refuses_an_out_folder_it_cannot_use_before_the_bus(
         assert not out.parent.exists()
     else:
         _refused(capsys, f"--out {out} is a file; expected a result folder")
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["simulate", "{dir}", "--out", "{tmp}/o"], "is a directory; expected a scenario file"),
+        (["campaign", "{dir}", "--out", "{tmp}/o"], "is a directory; expected a campaign file"),
+        (["identify", "{dir}"], "is a directory; expected a log file (CSV)"),
+        (["estimate", "{dir}", "--out", "{tmp}/o.csv"], "is a directory; expected a log file"),
+        (["run", "{dir}", "--bus", "virtual", "--out", "{tmp}/o"], "expected a scenario file"),
+        (["cueing", "{tmp}", "--platform", "{dir}", "--out", "{tmp}/o"], "expected a platform"),
+        (["simulate", "/dev/zero", "--out", "{tmp}/o"], "is a device, a pipe or a socket"),
+        (["identify", "/dev/zero"], "/dev/zero: is a device, a pipe or a socket; expected a log"),
+    ],
+)
+def test_a_folder_or_a_device_given_as_an_input_file_is_named_as_such(
+    argv: list[str], expected: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # they said "no such scenario file" (or campaign, log, platform file) of a path that is there
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    words = [w.format(dir=folder, tmp=tmp_path) for w in argv]
+    assert main(words) == 2
+    _refused(capsys, expected)

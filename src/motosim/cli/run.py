@@ -168,7 +168,7 @@ def load_realtime(path: str, *, safety: bool = False) -> tuple["RunInputs", dict
     from motosim.sim.scenario import implausible
 
     source = Path(path)
-    if not source.is_file():
+    if not source.exists():  # a folder or a device: refused by read_toml, saying which
         raise MotosimError(f"{path}: no such scenario file")
     data = read_toml(source, what="scenario file")
     rest, realtime = split_realtime(data, origin=str(path))
