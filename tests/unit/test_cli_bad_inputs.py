@@ -62,3 +62,30 @@ def test_a_folder_or_a_device_given_as_an_input_file_is_named_as_such(
     words = [w.format(dir=folder, tmp=tmp_path) for w in argv]
     assert main(words) == 2
     _refused(capsys, expected)
+
+
+def test_view_refuses_a_cueing_folder_that_motosim_cueing_did_not_write(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a simulate result given as --cueing was merged as nothing: the view served no platform
+    # commands, silently
+    pytest.importorskip("starlette")
+    import numpy as np
+
+    from motosim.io.results import ResultWriter
+
+    run = tmp_path / "run"
+    with ResultWriter(run, ("t", "theta_h", "x", "y"), {"scenario": {"name": "r"}}) as writer:
+        writer.append(np.array([[0.0, 0.0, 0.0, 0.0], [0.01, 0.1, 0.2, 0.0]]))
+        writer.close({})
+    assert main(["view", str(run), "--cueing", str(run)]) == 2
+    _refused(capsys, f"--cueing {run}: a result without phi_s, theta_s, psi_s, phi_vis")
+
+
+def test_design_refuses_an_integral_corner_below_a_millionth(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # 1e-300 went to the search: SciPy's RuntimeWarnings (four lines), then "no stabilising
+    # controller of order 1 was found", where 0 is refused at once
+    assert main(["design", "--integral-corner", "1e-300"]) == 2
+    _refused(capsys, "integral_corner = 1e-300; expected a fraction of the bandwidth from 1e-06")
