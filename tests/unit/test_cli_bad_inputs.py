@@ -89,3 +89,28 @@ def test_design_refuses_an_integral_corner_below_a_millionth(
     # controller of order 1 was found", where 0 is refused at once
     assert main(["design", "--integral-corner", "1e-300"]) == 2
     _refused(capsys, "integral_corner = 1e-300; expected a fraction of the bandwidth from 1e-06")
+
+
+def test_campaign_refuses_an_out_folder_holding_another_commands_result(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # it wrote its parts, manifest and report.html into a simulate result's folder
+    (tmp_path / "base.toml").write_text(
+        '[scenario]\nname = "b"\nduration = 0.2\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 1.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    campaign = tmp_path / "c.toml"
+    campaign.write_text(
+        '[campaign]\nscenario = "base.toml"\nruns = 2\n[factors]\n'
+        '"handlebar.inertia_factor" = [0.9, 1.1]\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "run"
+    out.mkdir()
+    for name in ("result.h5", "result.csv", "report.html"):
+        (out / name).write_text("kept", encoding="utf-8")
+    assert main(["campaign", str(campaign), "--out", str(out), "--jobs", "1"]) == 2
+    _refused(capsys, f"{out}: holds files that are not a campaign's results (no manifest.json")
+    assert sorted(p.name for p in out.iterdir()) == ["report.html", "result.csv", "result.h5"]
+    assert (out / "report.html").read_text(encoding="utf-8") == "kept"

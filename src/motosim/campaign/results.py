@@ -109,7 +109,8 @@ class ResultStore:
     Raises
     ------
     MotosimError
-        If the folder holds results of a campaign with another fingerprint.
+        If the folder holds results of a campaign with another fingerprint, or other files
+        (a result of motosim simulate, say) and no campaign's.
     """
 
     def __init__(
@@ -122,6 +123,12 @@ class ResultStore:
     ) -> None:
         self.folder = Path(folder)
         self.parts = self.folder / PARTS
+        foreign = self.folder.is_dir() and any(self.folder.iterdir())
+        if foreign and not (self.folder / MANIFEST).is_file() and not self.parts.is_dir():
+            raise MotosimError(
+                f"{self.folder}: holds files that are not a campaign's results (no {MANIFEST}, "
+                f"no {PARTS}); expected a new or empty folder, or a campaign's to resume"
+            )
         if (self.folder / MANIFEST).is_file():
             previous = read_manifest(self.folder).get("fingerprint")
             if previous != fingerprint:
