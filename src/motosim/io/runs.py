@@ -113,8 +113,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
     profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force, mc.side_wind]
-    if scenario.rider.profile is not None:
-        profiles.append(scenario.rider.profile)
+    profiles += [p for p in (scenario.rider.profile, scenario.rider.probe) if p is not None]
     for profile in profiles:
         if isinstance(profile, CsvProfile):
             tables[profile.file] = read_log(
