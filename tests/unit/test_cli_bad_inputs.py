@@ -114,3 +114,26 @@ def test_campaign_refuses_an_out_folder_holding_another_commands_result(
     _refused(capsys, f"{out}: holds files that are not a campaign's results (no manifest.json")
     assert sorted(p.name for p in out.iterdir()) == ["report.html", "result.csv", "result.h5"]
     assert (out / "report.html").read_text(encoding="utf-8") == "kept"
+
+
+def test_a_design_file_for_another_rate_whose_observer_fails_there_is_refused_before_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the observer of a 1 kHz design, sampled at 100 Hz, failed inside the run: two lines
+    # naming neither the file nor the rates, and an empty DIR.partial left behind
+    design = ROOT / "tests" / "data" / "design_simacom.toml"
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        '[scenario]\nname = "s"\nduration = 0.2\n[rates]\ncontrol = 100.0\nmeasurement = 100.0\n'
+        '[rider]\nkind = "torque"\nprofile = { kind = "constant", value = 1.0 }\n'
+        f"[controller]\ndesign = {str(design)!r}\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    assert main(["simulate", str(scenario), "--out", str(out)]) == 2
+    _refused(
+        capsys,
+        f"{design}: a design for 1000 Hz whose observer, sampled at the scenario's",
+        "expected a design for 100 Hz (motosim design --rate 100)",
+    )
+    assert not any(p.name.startswith("out") for p in tmp_path.iterdir())
