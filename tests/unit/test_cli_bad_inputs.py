@@ -137,3 +137,14 @@ def test_a_design_file_for_another_rate_whose_observer_fails_there_is_refused_be
         "expected a design for 100 Hz (motosim design --rate 100)",
     )
     assert not any(p.name.startswith("out") for p in tmp_path.iterdir())
+
+
+def test_excite_warns_for_an_encoder_of_one_count(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # --counts 1 wrote a log whose angle never left 0 (12 counts a handlebar turn), silently
+    out = tmp_path / "x.csv"
+    assert main(["excite", "--duration", "10", "--counts", "1", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("motosim: warning: --counts 1 is legal but")
+    assert out.is_file()

@@ -70,6 +70,9 @@ TYPICAL_OPTIONS: dict[tuple[str, str], Typical] = {
         0.0, 1.0, "A", "of a current sensor's noise (tens of mA)"
     ),
     ("excite", "--amplitude"): Typical(0.1, 48.0, "V", "of a handlebar motor's supply"),
+    ("excite", "--counts"): Typical(
+        100.0, 1e7, "", "counts per revolution of a motor encoder (hundreds to millions)"
+    ),
     ("modes", "--speeds"): _MODES_SWEEP,
     ("modes", "--range"): _MODES_SWEEP,
     ("design", "--speeds"): _SPEEDS,

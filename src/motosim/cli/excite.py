@@ -193,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
         f1=args.f1,
         frequency=args.frequency,
     )
-    for option in ("--duration", "--rate", "--current-noise", "--amplitude"):
+    for option in ("--duration", "--rate", "--current-noise", "--amplitude", "--counts"):
         warn_atypical("excite", option, getattr(args, option[2:].replace("-", "_")))
     columns = ("theta_h", "i_m", "u")
     log = type(log)(log.t, np.column_stack([log[c] for c in columns]), columns)
