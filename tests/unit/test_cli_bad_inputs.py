@@ -148,3 +148,37 @@ def test_excite_warns_for_an_encoder_of_one_count(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("motosim: warning: --counts 1 is legal but")
     assert out.is_file()
+
+
+@pytest.mark.parametrize(
+    ("options", "expected"),
+    [
+        # python-can half opened the bus: the error, then "UdpMulticastBus was not properly
+        # shut down", after the --duration warning (three lines)
+        (["--bus", "udp_multicast:notanip"], "expected a multicast group address"),
+        (["--bus", "udp_multicast:8.8.8.8"], "'udp_multicast:8.8.8.8'; expected a multicast"),
+        # 256.1.1.1 read as a host name: accepted, the platform's datagrams lost silently
+        (["--platform-udp", "256.1.1.1:9"], "--platform-udp '256.1.1.1:9'; expected HOST:PORT"),
+        # after the --duration warning (two lines)
+        (["--platform-can", "--platform", "{dir}"], "is a directory; expected a platform file"),
+        (["--pace", "bus"], "--pace bus with control = 1000 Hz and measurement = 100 Hz"),
+    ],
+)
+def test_run_refuses_bus_and_platform_options_in_one_line_before_any_warning(
+    options: list[str], expected: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["run", str(REALTIME), "--bus", "virtual", "--out", str(tmp_path / "o")]
+    argv += [o.format(dir=tmp_path) for o in options] + ["--duration", "0.2"]
+    assert main(argv) == 2
+    _refused(capsys, expected)
+
+
+def test_rig_refuses_a_rate_above_its_plant_rate_before_opening_the_bus(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # refused after the bus was opened
+    import unittest.mock
+
+    with unittest.mock.patch("motosim.io.can.open_link", side_effect=AssertionError("opened")):
+        assert main(["rig", str(REALTIME), "--bus", "virtual", "--rate", "20000"]) == 2
+    _refused(capsys, "--rate 20000.0; expected a rate in (0, 10000] Hz (the rig's plant_rate)")

@@ -101,6 +101,11 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
     inputs, realtime = load_realtime(args.scenario)
     sc = inputs.scenario
     settings = rig_settings(sc, realtime, origin=args.scenario)
+    if not args.rate <= settings.plant_rate:  # before the bus is opened
+        raise MotosimError(
+            f"--rate {args.rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz (the "
+            "rig's plant_rate)"
+        )
     duration = math.inf if args.duration is None else args.duration
     if not (duration > 0.0):
         raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
@@ -140,10 +145,6 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
             rig.on_frame = twin.receive_frame
         status_due = [0.0]
         rate = args.rate
-        if not (math.isfinite(rate) and 0.0 < rate <= settings.plant_rate):
-            raise MotosimError(
-                f"--rate {rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz"
-            )
         warn_atypical("rig", "--rate", args.rate)
         warn_atypical("rig", "--duration", args.duration)
         periods = 2**62 if math.isinf(duration) else round(duration * rate)

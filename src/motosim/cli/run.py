@@ -140,7 +140,7 @@ def _platform_address(text: str) -> tuple[str, int]:
 
 def check_rt_options(args: argparse.Namespace) -> None:
     """Refuse the options of run and rig before any work: --bus, --duration, --telemetry,
-    --fifo, --cpu, --spin (one line each)."""
+    --platform-udp, --platform, --fifo, --cpu, --spin (one line each)."""
     from motosim.io.can import check_bus
     from motosim.rt.telemetry import parse_address
 
@@ -153,6 +153,12 @@ def check_rt_options(args: argparse.Namespace) -> None:
         )
     if args.telemetry != "off":
         parse_address(args.telemetry)
+    if args.platform_udp != "off":
+        _platform_address(args.platform_udp)
+    if args.platform_udp != "off" or args.platform_can:
+        from motosim.cueing import load_platform
+
+        load_platform(args.platform)  # refused here, not after the scenario's designs
     check_privilege_options(args)
 
 
@@ -495,7 +501,6 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
         )
     if (folder / "result.h5").exists() and not args.overwrite:
         raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
-    warn_atypical("run", "--duration", args.duration)
     view = _view_setup(args, inputs, duration, limits) if args.view else None
     clock = clock_from_args(args)
     rate = sc.rates.control
@@ -536,6 +541,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             sender=udp_sender,
             send_every=max(1, round(rate / 100.0)),
         )
+    warn_atypical("run", "--duration", args.duration)  # once every check has passed
     link = open_link(args.bus, fast=args.link == "fast")
     if platform is not None and args.platform_can:
         from motosim.io.can import platform_codecs
