@@ -182,3 +182,25 @@ def test_rig_refuses_a_rate_above_its_plant_rate_before_opening_the_bus(
     with unittest.mock.patch("motosim.io.can.open_link", side_effect=AssertionError("opened")):
         assert main(["rig", str(REALTIME), "--bus", "virtual", "--rate", "20000"]) == 2
     _refused(capsys, "--rate 20000.0; expected a rate in (0, 10000] Hz (the rig's plant_rate)")
+
+
+@pytest.mark.parametrize("command", ["simulate", "fidelity", "run", "rig"])
+def test_a_scenario_refused_after_its_warnings_prints_only_the_error(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the warning of the speed (58 m/s) was printed, then the missing design file (or the
+    # missing safety table) refused it: two lines, where a refused command prints only its error
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        '[scenario]\nname = "s"\nduration = 0.2\n[motorcycle]\nspeed = 58.0\n[rider]\n'
+        'kind = "virtual"\n[controller]\ndesign = "nofile.toml"\n',
+        encoding="utf-8",
+    )
+    argv = {
+        "simulate": ["simulate", str(scenario), "--out", str(tmp_path / "o")],
+        "fidelity": ["fidelity", str(scenario)],
+        "run": ["run", str(scenario), "--bus", "virtual", "--out", str(tmp_path / "o")],
+        "rig": ["rig", str(scenario), "--bus", "virtual"],
+    }[command]
+    assert main(argv) == 2
+    _refused(capsys, "[realtime.safety] is missing" if command == "run" else "no such design")

@@ -14,11 +14,13 @@ import json
 import math
 import os
 import sys
-from collections.abc import Callable, Iterable
+import warnings
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from motosim.errors import MotosimError, warn
+from motosim.errors import MotosimError, MotosimWarning, warn
 from motosim.params.checks import short_repr
 
 __all__ = [
@@ -26,6 +28,7 @@ __all__ = [
     "check_figure_path",
     "check_output",
     "check_output_folder",
+    "deferred_warnings",
     "parse_float_list",
     "parse_range",
     "print_json",
@@ -126,6 +129,29 @@ def warn_atypical(command: str, option: str, values: float | Iterable[float] | N
         f"{option} {shown}{unit} {verb} legal but outside the typical {typical.low:g} to "
         f"{typical.high:g}{unit} {typical.why}; check the value and its unit"
     )
+
+
+@contextmanager
+def deferred_warnings() -> Iterator[None]:
+    """Hold the warnings raised in the block; show them when it ends, unless it is refused.
+
+    A refused command prints only its error: the warnings of a scenario read before a later
+    check (a missing CSV profile, design or safety table) refuses it would be more lines.
+    Interrupted (Ctrl-C), the block's warnings are shown.
+    """
+    refused = False
+    caught: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", MotosimWarning)
+            try:
+                yield
+            except MotosimError:
+                refused = True
+                raise
+    finally:
+        for item in [] if refused else caught:
+            warnings.warn_explicit(item.message, item.category, item.filename, item.lineno)
 
 
 def parse_float_list(option: str, text: str, *, max_items: int = MAX_LIST_ITEMS) -> list[float]:

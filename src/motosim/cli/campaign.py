@@ -128,6 +128,10 @@ def _check_options(args: argparse.Namespace) -> None:
             f"--out {out}: the folder {out.parent} does not exist; expected an existing folder "
             "(create it first)"
         )
+    if args.rerun is None and out.is_dir() and any(out.iterdir()):  # before the base scenario
+        from motosim.campaign.results import check_store_folder
+
+        check_store_folder(out)
     if args.jobs is not None and not 1 <= args.jobs <= 4096:
         raise MotosimError(f"--jobs {short_repr(args.jobs)}; expected 1 to 4096 worker processes")
     address = re.fullmatch(
