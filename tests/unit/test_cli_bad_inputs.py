@@ -204,3 +204,28 @@ def test_a_scenario_refused_after_its_warnings_prints_only_the_error(
     }[command]
     assert main(argv) == 2
     _refused(capsys, "[realtime.safety] is missing" if command == "run" else "no such design")
+
+
+def test_a_complete_result_without_its_csv_is_not_replaced_without_overwrite(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # with result.csv deleted (the larger file), the next simulate into the folder replaced
+    # result.h5, marked complete, without --overwrite
+    import numpy as np
+
+    from motosim.io.results import ResultWriter, load_result
+
+    run = tmp_path / "run"
+    with ResultWriter(run, ("t", "theta_h"), {"seed": 1}) as writer:
+        writer.append(np.array([[0.0, 0.1], [0.01, 0.2]]))
+        writer.close({"rms": 0.5})
+    (run / "result.csv").unlink()
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        '[scenario]\nname = "s"\nduration = 0.2\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 1.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    assert main(["simulate", str(scenario), "--out", str(run), "--no-report"]) == 2
+    _refused(capsys, f"{run}: already holds a result; give --overwrite or another --out")
+    assert load_result(run).summary == {"rms": 0.5}
