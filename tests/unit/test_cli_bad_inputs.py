@@ -229,3 +229,35 @@ def test_a_complete_result_without_its_csv_is_not_replaced_without_overwrite(
     assert main(["simulate", str(scenario), "--out", str(run), "--no-report"]) == 2
     _refused(capsys, f"{run}: already holds a result; give --overwrite or another --out")
     assert load_result(run).summary == {"rms": 0.5}
+
+
+@pytest.mark.parametrize("command", ["cueing", "simulate", "estimate"])
+def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # cueing RUN --out RUN --overwrite replaced the run it cued by its platform commands;
+    # simulate runs/s.toml --out runs --overwrite deleted the scenario with the old result;
+    # estimate LOG --out LOG --overwrite replaced the log by the estimate
+    import numpy as np
+
+    from motosim.io.results import ResultWriter
+
+    run = tmp_path / "run"
+    with ResultWriter(run, ("t", "theta_h"), {"seed": 1}) as writer:
+        writer.append(np.array([[0.0, 0.1], [0.01, 0.2]]))
+        writer.close({})
+    scenario = run / "s.toml"
+    scenario.write_text("[scenario]\n", encoding="utf-8")
+    log = tmp_path / "log.csv"
+    log.write_text("t,theta_h,i_m\n" + "".join(f"{k / 100},0,0\n" for k in range(20)))
+    argv, expected = {
+        "cueing": (["cueing", str(run), "--out", str(run)], f"--out {run} is the result {run}"),
+        "simulate": (
+            ["simulate", str(scenario), "--out", str(run)],
+            f"--out {run} holds the scenario {scenario} it reads; expected another folder",
+        ),
+        "estimate": (["estimate", str(log), "--out", str(log)], f"is the log {log} it reads"),
+    }[command]
+    assert main([*argv, "--overwrite"]) == 2
+    _refused(capsys, expected)
+    assert scenario.is_file() and (run / "result.h5").is_file() and log.is_file()

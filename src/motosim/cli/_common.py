@@ -32,6 +32,7 @@ __all__ = [
     "parse_float_list",
     "parse_range",
     "print_json",
+    "refuse_inside",
     "refuse_special",
     "save_figure",
     "show_progress",
@@ -241,6 +242,24 @@ def refuse_special(target: Path, option: str, expected: str) -> None:
     if target.exists() and not (target.is_file() or target.is_dir()):
         raise MotosimError(
             f"{option} {target} is a device, a pipe or a socket; expected {expected}"
+        )
+
+
+def refuse_inside(output: str | Path, source: str | Path, what: str, option: str = "--out") -> None:
+    """Refuse an output that is, or holds, an input the command reads.
+
+    Replacing it (``--overwrite`` replaces a result folder whole) would delete the input:
+    ``cueing RUN --out RUN`` replaced the run it cued, ``simulate runs/s.toml --out runs``
+    deleted the scenario.
+    """
+    out, src = Path(output).resolve(), Path(source).resolve()
+    if src == out or out in src.parents:
+        verb, kind = (
+            ("is", "file" if src.is_file() else "folder") if src == out else ("holds", "folder")
+        )
+        raise MotosimError(
+            f"{option} {output} {verb} the {what} {source} it reads; expected another {kind} "
+            "(writing there would replace it)"
         )
 
 

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from motosim.cli._common import (
     deferred_warnings,
     print_json,
+    refuse_inside,
     refuse_special,
     warn_atypical,
     write_text,
@@ -499,6 +500,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
         folder = Path(args.out)
         refuse_special(folder, "--out", "a result folder")
+        refuse_inside(folder, args.scenario, "scenario")
         if folder.exists() and not folder.is_dir():
             raise MotosimError(f"--out {folder} is a file; expected a result folder")
         if not folder.parent.is_dir():
