@@ -231,13 +231,14 @@ def test_a_complete_result_without_its_csv_is_not_replaced_without_overwrite(
     assert load_result(run).summary == {"rms": 0.5}
 
 
-@pytest.mark.parametrize("command", ["cueing", "simulate", "estimate"])
+@pytest.mark.parametrize("command", ["cueing", "simulate", "estimate", "excite", "design"])
 def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # cueing RUN --out RUN --overwrite replaced the run it cued by its platform commands;
     # simulate runs/s.toml --out runs --overwrite deleted the scenario with the old result;
-    # estimate LOG --out LOG --overwrite replaced the log by the estimate
+    # estimate LOG --out LOG --overwrite replaced the log by the estimate; excite and design
+    # --handlebar HB --out HB replaced the parameter file by a log or a design file
     import numpy as np
 
     from motosim.io.results import ResultWriter
@@ -250,6 +251,10 @@ def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
     scenario.write_text("[scenario]\n", encoding="utf-8")
     log = tmp_path / "log.csv"
     log.write_text("t,theta_h,i_m\n" + "".join(f"{k / 100},0,0\n" for k in range(20)))
+    hb = tmp_path / "hb.toml"
+    hb.write_bytes(
+        (ROOT / "src" / "motosim" / "params" / "data" / "simacom_handlebar.toml").read_bytes()
+    )
     argv, expected = {
         "cueing": (["cueing", str(run), "--out", str(run)], f"--out {run} is the result {run}"),
         "simulate": (
@@ -257,7 +262,13 @@ def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
             f"--out {run} holds the scenario {scenario} it reads; expected another folder",
         ),
         "estimate": (["estimate", str(log), "--out", str(log)], f"is the log {log} it reads"),
+        "excite": (
+            ["excite", "--handlebar", str(hb), "--duration", "10", "--out", str(hb)],
+            f"--out {hb} is the handlebar file {hb} it reads; expected another file",
+        ),
+        "design": (["design", "--handlebar", str(hb), "--out", str(hb)], "the handlebar file"),
     }[command]
     assert main([*argv, "--overwrite"]) == 2
     _refused(capsys, expected)
     assert scenario.is_file() and (run / "result.h5").is_file() and log.is_file()
+    assert "[set]" in hb.read_text(encoding="utf-8")  # still the parameter file

@@ -252,6 +252,8 @@ def refuse_inside(output: str | Path, source: str | Path, what: str, option: str
     ``cueing RUN --out RUN`` replaced the run it cued, ``simulate runs/s.toml --out runs``
     deleted the scenario.
     """
+    if not Path(source).exists():  # a packaged set's name, or refused as missing elsewhere
+        return
     out, src = Path(output).resolve(), Path(source).resolve()
     if src == out or out in src.parents:
         verb, kind = (
