@@ -272,3 +272,17 @@ def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
     _refused(capsys, expected)
     assert scenario.is_file() and (run / "result.h5").is_file() and log.is_file()
     assert "[set]" in hb.read_text(encoding="utf-8")  # still the parameter file
+
+
+@pytest.mark.parametrize("existing", ["base.toml", "base_true_handlebar.toml"])
+def test_campaign_write_scenario_never_replaces_a_file(
+    existing: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # --write-scenario base.toml replaced the campaign's own base scenario, silently (the
+    # command has no --overwrite), and its true handlebar file beside it
+    (tmp_path / existing).write_text("kept", encoding="utf-8")
+    target = tmp_path / "base.toml"
+    argv = ["campaign", str(tmp_path / "c.toml"), "--out", str(tmp_path / "k")]
+    assert main([*argv, "--rerun", "abc", "--write-scenario", str(target)]) == 2
+    _refused(capsys, f"{tmp_path / existing} exists; expected a new file name")
+    assert (tmp_path / existing).read_text(encoding="utf-8") == "kept"
