@@ -109,7 +109,7 @@ DESCRIPTIONS: dict[str, str] = {
     "controller.order": "Order of the tuned K_s (0 to 3).",
     "controller.integral_corner": (
         "Corner of the loop-shaping weight W1 = k (s + a omega_c) / s as a fraction a of the "
-        "bandwidth, in (0, 0.5] (0.1): more tracks tighter below the bandwidth, with less "
+        "bandwidth, from 1e-6 to 0.5 (0.1): more tracks tighter below the bandwidth, with less "
         "phase margin and fewer handlebars of the robustness grid kept."
     ),
     "controller.discretization": (
@@ -197,8 +197,8 @@ DESCRIPTIONS: dict[str, str] = {
     "profile.square.period": "Period [s].",
     "profile.square.start": "Start time [s].",
     "profile.chirp.amplitude": "Amplitude.",
-    "profile.chirp.f0": "Start frequency [Hz].",
-    "profile.chirp.f1": "End frequency at the end of the run [Hz].",
+    "profile.chirp.f0": "Start frequency [Hz], 0 to 10 000.",
+    "profile.chirp.f1": "End frequency at the end of the run [Hz], 0 to 10 000.",
     "profile.chirp.start": "Start time [s].",
     "profile.chirp.offset": "Constant added.",
     "profile.multisine.amplitude": "Peak of the sum (each line has the same amplitude).",

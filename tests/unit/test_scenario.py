@@ -89,6 +89,13 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
             ),
             "expected increasing times",
         ),
+        (  # a chirp to 1e9 Hz was accepted and sampled into aliased noise
+            MINIMAL.replace(
+                'kind = "constant", value = 1.0',
+                'kind = "chirp", amplitude = 5.0, f0 = 0.1, f1 = 1e9',
+            ),
+            "f1 = 1000000000.0; expected a finite number >= 0 and <= 10000 [Hz]",
+        ),
         ("[rider]\nkind = 'virtual'\n", "missing table [scenario]"),
         (
             "[scenario]\n[motorcycle]\nspeed = 2.0\n[rider]\nkind = 'virtual'\n",

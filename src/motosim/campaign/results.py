@@ -27,6 +27,7 @@ __all__ = [
     "MANIFEST",
     "PARTS",
     "ResultStore",
+    "check_store_folder",
     "load_results",
     "read_manifest",
 ]
@@ -92,6 +93,23 @@ def load_results(folder: str | Path) -> dict[str, NDArray[Any]]:
     return out
 
 
+def check_store_folder(folder: str | Path) -> None:
+    """Refuse a folder holding files but no campaign's results (a result of simulate, say).
+
+    Raises
+    ------
+    MotosimError
+        One line naming the folder.
+    """
+    folder = Path(folder)
+    foreign = folder.is_dir() and any(folder.iterdir())
+    if foreign and not (folder / MANIFEST).is_file() and not (folder / PARTS).is_dir():
+        raise MotosimError(
+            f"{folder}: holds files that are not a campaign's results (no {MANIFEST}, no "
+            f"{PARTS}); expected a new or empty folder, or a campaign's to resume"
+        )
+
+
 class ResultStore:
     """Writes a campaign's parts and manifest; knows the runs already written.
 
@@ -109,7 +127,8 @@ class ResultStore:
     Raises
     ------
     MotosimError
-        If the folder holds results of a campaign with another fingerprint.
+        If the folder holds results of a campaign with another fingerprint, or other files
+        (a result of motosim simulate, say) and no campaign's.
     """
 
     def __init__(
@@ -122,6 +141,7 @@ class ResultStore:
     ) -> None:
         self.folder = Path(folder)
         self.parts = self.folder / PARTS
+        check_store_folder(self.folder)
         if (self.folder / MANIFEST).is_file():
             previous = read_manifest(self.folder).get("fingerprint")
             if previous != fingerprint:

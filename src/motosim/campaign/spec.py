@@ -82,6 +82,10 @@ METRICS: dict[str, str] = {
 _HANDLEBAR_FIELDS = tuple(f.name for f in dataclasses.fields(HandlebarParameters))
 
 
+_MAX_RUNS = 10_000_000
+"""Most runs of one campaign (a grid's points included)."""
+
+
 @dataclass(frozen=True, slots=True)
 class Factor:
     """One varied value: listed ``values`` or a ``distribution`` over numbers.
@@ -224,8 +228,8 @@ class Campaign:
             raise MotosimError(f"[factors]: {paths}; expected each key once")
         if self.sampling not in ("grid", "lhs", "random"):
             raise MotosimError(f"sampling = {self.sampling!r}; expected 'grid', 'lhs' or 'random'")
-        if not 0 <= self.runs <= 10_000_000:
-            raise MotosimError(f"runs = {self.runs}; expected 1 to 10000000")
+        if not 0 <= self.runs <= _MAX_RUNS:
+            raise MotosimError(f"runs = {self.runs}; expected 1 to {_MAX_RUNS}")
         if self.sampling != "grid" and self.runs == 0:
             raise MotosimError(f"runs: missing; expected the number of runs of a {self.sampling}")
         if self.sampling == "grid":
@@ -235,6 +239,12 @@ class Campaign:
                         f"{f.path}: a grid needs values = [...] or levels with low and high"
                     )
             points = self.grid_points()
+            if points > _MAX_RUNS:
+                levels = " x ".join(str(len(f.values) or f.levels) for f in self.factors)
+                raise MotosimError(
+                    f"the grid has {levels} = {points:.3g} points; expected at most {_MAX_RUNS} "
+                    "runs (fewer levels, or sampling = 'lhs')"
+                )
             if self.runs % points:
                 raise MotosimError(
                     f"runs = {self.runs}; expected a multiple of the {points} grid points"
@@ -430,7 +440,7 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
 def load_campaign(path: str | Path) -> Campaign:
     """Read and validate a campaign file (a one-line :class:`MotosimError` otherwise)."""
     source = Path(path)
-    if not source.is_file():
+    if not source.exists():  # a folder or a device: refused by read_toml, saying which
         raise MotosimError(f"{path}: no such campaign file")
     data = read_toml(source, what="campaign file")
     campaign = parse_campaign(data, origin=str(path), folder=source.parent)

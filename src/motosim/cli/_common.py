@@ -14,11 +14,13 @@ import json
 import math
 import os
 import sys
-from collections.abc import Callable, Iterable
+import warnings
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from motosim.errors import MotosimError, warn
+from motosim.errors import MotosimError, MotosimWarning, warn
 from motosim.params.checks import short_repr
 
 __all__ = [
@@ -26,9 +28,11 @@ __all__ = [
     "check_figure_path",
     "check_output",
     "check_output_folder",
+    "deferred_warnings",
     "parse_float_list",
     "parse_range",
     "print_json",
+    "refuse_inside",
     "refuse_special",
     "save_figure",
     "show_progress",
@@ -70,6 +74,9 @@ TYPICAL_OPTIONS: dict[tuple[str, str], Typical] = {
         0.0, 1.0, "A", "of a current sensor's noise (tens of mA)"
     ),
     ("excite", "--amplitude"): Typical(0.1, 48.0, "V", "of a handlebar motor's supply"),
+    ("excite", "--counts"): Typical(
+        100.0, 1e7, "", "counts per revolution of a motor encoder (hundreds to millions)"
+    ),
     ("modes", "--speeds"): _MODES_SWEEP,
     ("modes", "--range"): _MODES_SWEEP,
     ("design", "--speeds"): _SPEEDS,
@@ -123,6 +130,29 @@ def warn_atypical(command: str, option: str, values: float | Iterable[float] | N
         f"{option} {shown}{unit} {verb} legal but outside the typical {typical.low:g} to "
         f"{typical.high:g}{unit} {typical.why}; check the value and its unit"
     )
+
+
+@contextmanager
+def deferred_warnings() -> Iterator[None]:
+    """Hold the warnings raised in the block; show them when it ends, unless it is refused.
+
+    A refused command prints only its error: the warnings of a scenario read before a later
+    check (a missing CSV profile, design or safety table) refuses it would be more lines.
+    Interrupted (Ctrl-C), the block's warnings are shown.
+    """
+    refused = False
+    caught: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", MotosimWarning)
+            try:
+                yield
+            except MotosimError:
+                refused = True
+                raise
+    finally:
+        for item in [] if refused else caught:
+            warnings.warn_explicit(item.message, item.category, item.filename, item.lineno)
 
 
 def parse_float_list(option: str, text: str, *, max_items: int = MAX_LIST_ITEMS) -> list[float]:
@@ -212,6 +242,26 @@ def refuse_special(target: Path, option: str, expected: str) -> None:
     if target.exists() and not (target.is_file() or target.is_dir()):
         raise MotosimError(
             f"{option} {target} is a device, a pipe or a socket; expected {expected}"
+        )
+
+
+def refuse_inside(output: str | Path, source: str | Path, what: str, option: str = "--out") -> None:
+    """Refuse an output that is, or holds, an input the command reads.
+
+    Replacing it (``--overwrite`` replaces a result folder whole) would delete the input:
+    ``cueing RUN --out RUN`` replaced the run it cued, ``simulate runs/s.toml --out runs``
+    deleted the scenario.
+    """
+    if not Path(source).exists():  # a packaged set's name, or refused as missing elsewhere
+        return
+    out, src = Path(output).resolve(), Path(source).resolve()
+    if src == out or out in src.parents:
+        verb, kind = (
+            ("is", "file" if src.is_file() else "folder") if src == out else ("holds", "folder")
+        )
+        raise MotosimError(
+            f"{option} {output} {verb} the {what} {source} it reads; expected another {kind} "
+            "(writing there would replace it)"
         )
 
 

@@ -2,12 +2,13 @@
 
 import argparse
 import math
+import os
 import re
 import sys
 from pathlib import Path
 from typing import Any
 
-from motosim.cli._common import print_json, refuse_special
+from motosim.cli._common import check_output, print_json, refuse_special
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -128,6 +129,10 @@ def _check_options(args: argparse.Namespace) -> None:
             f"--out {out}: the folder {out.parent} does not exist; expected an existing folder "
             "(create it first)"
         )
+    if args.rerun is None and out.is_dir() and any(out.iterdir()):  # before the base scenario
+        from motosim.campaign.results import check_store_folder
+
+        check_store_folder(out)
     if args.jobs is not None and not 1 <= args.jobs <= 4096:
         raise MotosimError(f"--jobs {short_repr(args.jobs)}; expected 1 to 4096 worker processes")
     address = re.fullmatch(
@@ -139,6 +144,17 @@ def _check_options(args: argparse.Namespace) -> None:
             f"--scheduler {short_repr(args.scheduler)}; expected a Dask scheduler address such "
             "as tcp://host:8786"
         )
+    if args.write_scenario:  # it replaced an existing file (the base scenario) silently
+        target = check_output(
+            args.write_scenario, overwrite=True, option="--write-scenario", suffixes=(".toml",)
+        )
+        beside = target.with_name(f"{target.stem}_true_handlebar.toml")  # campaign.export
+        for path in (target, beside):
+            if os.path.lexists(path):
+                raise MotosimError(
+                    f"--write-scenario {args.write_scenario}: {path} exists; expected a new file "
+                    "name (the scenario and its true handlebar file are never replaced)"
+                )
 
 
 def run(args: argparse.Namespace) -> int:

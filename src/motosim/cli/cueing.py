@@ -6,7 +6,13 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motosim.cli._common import check_output_folder, print_json, save_figure, warn_atypical
+from motosim.cli._common import (
+    check_output_folder,
+    print_json,
+    refuse_inside,
+    save_figure,
+    warn_atypical,
+)
 from motosim.errors import MotosimError
 
 if TYPE_CHECKING:
@@ -90,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
         raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
     check_output_folder(args.out, overwrite=args.overwrite)
+    refuse_inside(args.out, args.result, "result")
     import numpy as np
 
     from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform

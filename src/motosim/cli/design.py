@@ -10,6 +10,7 @@ from motosim.cli._common import (
     check_output,
     parse_float_list,
     print_json,
+    refuse_inside,
     warn_atypical,
     write_text,
 )
@@ -241,6 +242,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.out is not None:
         check_output(args.out, overwrite=args.overwrite)
+        refuse_inside(args.out, args.handlebar, "handlebar file")
     hb = load_parameters(args.handlebar, "handlebar")
     warn_atypical("design", "--speeds", speeds)
     warn_atypical("design", "--rate", args.rate)

@@ -4,7 +4,13 @@ import argparse
 import math
 from typing import Any
 
-from motosim.cli._common import check_figure_path, print_json, save_figure, warn_atypical
+from motosim.cli._common import (
+    check_figure_path,
+    deferred_warnings,
+    print_json,
+    save_figure,
+    warn_atypical,
+)
 from motosim.errors import MotosimError
 
 EXCITATIONS = ("multisine", "chirp")  # motosim.sim.fidelity.EXCITATIONS, without importing SciPy
@@ -120,15 +126,16 @@ def run(args: argparse.Namespace) -> int:
             f"--period {args.period:g} with --band {args.band}; expected a period of at least "
             f"1 / LOW = {1.0 / band[0]:g} s (the lowest line is 1 / period)"
         )
-    base = load_scenario(args.scenario) if args.scenario else Scenario(name="default")
-    folder = Path(args.scenario).parent if args.scenario else Path(".")
-    scenario = feel_scenario(
-        base, speed=args.speed, amplitude=args.amplitude, band=band, duration=duration,
-        excitation="chirp" if chirp else "multisine", period=args.period, periods=args.periods,
-    )  # fmt: skip
+    with deferred_warnings():  # the scenario's, once the files it names are read too
+        base = load_scenario(args.scenario) if args.scenario else Scenario(name="default")
+        folder = Path(args.scenario).parent if args.scenario else Path(".")
+        scenario = feel_scenario(
+            base, speed=args.speed, amplitude=args.amplitude, band=band, duration=duration,
+            excitation="chirp" if chirp else "multisine", period=args.period, periods=args.periods,
+        )  # fmt: skip
+        inputs = resolve(scenario, folder)
     for option in ("--speed", "--duration", "--amplitude"):
         warn_atypical("fidelity", option, getattr(args, option[2:]))
-    inputs = resolve(scenario, folder)
     result = simulate(inputs, rng=np.random.default_rng(scenario.seed), keep=True)
     signals = (result.t, result["tau_r"], result["theta_h"], result["delta"], inputs.sharp)
     probe = scenario.rider.probe

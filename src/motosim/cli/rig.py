@@ -5,7 +5,7 @@ import math
 import signal
 from typing import Any
 
-from motosim.cli._common import print_json, warn_atypical
+from motosim.cli._common import deferred_warnings, print_json, warn_atypical
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
@@ -98,12 +98,18 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
     check_rt_options(args)
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
-    inputs, realtime = load_realtime(args.scenario)
-    sc = inputs.scenario
-    settings = rig_settings(sc, realtime, origin=args.scenario)
-    duration = math.inf if args.duration is None else args.duration
-    if not (duration > 0.0):
-        raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
+    with deferred_warnings():  # the scenario's, once its checks have passed
+        inputs, realtime = load_realtime(args.scenario)
+        sc = inputs.scenario
+        settings = rig_settings(sc, realtime, origin=args.scenario)
+        if not args.rate <= settings.plant_rate:  # before the bus is opened
+            raise MotosimError(
+                f"--rate {args.rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz (the "
+                "rig's plant_rate)"
+            )
+        duration = math.inf if args.duration is None else args.duration
+        if not (duration > 0.0):
+            raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
     receiver = None
     rider: Any
     if sc.rider.profile is not None:
@@ -140,10 +146,6 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
             rig.on_frame = twin.receive_frame
         status_due = [0.0]
         rate = args.rate
-        if not (math.isfinite(rate) and 0.0 < rate <= settings.plant_rate):
-            raise MotosimError(
-                f"--rate {rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz"
-            )
         warn_atypical("rig", "--rate", args.rate)
         warn_atypical("rig", "--duration", args.duration)
         periods = 2**62 if math.isinf(duration) else round(duration * rate)

@@ -11,7 +11,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motosim.cli._common import print_json, refuse_special, warn_atypical, write_text
+from motosim.cli._common import (
+    deferred_warnings,
+    print_json,
+    refuse_inside,
+    refuse_special,
+    warn_atypical,
+    write_text,
+)
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
@@ -140,7 +147,7 @@ def _platform_address(text: str) -> tuple[str, int]:
 
 def check_rt_options(args: argparse.Namespace) -> None:
     """Refuse the options of run and rig before any work: --bus, --duration, --telemetry,
-    --fifo, --cpu, --spin (one line each)."""
+    --platform-udp, --platform, --fifo, --cpu, --spin (one line each)."""
     from motosim.io.can import check_bus
     from motosim.rt.telemetry import parse_address
 
@@ -153,6 +160,12 @@ def check_rt_options(args: argparse.Namespace) -> None:
         )
     if args.telemetry != "off":
         parse_address(args.telemetry)
+    if args.platform_udp != "off":
+        _platform_address(args.platform_udp)
+    if args.platform_udp != "off" or args.platform_can:
+        from motosim.cueing import load_platform
+
+        load_platform(args.platform)  # refused here, not after the scenario's designs
     check_privilege_options(args)
 
 
@@ -179,7 +192,7 @@ def load_realtime(
     from motosim.sim.scenario import implausible
 
     source = Path(path)
-    if not source.is_file():
+    if not source.exists():  # a folder or a device: refused by read_toml, saying which
         raise MotosimError(f"{path}: no such scenario file")
     data = read_toml(source, what="scenario file")
     rest, realtime = split_realtime(data, origin=str(path))
@@ -487,64 +500,75 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     check_rt_options(args)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
-    inputs, realtime = load_realtime(args.scenario, safety=True, pace=args.pace)
-    sc = inputs.scenario
-    if sc.motorcycle.input == "true":
-        raise MotosimError(
-            f'{args.scenario}: motorcycle input = "true" is a simulation-only reference; '
-            'expected "estimate" for a real-time run'
-        )
-    limits = parse_safety(realtime.get("safety"), origin=args.scenario)
-    inputs = within_safety(inputs, limits)  # the stack saturates where the clamp cuts
-    sc = inputs.scenario
-    duration = sc.duration if args.duration is None else args.duration
-    if not (np.isfinite(duration) and 0.0 < duration <= 86_400.0):
-        raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
-    folder = Path(args.out)
-    refuse_special(folder, "--out", "a result folder")
-    if (folder / "result.h5").exists() and not args.overwrite:
-        raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
-    warn_atypical("run", "--duration", args.duration)
-    view = _view_setup(args, inputs, duration, limits) if args.view else None
-    clock = clock_from_args(args)
-    rate = sc.rates.control
-    periods = round(duration * rate)
-    latency = parse_latency(realtime, origin=args.scenario)
-    age = frame_age(
-        latency, pace=args.pace, control_rate=rate, measurement_rate=sc.rates.measurement,
-        origin=args.scenario,
-    )  # fmt: skip
-    model = build_stack(inputs)
-    if args.pace not in run_paces(rate, sc.rates.measurement):
-        raise MotosimError(
-            f"--pace bus with control = {rate:g} Hz and measurement = "
-            f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"
-        )
-    model = account_for_delay(model, age, inputs.nominal_handlebar)  # the frames' age
-    world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
-    codecs = handlebar_codecs()
-    stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-    telemetry = None
-    if args.telemetry != "off":  # sent by the writer process (StateRelay), not the loop
-        from motosim.rt.telemetry import StateSender, parse_address
+    with deferred_warnings():  # the scenario's, once every check has passed
+        inputs, realtime = load_realtime(args.scenario, safety=True, pace=args.pace)
+        sc = inputs.scenario
+        if sc.motorcycle.input == "true":
+            raise MotosimError(
+                f'{args.scenario}: motorcycle input = "true" is a simulation-only reference; '
+                'expected "estimate" for a real-time run'
+            )
+        limits = parse_safety(realtime.get("safety"), origin=args.scenario)
+        inputs = within_safety(inputs, limits)  # the stack saturates where the clamp cuts
+        sc = inputs.scenario
+        duration = sc.duration if args.duration is None else args.duration
+        if not (np.isfinite(duration) and 0.0 < duration <= 86_400.0):
+            raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
+        folder = Path(args.out)
+        refuse_special(folder, "--out", "a result folder")
+        refuse_inside(folder, args.scenario, "scenario")
+        if folder.exists() and not folder.is_dir():
+            raise MotosimError(f"--out {folder} is a file; expected a result folder")
+        if not folder.parent.is_dir():
+            raise MotosimError(
+                f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
+                "folder (create it first)"
+            )
+        if (folder / "result.h5").exists() and not args.overwrite:
+            raise MotosimError(
+                f"{folder}: already holds a result; give --overwrite or another --out"
+            )
+        view = _view_setup(args, inputs, duration, limits) if args.view else None
+        clock = clock_from_args(args)
+        rate = sc.rates.control
+        periods = round(duration * rate)
+        latency = parse_latency(realtime, origin=args.scenario)
+        age = frame_age(
+            latency, pace=args.pace, control_rate=rate, measurement_rate=sc.rates.measurement,
+            origin=args.scenario,
+        )  # fmt: skip
+        model = build_stack(inputs)
+        if args.pace not in run_paces(rate, sc.rates.measurement):
+            raise MotosimError(
+                f"--pace bus with control = {rate:g} Hz and measurement = "
+                f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"
+            )
+        model = account_for_delay(model, age, inputs.nominal_handlebar)  # the frames' age
+        world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
+        codecs = handlebar_codecs()
+        stack = CompiledStack(model, force=world.force, side_force=world.side_force)
+        telemetry = None
+        if args.telemetry != "off":  # sent by the writer process (StateRelay), not the loop
+            from motosim.rt.telemetry import StateSender, parse_address
 
-        telemetry = parse_address(args.telemetry)
-        StateSender(telemetry, width=len(stack.names)).close()  # refused here, not there
-    platform = None
-    udp_sender = None
-    if args.platform_udp != "off" or args.platform_can:
-        from motosim.cueing import load_platform
-        from motosim.rt.platform import PlatformOutput, PlatformSender
+            telemetry = parse_address(args.telemetry)
+            StateSender(telemetry, width=len(stack.names)).close()  # refused here, not there
+        platform = None
+        udp_sender = None
+        if args.platform_udp != "off" or args.platform_can:
+            from motosim.cueing import load_platform
+            from motosim.rt.platform import PlatformOutput, PlatformSender
 
-        if args.platform_udp != "off":
-            udp_sender = PlatformSender(_platform_address(args.platform_udp))
-        platform = PlatformOutput(
-            load_platform(args.platform),
-            1.0 / rate,
-            tuple(stack.names),
-            sender=udp_sender,
-            send_every=max(1, round(rate / 100.0)),
-        )
+            if args.platform_udp != "off":
+                udp_sender = PlatformSender(_platform_address(args.platform_udp))
+            platform = PlatformOutput(
+                load_platform(args.platform),
+                1.0 / rate,
+                tuple(stack.names),
+                sender=udp_sender,
+                send_every=max(1, round(rate / 100.0)),
+            )
+    warn_atypical("run", "--duration", args.duration)  # once every check has passed
     link = open_link(args.bus, fast=args.link == "fast")
     if platform is not None and args.platform_can:
         from motosim.io.can import platform_codecs

@@ -5,7 +5,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motosim.cli._common import print_json, refuse_special, show_progress
+from motosim.cli._common import (
+    deferred_warnings,
+    print_json,
+    refuse_inside,
+    refuse_special,
+    show_progress,
+)
 from motosim.errors import MotosimError, RunFailedError
 
 if TYPE_CHECKING:
@@ -61,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     folder = Path(args.out)
     refuse_special(folder, "--out", "a result folder")
+    refuse_inside(folder, args.scenario, "scenario")
     if folder.exists() and not folder.is_dir():
         raise MotosimError(f"--out {folder} is a file; expected a result folder")
     if not folder.parent.is_dir():
@@ -72,10 +79,13 @@ def run(args: argparse.Namespace) -> int:
     from motosim.io.runs import load_scenario, resolve
     from motosim.sim.metrics import warnings
 
-    scenario = load_scenario(args.scenario)
-    if is_complete_result(folder) and not args.overwrite:
-        raise MotosimError(f"{folder}: already holds a result; give --overwrite or another --out")
-    inputs = resolve(scenario, Path(args.scenario).parent)
+    with deferred_warnings():  # shown once the files it names are read too
+        scenario = load_scenario(args.scenario)
+        if is_complete_result(folder) and not args.overwrite:
+            raise MotosimError(
+                f"{folder}: already holds a result; give --overwrite or another --out"
+            )
+        inputs = resolve(scenario, Path(args.scenario).parent)
     try:
         summary = run_scenario(
             inputs, folder, progress=show_progress(args.json), overwrite=args.overwrite

@@ -31,6 +31,21 @@ def _check_rate(rate: float) -> None:
         raise MotosimError(f"--rate {rate!r}; expected a replay speed from 0.01 to 1000")
 
 
+def _cueing(folder: str) -> Any:
+    """The result of ``motosim cueing`` in ``folder``; another command's is refused."""
+    from motosim.cueing.washout import WASHOUT_OUTPUTS
+    from motosim.io.results import load_result
+
+    cue = load_result(folder)
+    missing = [name for name in WASHOUT_OUTPUTS if name not in cue.names]
+    if missing:
+        raise MotosimError(
+            f"--cueing {folder}: a result without {', '.join(missing)}; expected a folder "
+            "written by motosim cueing (its platform commands)"
+        )
+    return cue
+
+
 def register(sub: Any) -> None:
     """Add ``view`` and ``telemetry`` to the subcommands."""
     view = sub.add_parser(
@@ -92,7 +107,7 @@ def run_view(args: argparse.Namespace) -> int:
         raise MotosimError(f"--host {short_repr(args.host)}; expected an IP address or host name")
     _check_rate(args.rate)
     result = load_result(args.folder)
-    series = result if args.cueing is None else merge_signals(result, load_result(args.cueing))
+    series = result if args.cueing is None else merge_signals(result, _cueing(args.cueing))
     warn_atypical("view", "--rate", args.rate)
     feed = ReplayFeed(series, rate=args.rate, loop=args.loop)
     road = road_from_xy(result["x"], result["y"])

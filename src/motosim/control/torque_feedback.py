@@ -297,7 +297,7 @@ def check_options(
     *, bandwidth: float, rate: float, integral_corner: float = INTEGRAL_CORNER
 ) -> None:
     """Raise :class:`MotosimError` unless 0 < bandwidth <= rate / 5 [Hz], rate > 0 [Hz] and
-    0 < integral_corner <= 0.5."""
+    1e-6 <= integral_corner <= 0.5."""
     if not (math.isfinite(rate) and rate > 0):
         raise MotosimError(f"rate = {rate!r}; expected a control rate > 0 [Hz]")
     if not (math.isfinite(bandwidth) and 0 < bandwidth <= rate / 5):
@@ -305,10 +305,11 @@ def check_options(
             f"bandwidth = {bandwidth!r} Hz; expected > 0 and at most a fifth of the "
             f"{rate:g} Hz control rate"
         )
-    if not (math.isfinite(integral_corner) and 0 < integral_corner <= 0.5):
+    # 1e-6, as a scenario's positive values: 1e-300 reached the search as a singular weight
+    if not (math.isfinite(integral_corner) and 1e-6 <= integral_corner <= 0.5):
         raise MotosimError(
             f"integral_corner = {integral_corner!r}; expected a fraction of the bandwidth "
-            "in (0, 0.5]"
+            "from 1e-06 to 0.5"
         )
 
 
@@ -439,7 +440,7 @@ def design_torque_feedback(
     n_starts : int
         Starts of the fixed-order search.
     integral_corner : float
-        W1's corner as a fraction of the bandwidth, in (0, 0.5]: W1 = gain (s + corner) / s
+        W1's corner as a fraction of the bandwidth, from 1e-6 to 0.5: W1 = gain (s + corner) / s
         with corner = 2 pi ``bandwidth`` ``integral_corner`` [rad/s]. Above the default 0.1
         the loop gains stiffness below the bandwidth (the tracking error from the rider
         torque's estimate) and loses phase at the crossover.

@@ -587,6 +587,8 @@ class MpcCueing:
             status.OSQP_PRIMAL_INFEASIBLE,
             status.OSQP_PRIMAL_INFEASIBLE_INACCURATE,
         }
+        # OSQP takes Ctrl-C during a solve for itself and returns this status
+        self._interrupted = status.OSQP_SIGINT
 
     @staticmethod
     def _stack(plan: AxisPlan) -> tuple[Array, Array, int, int]:
@@ -776,6 +778,8 @@ class MpcCueing:
             solver = self._solvers[j]
             solver.update(q=q, l=lo, u=hi)
             result = solver.solve(raise_error=False)
+            if result.info.status_val == self._interrupted:  # Ctrl-C, swallowed by OSQP
+                raise KeyboardInterrupt
             if result.info.status_val in self._infeasible:
                 # the angle and rate bounds of the coarse prediction cannot be met from this
                 # state (near a limit): plan with the input bounds only, the limit manager
@@ -785,6 +789,8 @@ class MpcCueing:
                 lo[n : 3 * n], hi[n : 3 * n] = -1e9, 1e9
                 solver.update(l=lo, u=hi)
                 result = solver.solve(raise_error=False)
+                if result.info.status_val == self._interrupted:
+                    raise KeyboardInterrupt
             if result.info.status_val in self._usable and math.isfinite(result.x[0]):
                 u = float(result.x[0])
             else:  # not solved in the iteration budget: brake

@@ -509,7 +509,7 @@ def load_platform(name_or_path: str | Path) -> CueingConfig:
         data = parse_toml(text, origin=origin)
     else:
         path = Path(name_or_path)
-        if not path.is_file():
+        if not path.exists():  # a folder or a device: refused by read_toml, saying which
             raise MotosimError(
                 f"{origin}: no such platform file or packaged platform; packaged platforms are "
                 f"{', '.join(list_platforms())}"

@@ -28,6 +28,7 @@ microseconds here; processes using python-can on the same group see the same fra
 """
 
 import importlib.resources
+import ipaddress
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -949,7 +950,22 @@ def check_bus(spec: str) -> tuple[str, str]:
             f"--bus {shown!r}; expected INTERFACE[:CHANNEL] with a python-can interface such as "
             "socketcan:can0, virtual or udp_multicast"
         )
+    if interface == "udp_multicast" and channel and not _is_multicast(channel):
+        # python-can failed on it after half opening the bus: two more lines
+        shown = channel if len(channel) <= 40 else channel[:37] + "..."
+        raise MotosimError(
+            f"--bus 'udp_multicast:{shown}'; expected a multicast group address as the "
+            "channel, such as udp_multicast:239.74.163.79 (224.0.0.0 to 239.255.255.255) or "
+            "an IPv6 ff00::/8 address"
+        )
     return interface, channel
+
+
+def _is_multicast(address: str) -> bool:
+    try:
+        return ipaddress.ip_address(address.strip("[]")).is_multicast
+    except ValueError:
+        return False
 
 
 def open_link(spec: str, *, fast: bool = True) -> CanLink | UdpMulticastLink:

@@ -268,8 +268,12 @@ def read_log(
         a time that does not strictly increase, too few samples.
     """
     source = Path(path)
-    if not source.is_file():
+    if source.is_dir():
+        raise MotosimError(f"{path}: is a directory; expected a log file (CSV)")
+    if not source.exists():
         raise MotosimError(f"{path}: no such log file")
+    if not source.is_file():
+        raise MotosimError(f"{path}: is a device, a pipe or a socket; expected a log file (CSV)")
     lines = _decode(source, str(path))
     if not lines:
         raise MotosimError(f"{path}: empty log; expected a header row and data rows")

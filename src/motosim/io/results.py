@@ -154,8 +154,22 @@ def lock_file(folder: str | Path) -> Path:
 
 
 def is_complete_result(folder: str | Path) -> bool:
-    """Whether ``folder`` holds a completed result (its ``result.csv`` is renamed at the end)."""
-    return (Path(folder) / _CSV_NAME).is_file()
+    """Whether ``folder`` holds a completed result (its ``result.csv`` is renamed at the end).
+
+    A ``result.h5`` marked complete counts too: a result whose CSV was deleted (it is the
+    larger file) was replaced by the next run into the folder without ``--overwrite``.
+    """
+    folder = Path(folder)
+    if (folder / _CSV_NAME).is_file():
+        return True
+    h5_path = folder / _H5_NAME
+    if not h5_path.is_file():
+        return False
+    try:
+        with h5py.File(h5_path, "r") as h5:
+            return bool(h5.attrs.get("complete", False))
+    except (OSError, ValueError):  # not HDF5, truncated: no result to keep
+        return False
 
 
 class _FolderLock:

@@ -19,11 +19,12 @@ import numpy as np
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER, synthesize_controller
 from motosim.errors import MotosimError, RunFailedError, warn
+from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
 from motosim.io.design_file import read_design
 from motosim.io.logs import read_log
 from motosim.io.opendrive import read_opendrive
 from motosim.io.results import ResultWriter
-from motosim.params import load_parameters
+from motosim.params import HandlebarParameters, load_parameters
 from motosim.params.toml import read_toml
 from motosim.sim import (
     SIGNALS,
@@ -52,7 +53,7 @@ __all__ = [
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file (one-line :class:`MotosimError` otherwise)."""
     source = Path(path)
-    if not source.is_file():
+    if not source.exists():  # a folder or a device: refused by read_toml, saying which
         raise MotosimError(f"{path}: no such scenario file")
     data = dict(read_toml(source, what="scenario file"))
     data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
@@ -113,8 +114,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
     profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force, mc.side_wind]
-    if scenario.rider.profile is not None:
-        profiles.append(scenario.rider.profile)
+    profiles += [p for p in (scenario.rider.profile, scenario.rider.probe) if p is not None]
     for profile in profiles:
         if isinstance(profile, CsvProfile):
             tables[profile.file] = read_log(
@@ -135,6 +135,8 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
         # the design's own discrete matrices when it was made for this rate
         matches = abs(design.rate - rate) <= 1e-9 * rate
         controller = design.controller_discrete[method] if matches else design.controller
+        if not matches and scenario.estimator.name == "walcott_zak":
+            _check_observer_rate(c.design, design.rate, observer, nominal, rate)
     elif c.kind == "ours":
         controller = synthesize_controller(
             nominal,
@@ -154,6 +156,28 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
         observer=observer,
         tables=tables,
     )
+
+
+def _check_observer_rate(
+    name: str,
+    made_for: float,
+    settings: ObserverSettings,
+    nominal: HandlebarParameters,
+    rate: float,
+) -> None:
+    """Refuse a design file's observer that is unstable sampled at the scenario's ``rate``.
+
+    Found only inside the run, it stopped it in two lines that named neither the file nor
+    the rates, and left an empty partial result.
+    """
+    try:
+        WalcottZakObserver(design_with(nominal, settings), dt=1.0 / rate)
+    except MotosimError as err:
+        raise MotosimError(
+            f"{name}: a design for {made_for:g} Hz whose observer, sampled at the scenario's "
+            f"measurement rate of {rate:g} Hz, fails ({err}); expected a design for {rate:g} Hz "
+            f"(motosim design --rate {rate:g})"
+        ) from None
 
 
 def load_run(path: str | Path) -> RunInputs:

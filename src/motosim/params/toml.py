@@ -161,8 +161,12 @@ def read_limited(path: Path, *, what: str, max_bytes: int) -> bytes:
     try:
         if path.is_dir():
             raise MotosimError(f"{origin}: is a directory; expected {article} {what}")
-        if not path.is_file():
+        if not path.exists():
             raise MotosimError(f"{origin}: no such {what}")
+        if not path.is_file():
+            raise MotosimError(
+                f"{origin}: is a device, a pipe or a socket; expected {article} {what}"
+            )
         size = path.stat().st_size
         if size > max_bytes:
             raise MotosimError(

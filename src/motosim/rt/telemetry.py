@@ -46,6 +46,7 @@ def _format(width: int) -> struct.Struct:
     return struct.Struct(f"<Qd{width}d")
 
 
+_DIGITS = re.compile(r"[0-9.]+")
 _HOSTNAME = re.compile(
     r"(?=.{1,253}$)[A-Za-z0-9_]([A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?"
     r"(\.[A-Za-z0-9_]([A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?)*\.?"
@@ -57,13 +58,13 @@ def is_host(text: str) -> bool:
 
     Examples
     --------
-    >>> is_host("127.0.0.1"), is_host("lab-pc.local"), is_host("a b"), is_host("")
+    >>> is_host("127.0.0.1"), is_host("lab-pc.local"), is_host("a b"), is_host("256.1.1.1")
     (True, True, False, False)
     """
     try:
         ipaddress.ip_address(text.strip("[]"))
-    except ValueError:
-        return _HOSTNAME.fullmatch(text) is not None
+    except ValueError:  # digits and dots only: an IPv4 address out of range, not a name
+        return _HOSTNAME.fullmatch(text) is not None and not _DIGITS.fullmatch(text)
     return True
 
 

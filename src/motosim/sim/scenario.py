@@ -198,8 +198,9 @@ class ChirpProfile:
 
     def __post_init__(self) -> None:
         _check("amplitude", self.amplitude)
-        _check("f0", self.f0, low=0.0, unit="Hz")
-        _check("f1", self.f1, low=0.0, unit="Hz")
+        # at most 10 kHz, as a multisine's lines: 1e9 Hz was sampled into an aliased noise
+        _check("f0", self.f0, low=0.0, high=1e4, unit="Hz")
+        _check("f1", self.f1, low=0.0, high=1e4, unit="Hz")
         _check("start", self.start, unit="s")
         _check("offset", self.offset)
 

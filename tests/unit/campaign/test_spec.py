@@ -59,6 +59,12 @@ UNIFORM = {"distribution": "uniform", "low": 0.5, "high": 1.5}
         (_doc({"x": [1.0]}, runs=3, series=["delta", "delta"]), "each signal once"),
         (_doc({"x": [1.0]}, runs=3, series=["delta"], every=0), "every = 0"),
         (_doc({"x": [1.0]}, runs=3, every=10), "expected series"),
+        # a grid of levels without runs: 1e9 points were planned one by one (a hang)
+        (_doc({"x": {**UNIFORM, "levels": 10**9}}, sampling="grid"), "1e\\+09 points"),
+        (
+            _doc({k: {**UNIFORM, "levels": 10**4} for k in "xyz"}, sampling="grid"),
+            "10000 x 10000 x 10000 = 1e\\+12 points; expected at most 10000000",
+        ),
     ],
 )
 def test_invalid_campaigns_are_one_line_errors(doc: dict[str, object], message: str) -> None:

@@ -87,3 +87,22 @@ def test_a_negative_corner_is_a_one_line_error() -> None:
     del data["mpc"]["roll_canal_corner"]
     with pytest.raises(MotosimError, match="missing key 'roll_canal_corner' in \\[mpc\\]"):
         parse_platform(data, origin="my.toml")
+
+
+def test_ctrl_c_taken_by_osqp_during_a_solve_interrupts_the_cueing() -> None:
+    # OSQP catches SIGINT during a solve and returns the status OSQP_SIGINT: the plan braked
+    # and went on, so Ctrl-C was lost and motosim cueing ran to its end (4 of 5 presses on a
+    # 300 s run)
+    osqp = pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
+    import unittest.mock
+
+    from motosim.cueing.mpc import MpcCueing
+
+    plan = MpcCueing(design_mpc(_config(0.0), TELBAN_CARDULLO_2005, 0.01))
+    interrupted = unittest.mock.Mock()
+    interrupted.info.status_val = osqp.SolverStatus.OSQP_SIGINT
+    with (
+        unittest.mock.patch.object(osqp.OSQP, "solve", return_value=interrupted),
+        pytest.raises(KeyboardInterrupt),
+    ):
+        plan.step(np.array([0.1, 0.0, 0.0, 0.0, 0.0]), np.zeros(3))

@@ -205,6 +205,9 @@ def test_parse_rig_checks_keys_and_types() -> None:
         parse_rig({"loss": 1.5}, base=base)
     with pytest.raises(MotosimError, match="multiple of"):
         parse_rig({"status_rate": 3000.0}, base=base)
+    # a negative bus-off was accepted as none
+    with pytest.raises(MotosimError, match=r"rig bus_off_duration = -1\.0; expected .* >= 0"):
+        parse_rig({"bus_off_at": 1.0, "bus_off_duration": -1.0}, base=base)
 
 
 def test_nothing_is_compiled_when_the_run_starts() -> None:
