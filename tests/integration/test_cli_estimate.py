@@ -73,3 +73,21 @@ def test_bad_logs(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     assert code == 0 and "resampled" in json.loads(out)["timing"]
     code, _, err = _run(capsys, "estimate", str(bad), "--estimator", "oracle", "--out", "x.csv")
     assert code == 2 and "invalid choice" in err
+
+
+def test_without_friction_compensation_the_dry_friction_reads_as_rider_torque(
+    capsys: pytest.CaptureFixture[str], log_file: Path, tmp_path: Path
+) -> None:
+    # --no-friction-compensation: the nominal dry friction (beta_s = 1.734 N*m, Table I) is
+    # not subtracted; the same log's estimate then differs by about beta_s (measured: median
+    # 1.734, largest 1.83 N*m), and the differentiated rate is untouched
+    runs = {}
+    for flag in ((), ("--no-friction-compensation",)):
+        out_file = tmp_path / f"est{len(flag)}.csv"
+        code, _, _ = _run(capsys, "estimate", str(log_file), "--out", str(out_file), *flag)
+        assert code == 0
+        runs[flag] = read_log(out_file, required=("theta_h_dot_hat", "tau_r_hat"))
+    on, off = runs[()], runs[("--no-friction-compensation",)]
+    np.testing.assert_array_equal(on["theta_h_dot_hat"], off["theta_h_dot_hat"])
+    gap = np.abs(on["tau_r_hat"] - off["tau_r_hat"])
+    assert 1.0 < float(np.max(gap)) < 2.0 * 1.734

@@ -5,6 +5,7 @@ import sys
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from motosim.cli.main import main
@@ -31,6 +32,28 @@ def test_excite_writes_the_log_columns(runs: Path) -> None:
     lines = (runs / "chirp.csv").read_text().splitlines()
     assert lines[0] == "t,theta_h,i_m,u"
     assert len(lines) == 6002  # 60 s at 100 Hz, both ends
+
+
+@pytest.mark.parametrize(
+    ("options", "amplitude", "crossings"),
+    [
+        # a linear chirp of f0 to f1 over T changes sign (f0 + f1) T times: 55 in 10 s
+        (["--signal", "chirp", "--f0", "0.5", "--f1", "5", "--amplitude", "6"], 6.0, 55),
+        # a rectangle of f changes sign 2 f T times: 40 in 10 s
+        (["--signal", "square", "--frequency", "2", "--amplitude", "1.5"], 1.5, 40),
+    ],
+)
+def test_excite_drives_the_voltage_its_options_give(
+    tmp_path: Path, options: list[str], amplitude: float, crossings: int
+) -> None:
+    from motosim.io import read_log
+
+    out = tmp_path / "run.csv"
+    assert main(["excite", *options, "--duration", "10", "--out", str(out)]) == 0
+    u = read_log(out, required=("u",))["u"]
+    assert float(np.max(np.abs(u))) == pytest.approx(amplitude, rel=1e-3)
+    signs = np.sign(u[np.abs(u) > 1e-9])
+    assert abs(int(np.count_nonzero(np.diff(signs))) - crossings) <= 1
 
 
 def test_identify_recovers_table1_and_writes_a_usable_file(

@@ -6,6 +6,7 @@ import math
 import sys
 import tomllib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -116,6 +117,72 @@ friction = false
     for edge in (0.0, 0.2, 0.7, 1.2, 1.7):
         settled &= ~((run.t >= edge) & (run.t < edge + 0.1))
     assert np.sqrt(np.mean((run["tau_r_hat"] - run["tau_r"])[settled] ** 2)) < 0.5
+
+
+@pytest.mark.parametrize("drive", ["true", "estimate"])
+def test_a_true_input_drives_the_motorcycle_by_the_riders_own_torque(
+    tmp_path: Path, drive: str
+) -> None:
+    # [motorcycle] input = "true": the virtual motorcycle is driven by the true rider torque,
+    # so its steer angle is the same whichever estimator runs (the estimates differ by up
+    # to 2 N*m); with the estimate driving it (the default), it is not (1.7 mrad apart)
+    deltas = []
+    for estimator in ("walcott_zak", "kalman"):
+        text = f"""
+[scenario]
+duration = 2.0
+[motorcycle]
+input = "{drive}"
+[rider]
+kind = "torque"
+profile = {{ kind = "steps", times = [0.2, 0.4], values = [3.0, 0.0] }}
+[estimator]
+name = "{estimator}"
+[controller]
+kind = "paper"
+"""
+        inputs = resolve(parse_scenario(tomllib.loads(text), origin="input"), tmp_path)
+        deltas.append(simulate(inputs, rng=np.random.default_rng(0))["delta"])
+    apart = float(np.max(np.abs(deltas[0] - deltas[1])))
+    assert apart == 0.0 if drive == "true" else apart > 1e-3
+
+
+def _square_run(tmp_path: Path, extra: str) -> tuple[RunInputs, Any, dict[str, float]]:
+    """A 2 s run of a +/-5 N*m square rider torque with ``extra`` tables; inputs, result,
+    metrics."""
+    text = f"""
+[scenario]
+duration = 2.0
+[rider]
+kind = "torque"
+profile = {{ kind = "square", low = -5.0, high = 5.0, period = 1.0, start = 0.2 }}
+{extra}
+"""
+    inputs = resolve(parse_scenario(tomllib.loads(text), origin="square"), tmp_path)
+    result = simulate(inputs, rng=np.random.default_rng(0))
+    return inputs, result, run_metrics(result.t, result.get, complete=True)
+
+
+def test_a_scenarios_controller_bandwidth_is_the_one_designed(tmp_path: Path) -> None:
+    # [controller] bandwidth other than its 10 Hz: designed at run time, a wider bandwidth
+    # tracks the steer angle tighter (measured: 9.1 % of the peak steer angle at 5 Hz,
+    # 4.6 % at 20 Hz); the run's metadata keeps it
+    fractions = {}
+    for bandwidth in (5.0, 20.0):
+        inputs, _, m = _square_run(tmp_path, f"[controller]\nbandwidth = {bandwidth}")
+        fractions[bandwidth] = m["tracking_rms_fraction"]
+        metadata: Any = run_metadata(inputs)
+        assert metadata["scenario"]["controller"]["bandwidth"] == bandwidth
+    assert fractions[20.0] < 0.7 * fractions[5.0]
+
+
+def test_an_exact_encoder_measures_the_true_angle(tmp_path: Path) -> None:
+    # [measurement] encoder_bits = 0: "exact"; 14 bits: steps of 2 pi / 2^14 rad
+    _, exact, _ = _square_run(tmp_path, "[measurement]\nencoder_bits = 0")
+    np.testing.assert_array_equal(exact["theta_h_meas"], exact["theta_h"])
+    _, coarse, _ = _square_run(tmp_path, "[measurement]\nencoder_bits = 14")
+    counts = coarse["theta_h_meas"] / (2 * math.pi / 2**14)
+    np.testing.assert_allclose(counts, np.round(counts), atol=1e-6)
 
 
 def test_interrupted_run_keeps_what_it_had(tmp_path: Path) -> None:
@@ -290,6 +357,58 @@ def test_side_wind_tips_the_motorcycle_and_the_rider_corrects() -> None:
     assert np.max(np.abs(result["tau_r"])) > 5.0  # the rider has something to correct
     assert np.max(np.abs(result["e_y"])) < 0.5  # is blown less than half a metre off the lane
     assert abs(result["e_y"][-1]) < 0.2  # and is back on it when the gust is over
+
+
+def test_the_virtual_riders_torque_limit_and_scale_and_the_side_winds_height() -> None:
+    # [rider] max_torque, torque_scale and [motorcycle] side_wind_height, other than their
+    # defaults (70 N*m, 10 N*m, 1 m), on crosswind_30 (the default rider peaks at 13 N*m)
+    from motosim.model.sharp import side_force_input
+
+    run = load_run(ROOT / "scenarios" / "crosswind_30.toml")
+
+    def peak(rider: dict[str, float], height: float = 1.0) -> tuple[float, float]:
+        sc = run.scenario
+        variant = dataclasses.replace(
+            run,
+            scenario=dataclasses.replace(
+                sc,
+                duration=6.0,  # the gust is over at 5 s
+                rider=dataclasses.replace(sc.rider, **rider),
+                motorcycle=dataclasses.replace(sc.motorcycle, side_wind_height=height),
+            ),
+        )
+        # the side wind acts at its height on the stack's virtual motorcycle
+        B_w = side_force_input(run.sharp, height=height)
+        np.testing.assert_array_equal(build_stack(variant).Bw, B_w)
+        result = simulate(variant, rng=np.random.default_rng(0))
+        return float(np.max(np.abs(result["tau_r"]))), float(np.max(np.abs(result["e_y"])))
+
+    torque, error = peak({})
+    assert torque > 10.0
+    # the rider's torque is limited to max_torque: clipped at 5 N*m
+    assert peak({"max_torque": 5.0})[0] == pytest.approx(5.0, abs=1e-9)
+    # a larger torque_scale makes the torque cheaper against the errors: the rider holds
+    # the lane tighter (measured: 0.29 m off it at the most against 0.47 m)
+    assert peak({"torque_scale": 30.0})[1] < 0.8 * error
+    # the same gust lower down tips the machine less: less to correct (3.0 N*m at 0.3 m)
+    assert peak({}, height=0.3)[0] < 0.5 * torque
+
+
+def test_the_virtual_rider_reads_the_path_its_preview_ahead() -> None:
+    # [rider] preview, other than its 0.3 s: the rider of lane_change_20 starts steering
+    # (|tau_r| > 0.5 N*m) as much earlier as it reads the path's curvature further ahead
+    # (measured: at 2.202 s with 0.3 s, 1.702 s with 0.8 s)
+    run = load_run(ROOT / "scenarios" / "lane_change_20.toml")
+    onset = {}
+    for preview in (0.3, 0.8):
+        sc = run.scenario
+        rider = dataclasses.replace(sc.rider, preview=preview)
+        variant = dataclasses.replace(
+            run, scenario=dataclasses.replace(sc, duration=3.0, rider=rider)
+        )
+        result = simulate(variant, rng=np.random.default_rng(0))
+        onset[preview] = float(result.t[np.argmax(np.abs(result["tau_r"]) > 0.5)])
+    assert onset[0.3] - onset[0.8] == pytest.approx(0.5, abs=0.01)
 
 
 def test_a_run_that_falls_is_a_failure_with_its_result_kept(

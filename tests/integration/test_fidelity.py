@@ -75,6 +75,9 @@ def test_fidelity_command_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(args) == 0
     payload = json.loads(capsys.readouterr().out)
     assert payload["worst_in"] == [0.5, 3.0] and payload["excitation"] == "multisine"
+    # what was measured: the probe's amplitude and its run, one period settling, one averaged
+    assert payload["amplitude"] == 10.0 and payload["scenario"] == ""
+    assert (payload["period"], payload["periods"], payload["duration"]) == (10.0, 1, 20.0)
     # lines every 0.1 Hz, about 12 a decade: 0.5-3 Hz holds 9 or 10
     assert len(payload["frequency_hz"]) == len(payload["magnitude_error_db"]) >= 8
     assert np.isfinite(payload["worst_magnitude_error_db"])
@@ -85,7 +88,8 @@ def test_fidelity_command_chirp_still_there(capsys: pytest.CaptureFixture[str]) 
     args = ["fidelity", "--excitation", "chirp", "--duration", "12", "--band", "0.5:3"]
     assert main([*args, "--json"]) == 0
     payload = json.loads(capsys.readouterr().out)
-    assert payload["excitation"] == "chirp"
+    assert payload["excitation"] == "chirp" and payload["duration"] == 12.0
+    assert "period" not in payload
     assert len(payload["frequency_hz"]) == len(payload["magnitude_error_db"]) > 10
 
 

@@ -224,6 +224,8 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     assert payload["wait"] == "compiled" and payload["counters"]["bus_errors"] == 0
     assert payload["warm"] is True  # the stack warmed before each deadline (--warm on)
     result = load_result(out)
+    # the link in use (--link fast, the default), in the summary and in the result
+    assert payload["link"] == result.metadata["realtime"]["link"] == "fast"
     report = json.loads((out / "timing.json").read_text())
     timing = report["timing"]
     # one row per 1 kHz control period served (a missed deadline is skipped and counted)

@@ -70,7 +70,7 @@ def _lockstep(
     else:
         receiver = StateReceiver(("127.0.0.1", 0))
         sender = StateSender(receiver.address)
-        rider = VirtualRider(world, receiver)
+        rider = VirtualRider(world, receiver, rate=rate)
     codecs = handlebar_codecs()
     channel = f"virtual:plausibility{next(_channels)}"
     try:

@@ -55,6 +55,38 @@ def test_telemetry_writes_an_mcap_the_reader_opens(
     assert rows[-1]["tau_r"] == pytest.approx(np.sin(0.5))
 
 
+def test_telemetry_keeps_one_row_in_every(
+    capsys: pytest.CaptureFixture[str], folder: Path, tmp_path: Path
+) -> None:
+    from mcap.reader import make_reader
+
+    # --every 10 of the 51 rows: rows 0, 10, ..., 50, each a signals and a pose message
+    code, out, _ = _run(
+        capsys, "telemetry", str(folder), "--mcap", str(tmp_path / "r.mcap"), "--every", "10"
+    )
+    assert code == 0 and "12 messages" in out
+    with (tmp_path / "r.mcap").open("rb") as stream:
+        reader = make_reader(stream)
+        rows = [json.loads(m.data) for _, c, m in reader.iter_messages(topics=["/motosim/signals"])]
+    assert [row["tau_r"] for row in rows] == pytest.approx(np.sin(np.arange(6) * 0.1))
+
+
+def test_telemetry_streams_plotjuggler_json(
+    capsys: pytest.CaptureFixture[str], folder: Path
+) -> None:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        sock.settimeout(5.0)
+        port = sock.getsockname()[1]
+        code, out, _ = _run(
+            capsys, "telemetry", str(folder), "--plotjuggler", f"127.0.0.1:{port}", "--rate", "10"
+        )
+        first = json.loads(sock.recv(65536))
+    # one JSON object per row, its time as PlotJuggler's "timestamp", every signal by name
+    assert code == 0 and "streamed 51 rows" in out
+    assert first["timestamp"] == 0.0 and set(NAMES) - {"t"} <= set(first)
+
+
 def test_telemetry_streams_esmini_packets(capsys: pytest.CaptureFixture[str], folder: Path) -> None:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
         sock.bind(("127.0.0.1", 0))

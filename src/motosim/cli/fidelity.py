@@ -153,10 +153,15 @@ def run(args: argparse.Namespace) -> int:
     low, high = max(band[0], _TARGET_BAND[0]), min(band[1], _TARGET_BAND[1])
     magnitude, phase = feel.worst(low, high)
     median = feel.median(low, high)
-    payload = {
+    payload: dict[str, Any] = {
+        "scenario": args.scenario or "",
         "speed": args.speed,
         "excitation": probe.kind if probe is not None else "",
+        "amplitude": args.amplitude,
         "band_hz": list(band),
+        # the probe's run: a chirp over its duration, or periods averaged after one to settle
+        "duration": scenario.duration,
+        **({} if chirp else {"period": args.period, "periods": args.periods}),
         "worst_in": [low, high],
         "worst_magnitude_error_db": magnitude,
         "worst_phase_error_deg": phase,

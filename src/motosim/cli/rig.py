@@ -121,7 +121,8 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
         from motosim.sim import build_rig
 
         receiver = StateReceiver(parse_address(args.telemetry))
-        rider = VirtualRider(build_rig(inputs, rng=np.random.default_rng(sc.seed)), receiver)
+        world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
+        rider = VirtualRider(world, receiver, rate=sc.rates.control)
     clock = clock_from_args(args)
     codecs = handlebar_codecs()
     twin = None

@@ -489,7 +489,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     given back to the handler ``sigint`` once the loop has ended."""
     import numpy as np
 
-    from motosim.io.can import handlebar_codecs, open_link
+    from motosim.io.can import UdpMulticastLink, handlebar_codecs, open_link
     from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, within_safety
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
@@ -570,6 +570,8 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             )
     warn_atypical("run", "--duration", args.duration)  # once every check has passed
     link = open_link(args.bus, fast=args.link == "fast")
+    # the link in use: --link fast is python-can's own on a bus other than udp_multicast
+    link_kind = "fast" if isinstance(link, UdpMulticastLink) else "python-can"
     if platform is not None and args.platform_can:
         from motosim.io.can import platform_codecs
         from motosim.rt.platform import PlatformCanSender, PlatformTee
@@ -597,6 +599,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
         metadata = run_metadata(inputs) | {
             "realtime": {
                 "bus": args.bus,
+                "link": link_kind,
                 "pace": args.pace,
                 "status_latency": latency,
                 "measurement_delay": age,
@@ -625,6 +628,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             udp_sender.close()
     timing = stats.as_dict()
     report = {
+        "link": link_kind,
         "pace": args.pace,
         "wait": "compiled" if runner.waits_compiled else "python",
         "warm": runner.warms and args.pace == "clock",

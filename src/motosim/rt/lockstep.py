@@ -179,14 +179,14 @@ class Lockstep:
         self._sender: StateSender | None = None
         self._links: list[CanLink | UdpMulticastLink] = []
         try:
-            rider: NDArray[np.float64] | Callable[[], float] = world.rider_profile
+            rider: NDArray[np.float64] | Callable[[float], float] = world.rider_profile
             if world.virtual_rider:
                 self._receiver = StateReceiver(("127.0.0.1", 0))
                 self._sender = StateSender(self._receiver.address)
-                virtual = VirtualRider(world, self._receiver)
+                virtual = VirtualRider(world, self._receiver, rate=self._rate)
 
-                def rider_now() -> float:
-                    self.rider_torques.append((self.rig.t, virtual()))
+                def rider_now(t: float) -> float:
+                    self.rider_torques.append((self.rig.t, virtual(t)))
                     return self.rider_torques[-1][1]
 
                 rider = rider_now

@@ -238,8 +238,8 @@ class VirtualRig:
         The rig's end of the bus.
     rider_torque : ndarray or callable
         The rider's torque [N*m] at each plant sub-step from the rider's start (held after
-        the end), or a function of no argument giving it now (a :class:`VirtualRider`),
-        asked once per status period.
+        the end), or a function of the time since the rider's start [s] giving it then (a
+        :class:`VirtualRider`), asked once per status period.
     rng : numpy.random.Generator
         Noise, jitter and frame loss.
     theta0 : float
@@ -258,7 +258,7 @@ class VirtualRig:
         settings: RigSettings,
         codecs: HandlebarCodecs,
         link: FrameLink,
-        rider_torque: Array | Callable[[], float],
+        rider_torque: Array | Callable[[float], float],
         rng: np.random.Generator,
         *,
         theta0: float = 0.0,
@@ -385,7 +385,7 @@ class VirtualRig:
                 rider, k0 = self._idle, 0
             elif self._policy is not None:
                 if self.k % self._sub == 0:
-                    self._held[0] = self._policy()  # the rider acts once per status period
+                    self._held[0] = self._policy(k0 * self.h)  # once per status period
                 rider, k0 = self._held, 0
             _plant_steps(
                 self.x, self.i_cmd if live else 0.0, rider, k0, n, hb.J_eq, hb.beta_eq,
@@ -490,26 +490,38 @@ class VirtualRider:
     The rider of :func:`motosim.sim.rider.rider_torque` (the same path, gains and limits as
     offline, from :func:`motosim.sim.build_rig`) looks at the virtual motorcycle's states in
     the newest datagram of the run's state stream (:mod:`motosim.rt.telemetry`); before the
-    first one it holds 0 N*m.
+    first one it holds 0 N*m. The scenario's probe (``[rider] probe``, ``world.rider_probe``)
+    is added at the time it is asked for, as offline.
 
     Parameters
     ----------
     world : RigModel
-        The scenario's world (its path and the rider's gain schedule).
+        The scenario's world (its path, the rider's gain schedule and the probe).
     receiver : StateReceiver
         The state stream.
     names : tuple of str
         The signals of the stream's rows.
+    rate : float
+        The scenario's control rate [Hz], at which ``world.rider_probe`` is sampled (held
+        after its end).
     """
 
     _STATES = ("v_y", "psi_dot", "phi_dot", "delta_dot", "phi", "delta", "F_yr", "F_yf")
 
     def __init__(
-        self, world: RigModel, receiver: StateReceiver, names: tuple[str, ...] = STACK_SIGNALS
+        self,
+        world: RigModel,
+        receiver: StateReceiver,
+        names: tuple[str, ...] = STACK_SIGNALS,
+        *,
+        rate: float,
     ) -> None:
         if not world.virtual_rider:
             raise MotosimError("the scenario's rider is a torque profile, not a virtual rider")
+        if not (math.isfinite(rate) and rate > 0.0):
+            raise MotosimError(f"rate = {rate!r} Hz: expected a positive control rate")
         self.world = world
+        self.rate = float(rate)
         self.receiver = receiver
         self._cols = [names.index(n) for n in (*self._STATES, "v_x", "psi", "x", "y")]
         self._x_v = np.zeros(8)
@@ -519,8 +531,9 @@ class VirtualRider:
         self._steer(world.path[0, 0], world.path[1, 0], world.path[2, 0])  # compiled now,
         # not on the run's first state row (a stall of the rig's frames at the run's start)
 
-    def __call__(self) -> float:
-        """The rider's torque now [N*m]."""
+    def __call__(self, t: float) -> float:
+        """The rider's torque [N*m] at ``t`` [s] from the rider's start: the path's, from the
+        newest state row, plus the probe's at ``t``."""
         if self.receiver.poll():
             row, c, w = self.receiver.row, self._cols, self.world
             for i in range(8):
@@ -531,7 +544,9 @@ class VirtualRider:
                 w.rider_limits[0], w.rider_limits[1],
             )  # fmt: skip
             self.torque = float(tau)
-        return self.torque
+        probe = self.world.rider_probe
+        k = min(max(math.floor(t * self.rate + 1e-9), 0), probe.size - 1)
+        return self.torque + float(probe[k])
 
     def _steer(self, x: float, y: float, psi: float) -> float:
         """The rider's torque [N*m] upright on the path at ``x``, ``y`` [m], heading ``psi``

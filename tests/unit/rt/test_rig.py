@@ -85,6 +85,16 @@ def test_current_command_acts_through_n_kt_and_the_drive_limit() -> None:
     assert rig.i_cmd == pytest.approx(32.767) and rig.x[2] == 30.0  # the drive's limit
 
 
+def test_the_drives_current_loop_is_a_first_order_lag_of_its_time_constant() -> None:
+    # [realtime.rig] current_time_constant = 0.01 s: a 10 A step command from t = 0 gives
+    # 10 (1 - exp(-t / 0.01)) A (the lag discretised exactly at the plant step)
+    rig, link = _rig(current_time_constant=0.01, command_timeout=1.0)
+    link.inbox.append(_command(10.0))
+    for t in (0.001, 0.01, 0.05):
+        rig.advance_to(t)
+        assert rig.x[2] == pytest.approx(10.0 * -math.expm1(-t / 0.01), rel=1e-9)
+
+
 def test_without_commands_the_drive_stops_the_torque() -> None:
     rig, link = _rig(command_timeout=0.01)
     link.inbox.append(_command(5.0))

@@ -200,17 +200,22 @@ def _fields(limits: SafetyLimits) -> dict[str, float]:
     return {name: getattr(limits, name) for name in SafetyLimits.__dataclass_fields__}
 
 
-@pytest.mark.parametrize("rate", [100.0, 1000.0])
-def test_frozen_sensor_trips_when_a_free_handlebar_would_have_turned(rate: float) -> None:
-    d = Driver(rate=rate, handlebar=True).running()
+@pytest.mark.parametrize(("rate", "frozen_angle"), [(100.0, 0.05), (1000.0, 0.05), (1000.0, 0.2)])
+def test_frozen_sensor_trips_when_a_free_handlebar_would_have_turned(
+    rate: float, frozen_angle: float
+) -> None:
+    # frozen_angle: the default 0.05 rad, and a scenario's [realtime.safety] frozen_angle
+    limits = SafetyLimits(**{**_fields(LIMITS), "frozen_angle": frozen_angle})
+    d = Driver(limits, rate=rate, handlebar=True).running()
     # a rider holding the handlebar still against a steady 10 A (30 N*m) is legitimate
     assert all(d.period(10.0, theta=0.1) == 10.0 for _ in range(round(5 * rate)))
     # the command moves by 3 A (9 N*m) and the angle stands still: a free handlebar of
     # Table I (beta_eq = 13.956 N*m*s/rad, beta_s = 1.734 N*m, N k_t = 3 N*m/A) turns at
     # (9 - 2 beta_s) / beta_eq = 0.396 rad/s beyond the dead band, so 0.05 rad after
-    # 0.126 s; the monitor uses the current sent the period before: one period later
+    # 0.126 s (0.2 rad after 0.505 s); the monitor uses the current sent the period before:
+    # one period later
     speed = (3.0 * HB.torque_per_amp - 2.0 * HB.beta_s) / HB.beta_eq
-    expected = math.floor(0.05 / (speed / rate)) + 2
+    expected = math.floor(frozen_angle / (speed / rate)) + 2
     out = [d.period(13.0, theta=0.1) for _ in range(expected + 5)]
     first_zero = out.index(0.0) + 1
     assert first_zero == expected and d.stage.fault == Fault.FROZEN_SENSOR
