@@ -5,6 +5,7 @@ import json
 import math
 import sys
 import tomllib
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 
 from motosim.cli.main import main
+from motosim.errors import MotosimWarning
 from motosim.io.results import ResultWriter, load_result
 from motosim.io.runs import load_run, load_scenario, resolve
 from motosim.params import load_parameters
@@ -325,6 +327,34 @@ def test_design_file_observer_is_what_runs(tmp_path: Path) -> None:
     a = simulate(default, rng=np.random.default_rng(0))
     b = simulate(slow, rng=np.random.default_rng(0))
     assert np.sqrt(np.mean((a["tau_r_hat"] - b["tau_r_hat"]) ** 2)) > 0.05
+
+
+def test_a_design_for_another_handlebar_warns_in_one_line(tmp_path: Path) -> None:
+    # The run takes a design file's gains with the scenario's nominal handlebar; a design made
+    # for another handlebar (J_eq x1.5) than that one is legal but mixes parts: one warning
+    # line naming the file and the value that differs; the design's own handlebar: silent.
+    text = (ROOT / "src/motosim/params/data/simacom_handlebar.toml").read_text(encoding="utf-8")
+    assert "value = 0.0415" in text
+    (tmp_path / "heavy.toml").write_text(
+        text.replace('name = "simacom_handlebar"', 'name = "heavy"').replace(
+            "value = 0.0415", "value = 0.06225"
+        )
+    )
+    out = str(tmp_path / "d.toml")
+    assert (
+        main(["design", "--order", "1", "--handlebar", str(tmp_path / "heavy.toml"), "--out", out])
+        == 0
+    )
+    with pytest.warns(MotosimWarning) as caught:
+        _inputs_with(tmp_path, '[controller]\ndesign = "d.toml"\n')
+    messages = [str(w.message) for w in caught if issubclass(w.category, MotosimWarning)]
+    assert len(messages) == 1 and "\n" not in messages[0], messages
+    assert "d.toml" in messages[0] and "J_eq 0.06225 against 0.0415" in messages[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _inputs_with(
+            tmp_path, '[handlebar]\nnominal = "heavy.toml"\n[controller]\ndesign = "d.toml"\n'
+        )
 
 
 def test_feedforward_brings_the_handlebar_to_the_steer_angle() -> None:

@@ -11,6 +11,7 @@ it to :func:`motosim.sim.simulate`.
 """
 
 import dataclasses
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -137,6 +138,7 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
         controller = design.controller_discrete[method] if matches else design.controller
         if not matches and scenario.estimator.name == "walcott_zak":
             _check_observer_rate(c.design, design.rate, observer, nominal, rate)
+        _warn_other_handlebar(c.design, design.handlebar, nominal)
     elif c.kind == "ours":
         controller = synthesize_controller(
             nominal,
@@ -178,6 +180,32 @@ def _check_observer_rate(
             f"measurement rate of {rate:g} Hz, fails ({err}); expected a design for {rate:g} Hz "
             f"(motosim design --rate {rate:g})"
         ) from None
+
+
+def _warn_other_handlebar(
+    name: str, designed_for: HandlebarParameters, nominal: HandlebarParameters
+) -> None:
+    """Warn when a design file was made for another handlebar than the scenario's nominal one.
+
+    The run takes the design's controller and observer gains but the scenario's ``[handlebar]
+    nominal`` for the observer's model and the feedforward: mixed parts, legal (a study of a
+    mismatched design) but not what a lab that forgot ``nominal`` means.
+    """
+    differ = [
+        f.name
+        for f in dataclasses.fields(nominal)
+        if not math.isclose(getattr(designed_for, f.name), getattr(nominal, f.name), rel_tol=1e-9)
+    ]
+    if differ:
+        shown = ", ".join(
+            f"{k} {getattr(designed_for, k):.4g} against {getattr(nominal, k):.4g}"
+            for k in differ[:3]
+        )
+        warn(
+            f"{name}: designed for another handlebar than the scenario's nominal one ({shown}"
+            f"{', ...' if len(differ) > 3 else ''}); the run mixes the design's gains with the "
+            "scenario's handlebar: set [handlebar] nominal to the design's handlebar file"
+        )
 
 
 def load_run(path: str | Path) -> RunInputs:
