@@ -111,9 +111,18 @@ def test_campaign_refuses_an_out_folder_holding_another_commands_result(
     for name in ("result.h5", "result.csv", "report.html"):
         (out / name).write_text("kept", encoding="utf-8")
     assert main(["campaign", str(campaign), "--out", str(out), "--jobs", "1"]) == 2
-    _refused(capsys, f"{out}: holds files that are not a campaign's results (no manifest.json")
+    _refused(capsys, f"{out}: holds report.html, result.h5, result.csv but no campaign's results")
     assert sorted(p.name for p in out.iterdir()) == ["report.html", "result.csv", "result.h5"]
     assert (out / "report.html").read_text(encoding="utf-8") == "kept"
+    # its own campaign and scenario files may share the folder with its results, as before
+    for name in ("result.h5", "result.csv", "report.html"):
+        (out / name).unlink()
+    for path in (campaign, tmp_path / "base.toml"):
+        path.rename(out / path.name)
+    (out / ".gitkeep").touch()
+    assert main(["campaign", str(out / "c.toml"), "--out", str(out), "--jobs", "1"]) == 0
+    capsys.readouterr()
+    assert (out / "manifest.json").is_file() and (out / "c.toml").is_file()
 
 
 def test_a_design_file_for_another_rate_whose_observer_fails_there_is_refused_before_the_run(
@@ -181,7 +190,7 @@ def test_rig_refuses_a_rate_above_its_plant_rate_before_opening_the_bus(
 
     with unittest.mock.patch("motosim.io.can.open_link", side_effect=AssertionError("opened")):
         assert main(["rig", str(REALTIME), "--bus", "virtual", "--rate", "20000"]) == 2
-    _refused(capsys, "--rate 20000.0; expected a rate in (0, 10000] Hz (the rig's plant_rate)")
+    _refused(capsys, "--rate 20000.0; expected a rate from 1 to 10000 Hz (the rig's plant_rate)")
 
 
 @pytest.mark.parametrize("command", ["simulate", "fidelity", "run", "rig"])
@@ -231,14 +240,15 @@ def test_a_complete_result_without_its_csv_is_not_replaced_without_overwrite(
     assert load_result(run).summary == {"rms": 0.5}
 
 
-@pytest.mark.parametrize("command", ["cueing", "simulate", "estimate", "excite", "design"])
+@pytest.mark.parametrize("command", ["cueing", "simulate", "run", "estimate", "excite", "design"])
 def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # cueing RUN --out RUN --overwrite replaced the run it cued by its platform commands;
     # simulate runs/s.toml --out runs --overwrite deleted the scenario with the old result;
     # estimate LOG --out LOG --overwrite replaced the log by the estimate; excite and design
-    # --handlebar HB --out HB replaced the parameter file by a log or a design file
+    # --handlebar HB --out HB replaced the parameter file by a log or a design file. Without
+    # --overwrite the same refusal comes first (it said "give --overwrite", which then failed)
     import numpy as np
 
     from motosim.io.results import ResultWriter
@@ -259,7 +269,11 @@ def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
         "cueing": (["cueing", str(run), "--out", str(run)], f"--out {run} is the result {run}"),
         "simulate": (
             ["simulate", str(scenario), "--out", str(run)],
-            f"--out {run} holds the scenario {scenario} it reads; expected another folder",
+            f"--out {run} holds the scenario {scenario} it reads; expected another result folder",
+        ),
+        "run": (
+            ["run", str(scenario), "--bus", "virtual", "--out", str(run)],
+            f"--out {run} holds the scenario {scenario} it reads; expected another result folder",
         ),
         "estimate": (["estimate", str(log), "--out", str(log)], f"is the log {log} it reads"),
         "excite": (
@@ -268,8 +282,9 @@ def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
         ),
         "design": (["design", "--handlebar", str(hb), "--out", str(hb)], "the handlebar file"),
     }[command]
-    assert main([*argv, "--overwrite"]) == 2
-    _refused(capsys, expected)
+    for extra in ([], ["--overwrite"]):
+        assert main([*argv, *extra]) == 2
+        _refused(capsys, expected)
     assert scenario.is_file() and (run / "result.h5").is_file() and log.is_file()
     assert "[set]" in hb.read_text(encoding="utf-8")  # still the parameter file
 

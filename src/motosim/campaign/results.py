@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim import __version__
+from motosim.campaign.series import SERIES
 from motosim.errors import MotosimError
 
 __all__ = [
@@ -93,20 +94,38 @@ def load_results(folder: str | Path) -> dict[str, NDArray[Any]]:
     return out
 
 
+FOREIGN = ("report.html", "result.h5", "result.csv", SERIES)
+"""Files a campaign would write over (its report, its series store) or that are another
+command's result (``motosim simulate``'s): a folder holding one without a campaign's
+manifest or parts is refused."""
+
+
 def check_store_folder(folder: str | Path) -> None:
-    """Refuse a folder holding files but no campaign's results (a result of simulate, say).
+    """Refuse a folder that holds another command's result or a file the campaign would write
+    over (:data:`FOREIGN`) but no campaign's results.
+
+    Anything else may sit beside the campaign's files: its campaign and scenario files, a
+    ``.gitkeep``.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The campaign's ``--out``.
 
     Raises
     ------
     MotosimError
-        One line naming the folder.
+        One line naming the folder and the files.
     """
     folder = Path(folder)
-    foreign = folder.is_dir() and any(folder.iterdir())
-    if foreign and not (folder / MANIFEST).is_file() and not (folder / PARTS).is_dir():
+    if (folder / MANIFEST).is_file() or (folder / PARTS).is_dir():
+        return
+    clash = [name for name in FOREIGN if os.path.lexists(folder / name)]
+    if clash:
         raise MotosimError(
-            f"{folder}: holds files that are not a campaign's results (no {MANIFEST}, no "
-            f"{PARTS}); expected a new or empty folder, or a campaign's to resume"
+            f"{folder}: holds {', '.join(clash)} but no campaign's results (no {MANIFEST}, no "
+            f"{PARTS}); expected a new folder, one without another result, or a campaign's "
+            "to resume"
         )
 
 

@@ -15,7 +15,7 @@ import math
 import os
 import sys
 import warnings
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -28,6 +28,7 @@ __all__ = [
     "check_figure_path",
     "check_output",
     "check_output_folder",
+    "check_result_folder",
     "deferred_warnings",
     "parse_float_list",
     "parse_range",
@@ -139,6 +140,11 @@ def deferred_warnings() -> Iterator[None]:
     A refused command prints only its error: the warnings of a scenario read before a later
     check (a missing CSV profile, design or safety table) refuses it would be more lines.
     Interrupted (Ctrl-C), the block's warnings are shown.
+
+    Yields
+    ------
+    None
+        Nothing: the block runs with the warnings held.
     """
     refused = False
     caught: list[warnings.WarningMessage] = []
@@ -245,24 +251,85 @@ def refuse_special(target: Path, option: str, expected: str) -> None:
         )
 
 
-def refuse_inside(output: str | Path, source: str | Path, what: str, option: str = "--out") -> None:
+def refuse_inside(
+    output: str | Path,
+    source: str | Path,
+    what: str,
+    option: str = "--out",
+    expected: str = "",
+) -> None:
     """Refuse an output that is, or holds, an input the command reads.
 
     Replacing it (``--overwrite`` replaces a result folder whole) would delete the input:
     ``cueing RUN --out RUN`` replaced the run it cued, ``simulate runs/s.toml --out runs``
     deleted the scenario.
+
+    Parameters
+    ----------
+    output : str or Path
+        The output file or folder.
+    source : str or Path
+        The input; a name that is not a path (a packaged parameter set) is not checked.
+    what : str
+        What the input is, for the message ("scenario", "log", ...).
+    option : str, optional
+        The option that named the output.
+    expected : str, optional
+        What the option expects ("a result folder"); by default "another file" or "another
+        folder" after the input's kind.
+
+    Raises
+    ------
+    MotosimError
+        If ``output`` is ``source`` or one of its parent folders.
     """
     if not Path(source).exists():  # a packaged set's name, or refused as missing elsewhere
         return
     out, src = Path(output).resolve(), Path(source).resolve()
-    if src == out or out in src.parents:
-        verb, kind = (
-            ("is", "file" if src.is_file() else "folder") if src == out else ("holds", "folder")
-        )
+    same = src == out or (out.exists() and os.path.samefile(src, out))
+    if same or out in src.parents:
+        kind = "file" if same and src.is_file() else "folder"
         raise MotosimError(
-            f"{option} {output} {verb} the {what} {source} it reads; expected another {kind} "
-            "(writing there would replace it)"
+            f"{option} {output} {'is' if same else 'holds'} the {what} {source} it reads; "
+            f"expected {expected or 'another ' + kind} (writing there would replace it)"
         )
+
+
+def check_result_folder(folder: str | Path, scenario: str | Path, *, overwrite: bool) -> Path:
+    """Check a run's result folder (``simulate``, ``run``) before any work is done.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The result folder (``--out``); its parent must exist.
+    scenario : str or Path
+        The scenario file the run reads: the folder must not be it or hold it.
+    overwrite : bool
+        Whether a complete result there may be replaced (``--overwrite``); a partial one
+        (an interrupted run's) always may.
+
+    Returns
+    -------
+    Path
+        The folder.
+
+    Raises
+    ------
+    MotosimError
+        If the folder is a special file or a file, is or holds the scenario, its parent does
+        not exist, or it holds a complete result and ``overwrite`` is false.
+    """
+    from motosim.io.results import is_complete_result
+
+    target = Path(folder)
+    refuse_special(target, "--out", "a result folder")
+    refuse_inside(target, scenario, "scenario", expected="another result folder")
+    if target.exists() and not target.is_dir():
+        raise MotosimError(f"--out {target} is a file; expected a result folder")
+    _refuse_missing_parent(target, "--out")
+    if is_complete_result(target) and not overwrite:
+        raise MotosimError(f"{target}: already holds a result; give --overwrite or another --out")
+    return target
 
 
 def _refuse_missing_parent(target: Path, option: str) -> None:
@@ -280,6 +347,7 @@ def check_output(
     overwrite: bool,
     option: str = "--out",
     suffixes: tuple[str, ...] = (),
+    reads: Sequence[tuple[str, str | Path]] = (),
 ) -> Path:
     """Check an output file before any work is done.
 
@@ -293,6 +361,9 @@ def check_output(
         The option that named it, for messages.
     suffixes : tuple of str, optional
         Admitted suffixes (lower case), e.g. ``(".png", ".svg")``; any when empty.
+    reads : sequence of (str, str or Path), optional
+        The inputs the command reads, ``(what, path)``: an output that is one of them is
+        refused first (:func:`refuse_inside`), even with ``overwrite``.
 
     Returns
     -------
@@ -314,6 +385,8 @@ def check_output(
         )
     if target.is_dir():
         raise MotosimError(f"{option} {target} is a folder; expected a file name")
+    for what, source in reads:
+        refuse_inside(target, source, what, option)
     refuse_special(target, option, "a file name")
     _refuse_missing_parent(target, option)
     if target.exists() and not overwrite:
@@ -321,7 +394,13 @@ def check_output(
     return target
 
 
-def check_output_folder(path: str | Path, *, overwrite: bool, option: str = "--out") -> Path:
+def check_output_folder(
+    path: str | Path,
+    *,
+    overwrite: bool,
+    option: str = "--out",
+    reads: Sequence[tuple[str, str | Path]] = (),
+) -> Path:
     """Check an output folder before any work is done: absent or empty, or ``overwrite``.
 
     Parameters
@@ -332,6 +411,9 @@ def check_output_folder(path: str | Path, *, overwrite: bool, option: str = "--o
         Whether a folder holding files may be written into (``--overwrite``).
     option : str, optional
         The option that named it, for messages.
+    reads : sequence of (str, str or Path), optional
+        The inputs the command reads, ``(what, path)``: a folder that is or holds one of
+        them is refused first (:func:`refuse_inside`), even with ``overwrite``.
 
     Returns
     -------
@@ -348,6 +430,8 @@ def check_output_folder(path: str | Path, *, overwrite: bool, option: str = "--o
         raise MotosimError(f"{option} is empty; expected a folder name")
     target = Path(path)
     refuse_special(target, option, "a folder")
+    for what, source in reads:
+        refuse_inside(target, source, what, option, "another folder")
     if target.exists() and not target.is_dir():
         raise MotosimError(f"{option} {target} is a file; expected a folder")
     _refuse_missing_parent(target, option)

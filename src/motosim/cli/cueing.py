@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Any
 from motosim.cli._common import (
     check_output_folder,
     print_json,
-    refuse_inside,
     save_figure,
     warn_atypical,
 )
@@ -95,8 +94,7 @@ def run(args: argparse.Namespace) -> int:
     """Cue, write, plot and summarise."""
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
         raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
-    check_output_folder(args.out, overwrite=args.overwrite)
-    refuse_inside(args.out, args.result, "result")
+    check_output_folder(args.out, overwrite=args.overwrite, reads=(("result", args.result),))
     import numpy as np
 
     from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform

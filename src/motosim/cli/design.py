@@ -10,7 +10,6 @@ from motosim.cli._common import (
     check_output,
     parse_float_list,
     print_json,
-    refuse_inside,
     warn_atypical,
     write_text,
 )
@@ -241,8 +240,9 @@ def run(args: argparse.Namespace) -> int:
             speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
         )
     if args.out is not None:
-        check_output(args.out, overwrite=args.overwrite)
-        refuse_inside(args.out, args.handlebar, "handlebar file")
+        check_output(
+            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
+        )
     hb = load_parameters(args.handlebar, "handlebar")
     warn_atypical("design", "--speeds", speeds)
     warn_atypical("design", "--rate", args.rate)

@@ -4,7 +4,7 @@ import argparse
 import math
 from typing import Any
 
-from motosim.cli._common import check_output, print_json, refuse_inside, warn_atypical
+from motosim.cli._common import check_output, print_json, warn_atypical
 from motosim.errors import MotosimError
 from motosim.params import HandlebarParameters, load_parameters
 from motosim.params.checks import check_number, short_repr
@@ -117,8 +117,9 @@ def _plan(args: argparse.Namespace) -> int:
         "notes": list(plan.notes),
     }
     if args.out:
-        check_output(args.out, overwrite=args.overwrite)
-        refuse_inside(args.out, args.handlebar, "handlebar file")
+        check_output(
+            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
+        )
         t = np.arange(round(plan.duration * args.rate) + 1) / args.rate
         phase = plan.f0 * t + 0.5 * (plan.f1 - plan.f0) / plan.duration * t**2
         command = plan.amplitude * np.sin(2.0 * np.pi * phase)
@@ -175,8 +176,7 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.out:
         raise MotosimError("excite needs --out RUN.csv; expected the log file to write")
-    check_output(args.out, overwrite=args.overwrite)
-    refuse_inside(args.out, args.handlebar, "handlebar file")
+    check_output(args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),))
     hb = load_parameters(args.handlebar, "handlebar")
     measurement = MeasurementModel(
         sample_rate=args.rate,

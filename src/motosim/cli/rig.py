@@ -104,7 +104,7 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
         settings = rig_settings(sc, realtime, origin=args.scenario)
         if not args.rate <= settings.plant_rate:  # before the bus is opened
             raise MotosimError(
-                f"--rate {args.rate!r}; expected a rate in (0, {settings.plant_rate:g}] Hz (the "
+                f"--rate {args.rate!r}; expected a rate from 1 to {settings.plant_rate:g} Hz (the "
                 "rig's plant_rate)"
             )
         duration = math.inf if args.duration is None else args.duration

@@ -12,10 +12,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
+    check_result_folder,
     deferred_warnings,
     print_json,
-    refuse_inside,
-    refuse_special,
     warn_atypical,
     write_text,
 )
@@ -500,6 +499,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     check_rt_options(args)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
+    folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     with deferred_warnings():  # the scenario's, once every check has passed
         inputs, realtime = load_realtime(args.scenario, safety=True, pace=args.pace)
         sc = inputs.scenario
@@ -514,20 +514,6 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
         duration = sc.duration if args.duration is None else args.duration
         if not (np.isfinite(duration) and 0.0 < duration <= 86_400.0):
             raise MotosimError(f"--duration {duration!r}; expected seconds in (0, 86400]")
-        folder = Path(args.out)
-        refuse_special(folder, "--out", "a result folder")
-        refuse_inside(folder, args.scenario, "scenario")
-        if folder.exists() and not folder.is_dir():
-            raise MotosimError(f"--out {folder} is a file; expected a result folder")
-        if not folder.parent.is_dir():
-            raise MotosimError(
-                f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
-                "folder (create it first)"
-            )
-        if (folder / "result.h5").exists() and not args.overwrite:
-            raise MotosimError(
-                f"{folder}: already holds a result; give --overwrite or another --out"
-            )
         view = _view_setup(args, inputs, duration, limits) if args.view else None
         clock = clock_from_args(args)
         rate = sc.rates.control

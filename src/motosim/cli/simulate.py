@@ -6,13 +6,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
+    check_result_folder,
     deferred_warnings,
     print_json,
-    refuse_inside,
-    refuse_special,
     show_progress,
 )
-from motosim.errors import MotosimError, RunFailedError
+from motosim.errors import RunFailedError
 
 if TYPE_CHECKING:
     from motosim.sim import RunInputs
@@ -65,26 +64,13 @@ def run_scenario(
 
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
-    folder = Path(args.out)
-    refuse_special(folder, "--out", "a result folder")
-    refuse_inside(folder, args.scenario, "scenario")
-    if folder.exists() and not folder.is_dir():
-        raise MotosimError(f"--out {folder} is a file; expected a result folder")
-    if not folder.parent.is_dir():
-        raise MotosimError(
-            f"--out {folder}: the folder {folder.parent} does not exist; expected an existing "
-            "folder (create it first)"
-        )
+    folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     from motosim.io.results import is_complete_result, partial_folder
     from motosim.io.runs import load_scenario, resolve
     from motosim.sim.metrics import warnings
 
     with deferred_warnings():  # shown once the files it names are read too
         scenario = load_scenario(args.scenario)
-        if is_complete_result(folder) and not args.overwrite:
-            raise MotosimError(
-                f"{folder}: already holds a result; give --overwrite or another --out"
-            )
         inputs = resolve(scenario, Path(args.scenario).parent)
     try:
         summary = run_scenario(

@@ -144,6 +144,18 @@ def run_paces(control_rate: float, measurement_rate: float) -> tuple[str, ...]:
     (:func:`frame_age`): a command that serves whichever run comes (``motosim rig``)
     refuses, under it, what every run refuses.
 
+    Parameters
+    ----------
+    control_rate : float
+        The loop's rate [Hz].
+    measurement_rate : float
+        The drive's status frame rate [Hz].
+
+    Returns
+    -------
+    tuple of str
+        The paces ``run --pace`` takes, ``"clock"`` first.
+
     Examples
     --------
     >>> run_paces(1000.0, 100.0), run_paces(100.0, 100.0)

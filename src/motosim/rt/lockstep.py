@@ -5,8 +5,10 @@ bus, on the machine's clock. :class:`Lockstep` builds the same pieces from a run
 in one process, over python-can's in-process ``virtual`` bus and on a
 :class:`~motosim.rt.clock.SimulatedClock` that advances the rig to each deadline before the
 loop's period: the run is deterministic and takes no longer than its computation. It is
-how the real-time tests and ``scripts/rt_frames_study.py`` check the loop against the
-offline simulator and study slow status frames and bus latency.
+how ``scripts/rt_frames_study.py`` and the real-time tests that compare the loop with the
+offline simulator study slow status frames and bus latency (the tests of the frozen-sensor
+monitor and of a stack stepped from Python build their own: they need a handlebar or a
+stepper this class does not take).
 """
 
 import math
@@ -109,7 +111,9 @@ class Lockstep:
         The name of the python-can ``virtual`` channel (runs alive together need their own).
     seed : int
         The seed of the rig's noise, jitter and frame loss, and of the generator the run's
-        world is built with (:func:`~motosim.sim.build_rig`).
+        world is built with (:func:`~motosim.sim.build_rig`); 0 by default, the seed the
+        tests give the offline simulator they compare with (``motosim run`` and ``motosim
+        rig`` take the scenario's ``seed``).
     validity : tuple of float, optional
         The runner's ``validity``: the virtual motorcycle's largest roll [rad], lowest and
         highest speed [m/s], beyond which the torque fades out and the run ends.

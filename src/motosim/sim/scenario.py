@@ -198,7 +198,8 @@ class ChirpProfile:
 
     def __post_init__(self) -> None:
         _check("amplitude", self.amplitude)
-        # at most 10 kHz, as a multisine's lines: 1e9 Hz was sampled into an aliased noise
+        # at most 10 kHz, as a multisine's lines (1e9 Hz was accepted); a frequency beyond the
+        # plant's Nyquist rate aliases when sampled: the scenario's rates are not known here
         _check("f0", self.f0, low=0.0, high=1e4, unit="Hz")
         _check("f1", self.f1, low=0.0, high=1e4, unit="Hz")
         _check("start", self.start, unit="s")
