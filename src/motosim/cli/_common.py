@@ -319,16 +319,19 @@ def check_result_folder(folder: str | Path, scenario: str | Path, *, overwrite: 
         If the folder is a special file or a file, is or holds the scenario, its parent does
         not exist, or it holds a complete result and ``overwrite`` is false.
     """
-    from motosim.io.results import is_complete_result
-
     target = Path(folder)
     refuse_special(target, "--out", "a result folder")
     refuse_inside(target, scenario, "scenario", expected="another result folder")
     if target.exists() and not target.is_dir():
         raise MotosimError(f"--out {target} is a file; expected a result folder")
     _refuse_missing_parent(target, "--out")
-    if is_complete_result(target) and not overwrite:
-        raise MotosimError(f"{target}: already holds a result; give --overwrite or another --out")
+    if not overwrite and target.is_dir():
+        from motosim.io.results import is_complete_result  # h5py: only for a folder there
+
+        if is_complete_result(target):
+            raise MotosimError(
+                f"{target}: already holds a result; give --overwrite or another --out"
+            )
     return target
 
 
