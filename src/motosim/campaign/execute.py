@@ -24,6 +24,7 @@ import importlib
 import math
 import os
 import time
+import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -513,6 +514,13 @@ def _fill(
             if on_progress is not None:
                 on_progress(done, len(plan.runs), failed)
         status = "complete"
+    except BaseException:
+        with warnings.catch_warnings():  # joblib's note that it cancelled the other tasks
+            warnings.filterwarnings("ignore", ".*tasks which were still being processed")
+            close = getattr(results, "close", None)
+            if close is not None:
+                close()
+        raise
     finally:
         end = time.perf_counter()
         run_wall = end - run_start
@@ -539,7 +547,11 @@ def _fill(
             written=len(store.done & {r.run_id for r in plan.runs}),
             last_call=dataclasses.asdict(summary),
         )
-        store.write_manifest(manifest)
+        try:
+            store.write_manifest(manifest)
+        except MotosimError:
+            if status == "complete":
+                raise  # else the error that stopped the campaign (a full disk) is the one said
     return summary
 
 
