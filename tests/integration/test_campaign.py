@@ -247,3 +247,24 @@ def test_series_in_zarr_equal_a_plain_simulate_and_resume_skips_them(
     argv = ["campaign", str(path), "--out", str(out), "--rerun", run_id, "--json"]
     assert main(argv) == 0
     assert json.loads(capsys.readouterr().out)["identical_to_stored"] is True
+
+
+def test_an_exported_scenario_that_does_not_fit_leaves_no_cut_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from motosim.errors import MotosimError
+
+    plan = plan_campaign(load_campaign(_write(tmp_path)))
+    real = Path.write_text
+
+    def half_then_full(self: Path, text: str, **kwargs: object) -> int:
+        real(self, text[: len(text) // 2], **kwargs)  # type: ignore[arg-type]
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_text", half_then_full)
+    target = tmp_path / "one.toml"
+    with pytest.raises(MotosimError, match=r"one(_true_handlebar)?\.toml: No space left on device"):
+        export_run(plan, plan.runs[0].run_id, target)
+    # it left half a scenario under its name, which --write-scenario then refused to replace
+    assert not list(tmp_path.glob("one*"))
+    assert not list(tmp_path.glob(".one*"))

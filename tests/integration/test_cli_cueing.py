@@ -60,3 +60,22 @@ def test_a_run_with_skipped_periods_is_refused_naming_the_folder_and_why(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and str(folder) in err
     assert "0.009 s" in err and "missed deadlines" in err
+
+
+def test_a_disk_too_full_for_the_commands_is_refused_before_writing(
+    run_dir: Path, tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import shutil
+
+    from motosim.io.results import RESERVE_BYTES
+
+    real = shutil.disk_usage
+    monkeypatch.setattr(  # the writer's reserve and 1 kB more: not the 400 rows' 67 kB
+        shutil, "disk_usage", lambda path: real(path)._replace(free=RESERVE_BYTES + 1000)
+    )
+    out = tmp_path / "cue"
+    assert main(["cueing", str(run_dir), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    # it said "a run of 0 rows" (the writer was not told the commands' length)
+    assert err.count("\n") == 1 and "a run of 400 rows of 5 signals needs" in err, err
+    assert not out.exists()

@@ -14,7 +14,14 @@ import numpy as np
 import pytest
 
 from motosim.errors import MotosimError
-from motosim.io.results import ResultWriter, load_result, lock_file, partial_folder
+from motosim.io.results import (
+    ResultWriter,
+    folder_lock,
+    load_result,
+    lock_file,
+    partial_folder,
+    write_whole,
+)
 
 NAMES = ("t", "phi")
 
@@ -242,3 +249,93 @@ def test_a_stop_signal_between_the_two_files_waits_for_the_block(
         assert h5["signals"].shape[0] == 5 and not h5.attrs["complete"]
     with (folder / "result.partial.csv").open(newline="") as handle:
         assert len(list(csv.reader(handle))) - 1 == 5
+
+
+def _filling_after(calls: int, written: list[str]) -> object:
+    """A ``write`` that writes ``calls`` pieces, then fails as a full disk does."""
+
+    def write(temporary: Path) -> None:
+        with temporary.open("w", encoding="utf-8") as handle:
+            for k in range(calls):
+                handle.write(f"piece {k}\n")
+                handle.flush()
+                written.append(temporary.name)
+            raise OSError(28, "No space left on device")
+
+    return write
+
+
+def test_write_whole_keeps_the_previous_file_when_the_disk_fills(tmp_path: Path) -> None:
+    target = tmp_path / "log.csv"
+    target.write_text("t,theta_h\n0.0,1.0\n", encoding="utf-8")
+    written: list[str] = []
+    with pytest.raises(MotosimError, match="No space left on device; the previous file"):
+        write_whole(target, _filling_after(3, written))  # type: ignore[arg-type]
+    # the pieces went to a hidden sibling, which is gone; the old file is as it was
+    assert written and written[0] == f".log.csv.{os.getpid()}.partial"
+    assert target.read_text(encoding="utf-8") == "t,theta_h\n0.0,1.0\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
+
+
+def test_write_whole_interrupted_keeps_the_previous_file_and_no_temporary(
+    tmp_path: Path,
+) -> None:
+    target = tmp_path / "report.html"
+    target.write_text("old", encoding="utf-8")
+
+    def interrupted(temporary: Path) -> None:
+        temporary.write_text("half a page", encoding="utf-8")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        write_whole(target, interrupted)
+    assert target.read_text(encoding="utf-8") == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["report.html"]
+
+
+def test_write_log_on_a_full_disk_keeps_the_previous_log(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import csv as csv_module
+
+    from motosim.io import logs
+    from motosim.timeseries import TimeSeries
+
+    target = tmp_path / "excite.csv"
+    old = TimeSeries(np.array([0.0, 0.01]), np.array([[1.0], [2.0]]), ("i_cmd",))
+    logs.write_log(target, old)
+    before = target.read_bytes()
+    real = csv_module.writer
+
+    class Filling:  # the third row does not fit
+        def __init__(self, handle: object) -> None:
+            self._writer = real(handle)  # type: ignore[arg-type]
+            self._rows = 0
+
+        def writerow(self, row: object) -> None:
+            self._rows += 1
+            if self._rows > 2:
+                raise OSError(28, "No space left on device")
+            self._writer.writerow(row)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(logs.csv, "writer", Filling)
+    longer = TimeSeries(np.arange(5) * 0.01, np.ones((5, 1)), ("i_cmd",))
+    with pytest.raises(MotosimError, match=r"cannot write .*No space left on device"):
+        logs.write_log(target, longer)
+    # before: the old log truncated, two rows of the new one left in it as if complete
+    assert target.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["excite.csv"]
+
+
+def test_folder_lock_refuses_a_second_writer_and_is_released(tmp_path: Path) -> None:
+    out = tmp_path / "campaign"
+    with folder_lock(out) as lock:
+        assert lock == lock_file(out.absolute())
+        with pytest.raises(MotosimError, match=rf"another run \(pid {os.getpid()}\) is writing"):
+            with folder_lock(out):
+                pass
+        with pytest.raises(MotosimError, match="another run"):  # a result writer too
+            ResultWriter(out, NAMES, {})
+    with folder_lock(out):  # released on leaving
+        pass
+    assert not lock.exists()

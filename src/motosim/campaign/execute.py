@@ -24,6 +24,7 @@ import importlib
 import math
 import os
 import time
+import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +39,7 @@ from motosim.campaign.spec import TRUE_HANDLEBAR, Campaign, Factor
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError, RunFailedError
 from motosim.estimation.walcott_zak import ObserverSettings
+from motosim.io.results import folder_lock
 from motosim.io.runs import parameter_source, resolve
 from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
@@ -441,12 +443,28 @@ def run_campaign(
     for f in campaign.factors:
         first = plan.runs[0].values[len(kinds)]
         kinds.append(float if f.path.startswith(f"{TRUE_HANDLEBAR}.") else type(first))
-    store = ResultStore(
-        out,
-        fingerprint=plan.fingerprint,
-        factors=[(f.path, k) for f, k in zip(campaign.factors, kinds, strict=True)],
-        metrics=campaign.metrics,
-    )
+    with folder_lock(out):  # a second instance on the folder is refused, not mixed in
+        store = ResultStore(
+            out,
+            fingerprint=plan.fingerprint,
+            factors=[(f.path, k) for f, k in zip(campaign.factors, kinds, strict=True)],
+            metrics=campaign.metrics,
+        )
+        return _fill(campaign, out, plan, store, chosen, workers, scheduler, start, on_progress)
+
+
+def _fill(
+    campaign: Campaign,
+    out: str | Path,
+    plan: Plan,
+    store: ResultStore,
+    chosen: Backend,
+    workers: int,
+    scheduler: str | None,
+    start: float,
+    on_progress: Callable[[int, int, int], None] | None,
+) -> CampaignSummary:
+    """Run the campaign's runs that ``store`` does not hold yet (:func:`run_campaign`)."""
     todo = [r for r in plan.runs if r.run_id not in store.done]
     skipped = len(plan.runs) - len(todo)
     needed = sorted({r.design for r in todo})
@@ -496,6 +514,13 @@ def run_campaign(
             if on_progress is not None:
                 on_progress(done, len(plan.runs), failed)
         status = "complete"
+    except BaseException:
+        with warnings.catch_warnings():  # joblib's note that it cancelled the other tasks
+            warnings.filterwarnings("ignore", ".*tasks which were still being processed")
+            close = getattr(results, "close", None)
+            if close is not None:
+                close()
+        raise
     finally:
         end = time.perf_counter()
         run_wall = end - run_start
@@ -522,7 +547,11 @@ def run_campaign(
             written=len(store.done & {r.run_id for r in plan.runs}),
             last_call=dataclasses.asdict(summary),
         )
-        store.write_manifest(manifest)
+        try:
+            store.write_manifest(manifest)
+        except MotosimError:
+            if status == "complete":
+                raise  # else the error that stopped the campaign (a full disk) is the one said
     return summary
 
 

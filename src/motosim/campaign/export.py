@@ -13,6 +13,7 @@ from typing import Any
 
 from motosim.campaign.plan import Plan, scenario_of
 from motosim.errors import MotosimError
+from motosim.io.results import write_whole
 from motosim.params import ParameterSet, dump_parameter_set
 from motosim.sim.scenario import scenario_dict
 
@@ -93,7 +94,8 @@ def export_run(plan: Plan, run_id: str, path: str | Path) -> list[Path]:
             sources={k: f"campaign {plan.campaign.name}, run {run_id}" for k in overrides},
         )
         hb_path.parent.mkdir(parents=True, exist_ok=True)
-        hb_path.write_text(dump_parameter_set(pset), encoding="utf-8")
+        text = dump_parameter_set(pset)
+        write_whole(hb_path, lambda temporary: temporary.write_text(text, encoding="utf-8"))
         written.append(hb_path)
         data["handlebar"]["true"] = hb_path.name
     comment = (
@@ -102,5 +104,6 @@ def export_run(plan: Plan, run_id: str, path: str | Path) -> list[Path]:
     )
     data["name"] = f"{plan.campaign.name}_{run_id}"
     target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_text(scenario_toml(data, comment=comment), encoding="utf-8")
+    scenario_text = scenario_toml(data, comment=comment)  # written whole: a rerun refuses a file
+    write_whole(target, lambda temporary: temporary.write_text(scenario_text, encoding="utf-8"))
     return [target, *written]

@@ -6,13 +6,13 @@ failed, else empty), ``failed_at`` [s] (NaN when unknown or ok), ``elapsed`` (co
 of the run [s]), one column per factor (named by its key) and one per kept metric (NaN for a
 failed run). Read them with pandas (``pandas.read_parquet("DIR/parts")``), polars, duckdb or
 :func:`load_results`. A part is written to a hidden file and renamed, so an interrupted
-campaign leaves only whole parts; ``DIR/manifest.json`` says what the campaign was (its file,
-base scenario, fingerprint, package version), how far it got and how long it took.
+campaign leaves only whole parts (a full disk is one line naming the part);
+``DIR/manifest.json`` says what the campaign was (its file, base scenario, fingerprint,
+package version), how far it got and how long it took.
 """
 
 import hashlib
 import json
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from motosim import __version__
 from motosim.campaign.series import SERIES
 from motosim.errors import MotosimError
+from motosim.io.results import write_whole
 
 __all__ = [
     "MANIFEST",
@@ -205,18 +206,14 @@ class ResultStore:
         ids = [str(i) for i in columns["run_id"]]
         name = hashlib.sha256(" ".join(ids).encode()).hexdigest()[:16]
         path = self.parts / f"part-{name}.parquet"
-        hidden = self.parts / f".part-{name}.tmp"
         table = pa.table({k: list(columns[k]) for k in self.schema().names}, schema=self.schema())
-        pq.write_table(table, hidden)
-        os.replace(hidden, path)
+        write_whole(path, lambda hidden: pq.write_table(table, hidden))
         self.done.update(ids)
         return path
 
     def write_manifest(self, payload: Mapping[str, Any]) -> Path:
         """Write ``manifest.json`` (atomically) with the package version added."""
-        path = self.folder / MANIFEST
-        hidden = self.folder / f".{MANIFEST}.tmp"
         text = json.dumps({"version": __version__, **payload}, indent=2, default=str)
-        hidden.write_text(text + "\n", encoding="utf-8")
-        os.replace(hidden, path)
-        return path
+        return write_whole(
+            self.folder / MANIFEST, lambda hidden: hidden.write_text(text + "\n", encoding="utf-8")
+        )

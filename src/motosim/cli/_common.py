@@ -447,17 +447,10 @@ def check_output_folder(
 
 def _atomic_write(target: Path, write: Callable[[Path], object]) -> Path:
     """Write through ``write`` into a temporary sibling, then rename it over ``target``."""
+    from motosim.io.results import write_whole
+
     _refuse_missing_parent(target, "output")
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.partial")
-    try:
-        write(temporary)
-        os.replace(temporary, target)
-    except OSError as err:
-        temporary.unlink(missing_ok=True)
-        raise MotosimError(
-            f"cannot write {target}: {err.strerror or err}; the previous file, if any, is kept"
-        ) from None
-    return target
+    return write_whole(target, write)
 
 
 def write_text(path: str | Path, text: str) -> Path:

@@ -85,7 +85,8 @@ def _write(run: "CueingRun", folder: Path, metadata: dict[str, Any], overwrite: 
     from motosim.io.results import ResultWriter
 
     names = ("t", *COMMAND_SIGNALS)
-    with ResultWriter(folder, names, metadata, overwrite=overwrite) as writer:
+    rows = run.commands.t.size
+    with ResultWriter(folder, names, metadata, overwrite=overwrite, expected_rows=rows) as writer:
         writer.append(np.column_stack([run.commands.t, run.commands.data]))
         writer.close(score_summary(run.score))
 

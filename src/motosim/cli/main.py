@@ -13,10 +13,13 @@ import argparse
 import importlib
 import logging
 import re
+import signal
 import sys
+import threading
 import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from types import FrameType
 from typing import NoReturn, TextIO
 
 from motosim import __version__
@@ -178,6 +181,36 @@ class _OneLine(logging.Handler):
 
 
 @contextmanager
+def _stop_signals_as_ctrl_c() -> Iterator[None]:
+    """Within the block SIGTERM and SIGHUP do what Ctrl-C (SIGINT) does at that moment.
+
+    A lab's process manager, ``timeout`` or a closed terminal stops a command with SIGTERM or
+    SIGHUP, whose default action ends the process at once: exit -15, a file half written,
+    ``motosim run``'s torque not faded out. Passed to the SIGINT handler installed when the
+    signal arrives (Python's, which raises KeyboardInterrupt; a result writer's; the real-time
+    loop's stop), they stop the command as Ctrl-C does: exit 130, the same files left.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def as_ctrl_c(signum: int, frame: FrameType | None) -> None:
+        handler = signal.getsignal(signal.SIGINT)
+        if callable(handler):
+            handler(signal.SIGINT, frame)
+        else:  # SIGINT ignored (a background job of a script): the stop is still asked for
+            raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
+    previous = {sig: signal.signal(sig, as_ctrl_c) for sig in stops}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+@contextmanager
 def _log_in_one_line() -> Iterator[None]:
     """Within the block, the ``motosim`` loggers print through :class:`_OneLine` only."""
     logger = logging.getLogger("motosim")
@@ -230,9 +263,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code.
 
     0 success, 1 an internal error (a bug; ``--debug`` shows its traceback), 2 bad input,
-    3 a run that failed (diverged, fell, faulted), 130 interrupted (Ctrl-C, SIGTERM).
+    3 a run that failed (diverged, fell, faulted), 130 interrupted (Ctrl-C, SIGTERM or
+    SIGHUP: the same stop, :func:`_stop_signals_as_ctrl_c`).
     """
-    words = list(sys.argv[1:] if argv is None else argv)
+    code = _main(list(sys.argv[1:] if argv is None else argv))
+    if argv is None:  # the process's own command line: it ends now
+        _exit_on_stop_signals(code)
+    return code
+
+
+def _exit_on_stop_signals(code: int) -> None:
+    """From now on SIGTERM and SIGHUP are ignored: the process is ending with ``code``.
+
+    The command is over and its files are closed; the interpreter's exit (joblib's workers,
+    numba, matplotlib) can take a second in which the default action would report the
+    finished command as killed (exit -15). Python puts back the default action of a handler
+    of its own as it exits, so they are ignored, not handled.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for sig in (signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])):
+        signal.signal(sig, signal.SIG_IGN)
+
+
+def _main(words: list[str]) -> int:
+    """:func:`main` on the words of a command line."""
     try:
         try:
             parser = build_parser(_chosen(words))
@@ -241,7 +296,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return stop.code if isinstance(stop.code, int) else 2
         _refuse_empty(parser, args)
         _SHOWN.clear()
-        with warnings.catch_warnings(), _log_in_one_line():
+        with warnings.catch_warnings(), _log_in_one_line(), _stop_signals_as_ctrl_c():
             warnings.simplefilter("always", MotosimWarning)
             warnings.showwarning = _show_warning
             code: int = args.func(args)

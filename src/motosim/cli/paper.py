@@ -3,11 +3,12 @@
 import argparse
 import html
 from collections.abc import Callable
+from functools import partial
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motosim.cli._common import check_output_folder, print_json, show_progress
+from motosim.cli._common import check_output_folder, print_json, show_progress, write_text
 from motosim.cli.simulate import run_scenario
 from motosim.errors import MotosimError
 from motosim.params.toml import parse_toml
@@ -105,10 +106,12 @@ def _figures(runs: dict[str, "SimResult"], out: Path) -> list[tuple[str, str]]:
             lambda: plot_motorcycle(runs["fig15_riding"], title="Riding run: path, roll, speed"),
         ),
     ]
+    from motosim.io.results import write_whole
+
     written = []
     for name, caption, make in specs:
         fig = make()
-        fig.savefig(out / name, dpi=110)
+        write_whole(out / name, partial(fig.savefig, dpi=110, format="png"))
         written.append((name, caption))
     return written
 
@@ -135,9 +138,7 @@ td:first-child{{text-align:left}}img{{max-width:100%}}figure{{margin:2em 0}}</st
 <p>Each run has its own report (click its name). Units: N*m, rad, rad/s, m.</p>
 <table><tr><th>run</th>{"".join(f"<th>{k}</th>" for k in keys)}</tr>{rows}</table>
 {figs}</body></html>"""
-    path = out / "index.html"
-    path.write_text(page, encoding="utf-8")
-    return path
+    return write_text(out / "index.html", page)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -558,21 +558,29 @@ def read_rig_log(
 
 
 def write_log(path: str | Path, series: TimeSeries) -> Path:
-    """Write a series as CSV with ``t`` first, full float precision.
+    """Write a series as CSV with ``t`` first, full float precision, whole or not at all.
+
+    A write that fails (a full disk) or is interrupted leaves a previous file as it was
+    (:func:`motosim.io.results.write_whole`).
 
     Raises
     ------
     MotosimError
         If the file cannot be written.
     """
+    from motosim.io.results import write_whole
+
     target = Path(path)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        with target.open("w", newline="", encoding="utf-8") as handle:
+    except OSError as err:
+        raise MotosimError(f"cannot write {path}: {err.strerror}") from None
+
+    def write(temporary: Path) -> None:
+        with temporary.open("w", newline="", encoding="utf-8") as handle:
             writer = csv.writer(handle)
             writer.writerow(("t", *series.names))
             for t, row in zip(series.t, series.data, strict=True):
                 writer.writerow([repr(float(t)), *(repr(float(v)) for v in row)])
-    except OSError as err:
-        raise MotosimError(f"cannot write {path}: {err.strerror}") from None
-    return target
+
+    return write_whole(target, write)

@@ -47,7 +47,7 @@ import re
 import shutil
 import signal
 import threading
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
@@ -67,11 +67,13 @@ __all__ = [
     "ResultWriter",
     "SimResult",
     "StopRequest",
+    "folder_lock",
     "is_complete_result",
     "load_result",
     "lock_file",
     "partial_folder",
     "terminate_as_interrupt",
+    "write_whole",
 ]
 
 _log = logging.getLogger(__name__)
@@ -222,6 +224,70 @@ class _FolderLock:
         self.path.unlink(missing_ok=True)
         os.close(self._fd)
         self._fd = None
+
+
+@contextmanager
+def folder_lock(folder: str | Path) -> Iterator[Path]:
+    """Hold the lock of a run writing ``folder`` (``.NAME.lock`` beside it) within the block.
+
+    The lock :class:`ResultWriter` holds, for writers of other kinds of folder (a campaign's):
+    a second writer of the same folder is refused in one line, and the operating system
+    releases the lock however the process ends.
+
+    Raises
+    ------
+    MotosimError
+        If another run holds it, or it cannot be created (naming the folder).
+    """
+    target = Path(folder).absolute()
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise MotosimError(f"cannot create folder {target.parent}: {_reason(err)}") from None
+    lock = _FolderLock(target)
+    try:
+        yield lock.path
+    finally:
+        lock.release()
+
+
+def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
+    """Write a file whole or not at all: through ``write`` into a hidden sibling, then renamed.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file. Until ``write`` has returned, a previous file there is left as it was.
+    write : callable
+        Called with the temporary path (``.NAME.PID.partial`` beside ``path``) to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    MotosimError
+        One line naming the file and the system's reason (a full disk, a read-only folder);
+        the temporary file is deleted, as it is when ``write`` is interrupted.
+    """
+    target = Path(path)
+    temporary = target.with_name(f".{target.name}.{os.getpid()}.partial")
+    try:
+        write(temporary)
+        os.replace(temporary, target)
+    except BaseException as err:
+        try:
+            temporary.unlink(missing_ok=True)
+        except OSError:  # a read-only folder: nothing was created there
+            pass
+        if isinstance(err, OSError):
+            raise MotosimError(
+                f"cannot write {target}: {_reason(err)}; the previous file, if any, is kept"
+            ) from None
+        raise
+    return target
 
 
 class StopRequest:

@@ -442,52 +442,55 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
     names = ("t", *result.names)
     table = np.column_stack([result.t, result.data])[::every]
     has_pose = all(n in names for n in POSE_SIGNALS)
-    try:
-        stream = Path(path).open("wb")
-    except OSError as err:
-        raise MotosimError(f"{path}: cannot write the MCAP file ({err.strerror})") from None
     count = 0
-    with stream:
-        writer = Writer(stream)
-        writer.start(profile="", library="motosim")
-        signals = writer.register_channel(
-            topic=_SIGNALS_TOPIC,
-            message_encoding="json",
-            schema_id=writer.register_schema(
-                name="motosim.Signals",
-                encoding="jsonschema",
-                data=json.dumps(_signals_schema(names)).encode(),
-            ),
-        )
-        pose_channel = writer.register_channel(
-            topic=_POSE_TOPIC,
-            message_encoding="json",
-            schema_id=writer.register_schema(
-                name="foxglove.PoseInFrame",
-                encoding="jsonschema",
-                data=json.dumps(_POSE_SCHEMA).encode(),
-            ),
-        )
-        for sequence, row in enumerate(table):
-            stamp = max(0, round(float(row[0]) * 1e9))
-            writer.add_message(
-                channel_id=signals,
-                log_time=stamp,
-                publish_time=stamp,
-                sequence=sequence,
-                data=json.dumps(_row_message(names, row)).encode(),
+
+    def write(temporary: Path) -> None:
+        nonlocal count
+        with temporary.open("wb") as stream:
+            writer = Writer(stream)
+            writer.start(profile="", library="motosim")
+            signals = writer.register_channel(
+                topic=_SIGNALS_TOPIC,
+                message_encoding="json",
+                schema_id=writer.register_schema(
+                    name="motosim.Signals",
+                    encoding="jsonschema",
+                    data=json.dumps(_signals_schema(names)).encode(),
+                ),
             )
-            count += 1
-            if has_pose:
+            pose_channel = writer.register_channel(
+                topic=_POSE_TOPIC,
+                message_encoding="json",
+                schema_id=writer.register_schema(
+                    name="foxglove.PoseInFrame",
+                    encoding="jsonschema",
+                    data=json.dumps(_POSE_SCHEMA).encode(),
+                ),
+            )
+            for sequence, row in enumerate(table):
+                stamp = max(0, round(float(row[0]) * 1e9))
                 writer.add_message(
-                    channel_id=pose_channel,
+                    channel_id=signals,
                     log_time=stamp,
                     publish_time=stamp,
                     sequence=sequence,
-                    data=json.dumps(_pose_message(pose_of(names, row))).encode(),
+                    data=json.dumps(_row_message(names, row)).encode(),
                 )
                 count += 1
-        writer.finish()  # type: ignore[no-untyped-call]
+                if has_pose:
+                    writer.add_message(
+                        channel_id=pose_channel,
+                        log_time=stamp,
+                        publish_time=stamp,
+                        sequence=sequence,
+                        data=json.dumps(_pose_message(pose_of(names, row))).encode(),
+                    )
+                    count += 1
+            writer.finish()  # type: ignore[no-untyped-call]
+
+    from motosim.io.results import write_whole
+
+    write_whole(path, write)
     return count
 
 

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from motosim.campaign import METRICS, load_results, read_manifest
-from motosim.errors import MotosimError
+from motosim.io.results import write_whole
 from motosim.plotting.campaign import plot_failures, plot_heatmap, plot_metric_vs_factors
 from motosim.report.html import _CSS, _png, _table
 
@@ -151,11 +151,8 @@ def build_campaign_report(folder: str | Path) -> Path:
         "</body></html>",
     ]
     target = source / "report.html"
-    try:
-        target.write_text("\n".join(parts) + "\n", encoding="utf-8")
-    except OSError as err:
-        raise MotosimError(f"cannot write {target}: {err.strerror}") from None
-    return target
+    text = "\n".join(parts) + "\n"
+    return write_whole(target, lambda temporary: temporary.write_text(text, encoding="utf-8"))
 
 
 def _rank(values: Any) -> Any:

@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from motosim.errors import MotosimError
-from motosim.io.results import SimResult, load_result
+from motosim.io.results import SimResult, load_result, write_whole
 from motosim.plotting.closed_loop import (
     plot_motor_torque,
     plot_motorcycle,
@@ -308,8 +308,5 @@ def build_report(folder: str | Path) -> Path:
         "</body></html>",
     ]
     target = source / _REPORT_NAME if source.is_dir() else source.with_name(_REPORT_NAME)
-    try:
-        target.write_text("\n".join(parts) + "\n", encoding="utf-8")
-    except OSError as err:
-        raise MotosimError(f"cannot write {target}: {err.strerror}") from None
-    return target
+    text = "\n".join(parts) + "\n"
+    return write_whole(target, lambda temporary: temporary.write_text(text, encoding="utf-8"))

@@ -1,0 +1,108 @@
+"""Every command stops on SIGTERM and SIGHUP as on Ctrl-C, and never leaves a file half written.
+
+A lab's process manager, ``timeout`` or a closed terminal stops a command with SIGTERM or
+SIGHUP. Before, only a result writer's ``with`` block turned them into Ctrl-C: any other
+command, or one still starting, was killed at once (exit -15), and a file being written by
+``excite``, ``estimate``, ``report`` or ``telemetry`` was left truncated under its own name.
+Each child here is ``python -m motosim``, the command line as a lab starts it.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from motosim.cli.main import main
+from motosim.io.results import folder_lock
+
+
+def _motosim(*argv: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "motosim", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+@pytest.mark.parametrize("stop", [signal.SIGTERM, signal.SIGHUP])
+def test_a_stop_signal_while_a_command_computes_is_exit_130_as_ctrl_c(
+    tmp_path: Path, stop: signal.Signals
+) -> None:
+    out = tmp_path / "design.toml"
+    child = _motosim("design", "--out", str(out))  # several seconds of optimisation
+    assert child.stderr is not None and child.stderr.readline().startswith("designing for")
+    child.send_signal(stop)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == 130, err  # was -15 (-1 for SIGHUP): killed, nothing said
+    assert err == "motosim: interrupted\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_while_excite_replaces_a_log_keeps_the_previous_one(tmp_path: Path) -> None:
+    out = tmp_path / "excite.csv"
+    out.write_text("t,i_cmd\n0.0,0.0\n", encoding="utf-8")
+    child = _motosim(
+        "excite", "--duration", "300", "--rate", "1000", "--out", str(out), "--overwrite"
+    )
+    deadline = time.monotonic() + 60.0
+    while not any(p.name.endswith(".partial") for p in tmp_path.iterdir()):  # writing
+        assert child.poll() is None and time.monotonic() < deadline, child.communicate()
+        time.sleep(0.01)
+    child.send_signal(signal.SIGTERM)
+    _, err = child.communicate(timeout=60)
+    if child.returncode == 0:  # it finished writing first: the new log, whole
+        pytest.skip("the log was written before the signal arrived")
+    assert child.returncode == 130 and err.endswith("motosim: interrupted\n"), err
+    # was: the old log truncated and the new one cut mid-row under the log's own name
+    assert out.read_text(encoding="utf-8") == "t,i_cmd\n0.0,0.0\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["excite.csv"]
+
+
+def test_a_stop_signal_after_the_command_is_not_a_kill(tmp_path: Path) -> None:
+    """The interpreter's exit after the command must not turn a finished run into exit -15."""
+    code = (
+        "import signal, sys\n"
+        "from motosim.cli.main import main\n"
+        "sys.argv = ['motosim', '--version']\n"
+        "main()\n"
+        "print(signal.getsignal(signal.SIGTERM) is signal.SIG_IGN, "
+        "signal.getsignal(signal.SIGHUP) is signal.SIG_IGN)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=60
+    )
+    assert done.stdout.splitlines()[-1] == "True True"
+    # called with its words (a test, a script) main leaves the handlers as they were
+    assert main(["--version"]) == 0
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
+def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "base.toml").write_text(
+        '[scenario]\nname = "base"\nduration = 0.2\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 1.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    campaign = tmp_path / "c.toml"
+    campaign.write_text(
+        '[campaign]\nname = "c"\nscenario = "base.toml"\nsampling = "grid"\nseed = 1\n'
+        '[factors]\n"handlebar.inertia_factor" = [0.9, 1.1]\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
+    with folder_lock(out):  # another instance, running or resuming the campaign
+        code = main(argv)
+    err = capsys.readouterr().err
+    # was: both ran every run into the same parts and manifest (same temporary names)
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"another run (pid {os.getpid()}) is writing this result" in err
+    assert not out.exists()
+    assert main(argv) == 0  # once it has ended
