@@ -13,6 +13,7 @@ package version), how far it got and how long it took.
 
 import hashlib
 import json
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
