@@ -96,6 +96,20 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
             ),
             "f1 = 1000000000.0; expected a finite number >= 0 and <= 10000 [Hz]",
         ),
+        (  # 6 kHz on the default 10 kHz plant is sampled into 4 kHz
+            MINIMAL.replace(
+                'kind = "constant", value = 1.0',
+                'kind = "chirp", amplitude = 5.0, f0 = 0.1, f1 = 6000.0',
+            ),
+            "[rider] profile: a chirp up to 6000 Hz; expected at most 5000 Hz, half [rates] plant",
+        ),
+        (
+            MINIMAL
+            + "[motorcycle]\nside_wind = { kind = 'multisine', amplitude = 1.0, f0 = 1.0, "
+            + "f1 = 900.0, period = 10.0 }\n[rates]\nplant = 1000.0\ncontrol = 1000.0\n"
+            + "measurement = 100.0\n",
+            "[motorcycle] side_wind: a multisine up to 900 Hz; expected at most 500 Hz",
+        ),
         ("[rider]\nkind = 'virtual'\n", "missing table [scenario]"),
         (
             "[scenario]\n[motorcycle]\nspeed = 2.0\n[rider]\nkind = 'virtual'\n",

@@ -198,8 +198,8 @@ class ChirpProfile:
 
     def __post_init__(self) -> None:
         _check("amplitude", self.amplitude)
-        # at most 10 kHz, as a multisine's lines (1e9 Hz was accepted); a frequency beyond the
-        # plant's Nyquist rate aliases when sampled: the scenario's rates are not known here
+        # at most 10 kHz, as a multisine's lines (1e9 Hz was accepted); beyond half the
+        # scenario's plant rate it would alias: refused by Scenario, which knows the rates
         _check("f0", self.f0, low=0.0, high=1e4, unit="Hz")
         _check("f1", self.f1, low=0.0, high=1e4, unit="Hz")
         _check("start", self.start, unit="s")
@@ -678,6 +678,23 @@ class Scenario:
             )
         if self.seed < 0:
             raise MotosimError(f"seed = {self.seed}; expected an integer >= 0")
+        mc = self.motorcycle
+        for where, profile in (
+            ("[rider] profile", self.rider.profile),
+            ("[rider] probe", self.rider.probe),
+            ("[motorcycle] drive_torque", mc.drive_torque),
+            ("[motorcycle] brake_torque", mc.brake_torque),
+            ("[motorcycle] wind_force", mc.wind_force),
+            ("[motorcycle] side_wind", mc.side_wind),
+        ):
+            if isinstance(profile, ChirpProfile | MultisineProfile):
+                top = max(profile.f0, profile.f1)
+                if top > 0.5 * self.rates.plant:
+                    raise MotosimError(
+                        f"{where}: a {profile.kind} up to {top:g} Hz; expected at most "
+                        f"{0.5 * self.rates.plant:g} Hz, half [rates] plant = "
+                        f"{self.rates.plant:g} Hz (beyond, it is sampled into another frequency)"
+                    )
         if self.controller.prediction and self.estimator.name != "walcott_zak":
             raise MotosimError(
                 f"[controller] prediction = true with [estimator] name = "
