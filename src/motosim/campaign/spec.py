@@ -440,8 +440,6 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
 def load_campaign(path: str | Path) -> Campaign:
     """Read and validate a campaign file (a one-line :class:`MotosimError` otherwise)."""
     source = Path(path)
-    if not source.exists():  # a folder or a device: refused by read_toml, saying which
-        raise MotosimError(f"{path}: no such campaign file")
     data = read_toml(source, what="campaign file")
     campaign = parse_campaign(data, origin=str(path), folder=source.parent)
     return dataclasses.replace(campaign, source=str(path))

@@ -191,8 +191,6 @@ def load_realtime(
     from motosim.sim.scenario import implausible
 
     source = Path(path)
-    if not source.exists():  # a folder or a device: refused by read_toml, saying which
-        raise MotosimError(f"{path}: no such scenario file")
     data = read_toml(source, what="scenario file")
     rest, realtime = split_realtime(data, origin=str(path))
     scenario = parse_scenario(rest, origin=str(path))

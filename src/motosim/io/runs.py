@@ -54,8 +54,6 @@ __all__ = [
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file (one-line :class:`MotosimError` otherwise)."""
     source = Path(path)
-    if not source.exists():  # a folder or a device: refused by read_toml, saying which
-        raise MotosimError(f"{path}: no such scenario file")
     data = dict(read_toml(source, what="scenario file"))
     data.pop("realtime", None)  # read by motosim run and rig (motosim.rt.config), not here
     scenario = read_road(parse_scenario(data, origin=str(path)), source.parent)
