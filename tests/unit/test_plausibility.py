@@ -66,6 +66,19 @@ def test_the_cli_prints_one_warning_line_and_goes_on(
     assert "J_eq" in out
 
 
+def test_a_librarys_warning_is_one_line_too(capsys: pytest.CaptureFixture[str]) -> None:
+    # NumPy's and SciPy's warnings printed Python's two lines (the file, then its source line)
+    from motosim.cli import main as cli
+
+    for _ in range(2):  # once
+        cli._show_warning(
+            RuntimeWarning("overflow encountered\nin multiply"), RuntimeWarning, "/a/b/_core.py", 7
+        )
+    assert capsys.readouterr().err == (
+        "motosim: warning: RuntimeWarning in _core.py:7: overflow encountered in multiply\n"
+    )
+
+
 @pytest.mark.parametrize(
     ("table", "expected"),
     [

@@ -12,6 +12,7 @@ one line ``motosim: error: ...`` with exit code 2, without a traceback.
 import argparse
 import importlib
 import logging
+import os
 import re
 import signal
 import sys
@@ -157,16 +158,17 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 _SHOWN: set[str] = set()
-_SHOW_OTHERS = warnings.showwarning
 
 
 def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
                   file: TextIO | None = None, line: str | None = None) -> None:  # fmt: skip
-    """Print a :class:`MotosimWarning` as one line ``motosim: warning: ...``, once."""
-    if not issubclass(category, MotosimWarning):
-        _SHOW_OTHERS(message, category, filename, lineno, file, line)
-        return
+    """Print a warning as one line ``motosim: warning: ...``, once: a
+    :class:`MotosimWarning` as it is, another (a library's: NumPy's overflow, SciPy's
+    ill-conditioning) with its kind and the file that raised it, not the two lines of
+    Python's format with that file's source line."""
     text = _one_line(str(message))
+    if not issubclass(category, MotosimWarning):
+        text = f"{category.__name__} in {os.path.basename(filename)}:{lineno}: {text}"
     if text not in _SHOWN:
         _SHOWN.add(text)
         print(f"motosim: warning: {text}", file=sys.stderr)
