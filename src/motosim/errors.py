@@ -15,6 +15,7 @@ Two kinds of failure, kept apart because a user acts differently on each:
   reason and exits with code 3; what the run computed until then is kept.
 """
 
+import signal
 import warnings
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "MotosimError",
     "MotosimWarning",
     "RunFailedError",
+    "stop_signals",
     "warn",
 ]
 
@@ -30,6 +32,20 @@ EXIT_BAD_INPUT = 2
 """Exit code of the command line for a :class:`MotosimError`."""
 EXIT_RUN_FAILED = 3
 """Exit code of the command line for a :class:`RunFailedError`."""
+
+
+def stop_signals() -> list[signal.Signals]:
+    """The signals that stop a command as Ctrl-C does: SIGTERM and, where it exists, SIGHUP,
+    less any this process was started with ignored (``nohup`` ignores SIGHUP so that a closed
+    terminal does not stop the command: it keeps running).
+
+    Examples
+    --------
+    >>> signal.SIGTERM in stop_signals()
+    True
+    """
+    stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
+    return [sig for sig in stops if signal.getsignal(sig) is not signal.SIG_IGN]
 
 
 class MotosimError(ValueError):

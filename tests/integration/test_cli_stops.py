@@ -63,23 +63,45 @@ def test_sigterm_while_excite_replaces_a_log_keeps_the_previous_one(tmp_path: Pa
     assert [p.name for p in tmp_path.iterdir()] == ["excite.csv"]
 
 
-def test_a_stop_signal_after_the_command_is_not_a_kill(tmp_path: Path) -> None:
-    """The interpreter's exit after the command must not turn a finished run into exit -15."""
+def test_a_stop_signal_after_the_command_ends_the_process_with_its_code() -> None:
+    """The interpreter's exit after the command must neither turn a finished run into exit
+    -15 nor hang on a stop signal: it leaves at once with the command's code, its output
+    flushed."""
     code = (
-        "import signal, sys\n"
+        "import os, signal, sys, time\n"
         "from motosim.cli.main import main\n"
         "sys.argv = ['motosim', '--version']\n"
-        "main()\n"
-        "print(signal.getsignal(signal.SIGTERM) is signal.SIG_IGN, "
-        "signal.getsignal(signal.SIGHUP) is signal.SIG_IGN)\n"
+        "code = main()\n"
+        "print('done', code, end='')\n"
+        "os.kill(os.getpid(), signal.SIGTERM)\n"
+        "time.sleep(30)\n"
+        "print('not reached')\n"
     )
-    done = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=60
-    )
-    assert done.stdout.splitlines()[-1] == "True True"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stdout.splitlines()[-1] == "done 0", done
     # called with its words (a test, a script) main leaves the handlers as they were
     assert main(["--version"]) == 0
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
+@pytest.mark.parametrize("ignored", [True, False])
+def test_a_hangup_stops_a_command_unless_started_with_nohup(ignored: bool) -> None:
+    """SIGHUP (a closed terminal) stops a command as Ctrl-C does; started under ``nohup`` (SIGHUP
+    ignored) the command keeps running, as before motosim handled the signal."""
+    code = (
+        "import os, signal, time\n"
+        f"if {ignored}: signal.signal(signal.SIGHUP, signal.SIG_IGN)\n"
+        "from motosim.cli.main import _stop_signals_as_ctrl_c\n"
+        "with _stop_signals_as_ctrl_c():\n"
+        "    os.kill(os.getpid(), signal.SIGHUP)\n"
+        "    time.sleep(0.5)\n"
+        "    print('kept running')\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    if ignored:
+        assert done.returncode == 0 and done.stdout.strip() == "kept running", done
+    else:
+        assert done.returncode != 0 and "KeyboardInterrupt" in done.stderr, done
 
 
 def test_a_campaign_on_a_folder_another_instance_writes_is_refused(

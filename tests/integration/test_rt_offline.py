@@ -437,3 +437,22 @@ def test_the_virtual_rider_is_compiled_before_the_run() -> None:
     finally:
         rider.rider_torque.disable_compile(False)
     assert np.isfinite(torque) and torque == virtual.torque
+
+
+def test_the_virtual_riders_probe_adds_nothing_after_the_scenarios_end() -> None:
+    # a rig serving a run longer than the scenario held the probe's last sample (a chirp's
+    # became a constant torque offset): after its end the probe adds nothing
+    from motosim.io.runs import load_run
+    from motosim.rt.rig import VirtualRider
+
+    inputs = load_run(Path(__file__).parents[2] / "scenarios" / "lane_change_20.toml")
+    world = build_rig(inputs, rng=np.random.default_rng(0))  # type: ignore[arg-type]
+    probe = np.full(11, 2.5)  # 10 ms at 1 kHz
+    world = world._replace(rider_probe=probe)  # a NamedTuple
+
+    class Silent:  # no state row: the path's torque stays 0
+        def poll(self) -> bool:
+            return False
+
+    virtual = VirtualRider(world, Silent(), rate=1000.0)  # type: ignore[arg-type]
+    assert [virtual(t) for t in (0.0, 0.010, 0.011, 5.0)] == [2.5, 2.5, 0.0, 0.0]

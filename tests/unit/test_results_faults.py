@@ -4,6 +4,7 @@ import csv
 import os
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import time
@@ -339,3 +340,17 @@ def test_folder_lock_refuses_a_second_writer_and_is_released(tmp_path: Path) -> 
     with folder_lock(out):  # released on leaving
         pass
     assert not lock.exists()
+
+
+def test_write_whole_writes_through_a_link_and_keeps_the_files_permissions(tmp_path: Path) -> None:
+    # renaming the temporary over the link replaced the link by a file (the file it named left
+    # as it was) and made a private (0600) file readable by everyone (0644)
+    real = tmp_path / "real.csv"
+    real.write_text("old", encoding="utf-8")
+    real.chmod(0o600)
+    link = tmp_path / "link.csv"
+    link.symlink_to(real)
+    write_whole(link, lambda p: p.write_text("new", encoding="utf-8"))
+    assert link.is_symlink() and real.read_text(encoding="utf-8") == "new"
+    assert stat.S_IMODE(real.stat().st_mode) == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real.csv"]

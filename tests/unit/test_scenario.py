@@ -103,12 +103,19 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
             ),
             "[rider] profile: a chirp up to 6000 Hz; expected at most 5000 Hz, half [rates] plant",
         ),
+        (  # the side wind is sampled at the control rate (1 kHz by default), not the plant's
+            MINIMAL
+            + "[motorcycle]\nside_wind = { kind = 'chirp', amplitude = 1.0, f0 = 800.0, "
+            + "f1 = 900.0 }\n",
+            "[motorcycle] side_wind: a chirp up to 900 Hz; expected at most 500 Hz, half [rates] "
+            "control = 1000 Hz",
+        ),
         (
             MINIMAL
             + "[motorcycle]\nside_wind = { kind = 'multisine', amplitude = 1.0, f0 = 1.0, "
-            + "f1 = 900.0, period = 10.0 }\n[rates]\nplant = 1000.0\ncontrol = 1000.0\n"
+            + "f1 = 90.0, period = 10.0 }\n[rates]\nplant = 1000.0\ncontrol = 100.0\n"
             + "measurement = 100.0\n",
-            "[motorcycle] side_wind: a multisine up to 900 Hz; expected at most 500 Hz",
+            "[motorcycle] side_wind: a multisine up to 90 Hz; expected at most 50 Hz",
         ),
         ("[rider]\nkind = 'virtual'\n", "missing table [scenario]"),
         (

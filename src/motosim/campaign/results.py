@@ -27,6 +27,7 @@ from motosim.errors import MotosimError
 from motosim.io.results import write_whole
 
 __all__ = [
+    "FOREIGN",
     "MANIFEST",
     "PARTS",
     "ResultStore",

@@ -30,6 +30,7 @@ from motosim.errors import (
     MotosimError,
     MotosimWarning,
     RunFailedError,
+    stop_signals,
 )
 
 __all__ = ["COMMANDS", "build_parser", "main"]
@@ -203,8 +204,7 @@ def _stop_signals_as_ctrl_c() -> Iterator[None]:
         else:  # SIGINT ignored (a background job of a script): the stop is still asked for
             raise KeyboardInterrupt(signal.Signals(signum).name)
 
-    stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
-    previous = {sig: signal.signal(sig, as_ctrl_c) for sig in stops}
+    previous = {sig: signal.signal(sig, as_ctrl_c) for sig in stop_signals()}
     try:
         yield
     finally:
@@ -275,17 +275,27 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _exit_on_stop_signals(code: int) -> None:
-    """From now on SIGTERM and SIGHUP are ignored: the process is ending with ``code``.
+    """From now on SIGTERM and SIGHUP end the process at once with ``code``.
 
     The command is over and its files are closed; the interpreter's exit (joblib's workers,
     numba, matplotlib) can take a second in which the default action would report the
-    finished command as killed (exit -15). Python puts back the default action of a handler
-    of its own as it exits, so they are ignored, not handled.
+    finished command as killed (exit -15), or hang. The handler flushes the standard streams
+    and leaves with the command's own code (:func:`os._exit`); a signal the process was
+    started with ignored (``nohup``) stays ignored.
     """
     if threading.current_thread() is not threading.main_thread():
         return
-    for sig in (signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])):
-        signal.signal(sig, signal.SIG_IGN)
+
+    def leave(signum: int, frame: FrameType | None) -> None:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):  # closed, or a broken pipe
+                pass
+        os._exit(code)
+
+    for sig in stop_signals():
+        signal.signal(sig, leave)
 
 
 def _main(words: list[str]) -> int:

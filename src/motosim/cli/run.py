@@ -25,7 +25,7 @@ from motosim.cli.rtcheck import (
     clock_from_args,
     privileges_from_args,
 )
-from motosim.errors import MotosimError, RunFailedError, warn
+from motosim.errors import MotosimError, RunFailedError, stop_signals, warn
 from motosim.params.checks import short_repr
 from motosim.params.toml import read_toml
 
@@ -311,7 +311,11 @@ def _writer_main(
     :class:`~motosim.io.telemetry.TelemetryRing` it fills every 5 ms, with the loop's timing
     and safety columns (:class:`~motosim.view.live.LoopRows`).
     """
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the loop's to handle
+    # Ctrl-C is the loop's to handle, and so are SIGTERM and SIGHUP, which a closed terminal
+    # or a service manager sends the whole process group: the loop fades the torque out and
+    # asks this process to close the result, as on Ctrl-C
+    for sig in (signal.SIGINT, *stop_signals()):
+        signal.signal(sig, signal.SIG_IGN)
     import numpy as np
 
     from motosim.io.results import ResultWriter

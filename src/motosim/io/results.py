@@ -59,7 +59,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from motosim import __version__
-from motosim.errors import MotosimError, RunFailedError
+from motosim.errors import MotosimError, RunFailedError, stop_signals
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -234,6 +234,16 @@ def folder_lock(folder: str | Path) -> Iterator[Path]:
     a second writer of the same folder is refused in one line, and the operating system
     releases the lock however the process ends.
 
+    Parameters
+    ----------
+    folder : str or Path
+        The folder written; its parent must exist and be writable (the lock is beside it).
+
+    Yields
+    ------
+    Path
+        The lock file.
+
     Raises
     ------
     MotosimError
@@ -257,9 +267,11 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
     Parameters
     ----------
     path : str or Path
-        The file. Until ``write`` has returned, a previous file there is left as it was.
+        The file. Until ``write`` has returned, a previous file there is left as it was; a
+        symbolic link is followed (the file it names is replaced, the link kept), and a
+        previous file's permissions are kept.
     write : callable
-        Called with the temporary path (``.NAME.PID.partial`` beside ``path``) to write.
+        Called with the temporary path (``.NAME.PID.partial`` beside the file) to write.
 
     Returns
     -------
@@ -273,10 +285,13 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
         the temporary file is deleted, as it is when ``write`` is interrupted.
     """
     target = Path(path)
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.partial")
+    real = Path(os.path.realpath(target))  # through a link, as writing in place did
+    temporary = real.with_name(f".{real.name}.{os.getpid()}.partial")
     try:
         write(temporary)
-        os.replace(temporary, target)
+        if real.exists():
+            shutil.copymode(real, temporary)  # a private log stays private
+        os.replace(temporary, real)
     except BaseException as err:
         try:
             temporary.unlink(missing_ok=True)
@@ -348,7 +363,7 @@ def terminate_as_interrupt() -> Iterator[StopRequest]:
         if not stop.holding:
             raise KeyboardInterrupt(stop.name)
 
-    stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
+    stops = stop_signals()
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # Ctrl-C, held alike
         stops.append(signal.SIGINT)
     previous = {sig: signal.signal(sig, _raise) for sig in stops}

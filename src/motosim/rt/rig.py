@@ -491,7 +491,9 @@ class VirtualRider:
     offline, from :func:`motosim.sim.build_rig`) looks at the virtual motorcycle's states in
     the newest datagram of the run's state stream (:mod:`motosim.rt.telemetry`); before the
     first one it holds 0 N*m. The scenario's probe (``[rider] probe``, ``world.rider_probe``)
-    is added at the time it is asked for, as offline.
+    is added at the time it is asked for, as offline; the rig asks once per status frame,
+    so at status frames slower than the control rate the probe is held over a frame period
+    where offline it changes every control period.
 
     Parameters
     ----------
@@ -502,8 +504,8 @@ class VirtualRider:
     names : tuple of str
         The signals of the stream's rows.
     rate : float
-        The scenario's control rate [Hz], at which ``world.rider_probe`` is sampled (held
-        after its end).
+        The scenario's control rate [Hz], at which ``world.rider_probe`` is sampled (0 after
+        its end: a rig serving a run longer than the scenario adds no torque there).
     """
 
     _STATES = ("v_y", "psi_dot", "phi_dot", "delta_dot", "phi", "delta", "F_yr", "F_yf")
@@ -532,8 +534,19 @@ class VirtualRider:
         # not on the run's first state row (a stall of the rig's frames at the run's start)
 
     def __call__(self, t: float) -> float:
-        """The rider's torque [N*m] at ``t`` [s] from the rider's start: the path's, from the
-        newest state row, plus the probe's at ``t``."""
+        """The rider's torque at a time of the rig.
+
+        Parameters
+        ----------
+        t : float
+            The time since the rider took the handlebar [s].
+
+        Returns
+        -------
+        float
+            The rider's torque [N*m]: the path's, from the newest state row, plus the probe's
+            at ``t``.
+        """
         if self.receiver.poll():
             row, c, w = self.receiver.row, self._cols, self.world
             for i in range(8):
@@ -545,8 +558,8 @@ class VirtualRider:
             )  # fmt: skip
             self.torque = float(tau)
         probe = self.world.rider_probe
-        k = min(max(math.floor(t * self.rate + 1e-9), 0), probe.size - 1)
-        return self.torque + float(probe[k])
+        k = max(math.floor(t * self.rate + 1e-9), 0)
+        return self.torque + (float(probe[k]) if k < probe.size else 0.0)
 
     def _steer(self, x: float, y: float, psi: float) -> float:
         """The rider's torque [N*m] upright on the path at ``x``, ``y`` [m], heading ``psi``

@@ -198,8 +198,8 @@ class ChirpProfile:
 
     def __post_init__(self) -> None:
         _check("amplitude", self.amplitude)
-        # at most 10 kHz, as a multisine's lines (1e9 Hz was accepted); beyond half the
-        # scenario's plant rate it would alias: refused by Scenario, which knows the rates
+        # at most 10 kHz, as a multisine's lines (1e9 Hz was accepted); beyond half the rate
+        # it is sampled at it would alias: refused by Scenario, which knows the rates
         _check("f0", self.f0, low=0.0, high=1e4, unit="Hz")
         _check("f1", self.f1, low=0.0, high=1e4, unit="Hz")
         _check("start", self.start, unit="s")
@@ -678,22 +678,24 @@ class Scenario:
             )
         if self.seed < 0:
             raise MotosimError(f"seed = {self.seed}; expected an integer >= 0")
-        mc = self.motorcycle
-        for where, profile in (
-            ("[rider] profile", self.rider.profile),
-            ("[rider] probe", self.rider.probe),
-            ("[motorcycle] drive_torque", mc.drive_torque),
-            ("[motorcycle] brake_torque", mc.brake_torque),
-            ("[motorcycle] wind_force", mc.wind_force),
-            ("[motorcycle] side_wind", mc.side_wind),
+        # a torque rider's profile is sampled at the plant rate, the others at the control
+        # rate (motosim.sim.closed_loop.build_rig): beyond half of it a profile aliases
+        mc, rates = self.motorcycle, self.rates
+        for where, profile, rate, key in (
+            ("[rider] profile", self.rider.profile, rates.plant, "plant"),
+            ("[rider] probe", self.rider.probe, rates.control, "control"),
+            ("[motorcycle] drive_torque", mc.drive_torque, rates.control, "control"),
+            ("[motorcycle] brake_torque", mc.brake_torque, rates.control, "control"),
+            ("[motorcycle] wind_force", mc.wind_force, rates.control, "control"),
+            ("[motorcycle] side_wind", mc.side_wind, rates.control, "control"),
         ):
             if isinstance(profile, ChirpProfile | MultisineProfile):
                 top = max(profile.f0, profile.f1)
-                if top > 0.5 * self.rates.plant:
+                if top > 0.5 * rate:
                     raise MotosimError(
                         f"{where}: a {profile.kind} up to {top:g} Hz; expected at most "
-                        f"{0.5 * self.rates.plant:g} Hz, half [rates] plant = "
-                        f"{self.rates.plant:g} Hz (beyond, it is sampled into another frequency)"
+                        f"{0.5 * rate:g} Hz, half [rates] {key} = {rate:g} Hz, the rate it is "
+                        "sampled at (beyond, it is sampled into another frequency)"
                     )
         if self.controller.prediction and self.estimator.name != "walcott_zak":
             raise MotosimError(
