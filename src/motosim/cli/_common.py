@@ -26,6 +26,7 @@ from motosim.params.checks import short_repr
 __all__ = [
     "TYPICAL_OPTIONS",
     "check_figure_path",
+    "check_folder_target",
     "check_output",
     "check_output_folder",
     "check_result_folder",
@@ -295,6 +296,47 @@ def refuse_inside(
         )
 
 
+def check_folder_target(
+    path: str | Path,
+    option: str,
+    expected: str,
+    *,
+    reads: Sequence[tuple[str, str | Path]] = (),
+) -> Path:
+    """Refuse an output folder that cannot be one, before any work: a special file, one that
+    is or holds an input the command reads, a file, or one whose parent does not exist.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder to write.
+    option : str
+        The option that named it, for messages.
+    expected : str
+        What the option expects, with its article ("a result folder").
+    reads : sequence of (str, str or Path), optional
+        The inputs the command reads, ``(what, path)`` (:func:`refuse_inside`).
+
+    Returns
+    -------
+    Path
+        The folder.
+
+    Raises
+    ------
+    MotosimError
+        One line for the first of these that applies.
+    """
+    target = Path(path)
+    refuse_special(target, option, expected)
+    for what, source in reads:
+        refuse_inside(target, source, what, option, "another " + expected.removeprefix("a "))
+    if target.exists() and not target.is_dir():
+        raise MotosimError(f"{option} {target} is a file; expected {expected}")
+    _refuse_missing_parent(target, option)
+    return target
+
+
 def check_result_folder(folder: str | Path, scenario: str | Path, *, overwrite: bool) -> Path:
     """Check a run's result folder (``simulate``, ``run``) before any work is done.
 
@@ -319,12 +361,9 @@ def check_result_folder(folder: str | Path, scenario: str | Path, *, overwrite: 
         If the folder is a special file or a file, is or holds the scenario, its parent does
         not exist, or it holds a complete result and ``overwrite`` is false.
     """
-    target = Path(folder)
-    refuse_special(target, "--out", "a result folder")
-    refuse_inside(target, scenario, "scenario", expected="another result folder")
-    if target.exists() and not target.is_dir():
-        raise MotosimError(f"--out {target} is a file; expected a result folder")
-    _refuse_missing_parent(target, "--out")
+    target = check_folder_target(
+        folder, "--out", "a result folder", reads=(("scenario", scenario),)
+    )
     if not overwrite and target.is_dir():
         from motosim.io.results import is_complete_result  # h5py: only for a folder there
 
@@ -431,13 +470,7 @@ def check_output_folder(
     """
     if not str(path).strip():
         raise MotosimError(f"{option} is empty; expected a folder name")
-    target = Path(path)
-    refuse_special(target, option, "a folder")
-    for what, source in reads:
-        refuse_inside(target, source, what, option, "another folder")
-    if target.exists() and not target.is_dir():
-        raise MotosimError(f"{option} {target} is a file; expected a folder")
-    _refuse_missing_parent(target, option)
+    target = check_folder_target(path, option, "a folder", reads=reads)
     if target.is_dir() and any(target.iterdir()) and not overwrite:
         raise MotosimError(
             f"{option} {target} is not empty; give --overwrite to replace what it holds"

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from motosim.cli._common import check_output, print_json, refuse_special
+from motosim.cli._common import check_folder_target, check_output, print_json
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -120,15 +120,7 @@ def _rerun(args: argparse.Namespace) -> int:
 
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse absurd options before the campaign is planned."""
-    out = Path(args.out)
-    refuse_special(out, "--out", "a result folder")
-    if out.exists() and not out.is_dir():
-        raise MotosimError(f"--out {out} is a file; expected a result folder")
-    if not out.parent.is_dir():
-        raise MotosimError(
-            f"--out {out}: the folder {out.parent} does not exist; expected an existing folder "
-            "(create it first)"
-        )
+    out = check_folder_target(args.out, "--out", "a result folder")
     if args.rerun is None and out.is_dir() and any(out.iterdir()):  # before the base scenario
         from motosim.campaign.results import check_store_folder
 
