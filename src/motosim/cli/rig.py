@@ -9,6 +9,7 @@ from motosim.cli._common import deferred_warnings, print_json, warn_atypical
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
+    check_udp_only_options,
     clock_from_args,
     privileges_from_args,
 )
@@ -75,6 +76,7 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
+    check_udp_only_options(args)  # before the numerical stack is imported
     from motosim.cli.run import _Presses
 
     presses = _Presses()  # Ctrl-C while the rig starts: counted, not lost in a C callback
@@ -138,7 +140,7 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
             None if args.platform_udp == "off" else _platform_address(args.platform_udp),
             codecs=platform_codecs() if args.platform_can else None,
         )
-    link = open_link(args.bus, fast=args.link == "fast")
+    link = open_link(args.bus, fast=args.link != "python-can")
     try:
         rig = VirtualRig(
             inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed)

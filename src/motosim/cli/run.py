@@ -22,6 +22,7 @@ from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
     check_privilege_options,
+    check_udp_only_options,
     clock_from_args,
     privileges_from_args,
 )
@@ -72,7 +73,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--wait",
         choices=("compiled", "python"),
-        default="compiled",
+        default=None,  # compiled; None tells the default from the option given
         help="how a clock-paced loop ends its wait: 'compiled' (default) spins to the "
         "deadline, reads the bus and runs the period in one compiled call (the fast "
         "udp_multicast link, on Linux; Python elsewhere); 'python' spins and reads in Python",
@@ -477,6 +478,7 @@ class _Presses:
 
 def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
+    check_udp_only_options(args)  # before the numerical stack is imported
     presses = _Presses()
     previous = signal.signal(signal.SIGINT, presses)
     try:
@@ -557,7 +559,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
                 send_every=max(1, round(rate / 100.0)),
             )
     warn_atypical("run", "--duration", args.duration)  # once every check has passed
-    link = open_link(args.bus, fast=args.link == "fast")
+    link = open_link(args.bus, fast=args.link != "python-can")
     # the link in use: --link fast is python-can's own on a bus other than udp_multicast
     link_kind = "fast" if isinstance(link, UdpMulticastLink) else "python-can"
     if platform is not None and args.platform_can:
@@ -808,7 +810,7 @@ def _loop(
                 first_timeout=runner.first_timeout, capacity=capacity,
                 received=lambda: runner.status_frames,
             )  # fmt: skip
-        elif args.wait == "compiled" and runner.compile_wait():
+        elif args.wait != "python" and runner.compile_wait():
             # the wait's end, the bus read and the period in one compiled call
             loop = RateLoop(rate, clock, capacity=capacity, woke=runner.woke)
             step = runner.wait_period
