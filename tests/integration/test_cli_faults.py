@@ -241,3 +241,61 @@ def test_a_lane_change_outside_the_riders_speeds_is_refused(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "expected 3 to 60 m/s with the virtual rider" in err
     assert not os.path.exists(tmp_path / "out")
+
+
+def _second_run(argv: list[str]) -> tuple[int, str]:
+    """``motosim argv`` in another process, as a second user starts it: its code and stderr."""
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, timeout=300
+    )
+    return done.returncode, done.stderr
+
+
+def test_simulate_holds_the_folder_until_its_report_is_written(tmp_path: Path) -> None:
+    # the report was written after the lock was released: a concurrent --overwrite of the
+    # same folder could replace the result under the report being built from it
+    import motosim.report
+
+    out = tmp_path / "run"
+    scenario = _long_scenario(tmp_path, 0.2)
+    second = ["simulate", str(scenario), "--out", str(out), "--overwrite", "--no-report"]
+    seen: list[tuple[int, str]] = []
+    real = motosim.report.build_report
+
+    def build_report(folder: Path) -> Path:
+        seen.append(_second_run(second))  # while the first writes its report
+        return real(folder)
+
+    with unittest.mock.patch.object(motosim.report, "build_report", build_report):
+        assert main(["simulate", str(scenario), "--out", str(out)]) == 0
+    [(code, err)] = seen
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"another run (pid {os.getpid()}) is writing this result" in err
+    assert (out / "report.html").is_file() and load_result(out).complete
+    code, err = _second_run(second)  # once the first has ended
+    assert code == 0, err
+
+
+def test_cueing_holds_the_folder_until_its_figures_are_written(tmp_path: Path) -> None:
+    # the same for cueing's figures, written beside its commands
+    import motosim.cli.cueing
+
+    out = tmp_path / "cue"
+    simulated = tmp_path / "run"
+    assert main(["simulate", str(_long_scenario(tmp_path, 1.0)), "--out", str(simulated),
+                 "--no-report"]) == 0  # fmt: skip
+    second = ["cueing", str(simulated), "--out", str(out), "--overwrite"]
+    seen: list[tuple[int, str]] = []
+    real = motosim.cli.cueing.save_figure
+
+    def save_figure(figure: Any, path: str) -> Any:
+        if not seen:
+            seen.append(_second_run(second))  # while the first writes its figures
+        return real(figure, path)
+
+    with unittest.mock.patch.object(motosim.cli.cueing, "save_figure", save_figure):
+        assert main(["cueing", str(simulated), "--out", str(out)]) == 0
+    [(code, err)] = seen
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"another run (pid {os.getpid()}) is writing this result" in err
+    assert (out / "perception.png").is_file() and (out / "commands.png").is_file()

@@ -1,6 +1,7 @@
 """Results survive every stop: SIGTERM, SIGKILL, a second run, a failed overwrite, a full disk."""
 
 import csv
+import fcntl
 import os
 import shutil
 import signal
@@ -340,6 +341,40 @@ def test_folder_lock_refuses_a_second_writer_and_is_released(tmp_path: Path) -> 
     with folder_lock(out):  # released on leaving
         pass
     assert not lock.exists()
+
+
+def test_a_shared_folder_lock_is_joined_by_its_threads_writer_and_held_to_the_end(
+    tmp_path: Path,
+) -> None:
+    # what simulate and cueing hold while they write the result, then its report or figures
+    import threading
+
+    out = tmp_path / "run"
+    refused: list[str] = []
+
+    def other_thread() -> None:
+        try:
+            ResultWriter(out, NAMES, {}, overwrite=True)
+        except MotosimError as err:
+            refused.append(str(err))
+
+    with folder_lock(out, shared=True) as lock:
+        with ResultWriter(out, NAMES, {}) as writer:  # joins: not refused
+            writer.append(np.array([[0.0, 1.0]]))
+        assert lock.exists()  # the writer closed; the folder is still locked
+        thread = threading.Thread(target=other_thread)
+        thread.start()
+        thread.join()
+        assert len(refused) == 1 and "another run" in refused[0]
+        fd = os.open(lock, os.O_RDWR)  # as another process sees it: locked
+        try:
+            with pytest.raises(BlockingIOError):
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        finally:
+            os.close(fd)
+    assert not lock.exists()
+    with folder_lock(out):  # released at the end of the block
+        pass
 
 
 def test_write_whole_writes_through_a_link_and_keeps_the_files_permissions(tmp_path: Path) -> None:

@@ -17,7 +17,9 @@ How a result is never lost or corrupted:
 - **Lock.** While a run writes ``NAME``, it holds an exclusive lock (``flock``) on the file
   ``.NAME.lock`` beside it; a second writer of the same folder, with or without
   ``overwrite``, is refused. The operating system releases the lock when the process ends,
-  however it ends, so a killed run never blocks the next one.
+  however it ends, so a killed run never blocks the next one. A command that writes more
+  into the folder after the result (``simulate``'s report, ``cueing``'s figures) holds the
+  lock until that is written too (:func:`folder_lock` with ``shared``).
 - **Staging.** The run writes into the sibling folder ``NAME.partial``; only
   :meth:`ResultWriter.close` moves it to ``NAME``, replacing a previous result in two renames
   (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
@@ -174,21 +176,40 @@ def is_complete_result(folder: str | Path) -> bool:
         return False
 
 
-class _FolderLock:
-    """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends."""
+_SHARED: dict[str, tuple[int, int, int]] = {}
+"""The locks held by ``folder_lock(..., shared=True)``: lock file -> (descriptor, holding
+thread, holders)."""
+_HELD_GUARD = threading.Lock()
 
-    def __init__(self, folder: Path) -> None:
+
+class _FolderLock:
+    """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends.
+
+    Taken with ``shared``, the thread that holds it may take it again (a
+    :class:`ResultWriter` within ``folder_lock(folder, shared=True)``, which keeps the folder
+    locked until the command's report is written): the holders share it, and the last one
+    releases it. Otherwise, and from another thread or process, a second holder is refused.
+    """
+
+    def __init__(self, folder: Path, *, shared: bool = False) -> None:
         self.path = lock_file(folder)
         self._fd: int | None = None
+        self._key = os.path.join(os.path.realpath(self.path.parent), self.path.name)
+        with _HELD_GUARD:
+            held = _SHARED.get(self._key)
+            if held is not None and held[1] == threading.get_ident():
+                _SHARED[self._key] = (held[0], held[1], held[2] + 1)
+                self._fd = held[0]
+                return
         try:
-            self._acquire(folder)
+            self._acquire(folder, shared)
         except OSError as err:
             raise MotosimError(
                 f"{folder}: cannot create the lock {self.path}: {err.strerror or err}; nothing "
                 "was written"
             ) from None
 
-    def _acquire(self, folder: Path) -> None:
+    def _acquire(self, folder: Path, shared: bool) -> None:
         for _ in range(10):  # retry if a finishing run unlinked the file we opened
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
             try:
@@ -213,21 +234,31 @@ class _FolderLock:
                     os.close(fd)
                     raise
                 self._fd = fd
+                if shared:
+                    with _HELD_GUARD:
+                        _SHARED[self._key] = (fd, threading.get_ident(), 1)
                 return
             os.close(fd)
         raise MotosimError(f"{folder}: could not lock {self.path}; try again")
 
     def release(self) -> None:
-        """Delete the lock file, then release the lock (in that order, so no one races in)."""
+        """Delete the lock file, then release the lock (in that order, so no one races in);
+        a lock taken again is released by the last of its holders."""
         if self._fd is None:
             return
+        with _HELD_GUARD:
+            held = _SHARED.pop(self._key, None)
+            if held is not None and held[2] > 1:
+                _SHARED[self._key] = (held[0], held[1], held[2] - 1)
+                self._fd = None
+                return
         self.path.unlink(missing_ok=True)
         os.close(self._fd)
         self._fd = None
 
 
 @contextmanager
-def folder_lock(folder: str | Path) -> Iterator[Path]:
+def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
     """Hold the lock of a run writing ``folder`` (``.NAME.lock`` beside it) within the block.
 
     The lock :class:`ResultWriter` holds, for writers of other kinds of folder (a campaign's):
@@ -238,6 +269,11 @@ def folder_lock(folder: str | Path) -> Iterator[Path]:
     ----------
     folder : str or Path
         The folder written; its parent must exist and be writable (the lock is beside it).
+    shared : bool
+        Let a :class:`ResultWriter` of ``folder`` opened within the block, in this thread,
+        share the lock instead of being refused: the folder then stays locked after the
+        writer has closed, until the block ends, so that what a command writes beside the
+        result (its report, its figures) is written under the lock too.
 
     Yields
     ------
@@ -254,7 +290,7 @@ def folder_lock(folder: str | Path) -> Iterator[Path]:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise MotosimError(f"cannot create folder {target.parent}: {_reason(err)}") from None
-    lock = _FolderLock(target)
+    lock = _FolderLock(target, shared=shared)
     try:
         yield lock.path
     finally:
