@@ -18,6 +18,7 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.io.results import (
     ResultWriter,
+    _host_tag,
     folder_lock,
     load_result,
     lock_file,
@@ -274,9 +275,62 @@ def test_write_whole_keeps_the_previous_file_when_the_disk_fills(tmp_path: Path)
     with pytest.raises(MotosimError, match="No space left on device; the previous file"):
         write_whole(target, _filling_after(3, written))  # type: ignore[arg-type]
     # the pieces went to a hidden sibling, which is gone; the old file is as it was
-    assert written and written[0] == f".log.csv.{os.getpid()}.partial"
+    assert written and written[0] == f".log.csv.{os.getpid()}.{_host_tag()}.partial"
     assert target.read_text(encoding="utf-8") == "t,theta_h\n0.0,1.0\n"
     assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
+
+
+_KILLED_WRITER = """
+import sys, time
+from pathlib import Path
+from motosim.io.results import write_whole
+
+def write(temporary: Path) -> None:
+    temporary.write_text("half a log", encoding="utf-8")
+    print(temporary.name, flush=True)
+    time.sleep(600)  # killed here, before the rename
+
+write_whole(Path(sys.argv[1]), write)
+"""
+
+
+def _writer_stopped_in_its_write(target: Path) -> tuple[subprocess.Popen[str], str]:
+    """A process writing ``target`` through write_whole, held before the rename; with the
+    name of its temporary file."""
+    child = subprocess.Popen(
+        [sys.executable, "-c", _KILLED_WRITER, str(target)], stdout=subprocess.PIPE, text=True
+    )
+    assert child.stdout is not None
+    name = child.stdout.readline().strip()
+    assert name, "the writer did not start"
+    return child, name
+
+
+def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
+    tmp_path: Path,
+) -> None:
+    # SIGKILL during a write left .NAME.PID.partial beside the file for good
+    target = tmp_path / "log.csv"
+    target.write_text("old", encoding="utf-8")
+    running, live_name = _writer_stopped_in_its_write(target)
+    killed, dead_name = _writer_stopped_in_its_write(target)  # keeps the running one's
+    killed.kill()
+    killed.communicate()
+    try:
+        # a leftover of another machine (a shared folder): its process cannot be looked up
+        other_host = tmp_path / f".log.csv.{killed.pid}.another-host.partial"
+        other_host.write_text("another machine's", encoding="utf-8")
+        unrelated = tmp_path / f".other.csv.{killed.pid}.{_host_tag()}.partial"
+        unrelated.write_text("another file's", encoding="utf-8")
+        assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
+        write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
+        assert target.read_text(encoding="utf-8") == "new"
+        assert not (tmp_path / dead_name).exists()  # its process is gone: removed
+        assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
+        assert other_host.is_file() and unrelated.is_file()
+    finally:
+        running.kill()
+        running.communicate()
 
 
 def test_write_whole_interrupted_keeps_the_previous_file_and_no_temporary(

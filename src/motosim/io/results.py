@@ -48,6 +48,7 @@ import os
 import re
 import shutil
 import signal
+import socket
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -297,6 +298,51 @@ def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
         lock.release()
 
 
+def _host_tag() -> str:
+    """This machine's name as it goes in a temporary file's name: letters, digits, ``-``."""
+    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:32] or "host"
+
+
+def _is_running(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this machine (another user's counts)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _remove_leftovers(real: Path) -> None:
+    """Delete the temporary files of earlier writes of ``real`` whose process has gone.
+
+    Only those written on this machine (its name in theirs) by a process that no longer
+    runs: a killed write's leftover (SIGKILL, a power cut). Another machine's (a shared
+    folder), a running process's, or one that cannot be deleted, is left as it is.
+    """
+    pattern = re.compile(
+        rf"\.{re.escape(real.name)}\.(?P<pid>[0-9]{{1,10}})\.{re.escape(_host_tag())}\.partial"
+    )
+    try:
+        names = [entry.name for entry in os.scandir(real.parent)]
+    except OSError:
+        return
+    for name in names:
+        match = pattern.fullmatch(name)
+        if match is None:
+            continue
+        pid = int(match["pid"])
+        if pid == os.getpid() or _is_running(pid):
+            continue
+        try:
+            (real.parent / name).unlink()
+        except OSError as err:
+            _log.debug("cannot remove the leftover %s: %s", name, err)
+        else:
+            _log.info("removed %s, left by process %d (gone)", name, pid)
+
+
 def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
     """Write a file whole or not at all: through ``write`` into a hidden sibling, then renamed.
 
@@ -307,7 +353,8 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
         symbolic link is followed (the file it names is replaced, the link kept), and a
         previous file's permissions are kept.
     write : callable
-        Called with the temporary path (``.NAME.PID.partial`` beside the file) to write.
+        Called with the temporary path (``.NAME.PID.HOST.partial`` beside the file, HOST this
+        machine's name) to write.
 
     Returns
     -------
@@ -319,10 +366,17 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
     MotosimError
         One line naming the file and the system's reason (a full disk, a read-only folder);
         the temporary file is deleted, as it is when ``write`` is interrupted.
+
+    Notes
+    -----
+    A process killed while it writes (SIGKILL, a power cut) leaves its temporary file. The
+    next write of the same file deletes such leftovers of this machine whose process has
+    gone (before writing: their space is free for it); a running process's are kept.
     """
     target = Path(path)
     real = Path(os.path.realpath(target))  # through a link, as writing in place did
-    temporary = real.with_name(f".{real.name}.{os.getpid()}.partial")
+    _remove_leftovers(real)
+    temporary = real.with_name(f".{real.name}.{os.getpid()}.{_host_tag()}.partial")
     try:
         write(temporary)
         if real.exists():
