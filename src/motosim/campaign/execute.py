@@ -443,7 +443,9 @@ def run_campaign(
     for f in campaign.factors:
         first = plan.runs[0].values[len(kinds)]
         kinds.append(float if f.path.startswith(f"{TRUE_HANDLEBAR}.") else type(first))
-    with folder_lock(out):  # a second instance on the folder is refused, not mixed in
+    # a second instance on the folder is refused, not mixed in; the lock is in the folder,
+    # which is written in place: nothing beside it, whose parent may be read-only
+    with folder_lock(out, inside=True):
         store = ResultStore(
             out,
             fingerprint=plan.fingerprint,
