@@ -299,3 +299,66 @@ def test_cueing_holds_the_folder_until_its_figures_are_written(tmp_path: Path) -
     assert code == 2 and err.count("\n") == 1, err
     assert f"another run (pid {os.getpid()}) is writing this result" in err
     assert (out / "perception.png").is_file() and (out / "commands.png").is_file()
+
+
+def test_a_campaign_stopped_by_a_full_disk_says_so_in_its_manifest(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the manifest said "running" after a full disk stopped the campaign: its last write
+    # failed on the same full disk, and the error was dropped for the one that stopped it.
+    # The disk here is --out itself: it fills up as the second part is written (the series,
+    # another program); a write that takes more than there is fails with ENOSPC, and
+    # deleting a file frees its size
+    import errno
+    import json
+
+    import motosim.campaign.results
+    from motosim.campaign import load_results
+
+    (tmp_path / "base.toml").write_text(
+        '[scenario]\nname = "base"\nduration = 0.2\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 1.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    values = ", ".join(f"{0.8 + 0.01 * k:.2f}" for k in range(40))
+    campaign = tmp_path / "c.toml"
+    campaign.write_text(
+        '[campaign]\nname = "c"\nscenario = "base.toml"\nsampling = "grid"\nseed = 1\n'
+        f'task_seconds = 0.01\n[factors]\n"handlebar.inertia_factor" = [{values}]\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+
+    def used() -> int:
+        return sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
+
+    capacity = [float("inf")]
+    parts = [0]
+    real = motosim.campaign.results.write_whole
+
+    def on_the_disk(path: Path, write: Callable[[Path], object]) -> Path:
+        def write_within(temporary: Path) -> None:
+            if Path(path).name.startswith("part-"):
+                parts[0] += 1
+                if parts[0] == 2:
+                    capacity[0] = used()  # full from here on
+            write(temporary)
+            if used() > capacity[0]:
+                raise OSError(errno.ENOSPC, "No space left on device")
+
+        return real(path, write_within)
+
+    argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
+    with unittest.mock.patch.object(motosim.campaign.results, "write_whole", on_the_disk):
+        code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "No space left on device" in err, err
+    manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    written = load_results(out)  # the parts read back with their own reader
+    assert manifest["status"] == "failed" and "No space left on device" in manifest["error"]
+    assert manifest["written"] == len(written["run_id"]) > 0
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]  # the room freed
+    assert main(argv) == 0  # resumed once there is room: complete, the error gone
+    manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    assert manifest["status"] == "complete" and "error" not in manifest
+    assert manifest["written"] == 40
