@@ -145,6 +145,36 @@ def test_a_campaign_writes_nothing_beside_its_out_folder(tmp_path: Path) -> None
     assert not any(p.name.endswith("lock") for p in out.iterdir())  # released at the end
 
 
+def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path) -> None:
+    # as simulate's: the lock was released before the report was built from the folder
+    import fcntl
+
+    import motosim.report.campaign
+
+    campaign = _small_campaign(tmp_path)
+    out = tmp_path / "out"
+    locked: list[bool] = []
+    real = motosim.report.campaign.build_campaign_report
+
+    def build_campaign_report(folder: Any) -> Any:
+        fd = os.open(out / ".motosim.lock", os.O_RDWR)  # as another instance tries it
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            locked.append(False)
+        except BlockingIOError:
+            locked.append(True)
+        finally:
+            os.close(fd)
+        return real(folder)
+
+    with unittest.mock.patch.object(
+        motosim.report.campaign, "build_campaign_report", build_campaign_report
+    ):
+        assert main(["campaign", str(campaign), "--out", str(out), "--jobs", "1"]) == 0
+    assert locked == [True] and (out / "report.html").is_file()
+    assert not (out / ".motosim.lock").exists()
+
+
 def test_a_campaign_runs_in_a_writable_out_under_a_read_only_parent(tmp_path: Path) -> None:
     campaign = _small_campaign(tmp_path)
     parent = tmp_path / "shared"
