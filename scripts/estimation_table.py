@@ -1,4 +1,4 @@
-"""Regenerate the estimation table of the README (section V.A of the paper, Fig. 9).
+"""Regenerate the estimation table of the identify guide (section V.A of the paper, Fig. 9).
 
     .venv/bin/python scripts/estimation_table.py [--plot FIG.png]
 

@@ -1,4 +1,4 @@
-"""Regenerate the identification accuracy table of the README (issue 11's rig logs).
+"""Regenerate the identification accuracy table of the identify guide (the rig logs).
 
     .venv/bin/python scripts/identification_table.py [--seeds 10]
 

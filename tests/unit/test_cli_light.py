@@ -105,3 +105,26 @@ def test_udp_multicast_options_left_out_pass_silently_with_another_bus() -> None
     )  # fmt: skip
     assert done.returncode == 2
     assert done.stderr == "motosim: error: --spin -1.0; expected microseconds in [0, 1000000)\n"
+
+
+def test_the_columns_help_names_every_unit_the_log_reader_converts() -> None:
+    """``identify --columns`` lists the units of the log's time, angle, current and voltage
+    columns: those :mod:`motosim.io.logs` converts (the identify guide lists the same; the
+    help left out mV)."""
+    import contextlib
+    import io
+    import re
+
+    from motosim.cli.main import main
+    from motosim.io.logs import _UNITS
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        main(["identify", "--help"])
+    listed = re.search(r"\(units ([^)]*)\)", " ".join(out.getvalue().split()))
+    assert listed is not None
+    quantities = ("time", "angle", "current", "voltage")
+    converted = {name for name, (what, _) in _UNITS.items() if what in quantities}
+    assert {unit.lower() for unit in listed.group(1).split(", ")} == {
+        name for name in converted if name.isascii()
+    }

@@ -130,6 +130,26 @@ def test_a_failed_overwrite_keeps_the_previous_result(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
 
 
+def test_a_failed_run_replaces_an_earlier_partial_result(tmp_path: Path) -> None:
+    """Module notes: a stopped run's rows go where one looks when no complete result is
+    there; an earlier stopped run's rows are no result to keep (the real-time guide: DIR.partial
+    only beside a complete result). Seen with motosim run: a second faulted run left its rows in
+    DIR.partial and the first one's in DIR, which motosim report then read."""
+    folder = tmp_path / "run"
+
+    def failed_run(number: int, rows: int) -> None:
+        with ResultWriter(folder, NAMES, {"run": number}) as w:
+            w.append(_block(0, rows))
+            raise RuntimeError("safety fault")
+
+    for number, rows in ((1, 4), (2, 6)):
+        with pytest.raises(RuntimeError, match="safety fault"):
+            failed_run(number, rows)
+    kept = load_result(folder)
+    assert not kept.complete and kept.metadata == {"run": 2} and kept.t.size == 6
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+
 def test_a_folder_of_other_files_is_refused(tmp_path: Path) -> None:
     (tmp_path / "notes.txt").write_text("mine")
     with pytest.raises(MotosimError, match="holds files that are not a motosim result"):

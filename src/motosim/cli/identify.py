@@ -59,7 +59,7 @@ def register(sub: Any) -> None:
         metavar="MAP",
         help=(
             "the log's columns for motosim's signals, with units: e.g. "
-            "t=time:ms,theta_h=angle_deg:deg,i_m=cur:A (units s, ms, us, rad, deg, A, mA, V)"
+            "t=time:ms,theta_h=angle_deg:deg,i_m=cur:A (units s, ms, us, rad, deg, A, mA, V, mV)"
         ),
     )
     parser.add_argument("--method", choices=METHODS, default="output_error")

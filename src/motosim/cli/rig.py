@@ -15,7 +15,7 @@ from motosim.cli.rtcheck import (
 )
 from motosim.errors import MotosimError
 
-__all__ = ["register"]
+__all__ = ["platform_line", "register"]
 
 
 def register(sub: Any) -> None:
@@ -218,4 +218,31 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
             f"({rig.bad_commands} bad); wake-up p99 {stats.wake_p99 * 1e6:.0f} us, "
             f"missed {stats.missed}"
         )
+        platform = summary["platform"]
+        if isinstance(platform, dict):
+            print(platform_line(platform))
     return 0
+
+
+def platform_line(platform: dict[str, Any]) -> str:
+    """The platform twin's line of the rig's summary: commands taken, losses, angles reached.
+
+    Parameters
+    ----------
+    platform : dict of str to Any
+        The summary's ``platform`` entry: ``datagrams``, ``can``, ``lost``, ``late``, ``bad``,
+        ``watchdog_timeouts`` and ``achieved_deg`` (roll, pitch, yaw [deg]).
+
+    Returns
+    -------
+    str
+        One line, angles in degrees.
+    """
+    roll, pitch, yaw = platform["achieved_deg"]
+    medium = "PF_COMMAND frames" if platform["can"] else "datagrams"
+    return (
+        f"platform: {platform['datagrams']} {medium} taken ({platform['lost']} lost, "
+        f"{platform['late']} late, {platform['bad']} bad), "
+        f"{platform['watchdog_timeouts']} watchdog timeouts; at the end roll {roll:.2f}, "
+        f"pitch {pitch:.2f}, yaw {yaw:.2f} deg"
+    )

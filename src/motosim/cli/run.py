@@ -692,7 +692,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             print(
                 f"  {100.0 * stats.miss_ratio:.1f} % of the deadlines were missed: the virtual "
                 "motorcycle fell behind the wall clock; check this PC with motosim rt-check "
-                "and give --fifo 80 --cpu 1 --mlock (see the README's lab set-up)"
+                "and give --fifo 80 --cpu 1 --mlock (the real-time guide: Setting up the lab PC)"
             )
     reason = runner.left_range
     if counters.fault == "NONE" and reason is not None:

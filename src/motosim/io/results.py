@@ -25,9 +25,9 @@ How a result is never lost or corrupted:
 - **Staging.** The run writes into the sibling folder ``NAME.partial``; only
   :meth:`ResultWriter.close` moves it to ``NAME``, replacing a previous result in two renames
   (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
-  complete result untouched; with no previous result its rows are moved to ``NAME`` marked
-  partial (``complete`` False, ``result.partial.csv``), and a rerun replaces them without
-  ``overwrite``.
+  complete result untouched; with no previous result, or an earlier stopped run's, its rows
+  are moved to ``NAME`` marked partial (``complete`` False, ``result.partial.csv``), and a
+  rerun replaces them without ``overwrite``.
 - **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
   them. Ctrl-C (SIGINT) and, inside ``with ResultWriter(...)``, SIGTERM close both files,
   readable, marked partial. The HDF5 file is written without SWMR, so it carries no "open
@@ -778,8 +778,10 @@ class ResultWriter:
         except (OSError, RuntimeError) as err:
             _log.warning("closing %s: %s", self._h5_path, _first_line(err))
         try:
-            if not self._folder.exists() or not any(self._folder.iterdir()):
-                self._publish()  # no previous result: the partial one goes where one looks
+            if not is_complete_result(self._folder):
+                # no previous result, or an earlier stopped run's: the partial one goes where
+                # one looks
+                self._publish()
                 self._location = self._folder
         except OSError as err:
             _log.warning("keeping %s: %s", self._staging, err)
@@ -804,6 +806,7 @@ class ResultWriter:
             elif not self._closed:
                 # a run that failed or was interrupted says where its rows are itself
                 expected = issubclass(exc_type, RunFailedError | KeyboardInterrupt)
+                self._abort()
                 _log.log(
                     logging.INFO if expected else logging.WARNING,
                     "run interrupted by %s: %d rows kept in %s, marked partial",
@@ -811,7 +814,6 @@ class ResultWriter:
                     self._rows,
                     self._location,
                 )
-                self._abort()
         finally:
             if self._signals is not None:
                 self._signals.__exit__(None, None, None)

@@ -1,8 +1,8 @@
 """Real-time privileges of the loop's process, each applied or refused without failing.
 
 A Python loop on a general-purpose kernel is soft real time at best; what makes its timing
-usable is the scheduling policy and a quiet memory system (see the README, "Running in real
-time"):
+usable is the scheduling policy and a quiet memory system (see the real-time guide, "Setting
+up the lab PC"):
 
 - ``SCHED_FIFO`` priority (:func:`os.sched_setscheduler`): the loop preempts every normal
   process; needs root, ``CAP_SYS_NICE`` or an ``ulimit -r`` (RLIMIT_RTPRIO) at least the
