@@ -241,3 +241,124 @@ def test_a_lane_change_outside_the_riders_speeds_is_refused(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "expected 3 to 60 m/s with the virtual rider" in err
     assert not os.path.exists(tmp_path / "out")
+
+
+def _second_run(argv: list[str]) -> tuple[int, str]:
+    """``motosim argv`` in another process, as a second user starts it: its code and stderr."""
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, timeout=300
+    )
+    return done.returncode, done.stderr
+
+
+def test_simulate_holds_the_folder_until_its_report_is_written(tmp_path: Path) -> None:
+    # the report was written after the lock was released: a concurrent --overwrite of the
+    # same folder could replace the result under the report being built from it
+    import motosim.report
+
+    out = tmp_path / "run"
+    scenario = _long_scenario(tmp_path, 0.2)
+    second = ["simulate", str(scenario), "--out", str(out), "--overwrite", "--no-report"]
+    seen: list[tuple[int, str]] = []
+    real = motosim.report.build_report
+
+    def build_report(folder: Path) -> Path:
+        seen.append(_second_run(second))  # while the first writes its report
+        return real(folder)
+
+    with unittest.mock.patch.object(motosim.report, "build_report", build_report):
+        assert main(["simulate", str(scenario), "--out", str(out)]) == 0
+    [(code, err)] = seen
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"another run (pid {os.getpid()}) is writing this result" in err
+    assert (out / "report.html").is_file() and load_result(out).complete
+    code, err = _second_run(second)  # once the first has ended
+    assert code == 0, err
+
+
+def test_cueing_holds_the_folder_until_its_figures_are_written(tmp_path: Path) -> None:
+    # the same for cueing's figures, written beside its commands
+    import motosim.cli.cueing
+
+    out = tmp_path / "cue"
+    simulated = tmp_path / "run"
+    assert main(["simulate", str(_long_scenario(tmp_path, 1.0)), "--out", str(simulated),
+                 "--no-report"]) == 0  # fmt: skip
+    second = ["cueing", str(simulated), "--out", str(out), "--overwrite"]
+    seen: list[tuple[int, str]] = []
+    real = motosim.cli.cueing.save_figure
+
+    def save_figure(figure: Any, path: str) -> Any:
+        if not seen:
+            seen.append(_second_run(second))  # while the first writes its figures
+        return real(figure, path)
+
+    with unittest.mock.patch.object(motosim.cli.cueing, "save_figure", save_figure):
+        assert main(["cueing", str(simulated), "--out", str(out)]) == 0
+    [(code, err)] = seen
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"another run (pid {os.getpid()}) is writing this result" in err
+    assert (out / "perception.png").is_file() and (out / "commands.png").is_file()
+
+
+def test_a_campaign_stopped_by_a_full_disk_says_so_in_its_manifest(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the manifest said "running" after a full disk stopped the campaign: its last write
+    # failed on the same full disk, and the error was dropped for the one that stopped it.
+    # The disk here is --out itself: it fills up as the second part is written (the series,
+    # another program); a write that takes more than there is fails with ENOSPC, and
+    # deleting a file frees its size
+    import errno
+    import json
+
+    import motosim.campaign.results
+    from motosim.campaign import load_results
+
+    (tmp_path / "base.toml").write_text(
+        '[scenario]\nname = "base"\nduration = 0.2\n[rider]\nkind = "torque"\n'
+        'profile = { kind = "constant", value = 1.0 }\n[controller]\nkind = "paper"\n',
+        encoding="utf-8",
+    )
+    values = ", ".join(f"{0.8 + 0.01 * k:.2f}" for k in range(40))
+    campaign = tmp_path / "c.toml"
+    campaign.write_text(
+        '[campaign]\nname = "c"\nscenario = "base.toml"\nsampling = "grid"\nseed = 1\n'
+        f'task_seconds = 0.01\n[factors]\n"handlebar.inertia_factor" = [{values}]\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+
+    def used() -> int:
+        return sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
+
+    capacity = [float("inf")]
+    parts = [0]
+    real = motosim.campaign.results.write_whole
+
+    def on_the_disk(path: Path, write: Callable[[Path], object]) -> Path:
+        def write_within(temporary: Path) -> None:
+            if Path(path).name.startswith("part-"):
+                parts[0] += 1
+                if parts[0] == 2:
+                    capacity[0] = used()  # full from here on
+            write(temporary)
+            if used() > capacity[0]:
+                raise OSError(errno.ENOSPC, "No space left on device")
+
+        return real(path, write_within)
+
+    argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
+    with unittest.mock.patch.object(motosim.campaign.results, "write_whole", on_the_disk):
+        code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "No space left on device" in err, err
+    manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    written = load_results(out)  # the parts read back with their own reader
+    assert manifest["status"] == "failed" and "No space left on device" in manifest["error"]
+    assert manifest["written"] == len(written["run_id"]) > 0
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]  # the room freed
+    assert main(argv) == 0  # resumed once there is room: complete, the error gone
+    manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    assert manifest["status"] == "complete" and "error" not in manifest
+    assert manifest["written"] == 40

@@ -56,6 +56,41 @@ def test_excite_drives_the_voltage_its_options_give(
     assert abs(int(np.count_nonzero(np.diff(signs))) - crossings) <= 1
 
 
+@pytest.mark.parametrize(
+    ("options", "settings"),
+    [
+        (["--signal", "chirp", "--f0", "0.5", "--f1", "5", "--amplitude", "6"],
+         {"amplitude": 6.0, "f0": 0.5, "f1": 5.0}),
+        (["--signal", "square", "--frequency", "2", "--amplitude", "1.5"],
+         {"amplitude": 1.5, "frequency": 2.0}),
+    ],
+)  # fmt: skip
+def test_excite_json_records_the_excitations_settings(
+    tmp_path: Path, options: list[str], settings: dict[str, float]
+) -> None:
+    # the JSON said the signal's kind and rate only: not its amplitude and frequencies
+    import subprocess
+
+    from motosim.io import read_log
+
+    out = tmp_path / "run.csv"
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", "excite", *options, "--duration", "10", "--seed", "3",
+         "--json", "--out", str(out)],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert {k: summary[k] for k in settings} == settings
+    assert summary["duration"] == 10.0 and summary["seed"] == 3
+    other = {"f0", "f1"} if "frequency" in settings else {"frequency"}
+    assert not other & summary.keys()  # the other signal's frequencies are not its settings
+    units = summary["units"]
+    assert units["amplitude"] == "V" and all(units[k] == "Hz" for k in settings if k[0] == "f")
+    u = read_log(out, required=("u",))["u"]  # the log read back: the amplitude driven
+    assert float(np.max(np.abs(u))) == pytest.approx(summary["amplitude"], rel=1e-3)
+
+
 def test_identify_recovers_table1_and_writes_a_usable_file(
     capsys: pytest.CaptureFixture[str], runs: Path
 ) -> None:

@@ -12,7 +12,9 @@ import signal
 import subprocess
 import sys
 import time
+import unittest.mock
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -104,27 +106,107 @@ def test_a_hangup_stops_a_command_unless_started_with_nohup(ignored: bool) -> No
         assert done.returncode != 0 and "KeyboardInterrupt" in done.stderr, done
 
 
-def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    (tmp_path / "base.toml").write_text(
+def _small_campaign(folder: Path) -> Path:
+    (folder / "base.toml").write_text(
         '[scenario]\nname = "base"\nduration = 0.2\n[rider]\nkind = "torque"\n'
         'profile = { kind = "constant", value = 1.0 }\n[controller]\nkind = "paper"\n',
         encoding="utf-8",
     )
-    campaign = tmp_path / "c.toml"
+    campaign = folder / "c.toml"
     campaign.write_text(
         '[campaign]\nname = "c"\nscenario = "base.toml"\nsampling = "grid"\nseed = 1\n'
         '[factors]\n"handlebar.inertia_factor" = [0.9, 1.1]\n',
         encoding="utf-8",
     )
+    return campaign
+
+
+def test_a_campaign_writes_nothing_beside_its_out_folder(tmp_path: Path) -> None:
+    # its lock was .out.lock beside --out: a read-only parent was refused although --out was
+    # writable. The parent seen while the campaign runs, from another process's view
+    import motosim.campaign.execute
+
+    campaign = _small_campaign(tmp_path)
+    parent = tmp_path / "shared"
+    parent.mkdir()
+    out = parent / "out"
+    out.mkdir()
+    seen: list[list[str]] = []
+    real = motosim.campaign.execute._fill
+
+    def fill(*args: Any) -> Any:
+        seen.append(sorted(p.name for p in parent.iterdir()))
+        return real(*args)
+
+    with unittest.mock.patch.object(motosim.campaign.execute, "_fill", fill):
+        code = main(["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"])
+    assert code == 0
+    assert seen == [["out"]]  # while it ran: nothing beside --out
+    assert not any(p.name.endswith("lock") for p in out.iterdir())  # released at the end
+
+
+def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path) -> None:
+    # as simulate's: the lock was released before the report was built from the folder
+    import fcntl
+
+    import motosim.report.campaign
+
+    campaign = _small_campaign(tmp_path)
+    out = tmp_path / "out"
+    locked: list[bool] = []
+    real = motosim.report.campaign.build_campaign_report
+
+    def build_campaign_report(folder: Any) -> Any:
+        fd = os.open(out / ".motosim.lock", os.O_RDWR)  # as another instance tries it
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            locked.append(False)
+        except BlockingIOError:
+            locked.append(True)
+        finally:
+            os.close(fd)
+        return real(folder)
+
+    with unittest.mock.patch.object(
+        motosim.report.campaign, "build_campaign_report", build_campaign_report
+    ):
+        assert main(["campaign", str(campaign), "--out", str(out), "--jobs", "1"]) == 0
+    assert locked == [True] and (out / "report.html").is_file()
+    assert not (out / ".motosim.lock").exists()
+
+
+def test_a_campaign_runs_in_a_writable_out_under_a_read_only_parent(tmp_path: Path) -> None:
+    campaign = _small_campaign(tmp_path)
+    parent = tmp_path / "shared"
+    out = parent / "out"
+    out.mkdir(parents=True)
+    parent.chmod(0o555)
+    try:
+        if os.access(parent, os.W_OK):
+            pytest.skip("running as a user who writes anywhere (root)")
+        argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
+        done = subprocess.run(
+            [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
+        )
+        assert done.returncode == 0, done.stderr
+        assert (out / "manifest.json").is_file()
+    finally:
+        parent.chmod(0o755)
+
+
+def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    campaign = _small_campaign(tmp_path)
     out = tmp_path / "out"
     argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
-    with folder_lock(out):  # another instance, running or resuming the campaign
+    with folder_lock(out, inside=True):  # another instance, running or resuming the campaign
         code = main(argv)
+        # the other instance made --out for its lock; this one wrote nothing in it
+        assert [p.name for p in out.iterdir()] == [".motosim.lock"]
     err = capsys.readouterr().err
     # was: both ran every run into the same parts and manifest (same temporary names)
     assert code == 2 and err.count("\n") == 1, err
     assert f"another run (pid {os.getpid()}) is writing this result" in err
-    assert not out.exists()
+    assert not out.exists()  # the other instance's folder, empty, went with its lock
     assert main(argv) == 0  # once it has ended

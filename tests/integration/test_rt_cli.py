@@ -153,6 +153,38 @@ def test_rig_keeps_a_status_latency_that_run_takes_paced_by_the_bus(
     assert code == 0 and json.loads(out)["commands"] == 0, err
 
 
+@pytest.mark.parametrize("command", ["run", "rig"])
+def test_the_platform_file_and_address_are_parsed_once(
+    command: str, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # check_rt_options read the platform file and the address, then run and rig read them
+    # again: the values it checked are the ones used
+    import unittest.mock
+
+    import motosim.cueing
+    import motosim.rt.telemetry
+
+    path = tmp_path / "s.toml"
+    path.write_text(SCENARIO, encoding="utf-8")
+    address = f"127.0.0.1:{free_udp_port()}"
+    argv = {
+        "run": ["run", str(path), "--out", str(tmp_path / "o"), "--no-report", "--telemetry",
+                "off"],
+        "rig": ["rig", str(path)],
+    }[command] + ["--bus", "virtual", "--duration", "0.05", "--platform-udp", address]  # fmt: skip
+    loads = unittest.mock.Mock(wraps=motosim.cueing.load_platform)
+    parses = unittest.mock.Mock(wraps=motosim.rt.telemetry.parse_address)
+    with (
+        unittest.mock.patch.object(motosim.cueing, "load_platform", loads),
+        unittest.mock.patch.object(motosim.rt.telemetry, "parse_address", parses),
+    ):
+        code = main(argv)
+    err = capsys.readouterr().err
+    assert code in (0, 3), err  # run: no drive on the bus, the watchdog's fault (exit 3)
+    parsed = [call.args[0] for call in parses.call_args_list]  # and the rig's --telemetry
+    assert loads.call_count == 1 and address in parsed and len(set(parsed)) == len(parsed)
+
+
 def test_run_refuses_a_view_port_out_of_range(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:

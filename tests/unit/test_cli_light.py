@@ -70,6 +70,43 @@ def test_choices_written_out_in_the_commands_equal_their_sources() -> None:
     assert identify.DRIVES == DRIVES
 
 
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["run", "s.toml", "--out", "o", "--bus", "virtual", "--link", "fast"], "--link fast"),
+        (["run", "s.toml", "--out", "o", "--bus", "socketcan:can0", "--wait", "python"],
+         "--wait python"),
+        (["rig", "s.toml", "--bus", "virtual", "--link", "python-can"], "--link python-can"),
+    ],
+)  # fmt: skip
+def test_udp_multicast_options_on_another_bus_refused_before_the_work(
+    argv: list[str], option: str
+) -> None:
+    # --link and --wait choose how a udp_multicast bus is read; with another bus they were
+    # ignored without a word. The command run as a user runs it: one line, exit 2, and the
+    # numerical stack not imported (the scenario file does not even exist)
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
+    )
+    bus = argv[argv.index("--bus") + 1]
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == (
+        f"motosim: error: {option} with --bus {bus!r}; {option.split()[0]} applies only to a "
+        "udp_multicast bus: leave it out with this bus\n"
+    )
+    assert _codes_and_heavy(argv) == "[2] []"
+
+
+def test_udp_multicast_options_left_out_pass_silently_with_another_bus() -> None:
+    # their defaults are not "given": the refusal that comes is the next check's (--spin)
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", "rig", "s.toml", "--bus", "virtual", "--spin", "-1"],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr == "motosim: error: --spin -1.0; expected microseconds in [0, 1000000)\n"
+
+
 def test_the_columns_help_names_every_unit_the_log_reader_converts() -> None:
     """``identify --columns`` lists the units of the log's time, angle, current and voltage
     columns: those :mod:`motosim.io.logs` converts (the identify guide lists the same; the

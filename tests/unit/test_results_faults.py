@@ -1,6 +1,7 @@
 """Results survive every stop: SIGTERM, SIGKILL, a second run, a failed overwrite, a full disk."""
 
 import csv
+import fcntl
 import os
 import shutil
 import signal
@@ -17,6 +18,7 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.io.results import (
     ResultWriter,
+    _host_tag,
     folder_lock,
     load_result,
     lock_file,
@@ -293,9 +295,62 @@ def test_write_whole_keeps_the_previous_file_when_the_disk_fills(tmp_path: Path)
     with pytest.raises(MotosimError, match="No space left on device; the previous file"):
         write_whole(target, _filling_after(3, written))  # type: ignore[arg-type]
     # the pieces went to a hidden sibling, which is gone; the old file is as it was
-    assert written and written[0] == f".log.csv.{os.getpid()}.partial"
+    assert written and written[0] == f".log.csv.{os.getpid()}.{_host_tag()}.partial"
     assert target.read_text(encoding="utf-8") == "t,theta_h\n0.0,1.0\n"
     assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
+
+
+_KILLED_WRITER = """
+import sys, time
+from pathlib import Path
+from motosim.io.results import write_whole
+
+def write(temporary: Path) -> None:
+    temporary.write_text("half a log", encoding="utf-8")
+    print(temporary.name, flush=True)
+    time.sleep(600)  # killed here, before the rename
+
+write_whole(Path(sys.argv[1]), write)
+"""
+
+
+def _writer_stopped_in_its_write(target: Path) -> tuple[subprocess.Popen[str], str]:
+    """A process writing ``target`` through write_whole, held before the rename; with the
+    name of its temporary file."""
+    child = subprocess.Popen(
+        [sys.executable, "-c", _KILLED_WRITER, str(target)], stdout=subprocess.PIPE, text=True
+    )
+    assert child.stdout is not None
+    name = child.stdout.readline().strip()
+    assert name, "the writer did not start"
+    return child, name
+
+
+def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
+    tmp_path: Path,
+) -> None:
+    # SIGKILL during a write left .NAME.PID.partial beside the file for good
+    target = tmp_path / "log.csv"
+    target.write_text("old", encoding="utf-8")
+    running, live_name = _writer_stopped_in_its_write(target)
+    killed, dead_name = _writer_stopped_in_its_write(target)  # keeps the running one's
+    killed.kill()
+    killed.communicate()
+    try:
+        # a leftover of another machine (a shared folder): its process cannot be looked up
+        other_host = tmp_path / f".log.csv.{killed.pid}.another-host.partial"
+        other_host.write_text("another machine's", encoding="utf-8")
+        unrelated = tmp_path / f".other.csv.{killed.pid}.{_host_tag()}.partial"
+        unrelated.write_text("another file's", encoding="utf-8")
+        assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
+        write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
+        assert target.read_text(encoding="utf-8") == "new"
+        assert not (tmp_path / dead_name).exists()  # its process is gone: removed
+        assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
+        assert other_host.is_file() and unrelated.is_file()
+    finally:
+        running.kill()
+        running.communicate()
 
 
 def test_write_whole_interrupted_keeps_the_previous_file_and_no_temporary(
@@ -360,6 +415,40 @@ def test_folder_lock_refuses_a_second_writer_and_is_released(tmp_path: Path) -> 
     with folder_lock(out):  # released on leaving
         pass
     assert not lock.exists()
+
+
+def test_a_shared_folder_lock_is_joined_by_its_threads_writer_and_held_to_the_end(
+    tmp_path: Path,
+) -> None:
+    # what simulate and cueing hold while they write the result, then its report or figures
+    import threading
+
+    out = tmp_path / "run"
+    refused: list[str] = []
+
+    def other_thread() -> None:
+        try:
+            ResultWriter(out, NAMES, {}, overwrite=True)
+        except MotosimError as err:
+            refused.append(str(err))
+
+    with folder_lock(out, shared=True) as lock:
+        with ResultWriter(out, NAMES, {}) as writer:  # joins: not refused
+            writer.append(np.array([[0.0, 1.0]]))
+        assert lock.exists()  # the writer closed; the folder is still locked
+        thread = threading.Thread(target=other_thread)
+        thread.start()
+        thread.join()
+        assert len(refused) == 1 and "another run" in refused[0]
+        fd = os.open(lock, os.O_RDWR)  # as another process sees it: locked
+        try:
+            with pytest.raises(BlockingIOError):
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        finally:
+            os.close(fd)
+    assert not lock.exists()
+    with folder_lock(out):  # released at the end of the block
+        pass
 
 
 def test_write_whole_writes_through_a_link_and_keeps_the_files_permissions(tmp_path: Path) -> None:

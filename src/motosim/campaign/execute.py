@@ -21,6 +21,7 @@ a run whose row is in a part has its series too.
 
 import dataclasses
 import importlib
+import json
 import math
 import os
 import time
@@ -190,6 +191,10 @@ def design_for(plan: Plan, key: str) -> Design:
         true_handlebars=plan.true_handlebars,
     )
 
+
+_MANIFEST_MARGIN = 16_384
+"""Bytes set aside beyond the first manifest for its last write (the last call's figures,
+the error) [bytes]."""
 
 _NEEDS = {
     "rms_tau_r_error": ("tau_r_hat", "tau_r"),
@@ -443,7 +448,9 @@ def run_campaign(
     for f in campaign.factors:
         first = plan.runs[0].values[len(kinds)]
         kinds.append(float if f.path.startswith(f"{TRUE_HANDLEBAR}.") else type(first))
-    with folder_lock(out):  # a second instance on the folder is refused, not mixed in
+    # a second instance on the folder is refused, not mixed in; the lock is in the folder,
+    # which is written in place: nothing beside it, whose parent may be read-only
+    with folder_lock(out, inside=True):
         store = ResultStore(
             out,
             fingerprint=plan.fingerprint,
@@ -488,22 +495,28 @@ def _fill(
         "status": "running",
         "written": skipped,
     }
-    store.write_manifest(manifest)
+    # disk set aside for the manifest's last write, freed just before it: a campaign stopped
+    # by a full disk still says so (else its manifest said "running")
+    store.reserve_space(len(json.dumps(manifest, indent=2, default=str)) + _MANIFEST_MARGIN)
+    try:
+        store.write_manifest(manifest)
+    except BaseException:
+        store.release_space()
+        raise
     design_time = time.perf_counter() - start
     done, failed, busy, compute, cpu = skipped, 0, 0.0, 0.0, 0.0
-    if on_progress is not None:
-        on_progress(done, len(plan.runs), failed)
     run_start = time.perf_counter()
-    if not tasks:
-        results: Iterator[tuple[dict[str, list[Any]], float, float]] = iter(())
-    elif workers == 1 and chosen == "joblib":
-        results = _serial(tasks)
-    elif chosen == "joblib":
-        results = _joblib(tasks, workers)
-    else:
-        results = _dask(tasks, workers, scheduler)
+    results: Iterator[tuple[dict[str, list[Any]], float, float]] = iter(())
     status = "interrupted"
     try:
+        if on_progress is not None:
+            on_progress(done, len(plan.runs), failed)
+        if tasks and workers == 1 and chosen == "joblib":
+            results = _serial(tasks)
+        elif tasks and chosen == "joblib":
+            results = _joblib(tasks, workers)
+        elif tasks:
+            results = _dask(tasks, workers, scheduler)
         for columns, seconds, cpu_seconds in results:
             store.write_part(columns)
             busy += seconds
@@ -514,7 +527,10 @@ def _fill(
             if on_progress is not None:
                 on_progress(done, len(plan.runs), failed)
         status = "complete"
-    except BaseException:
+    except BaseException as err:
+        if not isinstance(err, KeyboardInterrupt | SystemExit):  # a full disk, a worker lost
+            status = "failed"
+            manifest["error"] = (str(err).strip().splitlines() or [type(err).__name__])[0]
         with warnings.catch_warnings():  # joblib's note that it cancelled the other tasks
             warnings.filterwarnings("ignore", ".*tasks which were still being processed")
             close = getattr(results, "close", None)
@@ -547,6 +563,7 @@ def _fill(
             written=len(store.done & {r.run_id for r in plan.runs}),
             last_call=dataclasses.asdict(summary),
         )
+        store.release_space()  # the room for this write on a full disk
         try:
             store.write_manifest(manifest)
         except MotosimError:

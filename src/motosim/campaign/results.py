@@ -11,6 +11,7 @@ campaign leaves only whole parts (a full disk is one line naming the part);
 package version), how far it got and how long it took.
 """
 
+import errno
 import hashlib
 import json
 import os
@@ -38,6 +39,8 @@ __all__ = [
 
 MANIFEST = "manifest.json"
 """File name of the manifest in a result folder."""
+RESERVE = ".motosim.reserve"
+"""Disk space set aside while a campaign runs, for its manifest's last write."""
 PARTS = "parts"
 """Folder of the Parquet parts in a result folder."""
 
@@ -212,6 +215,47 @@ class ResultStore:
         write_whole(path, lambda hidden: pq.write_table(table, hidden))
         self.done.update(ids)
         return path
+
+    def reserve_space(self, nbytes: int) -> None:
+        """Set aside ``nbytes`` of disk in the folder (``.motosim.reserve``) for a last write.
+
+        A campaign stopped by a full disk frees it (:meth:`release_space`) to say in its
+        manifest how it ended. Allocated, not only sized (``posix_fallocate``; zeros written
+        where the file system cannot allocate).
+
+        Raises
+        ------
+        MotosimError
+            If the disk cannot give it (naming the folder and the system's reason).
+        """
+        path = self.folder / RESERVE
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            try:
+                try:
+                    os.posix_fallocate(fd, 0, nbytes)
+                except OSError as err:
+                    if err.errno not in (errno.EOPNOTSUPP, errno.EINVAL, errno.ENOSYS):
+                        raise
+                    os.write(fd, bytes(nbytes))
+            finally:
+                os.close(fd)
+        except OSError as err:
+            try:
+                path.unlink(missing_ok=True)
+            except OSError:
+                pass
+            raise MotosimError(
+                f"{self.folder}: cannot set aside {nbytes / 1000:.0f} kB for the campaign's "
+                f"manifest: {err.strerror or err}; no run was started"
+            ) from None
+
+    def release_space(self) -> None:
+        """Delete the space :meth:`reserve_space` set aside (nothing if there is none)."""
+        try:
+            (self.folder / RESERVE).unlink(missing_ok=True)
+        except OSError:
+            pass
 
     def write_manifest(self, payload: Mapping[str, Any]) -> Path:
         """Write ``manifest.json`` (atomically) with the package version added."""

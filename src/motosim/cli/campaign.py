@@ -168,30 +168,34 @@ def run(args: argparse.Namespace) -> int:
             bar.set_postfix_str(f"{failed} failed", refresh=False)
             bar.refresh()
 
-    try:
-        summary = run_campaign(
-            campaign,
-            args.out,
-            backend=args.backend,
-            scheduler=args.scheduler,
-            jobs=args.jobs,
-            on_progress=progress,
-        )
-    except KeyboardInterrupt:
-        print(
-            f"motosim: interrupted; the runs written are in {args.out}: run the same command "
-            "to resume",
-            file=sys.stderr,
-        )
-        return 130
-    finally:
-        if bar is not None:
-            bar.close()
-    report = None
-    if args.report:
-        from motosim.report.campaign import build_campaign_report
+    from motosim.io.results import folder_lock
 
-        report = build_campaign_report(args.out)
+    # the folder stays locked until its report is written (run_campaign's lock joins this one)
+    with folder_lock(args.out, shared=True, inside=True):
+        try:
+            summary = run_campaign(
+                campaign,
+                args.out,
+                backend=args.backend,
+                scheduler=args.scheduler,
+                jobs=args.jobs,
+                on_progress=progress,
+            )
+        except KeyboardInterrupt:
+            print(
+                f"motosim: interrupted; the runs written are in {args.out}: run the same command "
+                "to resume",
+                file=sys.stderr,
+            )
+            return 130
+        finally:
+            if bar is not None:
+                bar.close()
+        report = None
+        if args.report:
+            from motosim.report.campaign import build_campaign_report
+
+            report = build_campaign_report(args.out)
     if args.json:
         import dataclasses
 

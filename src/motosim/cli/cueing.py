@@ -130,21 +130,25 @@ def run(args: argparse.Namespace) -> int:
         "platform": config,
         "vestibular": model,
     }
-    _write(outcome, folder, metadata, args.overwrite)
+    from motosim.io.results import folder_lock
     from motosim.plotting.cueing import plot_commands, plot_perception
 
     scenario = result.metadata.get("scenario")
     name = str(scenario.get("name")) if isinstance(scenario, dict) else Path(args.result).name
     title = f"{name}: {args.algorithm} on {config.platform.name}"
-    save_figure(
-        plot_perception(outcome, thresholds=model.thresholds, title=title),
-        str(folder / "perception.png"),
-    )
     limits = tuple(axis.angle for axis in config.platform.axes)
-    save_figure(
-        plot_commands(outcome, limits=(limits[0], limits[1], limits[2]), title=title),
-        str(folder / "commands.png"),
-    )
+    # locked until the figures are written: a concurrent --overwrite of the folder is
+    # refused until then, not let in between the commands and their figures
+    with folder_lock(folder, shared=True):
+        _write(outcome, folder, metadata, args.overwrite)
+        save_figure(
+            plot_perception(outcome, thresholds=model.thresholds, title=title),
+            str(folder / "perception.png"),
+        )
+        save_figure(
+            plot_commands(outcome, limits=(limits[0], limits[1], limits[2]), title=title),
+            str(folder / "commands.png"),
+        )
     summary = score_summary(outcome.score)
     if args.json:
         print_json(

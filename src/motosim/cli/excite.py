@@ -200,13 +200,24 @@ def run(args: argparse.Namespace) -> int:
     columns = ("theta_h", "i_m", "u")
     log = type(log)(log.t, np.column_stack([log[c] for c in columns]), columns)
     path = write_log(args.out, log)
+    # the excitation's settings, as --plan names them: what made the log, to run it again
+    frequencies = (
+        {"f0": args.f0, "f1": args.f1} if args.signal == "chirp" else {"frequency": args.frequency}
+    )
     summary = {
         "out": str(path),
         "samples": int(log.t.size),
         "sample_rate": args.rate,
         "signal": args.signal,
+        "amplitude": args.amplitude,
+        **frequencies,
+        "duration": args.duration,
+        "seed": args.seed,
         "theta_h_range": [float(log["theta_h"].min()), float(log["theta_h"].max())],
         "i_m_peak": float(np.abs(log["i_m"]).max()),
+        "units": {"sample_rate": "Hz", "amplitude": "V"}
+        | dict.fromkeys(frequencies, "Hz")
+        | {"duration": "s", "theta_h_range": "rad", "i_m_peak": "A"},
     }
     if args.json:
         print_json(summary)

@@ -148,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
         out.mkdir(exist_ok=True)
     except OSError as err:
         raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
-    from motosim.io.results import load_result
+    from motosim.io.results import folder_lock, load_result
     from motosim.io.runs import resolve
     from motosim.report import build_report  # matplotlib: seconds, only once the output is fine
 
@@ -159,11 +159,13 @@ def run(args: argparse.Namespace) -> int:
         folder = out / scenario.name
         if not args.json:
             print(f"[{k}/{len(scenarios)}] {scenario.name}: {scenario.description}")
-        summaries[scenario.name] = run_scenario(
-            resolve(scenario, Path(".")), folder, progress=show_progress(args.json), overwrite=True
-        )
-        build_report(folder)
-        runs[scenario.name] = load_result(folder)
+        with folder_lock(folder, shared=True):  # until its report is written (as simulate)
+            summaries[scenario.name] = run_scenario(
+                resolve(scenario, Path(".")), folder, progress=show_progress(args.json),
+                overwrite=True,
+            )  # fmt: skip
+            build_report(folder)
+            runs[scenario.name] = load_result(folder)
     figures = _figures(runs, out)
     index = _index(out, figures, summaries)
     if args.json:

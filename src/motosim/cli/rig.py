@@ -9,6 +9,7 @@ from motosim.cli._common import deferred_warnings, print_json, warn_atypical
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
+    check_udp_only_options,
     clock_from_args,
     privileges_from_args,
 )
@@ -75,6 +76,7 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
+    check_udp_only_options(args)  # before the numerical stack is imported
     from motosim.cli.run import _Presses
 
     presses = _Presses()  # Ctrl-C while the rig starts: counted, not lost in a C callback
@@ -95,7 +97,7 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
     from motosim.rt.privileges import freeze_gc, thaw_gc
     from motosim.rt.rig import VirtualRig
 
-    check_rt_options(args)
+    options = check_rt_options(args)
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     with deferred_warnings():  # the scenario's, once its checks have passed
@@ -120,25 +122,24 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
         from motosim.rt.telemetry import StateReceiver, parse_address
         from motosim.sim import build_rig
 
-        receiver = StateReceiver(parse_address(args.telemetry))
+        # --telemetry off: refused by parse_address, as the virtual rider needs the stream
+        receiver = StateReceiver(options.telemetry or parse_address(args.telemetry))
         world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
         rider = VirtualRider(world, receiver, rate=sc.rates.control)
     clock = clock_from_args(args)
     codecs = handlebar_codecs()
     twin = None
-    if args.platform_udp != "off" or args.platform_can:
-        from motosim.cli.run import _platform_address
-        from motosim.cueing import load_platform
+    if options.platform is not None:  # --platform-udp or --platform-can
         from motosim.io.can import platform_codecs
         from motosim.rt.platform import PlatformTwin
 
         twin = PlatformTwin(
-            load_platform(args.platform).platform,
+            options.platform.platform,
             0.001,
-            None if args.platform_udp == "off" else _platform_address(args.platform_udp),
+            options.platform_udp,
             codecs=platform_codecs() if args.platform_can else None,
         )
-    link = open_link(args.bus, fast=args.link == "fast")
+    link = open_link(args.bus, fast=args.link != "python-can")
     try:
         rig = VirtualRig(
             inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed)

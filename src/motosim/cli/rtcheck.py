@@ -18,6 +18,7 @@ __all__ = [
     "add_link_option",
     "add_privilege_options",
     "check_privilege_options",
+    "check_udp_only_options",
     "privileges_from_args",
     "register",
 ]
@@ -28,10 +29,34 @@ def add_link_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--link",
         choices=("fast", "python-can"),
-        default="fast",
+        default=None,  # fast; None tells the default from the option given (udp_multicast only)
         help="on udp_multicast, send and read python-can's frames on its socket without a "
         "can.Message per frame (fast, default) or through python-can's bus (the same frames)",
     )
+
+
+def check_udp_only_options(args: argparse.Namespace) -> None:
+    """Refuse ``--link`` (and ``run``'s ``--wait``) given with a bus other than udp_multicast.
+
+    Both options choose how a udp_multicast bus is read; on another bus they would be ignored.
+    Their defaults (None: not given) pass silently. Reads only the ``--bus`` text: nothing is
+    imported, so the line comes before the numerical stack is loaded.
+
+    Raises
+    ------
+    MotosimError
+        Naming the option, its value and the bus.
+    """
+    interface = args.bus.partition(":")[0]
+    if interface == "udp_multicast":
+        return
+    for name in ("link", "wait"):
+        value = getattr(args, name, None)
+        if value is not None:
+            raise MotosimError(
+                f"--{name} {value} with --bus {short_repr(args.bus)}; --{name} applies only to a "
+                "udp_multicast bus: leave it out with this bus"
+            )
 
 
 def add_privilege_options(parser: argparse.ArgumentParser) -> None:

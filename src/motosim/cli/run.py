@@ -22,6 +22,7 @@ from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
     check_privilege_options,
+    check_udp_only_options,
     clock_from_args,
     privileges_from_args,
 )
@@ -32,6 +33,7 @@ from motosim.params.toml import read_toml
 if TYPE_CHECKING:
     import numpy as np
 
+    from motosim.cueing import CueingConfig
     from motosim.rt.rig import RigSettings
     from motosim.sim import RunInputs, Scenario
 
@@ -72,7 +74,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--wait",
         choices=("compiled", "python"),
-        default="compiled",
+        default=None,  # compiled; None tells the default from the option given
         help="how a clock-paced loop ends its wait: 'compiled' (default) spins to the "
         "deadline, reads the bus and runs the period in one compiled call (the fast "
         "udp_multicast link, on Linux; Python elsewhere); 'python' spins and reads in Python",
@@ -144,9 +146,29 @@ def _platform_address(text: str) -> tuple[str, int]:
         ) from None
 
 
-def check_rt_options(args: argparse.Namespace) -> None:
+@dataclass(frozen=True)
+class RtOptions:
+    """The options of run and rig that :func:`check_rt_options` parsed, for the command to use.
+
+    Attributes
+    ----------
+    telemetry : (str, int) or None
+        ``--telemetry`` as (host, port); None when ``off``.
+    platform_udp : (str, int) or None
+        ``--platform-udp`` as (host, port); None when ``off``.
+    platform : CueingConfig or None
+        The ``--platform`` file, loaded when ``--platform-udp`` or ``--platform-can`` asks
+        for it; else None.
+    """
+
+    telemetry: tuple[str, int] | None
+    platform_udp: tuple[str, int] | None
+    platform: "CueingConfig | None"
+
+
+def check_rt_options(args: argparse.Namespace) -> RtOptions:
     """Refuse the options of run and rig before any work: --bus, --duration, --telemetry,
-    --platform-udp, --platform, --fifo, --cpu, --spin (one line each)."""
+    --platform-udp, --platform, --fifo, --cpu, --spin (one line each); return those parsed."""
     from motosim.io.can import check_bus
     from motosim.rt.telemetry import parse_address
 
@@ -157,15 +179,15 @@ def check_rt_options(args: argparse.Namespace) -> None:
         raise MotosimError(
             f"--duration {short_repr(args.duration)}; expected seconds from 0.001 to 86400"
         )
-    if args.telemetry != "off":
-        parse_address(args.telemetry)
-    if args.platform_udp != "off":
-        _platform_address(args.platform_udp)
-    if args.platform_udp != "off" or args.platform_can:
+    telemetry = None if args.telemetry == "off" else parse_address(args.telemetry)
+    platform_udp = None if args.platform_udp == "off" else _platform_address(args.platform_udp)
+    platform = None
+    if platform_udp is not None or args.platform_can:
         from motosim.cueing import load_platform
 
-        load_platform(args.platform)  # refused here, not after the scenario's designs
+        platform = load_platform(args.platform)  # refused here, not after the scenario's designs
     check_privilege_options(args)
+    return RtOptions(telemetry, platform_udp, platform)
 
 
 def load_realtime(
@@ -477,6 +499,7 @@ class _Presses:
 
 def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
+    check_udp_only_options(args)  # before the numerical stack is imported
     presses = _Presses()
     previous = signal.signal(signal.SIGINT, presses)
     try:
@@ -498,7 +521,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     from motosim.sim.metrics import validity_limits
     from motosim.sim.stack import account_for_delay
 
-    check_rt_options(args)
+    options = check_rt_options(args)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
@@ -535,29 +558,27 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
         world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
         codecs = handlebar_codecs()
         stack = CompiledStack(model, force=world.force, side_force=world.side_force)
-        telemetry = None
-        if args.telemetry != "off":  # sent by the writer process (StateRelay), not the loop
-            from motosim.rt.telemetry import StateSender, parse_address
+        telemetry = options.telemetry
+        if telemetry is not None:  # sent by the writer process (StateRelay), not the loop
+            from motosim.rt.telemetry import StateSender
 
-            telemetry = parse_address(args.telemetry)
             StateSender(telemetry, width=len(stack.names)).close()  # refused here, not there
         platform = None
         udp_sender = None
-        if args.platform_udp != "off" or args.platform_can:
-            from motosim.cueing import load_platform
+        if options.platform is not None:
             from motosim.rt.platform import PlatformOutput, PlatformSender
 
-            if args.platform_udp != "off":
-                udp_sender = PlatformSender(_platform_address(args.platform_udp))
+            if options.platform_udp is not None:
+                udp_sender = PlatformSender(options.platform_udp)
             platform = PlatformOutput(
-                load_platform(args.platform),
+                options.platform,
                 1.0 / rate,
                 tuple(stack.names),
                 sender=udp_sender,
                 send_every=max(1, round(rate / 100.0)),
             )
     warn_atypical("run", "--duration", args.duration)  # once every check has passed
-    link = open_link(args.bus, fast=args.link == "fast")
+    link = open_link(args.bus, fast=args.link != "python-can")
     # the link in use: --link fast is python-can's own on a bus other than udp_multicast
     link_kind = "fast" if isinstance(link, UdpMulticastLink) else "python-can"
     if platform is not None and args.platform_can:
@@ -808,7 +829,7 @@ def _loop(
                 first_timeout=runner.first_timeout, capacity=capacity,
                 received=lambda: runner.status_frames,
             )  # fmt: skip
-        elif args.wait == "compiled" and runner.compile_wait():
+        elif args.wait != "python" and runner.compile_wait():
             # the wait's end, the bus read and the period in one compiled call
             loop = RateLoop(rate, clock, capacity=capacity, woke=runner.woke)
             step = runner.wait_period

@@ -65,45 +65,48 @@ def run_scenario(
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
-    from motosim.io.results import is_complete_result, partial_folder
+    from motosim.io.results import folder_lock, is_complete_result, partial_folder
     from motosim.io.runs import load_scenario, resolve
     from motosim.sim.metrics import warnings
 
     with deferred_warnings():  # shown once the files it names are read too
         scenario = load_scenario(args.scenario)
         inputs = resolve(scenario, Path(args.scenario).parent)
-    try:
-        summary = run_scenario(
-            inputs, folder, progress=show_progress(args.json), overwrite=args.overwrite
-        )
-    except KeyboardInterrupt:
-        staged = partial_folder(folder)
-        kept = staged if staged.is_dir() else folder
-        print(f"motosim: interrupted; the partial result is in {kept}", file=sys.stderr)
-        return 130
-    except RunFailedError:
+    # the folder stays locked until its report is written: a concurrent --overwrite of the
+    # same folder is refused until then, not let in between the result and its report
+    with folder_lock(folder, shared=True):
+        try:
+            summary = run_scenario(
+                inputs, folder, progress=show_progress(args.json), overwrite=args.overwrite
+            )
+        except KeyboardInterrupt:
+            staged = partial_folder(folder)
+            kept = staged if staged.is_dir() else folder
+            print(f"motosim: interrupted; the partial result is in {kept}", file=sys.stderr)
+            return 130
+        except RunFailedError:
+            report = None
+            if is_complete_result(folder):  # written whole, flagged: its report and metrics
+                if args.report:
+                    from motosim.report import build_report
+
+                    report = build_report(folder)
+                if args.json:  # what a script reads, failure included; the reason on stderr
+                    from motosim.io.results import load_result
+
+                    summary = load_result(folder).summary
+                    print_json(
+                        {"out": str(folder), "report": str(report) if report else None,
+                         "metrics": summary}
+                    )  # fmt: skip
+            raise
+        for line in warnings(summary):
+            print(f"motosim: warning: {line}", file=sys.stderr)
         report = None
-        if is_complete_result(folder):  # written whole, flagged: its report and metrics
-            if args.report:
-                from motosim.report import build_report
+        if args.report:
+            from motosim.report import build_report
 
-                report = build_report(folder)
-            if args.json:  # what a script reads, failure included; the reason on stderr
-                from motosim.io.results import load_result
-
-                summary = load_result(folder).summary
-                print_json(
-                    {"out": str(folder), "report": str(report) if report else None,
-                     "metrics": summary}
-                )  # fmt: skip
-        raise
-    for line in warnings(summary):
-        print(f"motosim: warning: {line}", file=sys.stderr)
-    report = None
-    if args.report:
-        from motosim.report import build_report
-
-        report = build_report(folder)
+            report = build_report(folder)
     if args.json:
         print_json(
             {

@@ -17,7 +17,11 @@ How a result is never lost or corrupted:
 - **Lock.** While a run writes ``NAME``, it holds an exclusive lock (``flock``) on the file
   ``.NAME.lock`` beside it; a second writer of the same folder, with or without
   ``overwrite``, is refused. The operating system releases the lock when the process ends,
-  however it ends, so a killed run never blocks the next one.
+  however it ends, so a killed run never blocks the next one. A command that writes more
+  into the folder after the result (``simulate``'s report, ``cueing``'s figures) holds the
+  lock until that is written too (:func:`folder_lock` with ``shared``). A folder written in
+  place, never replaced whole (a campaign's), holds its lock inside: ``NAME/.motosim.lock``
+  (:func:`folder_lock` with ``inside``).
 - **Staging.** The run writes into the sibling folder ``NAME.partial``; only
   :meth:`ResultWriter.close` moves it to ``NAME``, replacing a previous result in two renames
   (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
@@ -46,6 +50,7 @@ import os
 import re
 import shutil
 import signal
+import socket
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -149,10 +154,14 @@ def partial_folder(folder: str | Path) -> Path:
     return target.with_name(target.name + _PARTIAL)
 
 
-def lock_file(folder: str | Path) -> Path:
-    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it."""
+_INSIDE_LOCK = ".motosim.lock"
+
+
+def lock_file(folder: str | Path, *, inside: bool = False) -> Path:
+    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it, or with
+    ``inside`` (a folder that is never replaced whole: a campaign's) ``.motosim.lock`` in it."""
     target = Path(folder)
-    return target.with_name(f".{target.name}.lock")
+    return target / _INSIDE_LOCK if inside else target.with_name(f".{target.name}.lock")
 
 
 def is_complete_result(folder: str | Path) -> bool:
@@ -174,21 +183,40 @@ def is_complete_result(folder: str | Path) -> bool:
         return False
 
 
-class _FolderLock:
-    """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends."""
+_SHARED: dict[str, tuple[int, int, int]] = {}
+"""The locks held by ``folder_lock(..., shared=True)``: lock file -> (descriptor, holding
+thread, holders)."""
+_HELD_GUARD = threading.Lock()
 
-    def __init__(self, folder: Path) -> None:
-        self.path = lock_file(folder)
+
+class _FolderLock:
+    """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends.
+
+    Taken with ``shared``, the thread that holds it may take it again (a
+    :class:`ResultWriter` within ``folder_lock(folder, shared=True)``, which keeps the folder
+    locked until the command's report is written): the holders share it, and the last one
+    releases it. Otherwise, and from another thread or process, a second holder is refused.
+    """
+
+    def __init__(self, folder: Path, *, shared: bool = False, inside: bool = False) -> None:
+        self.path = lock_file(folder, inside=inside)
         self._fd: int | None = None
+        self._key = os.path.join(os.path.realpath(self.path.parent), self.path.name)
+        with _HELD_GUARD:
+            held = _SHARED.get(self._key)
+            if held is not None and held[1] == threading.get_ident():
+                _SHARED[self._key] = (held[0], held[1], held[2] + 1)
+                self._fd = held[0]
+                return
         try:
-            self._acquire(folder)
+            self._acquire(folder, shared)
         except OSError as err:
             raise MotosimError(
                 f"{folder}: cannot create the lock {self.path}: {err.strerror or err}; nothing "
                 "was written"
             ) from None
 
-    def _acquire(self, folder: Path) -> None:
+    def _acquire(self, folder: Path, shared: bool) -> None:
         for _ in range(10):  # retry if a finishing run unlinked the file we opened
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
             try:
@@ -213,21 +241,33 @@ class _FolderLock:
                     os.close(fd)
                     raise
                 self._fd = fd
+                if shared:
+                    with _HELD_GUARD:
+                        _SHARED[self._key] = (fd, threading.get_ident(), 1)
                 return
             os.close(fd)
         raise MotosimError(f"{folder}: could not lock {self.path}; try again")
 
     def release(self) -> None:
-        """Delete the lock file, then release the lock (in that order, so no one races in)."""
+        """Delete the lock file, then release the lock (in that order, so no one races in);
+        a lock taken again is released by the last of its holders."""
         if self._fd is None:
             return
+        with _HELD_GUARD:
+            held = _SHARED.pop(self._key, None)
+            if held is not None and held[2] > 1:
+                _SHARED[self._key] = (held[0], held[1], held[2] - 1)
+                self._fd = None
+                return
         self.path.unlink(missing_ok=True)
         os.close(self._fd)
         self._fd = None
 
 
 @contextmanager
-def folder_lock(folder: str | Path) -> Iterator[Path]:
+def folder_lock(
+    folder: str | Path, *, shared: bool = False, inside: bool = False
+) -> Iterator[Path]:
     """Hold the lock of a run writing ``folder`` (``.NAME.lock`` beside it) within the block.
 
     The lock :class:`ResultWriter` holds, for writers of other kinds of folder (a campaign's):
@@ -237,7 +277,18 @@ def folder_lock(folder: str | Path) -> Iterator[Path]:
     Parameters
     ----------
     folder : str or Path
-        The folder written; its parent must exist and be writable (the lock is beside it).
+        The folder written; its parent must exist and be writable (the lock is beside it),
+        or with ``inside`` the folder itself (created if needed, parents included).
+    shared : bool
+        Let a :class:`ResultWriter` of ``folder`` opened within the block, in this thread,
+        share the lock instead of being refused: the folder then stays locked after the
+        writer has closed, until the block ends, so that what a command writes beside the
+        result (its report, its figures) is written under the lock too.
+    inside : bool
+        Put the lock in ``folder`` (``.motosim.lock``), for a folder that is written in place,
+        never replaced whole by a rename (a campaign's: a result folder is, which would take
+        a lock inside with it): nothing is written beside ``folder``, whose parent may be
+        read-only. A folder this call created is deleted on leaving if it is left empty.
 
     Yields
     ------
@@ -250,15 +301,78 @@ def folder_lock(folder: str | Path) -> Iterator[Path]:
         If another run holds it, or it cannot be created (naming the folder).
     """
     target = Path(folder).absolute()
+    created = False
     try:
-        target.parent.mkdir(parents=True, exist_ok=True)
+        if inside:
+            if not target.is_dir():  # a file there: refused by the lock's creation below
+                target.parent.mkdir(parents=True, exist_ok=True)
+                try:
+                    target.mkdir()
+                    created = True
+                except FileExistsError:  # another instance made it meanwhile: its lock decides
+                    pass
+        else:
+            target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise MotosimError(f"cannot create folder {target.parent}: {_reason(err)}") from None
-    lock = _FolderLock(target)
+        where = target if inside else target.parent
+        raise MotosimError(f"cannot create folder {where}: {_reason(err)}") from None
     try:
-        yield lock.path
+        lock = _FolderLock(target, shared=shared, inside=inside)
+        try:
+            yield lock.path
+        finally:
+            lock.release()
     finally:
-        lock.release()
+        if created:
+            try:
+                target.rmdir()  # only if empty: nothing was written there
+            except OSError:
+                pass
+
+
+def _host_tag() -> str:
+    """This machine's name as it goes in a temporary file's name: letters, digits, ``-``."""
+    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:32] or "host"
+
+
+def _is_running(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this machine (another user's counts)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _remove_leftovers(real: Path) -> None:
+    """Delete the temporary files of earlier writes of ``real`` whose process has gone.
+
+    Only those written on this machine (its name in theirs) by a process that no longer
+    runs: a killed write's leftover (SIGKILL, a power cut). Another machine's (a shared
+    folder), a running process's, or one that cannot be deleted, is left as it is.
+    """
+    pattern = re.compile(
+        rf"\.{re.escape(real.name)}\.(?P<pid>[0-9]{{1,10}})\.{re.escape(_host_tag())}\.partial"
+    )
+    try:
+        names = [entry.name for entry in os.scandir(real.parent)]
+    except OSError:
+        return
+    for name in names:
+        match = pattern.fullmatch(name)
+        if match is None:
+            continue
+        pid = int(match["pid"])
+        if pid == os.getpid() or _is_running(pid):
+            continue
+        try:
+            (real.parent / name).unlink()
+        except OSError as err:
+            _log.debug("cannot remove the leftover %s: %s", name, err)
+        else:
+            _log.info("removed %s, left by process %d (gone)", name, pid)
 
 
 def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
@@ -271,7 +385,8 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
         symbolic link is followed (the file it names is replaced, the link kept), and a
         previous file's permissions are kept.
     write : callable
-        Called with the temporary path (``.NAME.PID.partial`` beside the file) to write.
+        Called with the temporary path (``.NAME.PID.HOST.partial`` beside the file, HOST this
+        machine's name) to write.
 
     Returns
     -------
@@ -283,10 +398,17 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
     MotosimError
         One line naming the file and the system's reason (a full disk, a read-only folder);
         the temporary file is deleted, as it is when ``write`` is interrupted.
+
+    Notes
+    -----
+    A process killed while it writes (SIGKILL, a power cut) leaves its temporary file. The
+    next write of the same file deletes such leftovers of this machine whose process has
+    gone (before writing: their space is free for it); a running process's are kept.
     """
     target = Path(path)
     real = Path(os.path.realpath(target))  # through a link, as writing in place did
-    temporary = real.with_name(f".{real.name}.{os.getpid()}.partial")
+    _remove_leftovers(real)
+    temporary = real.with_name(f".{real.name}.{os.getpid()}.{_host_tag()}.partial")
     try:
         write(temporary)
         if real.exists():

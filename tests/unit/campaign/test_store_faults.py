@@ -41,3 +41,24 @@ def test_a_part_that_does_not_fit_is_one_line_and_leaves_no_cut_file(
         store.write_manifest({"fingerprint": "f"})
     hidden = [p.name for p in (tmp_path / "c").rglob(".*")]
     assert hidden == [] and list(load_results(tmp_path / "c")["run_id"]) == ["a"]
+
+
+def test_room_for_the_last_manifest_refused_by_a_full_disk_is_one_line_and_no_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import os
+
+    store = ResultStore(tmp_path / "c", fingerprint="f", factors=[("x", float)], metrics=["rms"])
+    store.reserve_space(20_000)
+    reserve = tmp_path / "c" / ".motosim.reserve"
+    assert reserve.stat().st_size == 20_000  # allocated, freed before the last write
+    store.release_space()
+    assert not reserve.exists()
+
+    def full(fd: int, offset: int, length: int) -> None:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "posix_fallocate", full)
+    with pytest.raises(MotosimError, match=r"cannot set aside 20 kB .*No space left on device; no"):
+        store.reserve_space(20_000)
+    assert not reserve.exists()
