@@ -302,3 +302,34 @@ def test_paced_by_the_bus_without_a_drive_trips_no_drive_after_the_start_timeout
     assert runner.counters().fault == "NO_DRIVE" and np.all(rows[:, 4] == 0.0)
     stats = loop.stats()  # 1 s of frame periods without a frame: the drive's, not missed
     assert rows[0, 0] == 0.0 and stats.gaps >= 100 and stats.missed == 0
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_a_loop_late_while_the_bus_is_off_sends_zero_on_its_first_period_back(
+    links: tuple[CanLink, CanLink], rate: float
+) -> None:
+    # The bus goes off at 0.8 s and the loop stalls for 5.5 periods in the period before
+    # (it skips 5 deadlines): once back, 6 periods have passed without a status frame, more
+    # than the watchdog's 3, so its first period sends zero (before, the skipped deadlines
+    # were not counted: the stale command went out for 2 more periods).
+    host, drive = links
+    settings = _settings(rate, bus_off_at=0.8, bus_off_duration=1.0)
+    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(20_001, 3.0), np.random.default_rng(0))
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=rate)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    stall = round(0.8 * rate) - 1
+
+    def period(k: int, t: float) -> bool:
+        carry_on = runner.period(k, t)
+        if k == stall:
+            clock.advance(5.5 / rate)
+        return carry_on
+
+    loop = RateLoop(rate, clock)
+    loop.run(period, periods=round(1.2 * rate))
+    rows = runner.ring.drain()
+    back = stall + 1  # the row of the first period served after the stall
+    assert loop.stats().missed == 5 and rows[back, 0] == pytest.approx(0.8 + 5.0 / rate)
+    assert rows[stall, 4] != 0.0 and np.all(rows[back:, 4] == 0.0)
+    assert runner.counters().fault == "WATCHDOG"

@@ -13,8 +13,9 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
 - soft end stops: beyond ``soft_stop`` [rad] the command pushing further out is dropped and
   a restoring spring ``end_stop_gain`` [A/rad] is added; beyond ``hard_stop`` a fault;
 - a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request;
-- a communication watchdog: no valid status frame for ``watchdog_periods`` periods -> zero
-  command and a latched fault; a status frame is valid when its checksum is right and its
+- a communication watchdog: no valid status frame for ``watchdog_periods`` periods (the
+  loop's deadlines, those it skipped when late included) -> zero command and a latched
+  fault; a status frame is valid when its checksum is right and its
   alive counter has moved forward, by 1 to 7 of its 16 values (a stale or duplicated frame,
   or an older one delivered after a newer, does not feed the watchdog and is not used: the
   counter's window of AUTOSAR's E2E profiles, *Specification of SW-C End-to-End
@@ -316,14 +317,20 @@ def safety_step(
     now: float,
 ) -> float:
     """:meth:`SafetyStage.step` on the state array (``now`` NaN: the stage counts its own
-    periods)."""
+    periods; else the periods since the last step are counted from ``now``, so that the
+    deadlines a late loop skipped count for the watchdog)."""
     dt = p[P_DT]
-    s[S_T] = s[S_T] + dt if now != now else now
+    if now != now:
+        periods = 1.0
+        s[S_T] += dt
+    else:  # deadlines the loop skipped since the last step passed without a status frame too
+        periods = max(1.0, math.floor((now - s[S_T]) / dt + 0.5))
+        s[S_T] = now
     if s[S_FRESH] != 0.0:
         s[S_MISSING] = 0.0
         s[S_FRESH] = 0.0
     else:
-        s[S_MISSING] += 1.0
+        s[S_MISSING] += periods
         if s[S_MISSING] >= p[P_WATCHDOG] and s[S_STATE] != 0.0:
             safety_trip(s, 1)  # WATCHDOG
     if not (math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)) or math.isinf(
@@ -598,8 +605,11 @@ class SafetyStage:
         tau_hat : float
             The estimated rider torque [N*m] (NaN if the stack has none: hands-off off).
         now : float, optional
-            The loop's time [s], for the fault's time stamp; by default the stage counts
-            its own periods.
+            The loop's time [s] since the stage's first step, for the fault's time stamp
+            and the watchdog: the control periods since the last step, rounded (at least
+            one), count as periods without a status frame unless one came, so that the
+            deadlines a late loop skipped count too. By default the stage counts its own
+            periods, one per step.
         """
         t = math.nan if now is None else float(now)
         return float(

@@ -297,3 +297,35 @@ def test_a_drive_fault_counts_even_in_a_frame_not_used() -> None:
     older = (d.counter - 3) & 0xF
     assert not d.stage.status_frame(checksum_ok=True, counter=older, drive_fault=True)
     assert d.stage.fault == Fault.DRIVE_FAULT and d.period(frame=False) == 0.0
+
+
+@pytest.mark.parametrize("skipped", [1, 2, 5, 50])
+def test_deadlines_a_late_loop_skipped_count_for_the_watchdog(skipped: int) -> None:
+    # The watchdog promises zero torque once no valid status frame came for
+    # watchdog_periods (3) periods of the loop. A loop that is late skips deadlines (it
+    # does not step then): the drive's silence meanwhile counts, so the first step after
+    # 3 or more periods of silence sends zero (before, only the steps were counted: a
+    # stall of 50 periods left the stale command on for 2 more periods).
+    d = Driver(rate=1000.0)
+    d.stage.enable()
+    t = 0.0
+    for _ in range(600):  # the fade-in, with a status frame in every period
+        d.period(now=t, theta=1e-3 * (round(t * 1e3) % 2))
+        t += 1e-3
+    assert d.stage.state == State.RUNNING
+    t += skipped * 1e-3  # the deadlines skipped, without a status frame
+    out = d.period(frame=False, now=t)
+    if skipped + 1 >= 3:
+        assert out == 0.0 and d.stage.fault == Fault.WATCHDOG
+    else:
+        assert out == 10.0 and d.period(frame=False, now=t + 1e-3) == 0.0
+
+
+def test_a_status_frame_after_skipped_deadlines_feeds_the_watchdog() -> None:
+    # a loop late by 10 periods whose drive kept sending: the frames read after the stall
+    # are fresh, the watchdog does not trip
+    d = Driver(rate=1000.0)
+    d.stage.enable()
+    for k in range(600):
+        d.period(now=k * 1e-3, theta=1e-3 * (k % 2))
+    assert d.period(now=0.610) == 10.0 and d.stage.fault == Fault.NONE
