@@ -333,3 +333,35 @@ def test_a_loop_late_while_the_bus_is_off_sends_zero_on_its_first_period_back(
     assert loop.stats().missed == 5 and rows[back, 0] == pytest.approx(0.8 + 5.0 / rate)
     assert rows[stall, 4] != 0.0 and np.all(rows[back:, 4] == 0.0)
     assert runner.counters().fault == "WATCHDOG"
+
+
+def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    # At the end of the duration motosim run calls finish() and runs the periods it
+    # returns (ten times over at most): with a slew-rate limit slower than the fade (5 A/s:
+    # 10 A need 2 s, the fade 0.5 s) the run must still end on a zero command with the
+    # stage IDLE, never on a current left on (the drive would hold it). The rider's torque
+    # rises to 30 N*m over 3 s against the spring (i = -30 theta: 9.4 A at 0.31 rad with
+    # the friction), holds it to 4 s, then the rider lets go.
+    host, drive = links
+    tau = np.zeros(200_000)
+    tau[:40_000] = 30.0
+    tau[:30_000] = np.linspace(0.0, 30.0, 30_000)
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, tau, np.random.default_rng(3))
+    limits = SafetyLimits(**{
+        name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
+    } | {"max_slew": 5.0})  # fmt: skip
+    runner = RealtimeRunner(SpringStack(30.0), host, CODECS, limits, rate=100.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    loop = RateLoop(100.0, clock)
+    loop.run(runner.period, periods=400)
+    rows = runner.ring.drain()
+    assert rows[-1, 5] == State.RUNNING and rows[-1, 4] < -9.0
+    fade = runner.finish()
+    served = loop.run(runner.period, periods=10 * fade)
+    rows = np.vstack([rows, runner.ring.drain()])
+    assert served < 10 * fade and rows[-1, 4] == 0.0 and rows[-1, 5] == State.IDLE
+    assert np.all(rows[-served:-1, 5] == State.STOPPING)
+    assert np.all(np.abs(np.diff(rows[:, 4])) <= 0.05 + 1e-9)  # 5 A/s at 100 Hz, no step

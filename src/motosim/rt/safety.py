@@ -12,7 +12,8 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   ``max_speed`` [rad/s] (to zero ``speed_band`` [rad/s] above it), never adds torque;
 - soft end stops: beyond ``soft_stop`` [rad] the command pushing further out is dropped and
   a restoring spring ``end_stop_gain`` [A/rad] is added; beyond ``hard_stop`` a fault;
-- a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request;
+- a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request
+  (IDLE once the command sent is zero: the slew-rate limit may take longer than the fade);
 - a communication watchdog: no valid status frame for ``watchdog_periods`` periods (the
   loop's deadlines, those it skipped when late included) -> zero command and a latched
   fault; a status frame is valid when its checksum is right and its
@@ -371,15 +372,15 @@ def safety_step(
     # clamp, fade, slew
     i = min(max(i, -p[P_MAX_CURRENT]), p[P_MAX_CURRENT])
     s[S_ENVELOPE] = _ramped_envelope(s, p)
-    if state == 4.0 and s[S_ENVELOPE] == 0.0:  # STOPPING, faded out
-        s[S_STATE] = 0.0
-    elif state == 1.0 and s[S_ENVELOPE] >= 1.0:  # FADE_IN, faded in
-        s[S_STATE] = 2.0
     i *= s[S_ENVELOPE]
     step = p[P_MAX_SLEW] * dt
     last = s[S_LAST]
     i = min(max(i, last - step), last + step)
     s[S_LAST] = i
+    if state == 4.0 and s[S_ENVELOPE] == 0.0 and i == 0.0:  # STOPPING, faded out, sent 0
+        s[S_STATE] = 0.0
+    elif state == 1.0 and s[S_ENVELOPE] >= 1.0:  # FADE_IN, faded in
+        s[S_STATE] = 2.0
     return float(i)
 
 
@@ -545,7 +546,8 @@ class SafetyStage:
         safety_enable(self._s)
 
     def request_stop(self) -> None:
-        """Fade the torque out over ``fade_in`` seconds, then go IDLE."""
+        """Fade the torque out over ``fade_in`` seconds, then go IDLE once the command
+        sent is zero (later when the slew-rate limit holds it back)."""
         safety_request_stop(self._s)
 
     def trip(self, fault: Fault) -> None:

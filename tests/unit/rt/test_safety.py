@@ -329,3 +329,24 @@ def test_a_status_frame_after_skipped_deadlines_feeds_the_watchdog() -> None:
     for k in range(600):
         d.period(now=k * 1e-3, theta=1e-3 * (k % 2))
     assert d.period(now=0.610) == 10.0 and d.stage.fault == Fault.NONE
+
+
+def test_a_stop_goes_idle_only_once_the_command_sent_is_zero() -> None:
+    # A slew-rate limit slower than the fade (5 A/s against 10 A over 0.5 s): the fade-out
+    # promises a command sent that comes down to zero, never a step; the stage stays
+    # STOPPING (the drive enabled) until it is zero. Before, it went IDLE with the
+    # envelope at 0 while 7.5 A were sent, and the next period stepped to 0 A.
+    d = Driver(SafetyLimits(**{**_fields(LIMITS), "max_slew": 5.0}), rate=100.0)
+    d.stage.enable()
+    for _ in range(400):  # 10 A reached at 0.05 A per period
+        d.period()
+    assert d.stage.state == State.RUNNING and d.period() == 10.0
+    d.stage.request_stop()
+    out, states = [], []
+    while d.stage.state != State.IDLE and len(out) < 1000:
+        out.append(d.period())
+        states.append(d.stage.state)
+    assert out[-1] == 0.0 and all(s == State.STOPPING for s in states[:-1])
+    steps = [a - b for a, b in itertools.pairwise([10.0, *out])]
+    assert all(0.0 <= step <= 0.05 + 1e-12 for step in steps)  # 5 A/s at 100 Hz
+    assert len(out) == 200 and d.period() == 0.0  # 10 A at 5 A/s: 2 s
