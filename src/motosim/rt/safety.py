@@ -27,7 +27,9 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
 - hands-off detection: while the estimated rider torque stays below ``hands_off_torque``
-  [N*m] for ``hands_off_time`` [s], the command is scaled by ``hands_off_gain``;
+  [N*m] for ``hands_off_time`` [s], the stack's command is scaled by ``hands_off_gain``
+  (before the limits: the end stops' spring is not scaled; a period without an estimate
+  keeps the flag as it is);
 - a frozen-sensor monitor (given the handlebar's parameters): the angle has not changed
   while the motor torque has moved so far from its value at the angle's last change that a
   free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault
@@ -347,8 +349,17 @@ def safety_step(
         s[S_LAST] = 0.0
         s[S_ENVELOPE] = 0.0
         return 0.0
+    # hands-off: reduce the stack's command while nobody holds the handlebar (the flag
+    # kept as it is without an estimate); not the end stops' spring, added after
+    if p[P_HANDS_OFF_TORQUE] > 0.0 and tau_hat == tau_hat:
+        if abs(tau_hat) < p[P_HANDS_OFF_TORQUE]:
+            s[S_QUIET] += dt
+            s[S_HANDS_OFF] = 1.0 if s[S_QUIET] >= p[P_HANDS_OFF_TIME] else 0.0
+        else:
+            s[S_QUIET] = 0.0
+            s[S_HANDS_OFF] = 0.0
+    i = command * p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else command
     # speed limiter: only reduces a command that pushes the handlebar faster
-    i = command
     excess = abs(omega) - p[P_MAX_SPEED]
     if excess > 0.0 and i * omega > 0.0:
         i *= max(0.0, 1.0 - excess / p[P_SPEED_BAND])
@@ -359,16 +370,6 @@ def safety_step(
         if i * out > 0.0:
             i = 0.0
         i -= out * p[P_END_STOP_GAIN] * over
-    # hands-off: reduce the gain while nobody holds the handlebar
-    if p[P_HANDS_OFF_TORQUE] > 0.0 and tau_hat == tau_hat:
-        if abs(tau_hat) < p[P_HANDS_OFF_TORQUE]:
-            s[S_QUIET] += dt
-            s[S_HANDS_OFF] = 1.0 if s[S_QUIET] >= p[P_HANDS_OFF_TIME] else 0.0
-        else:
-            s[S_QUIET] = 0.0
-            s[S_HANDS_OFF] = 0.0
-        if s[S_HANDS_OFF] != 0.0:
-            i *= p[P_HANDS_OFF_GAIN]
     # clamp, fade, slew
     i = min(max(i, -p[P_MAX_CURRENT]), p[P_MAX_CURRENT])
     s[S_ENVELOPE] = _ramped_envelope(s, p)

@@ -350,3 +350,32 @@ def test_a_stop_goes_idle_only_once_the_command_sent_is_zero() -> None:
     steps = [a - b for a, b in itertools.pairwise([10.0, *out])]
     assert all(0.0 <= step <= 0.05 + 1e-12 for step in steps)  # 5 A/s at 100 Hz
     assert len(out) == 200 and d.period() == 0.0  # 10 A at 5 A/s: 2 s
+
+
+def test_hands_off_scales_the_stacks_command_not_the_end_stops_spring() -> None:
+    # Hands-off detection reduces the feedback gain (the stack's command) while nobody
+    # holds the handlebar; the soft end stop's spring is a limit of its own and must keep
+    # its full strength then, when nothing else holds the handlebar back (before, it was
+    # scaled too: to 25 % here, to nothing with hands_off_gain = 0).
+    for gain in (0.25, 0.0):
+        lim = SafetyLimits(**{**_fields(LIMITS), "hands_off_torque": 0.5, "hands_off_gain": gain})
+        d = Driver(lim, rate=100.0).running()
+        for _ in range(25):  # 0.25 s without the rider's torque: hands off after 0.2 s
+            d.period(tau_hat=0.1)
+        assert d.stage.hands_off
+        assert d.period(10.0, theta=0.3, tau_hat=0.1) == pytest.approx(10.0 * gain)
+        # 0.2 rad beyond the soft stop: the spring's 40 A/rad whole, the push out dropped
+        assert d.period(0.0, theta=0.7, tau_hat=0.1) == pytest.approx(-8.0)
+        assert d.period(10.0, theta=0.7, tau_hat=0.1) == pytest.approx(-8.0)
+        assert d.period(-4.0, theta=0.7, tau_hat=0.1) == pytest.approx(-4.0 * gain - 8.0)
+
+
+def test_a_period_without_an_estimate_keeps_the_hands_off_gain() -> None:
+    # tau_hat NaN is "no estimate this period": it must not give the full gain back while
+    # nobody holds the handlebar (before, the reduced gain was skipped with the detection)
+    lim = SafetyLimits(**{**_fields(LIMITS), "hands_off_torque": 0.5})
+    d = Driver(lim, rate=100.0).running()
+    for _ in range(25):
+        d.period(tau_hat=0.1)
+    assert d.stage.hands_off and d.period(tau_hat=math.nan) == pytest.approx(2.5)
+    assert d.stage.hands_off and d.stage.fault == Fault.NONE
