@@ -365,3 +365,42 @@ def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
     assert served < 10 * fade and rows[-1, 4] == 0.0 and rows[-1, 5] == State.IDLE
     assert np.all(rows[-served:-1, 5] == State.STOPPING)
     assert np.all(np.abs(np.diff(rows[:, 4])) <= 0.05 + 1e-9)  # 5 A/s at 100 Hz, no step
+
+
+class EstimateStack(SpringStack):
+    """The spring, with an estimate and a rate in its row that go NaN from ``bad_from``
+    (``column``), its command still finite."""
+
+    names = ("tau_r_hat", "theta_h_dot_hat")
+
+    def __init__(self, gain: float, column: int, bad_from: int) -> None:
+        super().__init__(gain)
+        self.column, self.bad_from, self.steps = column, bad_from, 0
+
+    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
+        command = -self.gain * theta_meas
+        self._row[:] = (3.0, 0.0)
+        if self.steps >= self.bad_from:
+            self._row[self.column] = math.nan
+        self.steps += 1
+        return command
+
+
+@pytest.mark.parametrize("column", [0, 1])
+def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
+    links: tuple[CanLink, CanLink], column: int
+) -> None:
+    # The NaN guard promises zero torque for a NaN in a measurement, the estimate or the
+    # command: the stack's rider-torque estimate (tau_r_hat) or rate going NaN while its
+    # command stays finite trips NON_FINITE in that period (before, a NaN estimate was
+    # taken for "no estimate" and the command went on).
+    host, drive = links
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(20_001, 3.0),
+                      np.random.default_rng(4))  # fmt: skip
+    runner = RealtimeRunner(EstimateStack(20.0, column, 70), host, CODECS, LIMITS, rate=100.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    RateLoop(100.0, clock).run(runner.period, periods=100)
+    rows = runner.ring.drain()
+    assert runner.counters().fault == "NON_FINITE"
+    assert rows[69, 4] != 0.0 and np.all(rows[70:, 4] == 0.0) and rows[70, 6] == Fault.NON_FINITE

@@ -374,6 +374,10 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
 def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_read: float) -> int:
     """The safety stage on the stack's ``command`` [A], the frames to send, the row.
 
+    The stack's estimate of the rider's torque (its row's ``tau_r_hat``) NaN trips
+    ``NON_FINITE`` as an inf does (the stage takes NaN for "no estimate": a stack without
+    one).
+
     ``woke`` and ``done_read`` are the period's wake-up and the end of the bus read on the
     loop's clock [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
     whether the run goes on, whether the heartbeat frame is to be sent this period, and the
@@ -393,6 +397,8 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
         omega = 0.0
     r[R_PREV_THETA] = theta_now
     tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
+    if started and tau_at >= 0 and tau_hat != tau_hat:  # NaN: no estimate only without one
+        safety_trip(s, 2)  # NON_FINITE
     phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
     if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
         phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
