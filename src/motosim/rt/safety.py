@@ -8,10 +8,11 @@ current command and before the command is encoded (the protections of force-feed
 firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
 
 - a current clamp (``max_current`` [A]) and a slew-rate limit (``max_slew`` [A/s]);
-- a speed limiter that only ever reduces the command pushing the handlebar faster beyond
-  ``max_speed`` [rad/s] (to zero ``speed_band`` [rad/s] above it), never adds torque;
 - soft end stops: beyond ``soft_stop`` [rad] the command pushing further out is dropped and
   a restoring spring ``end_stop_gain`` [A/rad] is added; beyond ``hard_stop`` a fault;
+- a speed limiter that only ever reduces what pushes the handlebar faster beyond
+  ``max_speed`` [rad/s] (to zero ``speed_band`` [rad/s] above it), the end stops' spring
+  included, never adds torque;
 - a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request
   (IDLE once the command sent is zero: the slew-rate limit may take longer than the fade);
 - a communication watchdog: no valid status frame for ``watchdog_periods`` periods (the
@@ -35,6 +36,10 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault
   (see :class:`SafetyStage`, Notes).
 
+Each period the stack's command goes, in this order, through the hands-off gain, the end
+stops, the speed limiter, the clamp, the fade and the slew-rate limit: no later stage adds
+what an earlier one took away (the slew-rate limit only delays it: it holds a decrease back
+as it holds an increase, by at most ``max_current / max_slew`` seconds).
 A fault gives a zero command in the same period it is detected, without slew limiting, and
 stays latched until :meth:`SafetyStage.clear`; enabling again starts a new fade-in. The stage
 keeps its state in a float64 array stepped by compiled functions (:func:`safety_step` and
@@ -359,10 +364,6 @@ def safety_step(
             s[S_QUIET] = 0.0
             s[S_HANDS_OFF] = 0.0
     i = command * p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else command
-    # speed limiter: only reduces a command that pushes the handlebar faster
-    excess = abs(omega) - p[P_MAX_SPEED]
-    if excess > 0.0 and i * omega > 0.0:
-        i *= max(0.0, 1.0 - excess / p[P_SPEED_BAND])
     # soft end stops
     over = abs(theta) - p[P_SOFT_STOP]
     if over > 0.0:
@@ -370,6 +371,11 @@ def safety_step(
         if i * out > 0.0:
             i = 0.0
         i -= out * p[P_END_STOP_GAIN] * over
+    # speed limiter: only reduces what pushes the handlebar faster (the end stops' spring
+    # included: it must not speed up a handlebar already too fast on its way back)
+    excess = abs(omega) - p[P_MAX_SPEED]
+    if excess > 0.0 and i * omega > 0.0:
+        i *= max(0.0, 1.0 - excess / p[P_SPEED_BAND])
     # clamp, fade, slew
     i = min(max(i, -p[P_MAX_CURRENT]), p[P_MAX_CURRENT])
     s[S_ENVELOPE] = _ramped_envelope(s, p)

@@ -379,3 +379,25 @@ def test_a_period_without_an_estimate_keeps_the_hands_off_gain() -> None:
         d.period(tau_hat=0.1)
     assert d.stage.hands_off and d.period(tau_hat=math.nan) == pytest.approx(2.5)
     assert d.stage.hands_off and d.stage.fault == Fault.NONE
+
+
+@given(
+    command=st.floats(-20.0, 20.0),
+    theta=st.floats(-0.79, 0.79),
+    speed=st.floats(LIMITS.max_speed + LIMITS.speed_band, 100.0),
+    sign=st.sampled_from([-1.0, 1.0]),
+)
+def test_nothing_the_stage_sends_pushes_a_handlebar_too_fast_faster(
+    command: float, theta: float, speed: float, sign: float
+) -> None:
+    # At max_speed + speed_band and beyond, the speed limiter promises no torque in the
+    # direction of motion, at any angle: beyond the soft stop the end stop's spring pulls
+    # back, and on a handlebar already returning too fast it must not push it faster
+    # (before, the spring was added after the limiter: 40 A/rad * 0.29 rad = 11.6 A with a
+    # handlebar at 0.79 rad coming back at 100 rad/s).
+    omega = sign * speed
+    d = Driver().running()
+    out = d.period(command, theta=theta, omega=omega)
+    assert out * omega <= 0.0
+    still = Driver().running().period(command, theta=theta, omega=0.0)
+    assert abs(out) <= abs(still) and out * still >= 0.0  # it only ever reduces
