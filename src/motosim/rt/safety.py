@@ -184,7 +184,7 @@ class SafetyLimits:
         for name, (low, high, unit) in SAFETY_RANGES.items():
             value = getattr(self, name)
             if name == "watchdog_periods":
-                if not (isinstance(value, int) and low <= value <= high):
+                if isinstance(value, bool) or not (isinstance(value, int) and low <= value <= high):
                     raise MotosimError(
                         f"safety watchdog_periods = {short_repr(value)}; expected an integer "
                         f"from {low:g} to {high:g}"
@@ -476,11 +476,15 @@ class SafetyStage:
     ) -> None:
         if not (math.isfinite(dt) and dt > 0.0):
             raise MotosimError(f"dt = {dt!r} s: expected a positive period")
-        if periods_per_frame < 1:
+        if (
+            isinstance(periods_per_frame, bool)
+            or not isinstance(periods_per_frame, int | np.integer)
+            or periods_per_frame < 1
+        ):  # a NaN would have made the watchdog's count never reached
             raise MotosimError(
                 f"periods_per_frame = {periods_per_frame!r}: expected an integer >= 1"
             )
-        self._watchdog = limits.watchdog_periods * periods_per_frame
+        self._watchdog = limits.watchdog_periods * int(periods_per_frame)
         self.limits = limits
         self.dt = float(dt)
         self._s = new_safety_state()

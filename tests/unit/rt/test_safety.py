@@ -3,6 +3,7 @@
 import itertools
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -213,6 +214,8 @@ def test_watchdog_waits_while_idle() -> None:
         ("hard_stop", 0.4),
         ("hands_off_gain", 1.5),
         ("watchdog_periods", 0),
+        ("watchdog_periods", True),  # a TOML true is no count of periods
+        ("watchdog_periods", 2.0),
         ("end_stop_gain", -1.0),
     ],
 )
@@ -426,3 +429,17 @@ def test_nothing_the_stage_sends_pushes_a_handlebar_too_fast_faster(
     assert out * omega <= 0.0
     still = Driver().running().period(command, theta=theta, omega=0.0)
     assert abs(out) <= abs(still) and out * still >= 0.0  # it only ever reduces
+
+
+@pytest.mark.parametrize("periods_per_frame", [math.nan, 2.5, 0, True])
+def test_periods_per_frame_must_be_a_whole_count(periods_per_frame: object) -> None:
+    # the watchdog waits watchdog_periods * periods_per_frame periods: a NaN made that
+    # count one it never reached (the watchdog off) and was accepted, as was 2.5
+    with pytest.raises(MotosimError, match="periods_per_frame"):
+        SafetyStage(LIMITS, dt=1e-3, periods_per_frame=periods_per_frame)  # type: ignore[arg-type]
+
+
+def test_the_watchdog_waits_its_frame_periods_under_a_faster_loop() -> None:
+    # 100 Hz status frames under a 1 kHz loop: 3 frame periods are 30 loop periods
+    stage = SafetyStage(LIMITS, dt=1e-3, periods_per_frame=np.int64(10))  # type: ignore[arg-type]
+    assert stage.watchdog_periods == 30
