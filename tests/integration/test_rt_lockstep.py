@@ -404,3 +404,32 @@ def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
     rows = runner.ring.drain()
     assert runner.counters().fault == "NON_FINITE"
     assert rows[69, 4] != 0.0 and np.all(rows[70:, 4] == 0.0) and rows[70, 6] == Fault.NON_FINITE
+
+
+def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    # A stack whose row has no theta_h_dot_hat (a StackStepper in Python may have none): the
+    # loop takes the handlebar's rate from the measured angle. With 100 Hz status frames
+    # under a 1 kHz loop the angle changes once in ten periods; its change over one period
+    # read a rate ten times the handlebar's, and the speed limiter (6 rad/s) cut the
+    # command of a handlebar swinging at 1.8 rad/s in 96 periods of 3 s. The rate is the
+    # change between two frames over their interval.
+    host, drive = links
+    limits = SafetyLimits(**{
+        name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
+    } | {"max_speed": 6.0, "speed_band": 4.0})  # fmt: skip
+    t = np.arange(40_001) / 10_000.0
+    tau = 25.0 * np.sin(2.0 * np.pi * t)  # the rider swings the handlebar at 1 Hz
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, tau, np.random.default_rng(3))
+    runner = RealtimeRunner(SpringStack(5.0), host, CODECS, limits, rate=1000.0,
+                            periods_per_frame=10)  # fmt: skip
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    RateLoop(1000.0, clock).run(runner.period, periods=3000)
+    rows = runner.ring.drain()
+    frames = rows[::10, 1]  # the angle measured, once per frame
+    speed = np.max(np.abs(np.diff(frames))) * 100.0
+    assert 1.0 < speed < limits.max_speed and runner.counters().fault == "NONE"
+    running = rows[:, 5] == State.RUNNING
+    assert np.array_equal(rows[running, 4], rows[running, 3])  # the command passed whole
