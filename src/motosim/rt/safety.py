@@ -21,9 +21,9 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   alive counter has moved forward, by 1 to 7 of its 16 values (a stale or duplicated frame,
   or an older one delivered after a newer, does not feed the watchdog and is not used: the
   counter's window of AUTOSAR's E2E profiles, *Specification of SW-C End-to-End
-  Communication Protection Library*, R4.0; after 7 or more frames lost in a row, which
-  trip the default watchdog long before, the counter is taken up again after up to 9
-  frames);
+  Communication Protection Library*, R4.0; after 7 or more frames lost in a row the counter
+  is taken up again at the second of two frames in a row one count apart, so that a
+  ``watchdog_periods`` above 7 frames is kept too);
 - guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
@@ -208,14 +208,15 @@ frames lost); a larger one is an older frame delivered after a newer."""
 
 S_STATE, S_FAULT, S_FAULT_TIME, S_T, S_ENVELOPE, S_LAST, S_COUNTER, S_FRESH = range(8)
 S_MISSING, S_QUIET, S_HANDS_OFF, S_REF_THETA, S_REF_TORQUE, S_FREE, S_LOST, S_STALE = range(8, 16)
-S_GAIN = 16
-SAFETY_STATE_SIZE = 17
+S_GAIN, S_BEHIND = 16, 17
+SAFETY_STATE_SIZE = 18
 """Positions in the stage's state array (state and fault codes, the fault's time [s], the
 stage's time [s], the fade envelope, the last command [A], the last alive counter, a fresh
 frame flag, periods without a fresh frame, hands-off time [s] and flag, the frozen-sensor
 monitor's reference angle [rad], torque [N*m] and free turn [rad], frames lost and stale,
 the gain on the stack's command: ``hands_off_gain`` while hands off, back to 1 over
-``fade_in``)."""
+``fade_in``; the alive counter of the last frame refused as older, -1 if the last frame was
+not one)."""
 
 (
     P_MAX_CURRENT, P_MAX_SLEW, P_MAX_SPEED, P_SPEED_BAND, P_SOFT_STOP, P_HARD_STOP,
@@ -254,6 +255,7 @@ def new_safety_state() -> NDArray[np.float64]:
     s[S_COUNTER] = -1.0
     s[S_REF_THETA] = math.nan
     s[S_GAIN] = 1.0
+    s[S_BEHIND] = -1.0
     return s
 
 
@@ -283,10 +285,19 @@ def safety_status_frame(
     c = int(counter) & 0xF
     last = int(s[S_COUNTER])
     step = (c - last) & 0xF
+    behind = int(s[S_BEHIND])
+    s[S_BEHIND] = -1.0
     if last >= 0 and (step == 0 or step > MAX_COUNTER_STEP):
-        s[S_STALE] += 1.0  # the same frame again, or an older one after a newer
-        return False
-    if last >= 0:
+        if step == 0 or behind < 0 or c != (behind + 1) & 0xF:
+            s[S_STALE] += 1.0  # the same frame again, or an older one after a newer
+            if step != 0:
+                s[S_BEHIND] = c
+            return False
+        # two frames in a row, one count apart, both beyond the window: the drive's counter
+        # went on while 7 or more frames were lost; taken up again from the second
+        s[S_LOST] += ((behind - last) & 0xF) - 1
+        s[S_STALE] -= 1.0  # the first was no older frame: it was fresh, though not used
+    elif last >= 0:
         s[S_LOST] += step - 1
     s[S_COUNTER] = c
     s[S_FRESH] = 1.0
@@ -579,6 +590,7 @@ class SafetyStage:
         s[S_STATE] = 0.0
         s[S_MISSING] = 0.0
         s[S_COUNTER] = -1.0
+        s[S_BEHIND] = -1.0
 
     # --- frames ------------------------------------------------------------------------
     def status_frame(self, *, checksum_ok: bool, counter: float, drive_fault: bool) -> bool:
@@ -588,7 +600,9 @@ class SafetyStage:
         that has not moved (a stale or duplicated frame) or went back (an older frame
         delivered after a newer: more than :data:`MAX_COUNTER_STEP` ahead on the 4-bit
         circle) makes the frame invalid; a counter that jumped by up to
-        :data:`MAX_COUNTER_STEP` counts the lost frames.
+        :data:`MAX_COUNTER_STEP` counts the lost frames. Two frames in a row one count
+        apart, both beyond that window, are 7 or more frames lost: the second is valid
+        (the counter taken up again).
         """
         return bool(safety_status_frame(self._s, bool(checksum_ok), float(counter),
                                         bool(drive_fault)))  # fmt: skip

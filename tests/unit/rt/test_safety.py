@@ -307,15 +307,48 @@ def test_an_older_frame_after_a_newer_is_not_used() -> None:
 
 
 def test_a_long_gap_is_taken_up_again() -> None:
-    # After 8 frames lost the counter has stepped 9 ahead, read as an older frame; the
-    # following frames are taken up again within 9 frames (the gap itself is the watchdog's).
+    # After 8 frames lost the counter has stepped 9 ahead, read as an older frame; the next
+    # frame, one count further, shows the drive's counter went on: it is taken up again
+    # (the gap itself is the watchdog's). Before, the frames were refused until the counter
+    # came round into the window, up to 9 frames later.
     d = Driver().running()
     start = d.counter
     fresh = [
         d.stage.status_frame(checksum_ok=True, counter=(start + k) & 0xF, drive_fault=False)
         for k in range(9, 18)
     ]
-    assert fresh == [False] * 8 + [True]  # +9 to +15: older; +16: the last counter again
+    assert fresh == [False] + [True] * 8
+    assert d.stage.frames_lost == 8 and d.stage.frames_stale == 0
+
+
+def test_an_older_frame_then_the_next_one_is_no_long_gap() -> None:
+    # one older frame delivered late, then the drive's next frame: the older one refused,
+    # the next one taken as one step after the newest (not as a counter taken up again)
+    d = Driver().running()
+    newest = d.counter
+    assert not d.stage.status_frame(checksum_ok=True, counter=newest - 3, drive_fault=False)
+    assert d.stage.status_frame(checksum_ok=True, counter=newest + 1, drive_fault=False)
+    assert d.stage.frames_lost == 0 and d.stage.frames_stale == 1
+    # and a frame repeated twice is no counter going on
+    for _ in range(2):
+        assert not d.stage.status_frame(checksum_ok=True, counter=newest + 1, drive_fault=False)
+
+
+@pytest.mark.parametrize("lost", [7, 9, 13])
+def test_a_watchdog_longer_than_the_counters_window_is_kept(lost: int) -> None:
+    # watchdog_periods = 20 frames (a lab's lossy bus): a burst of 7 to 13 frames lost must
+    # not trip it, however the 4-bit counter jumped; before, the frames after the gap were
+    # refused until the counter came round (up to 9 more), and a gap of 9 lost frames
+    # tripped the 20-frame watchdog. (14 and 15 lost bring the counter round to the last
+    # one's, a repeated frame to a 4-bit counter: taken up at the frame after.)
+    d = Driver(SafetyLimits(**{**_fields(LIMITS), "watchdog_periods": 20}), rate=100.0)
+    d.running()
+    for _ in range(lost):  # the frames lost: their counts are used by the drive
+        d.counter += 1
+        assert d.period(frame=False) == 10.0
+    out = [d.period() for _ in range(20)]
+    assert out == [10.0] * 20 and d.stage.fault == Fault.NONE
+    assert d.stage.frames_lost == lost
 
 
 def test_a_drive_fault_counts_even_in_a_frame_not_used() -> None:
