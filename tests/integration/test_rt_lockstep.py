@@ -433,3 +433,63 @@ def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
     assert 1.0 < speed < limits.max_speed and runner.counters().fault == "NONE"
     running = rows[:, 5] == State.RUNNING
     assert np.array_equal(rows[running, 4], rows[running, 3])  # the command passed whole
+
+
+def test_nothing_enables_the_torque_again_after_a_fault(links: tuple[CanLink, CanLink]) -> None:
+    # An E-stop frame at 0.5 s latches the fault. What a user must do to have torque again
+    # is start a new run: within this one, the drive's frames going on, the view's Arm
+    # button and a stop request leave the command at zero and the stage in FAULT, and a
+    # keyboard E-stop after it does not replace the first fault's reason.
+    host, drive = links
+    settings = _settings(100.0, faults=RigFaults(estop=0.5))
+    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(100_000, 3.0), np.random.default_rng(5))
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, linger=5.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+
+    def period(k: int, t: float) -> bool:
+        if k == 70:
+            runner.arm()
+        elif k == 80:
+            runner.emergency_stop()
+        elif k == 90:
+            runner.request_stop()
+        return runner.period(k, t)
+
+    served = RateLoop(100.0, clock).run(period, periods=300)
+    rows = runner.ring.drain()
+    k = int(np.argmax(rows[:, 6] > 0))
+    assert rows[k - 1, 4] != 0.0 and np.all(rows[k:, 4] == 0.0)
+    assert np.all(rows[k:, 5] == State.FAULT) and served == 300
+    c = runner.counters()
+    assert c.fault == "ESTOP_CAN" and c.status_frames >= 290 and c.frames_stale == 0
+
+
+@pytest.mark.parametrize("stop", ["ctrl-c", "e-stop"])
+def test_a_stop_during_the_fade_in(links: tuple[CanLink, CanLink], stop: str) -> None:
+    # Ctrl-C 0.2 s into the 0.5 s fade-in fades the torque out from where the fade-in had
+    # brought it (0.4 of the command, down by 0.02 of it per period at 100 Hz: never a
+    # step up or to zero), then the run ends IDLE; an E-stop sends zero at once.
+    host, drive = links
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(100_000, 3.0),
+                      np.random.default_rng(6))  # fmt: skip
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+
+    def period(k: int, t: float) -> bool:
+        if k == 20:
+            runner.request_stop() if stop == "ctrl-c" else runner.emergency_stop()
+        return runner.period(k, t)
+
+    served = RateLoop(100.0, clock).run(period, periods=300)
+    rows = runner.ring.drain()
+    assert np.all(rows[:20, 5] == State.FADE_IN)
+    share = rows[:, 4] / np.where(rows[:, 3] == 0.0, 1.0, rows[:, 3])
+    assert share[19] == pytest.approx(0.4)
+    if stop == "ctrl-c":
+        assert served == 40 and rows[-1, 5] == State.IDLE and rows[-1, 4] == 0.0
+        assert share[20:] == pytest.approx(0.4 - 0.02 * np.arange(1, 21))
+        assert runner.counters().fault == "NONE"
+    else:
+        assert np.all(rows[20:, 4] == 0.0) and runner.counters().fault == "ESTOP_KEY"
