@@ -30,8 +30,9 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
 - hands-off detection: while the estimated rider torque stays below ``hands_off_torque``
   [N*m] for ``hands_off_time`` [s], the stack's command is scaled by ``hands_off_gain``
   (before the limits: the end stops' spring is not scaled; a period without an estimate
-  keeps the flag as it is); once the rider's torque is back, the scale returns to 1 at the
-  fade-in's pace, so that a rider who takes the handlebar gets the torque back gradually;
+  keeps the flag as it is); once the rider's torque is back, the command is whole again at
+  once, as fast as the slew-rate limit lets it (a ramp at the fade-in's pace was tried: the
+  stack's tracking at the start of a manoeuvre suffered, see the realtime guide);
 - a frozen-sensor monitor (given the handlebar's parameters): the angle has not changed
   while the motor torque has moved so far from its value at the angle's last change that a
   free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault
@@ -208,14 +209,13 @@ frames lost); a larger one is an older frame delivered after a newer."""
 
 S_STATE, S_FAULT, S_FAULT_TIME, S_T, S_ENVELOPE, S_LAST, S_COUNTER, S_FRESH = range(8)
 S_MISSING, S_QUIET, S_HANDS_OFF, S_REF_THETA, S_REF_TORQUE, S_FREE, S_LOST, S_STALE = range(8, 16)
-S_GAIN, S_BEHIND = 16, 17
-SAFETY_STATE_SIZE = 18
+S_BEHIND = 16
+SAFETY_STATE_SIZE = 17
 """Positions in the stage's state array (state and fault codes, the fault's time [s], the
 stage's time [s], the fade envelope, the last command [A], the last alive counter, a fresh
 frame flag, periods without a fresh frame, hands-off time [s] and flag, the frozen-sensor
 monitor's reference angle [rad], torque [N*m] and free turn [rad], frames lost and stale,
-the gain on the stack's command: ``hands_off_gain`` while hands off, back to 1 over
-``fade_in``; the alive counter of the last frame refused as older, -1 if the last frame was
+the alive counter of the last frame refused as older, -1 if the last frame was
 not one)."""
 
 (
@@ -254,7 +254,6 @@ def new_safety_state() -> NDArray[np.float64]:
     s[S_FAULT_TIME] = math.nan
     s[S_COUNTER] = -1.0
     s[S_REF_THETA] = math.nan
-    s[S_GAIN] = 1.0
     s[S_BEHIND] = -1.0
     return s
 
@@ -379,8 +378,7 @@ def safety_step(
         else:
             s[S_QUIET] = 0.0
             s[S_HANDS_OFF] = 0.0
-    s[S_GAIN] = _ramped_gain(s, p)
-    i = command * s[S_GAIN]
+    i = command * p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else command
     # soft end stops
     over = abs(theta) - p[P_SOFT_STOP]
     if over > 0.0:
@@ -654,25 +652,13 @@ class SafetyStage:
 @njit(cache=True)
 def safety_scale(s: NDArray[np.float64], p: NDArray[np.float64]) -> float:
     """The share of its command the stage will pass in the coming period [-], as far as it
-    is known before the command: the fade envelope times the gain on the command (the
-    hands-off gain while nobody holds the handlebar, its way back to 1 after), their ramps
-    taken; 0 while the stage is idle or faulted. The clamp,
+    is known before the command: the fade envelope (its ramp taken) times the hands-off
+    gain while nobody holds the handlebar; 0 while the stage is idle or faulted. The clamp,
     the slew and the speed and end-stop limits, which depend on the command, are not in it.
     """
     if s[S_STATE] == 0.0 or s[S_STATE] == 3.0:  # IDLE, FAULT: the drive is disabled
         return 0.0
-    return float(_ramped_envelope(s, p) * _ramped_gain(s, p))
-
-
-@njit(cache=True)
-def _ramped_gain(s: NDArray[np.float64], p: NDArray[np.float64]) -> float:
-    """The gain on the stack's command after this period's ramp: ``hands_off_gain`` at once
-    while hands off, else back up towards 1 at the fade-in's pace (1 / ``fade_in`` per
-    second): a rider who takes the handlebar again gets the full torque back gradually,
-    never as a step."""
-    if s[S_HANDS_OFF] != 0.0:
-        return float(p[P_HANDS_OFF_GAIN])
-    return float(min(1.0, s[S_GAIN] + p[P_DT] / p[P_FADE_IN]))
+    return float(_ramped_envelope(s, p) * (p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else 1.0))
 
 
 @njit(cache=True)
