@@ -581,7 +581,8 @@ class SafetyStage:
         safety_trip(self._s, int(fault))
 
     def clear(self) -> None:
-        """Forget a latched fault and go IDLE (the watchdog starts afresh)."""
+        """Forget a latched fault and go IDLE (the watchdog, the alive counter, the
+        frozen-sensor monitor and hands-off detection start afresh)."""
         s = self._s
         s[S_FAULT] = 0.0
         s[S_FAULT_TIME] = math.nan
@@ -589,6 +590,10 @@ class SafetyStage:
         s[S_MISSING] = 0.0
         s[S_COUNTER] = -1.0
         s[S_BEHIND] = -1.0
+        s[S_REF_THETA] = math.nan
+        s[S_FREE] = 0.0
+        s[S_QUIET] = 0.0
+        s[S_HANDS_OFF] = 0.0
 
     # --- frames ------------------------------------------------------------------------
     def status_frame(self, *, checksum_ok: bool, counter: float, drive_fault: bool) -> bool:

@@ -452,3 +452,20 @@ def test_the_watchdog_waits_its_frame_periods_under_a_faster_loop() -> None:
     # 100 Hz status frames under a 1 kHz loop: 3 frame periods are 30 loop periods
     stage = SafetyStage(LIMITS, dt=1e-3, periods_per_frame=np.int64(10))  # type: ignore[arg-type]
     assert stage.watchdog_periods == 30
+
+
+def test_clear_starts_the_frozen_sensor_monitor_afresh() -> None:
+    # After a FROZEN_SENSOR fault is cleared (a new sensor fitted, the handlebar at rest at
+    # the same count), the monitor must start from the new fade-in's torque, not compare it
+    # with the torque of the fault's time: before, the first period of the fade-in tripped
+    # it again (0 A now against 13 A then, with the turn already beyond frozen_angle).
+    d = Driver(handlebar=True).running()
+    for _ in range(1000):
+        d.period(10.0, theta=0.1)
+    for _ in range(300):
+        d.period(13.0, theta=0.1)
+    assert d.stage.fault == Fault.FROZEN_SENSOR
+    d.stage.clear()
+    d.stage.enable()
+    out = [d.period(0.5, theta=0.1) for _ in range(600)]  # 1.5 N*m: within the dead band
+    assert d.stage.fault == Fault.NONE and out[-1] == 0.5 and d.stage.free_turn == 0.0
