@@ -493,3 +493,35 @@ def test_a_stop_during_the_fade_in(links: tuple[CanLink, CanLink], stop: str) ->
         assert runner.counters().fault == "NONE"
     else:
         assert np.all(rows[20:, 4] == 0.0) and runner.counters().fault == "ESTOP_KEY"
+
+
+def test_a_heartbeat_whose_first_deadline_was_skipped_is_sent_late_not_dropped() -> None:
+    # The heartbeat goes out every 0.1 s (10 periods at 100 Hz). A loop late over the
+    # deadline that was to send one (k = 20) sends it in the next period served (k = 21);
+    # before, it went with the deadline, and the drive saw 0.2 s between two heartbeats.
+    channel = f"virtual:heartbeat{next(_channels)}"
+    host, drive, listener = open_link(channel), open_link(channel), open_link(channel)
+    try:
+        vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(20_001, 3.0),
+                          np.random.default_rng(7))  # fmt: skip
+        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+        clock = SimulatedClock()
+        clock.listen(vrig.advance_to)
+
+        def period(k: int, t: float) -> bool:
+            carry_on = runner.period(k, t)
+            if k == 19:
+                clock.advance(1.5e-2)  # 1.5 periods late: the deadline k = 20 is skipped
+            return carry_on
+
+        RateLoop(100.0, clock).run(period, periods=50)
+        counters, values = [], np.zeros(len(CODECS.heartbeat.names))
+        at = CODECS.position(CODECS.heartbeat, "counter")
+        while (frame := listener.receive()) is not None:
+            if frame[0] == CODECS.heartbeat.frame_id:
+                assert CODECS.heartbeat.decode(frame[1], values)
+                counters.append(int(values[at]))
+    finally:
+        for link in (host, drive, listener):
+            link.close()
+    assert counters == [0, 1, 2, 3, 4]  # k = 0, 10, 21, 30, 40

@@ -16,8 +16,8 @@ does (see :mod:`motosim.rt.run`):
    :func:`~motosim.rt.stack.stack_period`);
 4. :func:`finish`: the virtual motorcycle's range (a fall, a speed outside the model's: the
    torque fades out and the run ends, as offline), the safety stage
-   (:func:`~motosim.rt.safety.safety_step`), the command
-   frame and, every ``heartbeat_every`` periods, the heartbeat frame encoded
+   (:func:`~motosim.rt.safety.safety_step`), the command frame and, in the first period
+   served of every ``heartbeat_every``, the heartbeat frame encoded
    (:func:`~motosim.io.can.encode_frame`) in place in the bytes to send; the row written into
    the ring's next slot (its head is advanced by the runner once the time stamps of the
    send are in the row).
@@ -98,9 +98,9 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_SINCE, R_OMEGA,
-) = range(37)  # fmt: skip
-RUNNER_STATE_SIZE = 37
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_SINCE, R_OMEGA, R_BEATS,
+) = range(38)  # fmt: skip
+RUNNER_STATE_SIZE = 38
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
 the angle of the last fresh status frame, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
@@ -115,8 +115,9 @@ stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did n
 the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
 errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`);
 whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0);
-and, for a stack without a rate in its row, the periods since the last fresh status frame
-and the handlebar's rate between the last two [rad/s]."""
+for a stack without a rate in its row, the periods since the last fresh status frame and
+the handlebar's rate between the last two [rad/s]; and the heartbeat due next (its index:
+the period's index over ``heartbeat_every``)."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -433,8 +434,9 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     r[R_SENT] = sent + 1
     encode_frame(a.command, values, a.command_frame, q[Q_COMMAND_AT])
     every = int(r[R_HEARTBEAT_EVERY])
-    beat = k % every == 0
-    if beat:
+    beat = k // every >= r[R_BEATS]  # the first period of its heartbeat period served
+    if beat:  # (k % every == 0 missed the heartbeat whose period's first deadline was skipped)
+        r[R_BEATS] = k // every + 1
         values = a.heartbeat_values
         values[q[Q_STATE]] = state
         values[q[Q_FAULT]] = s[S_FAULT]
