@@ -469,3 +469,21 @@ def test_clear_starts_the_frozen_sensor_monitor_afresh() -> None:
     d.stage.enable()
     out = [d.period(0.5, theta=0.1) for _ in range(600)]  # 1.5 N*m: within the dead band
     assert d.stage.fault == Fault.NONE and out[-1] == 0.5 and d.stage.free_turn == 0.0
+
+
+def test_a_status_frame_in_the_watchdogs_last_period_keeps_it_quiet() -> None:
+    # the boundary: two periods without status, a frame in the third: no trip; then three
+    # periods without: the third sends zero (the watchdog's 3 periods, exactly)
+    d = Driver(rate=1000.0).running()
+    assert [d.period(frame=False) for _ in range(2)] == [10.0, 10.0]
+    assert d.period() == 10.0 and d.stage.fault == Fault.NONE
+    assert [d.period(frame=False) for _ in range(3)] == [10.0, 10.0, 0.0]
+
+
+def test_the_alive_counter_wraps_round_without_a_loss() -> None:
+    # 4 bits: 14, 15, 0, 1 are four frames in a row, none lost, none stale
+    stage = SafetyStage(LIMITS, dt=1e-3)
+    fresh = [
+        stage.status_frame(checksum_ok=True, counter=c, drive_fault=False) for c in (14, 15, 0, 1)
+    ]
+    assert fresh == [True] * 4 and stage.frames_lost == 0 and stage.frames_stale == 0
