@@ -302,3 +302,226 @@ def test_paced_by_the_bus_without_a_drive_trips_no_drive_after_the_start_timeout
     assert runner.counters().fault == "NO_DRIVE" and np.all(rows[:, 4] == 0.0)
     stats = loop.stats()  # 1 s of frame periods without a frame: the drive's, not missed
     assert rows[0, 0] == 0.0 and stats.gaps >= 100 and stats.missed == 0
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_a_loop_late_while_the_bus_is_off_sends_zero_on_its_first_period_back(
+    links: tuple[CanLink, CanLink], rate: float
+) -> None:
+    # The bus goes off at 0.8 s and the loop stalls for 5.5 periods in the period before
+    # (it skips 5 deadlines): once back, 6 periods have passed without a status frame, more
+    # than the watchdog's 3, so its first period sends zero (before, the skipped deadlines
+    # were not counted: the stale command went out for 2 more periods).
+    host, drive = links
+    settings = _settings(rate, bus_off_at=0.8, bus_off_duration=1.0)
+    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(20_001, 3.0), np.random.default_rng(0))
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=rate)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    stall = round(0.8 * rate) - 1
+
+    def period(k: int, t: float) -> bool:
+        carry_on = runner.period(k, t)
+        if k == stall:
+            clock.advance(5.5 / rate)
+        return carry_on
+
+    loop = RateLoop(rate, clock)
+    loop.run(period, periods=round(1.2 * rate))
+    rows = runner.ring.drain()
+    back = stall + 1  # the row of the first period served after the stall
+    assert loop.stats().missed == 5 and rows[back, 0] == pytest.approx(0.8 + 5.0 / rate)
+    assert rows[stall, 4] != 0.0 and np.all(rows[back:, 4] == 0.0)
+    assert runner.counters().fault == "WATCHDOG"
+
+
+def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    # At the end of the duration motosim run calls finish() and runs the periods it
+    # returns (ten times over at most): with a slew-rate limit slower than the fade (5 A/s:
+    # 10 A need 2 s, the fade 0.5 s) the run must still end on a zero command with the
+    # stage IDLE, never on a current left on (the drive would hold it). The rider's torque
+    # rises to 30 N*m over 3 s against the spring (i = -30 theta: 9.4 A at 0.31 rad with
+    # the friction), holds it to 4 s, then the rider lets go.
+    host, drive = links
+    tau = np.zeros(200_000)
+    tau[:40_000] = 30.0
+    tau[:30_000] = np.linspace(0.0, 30.0, 30_000)
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, tau, np.random.default_rng(3))
+    limits = SafetyLimits(**{
+        name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
+    } | {"max_slew": 5.0})  # fmt: skip
+    runner = RealtimeRunner(SpringStack(30.0), host, CODECS, limits, rate=100.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    loop = RateLoop(100.0, clock)
+    loop.run(runner.period, periods=400)
+    rows = runner.ring.drain()
+    assert rows[-1, 5] == State.RUNNING and rows[-1, 4] < -9.0
+    fade = runner.finish()
+    served = loop.run(runner.period, periods=10 * fade)
+    rows = np.vstack([rows, runner.ring.drain()])
+    assert served < 10 * fade and rows[-1, 4] == 0.0 and rows[-1, 5] == State.IDLE
+    assert np.all(rows[-served:-1, 5] == State.STOPPING)
+    assert np.all(np.abs(np.diff(rows[:, 4])) <= 0.05 + 1e-9)  # 5 A/s at 100 Hz, no step
+
+
+class EstimateStack(SpringStack):
+    """The spring, with an estimate and a rate in its row that go NaN from ``bad_from``
+    (``column``), its command still finite."""
+
+    names = ("tau_r_hat", "theta_h_dot_hat")
+
+    def __init__(self, gain: float, column: int, bad_from: int) -> None:
+        super().__init__(gain)
+        self.column, self.bad_from, self.steps = column, bad_from, 0
+
+    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
+        command = -self.gain * theta_meas
+        self._row[:] = (3.0, 0.0)
+        if self.steps >= self.bad_from:
+            self._row[self.column] = math.nan
+        self.steps += 1
+        return command
+
+
+@pytest.mark.parametrize("column", [0, 1])
+def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
+    links: tuple[CanLink, CanLink], column: int
+) -> None:
+    # The NaN guard promises zero torque for a NaN in a measurement, the estimate or the
+    # command: the stack's rider-torque estimate (tau_r_hat) or rate going NaN while its
+    # command stays finite trips NON_FINITE in that period (before, a NaN estimate was
+    # taken for "no estimate" and the command went on).
+    host, drive = links
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(20_001, 3.0),
+                      np.random.default_rng(4))  # fmt: skip
+    runner = RealtimeRunner(EstimateStack(20.0, column, 70), host, CODECS, LIMITS, rate=100.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    RateLoop(100.0, clock).run(runner.period, periods=100)
+    rows = runner.ring.drain()
+    assert runner.counters().fault == "NON_FINITE"
+    assert rows[69, 4] != 0.0 and np.all(rows[70:, 4] == 0.0) and rows[70, 6] == Fault.NON_FINITE
+
+
+def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
+    links: tuple[CanLink, CanLink],
+) -> None:
+    # A stack whose row has no theta_h_dot_hat (a StackStepper in Python may have none): the
+    # loop takes the handlebar's rate from the measured angle. With 100 Hz status frames
+    # under a 1 kHz loop the angle changes once in ten periods; its change over one period
+    # read a rate ten times the handlebar's, and the speed limiter (6 rad/s) cut the
+    # command of a handlebar swinging at 1.8 rad/s in 96 periods of 3 s. The rate is the
+    # change between two frames over their interval.
+    host, drive = links
+    limits = SafetyLimits(**{
+        name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
+    } | {"max_speed": 6.0, "speed_band": 4.0})  # fmt: skip
+    t = np.arange(40_001) / 10_000.0
+    tau = 25.0 * np.sin(2.0 * np.pi * t)  # the rider swings the handlebar at 1 Hz
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, tau, np.random.default_rng(3))
+    runner = RealtimeRunner(SpringStack(5.0), host, CODECS, limits, rate=1000.0,
+                            periods_per_frame=10)  # fmt: skip
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    RateLoop(1000.0, clock).run(runner.period, periods=3000)
+    rows = runner.ring.drain()
+    frames = rows[::10, 1]  # the angle measured, once per frame
+    speed = np.max(np.abs(np.diff(frames))) * 100.0
+    assert 1.0 < speed < limits.max_speed and runner.counters().fault == "NONE"
+    running = rows[:, 5] == State.RUNNING
+    assert np.array_equal(rows[running, 4], rows[running, 3])  # the command passed whole
+
+
+def test_nothing_enables_the_torque_again_after_a_fault(links: tuple[CanLink, CanLink]) -> None:
+    # An E-stop frame at 0.5 s latches the fault. What a user must do to have torque again
+    # is start a new run: within this one, the drive's frames going on, the view's Arm
+    # button and a stop request leave the command at zero and the stage in FAULT, and a
+    # keyboard E-stop after it does not replace the first fault's reason.
+    host, drive = links
+    settings = _settings(100.0, faults=RigFaults(estop=0.5))
+    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(100_000, 3.0), np.random.default_rng(5))
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, linger=5.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+
+    def period(k: int, t: float) -> bool:
+        if k == 70:
+            runner.arm()
+        elif k == 80:
+            runner.emergency_stop()
+        elif k == 90:
+            runner.request_stop()
+        return runner.period(k, t)
+
+    served = RateLoop(100.0, clock).run(period, periods=300)
+    rows = runner.ring.drain()
+    k = int(np.argmax(rows[:, 6] > 0))
+    assert rows[k - 1, 4] != 0.0 and np.all(rows[k:, 4] == 0.0)
+    assert np.all(rows[k:, 5] == State.FAULT) and served == 300
+    c = runner.counters()
+    assert c.fault == "ESTOP_CAN" and c.status_frames >= 290 and c.frames_stale == 0
+
+
+@pytest.mark.parametrize("stop", ["ctrl-c", "e-stop"])
+def test_a_stop_during_the_fade_in(links: tuple[CanLink, CanLink], stop: str) -> None:
+    # Ctrl-C 0.2 s into the 0.5 s fade-in fades the torque out from where the fade-in had
+    # brought it (0.4 of the command, down by 0.02 of it per period at 100 Hz: never a
+    # step up or to zero), then the run ends IDLE; an E-stop sends zero at once.
+    host, drive = links
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(100_000, 3.0),
+                      np.random.default_rng(6))  # fmt: skip
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+
+    def period(k: int, t: float) -> bool:
+        if k == 20:
+            runner.request_stop() if stop == "ctrl-c" else runner.emergency_stop()
+        return runner.period(k, t)
+
+    served = RateLoop(100.0, clock).run(period, periods=300)
+    rows = runner.ring.drain()
+    assert np.all(rows[:20, 5] == State.FADE_IN)
+    share = rows[:, 4] / np.where(rows[:, 3] == 0.0, 1.0, rows[:, 3])
+    assert share[19] == pytest.approx(0.4)
+    if stop == "ctrl-c":
+        assert served == 40 and rows[-1, 5] == State.IDLE and rows[-1, 4] == 0.0
+        assert share[20:] == pytest.approx(0.4 - 0.02 * np.arange(1, 21))
+        assert runner.counters().fault == "NONE"
+    else:
+        assert np.all(rows[20:, 4] == 0.0) and runner.counters().fault == "ESTOP_KEY"
+
+
+def test_a_heartbeat_whose_first_deadline_was_skipped_is_sent_late_not_dropped() -> None:
+    # The heartbeat goes out every 0.1 s (10 periods at 100 Hz). A loop late over the
+    # deadline that was to send one (k = 20) sends it in the next period served (k = 21);
+    # before, it went with the deadline, and the drive saw 0.2 s between two heartbeats.
+    channel = f"virtual:heartbeat{next(_channels)}"
+    host, drive, listener = open_link(channel), open_link(channel), open_link(channel)
+    try:
+        vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(20_001, 3.0),
+                          np.random.default_rng(7))  # fmt: skip
+        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+        clock = SimulatedClock()
+        clock.listen(vrig.advance_to)
+
+        def period(k: int, t: float) -> bool:
+            carry_on = runner.period(k, t)
+            if k == 19:
+                clock.advance(1.5e-2)  # 1.5 periods late: the deadline k = 20 is skipped
+            return carry_on
+
+        RateLoop(100.0, clock).run(period, periods=50)
+        counters, values = [], np.zeros(len(CODECS.heartbeat.names))
+        at = CODECS.position(CODECS.heartbeat, "counter")
+        while (frame := listener.receive()) is not None:
+            if frame[0] == CODECS.heartbeat.frame_id:
+                assert CODECS.heartbeat.decode(frame[1], values)
+                counters.append(int(values[at]))
+    finally:
+        for link in (host, drive, listener):
+            link.close()
+    assert counters == [0, 1, 2, 3, 4]  # k = 0, 10, 21, 30, 40

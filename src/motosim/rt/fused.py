@@ -16,8 +16,8 @@ does (see :mod:`motosim.rt.run`):
    :func:`~motosim.rt.stack.stack_period`);
 4. :func:`finish`: the virtual motorcycle's range (a fall, a speed outside the model's: the
    torque fades out and the run ends, as offline), the safety stage
-   (:func:`~motosim.rt.safety.safety_step`), the command
-   frame and, every ``heartbeat_every`` periods, the heartbeat frame encoded
+   (:func:`~motosim.rt.safety.safety_step`), the command frame and, in the first period
+   served of every ``heartbeat_every``, the heartbeat frame encoded
    (:func:`~motosim.io.can.encode_frame`) in place in the bytes to send; the row written into
    the ring's next slot (its head is advanced by the runner once the time stamps of the
    send are in the row).
@@ -98,11 +98,11 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM,
-) = range(35)  # fmt: skip
-RUNNER_STATE_SIZE = 35
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_SINCE, R_OMEGA, R_BEATS,
+) = range(38)  # fmt: skip
+RUNNER_STATE_SIZE = 38
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
-the angle of the period before, flags (started, a fresh status frame, stop requested,
+the angle of the last fresh status frame, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
 status frames received, datagrams that were no frames; then its settings: periods to linger
 after a fault, the ``NO_DRIVE`` timeout [periods], periods between heartbeats, the period
@@ -113,8 +113,11 @@ stack's row holds its roll and speed (-1: nowhere); and whether, when (since the
 deadline [s]), at which roll [rad] and speed [m/s] the motorcycle left that range; the
 stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did not step);
 the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
-errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`); and
-whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0)."""
+errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`);
+whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0);
+for a stack without a rate in its row, the periods since the last fresh status frame and
+the handlebar's rate between the last two [rad/s]; and the heartbeat due next (its index:
+the period's index over ``heartbeat_every``)."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -360,6 +363,8 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
         started = True
         reset = True
         r[R_PREV_THETA] = r[R_THETA]
+        r[R_SINCE] = 0.0
+        r[R_OMEGA] = 0.0
         if r[R_STOP] == 0.0 and r[R_ARMED] != 0.0:
             safety_enable(s)
     if r[R_ARM_REQUEST] != 0.0 and started:
@@ -374,6 +379,10 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
 def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_read: float) -> int:
     """The safety stage on the stack's ``command`` [A], the frames to send, the row.
 
+    The stack's estimate of the rider's torque (its row's ``tau_r_hat``) NaN trips
+    ``NON_FINITE`` as an inf does (the stage takes NaN for "no estimate": a stack without
+    one).
+
     ``woke`` and ``done_read`` are the period's wake-up and the end of the bus read on the
     loop's clock [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
     whether the run goes on, whether the heartbeat frame is to be sent this period, and the
@@ -381,18 +390,26 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     advances the ring's head).
     """
     r, q, s = a.runner, a.positions, a.safety
+    fresh = r[R_FRESH] != 0.0
     r[R_FRESH] = 0.0
     started = r[R_STARTED] != 0.0
     theta_now = r[R_THETA]
     rate_at, tau_at = int(r[R_S_RATE]), int(r[R_S_TAU])
     if started and rate_at >= 0:
         omega = a.stack_row[rate_at]
-    elif started:
-        omega = (theta_now - r[R_PREV_THETA]) / r[R_DT]
+    elif started:  # the angle's change between the last two fresh frames over their interval
+        # (with frames slower than the loop, not one period's: a rate ten times too high)
+        r[R_SINCE] += 1.0
+        if fresh:
+            r[R_OMEGA] = (theta_now - r[R_PREV_THETA]) / (r[R_SINCE] * r[R_DT])
+            r[R_PREV_THETA] = theta_now
+            r[R_SINCE] = 0.0
+        omega = r[R_OMEGA]
     else:
         omega = 0.0
-    r[R_PREV_THETA] = theta_now
     tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
+    if started and tau_at >= 0 and tau_hat != tau_hat:  # NaN: no estimate only without one
+        safety_trip(s, 2)  # NON_FINITE
     phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
     if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
         phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
@@ -417,8 +434,9 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     r[R_SENT] = sent + 1
     encode_frame(a.command, values, a.command_frame, q[Q_COMMAND_AT])
     every = int(r[R_HEARTBEAT_EVERY])
-    beat = k % every == 0
-    if beat:
+    beat = k // every >= r[R_BEATS]  # the first period of its heartbeat period served
+    if beat:  # (k % every == 0 missed the heartbeat whose period's first deadline was skipped)
+        r[R_BEATS] = k // every + 1
         values = a.heartbeat_values
         values[q[Q_STATE]] = state
         values[q[Q_FAULT]] = s[S_FAULT]

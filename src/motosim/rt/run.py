@@ -457,12 +457,16 @@ class RealtimeRunner:
 
     def finish(self) -> int:
         """End a run that reached its duration: fade the torque out like a stop request
-        (without counting as one); the number of periods the fade-out needs (0 when the
-        torque is already off); :meth:`period` returns False once the torque is off."""
+        (without counting as one); the most periods the fade-out needs (the fade, then the
+        slew-rate limit's way down from the clamp; 0 when the torque is already off);
+        :meth:`period` returns False once the torque is off."""
         if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
             self._r[fused.R_FINISHING] = 1.0
             self.safety.request_stop()
-            return math.ceil(self.safety.envelope * self.safety.limits.fade_in / self.dt) + 2
+            limits = self.safety.limits
+            fade = math.ceil(self.safety.envelope * limits.fade_in / self.dt)
+            slew = math.ceil(limits.max_current / (limits.max_slew * self.dt))
+            return fade + slew + 2
         return 0
 
     def emergency_stop(self) -> None:

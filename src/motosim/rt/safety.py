@@ -8,29 +8,40 @@ current command and before the command is encoded (the protections of force-feed
 firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
 
 - a current clamp (``max_current`` [A]) and a slew-rate limit (``max_slew`` [A/s]);
-- a speed limiter that only ever reduces the command pushing the handlebar faster beyond
-  ``max_speed`` [rad/s] (to zero ``speed_band`` [rad/s] above it), never adds torque;
 - soft end stops: beyond ``soft_stop`` [rad] the command pushing further out is dropped and
   a restoring spring ``end_stop_gain`` [A/rad] is added; beyond ``hard_stop`` a fault;
-- a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request;
-- a communication watchdog: no valid status frame for ``watchdog_periods`` periods -> zero
-  command and a latched fault; a status frame is valid when its checksum is right and its
+- a speed limiter that only ever reduces what pushes the handlebar faster beyond
+  ``max_speed`` [rad/s] (to zero ``speed_band`` [rad/s] above it), the end stops' spring
+  included, never adds torque;
+- a fade-in over ``fade_in`` [s] (0.5 s) on every enable, and a fade-out on a stop request
+  (IDLE once the command sent is zero: the slew-rate limit may take longer than the fade);
+- a communication watchdog: no valid status frame for ``watchdog_periods`` periods (the
+  loop's deadlines, those it skipped when late included) -> zero command and a latched
+  fault; a status frame is valid when its checksum is right and its
   alive counter has moved forward, by 1 to 7 of its 16 values (a stale or duplicated frame,
   or an older one delivered after a newer, does not feed the watchdog and is not used: the
   counter's window of AUTOSAR's E2E profiles, *Specification of SW-C End-to-End
-  Communication Protection Library*, R4.0; after 7 or more frames lost in a row, which
-  trip the default watchdog long before, the counter is taken up again after up to 9
-  frames);
+  Communication Protection Library*, R4.0; after 7 or more frames lost in a row the counter
+  is taken up again at the second of two frames in a row one count apart, so that a
+  ``watchdog_periods`` above 7 frames is kept too);
 - guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
 - hands-off detection: while the estimated rider torque stays below ``hands_off_torque``
-  [N*m] for ``hands_off_time`` [s], the command is scaled by ``hands_off_gain``;
+  [N*m] for ``hands_off_time`` [s], the stack's command is scaled by ``hands_off_gain``
+  (before the limits: the end stops' spring is not scaled; a period without an estimate
+  keeps the flag as it is); once the rider's torque is back, the command is whole again at
+  once, as fast as the slew-rate limit lets it (a ramp at the fade-in's pace was tried: the
+  stack's tracking at the start of a manoeuvre suffered, see the realtime guide);
 - a frozen-sensor monitor (given the handlebar's parameters): the angle has not changed
   while the motor torque has moved so far from its value at the angle's last change that a
   free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault
   (see :class:`SafetyStage`, Notes).
 
+Each period the stack's command goes, in this order, through the hands-off gain, the end
+stops, the speed limiter, the clamp, the fade and the slew-rate limit: no later stage adds
+what an earlier one took away (the slew-rate limit only delays it: it holds a decrease back
+as it holds an increase, by at most ``max_current / max_slew`` seconds).
 A fault gives a zero command in the same period it is detected, without slew limiting, and
 stays latched until :meth:`SafetyStage.clear`; enabling again starts a new fade-in. The stage
 keeps its state in a float64 array stepped by compiled functions (:func:`safety_step` and
@@ -174,7 +185,7 @@ class SafetyLimits:
         for name, (low, high, unit) in SAFETY_RANGES.items():
             value = getattr(self, name)
             if name == "watchdog_periods":
-                if not (isinstance(value, int) and low <= value <= high):
+                if isinstance(value, bool) or not (isinstance(value, int) and low <= value <= high):
                     raise MotosimError(
                         f"safety watchdog_periods = {short_repr(value)}; expected an integer "
                         f"from {low:g} to {high:g}"
@@ -198,11 +209,14 @@ frames lost); a larger one is an older frame delivered after a newer."""
 
 S_STATE, S_FAULT, S_FAULT_TIME, S_T, S_ENVELOPE, S_LAST, S_COUNTER, S_FRESH = range(8)
 S_MISSING, S_QUIET, S_HANDS_OFF, S_REF_THETA, S_REF_TORQUE, S_FREE, S_LOST, S_STALE = range(8, 16)
-SAFETY_STATE_SIZE = 16
+S_BEHIND = 16
+SAFETY_STATE_SIZE = 17
 """Positions in the stage's state array (state and fault codes, the fault's time [s], the
 stage's time [s], the fade envelope, the last command [A], the last alive counter, a fresh
 frame flag, periods without a fresh frame, hands-off time [s] and flag, the frozen-sensor
-monitor's reference angle [rad], torque [N*m] and free turn [rad], frames lost and stale)."""
+monitor's reference angle [rad], torque [N*m] and free turn [rad], frames lost and stale,
+the alive counter of the last frame refused as older, -1 if the last frame was
+not one)."""
 
 (
     P_MAX_CURRENT, P_MAX_SLEW, P_MAX_SPEED, P_SPEED_BAND, P_SOFT_STOP, P_HARD_STOP,
@@ -240,6 +254,7 @@ def new_safety_state() -> NDArray[np.float64]:
     s[S_FAULT_TIME] = math.nan
     s[S_COUNTER] = -1.0
     s[S_REF_THETA] = math.nan
+    s[S_BEHIND] = -1.0
     return s
 
 
@@ -269,10 +284,19 @@ def safety_status_frame(
     c = int(counter) & 0xF
     last = int(s[S_COUNTER])
     step = (c - last) & 0xF
+    behind = int(s[S_BEHIND])
+    s[S_BEHIND] = -1.0
     if last >= 0 and (step == 0 or step > MAX_COUNTER_STEP):
-        s[S_STALE] += 1.0  # the same frame again, or an older one after a newer
-        return False
-    if last >= 0:
+        if step == 0 or behind < 0 or c != (behind + 1) & 0xF:
+            s[S_STALE] += 1.0  # the same frame again, or an older one after a newer
+            if step != 0:
+                s[S_BEHIND] = c
+            return False
+        # two frames in a row, one count apart, both beyond the window: the drive's counter
+        # went on while 7 or more frames were lost; taken up again from the second
+        s[S_LOST] += ((behind - last) & 0xF) - 1
+        s[S_STALE] -= 1.0  # the first was no older frame: it was fresh, though not used
+    elif last >= 0:
         s[S_LOST] += step - 1
     s[S_COUNTER] = c
     s[S_FRESH] = 1.0
@@ -316,14 +340,20 @@ def safety_step(
     now: float,
 ) -> float:
     """:meth:`SafetyStage.step` on the state array (``now`` NaN: the stage counts its own
-    periods)."""
+    periods; else the periods since the last step are counted from ``now``, so that the
+    deadlines a late loop skipped count for the watchdog)."""
     dt = p[P_DT]
-    s[S_T] = s[S_T] + dt if now != now else now
+    if now != now:
+        periods = 1.0
+        s[S_T] += dt
+    else:  # deadlines the loop skipped since the last step passed without a status frame too
+        periods = max(1.0, math.floor((now - s[S_T]) / dt + 0.5))
+        s[S_T] = now
     if s[S_FRESH] != 0.0:
         s[S_MISSING] = 0.0
         s[S_FRESH] = 0.0
     else:
-        s[S_MISSING] += 1.0
+        s[S_MISSING] += periods
         if s[S_MISSING] >= p[P_WATCHDOG] and s[S_STATE] != 0.0:
             safety_trip(s, 1)  # WATCHDOG
     if not (math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)) or math.isinf(
@@ -339,19 +369,8 @@ def safety_step(
         s[S_LAST] = 0.0
         s[S_ENVELOPE] = 0.0
         return 0.0
-    # speed limiter: only reduces a command that pushes the handlebar faster
-    i = command
-    excess = abs(omega) - p[P_MAX_SPEED]
-    if excess > 0.0 and i * omega > 0.0:
-        i *= max(0.0, 1.0 - excess / p[P_SPEED_BAND])
-    # soft end stops
-    over = abs(theta) - p[P_SOFT_STOP]
-    if over > 0.0:
-        out = 1.0 if theta > 0.0 else -1.0
-        if i * out > 0.0:
-            i = 0.0
-        i -= out * p[P_END_STOP_GAIN] * over
-    # hands-off: reduce the gain while nobody holds the handlebar
+    # hands-off: reduce the stack's command while nobody holds the handlebar (the flag
+    # kept as it is without an estimate); not the end stops' spring, added after
     if p[P_HANDS_OFF_TORQUE] > 0.0 and tau_hat == tau_hat:
         if abs(tau_hat) < p[P_HANDS_OFF_TORQUE]:
             s[S_QUIET] += dt
@@ -359,20 +378,31 @@ def safety_step(
         else:
             s[S_QUIET] = 0.0
             s[S_HANDS_OFF] = 0.0
-        if s[S_HANDS_OFF] != 0.0:
-            i *= p[P_HANDS_OFF_GAIN]
+    i = command * p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else command
+    # soft end stops
+    over = abs(theta) - p[P_SOFT_STOP]
+    if over > 0.0:
+        out = 1.0 if theta > 0.0 else -1.0
+        if i * out > 0.0:
+            i = 0.0
+        i -= out * p[P_END_STOP_GAIN] * over
+    # speed limiter: only reduces what pushes the handlebar faster (the end stops' spring
+    # included: it must not speed up a handlebar already too fast on its way back)
+    excess = abs(omega) - p[P_MAX_SPEED]
+    if excess > 0.0 and i * omega > 0.0:
+        i *= max(0.0, 1.0 - excess / p[P_SPEED_BAND])
     # clamp, fade, slew
     i = min(max(i, -p[P_MAX_CURRENT]), p[P_MAX_CURRENT])
     s[S_ENVELOPE] = _ramped_envelope(s, p)
-    if state == 4.0 and s[S_ENVELOPE] == 0.0:  # STOPPING, faded out
-        s[S_STATE] = 0.0
-    elif state == 1.0 and s[S_ENVELOPE] >= 1.0:  # FADE_IN, faded in
-        s[S_STATE] = 2.0
     i *= s[S_ENVELOPE]
     step = p[P_MAX_SLEW] * dt
     last = s[S_LAST]
     i = min(max(i, last - step), last + step)
     s[S_LAST] = i
+    if state == 4.0 and s[S_ENVELOPE] == 0.0 and i == 0.0:  # STOPPING, faded out, sent 0
+        s[S_STATE] = 0.0
+    elif state == 1.0 and s[S_ENVELOPE] >= 1.0:  # FADE_IN, faded in
+        s[S_STATE] = 2.0
     return float(i)
 
 
@@ -455,11 +485,15 @@ class SafetyStage:
     ) -> None:
         if not (math.isfinite(dt) and dt > 0.0):
             raise MotosimError(f"dt = {dt!r} s: expected a positive period")
-        if periods_per_frame < 1:
+        if (
+            isinstance(periods_per_frame, bool)
+            or not isinstance(periods_per_frame, int | np.integer)
+            or periods_per_frame < 1
+        ):  # a NaN would have made the watchdog's count never reached
             raise MotosimError(
                 f"periods_per_frame = {periods_per_frame!r}: expected an integer >= 1"
             )
-        self._watchdog = limits.watchdog_periods * periods_per_frame
+        self._watchdog = limits.watchdog_periods * int(periods_per_frame)
         self.limits = limits
         self.dt = float(dt)
         self._s = new_safety_state()
@@ -538,7 +572,8 @@ class SafetyStage:
         safety_enable(self._s)
 
     def request_stop(self) -> None:
-        """Fade the torque out over ``fade_in`` seconds, then go IDLE."""
+        """Fade the torque out over ``fade_in`` seconds, then go IDLE once the command
+        sent is zero (later when the slew-rate limit holds it back)."""
         safety_request_stop(self._s)
 
     def trip(self, fault: Fault) -> None:
@@ -546,13 +581,19 @@ class SafetyStage:
         safety_trip(self._s, int(fault))
 
     def clear(self) -> None:
-        """Forget a latched fault and go IDLE (the watchdog starts afresh)."""
+        """Forget a latched fault and go IDLE (the watchdog, the alive counter, the
+        frozen-sensor monitor and hands-off detection start afresh)."""
         s = self._s
         s[S_FAULT] = 0.0
         s[S_FAULT_TIME] = math.nan
         s[S_STATE] = 0.0
         s[S_MISSING] = 0.0
         s[S_COUNTER] = -1.0
+        s[S_BEHIND] = -1.0
+        s[S_REF_THETA] = math.nan
+        s[S_FREE] = 0.0
+        s[S_QUIET] = 0.0
+        s[S_HANDS_OFF] = 0.0
 
     # --- frames ------------------------------------------------------------------------
     def status_frame(self, *, checksum_ok: bool, counter: float, drive_fault: bool) -> bool:
@@ -562,7 +603,9 @@ class SafetyStage:
         that has not moved (a stale or duplicated frame) or went back (an older frame
         delivered after a newer: more than :data:`MAX_COUNTER_STEP` ahead on the 4-bit
         circle) makes the frame invalid; a counter that jumped by up to
-        :data:`MAX_COUNTER_STEP` counts the lost frames.
+        :data:`MAX_COUNTER_STEP` counts the lost frames. Two frames in a row one count
+        apart, both beyond that window, are 7 or more frames lost: the second is valid
+        (the counter taken up again).
         """
         return bool(safety_status_frame(self._s, bool(checksum_ok), float(counter),
                                         bool(drive_fault)))  # fmt: skip
@@ -598,8 +641,11 @@ class SafetyStage:
         tau_hat : float
             The estimated rider torque [N*m] (NaN if the stack has none: hands-off off).
         now : float, optional
-            The loop's time [s], for the fault's time stamp; by default the stage counts
-            its own periods.
+            The loop's time [s] since the stage's first step, for the fault's time stamp
+            and the watchdog: the control periods since the last step, rounded (at least
+            one), count as periods without a status frame unless one came, so that the
+            deadlines a late loop skipped count too. By default the stage counts its own
+            periods, one per step.
         """
         t = math.nan if now is None else float(now)
         return float(

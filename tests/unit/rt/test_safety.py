@@ -3,6 +3,7 @@
 import itertools
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -160,6 +161,7 @@ def test_hands_off_reduces_the_gain_until_the_rider_holds_again() -> None:
     d = Driver(lim, rate=100.0).running()
     out = [d.period(tau_hat=0.1) for _ in range(25)]
     assert out[18] == 10.0 and out[19] == pytest.approx(2.5) and d.stage.hands_off  # 0.2 s
+    # the rider takes the handlebar: the whole command at once (within the slew limit)
     assert d.period(tau_hat=2.0) == 10.0 and not d.stage.hands_off
 
 
@@ -188,6 +190,8 @@ def test_watchdog_waits_while_idle() -> None:
         ("hard_stop", 0.4),
         ("hands_off_gain", 1.5),
         ("watchdog_periods", 0),
+        ("watchdog_periods", True),  # a TOML true is no count of periods
+        ("watchdog_periods", 2.0),
         ("end_stop_gain", -1.0),
     ],
 )
@@ -279,15 +283,48 @@ def test_an_older_frame_after_a_newer_is_not_used() -> None:
 
 
 def test_a_long_gap_is_taken_up_again() -> None:
-    # After 8 frames lost the counter has stepped 9 ahead, read as an older frame; the
-    # following frames are taken up again within 9 frames (the gap itself is the watchdog's).
+    # After 8 frames lost the counter has stepped 9 ahead, read as an older frame; the next
+    # frame, one count further, shows the drive's counter went on: it is taken up again
+    # (the gap itself is the watchdog's). Before, the frames were refused until the counter
+    # came round into the window, up to 9 frames later.
     d = Driver().running()
     start = d.counter
     fresh = [
         d.stage.status_frame(checksum_ok=True, counter=(start + k) & 0xF, drive_fault=False)
         for k in range(9, 18)
     ]
-    assert fresh == [False] * 8 + [True]  # +9 to +15: older; +16: the last counter again
+    assert fresh == [False] + [True] * 8
+    assert d.stage.frames_lost == 8 and d.stage.frames_stale == 0
+
+
+def test_an_older_frame_then_the_next_one_is_no_long_gap() -> None:
+    # one older frame delivered late, then the drive's next frame: the older one refused,
+    # the next one taken as one step after the newest (not as a counter taken up again)
+    d = Driver().running()
+    newest = d.counter
+    assert not d.stage.status_frame(checksum_ok=True, counter=newest - 3, drive_fault=False)
+    assert d.stage.status_frame(checksum_ok=True, counter=newest + 1, drive_fault=False)
+    assert d.stage.frames_lost == 0 and d.stage.frames_stale == 1
+    # and a frame repeated twice is no counter going on
+    for _ in range(2):
+        assert not d.stage.status_frame(checksum_ok=True, counter=newest + 1, drive_fault=False)
+
+
+@pytest.mark.parametrize("lost", [7, 9, 13])
+def test_a_watchdog_longer_than_the_counters_window_is_kept(lost: int) -> None:
+    # watchdog_periods = 20 frames (a lab's lossy bus): a burst of 7 to 13 frames lost must
+    # not trip it, however the 4-bit counter jumped; before, the frames after the gap were
+    # refused until the counter came round (up to 9 more), and a gap of 9 lost frames
+    # tripped the 20-frame watchdog. (14 and 15 lost bring the counter round to the last
+    # one's, a repeated frame to a 4-bit counter: taken up at the frame after.)
+    d = Driver(SafetyLimits(**{**_fields(LIMITS), "watchdog_periods": 20}), rate=100.0)
+    d.running()
+    for _ in range(lost):  # the frames lost: their counts are used by the drive
+        d.counter += 1
+        assert d.period(frame=False) == 10.0
+    out = [d.period() for _ in range(20)]
+    assert out == [10.0] * 20 and d.stage.fault == Fault.NONE
+    assert d.stage.frames_lost == lost
 
 
 def test_a_drive_fault_counts_even_in_a_frame_not_used() -> None:
@@ -297,3 +334,156 @@ def test_a_drive_fault_counts_even_in_a_frame_not_used() -> None:
     older = (d.counter - 3) & 0xF
     assert not d.stage.status_frame(checksum_ok=True, counter=older, drive_fault=True)
     assert d.stage.fault == Fault.DRIVE_FAULT and d.period(frame=False) == 0.0
+
+
+@pytest.mark.parametrize("skipped", [1, 2, 5, 50])
+def test_deadlines_a_late_loop_skipped_count_for_the_watchdog(skipped: int) -> None:
+    # The watchdog promises zero torque once no valid status frame came for
+    # watchdog_periods (3) periods of the loop. A loop that is late skips deadlines (it
+    # does not step then): the drive's silence meanwhile counts, so the first step after
+    # 3 or more periods of silence sends zero (before, only the steps were counted: a
+    # stall of 50 periods left the stale command on for 2 more periods).
+    d = Driver(rate=1000.0)
+    d.stage.enable()
+    t = 0.0
+    for _ in range(600):  # the fade-in, with a status frame in every period
+        d.period(now=t, theta=1e-3 * (round(t * 1e3) % 2))
+        t += 1e-3
+    assert d.stage.state == State.RUNNING
+    t += skipped * 1e-3  # the deadlines skipped, without a status frame
+    out = d.period(frame=False, now=t)
+    if skipped + 1 >= 3:
+        assert out == 0.0 and d.stage.fault == Fault.WATCHDOG
+    else:
+        assert out == 10.0 and d.period(frame=False, now=t + 1e-3) == 0.0
+
+
+def test_a_status_frame_after_skipped_deadlines_feeds_the_watchdog() -> None:
+    # a loop late by 10 periods whose drive kept sending: the frames read after the stall
+    # are fresh, the watchdog does not trip
+    d = Driver(rate=1000.0)
+    d.stage.enable()
+    for k in range(600):
+        d.period(now=k * 1e-3, theta=1e-3 * (k % 2))
+    assert d.period(now=0.610) == 10.0 and d.stage.fault == Fault.NONE
+
+
+def test_a_stop_goes_idle_only_once_the_command_sent_is_zero() -> None:
+    # A slew-rate limit slower than the fade (5 A/s against 10 A over 0.5 s): the fade-out
+    # promises a command sent that comes down to zero, never a step; the stage stays
+    # STOPPING (the drive enabled) until it is zero. Before, it went IDLE with the
+    # envelope at 0 while 7.5 A were sent, and the next period stepped to 0 A.
+    d = Driver(SafetyLimits(**{**_fields(LIMITS), "max_slew": 5.0}), rate=100.0)
+    d.stage.enable()
+    for _ in range(400):  # 10 A reached at 0.05 A per period
+        d.period()
+    assert d.stage.state == State.RUNNING and d.period() == 10.0
+    d.stage.request_stop()
+    out, states = [], []
+    while d.stage.state != State.IDLE and len(out) < 1000:
+        out.append(d.period())
+        states.append(d.stage.state)
+    assert out[-1] == 0.0 and all(s == State.STOPPING for s in states[:-1])
+    steps = [a - b for a, b in itertools.pairwise([10.0, *out])]
+    assert all(0.0 <= step <= 0.05 + 1e-12 for step in steps)  # 5 A/s at 100 Hz
+    assert len(out) == 200 and d.period() == 0.0  # 10 A at 5 A/s: 2 s
+
+
+def test_hands_off_scales_the_stacks_command_not_the_end_stops_spring() -> None:
+    # Hands-off detection reduces the feedback gain (the stack's command) while nobody
+    # holds the handlebar; the soft end stop's spring is a limit of its own and must keep
+    # its full strength then, when nothing else holds the handlebar back (before, it was
+    # scaled too: to 25 % here, to nothing with hands_off_gain = 0).
+    for gain in (0.25, 0.0):
+        lim = SafetyLimits(**{**_fields(LIMITS), "hands_off_torque": 0.5, "hands_off_gain": gain})
+        d = Driver(lim, rate=100.0).running()
+        for _ in range(25):  # 0.25 s without the rider's torque: hands off after 0.2 s
+            d.period(tau_hat=0.1)
+        assert d.stage.hands_off
+        assert d.period(10.0, theta=0.3, tau_hat=0.1) == pytest.approx(10.0 * gain)
+        # 0.2 rad beyond the soft stop: the spring's 40 A/rad whole, the push out dropped
+        assert d.period(0.0, theta=0.7, tau_hat=0.1) == pytest.approx(-8.0)
+        assert d.period(10.0, theta=0.7, tau_hat=0.1) == pytest.approx(-8.0)
+        assert d.period(-4.0, theta=0.7, tau_hat=0.1) == pytest.approx(-4.0 * gain - 8.0)
+
+
+def test_a_period_without_an_estimate_keeps_the_hands_off_gain() -> None:
+    # tau_hat NaN is "no estimate this period": it must not give the full gain back while
+    # nobody holds the handlebar (before, the reduced gain was skipped with the detection)
+    lim = SafetyLimits(**{**_fields(LIMITS), "hands_off_torque": 0.5})
+    d = Driver(lim, rate=100.0).running()
+    for _ in range(25):
+        d.period(tau_hat=0.1)
+    assert d.stage.hands_off and d.period(tau_hat=math.nan) == pytest.approx(2.5)
+    assert d.stage.hands_off and d.stage.fault == Fault.NONE
+
+
+@given(
+    command=st.floats(-20.0, 20.0),
+    theta=st.floats(-0.79, 0.79),
+    speed=st.floats(LIMITS.max_speed + LIMITS.speed_band, 100.0),
+    sign=st.sampled_from([-1.0, 1.0]),
+)
+def test_nothing_the_stage_sends_pushes_a_handlebar_too_fast_faster(
+    command: float, theta: float, speed: float, sign: float
+) -> None:
+    # At max_speed + speed_band and beyond, the speed limiter promises no torque in the
+    # direction of motion, at any angle: beyond the soft stop the end stop's spring pulls
+    # back, and on a handlebar already returning too fast it must not push it faster
+    # (before, the spring was added after the limiter: 40 A/rad * 0.29 rad = 11.6 A with a
+    # handlebar at 0.79 rad coming back at 100 rad/s).
+    omega = sign * speed
+    d = Driver().running()
+    out = d.period(command, theta=theta, omega=omega)
+    assert out * omega <= 0.0
+    still = Driver().running().period(command, theta=theta, omega=0.0)
+    assert abs(out) <= abs(still) and out * still >= 0.0  # it only ever reduces
+
+
+@pytest.mark.parametrize("periods_per_frame", [math.nan, 2.5, 0, True])
+def test_periods_per_frame_must_be_a_whole_count(periods_per_frame: object) -> None:
+    # the watchdog waits watchdog_periods * periods_per_frame periods: a NaN made that
+    # count one it never reached (the watchdog off) and was accepted, as was 2.5
+    with pytest.raises(MotosimError, match="periods_per_frame"):
+        SafetyStage(LIMITS, dt=1e-3, periods_per_frame=periods_per_frame)  # type: ignore[arg-type]
+
+
+def test_the_watchdog_waits_its_frame_periods_under_a_faster_loop() -> None:
+    # 100 Hz status frames under a 1 kHz loop: 3 frame periods are 30 loop periods
+    stage = SafetyStage(LIMITS, dt=1e-3, periods_per_frame=np.int64(10))  # type: ignore[arg-type]
+    assert stage.watchdog_periods == 30
+
+
+def test_clear_starts_the_frozen_sensor_monitor_afresh() -> None:
+    # After a FROZEN_SENSOR fault is cleared (a new sensor fitted, the handlebar at rest at
+    # the same count), the monitor must start from the new fade-in's torque, not compare it
+    # with the torque of the fault's time: before, the first period of the fade-in tripped
+    # it again (0 A now against 13 A then, with the turn already beyond frozen_angle).
+    d = Driver(handlebar=True).running()
+    for _ in range(1000):
+        d.period(10.0, theta=0.1)
+    for _ in range(300):
+        d.period(13.0, theta=0.1)
+    assert d.stage.fault == Fault.FROZEN_SENSOR
+    d.stage.clear()
+    d.stage.enable()
+    out = [d.period(0.5, theta=0.1) for _ in range(600)]  # 1.5 N*m: within the dead band
+    assert d.stage.fault == Fault.NONE and out[-1] == 0.5 and d.stage.free_turn == 0.0
+
+
+def test_a_status_frame_in_the_watchdogs_last_period_keeps_it_quiet() -> None:
+    # the boundary: two periods without status, a frame in the third: no trip; then three
+    # periods without: the third sends zero (the watchdog's 3 periods, exactly)
+    d = Driver(rate=1000.0).running()
+    assert [d.period(frame=False) for _ in range(2)] == [10.0, 10.0]
+    assert d.period() == 10.0 and d.stage.fault == Fault.NONE
+    assert [d.period(frame=False) for _ in range(3)] == [10.0, 10.0, 0.0]
+
+
+def test_the_alive_counter_wraps_round_without_a_loss() -> None:
+    # 4 bits: 14, 15, 0, 1 are four frames in a row, none lost, none stale
+    stage = SafetyStage(LIMITS, dt=1e-3)
+    fresh = [
+        stage.status_frame(checksum_ok=True, counter=c, drive_fault=False) for c in (14, 15, 0, 1)
+    ]
+    assert fresh == [True] * 4 and stage.frames_lost == 0 and stage.frames_stale == 0
