@@ -18,7 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from motosim.control.torque_feedback import PAPER_CONTROLLER, synthesize_controller
+from motosim.control.torque_feedback import (
+    INTEGRAL_CORNER,
+    PAPER_CONTROLLER,
+    handlebar_bandwidth,
+    synthesize_controller,
+)
 from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
 from motosim.io.design_file import read_design
@@ -98,8 +103,8 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     The controller is the scenario's: none, the paper's eq. (26), the one of a design file
     (whose observer settings the run then uses too), or ours synthesised for the nominal
     handlebar at the scenario's bandwidth (by default
-    :func:`~motosim.control.torque_feedback.default_bandwidth` of the measurement rate), order
-    and integral corner.
+    :func:`~motosim.control.torque_feedback.handlebar_bandwidth` of the handlebar at the
+    measurement rate), order and integral corner.
 
     Raises
     ------
@@ -138,15 +143,21 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
             _check_observer_rate(c.design, design.rate, observer, nominal, rate)
         _warn_other_handlebar(c.design, design.handlebar, nominal)
     elif c.kind == "ours":
-        controller = synthesize_controller(
-            nominal,
-            rng=np.random.default_rng(0),
-            bandwidth=c.bandwidth,
-            order=c.order,
-            rate=scenario.rates.measurement,
-            n_starts=4,
-            integral_corner=c.integral_corner,
-        )
+        bandwidth = c.bandwidth
+        if bandwidth is None:
+            bandwidth, controller = handlebar_bandwidth(
+                nominal, rate=scenario.rates.measurement, n_starts=4
+            )
+        if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
+            controller = synthesize_controller(
+                nominal,
+                rng=np.random.default_rng(0),
+                bandwidth=bandwidth,
+                order=c.order,
+                rate=scenario.rates.measurement,
+                n_starts=4,
+                integral_corner=c.integral_corner,
+            )
     return prepare(
         scenario,
         sharp=load_parameters(parameter_source(mc.params, folder), "sharp"),

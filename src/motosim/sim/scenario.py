@@ -590,8 +590,10 @@ FEEDFORWARD = ("rider", "reference")
 class Controller:
     """The torque-feedback controller.
 
-    ``bandwidth`` None: :func:`motosim.control.torque_feedback.default_bandwidth` of the
-    measurement rate (10 Hz, a fifth of the rate below 50 Hz). ``integral_corner``: the
+    ``bandwidth`` None: :func:`motosim.control.torque_feedback.handlebar_bandwidth` of the
+    nominal handlebar at the measurement rate (10 Hz, a fifth of the rate below 50 Hz; from
+    1 kHz higher for a handlebar whose loop would be softer than the packaged one's at 1 Hz,
+    up to 20 Hz). ``integral_corner``: the
     loop-shaping weight's corner as a fraction of the bandwidth
     (:func:`motosim.control.torque_feedback.design_torque_feedback`). ``prediction``: the
     rider-torque cancellation reads tau_r_hat + T_d times its filtered rate, T_d the estimate
