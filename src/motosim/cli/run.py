@@ -497,9 +497,36 @@ class _Presses:
             raise KeyboardInterrupt
 
 
+def _check_wait(args: argparse.Namespace) -> None:
+    """Refuse ``--wait compiled`` given with ``--pace bus`` or ``--link python-can``.
+
+    The compiled wait ends a clock-paced loop's wait and reads the fast link's socket; those
+    runs wait in Python, which the option left out (None) lets pass silently. Reads only the
+    options: the line comes before the numerical stack is loaded.
+
+    Raises
+    ------
+    MotosimError
+        Naming both options.
+    """
+    if args.wait != "compiled":
+        return
+    if args.pace == "bus":
+        raise MotosimError(
+            "--wait compiled with --pace bus; the compiled wait applies only to a clock-paced "
+            "loop (--pace clock): leave --wait out with --pace bus"
+        )
+    if args.link == "python-can":
+        raise MotosimError(
+            "--wait compiled with --link python-can; the compiled wait applies only to the "
+            "fast link (--link fast): leave --wait out with --link python-can"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
     check_udp_only_options(args)  # before the numerical stack is imported
+    _check_wait(args)
     presses = _Presses()
     previous = signal.signal(signal.SIGINT, presses)
     try:
