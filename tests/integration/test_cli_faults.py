@@ -22,7 +22,7 @@ import pytest
 
 from motosim.cli.main import main
 from motosim.errors import RunFailedError
-from motosim.io.results import load_result, partial_folder
+from motosim.io.results import folder_lock, load_result, lock_file, partial_folder
 from motosim.sim import SIGNALS
 
 ROOT = Path(__file__).parents[2]
@@ -362,3 +362,46 @@ def test_a_campaign_stopped_by_a_full_disk_says_so_in_its_manifest(
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
     assert manifest["status"] == "complete" and "error" not in manifest
     assert manifest["written"] == 40
+
+
+def test_run_holds_the_folder_until_its_timing_and_report_are_written(tmp_path: Path) -> None:
+    # the writer process released the lock when it closed the result; timing.json and the
+    # report came after, in motosim run's process: a concurrent --overwrite of the same
+    # folder could replace the result under them. The virtual bus is this process's own
+    # (no drive answers on it: 0.5 s idle, exit 0)
+    pytest.importorskip("can", reason="motosim run needs the rt group (python-can)")
+    import motosim.cli.run
+    import motosim.report
+
+    out = tmp_path / "run"
+    second = ["simulate", str(_long_scenario(tmp_path, 0.2)), "--out", str(out), "--overwrite",
+              "--no-report"]  # fmt: skip
+    seen: dict[str, tuple[int, str]] = {}
+    real_write = motosim.cli.run.write_text
+    real_report = motosim.report.build_report
+
+    def write_text(path: Path, text: str) -> Any:
+        if path.name == "timing.json":
+            seen["timing.json"] = _second_run(second)  # the first file beside the rows
+        return real_write(path, text)
+
+    def build_report(folder: Path) -> Path:
+        seen["report"] = _second_run(second)  # the last
+        return real_report(folder)
+
+    with (
+        unittest.mock.patch.object(motosim.cli.run, "write_text", write_text),
+        unittest.mock.patch.object(motosim.report, "build_report", build_report),
+    ):
+        code = main(["run", str(ROOT / "scenarios" / "realtime_square.toml"), "--bus", "virtual",
+                     "--out", str(out), "--duration", "0.5", "--telemetry", "off"])  # fmt: skip
+    assert code == 0
+    assert list(seen) == ["timing.json", "report"]
+    for what, (code, err) in seen.items():
+        assert code == 2 and err.count("\n") == 1, (what, err)
+        assert "another run (pid " in err and "is writing this result" in err, (what, err)
+    assert (out / "timing.json").is_file() and (out / "report.html").is_file()
+    assert load_result(out).metadata["realtime"]["bus"] == "virtual"  # the run's, not replaced
+    assert not lock_file(out).exists()
+    with folder_lock(out):  # released once the report is written
+        pass

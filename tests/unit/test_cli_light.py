@@ -107,6 +107,48 @@ def test_udp_multicast_options_left_out_pass_silently_with_another_bus() -> None
     assert done.stderr == "motosim: error: --spin -1.0; expected microseconds in [0, 1000000)\n"
 
 
+@pytest.mark.parametrize(
+    ("given", "other", "why"),
+    [
+        (["--pace", "bus"], "--pace bus", "a clock-paced loop (--pace clock)"),
+        (["--link", "python-can"], "--link python-can", "the fast link (--link fast)"),
+    ],
+)
+def test_the_compiled_wait_given_where_it_cannot_run_is_refused_before_the_work(
+    given: list[str], other: str, why: str
+) -> None:
+    # paced by the bus, or through python-can's link, the loop waits in Python: --wait
+    # compiled given there fell back to it without a word (only timing.json's "wait" said
+    # so). One line, exit 2, before the numerical stack is imported (the file does not exist)
+    argv = ["run", "s.toml", "--out", "o", "--bus", "udp_multicast:239.74.166.12",
+            "--wait", "compiled", *given]  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == (
+        f"motosim: error: --wait compiled with {other}; the compiled wait applies only to "
+        f"{why}: leave --wait out with {other}\n"
+    )
+    assert _codes_and_heavy(argv) == "[2] []"
+
+
+@pytest.mark.parametrize("given", [["--pace", "bus"], ["--link", "python-can"]])
+@pytest.mark.parametrize("wait", [[], ["--wait", "python"]])
+def test_the_wait_left_out_or_python_passes_silently_paced_by_the_bus_or_on_python_can(
+    given: list[str], wait: list[str]
+) -> None:
+    # the default, and the Python wait those runs use, are not refused: the refusal that
+    # comes is the next check's (--spin)
+    argv = ["run", "s.toml", "--out", "o", "--bus", "udp_multicast:239.74.166.12", "--spin",
+            "-1", *given, *wait]  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 2
+    assert done.stderr == "motosim: error: --spin -1.0; expected microseconds in [0, 1000000)\n"
+
+
 def test_the_columns_help_names_every_unit_the_log_reader_converts() -> None:
     """``identify --columns`` lists the units of the log's time, angle, current and voltage
     columns: those :mod:`motosim.io.logs` converts (the identify guide lists the same; the

@@ -7,6 +7,7 @@ import signal
 import sys
 import threading
 from collections.abc import Callable
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -332,12 +333,47 @@ def _writer_main(
     also serves the rider's view and the dashboard from a
     :class:`~motosim.io.telemetry.TelemetryRing` it fills every 5 ms, with the loop's timing
     and safety columns (:class:`~motosim.view.live.LoopRows`).
+
+    The folder's lock (:func:`~motosim.io.results.folder_lock`) is taken before the result
+    is opened, which joins it, and held after the result is closed, until ("release",) or
+    the end of ``conn``: ``motosim run`` writes ``timing.json`` and the report beside the
+    rows meanwhile, and a concurrent ``--overwrite`` of the folder is refused until then.
     """
     # Ctrl-C is the loop's to handle, and so are SIGTERM and SIGHUP, which a closed terminal
     # or a service manager sends the whole process group: the loop fades the torque out and
     # asks this process to close the result, as on Ctrl-C
     for sig in (signal.SIGINT, *stop_signals()):
         signal.signal(sig, signal.SIG_IGN)
+    from motosim.io.results import folder_lock
+
+    with ExitStack() as held:
+        try:
+            held.enter_context(folder_lock(Path(folder), shared=True))
+        except MotosimError as err:
+            conn.send(("error", str(err)))
+            return
+        if _write_result(conn, handle, names, folder, metadata, overwrite, torque_per_amp,
+                         view, telemetry, rate):  # fmt: skip
+            try:
+                conn.recv()  # ("release",): motosim run has written its files
+            except (EOFError, OSError):  # or has ended
+                pass
+
+
+def _write_result(
+    conn: Any,
+    handle: Any,
+    names: tuple[str, ...],
+    folder: str,
+    metadata: dict[str, Any],
+    overwrite: bool,
+    torque_per_amp: float,
+    view: _ViewSetup | None,
+    telemetry: tuple[str, int] | None,
+    rate: float,
+) -> bool:
+    """:func:`_writer_main` under the folder's lock: False once ("error", text) is sent,
+    True once ("done", ...) is."""
     import numpy as np
 
     from motosim.io.results import ResultWriter
@@ -367,7 +403,7 @@ def _writer_main(
         ring.close()
         if server is not None:
             server.stop()
-        return
+        return False
     stop_relay = _start_relay(ring, names, telemetry, rate)
     conn.send(("ready", url))
     blocks: list[np.ndarray] = []
@@ -436,6 +472,7 @@ def _writer_main(
             server.stop()
     profile = profile_stats(np.vstack(stamps), stamp_names) if stamps else {}
     conn.send(("done", summary, str(writer.location), profile, stream))
+    return True
 
 
 def _start_relay(
@@ -497,9 +534,36 @@ class _Presses:
             raise KeyboardInterrupt
 
 
+def _check_wait(args: argparse.Namespace) -> None:
+    """Refuse ``--wait compiled`` given with ``--pace bus`` or ``--link python-can``.
+
+    The compiled wait ends a clock-paced loop's wait and reads the fast link's socket; those
+    runs wait in Python, which the option left out (None) lets pass silently. Reads only the
+    options: the line comes before the numerical stack is loaded.
+
+    Raises
+    ------
+    MotosimError
+        Naming both options.
+    """
+    if args.wait != "compiled":
+        return
+    if args.pace == "bus":
+        raise MotosimError(
+            "--wait compiled with --pace bus; the compiled wait applies only to a clock-paced "
+            "loop (--pace clock): leave --wait out with --pace bus"
+        )
+    if args.link == "python-can":
+        raise MotosimError(
+            "--wait compiled with --link python-can; the compiled wait applies only to the "
+            "fast link (--link fast): leave --wait out with --link python-can"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
     check_udp_only_options(args)  # before the numerical stack is imported
+    _check_wait(args)
     presses = _Presses()
     previous = signal.signal(signal.SIGINT, presses)
     try:
@@ -587,87 +651,91 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
 
         can_sender = PlatformCanSender(link, platform_codecs())
         platform.sender = can_sender if udp_sender is None else PlatformTee(udp_sender, can_sender)
+    end_writer: Callable[[], None] = _no_writer
     try:
-        runner = RealtimeRunner(
-            stack,
-            link,
-            codecs,
-            limits,
-            rate=rate,
-            periods_per_frame=model.measure_every,
-            capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
-            shared_ring=True,
-            wait_for_arm=view is not None,
-            platform=platform,
-            now=clock.now,
-            clock=clock,
-            handlebar=inputs.nominal_handlebar,
-            validity=validity_limits(sc.motorcycle.speed),
-            warm=args.warm == "on",
-        )
-        metadata = run_metadata(inputs) | {
-            "realtime": {
-                "bus": args.bus,
-                "link": link_kind,
-                "pace": args.pace,
-                "status_latency": latency,
-                "measurement_delay": age,
-                "safety": limits,
-                "duration": duration,
-            }
-        }
         try:
-            presses.check()  # Ctrl-C while the stack was built: no run
-        except KeyboardInterrupt:
-            runner.ring.close()  # the loop would have: its shared memory
-            raise
-        # a partial result is kept beside a complete one already there (--overwrite):
-        # the timing and the report go where the rows went
-        stats, privileges, summary, folder = _loop(
-            args, runner, clock, rate, periods, folder, metadata,
-            inputs.nominal_handlebar.torque_per_amp, view, telemetry,
-        )  # fmt: skip
-        signal.signal(signal.SIGINT, sigint)  # the files are closed: Ctrl-C as before
-        counters = runner.counters()
-    finally:
-        link.close()
-        if platform is not None and platform.sender is not None:
-            platform.sender.close()
-        elif udp_sender is not None:
-            udp_sender.close()
-    timing = stats.as_dict()
-    report = {
-        "link": link_kind,
-        "pace": args.pace,
-        "wait": "compiled" if runner.waits_compiled else "python",
-        "warm": runner.warms and args.pace == "clock",
-        "timing": timing,
-        "profile": summary.get("profile", {}),
-        "state_stream": summary.get("state_stream", {}),
-        "units": "s",
-        "privileges": [
-            {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
-        ],
-        "counters": {
-            "status_frames": counters.status_frames,
-            "frames_lost": counters.frames_lost,
-            "frames_stale": counters.frames_stale,
-            "send_errors": counters.send_errors,
-            "bus_errors": link.errors,
-            "ring_dropped": int(summary.get("ring_dropped", 0)),
-            "platform_datagrams": 0 if platform is None else platform.sequence,
-            "platform_can": bool(args.platform_can),
-        },
-        "state": counters.state,
-        "fault": counters.fault,
-        "fault_reason": counters.fault_reason,
-    }
-    write_text(folder / "timing.json", _json(report))
-    html = None
-    if args.report:
-        from motosim.report import build_report
+            runner = RealtimeRunner(
+                stack,
+                link,
+                codecs,
+                limits,
+                rate=rate,
+                periods_per_frame=model.measure_every,
+                capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
+                shared_ring=True,
+                wait_for_arm=view is not None,
+                platform=platform,
+                now=clock.now,
+                clock=clock,
+                handlebar=inputs.nominal_handlebar,
+                validity=validity_limits(sc.motorcycle.speed),
+                warm=args.warm == "on",
+            )
+            metadata = run_metadata(inputs) | {
+                "realtime": {
+                    "bus": args.bus,
+                    "link": link_kind,
+                    "pace": args.pace,
+                    "status_latency": latency,
+                    "measurement_delay": age,
+                    "safety": limits,
+                    "duration": duration,
+                }
+            }
+            try:
+                presses.check()  # Ctrl-C while the stack was built: no run
+            except KeyboardInterrupt:
+                runner.ring.close()  # the loop would have: its shared memory
+                raise
+            # a partial result is kept beside a complete one already there (--overwrite):
+            # the timing and the report go where the rows went
+            stats, privileges, summary, folder, end_writer = _loop(
+                args, runner, clock, rate, periods, folder, metadata,
+                inputs.nominal_handlebar.torque_per_amp, view, telemetry,
+            )  # fmt: skip
+            signal.signal(signal.SIGINT, sigint)  # the files are closed: Ctrl-C as before
+            counters = runner.counters()
+        finally:
+            link.close()
+            if platform is not None and platform.sender is not None:
+                platform.sender.close()
+            elif udp_sender is not None:
+                udp_sender.close()
+        timing = stats.as_dict()
+        report = {
+            "link": link_kind,
+            "pace": args.pace,
+            "wait": "compiled" if runner.waits_compiled else "python",
+            "warm": runner.warms and args.pace == "clock",
+            "timing": timing,
+            "profile": summary.get("profile", {}),
+            "state_stream": summary.get("state_stream", {}),
+            "units": "s",
+            "privileges": [
+                {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
+            ],
+            "counters": {
+                "status_frames": counters.status_frames,
+                "frames_lost": counters.frames_lost,
+                "frames_stale": counters.frames_stale,
+                "send_errors": counters.send_errors,
+                "bus_errors": link.errors,
+                "ring_dropped": int(summary.get("ring_dropped", 0)),
+                "platform_datagrams": 0 if platform is None else platform.sequence,
+                "platform_can": bool(args.platform_can),
+            },
+            "state": counters.state,
+            "fault": counters.fault,
+            "fault_reason": counters.fault_reason,
+        }
+        write_text(folder / "timing.json", _json(report))
+        html = None
+        if args.report:
+            from motosim.report import build_report
 
-        html = build_report(folder)
+            html = build_report(folder)
+    finally:
+        end_writer()  # the files beside the rows are written: the folder's lock is released
     if args.json:
         print_json({"out": str(folder), "report": str(html) if html else None} | report)
     else:
@@ -766,9 +834,12 @@ def _loop(
     torque_per_amp: float,
     view: _ViewSetup | None = None,
     telemetry: tuple[str, int] | None = None,
-) -> tuple[Any, tuple[Any, ...], dict[str, Any], Path]:
+) -> tuple[Any, tuple[Any, ...], dict[str, Any], Path, Callable[[], None]]:
     """The real-time part: writer process (and view, and the state stream to ``telemetry``),
-    privileges, signals, keyboard, the loop."""
+    privileges, signals, keyboard, the loop. Returns the loop's timing, the privileges, the
+    result's summary, where its rows are, and the function that ends the writer process,
+    which holds the folder's lock until then (called once the files beside the rows are
+    written)."""
     import dataclasses
     import multiprocessing
 
@@ -803,6 +874,7 @@ def _loop(
         daemon=True,
     )  # fmt: skip
     writer.start()
+    done = False  # the result closed: the writer holds the folder's lock until released
     if view is not None:
         view.control.close()  # the writer holds its copy: EOF here once it ends
     try:
@@ -866,10 +938,28 @@ def _loop(
             raise MotosimError(f"{folder}: the result writer did not finish")
         _, summary, location, profile, stream = ours.recv()
         summary = summary | {"profile": profile, "state_stream": stream}
+        done = True
     finally:
-        writer.join(timeout=10.0)
-        if writer.is_alive():
-            writer.kill()
+        if not done:
+            _end_writer(writer, None)
         runner.ring.close()
         signal.signal(signal.SIGINT, previous)
-    return stats, privileges, summary, Path(location)
+    return stats, privileges, summary, Path(location), lambda: _end_writer(writer, ours)
+
+
+def _no_writer() -> None:
+    """No writer process to end: the run stopped before it started."""
+
+
+def _end_writer(writer: Any, conn: Any) -> None:
+    """Let the writer process release the folder's lock through ``conn`` (None: it is not
+    waiting for that), then join it; killed if it has not ended within 10 s."""
+    if conn is not None:
+        try:
+            conn.send(("release",))
+        except OSError:  # it has ended
+            pass
+        conn.close()
+    writer.join(timeout=10.0)
+    if writer.is_alive():
+        writer.kill()

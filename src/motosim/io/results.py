@@ -18,8 +18,9 @@ How a result is never lost or corrupted:
   ``.NAME.lock`` beside it; a second writer of the same folder, with or without
   ``overwrite``, is refused. The operating system releases the lock when the process ends,
   however it ends, so a killed run never blocks the next one. A command that writes more
-  into the folder after the result (``simulate``'s report, ``cueing``'s figures) holds the
-  lock until that is written too (:func:`folder_lock` with ``shared``). A folder written in
+  into the folder after the result (``simulate``'s report, ``cueing``'s figures, ``run``'s
+  ``timing.json`` and report, its writer process holding the lock) holds the lock until
+  that is written too (:func:`folder_lock` with ``shared``). A folder written in
   place, never replaced whole (a campaign's), holds its lock inside: ``NAME/.motosim.lock``
   (:func:`folder_lock` with ``inside``).
 - **Staging.** The run writes into the sibling folder ``NAME.partial``; only
