@@ -19,7 +19,7 @@ from typing import Any
 import pytest
 
 from motosim.cli.main import main
-from motosim.io.results import folder_lock
+from motosim.io.results import folder_lock, lock_file
 
 
 def _motosim(*argv: str) -> subprocess.Popen[str]:
@@ -121,30 +121,6 @@ def _small_campaign(folder: Path) -> Path:
     return campaign
 
 
-def test_a_campaign_writes_nothing_beside_its_out_folder(tmp_path: Path) -> None:
-    # its lock was .out.lock beside --out: a read-only parent was refused although --out was
-    # writable. The parent seen while the campaign runs, from another process's view
-    import motosim.campaign.execute
-
-    campaign = _small_campaign(tmp_path)
-    parent = tmp_path / "shared"
-    parent.mkdir()
-    out = parent / "out"
-    out.mkdir()
-    seen: list[list[str]] = []
-    real = motosim.campaign.execute._fill
-
-    def fill(*args: Any) -> Any:
-        seen.append(sorted(p.name for p in parent.iterdir()))
-        return real(*args)
-
-    with unittest.mock.patch.object(motosim.campaign.execute, "_fill", fill):
-        code = main(["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"])
-    assert code == 0
-    assert seen == [["out"]]  # while it ran: nothing beside --out
-    assert not any(p.name.endswith("lock") for p in out.iterdir())  # released at the end
-
-
 def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path) -> None:
     # as simulate's: the lock was released before the report was built from the folder
     import fcntl
@@ -157,7 +133,7 @@ def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path)
     real = motosim.report.campaign.build_campaign_report
 
     def build_campaign_report(folder: Any) -> Any:
-        fd = os.open(out / ".motosim.lock", os.O_RDWR)  # as another instance tries it
+        fd = os.open(lock_file(out), os.O_RDWR)  # as another instance tries it
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             locked.append(False)
@@ -172,10 +148,12 @@ def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path)
     ):
         assert main(["campaign", str(campaign), "--out", str(out), "--jobs", "1"]) == 0
     assert locked == [True] and (out / "report.html").is_file()
-    assert not (out / ".motosim.lock").exists()
+    assert not lock_file(out).exists()
 
 
-def test_a_campaign_runs_in_a_writable_out_under_a_read_only_parent(tmp_path: Path) -> None:
+def test_a_campaign_under_a_read_only_parent_is_refused_in_one_line(tmp_path: Path) -> None:
+    # its lock is beside --out (.out.lock), as every command's, so that a campaign and a
+    # simulate of the same folder exclude each other: a read-only parent is refused
     campaign = _small_campaign(tmp_path)
     parent = tmp_path / "shared"
     out = parent / "out"
@@ -188,8 +166,9 @@ def test_a_campaign_runs_in_a_writable_out_under_a_read_only_parent(tmp_path: Pa
         done = subprocess.run(
             [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
         )
-        assert done.returncode == 0, done.stderr
-        assert (out / "manifest.json").is_file()
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert "cannot create the lock" in done.stderr and "nothing was written" in done.stderr
+        assert list(out.iterdir()) == []
     finally:
         parent.chmod(0o755)
 
@@ -200,13 +179,11 @@ def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
     campaign = _small_campaign(tmp_path)
     out = tmp_path / "out"
     argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
-    with folder_lock(out, inside=True):  # another instance, running or resuming the campaign
+    with folder_lock(out):  # another instance, running or resuming the campaign
         code = main(argv)
-        # the other instance made --out for its lock; this one wrote nothing in it
-        assert [p.name for p in out.iterdir()] == [".motosim.lock"]
     err = capsys.readouterr().err
     # was: both ran every run into the same parts and manifest (same temporary names)
     assert code == 2 and err.count("\n") == 1, err
     assert f"another run (pid {os.getpid()}) is writing this result" in err
-    assert not out.exists()  # the other instance's folder, empty, went with its lock
+    assert not out.exists()
     assert main(argv) == 0  # once it has ended

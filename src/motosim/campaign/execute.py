@@ -448,9 +448,10 @@ def run_campaign(
     for f in campaign.factors:
         first = plan.runs[0].values[len(kinds)]
         kinds.append(float if f.path.startswith(f"{TRUE_HANDLEBAR}.") else type(first))
-    # a second instance on the folder is refused, not mixed in; the lock is in the folder,
-    # which is written in place: nothing beside it, whose parent may be read-only
-    with folder_lock(out, inside=True):
+    # a second instance on the folder, or another command writing it (motosim simulate, whose
+    # result would replace the folder whole), is refused, not mixed in: the lock is beside the
+    # folder (.NAME.lock), the one every command takes
+    with folder_lock(out):
         store = ResultStore(
             out,
             fingerprint=plan.fingerprint,

@@ -19,9 +19,7 @@ How a result is never lost or corrupted:
   ``overwrite``, is refused. The operating system releases the lock when the process ends,
   however it ends, so a killed run never blocks the next one. A command that writes more
   into the folder after the result (``simulate``'s report, ``cueing``'s figures) holds the
-  lock until that is written too (:func:`folder_lock` with ``shared``). A folder written in
-  place, never replaced whole (a campaign's), holds its lock inside: ``NAME/.motosim.lock``
-  (:func:`folder_lock` with ``inside``).
+  lock until that is written too (:func:`folder_lock` with ``shared``).
 - **Staging.** The run writes into the sibling folder ``NAME.partial``; only
   :meth:`ResultWriter.close` moves it to ``NAME``, replacing a previous result in two renames
   (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
@@ -154,14 +152,10 @@ def partial_folder(folder: str | Path) -> Path:
     return target.with_name(target.name + _PARTIAL)
 
 
-_INSIDE_LOCK = ".motosim.lock"
-
-
-def lock_file(folder: str | Path, *, inside: bool = False) -> Path:
-    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it, or with
-    ``inside`` (a folder that is never replaced whole: a campaign's) ``.motosim.lock`` in it."""
+def lock_file(folder: str | Path) -> Path:
+    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it."""
     target = Path(folder)
-    return target / _INSIDE_LOCK if inside else target.with_name(f".{target.name}.lock")
+    return target.with_name(f".{target.name}.lock")
 
 
 def is_complete_result(folder: str | Path) -> bool:
@@ -198,8 +192,8 @@ class _FolderLock:
     releases it. Otherwise, and from another thread or process, a second holder is refused.
     """
 
-    def __init__(self, folder: Path, *, shared: bool = False, inside: bool = False) -> None:
-        self.path = lock_file(folder, inside=inside)
+    def __init__(self, folder: Path, *, shared: bool = False) -> None:
+        self.path = lock_file(folder)
         self._fd: int | None = None
         self._key = os.path.join(os.path.realpath(self.path.parent), self.path.name)
         with _HELD_GUARD:
@@ -265,9 +259,7 @@ class _FolderLock:
 
 
 @contextmanager
-def folder_lock(
-    folder: str | Path, *, shared: bool = False, inside: bool = False
-) -> Iterator[Path]:
+def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
     """Hold the lock of a run writing ``folder`` (``.NAME.lock`` beside it) within the block.
 
     The lock :class:`ResultWriter` holds, for writers of other kinds of folder (a campaign's):
@@ -277,18 +269,12 @@ def folder_lock(
     Parameters
     ----------
     folder : str or Path
-        The folder written; its parent must exist and be writable (the lock is beside it),
-        or with ``inside`` the folder itself (created if needed, parents included).
+        The folder written; its parent must exist and be writable (the lock is beside it).
     shared : bool
         Let a :class:`ResultWriter` of ``folder`` opened within the block, in this thread,
         share the lock instead of being refused: the folder then stays locked after the
         writer has closed, until the block ends, so that what a command writes beside the
         result (its report, its figures) is written under the lock too.
-    inside : bool
-        Put the lock in ``folder`` (``.motosim.lock``), for a folder that is written in place,
-        never replaced whole by a rename (a campaign's: a result folder is, which would take
-        a lock inside with it): nothing is written beside ``folder``, whose parent may be
-        read-only. A folder this call created is deleted on leaving if it is left empty.
 
     Yields
     ------
@@ -301,33 +287,15 @@ def folder_lock(
         If another run holds it, or it cannot be created (naming the folder).
     """
     target = Path(folder).absolute()
-    created = False
     try:
-        if inside:
-            if not target.is_dir():  # a file there: refused by the lock's creation below
-                target.parent.mkdir(parents=True, exist_ok=True)
-                try:
-                    target.mkdir()
-                    created = True
-                except FileExistsError:  # another instance made it meanwhile: its lock decides
-                    pass
-        else:
-            target.parent.mkdir(parents=True, exist_ok=True)
+        target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        where = target if inside else target.parent
-        raise MotosimError(f"cannot create folder {where}: {_reason(err)}") from None
+        raise MotosimError(f"cannot create folder {target.parent}: {_reason(err)}") from None
+    lock = _FolderLock(target, shared=shared)
     try:
-        lock = _FolderLock(target, shared=shared, inside=inside)
-        try:
-            yield lock.path
-        finally:
-            lock.release()
+        yield lock.path
     finally:
-        if created:
-            try:
-                target.rmdir()  # only if empty: nothing was written there
-            except OSError:
-                pass
+        lock.release()
 
 
 def _host_tag() -> str:
