@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 import unittest.mock
 from pathlib import Path
@@ -187,3 +188,48 @@ def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
     assert f"another run (pid {os.getpid()}) is writing this result" in err
     assert not out.exists()
     assert main(argv) == 0  # once it has ended
+
+
+def test_a_campaign_and_a_simulate_of_one_folder_exclude_each_other(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # with the campaign's lock inside --out (3dc0dd8) a simulate took its own lock beside
+    # --out, and its publishing rename replaced the whole folder: the campaign's manifest and
+    # parts were deleted while the campaign said it had succeeded
+    import numpy as np
+
+    import motosim.campaign.execute
+    from motosim.io.results import ResultWriter
+
+    campaign = _small_campaign(tmp_path)
+    out = tmp_path / "out"
+    argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
+    with ResultWriter(out, ("t", "phi"), {}) as writer:  # a simulate writing --out
+        writer.append(np.array([[0.0, 0.1]]))
+        assert main(argv) == 2
+        writer.close()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"another run (pid {os.getpid()}) is writing" in err, err
+    assert sorted(p.name for p in out.iterdir()) == ["result.csv", "result.h5"]
+
+    # the reverse: a simulate while the campaign writes --out (before it has a file there)
+    other = tmp_path / "other"
+    scenario = tmp_path / "base.toml"
+    codes: list[int] = []
+    real = motosim.campaign.execute.ResultStore
+
+    def simulate() -> None:
+        codes.append(main(["simulate", str(scenario), "--out", str(other), "--no-report"]))
+
+    def store(*args: Any, **kwargs: Any) -> Any:
+        # another thread, as another process: the campaign's thread would share its lock
+        thread = threading.Thread(target=simulate)
+        thread.start()
+        thread.join()
+        return real(*args, **kwargs)
+
+    with unittest.mock.patch.object(motosim.campaign.execute, "ResultStore", store):
+        assert main([*argv[:3], str(other), *argv[4:]]) == 0
+    err = capsys.readouterr().err
+    assert codes == [2] and f"another run (pid {os.getpid()}) is writing" in err, err
+    assert (other / "manifest.json").is_file() and (other / "parts").is_dir()

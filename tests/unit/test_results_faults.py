@@ -463,3 +463,48 @@ def test_write_whole_writes_through_a_link_and_keeps_the_files_permissions(tmp_p
     assert link.is_symlink() and real.read_text(encoding="utf-8") == "new"
     assert stat.S_IMODE(real.stat().st_mode) == 0o600
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real.csv"]
+
+
+def test_a_stopped_run_never_replaces_a_folder_of_other_files(tmp_path: Path) -> None:
+    # files another program (a campaign of a version that locked inside its folder) put in
+    # the result folder while the run went: _abort published over any folder that was not a
+    # complete result, and the rename deleted them
+    folder = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        with ResultWriter(folder, NAMES, {}) as writer:
+            writer.append(_block(0, 5))
+            folder.mkdir()
+            (folder / "manifest.json").write_text("{}\n", encoding="utf-8")
+            raise KeyboardInterrupt
+    assert [p.name for p in folder.iterdir()] == ["manifest.json"]
+    assert writer.location == partial_folder(folder)
+    assert load_result(partial_folder(folder)).t.size == 5
+    assert not lock_file(folder).exists()
+
+
+def test_a_completed_run_never_replaces_a_folder_of_other_files(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    with ResultWriter(folder, NAMES, {}) as writer:
+        writer.append(_block(0, 5))
+        folder.mkdir()
+        (folder / "manifest.json").write_text("{}\n", encoding="utf-8")
+        with pytest.raises(MotosimError) as caught:
+            writer.close()
+    message = str(caught.value)
+    assert "\n" not in message and "not a motosim result" in message
+    assert str(partial_folder(folder)) in message
+    assert [p.name for p in folder.iterdir()] == ["manifest.json"]
+    kept = load_result(partial_folder(folder))
+    assert kept.complete and kept.t.size == 5
+    assert not lock_file(folder).exists()
+
+
+def test_a_stopped_run_still_replaces_an_empty_folder_or_a_stopped_result(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    folder.mkdir()  # empty: as before
+    for rows in (3, 4):  # the second replaces the first run's rows
+        with pytest.raises(KeyboardInterrupt):
+            with ResultWriter(folder, NAMES, {}) as writer:
+                writer.append(_block(0, rows))
+                raise KeyboardInterrupt
+        assert writer.location == folder and load_result(folder).t.size == rows

@@ -25,7 +25,9 @@ How a result is never lost or corrupted:
   (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
   complete result untouched; with no previous result, or an earlier stopped run's, its rows
   are moved to ``NAME`` marked partial (``complete`` False, ``result.partial.csv``), and a
-  rerun replaces them without ``overwrite``.
+  rerun replaces them without ``overwrite``. A ``NAME`` that is neither empty nor a motosim
+  result (files another program put there while the run went) is never moved aside: the
+  result, complete or not, stays in ``NAME.partial``, and the run says so.
 - **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
   them. Ctrl-C (SIGINT) and, inside ``with ResultWriter(...)``, SIGTERM close both files,
   readable, marked partial. The HDF5 file is written without SWMR, so it carries no "open
@@ -715,6 +717,14 @@ class ResultWriter:
             os.close(self._csv)
             os.replace(self._csv_path, self._staging / _CSV_NAME)
             self._publish()
+        except _Occupied:
+            self._closed = True
+            self._lock.release()
+            raise MotosimError(
+                f"{self._folder}: holds files that are not a motosim result, written there while "
+                f"the run went; they are left as they are, and the complete result is in "
+                f"{self._staging}"
+            ) from None
         except OSError as err:
             self._fail(self._h5_path, err)
         self._closed = True
@@ -722,7 +732,17 @@ class ResultWriter:
         self._lock.release()
 
     def _publish(self) -> None:
-        """Move the staging folder to the result folder, the previous one aside then deleted."""
+        """Move the staging folder to the result folder, the previous one aside then deleted.
+
+        Raises
+        ------
+        _Occupied
+            If the result folder now holds files that are not a motosim result (written
+            there while the run went, by a program that does not take the lock): it is left
+            as it is, and so is the staging folder.
+        """
+        if not _replaceable(self._folder):
+            raise _Occupied(self._folder)
         old = self._folder.with_name(f".{self._folder.name}.old")
         if old.exists():
             shutil.rmtree(old)
@@ -748,9 +768,15 @@ class ResultWriter:
         try:
             if not is_complete_result(self._folder):
                 # no previous result, or an earlier stopped run's: the partial one goes where
-                # one looks
+                # one looks (never over a folder of other files: _publish refuses it)
                 self._publish()
                 self._location = self._folder
+        except _Occupied:
+            _log.warning(
+                "%s holds files that are not a motosim result: left as it is, the rows kept in %s",
+                self._folder,
+                self._staging,
+            )
         except OSError as err:
             _log.warning("keeping %s: %s", self._staging, err)
         self._lock.release()
@@ -788,6 +814,19 @@ class ResultWriter:
                 self._signals = None
         if exc is None:
             self._stop.check()
+
+
+class _Occupied(OSError):
+    """The result folder holds files that are not a motosim result: it is not replaced."""
+
+
+def _replaceable(folder: Path) -> bool:
+    """Whether publishing may move ``folder`` aside: it is missing, empty, or a motosim
+    result, complete or stopped (its ``result.h5`` there, as :func:`_check_folder` sees it)."""
+    try:
+        return not folder.exists() or (folder / _H5_NAME).is_file() or not any(folder.iterdir())
+    except NotADirectoryError:
+        return False
 
 
 def _reason(err: BaseException) -> str:
