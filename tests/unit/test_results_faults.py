@@ -9,6 +9,7 @@ import stat
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import h5py
@@ -465,17 +466,35 @@ def test_write_whole_writes_through_a_link_and_keeps_the_files_permissions(tmp_p
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real.csv"]
 
 
+def _stopped_run(
+    folder: Path,
+    rows: int,
+    writers: list[ResultWriter],
+    meanwhile: Callable[[], None] | None = None,
+) -> None:
+    """A run of ``rows`` rows into ``folder`` stopped by Ctrl-C, after ``meanwhile()``."""
+    with ResultWriter(folder, NAMES, {}) as writer:
+        writers.append(writer)
+        writer.append(_block(0, rows))
+        if meanwhile is not None:
+            meanwhile()
+        raise KeyboardInterrupt
+
+
 def test_a_stopped_run_never_replaces_a_folder_of_other_files(tmp_path: Path) -> None:
     # files another program (a campaign of a version that locked inside its folder) put in
     # the result folder while the run went: _abort published over any folder that was not a
     # complete result, and the rename deleted them
     folder = tmp_path / "run"
+
+    def campaign_meanwhile() -> None:
+        folder.mkdir()
+        (folder / "manifest.json").write_text("{}\n", encoding="utf-8")
+
+    writers: list[ResultWriter] = []
     with pytest.raises(KeyboardInterrupt):
-        with ResultWriter(folder, NAMES, {}) as writer:
-            writer.append(_block(0, 5))
-            folder.mkdir()
-            (folder / "manifest.json").write_text("{}\n", encoding="utf-8")
-            raise KeyboardInterrupt
+        _stopped_run(folder, 5, writers, campaign_meanwhile)
+    writer = writers[0]
     assert [p.name for p in folder.iterdir()] == ["manifest.json"]
     assert writer.location == partial_folder(folder)
     assert load_result(partial_folder(folder)).t.size == 5
@@ -503,8 +522,7 @@ def test_a_stopped_run_still_replaces_an_empty_folder_or_a_stopped_result(tmp_pa
     folder = tmp_path / "run"
     folder.mkdir()  # empty: as before
     for rows in (3, 4):  # the second replaces the first run's rows
+        writers: list[ResultWriter] = []
         with pytest.raises(KeyboardInterrupt):
-            with ResultWriter(folder, NAMES, {}) as writer:
-                writer.append(_block(0, rows))
-                raise KeyboardInterrupt
-        assert writer.location == folder and load_result(folder).t.size == rows
+            _stopped_run(folder, rows, writers)
+        assert writers[0].location == folder and load_result(folder).t.size == rows

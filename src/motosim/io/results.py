@@ -717,7 +717,7 @@ class ResultWriter:
             os.close(self._csv)
             os.replace(self._csv_path, self._staging / _CSV_NAME)
             self._publish()
-        except _Occupied:
+        except _OccupiedError:
             self._closed = True
             self._lock.release()
             raise MotosimError(
@@ -736,13 +736,13 @@ class ResultWriter:
 
         Raises
         ------
-        _Occupied
+        _OccupiedError
             If the result folder now holds files that are not a motosim result (written
             there while the run went, by a program that does not take the lock): it is left
             as it is, and so is the staging folder.
         """
         if not _replaceable(self._folder):
-            raise _Occupied(self._folder)
+            raise _OccupiedError(self._folder)
         old = self._folder.with_name(f".{self._folder.name}.old")
         if old.exists():
             shutil.rmtree(old)
@@ -771,7 +771,7 @@ class ResultWriter:
                 # one looks (never over a folder of other files: _publish refuses it)
                 self._publish()
                 self._location = self._folder
-        except _Occupied:
+        except _OccupiedError:
             _log.warning(
                 "%s holds files that are not a motosim result: left as it is, the rows kept in %s",
                 self._folder,
@@ -816,7 +816,7 @@ class ResultWriter:
             self._stop.check()
 
 
-class _Occupied(OSError):
+class _OccupiedError(OSError):
     """The result folder holds files that are not a motosim result: it is not replaced."""
 
 
