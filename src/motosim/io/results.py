@@ -74,6 +74,7 @@ __all__ = [
     "StopRequest",
     "folder_lock",
     "is_complete_result",
+    "is_locked",
     "load_result",
     "lock_file",
     "partial_folder",
@@ -258,6 +259,45 @@ class _FolderLock:
         self.path.unlink(missing_ok=True)
         os.close(self._fd)
         self._fd = None
+
+
+def is_locked(folder: str | Path) -> bool:
+    """Whether a process holds the lock of a run writing ``folder`` (:func:`folder_lock`).
+
+    Tries the lock without waiting and, if it gets it, lets it go at once; writes nothing
+    (a missing lock file is no holder). A writer that tries the lock in that instant is
+    refused as if the folder were being written: try again.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The folder (its lock is ``.NAME.lock`` beside it).
+
+    Returns
+    -------
+    bool
+        True while a process, this one included, holds it.
+    """
+    path = lock_file(Path(folder).absolute())
+    for _ in range(10):  # again if the file taken was a finished run's, replaced meanwhile
+        try:
+            fd = os.open(path, os.O_RDONLY)
+        except FileNotFoundError:
+            return False
+        except OSError:  # unreadable: say held rather than stopped
+            return True
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            same = os.fstat(fd).st_ino == os.stat(path).st_ino
+        except BlockingIOError:
+            return True
+        except FileNotFoundError:  # its run ended meanwhile
+            return False
+        finally:
+            os.close(fd)
+        if same:
+            return False
+    return True
 
 
 @contextmanager
