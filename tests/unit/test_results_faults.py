@@ -3,6 +3,7 @@
 import csv
 import fcntl
 import os
+import re
 import shutil
 import signal
 import stat
@@ -19,7 +20,6 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.io.results import (
     ResultWriter,
-    _host_tag,
     folder_lock,
     load_result,
     lock_file,
@@ -296,7 +296,7 @@ def test_write_whole_keeps_the_previous_file_when_the_disk_fills(tmp_path: Path)
     with pytest.raises(MotosimError, match="No space left on device; the previous file"):
         write_whole(target, _filling_after(3, written))  # type: ignore[arg-type]
     # the pieces went to a hidden sibling, which is gone; the old file is as it was
-    assert written and written[0] == f".log.csv.{os.getpid()}.{_host_tag()}.partial"
+    assert written and re.fullmatch(r"\.log\.csv\.[0-9a-f]{12}\.partial", written[0]), written
     assert target.read_text(encoding="utf-8") == "t,theta_h\n0.0,1.0\n"
     assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
 
@@ -327,31 +327,72 @@ def _writer_stopped_in_its_write(target: Path) -> tuple[subprocess.Popen[str], s
     return child, name
 
 
+def test_write_whole_holds_a_lock_on_its_temporary_file_while_it_writes(tmp_path: Path) -> None:
+    # a0a7497 told a running writer from a killed one by the PID and the host name in the
+    # temporary's name: two hosts whose names sanitise alike, or containers sharing a host
+    # name and a folder, saw a running writer as gone and deleted its file
+    held: list[bool] = []
+
+    def write(temporary: Path) -> None:
+        temporary.write_text("new", encoding="utf-8")
+        fd = os.open(temporary, os.O_RDONLY)  # as another process's cleaner tries it
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            held.append(False)
+        except BlockingIOError:
+            held.append(True)
+        finally:
+            os.close(fd)
+
+    write_whole(tmp_path / "log.csv", write)
+    assert held == [True]
+    assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
+
+
+_HOLDER = """
+import fcntl, os, sys
+fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT, 0o644)
+os.write(fd, b"half a log")
+fcntl.flock(fd, fcntl.LOCK_EX)
+print("held", flush=True)
+sys.stdin.read()
+"""
+
+
 def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
     tmp_path: Path,
 ) -> None:
-    # SIGKILL during a write left .NAME.PID.partial beside the file for good
+    # SIGKILL during a write left .NAME.XXXX.partial beside the file for good
     target = tmp_path / "log.csv"
     target.write_text("old", encoding="utf-8")
     running, live_name = _writer_stopped_in_its_write(target)
     killed, dead_name = _writer_stopped_in_its_write(target)  # keeps the running one's
     killed.kill()
     killed.communicate()
-    try:
-        # a leftover of another machine (a shared folder): its process cannot be looked up
-        other_host = tmp_path / f".log.csv.{killed.pid}.another-host.partial"
-        other_host.write_text("another machine's", encoding="utf-8")
-        unrelated = tmp_path / f".other.csv.{killed.pid}.{_host_tag()}.partial"
-        unrelated.write_text("another file's", encoding="utf-8")
-        assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
-        write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
-        assert target.read_text(encoding="utf-8") == "new"
-        assert not (tmp_path / dead_name).exists()  # its process is gone: removed
-        assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
-        assert other_host.is_file() and unrelated.is_file()
-    finally:
-        running.kill()
-        running.communicate()
+    # a write going on elsewhere (another machine, a container with its own PIDs): only its
+    # lock says so, held here by another process
+    elsewhere = tmp_path / ".log.csv.0123456789ab.partial"
+    with subprocess.Popen(
+        [sys.executable, "-c", _HOLDER, str(elsewhere)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    ) as holder:  # fmt: skip
+        try:
+            assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+            unrelated = tmp_path / ".other.csv.0123456789ab.partial"  # another file's
+            unrelated.write_text("another file's", encoding="utf-8")
+            assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
+            write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
+            assert target.read_text(encoding="utf-8") == "new"
+            assert not (tmp_path / dead_name).exists()  # its lock went with it: removed
+            assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
+            assert elsewhere.read_text(encoding="utf-8") == "half a log"  # kept
+            assert unrelated.is_file()
+        finally:
+            holder.kill()
+            running.kill()
+            running.communicate()
+    write_whole(target, lambda temporary: temporary.write_text("newer", encoding="utf-8"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["log.csv", unrelated.name])
 
 
 def test_write_whole_interrupted_keeps_the_previous_file_and_no_temporary(

@@ -48,9 +48,9 @@ import logging
 import math
 import os
 import re
+import secrets
 import shutil
 import signal
-import socket
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -340,49 +340,59 @@ def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
         lock.release()
 
 
-def _host_tag() -> str:
-    """This machine's name as it goes in a temporary file's name: letters, digits, ``-``."""
-    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:32] or "host"
-
-
-def _is_running(pid: int) -> bool:
-    """Whether a process ``pid`` runs on this machine (another user's counts)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
+_LEFTOVER = r"[0-9a-f]{12}"
+"""The random part of a temporary file's name, ``.NAME.<12 hex digits>.partial``."""
 
 
 def _remove_leftovers(real: Path) -> None:
-    """Delete the temporary files of earlier writes of ``real`` whose process has gone.
+    """Delete the temporary files of earlier writes of ``real`` that no process writes.
 
-    Only those written on this machine (its name in theirs) by a process that no longer
-    runs: a killed write's leftover (SIGKILL, a power cut). Another machine's (a shared
-    folder), a running process's, or one that cannot be deleted, is left as it is.
+    A writer holds an exclusive ``flock`` on its temporary file while it writes, and the
+    operating system releases it when the process ends, however it ends (on NFS too, where
+    ``flock`` is a lock of the server's). A leftover ``.NAME.*.partial`` of the same file
+    whose lock this call can take without waiting is a killed write's (SIGKILL, a power cut):
+    it is deleted. One whose lock is held (a write going on, in this process or another,
+    on any machine or container), or that cannot be opened or deleted, is left.
     """
-    pattern = re.compile(
-        rf"\.{re.escape(real.name)}\.(?P<pid>[0-9]{{1,10}})\.{re.escape(_host_tag())}\.partial"
-    )
+    pattern = re.compile(rf"\.{re.escape(real.name)}\.{_LEFTOVER}\.partial")
     try:
-        names = [entry.name for entry in os.scandir(real.parent)]
+        names = [entry.name for entry in os.scandir(real.parent) if pattern.fullmatch(entry.name)]
     except OSError:
         return
     for name in names:
-        match = pattern.fullmatch(name)
-        if match is None:
-            continue
-        pid = int(match["pid"])
-        if pid == os.getpid() or _is_running(pid):
+        path = real.parent / name
+        try:
+            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+        except OSError:
             continue
         try:
-            (real.parent / name).unlink()
-        except OSError as err:
-            _log.debug("cannot remove the leftover %s: %s", name, err)
-        else:
-            _log.info("removed %s, left by process %d (gone)", name, pid)
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            if os.fstat(fd).st_ino == os.stat(path).st_ino:
+                path.unlink()  # under its lock: no writer can take it up meanwhile
+                _log.info("removed %s, left by a write that was killed", name)
+        except OSError as err:  # BlockingIOError: a write going on
+            _log.debug("leaving %s: %s", name, err)
+        finally:
+            os.close(fd)
+
+
+def _open_temporary(real: Path) -> tuple[Path, int]:
+    """Create a new temporary file beside ``real`` and lock it (see :func:`_remove_leftovers`);
+    its name and the descriptor that holds the lock."""
+    while True:
+        temporary = real.with_name(f".{real.name}.{secrets.token_hex(6)}.partial")
+        fd = os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)  # umask applies
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)  # at once, unless a cleaner is trying it
+            if os.fstat(fd).st_ino == os.stat(temporary).st_ino:
+                return temporary, fd
+        except FileNotFoundError:  # a cleaner took it between its creation and the lock
+            pass
+        except BaseException:
+            os.close(fd)
+            temporary.unlink(missing_ok=True)
+            raise
+        os.close(fd)
 
 
 def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
@@ -395,8 +405,8 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
         symbolic link is followed (the file it names is replaced, the link kept), and a
         previous file's permissions are kept.
     write : callable
-        Called with the temporary path (``.NAME.PID.HOST.partial`` beside the file, HOST this
-        machine's name) to write.
+        Called with the temporary path to write (``.NAME.XXXXXXXXXXXX.partial`` beside the
+        file, 12 random hexadecimal digits; it exists, empty, and may be written over).
 
     Returns
     -------
@@ -411,29 +421,37 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
 
     Notes
     -----
-    A process killed while it writes (SIGKILL, a power cut) leaves its temporary file. The
-    next write of the same file deletes such leftovers of this machine whose process has
-    gone (before writing: their space is free for it); a running process's are kept.
+    The writer holds an exclusive ``flock`` on its temporary file until the rename. A process
+    killed while it writes (SIGKILL, a power cut) leaves the file, and its lock goes with the
+    process: the next write of the same file deletes such leftovers, those whose lock it can
+    take (before writing: their space is free for it); a write going on, in any process, on
+    any machine sharing the folder, keeps its file.
     """
     target = Path(path)
     real = Path(os.path.realpath(target))  # through a link, as writing in place did
     _remove_leftovers(real)
-    temporary = real.with_name(f".{real.name}.{os.getpid()}.{_host_tag()}.partial")
+    temporary: Path | None = None
+    fd = -1
     try:
+        temporary, fd = _open_temporary(real)
         write(temporary)
         if real.exists():
             shutil.copymode(real, temporary)  # a private log stays private
         os.replace(temporary, real)
     except BaseException as err:
-        try:
-            temporary.unlink(missing_ok=True)
-        except OSError:  # a read-only folder: nothing was created there
-            pass
+        if temporary is not None:
+            try:
+                temporary.unlink(missing_ok=True)
+            except OSError:
+                pass
         if isinstance(err, OSError):
             raise MotosimError(
                 f"cannot write {target}: {_reason(err)}; the previous file, if any, is kept"
             ) from None
         raise
+    finally:
+        if fd >= 0:
+            os.close(fd)  # the lock goes with it
     return target
 
 
