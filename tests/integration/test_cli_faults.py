@@ -301,11 +301,12 @@ def test_cueing_holds_the_folder_until_its_figures_are_written(tmp_path: Path) -
     assert (out / "perception.png").is_file() and (out / "commands.png").is_file()
 
 
-def test_a_campaign_stopped_by_a_full_disk_says_so_in_its_manifest(
+def test_a_campaign_stopped_by_a_full_disk_is_read_as_stopped_and_resumes(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # the manifest said "running" after a full disk stopped the campaign: its last write
-    # failed on the same full disk, and the error was dropped for the one that stopped it.
+    # fails on the same full disk. "running" is true only while a process holds the folder's
+    # lock: read with read_manifest (as the report and a resume read it), it says "stopped".
     # The disk here is --out itself: it fills up as the second part is written (the series,
     # another program); a write that takes more than there is fails with ENOSPC, and
     # deleting a file frees its size
@@ -313,7 +314,7 @@ def test_a_campaign_stopped_by_a_full_disk_says_so_in_its_manifest(
     import json
 
     import motosim.campaign.results
-    from motosim.campaign import load_results
+    from motosim.campaign import load_results, read_manifest
 
     (tmp_path / "base.toml").write_text(
         '[scenario]\nname = "base"\nduration = 0.2\n[rider]\nkind = "torque"\n'
@@ -353,13 +354,13 @@ def test_a_campaign_stopped_by_a_full_disk_says_so_in_its_manifest(
         code = main(argv)
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "No space left on device" in err, err
-    manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
-    written = load_results(out)  # the parts read back with their own reader
-    assert manifest["status"] == "failed" and "No space left on device" in manifest["error"]
-    assert manifest["written"] == len(written["run_id"]) > 0
-    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]  # the room freed
-    assert main(argv) == 0  # resumed once there is room: complete, the error gone
-    manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    in_file = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    assert in_file["status"] == "running"  # its last write failed on the full disk
+    assert read_manifest(out)["status"] == "stopped"  # no process holds the lock
+    assert 0 < len(load_results(out)["run_id"]) < 40  # the parts written before the disk filled
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]  # no cut file
+    assert main(argv) == 0  # resumed once there is room: complete
+    manifest = read_manifest(out)
     assert manifest["status"] == "complete" and "error" not in manifest
     assert manifest["written"] == 40
 

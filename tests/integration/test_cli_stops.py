@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 import unittest.mock
 from pathlib import Path
@@ -19,7 +20,7 @@ from typing import Any
 import pytest
 
 from motosim.cli.main import main
-from motosim.io.results import folder_lock
+from motosim.io.results import folder_lock, lock_file
 
 
 def _motosim(*argv: str) -> subprocess.Popen[str]:
@@ -121,30 +122,6 @@ def _small_campaign(folder: Path) -> Path:
     return campaign
 
 
-def test_a_campaign_writes_nothing_beside_its_out_folder(tmp_path: Path) -> None:
-    # its lock was .out.lock beside --out: a read-only parent was refused although --out was
-    # writable. The parent seen while the campaign runs, from another process's view
-    import motosim.campaign.execute
-
-    campaign = _small_campaign(tmp_path)
-    parent = tmp_path / "shared"
-    parent.mkdir()
-    out = parent / "out"
-    out.mkdir()
-    seen: list[list[str]] = []
-    real = motosim.campaign.execute._fill
-
-    def fill(*args: Any) -> Any:
-        seen.append(sorted(p.name for p in parent.iterdir()))
-        return real(*args)
-
-    with unittest.mock.patch.object(motosim.campaign.execute, "_fill", fill):
-        code = main(["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"])
-    assert code == 0
-    assert seen == [["out"]]  # while it ran: nothing beside --out
-    assert not any(p.name.endswith("lock") for p in out.iterdir())  # released at the end
-
-
 def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path) -> None:
     # as simulate's: the lock was released before the report was built from the folder
     import fcntl
@@ -157,7 +134,7 @@ def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path)
     real = motosim.report.campaign.build_campaign_report
 
     def build_campaign_report(folder: Any) -> Any:
-        fd = os.open(out / ".motosim.lock", os.O_RDWR)  # as another instance tries it
+        fd = os.open(lock_file(out), os.O_RDWR)  # as another instance tries it
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             locked.append(False)
@@ -172,10 +149,12 @@ def test_a_campaign_holds_its_folder_until_its_report_is_written(tmp_path: Path)
     ):
         assert main(["campaign", str(campaign), "--out", str(out), "--jobs", "1"]) == 0
     assert locked == [True] and (out / "report.html").is_file()
-    assert not (out / ".motosim.lock").exists()
+    assert not lock_file(out).exists()
 
 
-def test_a_campaign_runs_in_a_writable_out_under_a_read_only_parent(tmp_path: Path) -> None:
+def test_a_campaign_under_a_read_only_parent_is_refused_in_one_line(tmp_path: Path) -> None:
+    # its lock is beside --out (.out.lock), as every command's, so that a campaign and a
+    # simulate of the same folder exclude each other: a read-only parent is refused
     campaign = _small_campaign(tmp_path)
     parent = tmp_path / "shared"
     out = parent / "out"
@@ -188,8 +167,9 @@ def test_a_campaign_runs_in_a_writable_out_under_a_read_only_parent(tmp_path: Pa
         done = subprocess.run(
             [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
         )
-        assert done.returncode == 0, done.stderr
-        assert (out / "manifest.json").is_file()
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert "cannot create the lock" in done.stderr and "nothing was written" in done.stderr
+        assert list(out.iterdir()) == []
     finally:
         parent.chmod(0o755)
 
@@ -200,13 +180,56 @@ def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
     campaign = _small_campaign(tmp_path)
     out = tmp_path / "out"
     argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
-    with folder_lock(out, inside=True):  # another instance, running or resuming the campaign
+    with folder_lock(out):  # another instance, running or resuming the campaign
         code = main(argv)
-        # the other instance made --out for its lock; this one wrote nothing in it
-        assert [p.name for p in out.iterdir()] == [".motosim.lock"]
     err = capsys.readouterr().err
     # was: both ran every run into the same parts and manifest (same temporary names)
     assert code == 2 and err.count("\n") == 1, err
     assert f"another run (pid {os.getpid()}) is writing this result" in err
-    assert not out.exists()  # the other instance's folder, empty, went with its lock
+    assert not out.exists()
     assert main(argv) == 0  # once it has ended
+
+
+def test_a_campaign_and_a_simulate_of_one_folder_exclude_each_other(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # with the campaign's lock inside --out (3dc0dd8) a simulate took its own lock beside
+    # --out, and its publishing rename replaced the whole folder: the campaign's manifest and
+    # parts were deleted while the campaign said it had succeeded
+    import numpy as np
+
+    import motosim.campaign.execute
+    from motosim.io.results import ResultWriter
+
+    campaign = _small_campaign(tmp_path)
+    out = tmp_path / "out"
+    argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
+    with ResultWriter(out, ("t", "phi"), {}) as writer:  # a simulate writing --out
+        writer.append(np.array([[0.0, 0.1]]))
+        assert main(argv) == 2
+        writer.close()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"another run (pid {os.getpid()}) is writing" in err, err
+    assert sorted(p.name for p in out.iterdir()) == ["result.csv", "result.h5"]
+
+    # the reverse: a simulate while the campaign writes --out (before it has a file there)
+    other = tmp_path / "other"
+    scenario = tmp_path / "base.toml"
+    codes: list[int] = []
+    real = motosim.campaign.execute.ResultStore
+
+    def simulate() -> None:
+        codes.append(main(["simulate", str(scenario), "--out", str(other), "--no-report"]))
+
+    def store(*args: Any, **kwargs: Any) -> Any:
+        # another thread, as another process: the campaign's thread would share its lock
+        thread = threading.Thread(target=simulate)
+        thread.start()
+        thread.join()
+        return real(*args, **kwargs)
+
+    with unittest.mock.patch.object(motosim.campaign.execute, "ResultStore", store):
+        assert main([*argv[:3], str(other), *argv[4:]]) == 0
+    err = capsys.readouterr().err
+    assert codes == [2] and f"another run (pid {os.getpid()}) is writing" in err, err
+    assert (other / "manifest.json").is_file() and (other / "parts").is_dir()

@@ -3,12 +3,14 @@
 import csv
 import fcntl
 import os
+import re
 import shutil
 import signal
 import stat
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import h5py
@@ -18,7 +20,6 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.io.results import (
     ResultWriter,
-    _host_tag,
     folder_lock,
     load_result,
     lock_file,
@@ -295,7 +296,7 @@ def test_write_whole_keeps_the_previous_file_when_the_disk_fills(tmp_path: Path)
     with pytest.raises(MotosimError, match="No space left on device; the previous file"):
         write_whole(target, _filling_after(3, written))  # type: ignore[arg-type]
     # the pieces went to a hidden sibling, which is gone; the old file is as it was
-    assert written and written[0] == f".log.csv.{os.getpid()}.{_host_tag()}.partial"
+    assert written and re.fullmatch(r"\.log\.csv\.[0-9a-f]{12}\.partial", written[0]), written
     assert target.read_text(encoding="utf-8") == "t,theta_h\n0.0,1.0\n"
     assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
 
@@ -326,31 +327,72 @@ def _writer_stopped_in_its_write(target: Path) -> tuple[subprocess.Popen[str], s
     return child, name
 
 
+def test_write_whole_holds_a_lock_on_its_temporary_file_while_it_writes(tmp_path: Path) -> None:
+    # a0a7497 told a running writer from a killed one by the PID and the host name in the
+    # temporary's name: two hosts whose names sanitise alike, or containers sharing a host
+    # name and a folder, saw a running writer as gone and deleted its file
+    held: list[bool] = []
+
+    def write(temporary: Path) -> None:
+        temporary.write_text("new", encoding="utf-8")
+        fd = os.open(temporary, os.O_RDONLY)  # as another process's cleaner tries it
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            held.append(False)
+        except BlockingIOError:
+            held.append(True)
+        finally:
+            os.close(fd)
+
+    write_whole(tmp_path / "log.csv", write)
+    assert held == [True]
+    assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
+
+
+_HOLDER = """
+import fcntl, os, sys
+fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT, 0o644)
+os.write(fd, b"half a log")
+fcntl.flock(fd, fcntl.LOCK_EX)
+print("held", flush=True)
+sys.stdin.read()
+"""
+
+
 def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
     tmp_path: Path,
 ) -> None:
-    # SIGKILL during a write left .NAME.PID.partial beside the file for good
+    # SIGKILL during a write left .NAME.XXXX.partial beside the file for good
     target = tmp_path / "log.csv"
     target.write_text("old", encoding="utf-8")
     running, live_name = _writer_stopped_in_its_write(target)
     killed, dead_name = _writer_stopped_in_its_write(target)  # keeps the running one's
     killed.kill()
     killed.communicate()
-    try:
-        # a leftover of another machine (a shared folder): its process cannot be looked up
-        other_host = tmp_path / f".log.csv.{killed.pid}.another-host.partial"
-        other_host.write_text("another machine's", encoding="utf-8")
-        unrelated = tmp_path / f".other.csv.{killed.pid}.{_host_tag()}.partial"
-        unrelated.write_text("another file's", encoding="utf-8")
-        assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
-        write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
-        assert target.read_text(encoding="utf-8") == "new"
-        assert not (tmp_path / dead_name).exists()  # its process is gone: removed
-        assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
-        assert other_host.is_file() and unrelated.is_file()
-    finally:
-        running.kill()
-        running.communicate()
+    # a write going on elsewhere (another machine, a container with its own PIDs): only its
+    # lock says so, held here by another process
+    elsewhere = tmp_path / ".log.csv.0123456789ab.partial"
+    with subprocess.Popen(
+        [sys.executable, "-c", _HOLDER, str(elsewhere)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    ) as holder:  # fmt: skip
+        try:
+            assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+            unrelated = tmp_path / ".other.csv.0123456789ab.partial"  # another file's
+            unrelated.write_text("another file's", encoding="utf-8")
+            assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
+            write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
+            assert target.read_text(encoding="utf-8") == "new"
+            assert not (tmp_path / dead_name).exists()  # its lock went with it: removed
+            assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
+            assert elsewhere.read_text(encoding="utf-8") == "half a log"  # kept
+            assert unrelated.is_file()
+        finally:
+            holder.kill()
+            running.kill()
+            running.communicate()
+    write_whole(target, lambda temporary: temporary.write_text("newer", encoding="utf-8"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["log.csv", unrelated.name])
 
 
 def test_write_whole_interrupted_keeps_the_previous_file_and_no_temporary(
@@ -463,3 +505,65 @@ def test_write_whole_writes_through_a_link_and_keeps_the_files_permissions(tmp_p
     assert link.is_symlink() and real.read_text(encoding="utf-8") == "new"
     assert stat.S_IMODE(real.stat().st_mode) == 0o600
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real.csv"]
+
+
+def _stopped_run(
+    folder: Path,
+    rows: int,
+    writers: list[ResultWriter],
+    meanwhile: Callable[[], None] | None = None,
+) -> None:
+    """A run of ``rows`` rows into ``folder`` stopped by Ctrl-C, after ``meanwhile()``."""
+    with ResultWriter(folder, NAMES, {}) as writer:
+        writers.append(writer)
+        writer.append(_block(0, rows))
+        if meanwhile is not None:
+            meanwhile()
+        raise KeyboardInterrupt
+
+
+def test_a_stopped_run_never_replaces_a_folder_of_other_files(tmp_path: Path) -> None:
+    # files another program (a campaign of a version that locked inside its folder) put in
+    # the result folder while the run went: _abort published over any folder that was not a
+    # complete result, and the rename deleted them
+    folder = tmp_path / "run"
+
+    def campaign_meanwhile() -> None:
+        folder.mkdir()
+        (folder / "manifest.json").write_text("{}\n", encoding="utf-8")
+
+    writers: list[ResultWriter] = []
+    with pytest.raises(KeyboardInterrupt):
+        _stopped_run(folder, 5, writers, campaign_meanwhile)
+    writer = writers[0]
+    assert [p.name for p in folder.iterdir()] == ["manifest.json"]
+    assert writer.location == partial_folder(folder)
+    assert load_result(partial_folder(folder)).t.size == 5
+    assert not lock_file(folder).exists()
+
+
+def test_a_completed_run_never_replaces_a_folder_of_other_files(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    with ResultWriter(folder, NAMES, {}) as writer:
+        writer.append(_block(0, 5))
+        folder.mkdir()
+        (folder / "manifest.json").write_text("{}\n", encoding="utf-8")
+        with pytest.raises(MotosimError) as caught:
+            writer.close()
+    message = str(caught.value)
+    assert "\n" not in message and "not a motosim result" in message
+    assert str(partial_folder(folder)) in message
+    assert [p.name for p in folder.iterdir()] == ["manifest.json"]
+    kept = load_result(partial_folder(folder))
+    assert kept.complete and kept.t.size == 5
+    assert not lock_file(folder).exists()
+
+
+def test_a_stopped_run_still_replaces_an_empty_folder_or_a_stopped_result(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    folder.mkdir()  # empty: as before
+    for rows in (3, 4):  # the second replaces the first run's rows
+        writers: list[ResultWriter] = []
+        with pytest.raises(KeyboardInterrupt):
+            _stopped_run(folder, rows, writers)
+        assert writers[0].location == folder and load_result(folder).t.size == rows

@@ -21,7 +21,7 @@ a run whose row is in a part has its series too.
 
 import dataclasses
 import importlib
-import json
+import logging
 import math
 import os
 import time
@@ -61,6 +61,8 @@ __all__ = [
     "run_campaign",
     "run_task",
 ]
+
+_log = logging.getLogger(__name__)
 
 STEPS_PER_SECOND = 7.0e5
 """Stack periods of a whole run (rig and stack) one core simulates per second, to size tasks
@@ -191,10 +193,6 @@ def design_for(plan: Plan, key: str) -> Design:
         true_handlebars=plan.true_handlebars,
     )
 
-
-_MANIFEST_MARGIN = 16_384
-"""Bytes set aside beyond the first manifest for its last write (the last call's figures,
-the error) [bytes]."""
 
 _NEEDS = {
     "rms_tau_r_error": ("tau_r_hat", "tau_r"),
@@ -448,9 +446,10 @@ def run_campaign(
     for f in campaign.factors:
         first = plan.runs[0].values[len(kinds)]
         kinds.append(float if f.path.startswith(f"{TRUE_HANDLEBAR}.") else type(first))
-    # a second instance on the folder is refused, not mixed in; the lock is in the folder,
-    # which is written in place: nothing beside it, whose parent may be read-only
-    with folder_lock(out, inside=True):
+    # a second instance on the folder, or another command writing it (motosim simulate, whose
+    # result would replace the folder whole), is refused, not mixed in: the lock is beside the
+    # folder (.NAME.lock), the one every command takes
+    with folder_lock(out):
         store = ResultStore(
             out,
             fingerprint=plan.fingerprint,
@@ -472,6 +471,8 @@ def _fill(
     on_progress: Callable[[int, int, int], None] | None,
 ) -> CampaignSummary:
     """Run the campaign's runs that ``store`` does not hold yet (:func:`run_campaign`)."""
+    if store.previous == "stopped":
+        _log.info("%s: its last call stopped while running (killed, or a full disk); resuming", out)
     todo = [r for r in plan.runs if r.run_id not in store.done]
     skipped = len(plan.runs) - len(todo)
     needed = sorted({r.design for r in todo})
@@ -495,14 +496,9 @@ def _fill(
         "status": "running",
         "written": skipped,
     }
-    # disk set aside for the manifest's last write, freed just before it: a campaign stopped
-    # by a full disk still says so (else its manifest said "running")
-    store.reserve_space(len(json.dumps(manifest, indent=2, default=str)) + _MANIFEST_MARGIN)
-    try:
-        store.write_manifest(manifest)
-    except BaseException:
-        store.release_space()
-        raise
+    # "running" holds only while this process holds the folder's lock: a reader that can take
+    # the lock reads the campaign as stopped (read_manifest), however this call ends
+    store.write_manifest(manifest)
     design_time = time.perf_counter() - start
     done, failed, busy, compute, cpu = skipped, 0, 0.0, 0.0, 0.0
     run_start = time.perf_counter()
@@ -563,10 +559,9 @@ def _fill(
             written=len(store.done & {r.run_id for r in plan.runs}),
             last_call=dataclasses.asdict(summary),
         )
-        store.release_space()  # the room for this write on a full disk
         try:
             store.write_manifest(manifest)
-        except MotosimError:
+        except MotosimError:  # one line, naming the file and the system's reason
             if status == "complete":
                 raise  # else the error that stopped the campaign (a full disk) is the one said
     return summary

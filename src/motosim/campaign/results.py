@@ -8,10 +8,11 @@ failed run). Read them with pandas (``pandas.read_parquet("DIR/parts")``), polar
 :func:`load_results`. A part is written to a hidden file and renamed, so an interrupted
 campaign leaves only whole parts (a full disk is one line naming the part);
 ``DIR/manifest.json`` says what the campaign was (its file, base scenario, fingerprint,
-package version), how far it got and how long it took.
+package version), how far it got, how long it took and how its last call ended (``status``);
+``"running"`` there is true only while a process holds the folder's lock, and
+:func:`read_manifest` reads it as ``"stopped"`` when none does.
 """
 
-import errno
 import hashlib
 import json
 import os
@@ -25,7 +26,7 @@ from numpy.typing import NDArray
 from motosim import __version__
 from motosim.campaign.series import SERIES
 from motosim.errors import MotosimError
-from motosim.io.results import write_whole
+from motosim.io.results import is_locked, write_whole
 
 __all__ = [
     "FOREIGN",
@@ -39,8 +40,6 @@ __all__ = [
 
 MANIFEST = "manifest.json"
 """File name of the manifest in a result folder."""
-RESERVE = ".motosim.reserve"
-"""Disk space set aside while a campaign runs, for its manifest's last write."""
 PARTS = "parts"
 """Folder of the Parquet parts in a result folder."""
 
@@ -52,7 +51,14 @@ def _arrow_type(kind: type) -> Any:
 
 
 def read_manifest(folder: str | Path) -> dict[str, Any]:
-    """The manifest of a result folder.
+    """The manifest of a result folder, its ``status`` as it is now.
+
+    A manifest's ``"running"`` is true only while a process holds the folder's lock (the
+    campaign running it: :func:`motosim.io.results.folder_lock`). A campaign stopped without
+    its last manifest write (SIGKILL, an OOM kill, a power cut, a full disk) left
+    ``"running"`` in the file: when no process holds the lock (this call takes it without
+    waiting, and lets it go at once), the status read is ``"stopped"``. Running the campaign
+    again resumes it.
 
     Raises
     ------
@@ -68,6 +74,8 @@ def read_manifest(folder: str | Path) -> dict[str, Any]:
         manifest: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as err:
         raise MotosimError(f"{path}: not a JSON manifest ({err})") from None
+    if manifest.get("status") == "running" and not is_locked(folder):
+        manifest["status"] = "stopped"
     return manifest
 
 
@@ -149,6 +157,15 @@ class ResultStore:
     metrics : Sequence of str
         Metric column names.
 
+    Attributes
+    ----------
+    previous : str or None
+        How the campaign's last call ended, from its manifest (None for a new folder). The
+        store is opened by the holder of the folder's lock (:func:`run_campaign
+        <motosim.campaign.execute.run_campaign>`), so no other process runs the campaign: a
+        ``"running"`` left in the manifest is read as ``"stopped"`` (a call stopped without
+        its last manifest write), and the campaign resumes.
+
     Raises
     ------
     MotosimError
@@ -167,8 +184,12 @@ class ResultStore:
         self.folder = Path(folder)
         self.parts = self.folder / PARTS
         check_store_folder(self.folder)
+        self.previous: str | None = None
         if (self.folder / MANIFEST).is_file():
-            previous = read_manifest(self.folder).get("fingerprint")
+            found = read_manifest(self.folder)
+            status = str(found.get("status"))
+            self.previous = "stopped" if status == "running" else status  # see the docstring
+            previous = found.get("fingerprint")
             if previous != fingerprint:
                 raise MotosimError(
                     f"{self.folder}: holds results of another campaign or version "
@@ -215,47 +236,6 @@ class ResultStore:
         write_whole(path, lambda hidden: pq.write_table(table, hidden))
         self.done.update(ids)
         return path
-
-    def reserve_space(self, nbytes: int) -> None:
-        """Set aside ``nbytes`` of disk in the folder (``.motosim.reserve``) for a last write.
-
-        A campaign stopped by a full disk frees it (:meth:`release_space`) to say in its
-        manifest how it ended. Allocated, not only sized (``posix_fallocate``; zeros written
-        where the file system cannot allocate).
-
-        Raises
-        ------
-        MotosimError
-            If the disk cannot give it (naming the folder and the system's reason).
-        """
-        path = self.folder / RESERVE
-        try:
-            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
-            try:
-                try:
-                    os.posix_fallocate(fd, 0, nbytes)
-                except OSError as err:
-                    if err.errno not in (errno.EOPNOTSUPP, errno.EINVAL, errno.ENOSYS):
-                        raise
-                    os.write(fd, bytes(nbytes))
-            finally:
-                os.close(fd)
-        except OSError as err:
-            try:
-                path.unlink(missing_ok=True)
-            except OSError:
-                pass
-            raise MotosimError(
-                f"{self.folder}: cannot set aside {nbytes / 1000:.0f} kB for the campaign's "
-                f"manifest: {err.strerror or err}; no run was started"
-            ) from None
-
-    def release_space(self) -> None:
-        """Delete the space :meth:`reserve_space` set aside (nothing if there is none)."""
-        try:
-            (self.folder / RESERVE).unlink(missing_ok=True)
-        except OSError:
-            pass
 
     def write_manifest(self, payload: Mapping[str, Any]) -> Path:
         """Write ``manifest.json`` (atomically) with the package version added."""

@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
     from motosim.io.results import folder_lock
 
     # the folder stays locked until its report is written (run_campaign's lock joins this one)
-    with folder_lock(args.out, shared=True, inside=True):
+    with folder_lock(args.out, shared=True):
         try:
             summary = run_campaign(
                 campaign,

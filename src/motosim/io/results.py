@@ -20,15 +20,15 @@ How a result is never lost or corrupted:
   however it ends, so a killed run never blocks the next one. A command that writes more
   into the folder after the result (``simulate``'s report, ``cueing``'s figures, ``run``'s
   ``timing.json`` and report, its writer process holding the lock) holds the lock until
-  that is written too (:func:`folder_lock` with ``shared``). A folder written in
-  place, never replaced whole (a campaign's), holds its lock inside: ``NAME/.motosim.lock``
-  (:func:`folder_lock` with ``inside``).
+  that is written too (:func:`folder_lock` with ``shared``).
 - **Staging.** The run writes into the sibling folder ``NAME.partial``; only
   :meth:`ResultWriter.close` moves it to ``NAME``, replacing a previous result in two renames
   (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
   complete result untouched; with no previous result, or an earlier stopped run's, its rows
   are moved to ``NAME`` marked partial (``complete`` False, ``result.partial.csv``), and a
-  rerun replaces them without ``overwrite``.
+  rerun replaces them without ``overwrite``. A ``NAME`` that is neither empty nor a motosim
+  result (files another program put there while the run went) is never moved aside: the
+  result, complete or not, stays in ``NAME.partial``, and the run says so.
 - **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
   them. Ctrl-C (SIGINT) and, inside ``with ResultWriter(...)``, SIGTERM close both files,
   readable, marked partial. The HDF5 file is written without SWMR, so it carries no "open
@@ -49,9 +49,9 @@ import logging
 import math
 import os
 import re
+import secrets
 import shutil
 import signal
-import socket
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -75,6 +75,7 @@ __all__ = [
     "StopRequest",
     "folder_lock",
     "is_complete_result",
+    "is_locked",
     "load_result",
     "lock_file",
     "partial_folder",
@@ -155,14 +156,10 @@ def partial_folder(folder: str | Path) -> Path:
     return target.with_name(target.name + _PARTIAL)
 
 
-_INSIDE_LOCK = ".motosim.lock"
-
-
-def lock_file(folder: str | Path, *, inside: bool = False) -> Path:
-    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it, or with
-    ``inside`` (a folder that is never replaced whole: a campaign's) ``.motosim.lock`` in it."""
+def lock_file(folder: str | Path) -> Path:
+    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it."""
     target = Path(folder)
-    return target / _INSIDE_LOCK if inside else target.with_name(f".{target.name}.lock")
+    return target.with_name(f".{target.name}.lock")
 
 
 def is_complete_result(folder: str | Path) -> bool:
@@ -199,8 +196,8 @@ class _FolderLock:
     releases it. Otherwise, and from another thread or process, a second holder is refused.
     """
 
-    def __init__(self, folder: Path, *, shared: bool = False, inside: bool = False) -> None:
-        self.path = lock_file(folder, inside=inside)
+    def __init__(self, folder: Path, *, shared: bool = False) -> None:
+        self.path = lock_file(folder)
         self._fd: int | None = None
         self._key = os.path.join(os.path.realpath(self.path.parent), self.path.name)
         with _HELD_GUARD:
@@ -265,10 +262,47 @@ class _FolderLock:
         self._fd = None
 
 
+def is_locked(folder: str | Path) -> bool:
+    """Whether a process holds the lock of a run writing ``folder`` (:func:`folder_lock`).
+
+    Tries the lock without waiting and, if it gets it, lets it go at once; writes nothing
+    (a missing lock file is no holder). A writer that tries the lock in that instant is
+    refused as if the folder were being written: try again.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The folder (its lock is ``.NAME.lock`` beside it).
+
+    Returns
+    -------
+    bool
+        True while a process, this one included, holds it.
+    """
+    path = lock_file(Path(folder).absolute())
+    for _ in range(10):  # again if the file taken was a finished run's, replaced meanwhile
+        try:
+            fd = os.open(path, os.O_RDONLY)
+        except FileNotFoundError:
+            return False
+        except OSError:  # unreadable: say held rather than stopped
+            return True
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            same = os.fstat(fd).st_ino == os.stat(path).st_ino
+        except BlockingIOError:
+            return True
+        except FileNotFoundError:  # its run ended meanwhile
+            return False
+        finally:
+            os.close(fd)
+        if same:
+            return False
+    return True
+
+
 @contextmanager
-def folder_lock(
-    folder: str | Path, *, shared: bool = False, inside: bool = False
-) -> Iterator[Path]:
+def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
     """Hold the lock of a run writing ``folder`` (``.NAME.lock`` beside it) within the block.
 
     The lock :class:`ResultWriter` holds, for writers of other kinds of folder (a campaign's):
@@ -278,18 +312,12 @@ def folder_lock(
     Parameters
     ----------
     folder : str or Path
-        The folder written; its parent must exist and be writable (the lock is beside it),
-        or with ``inside`` the folder itself (created if needed, parents included).
+        The folder written; its parent must exist and be writable (the lock is beside it).
     shared : bool
         Let a :class:`ResultWriter` of ``folder`` opened within the block, in this thread,
         share the lock instead of being refused: the folder then stays locked after the
         writer has closed, until the block ends, so that what a command writes beside the
         result (its report, its figures) is written under the lock too.
-    inside : bool
-        Put the lock in ``folder`` (``.motosim.lock``), for a folder that is written in place,
-        never replaced whole by a rename (a campaign's: a result folder is, which would take
-        a lock inside with it): nothing is written beside ``folder``, whose parent may be
-        read-only. A folder this call created is deleted on leaving if it is left empty.
 
     Yields
     ------
@@ -302,78 +330,70 @@ def folder_lock(
         If another run holds it, or it cannot be created (naming the folder).
     """
     target = Path(folder).absolute()
-    created = False
     try:
-        if inside:
-            if not target.is_dir():  # a file there: refused by the lock's creation below
-                target.parent.mkdir(parents=True, exist_ok=True)
-                try:
-                    target.mkdir()
-                    created = True
-                except FileExistsError:  # another instance made it meanwhile: its lock decides
-                    pass
-        else:
-            target.parent.mkdir(parents=True, exist_ok=True)
+        target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        where = target if inside else target.parent
-        raise MotosimError(f"cannot create folder {where}: {_reason(err)}") from None
+        raise MotosimError(f"cannot create folder {target.parent}: {_reason(err)}") from None
+    lock = _FolderLock(target, shared=shared)
     try:
-        lock = _FolderLock(target, shared=shared, inside=inside)
-        try:
-            yield lock.path
-        finally:
-            lock.release()
+        yield lock.path
     finally:
-        if created:
-            try:
-                target.rmdir()  # only if empty: nothing was written there
-            except OSError:
-                pass
+        lock.release()
 
 
-def _host_tag() -> str:
-    """This machine's name as it goes in a temporary file's name: letters, digits, ``-``."""
-    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:32] or "host"
-
-
-def _is_running(pid: int) -> bool:
-    """Whether a process ``pid`` runs on this machine (another user's counts)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
+_LEFTOVER = r"[0-9a-f]{12}"
+"""The random part of a temporary file's name, ``.NAME.<12 hex digits>.partial``."""
 
 
 def _remove_leftovers(real: Path) -> None:
-    """Delete the temporary files of earlier writes of ``real`` whose process has gone.
+    """Delete the temporary files of earlier writes of ``real`` that no process writes.
 
-    Only those written on this machine (its name in theirs) by a process that no longer
-    runs: a killed write's leftover (SIGKILL, a power cut). Another machine's (a shared
-    folder), a running process's, or one that cannot be deleted, is left as it is.
+    A writer holds an exclusive ``flock`` on its temporary file while it writes, and the
+    operating system releases it when the process ends, however it ends (on NFS too, where
+    ``flock`` is a lock of the server's). A leftover ``.NAME.*.partial`` of the same file
+    whose lock this call can take without waiting is a killed write's (SIGKILL, a power cut):
+    it is deleted. One whose lock is held (a write going on, in this process or another,
+    on any machine or container), or that cannot be opened or deleted, is left.
     """
-    pattern = re.compile(
-        rf"\.{re.escape(real.name)}\.(?P<pid>[0-9]{{1,10}})\.{re.escape(_host_tag())}\.partial"
-    )
+    pattern = re.compile(rf"\.{re.escape(real.name)}\.{_LEFTOVER}\.partial")
     try:
-        names = [entry.name for entry in os.scandir(real.parent)]
+        names = [entry.name for entry in os.scandir(real.parent) if pattern.fullmatch(entry.name)]
     except OSError:
         return
     for name in names:
-        match = pattern.fullmatch(name)
-        if match is None:
-            continue
-        pid = int(match["pid"])
-        if pid == os.getpid() or _is_running(pid):
+        path = real.parent / name
+        try:
+            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+        except OSError:
             continue
         try:
-            (real.parent / name).unlink()
-        except OSError as err:
-            _log.debug("cannot remove the leftover %s: %s", name, err)
-        else:
-            _log.info("removed %s, left by process %d (gone)", name, pid)
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            if os.fstat(fd).st_ino == os.stat(path).st_ino:
+                path.unlink()  # under its lock: no writer can take it up meanwhile
+                _log.info("removed %s, left by a write that was killed", name)
+        except OSError as err:  # BlockingIOError: a write going on
+            _log.debug("leaving %s: %s", name, err)
+        finally:
+            os.close(fd)
+
+
+def _open_temporary(real: Path) -> tuple[Path, int]:
+    """Create a new temporary file beside ``real`` and lock it (see :func:`_remove_leftovers`);
+    its name and the descriptor that holds the lock."""
+    while True:
+        temporary = real.with_name(f".{real.name}.{secrets.token_hex(6)}.partial")
+        fd = os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)  # umask applies
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)  # at once, unless a cleaner is trying it
+            if os.fstat(fd).st_ino == os.stat(temporary).st_ino:
+                return temporary, fd
+        except FileNotFoundError:  # a cleaner took it between its creation and the lock
+            pass
+        except BaseException:
+            os.close(fd)
+            temporary.unlink(missing_ok=True)
+            raise
+        os.close(fd)
 
 
 def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
@@ -386,8 +406,8 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
         symbolic link is followed (the file it names is replaced, the link kept), and a
         previous file's permissions are kept.
     write : callable
-        Called with the temporary path (``.NAME.PID.HOST.partial`` beside the file, HOST this
-        machine's name) to write.
+        Called with the temporary path to write (``.NAME.XXXXXXXXXXXX.partial`` beside the
+        file, 12 random hexadecimal digits; it exists, empty, and may be written over).
 
     Returns
     -------
@@ -402,29 +422,37 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
 
     Notes
     -----
-    A process killed while it writes (SIGKILL, a power cut) leaves its temporary file. The
-    next write of the same file deletes such leftovers of this machine whose process has
-    gone (before writing: their space is free for it); a running process's are kept.
+    The writer holds an exclusive ``flock`` on its temporary file until the rename. A process
+    killed while it writes (SIGKILL, a power cut) leaves the file, and its lock goes with the
+    process: the next write of the same file deletes such leftovers, those whose lock it can
+    take (before writing: their space is free for it); a write going on, in any process, on
+    any machine sharing the folder, keeps its file.
     """
     target = Path(path)
     real = Path(os.path.realpath(target))  # through a link, as writing in place did
     _remove_leftovers(real)
-    temporary = real.with_name(f".{real.name}.{os.getpid()}.{_host_tag()}.partial")
+    temporary: Path | None = None
+    fd = -1
     try:
+        temporary, fd = _open_temporary(real)
         write(temporary)
         if real.exists():
             shutil.copymode(real, temporary)  # a private log stays private
         os.replace(temporary, real)
     except BaseException as err:
-        try:
-            temporary.unlink(missing_ok=True)
-        except OSError:  # a read-only folder: nothing was created there
-            pass
+        if temporary is not None:
+            try:
+                temporary.unlink(missing_ok=True)
+            except OSError:
+                pass
         if isinstance(err, OSError):
             raise MotosimError(
                 f"cannot write {target}: {_reason(err)}; the previous file, if any, is kept"
             ) from None
         raise
+    finally:
+        if fd >= 0:
+            os.close(fd)  # the lock goes with it
     return target
 
 
@@ -748,6 +776,14 @@ class ResultWriter:
             os.close(self._csv)
             os.replace(self._csv_path, self._staging / _CSV_NAME)
             self._publish()
+        except _OccupiedError:
+            self._closed = True
+            self._lock.release()
+            raise MotosimError(
+                f"{self._folder}: holds files that are not a motosim result, written there while "
+                f"the run went; they are left as they are, and the complete result is in "
+                f"{self._staging}"
+            ) from None
         except OSError as err:
             self._fail(self._h5_path, err)
         self._closed = True
@@ -755,7 +791,17 @@ class ResultWriter:
         self._lock.release()
 
     def _publish(self) -> None:
-        """Move the staging folder to the result folder, the previous one aside then deleted."""
+        """Move the staging folder to the result folder, the previous one aside then deleted.
+
+        Raises
+        ------
+        _OccupiedError
+            If the result folder now holds files that are not a motosim result (written
+            there while the run went, by a program that does not take the lock): it is left
+            as it is, and so is the staging folder.
+        """
+        if not _replaceable(self._folder):
+            raise _OccupiedError(self._folder)
         old = self._folder.with_name(f".{self._folder.name}.old")
         if old.exists():
             shutil.rmtree(old)
@@ -781,9 +827,15 @@ class ResultWriter:
         try:
             if not is_complete_result(self._folder):
                 # no previous result, or an earlier stopped run's: the partial one goes where
-                # one looks
+                # one looks (never over a folder of other files: _publish refuses it)
                 self._publish()
                 self._location = self._folder
+        except _OccupiedError:
+            _log.warning(
+                "%s holds files that are not a motosim result: left as it is, the rows kept in %s",
+                self._folder,
+                self._staging,
+            )
         except OSError as err:
             _log.warning("keeping %s: %s", self._staging, err)
         self._lock.release()
@@ -821,6 +873,19 @@ class ResultWriter:
                 self._signals = None
         if exc is None:
             self._stop.check()
+
+
+class _OccupiedError(OSError):
+    """The result folder holds files that are not a motosim result: it is not replaced."""
+
+
+def _replaceable(folder: Path) -> bool:
+    """Whether publishing may move ``folder`` aside: it is missing, empty, or a motosim
+    result, complete or stopped (its ``result.h5`` there, as :func:`_check_folder` sees it)."""
+    try:
+        return not folder.exists() or (folder / _H5_NAME).is_file() or not any(folder.iterdir())
+    except NotADirectoryError:
+        return False
 
 
 def _reason(err: BaseException) -> str:

@@ -43,22 +43,32 @@ def test_a_part_that_does_not_fit_is_one_line_and_leaves_no_cut_file(
     assert hidden == [] and list(load_results(tmp_path / "c")["run_id"]) == ["a"]
 
 
-def test_room_for_the_last_manifest_refused_by_a_full_disk_is_one_line_and_no_file(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    import os
+def test_running_is_read_as_stopped_once_no_process_holds_the_lock(tmp_path: Path) -> None:
+    # a campaign killed (SIGKILL, an OOM kill, a power cut) or stopped by a full disk before
+    # its last manifest write left "running" in the file for good
+    import subprocess
+    import sys
 
-    store = ResultStore(tmp_path / "c", fingerprint="f", factors=[("x", float)], metrics=["rms"])
-    store.reserve_space(20_000)
-    reserve = tmp_path / "c" / ".motosim.reserve"
-    assert reserve.stat().st_size == 20_000  # allocated, freed before the last write
-    store.release_space()
-    assert not reserve.exists()
+    from motosim.campaign.results import read_manifest
 
-    def full(fd: int, offset: int, length: int) -> None:
-        raise OSError(28, "No space left on device")
-
-    monkeypatch.setattr(os, "posix_fallocate", full)
-    with pytest.raises(MotosimError, match=r"cannot set aside 20 kB .*No space left on device; no"):
-        store.reserve_space(20_000)
-    assert not reserve.exists()
+    folder = tmp_path / "c"
+    store = ResultStore(folder, fingerprint="f", factors=[("x", float)], metrics=["rms"])
+    store.write_manifest({"fingerprint": "f", "status": "running"})
+    with subprocess.Popen(  # the campaign's process, holding the folder's lock
+        [sys.executable, "-c",
+         "import sys\nfrom motosim.io.results import folder_lock\n"
+         "with folder_lock(sys.argv[1]):\n    print('held', flush=True)\n    sys.stdin.read()\n",
+         str(folder)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    ) as holder:  # fmt: skip
+        try:
+            assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+            assert read_manifest(folder)["status"] == "running"
+        finally:
+            holder.kill()  # as SIGKILL ends a campaign: the lock dies with it
+            holder.wait()
+    assert read_manifest(folder)["status"] == "stopped"
+    store.write_manifest({"fingerprint": "f", "status": "complete"})
+    assert read_manifest(folder)["status"] == "complete"
+    again = ResultStore(folder, fingerprint="f", factors=[("x", float)], metrics=["rms"])
+    assert again.previous == "complete"
