@@ -305,7 +305,9 @@ def take_frames(a: PeriodArrays, first: int, end: int) -> int:
             r[R_STATUS_FRAMES] += 1.0
             values = a.status_values
             ok = decode_frame(a.status, a.rx[j], start, length, values)
-            if safety_status_frame(s, ok, values[q[Q_COUNTER]], values[q[Q_DRIVE_FAULT]] > 0.5):
+            if safety_status_frame(
+                s, a.limits, ok, values[q[Q_COUNTER]], values[q[Q_DRIVE_FAULT]] > 0.5
+            ):
                 r[R_THETA] = values[q[Q_ANGLE]]
                 r[R_CURRENT] = values[q[Q_CURRENT]]
                 r[R_FRESH] = 1.0
