@@ -525,3 +525,48 @@ def test_a_heartbeat_whose_first_deadline_was_skipped_is_sent_late_not_dropped()
         for link in (host, drive, listener):
             link.close()
     assert counters == [0, 1, 2, 3, 4]  # k = 0, 10, 21, 30, 40
+
+
+def test_the_heartbeat_goes_on_through_the_fade_out_of_a_second_run() -> None:
+    # motosim run runs the duration, calls finish() and runs the fade-out as a second
+    # loop.run, whose k starts at 0 again. The 10 Hz heartbeat must go on every 0.1 s
+    # through the fade-out (a drive supervising it faults otherwise), its counter one on
+    # from the last. Before, the heartbeat was indexed by k against the first run's count:
+    # none in the whole fade-out (0.5 s).
+    channel = f"virtual:heartbeat{next(_channels)}"
+    host, drive, listener = open_link(channel), open_link(channel), open_link(channel)
+    try:
+        vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(200_001, 3.0),
+                          np.random.default_rng(7))  # fmt: skip
+        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+        clock = SimulatedClock()
+        clock.listen(vrig.advance_to)
+        counters, stamps = [], []
+        values = np.zeros(len(CODECS.heartbeat.names))
+        at = CODECS.position(CODECS.heartbeat, "counter")
+
+        def period(k: int, t: float) -> bool:
+            carry_on = runner.period(k, t)
+            while (frame := listener.receive()) is not None:
+                if frame[0] == CODECS.heartbeat.frame_id:
+                    assert CODECS.heartbeat.decode(frame[1], values)
+                    counters.append(int(values[at]))
+                    stamps.append(t)
+            return carry_on
+
+        loop = RateLoop(100.0, clock)
+        loop.run(period, periods=300)  # the duration: 3 s
+        end = clock.now()
+        fade = runner.finish()
+        served = loop.run(period, periods=10 * fade)
+    finally:
+        for link in (host, drive, listener):
+            link.close()
+    assert served == 50 and runner.safety.state == State.IDLE  # the 0.5 s fade-out
+    # no deadline missed: the rows' count of them (column 10) stays 0; it was -300 in the
+    # fade-out (the second run's k against the first run's periods)
+    rows = runner.ring.drain()
+    assert rows.shape[0] == 350 and np.all(rows[:, 10] == 0.0)
+    assert sum(stamp > end for stamp in stamps) == 5
+    assert counters == [n & 0xF for n in range(35)]  # one on from the last, none skipped
+    assert np.allclose(np.diff(stamps), 0.1)
