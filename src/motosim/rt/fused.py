@@ -98,7 +98,7 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_SINCE, R_OMEGA, R_BEATS,
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS,
 ) = range(38)  # fmt: skip
 RUNNER_STATE_SIZE = 38
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
@@ -115,9 +115,9 @@ stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did n
 the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
 errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`);
 whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0);
-for a stack without a rate in its row, the periods since the last fresh status frame and
-the handlebar's rate between the last two [rad/s]; and the heartbeat due next (its index:
-the period's index on the loop's time since the first deadline, over
+for a stack without a rate in its row, the deadline of the period that read the last fresh
+status frame [s] and the handlebar's rate between the last two [rad/s]; and the heartbeat
+due next (its index: the period's index on the loop's time since the first deadline, over
 ``heartbeat_every``)."""
 
 (
@@ -366,7 +366,7 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
         started = True
         reset = True
         r[R_PREV_THETA] = r[R_THETA]
-        r[R_SINCE] = 0.0
+        r[R_FRESH_AT] = t
         r[R_OMEGA] = 0.0
         if r[R_STOP] == 0.0 and r[R_ARMED] != 0.0:
             safety_enable(s)
@@ -404,12 +404,13 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     if started and rate_at >= 0:
         omega = a.stack_row[rate_at]
     elif started:  # the angle's change between the last two fresh frames over their interval
-        # (with frames slower than the loop, not one period's: a rate ten times too high)
-        r[R_SINCE] += 1.0
-        if fresh:
-            r[R_OMEGA] = (theta_now - r[R_PREV_THETA]) / (r[R_SINCE] * r[R_DT])
+        # (with frames slower than the loop, not one period's: a rate ten times too high),
+        # on the loop's time: the deadlines a late loop skipped count (not the periods
+        # served: the rate read too high), and a second run (the fade-out) goes on from it
+        if fresh and t > r[R_FRESH_AT]:
+            r[R_OMEGA] = (theta_now - r[R_PREV_THETA]) / (t - r[R_FRESH_AT])
             r[R_PREV_THETA] = theta_now
-            r[R_SINCE] = 0.0
+            r[R_FRESH_AT] = t
         omega = r[R_OMEGA]
     else:
         omega = 0.0
