@@ -406,15 +406,19 @@ def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
     assert rows[69, 4] != 0.0 and np.all(rows[70:, 4] == 0.0) and rows[70, 6] == Fault.NON_FINITE
 
 
+@pytest.mark.parametrize("stall", [0.0, 8.5])
 def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
-    links: tuple[CanLink, CanLink],
+    links: tuple[CanLink, CanLink], stall: float
 ) -> None:
     # A stack whose row has no theta_h_dot_hat (a StackStepper in Python may have none): the
     # loop takes the handlebar's rate from the measured angle. With 100 Hz status frames
     # under a 1 kHz loop the angle changes once in ten periods; its change over one period
     # read a rate ten times the handlebar's, and the speed limiter (6 rad/s) cut the
     # command of a handlebar swinging at 1.8 rad/s in 96 periods of 3 s. The rate is the
-    # change between two frames over their interval.
+    # change between two frames over their interval, on the loop's time: with the loop
+    # late by 8.5 periods once per frame interval (its deadlines skipped), the periods
+    # served between two frames read a rate up to five times too high, and the limiter cut
+    # 32 of the 103 running periods.
     host, drive = links
     limits = SafetyLimits(**{
         name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
@@ -426,12 +430,23 @@ def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
                             periods_per_frame=10)  # fmt: skip
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
-    RateLoop(1000.0, clock).run(runner.period, periods=3000)
+
+    def period(k: int, t: float) -> bool:
+        carry_on = runner.period(k, t)
+        if stall and k % 10 == 3:
+            clock.advance(stall / 1000.0)  # late once per frame interval
+        return carry_on
+
+    loop = RateLoop(1000.0, clock)
+    loop.run(period, periods=3000)
     rows = runner.ring.drain()
-    frames = rows[::10, 1]  # the angle measured, once per frame
-    speed = np.max(np.abs(np.diff(frames))) * 100.0
+    assert (loop.stats().missed > 2000) == bool(stall)
+    # the handlebar's speed: the measured angle's changes over the loop's time between them
+    changes = np.flatnonzero(np.diff(rows[:, 1]) != 0.0) + 1
+    speed = np.max(np.abs(np.diff(rows[changes, 1]) / np.diff(rows[changes, 0])))
     assert 1.0 < speed < limits.max_speed and runner.counters().fault == "NONE"
     running = rows[:, 5] == State.RUNNING
+    assert np.sum(running) > 100
     assert np.array_equal(rows[running, 4], rows[running, 3])  # the command passed whole
 
 
@@ -525,3 +540,48 @@ def test_a_heartbeat_whose_first_deadline_was_skipped_is_sent_late_not_dropped()
         for link in (host, drive, listener):
             link.close()
     assert counters == [0, 1, 2, 3, 4]  # k = 0, 10, 21, 30, 40
+
+
+def test_the_heartbeat_goes_on_through_the_fade_out_of_a_second_run() -> None:
+    # motosim run runs the duration, calls finish() and runs the fade-out as a second
+    # loop.run, whose k starts at 0 again. The 10 Hz heartbeat must go on every 0.1 s
+    # through the fade-out (a drive supervising it faults otherwise), its counter one on
+    # from the last. Before, the heartbeat was indexed by k against the first run's count:
+    # none in the whole fade-out (0.5 s).
+    channel = f"virtual:heartbeat{next(_channels)}"
+    host, drive, listener = open_link(channel), open_link(channel), open_link(channel)
+    try:
+        vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(200_001, 3.0),
+                          np.random.default_rng(7))  # fmt: skip
+        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+        clock = SimulatedClock()
+        clock.listen(vrig.advance_to)
+        counters, stamps = [], []
+        values = np.zeros(len(CODECS.heartbeat.names))
+        at = CODECS.position(CODECS.heartbeat, "counter")
+
+        def period(k: int, t: float) -> bool:
+            carry_on = runner.period(k, t)
+            while (frame := listener.receive()) is not None:
+                if frame[0] == CODECS.heartbeat.frame_id:
+                    assert CODECS.heartbeat.decode(frame[1], values)
+                    counters.append(int(values[at]))
+                    stamps.append(t)
+            return carry_on
+
+        loop = RateLoop(100.0, clock)
+        loop.run(period, periods=300)  # the duration: 3 s
+        end = clock.now()
+        fade = runner.finish()
+        served = loop.run(period, periods=10 * fade)
+    finally:
+        for link in (host, drive, listener):
+            link.close()
+    assert served == 50 and runner.safety.state == State.IDLE  # the 0.5 s fade-out
+    # no deadline missed: the rows' count of them (column 10) stays 0; it was -300 in the
+    # fade-out (the second run's k against the first run's periods)
+    rows = runner.ring.drain()
+    assert rows.shape[0] == 350 and np.all(rows[:, 10] == 0.0)
+    assert sum(stamp > end for stamp in stamps) == 5
+    assert counters == [n & 0xF for n in range(35)]  # one on from the last, none skipped
+    assert np.allclose(np.diff(stamps), 0.1)

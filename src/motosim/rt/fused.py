@@ -98,7 +98,7 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_SINCE, R_OMEGA, R_BEATS,
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS,
 ) = range(38)  # fmt: skip
 RUNNER_STATE_SIZE = 38
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
@@ -115,9 +115,10 @@ stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did n
 the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
 errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`);
 whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0);
-for a stack without a rate in its row, the periods since the last fresh status frame and
-the handlebar's rate between the last two [rad/s]; and the heartbeat due next (its index:
-the period's index over ``heartbeat_every``)."""
+for a stack without a rate in its row, the deadline of the period that read the last fresh
+status frame [s] and the handlebar's rate between the last two [rad/s]; and the heartbeat
+due next (its index: the period's index on the loop's time since the first deadline, over
+``heartbeat_every``)."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -305,7 +306,9 @@ def take_frames(a: PeriodArrays, first: int, end: int) -> int:
             r[R_STATUS_FRAMES] += 1.0
             values = a.status_values
             ok = decode_frame(a.status, a.rx[j], start, length, values)
-            if safety_status_frame(s, ok, values[q[Q_COUNTER]], values[q[Q_DRIVE_FAULT]] > 0.5):
+            if safety_status_frame(
+                s, a.limits, ok, values[q[Q_COUNTER]], values[q[Q_DRIVE_FAULT]] > 0.5
+            ):
                 r[R_THETA] = values[q[Q_ANGLE]]
                 r[R_CURRENT] = values[q[Q_CURRENT]]
                 r[R_FRESH] = 1.0
@@ -363,7 +366,7 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
         started = True
         reset = True
         r[R_PREV_THETA] = r[R_THETA]
-        r[R_SINCE] = 0.0
+        r[R_FRESH_AT] = t
         r[R_OMEGA] = 0.0
         if r[R_STOP] == 0.0 and r[R_ARMED] != 0.0:
             safety_enable(s)
@@ -376,15 +379,18 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
 
 
 @njit(cache=True)
-def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_read: float) -> int:
+def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: float) -> int:
     """The safety stage on the stack's ``command`` [A], the frames to send, the row.
 
     The stack's estimate of the rider's torque (its row's ``tau_r_hat``) NaN trips
     ``NON_FINITE`` as an inf does (the stage takes NaN for "no estimate": a stack without
     one).
 
-    ``woke`` and ``done_read`` are the period's wake-up and the end of the bus read on the
-    loop's clock [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
+    ``t`` is the period's deadline [s]: the period's index is taken on the loop's time
+    since the first deadline, not from the loop's ``k``, which a second run of the loop
+    (motosim run's fade-out after the duration) counts from 0 again. ``woke`` and
+    ``done_read`` are the period's wake-up and the end of the bus read on the loop's clock
+    [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
     whether the run goes on, whether the heartbeat frame is to be sent this period, and the
     ring's slot the row went to (the runner writes the send's time stamps there, then
     advances the ring's head).
@@ -398,12 +404,13 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     if started and rate_at >= 0:
         omega = a.stack_row[rate_at]
     elif started:  # the angle's change between the last two fresh frames over their interval
-        # (with frames slower than the loop, not one period's: a rate ten times too high)
-        r[R_SINCE] += 1.0
-        if fresh:
-            r[R_OMEGA] = (theta_now - r[R_PREV_THETA]) / (r[R_SINCE] * r[R_DT])
+        # (with frames slower than the loop, not one period's: a rate ten times too high),
+        # on the loop's time: the deadlines a late loop skipped count (not the periods
+        # served: the rate read too high), and a second run (the fade-out) goes on from it
+        if fresh and t > r[R_FRESH_AT]:
+            r[R_OMEGA] = (theta_now - r[R_PREV_THETA]) / (t - r[R_FRESH_AT])
             r[R_PREV_THETA] = theta_now
-            r[R_SINCE] = 0.0
+            r[R_FRESH_AT] = t
         omega = r[R_OMEGA]
     else:
         omega = 0.0
@@ -433,14 +440,15 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     values[q[Q_COMMAND_COUNTER]] = sent & 0xF
     r[R_SENT] = sent + 1
     encode_frame(a.command, values, a.command_frame, q[Q_COMMAND_AT])
+    n = math.floor((t - r[R_T0]) / r[R_DT] + 0.5)  # the period's index on the loop's time
     every = int(r[R_HEARTBEAT_EVERY])
-    beat = k // every >= r[R_BEATS]  # the first period of its heartbeat period served
-    if beat:  # (k % every == 0 missed the heartbeat whose period's first deadline was skipped)
-        r[R_BEATS] = k // every + 1
+    beat = n // every >= r[R_BEATS]  # the first period of its heartbeat period served
+    if beat:  # (n % every == 0 missed the heartbeat whose period's first deadline was skipped)
+        r[R_BEATS] = n // every + 1
         values = a.heartbeat_values
         values[q[Q_STATE]] = state
         values[q[Q_FAULT]] = s[S_FAULT]
-        values[q[Q_HEARTBEAT_COUNTER]] = (k // every) & 0xF
+        values[q[Q_HEARTBEAT_COUNTER]] = (n // every) & 0xF
         encode_frame(a.heartbeat, values, a.heartbeat_frame, q[Q_HEARTBEAT_AT])
     slot = int(a.ring_head[0] % a.ring.shape[0])
     row = a.ring[slot]
@@ -454,7 +462,7 @@ def finish(a: PeriodArrays, command: float, k: int, t: float, woke: float, done_
     row[7] = t
     row[8] = woke - t
     row[9] = math.nan  # compute, done_control, done_send: by the runner after the send
-    row[10] = k - r[R_CALLS]  # deadlines skipped before this one
+    row[10] = n - r[R_CALLS]  # deadlines skipped before this one
     row[11] = done_read - woke
     row[12] = math.nan
     row[13] = math.nan
@@ -504,7 +512,7 @@ def fused_period(
         )  # fmt: skip
         if start >= 0:
             r[R_STACK_TIME] = (monotonic_ns() - start) * 1e-9
-    return finish(a, command, k, t, woke, done_read)
+    return finish(a, command, t, woke, done_read)
 
 
 @njit(cache=True)

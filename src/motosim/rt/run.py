@@ -295,7 +295,7 @@ class RealtimeRunner:
         a = self._arrays
         self._take = compiled(fused.take_frames, a, 0, 0)
         self._begin = compiled(fused.begin, a, 0, 0.0)
-        self._finish = compiled(fused.finish, a, 0.0, 0, 0.0, 0.0, 0.0)
+        self._finish = compiled(fused.finish, a, 0.0, 0.0, 0.0, 0.0)
         self._kernel: Callable[..., int] | None = None
         self._context: object = None
         self._warms = False  # whether the kernel warms (compiled, its stack compiled)
@@ -601,7 +601,7 @@ class RealtimeRunner:
                 float(safety_scale(a.safety, a.limits)),
             )  # fmt: skip
             a.stack_row[:] = self.stepper.row()
-        flags: int = self._finish(a, float(command), k, t, woke, done_read)
+        flags: int = self._finish(a, float(command), t, woke, done_read)
         return flags
 
     def _publish(self, k: int, t: float) -> None:

@@ -22,8 +22,12 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   or an older one delivered after a newer, does not feed the watchdog and is not used: the
   counter's window of AUTOSAR's E2E profiles, *Specification of SW-C End-to-End
   Communication Protection Library*, R4.0; after 7 or more frames lost in a row the counter
-  is taken up again at the second of two frames in a row one count apart, so that a
-  ``watchdog_periods`` above 7 frames is kept too);
+  is taken up again at the second of two frames in a row one count apart, if as many
+  frame periods have passed without a valid frame as the counter went on, within one, so
+  that a ``watchdog_periods`` above 7 frames is kept too; older frames delivered late come
+  without that silence and are not taken up, and a gateway replaying its last three
+  frames trips a watchdog of up to 13 frames: a longer one cannot tell the replay from
+  the drive's counter gone on, a limit of the 4-bit counter);
 - guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
@@ -221,25 +225,30 @@ not one)."""
 (
     P_MAX_CURRENT, P_MAX_SLEW, P_MAX_SPEED, P_SPEED_BAND, P_SOFT_STOP, P_HARD_STOP,
     P_END_STOP_GAIN, P_HANDS_OFF_TORQUE, P_HANDS_OFF_TIME, P_HANDS_OFF_GAIN, P_FADE_IN,
-    P_FROZEN_ANGLE, P_WATCHDOG, P_DT, P_MONITOR, P_TORQUE_PER_AMP, P_BAND, P_BETA,
-) = range(18)  # fmt: skip
-SAFETY_PARAMS_SIZE = 18
+    P_FROZEN_ANGLE, P_WATCHDOG, P_DT, P_MONITOR, P_TORQUE_PER_AMP, P_BAND, P_BETA, P_PER_FRAME,
+) = range(19)  # fmt: skip
+SAFETY_PARAMS_SIZE = 19
 
 
 def safety_params(
-    limits: SafetyLimits, dt: float, watchdog: int, handlebar: HandlebarParameters | None
+    limits: SafetyLimits,
+    dt: float,
+    periods_per_frame: int,
+    handlebar: HandlebarParameters | None,
 ) -> NDArray[np.float64]:
-    """The limits, the period [s], the watchdog's periods and the frozen-sensor monitor's
-    handlebar (N k_t [N*m/A], twice the dry friction [N*m], beta_eq [N*m*s/rad]) as the
-    array the compiled stage reads."""
+    """The limits, the period [s], the watchdog's periods (``watchdog_periods`` frame
+    periods of ``periods_per_frame`` control periods), the control periods per status frame
+    and the frozen-sensor monitor's handlebar (N k_t [N*m/A], twice the dry friction [N*m],
+    beta_eq [N*m*s/rad]) as the array the compiled stage reads."""
     p = np.zeros(SAFETY_PARAMS_SIZE)
     p[:P_WATCHDOG] = [
         limits.max_current, limits.max_slew, limits.max_speed, limits.speed_band,
         limits.soft_stop, limits.hard_stop, limits.end_stop_gain, limits.hands_off_torque,
         limits.hands_off_time, limits.hands_off_gain, limits.fade_in, limits.frozen_angle,
     ]  # fmt: skip
-    p[P_WATCHDOG] = watchdog
+    p[P_WATCHDOG] = limits.watchdog_periods * periods_per_frame
     p[P_DT] = dt
+    p[P_PER_FRAME] = periods_per_frame
     if handlebar is not None:
         p[P_MONITOR] = 1.0
         p[P_TORQUE_PER_AMP] = handlebar.torque_per_amp
@@ -273,9 +282,13 @@ def safety_trip(s: NDArray[np.float64], fault: int) -> None:
 
 @njit(cache=True)
 def safety_status_frame(
-    s: NDArray[np.float64], checksum_ok: bool, counter: float, drive_fault: bool
+    s: NDArray[np.float64],
+    p: NDArray[np.float64],
+    checksum_ok: bool,
+    counter: float,
+    drive_fault: bool,
 ) -> bool:
-    """:meth:`SafetyStage.status_frame` on the state array."""
+    """:meth:`SafetyStage.status_frame` on the state and parameter arrays."""
     if not checksum_ok:
         safety_trip(s, 3)  # CHECKSUM
         return False
@@ -287,13 +300,26 @@ def safety_status_frame(
     behind = int(s[S_BEHIND])
     s[S_BEHIND] = -1.0
     if last >= 0 and (step == 0 or step > MAX_COUNTER_STEP):
-        if step == 0 or behind < 0 or c != (behind + 1) & 0xF:
+        # Two frames in a row one count apart, both beyond the window, are the drive's
+        # counter gone on while 7 or more frames were lost, or two older frames (delivered
+        # late, or replayed: 8, 9 after 10): a 4-bit counter cannot tell them apart. The
+        # silence can: 7 or more frames lost leave as many frame periods without a valid
+        # frame (none this period either), and the counter has gone on by as many frames
+        # as the silence lasted (within one: the frames' jitter); older frames come
+        # without that silence, and a gateway replaying its last frames trips the watchdog
+        # first unless it is longer than 13 frames.
+        frames = (s[S_MISSING] + 1.0) / p[P_PER_FRAME]  # since the last valid frame
+        silence = (
+            s[S_FRESH] == 0.0
+            and frames >= MAX_COUNTER_STEP + 1
+            and (c - last - math.floor(frames + 0.5) + 1) & 0xF <= 2
+        )
+        if step == 0 or behind < 0 or c != (behind + 1) & 0xF or not silence:
             s[S_STALE] += 1.0  # the same frame again, or an older one after a newer
             if step != 0:
                 s[S_BEHIND] = c
             return False
-        # two frames in a row, one count apart, both beyond the window: the drive's counter
-        # went on while 7 or more frames were lost; taken up again from the second
+        # taken up again from the second
         s[S_LOST] += ((behind - last) & 0xF) - 1
         s[S_STALE] -= 1.0  # the first was no older frame: it was fresh, though not used
     elif last >= 0:
@@ -497,7 +523,7 @@ class SafetyStage:
         self.limits = limits
         self.dt = float(dt)
         self._s = new_safety_state()
-        self._p = safety_params(limits, self.dt, self._watchdog, handlebar)
+        self._p = safety_params(limits, self.dt, int(periods_per_frame), handlebar)
 
     @property
     def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -604,10 +630,13 @@ class SafetyStage:
         delivered after a newer: more than :data:`MAX_COUNTER_STEP` ahead on the 4-bit
         circle) makes the frame invalid; a counter that jumped by up to
         :data:`MAX_COUNTER_STEP` counts the lost frames. Two frames in a row one count
-        apart, both beyond that window, are 7 or more frames lost: the second is valid
-        (the counter taken up again).
+        apart, both beyond that window, after :data:`MAX_COUNTER_STEP` frame periods
+        without a valid frame (the silence of 7 or more frames lost: the periods stepped
+        since the last valid frame, the deadlines a late loop skipped included), are 7 or
+        more frames lost: the second is valid (the counter taken up again). Without that
+        silence they are older frames (delivered late, or replayed) and both are refused.
         """
-        return bool(safety_status_frame(self._s, bool(checksum_ok), float(counter),
+        return bool(safety_status_frame(self._s, self._p, bool(checksum_ok), float(counter),
                                         bool(drive_fault)))  # fmt: skip
 
     def silent(self) -> None:

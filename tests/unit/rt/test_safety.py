@@ -32,9 +32,17 @@ class Driver:
     """Feeds a stage fresh status frames and steps it, as the loop does."""
 
     def __init__(
-        self, limits: SafetyLimits = LIMITS, rate: float = 1000.0, *, handlebar: bool = False
+        self,
+        limits: SafetyLimits = LIMITS,
+        rate: float = 1000.0,
+        *,
+        handlebar: bool = False,
+        periods_per_frame: int = 1,
     ) -> None:
-        self.stage = SafetyStage(limits, dt=1.0 / rate, handlebar=HB if handlebar else None)
+        self.stage = SafetyStage(
+            limits, dt=1.0 / rate, handlebar=HB if handlebar else None,
+            periods_per_frame=periods_per_frame,
+        )  # fmt: skip
         self.counter = 0
 
     def period(self, command: float = 10.0, *, frame: bool = True, **kw: float) -> float:
@@ -283,18 +291,69 @@ def test_an_older_frame_after_a_newer_is_not_used() -> None:
 
 
 def test_a_long_gap_is_taken_up_again() -> None:
-    # After 8 frames lost the counter has stepped 9 ahead, read as an older frame; the next
-    # frame, one count further, shows the drive's counter went on: it is taken up again
-    # (the gap itself is the watchdog's). Before, the frames were refused until the counter
-    # came round into the window, up to 9 frames later.
-    d = Driver().running()
+    # After 8 frames lost (8 periods without a frame: a watchdog of 20 frames holds them)
+    # the counter has stepped 9 ahead, read as an older frame; the next frame, one count
+    # further after that silence, shows the drive's counter went on: it is taken up again.
+    # Before, the frames were refused until the counter came round into the window, up to
+    # 9 frames later.
+    d = Driver(SafetyLimits(**{**_fields(LIMITS), "watchdog_periods": 20})).running()
     start = d.counter
-    fresh = [
-        d.stage.status_frame(checksum_ok=True, counter=(start + k) & 0xF, drive_fault=False)
-        for k in range(9, 18)
-    ]
+    for _ in range(8):
+        assert d.period(frame=False) == 10.0
+    fresh = []
+    for k in range(9, 18):
+        counter = (start + k) & 0xF
+        fresh.append(d.stage.status_frame(checksum_ok=True, counter=counter, drive_fault=False))
+        assert d.stage.step(10.0, theta=0.0, omega=0.0, tau_hat=5.0) == 10.0
     assert fresh == [False] + [True] * 8
-    assert d.stage.frames_lost == 8 and d.stage.frames_stale == 0
+    assert d.stage.frames_lost == 8 and d.stage.frames_stale == 0 and d.stage.fault == Fault.NONE
+
+
+@pytest.mark.parametrize("same_period", [False, True])
+def test_two_older_frames_after_a_newer_are_refused(same_period: bool) -> None:
+    # Frames 8 and 9 delivered late after 10 (in two periods, or in one): both older, both
+    # refused, the drive's next frame 11 is one step on. Two older frames one count apart
+    # are what 7 or more frames lost look like to a 4-bit counter; without the silence
+    # that such a loss leaves (7 frame periods without a valid frame) they are not taken
+    # up. Before, 9 was taken up with its old angle and 11 counted a frame lost.
+    d = Driver(SafetyLimits(**{**_fields(LIMITS), "watchdog_periods": 20})).running()
+    newest = d.counter
+    fresh = []
+    for back in (2, 1):
+        older = (newest - back) & 0xF
+        fresh.append(d.stage.status_frame(checksum_ok=True, counter=older, drive_fault=False))
+        if not same_period:
+            d.period(frame=False)
+    assert fresh == [False, False]
+    assert d.period() == 10.0  # newest + 1
+    assert d.stage.frames_stale == 2 and d.stage.frames_lost == 0
+
+
+@pytest.mark.parametrize(("periods_per_frame", "frames"), [(1, 3), (10, 3), (1, 13)])
+def test_a_gateway_replaying_its_last_frames_trips_the_watchdog(
+    periods_per_frame: int, frames: int
+) -> None:
+    # The drive is gone and a gateway replays its last three frames (8, 9, 10, 8, ...), one
+    # per frame period: none is valid, and the watchdog trips after its frame periods as
+    # for a silent bus. Before, 9 and 10 of each round were taken (the counter taken up
+    # again at 8, 9): two frames in three accepted, the watchdog never tripped and the
+    # command stayed on. A watchdog of up to 13 frames trips: the replayed 8, 9 agree with
+    # a counter gone on during the silence (within one frame) only 13, 14 frames after 10.
+    limits = SafetyLimits(**{**_fields(LIMITS), "watchdog_periods": frames})
+    d = Driver(limits, periods_per_frame=periods_per_frame).running()
+    newest = d.counter
+    replay = itertools.cycle([(newest - 2) & 0xF, (newest - 1) & 0xF, newest & 0xF])
+    out, accepted = [], 0
+    for k in range(1, 200 * periods_per_frame + 1):
+        if k % periods_per_frame == 0:
+            counter = next(replay)
+            accepted += d.stage.status_frame(checksum_ok=True, counter=counter, drive_fault=False)
+        out.append(d.stage.step(10.0, theta=0.0, omega=0.0, tau_hat=5.0))
+        if d.stage.fault != Fault.NONE:
+            break
+    watchdog = frames * periods_per_frame
+    assert accepted == 0 and d.stage.fault == Fault.WATCHDOG
+    assert out == [10.0] * (watchdog - 1) + [0.0]
 
 
 def test_an_older_frame_then_the_next_one_is_no_long_gap() -> None:
