@@ -345,53 +345,83 @@ _LEFTOVER = r"[0-9a-f]{12}"
 """The random part of a temporary file's name, ``.NAME.<12 hex digits>.partial``."""
 
 
+def _sidecar(temporary: Path) -> Path:
+    """The empty file whose lock says a write of ``temporary`` is going on:
+    ``.NAME.XXXXXXXXXXXX.partial.lock``."""
+    return temporary.with_name(temporary.name + ".lock")
+
+
 def _remove_leftovers(real: Path) -> None:
     """Delete the temporary files of earlier writes of ``real`` that no process writes.
 
-    A writer holds an exclusive ``flock`` on its temporary file while it writes, and the
-    operating system releases it when the process ends, however it ends (on NFS too, where
-    ``flock`` is a lock of the server's). A leftover ``.NAME.*.partial`` of the same file
-    whose lock this call can take without waiting is a killed write's (SIGKILL, a power cut):
-    it is deleted. One whose lock is held (a write going on, in this process or another,
-    on any machine or container), or that cannot be opened or deleted, is left.
+    A writer holds an exclusive ``flock`` on an empty sidecar, ``.NAME.XXXX.partial.lock``,
+    which it creates (and locks) before its temporary file ``.NAME.XXXX.partial`` and deletes
+    after it; the operating system releases the lock when the process ends, however it ends.
+    The lock is on the sidecar, never read or written, not on the file written: on SMB/CIFS a
+    lock is mandatory, and the writes, made through descriptors of their own, would fail.
+    Both are opened for writing, as an exclusive lock needs on NFS.
+
+    A leftover of the same file whose sidecar's lock this call can take without waiting is a
+    killed write's (SIGKILL, a power cut): the temporary file, then the sidecar, are deleted;
+    a sidecar alone (a writer killed before it created its temporary file) too. One whose lock
+    is held (a write going on, in this process or another), or that cannot be opened or
+    deleted, is left. A temporary file without a sidecar is no write of this version going on
+    (the sidecar is created first and deleted last): it is deleted if a lock on the file
+    itself can be taken (an earlier version's writer held that one).
     """
-    pattern = re.compile(rf"\.{re.escape(real.name)}\.{_LEFTOVER}\.partial")
+    pattern = re.compile(rf"\.{re.escape(real.name)}\.({_LEFTOVER})\.partial(\.lock)?")
     try:
-        names = [entry.name for entry in os.scandir(real.parent) if pattern.fullmatch(entry.name)]
+        tokens = {
+            found.group(1)
+            for entry in os.scandir(real.parent)
+            if (found := pattern.fullmatch(entry.name)) is not None
+        }
     except OSError:
         return
-    for name in names:
-        path = real.parent / name
+    for token in sorted(tokens):
+        temporary = real.with_name(f".{real.name}.{token}.partial")
+        sidecar = _sidecar(temporary)
         try:
-            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+            fd = os.open(sidecar, os.O_RDWR | os.O_NOFOLLOW)
+        except FileNotFoundError:  # none, or its write has just ended (and its file is gone)
+            sidecar = temporary
+            try:
+                fd = os.open(temporary, os.O_RDWR | os.O_NOFOLLOW)
+            except OSError:
+                continue
         except OSError:
             continue
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            if os.fstat(fd).st_ino == os.stat(path).st_ino:
-                path.unlink()  # under its lock: no writer can take it up meanwhile
-                _log.info("removed %s, left by a write that was killed", name)
+            if os.fstat(fd).st_ino == os.stat(sidecar).st_ino:
+                # under its lock: no writer can take it up meanwhile
+                temporary.unlink(missing_ok=True)
+                sidecar.unlink(missing_ok=True)
+                _log.info("removed %s, left by a write that was killed", temporary.name)
         except OSError as err:  # BlockingIOError: a write going on
-            _log.debug("leaving %s: %s", name, err)
+            _log.debug("leaving %s: %s", temporary.name, err)
         finally:
             os.close(fd)
 
 
 def _open_temporary(real: Path) -> tuple[Path, int]:
-    """Create a new temporary file beside ``real`` and lock it (see :func:`_remove_leftovers`);
-    its name and the descriptor that holds the lock."""
+    """Create a new temporary file beside ``real``, after its sidecar, locked (see
+    :func:`_remove_leftovers`); its name and the descriptor of the sidecar, which holds the
+    lock."""
     while True:
         temporary = real.with_name(f".{real.name}.{secrets.token_hex(6)}.partial")
-        fd = os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)  # umask applies
+        sidecar = _sidecar(temporary)
+        fd = os.open(sidecar, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)  # umask applies
         try:
             fcntl.flock(fd, fcntl.LOCK_EX)  # at once, unless a cleaner is trying it
-            if os.fstat(fd).st_ino == os.stat(temporary).st_ino:
+            if os.fstat(fd).st_ino == os.stat(sidecar).st_ino:
+                os.close(os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666))
                 return temporary, fd
         except FileNotFoundError:  # a cleaner took it between its creation and the lock
             pass
         except BaseException:
             os.close(fd)
-            temporary.unlink(missing_ok=True)
+            sidecar.unlink(missing_ok=True)
             raise
         os.close(fd)
 
@@ -422,11 +452,11 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
 
     Notes
     -----
-    The writer holds an exclusive ``flock`` on its temporary file until the rename. A process
-    killed while it writes (SIGKILL, a power cut) leaves the file, and its lock goes with the
-    process: the next write of the same file deletes such leftovers, those whose lock it can
-    take (before writing: their space is free for it); a write going on, in any process, on
-    any machine sharing the folder, keeps its file.
+    The writer holds an exclusive ``flock`` on an empty sidecar, ``.NAME.XXXX.partial.lock``,
+    until the rename; both are then deleted. A process killed while it writes (SIGKILL, a
+    power cut) leaves both files, and its lock goes with the process: the next write of the
+    same file deletes such leftovers, those whose lock it can take (before writing: their
+    space is free for it); a write going on keeps its files (see :func:`_remove_leftovers`).
     """
     target = Path(path)
     real = Path(os.path.realpath(target))  # through a link, as writing in place did
@@ -452,7 +482,12 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
         raise
     finally:
         if fd >= 0:
-            os.close(fd)  # the lock goes with it
+            os.close(fd)  # the lock goes with it; the temporary file is gone already
+        if temporary is not None:
+            try:
+                _sidecar(temporary).unlink(missing_ok=True)
+            except OSError:  # a lone unlocked sidecar: the next write's cleaner takes it
+                pass
     return target
 
 
