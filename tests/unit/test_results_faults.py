@@ -505,6 +505,69 @@ def test_folder_lock_refuses_a_second_writer_and_is_released(tmp_path: Path) -> 
     assert not lock.exists()
 
 
+_READER = """
+import fcntl, os, sys
+fd = os.open(sys.argv[1], os.O_RDONLY)
+fcntl.flock(fd, fcntl.LOCK_SH)  # as is_locked does, for an instant
+print("reading", flush=True)
+sys.stdin.read()
+"""
+
+
+def _dead_pid() -> int:
+    """The pid of a process that has ended (reaped)."""
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
+def test_folder_lock_names_no_dead_pid_when_a_reader_holds_a_stale_lock(tmp_path: Path) -> None:
+    # the finding: a killed campaign's stale lock file says "pid 99999"; a status reader
+    # (is_locked) holding its shared lock made folder_lock say that a dead pid was writing
+    out = tmp_path / "campaign"
+    stale = lock_file(out.absolute())
+    stale.write_text(f"pid {_dead_pid()}\n", encoding="ascii")
+    with subprocess.Popen(
+        [sys.executable, "-c", _READER, str(stale)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    ) as reader:  # fmt: skip
+        try:
+            assert reader.stdout is not None and reader.stdout.readline().strip() == "reading"
+            with pytest.raises(MotosimError) as info:
+                with folder_lock(out):
+                    pass
+        finally:
+            reader.kill()
+    message = str(info.value)
+    assert "another process is writing this result or reading its status" in message
+    assert "pid" not in message and "\n" not in message
+    with folder_lock(out):  # the reader gone, the stale file is taken over
+        assert stale.read_text(encoding="ascii") == f"pid {os.getpid()}\n"
+
+
+def test_folder_lock_waits_out_a_readers_instant(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # is_locked holds a shared lock for microseconds; a writer trying in that instant was
+    # refused at once. Here the lock is busy for the first three tries, as if a reader held it
+    from motosim.io import results
+
+    real = fcntl.flock
+    tries: list[int] = []
+
+    def busy_at_first(fd: int, operation: int) -> None:
+        if operation & fcntl.LOCK_EX and len(tries) < 3:
+            tries.append(fd)
+            raise BlockingIOError(11, "Resource temporarily unavailable")
+        real(fd, operation)
+
+    monkeypatch.setattr(results.fcntl, "flock", busy_at_first)
+    out = tmp_path / "campaign"
+    with folder_lock(out) as lock:
+        assert lock.read_text(encoding="ascii") == f"pid {os.getpid()}\n"
+    assert len(tries) == 3
+
+
 def test_a_shared_folder_lock_is_joined_by_its_threads_writer_and_held_to_the_end(
     tmp_path: Path,
 ) -> None:

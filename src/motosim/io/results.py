@@ -53,6 +53,7 @@ import secrets
 import shutil
 import signal
 import threading
+import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, is_dataclass
@@ -187,6 +188,45 @@ thread, holders)."""
 _HELD_GUARD = threading.Lock()
 
 
+_LOCK_PATIENCE = 0.05
+"""How long, in s, a writer tries a folder's lock before it is refused: a reader
+(:func:`is_locked`) holds it for microseconds."""
+
+
+def _lock_within(fd: int, patience: float) -> bool:
+    """Take an exclusive ``flock`` on ``fd``, trying for ``patience`` seconds; whether it was
+    taken."""
+    deadline = time.monotonic() + patience
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.005)
+
+
+def _live_holder(text: str) -> int | None:
+    """The pid written in a lock file (``pid N``) if a process of that number is alive here;
+    None if there is none, or it has ended (a killed run's file, whose lock a reader holds)."""
+    found = re.fullmatch(r"\s*pid (\d+)\s*", text)
+    if found is None:
+        return None
+    pid = int(found.group(1))
+    if pid <= 0:
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:  # another user's process
+        return pid
+    except (OverflowError, OSError):
+        return None
+    return pid
+
+
 class _FolderLock:
     """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends.
 
@@ -217,15 +257,18 @@ class _FolderLock:
     def _acquire(self, folder: Path, shared: bool) -> None:
         for _ in range(10):  # retry if a finishing run unlinked the file we opened
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                holder = os.read(fd, 64).decode("ascii", "replace").strip() or "another process"
+            if not _lock_within(fd, _LOCK_PATIENCE):
+                holder = _live_holder(os.read(fd, 64).decode("ascii", "replace"))
                 os.close(fd)
+                if holder is None:  # a reader's lock, or a writer elsewhere, on a stale file
+                    raise MotosimError(
+                        f"{folder}: another process is writing this result or reading its "
+                        "status; wait for it to end or choose another folder"
+                    )
                 raise MotosimError(
-                    f"{folder}: another run ({holder}) is writing this result; wait for it to "
-                    "end or choose another folder"
-                ) from None
+                    f"{folder}: another run (pid {holder}) is writing this result; wait for it "
+                    "to end or choose another folder"
+                )
             try:
                 same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
             except FileNotFoundError:
@@ -266,8 +309,8 @@ def is_locked(folder: str | Path) -> bool:
     """Whether a process holds the lock of a run writing ``folder`` (:func:`folder_lock`).
 
     Tries the lock without waiting and, if it gets it, lets it go at once; writes nothing
-    (a missing lock file is no holder). A writer that tries the lock in that instant is
-    refused as if the folder were being written: try again.
+    (a missing lock file is no holder). A writer that tries the lock in that instant tries
+    again for 50 ms before it is refused.
 
     Parameters
     ----------
@@ -327,7 +370,8 @@ def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
     Raises
     ------
     MotosimError
-        If another run holds it, or it cannot be created (naming the folder).
+        If another process still holds it after 50 ms (naming the run's pid if the lock file
+        names a live one), or it cannot be created (naming the folder).
     """
     target = Path(folder).absolute()
     try:
