@@ -327,42 +327,78 @@ def _writer_stopped_in_its_write(target: Path) -> tuple[subprocess.Popen[str], s
     return child, name
 
 
-def test_write_whole_holds_a_lock_on_its_temporary_file_while_it_writes(tmp_path: Path) -> None:
+def _nfs_flock(real: Callable[[int, int], None]) -> Callable[[int, int], None]:
+    """``fcntl.flock`` as on NFS, which emulates it by a whole-file lock of the server's:
+    "in order to place an exclusive lock, the file must be opened for writing" (man 2 flock,
+    NOTES); else EBADF."""
+
+    def flock(fd: int, operation: int) -> None:
+        writable = fcntl.fcntl(fd, fcntl.F_GETFL) & os.O_ACCMODE != os.O_RDONLY
+        if operation & fcntl.LOCK_EX and not writable:
+            raise OSError(9, "Bad file descriptor")
+        real(fd, operation)
+
+    return flock
+
+
+def _try_lock(path: Path) -> bool:
+    """Whether an exclusive lock on ``path`` is free, tried as another process's cleaner
+    does (opened for writing, as NFS needs)."""
+    fd = os.open(path, os.O_RDWR)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return True
+    except BlockingIOError:
+        return False
+    finally:
+        os.close(fd)
+
+
+def test_write_whole_holds_a_lock_on_a_sidecar_not_on_the_file_it_writes(
+    tmp_path: Path,
+) -> None:
     # a0a7497 told a running writer from a killed one by the PID and the host name in the
     # temporary's name: two hosts whose names sanitise alike, or containers sharing a host
-    # name and a folder, saw a running writer as gone and deleted its file
-    held: list[bool] = []
+    # name and a folder, saw a running writer as gone and deleted its file. 68754e1 locked the
+    # temporary file itself: on SMB/CIFS (Linux >= 5.5) that lock is mandatory, "any IO on a
+    # locked file will always fail with EACCES when done from a separate file descriptor"
+    # (man 2 flock), and every write callback opens the file anew
+    seen: list[tuple[bool, bool, int]] = []
 
     def write(temporary: Path) -> None:
-        temporary.write_text("new", encoding="utf-8")
-        fd = os.open(temporary, os.O_RDONLY)  # as another process's cleaner tries it
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            held.append(False)
-        except BlockingIOError:
-            held.append(True)
-        finally:
-            os.close(fd)
+        sidecar = temporary.with_name(temporary.name + ".lock")
+        with temporary.open("w", encoding="utf-8") as handle:  # a descriptor of its own
+            handle.write("new")
+        seen.append((_try_lock(sidecar), _try_lock(temporary), sidecar.stat().st_size))
 
     write_whole(tmp_path / "log.csv", write)
-    assert held == [True]
-    assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
+    # the sidecar is locked and empty, the file written is free of any lock
+    assert seen == [(False, True, 0)]
+    assert (tmp_path / "log.csv").read_text(encoding="utf-8") == "new"
+    assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]  # both removed after the rename
 
 
 _HOLDER = """
 import fcntl, os, sys
-fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT, 0o644)
-os.write(fd, b"half a log")
+fd = os.open(sys.argv[1] + ".lock", os.O_RDWR | os.O_CREAT, 0o644)
 fcntl.flock(fd, fcntl.LOCK_EX)
+with open(sys.argv[1], "w") as handle:
+    handle.write("half a log")
 print("held", flush=True)
 sys.stdin.read()
 """
 
 
+@pytest.mark.parametrize("nfs", [False, True], ids=["local", "nfs-rules"])
 def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
-    tmp_path: Path,
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, nfs: bool
 ) -> None:
-    # SIGKILL during a write left .NAME.XXXX.partial beside the file for good
+    # SIGKILL during a write left .NAME.XXXX.partial beside the file for good; under NFS's
+    # rule 68754e1's cleaner, which opened leftovers read-only, got EBADF and removed none
+    if nfs:
+        from motosim.io import results
+
+        monkeypatch.setattr(results.fcntl, "flock", _nfs_flock(fcntl.flock))
     target = tmp_path / "log.csv"
     target.write_text("old", encoding="utf-8")
     running, live_name = _writer_stopped_in_its_write(target)
@@ -372,6 +408,11 @@ def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
     # a write going on elsewhere (another machine, a container with its own PIDs): only its
     # lock says so, held here by another process
     elsewhere = tmp_path / ".log.csv.0123456789ab.partial"
+    # a sidecar alone (killed before it created its file), a file without a sidecar
+    lone_sidecar = tmp_path / ".log.csv.00000000000a.partial.lock"
+    lone_sidecar.touch()
+    lone_file = tmp_path / ".log.csv.00000000000b.partial"
+    lone_file.write_text("half a log", encoding="utf-8")
     with subprocess.Popen(
         [sys.executable, "-c", _HOLDER, str(elsewhere)],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
@@ -381,10 +422,15 @@ def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
             unrelated = tmp_path / ".other.csv.0123456789ab.partial"  # another file's
             unrelated.write_text("another file's", encoding="utf-8")
             assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
+            assert (tmp_path / (dead_name + ".lock")).is_file()
             write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
             assert target.read_text(encoding="utf-8") == "new"
-            assert not (tmp_path / dead_name).exists()  # its lock went with it: removed
+            # its lock went with it: removed, with its sidecar
+            assert not (tmp_path / dead_name).exists()
+            assert not (tmp_path / (dead_name + ".lock")).exists()
+            assert not lone_sidecar.exists() and not lone_file.exists()
             assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
+            assert (tmp_path / (live_name + ".lock")).is_file()
             assert elsewhere.read_text(encoding="utf-8") == "half a log"  # kept
             assert unrelated.is_file()
         finally:
@@ -457,6 +503,69 @@ def test_folder_lock_refuses_a_second_writer_and_is_released(tmp_path: Path) -> 
     with folder_lock(out):  # released on leaving
         pass
     assert not lock.exists()
+
+
+_READER = """
+import fcntl, os, sys
+fd = os.open(sys.argv[1], os.O_RDONLY)
+fcntl.flock(fd, fcntl.LOCK_SH)  # as is_locked does, for an instant
+print("reading", flush=True)
+sys.stdin.read()
+"""
+
+
+def _dead_pid() -> int:
+    """The pid of a process that has ended (reaped)."""
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
+def test_folder_lock_names_no_dead_pid_when_a_reader_holds_a_stale_lock(tmp_path: Path) -> None:
+    # the finding: a killed campaign's stale lock file says "pid 99999"; a status reader
+    # (is_locked) holding its shared lock made folder_lock say that a dead pid was writing
+    out = tmp_path / "campaign"
+    stale = lock_file(out.absolute())
+    stale.write_text(f"pid {_dead_pid()}\n", encoding="ascii")
+    with subprocess.Popen(
+        [sys.executable, "-c", _READER, str(stale)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    ) as reader:  # fmt: skip
+        try:
+            assert reader.stdout is not None and reader.stdout.readline().strip() == "reading"
+            with pytest.raises(MotosimError) as info:
+                with folder_lock(out):
+                    pass
+        finally:
+            reader.kill()
+    message = str(info.value)
+    assert "another process is writing this result or reading its status" in message
+    assert "pid" not in message and "\n" not in message
+    with folder_lock(out):  # the reader gone, the stale file is taken over
+        assert stale.read_text(encoding="ascii") == f"pid {os.getpid()}\n"
+
+
+def test_folder_lock_waits_out_a_readers_instant(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # is_locked holds a shared lock for microseconds; a writer trying in that instant was
+    # refused at once. Here the lock is busy for the first three tries, as if a reader held it
+    from motosim.io import results
+
+    real = fcntl.flock
+    tries: list[int] = []
+
+    def busy_at_first(fd: int, operation: int) -> None:
+        if operation & fcntl.LOCK_EX and len(tries) < 3:
+            tries.append(fd)
+            raise BlockingIOError(11, "Resource temporarily unavailable")
+        real(fd, operation)
+
+    monkeypatch.setattr(results.fcntl, "flock", busy_at_first)
+    out = tmp_path / "campaign"
+    with folder_lock(out) as lock:
+        assert lock.read_text(encoding="ascii") == f"pid {os.getpid()}\n"
+    assert len(tries) == 3
 
 
 def test_a_shared_folder_lock_is_joined_by_its_threads_writer_and_held_to_the_end(

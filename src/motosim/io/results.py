@@ -53,6 +53,7 @@ import secrets
 import shutil
 import signal
 import threading
+import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, is_dataclass
@@ -187,6 +188,45 @@ thread, holders)."""
 _HELD_GUARD = threading.Lock()
 
 
+_LOCK_PATIENCE = 0.05
+"""How long, in s, a writer tries a folder's lock before it is refused: a reader
+(:func:`is_locked`) holds it for microseconds."""
+
+
+def _lock_within(fd: int, patience: float) -> bool:
+    """Take an exclusive ``flock`` on ``fd``, trying for ``patience`` seconds; whether it was
+    taken."""
+    deadline = time.monotonic() + patience
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.005)
+
+
+def _live_holder(text: str) -> int | None:
+    """The pid written in a lock file (``pid N``) if a process of that number is alive here;
+    None if there is none, or it has ended (a killed run's file, whose lock a reader holds)."""
+    found = re.fullmatch(r"\s*pid (\d+)\s*", text)
+    if found is None:
+        return None
+    pid = int(found.group(1))
+    if pid <= 0:
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:  # another user's process
+        return pid
+    except (OverflowError, OSError):
+        return None
+    return pid
+
+
 class _FolderLock:
     """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends.
 
@@ -217,15 +257,18 @@ class _FolderLock:
     def _acquire(self, folder: Path, shared: bool) -> None:
         for _ in range(10):  # retry if a finishing run unlinked the file we opened
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                holder = os.read(fd, 64).decode("ascii", "replace").strip() or "another process"
+            if not _lock_within(fd, _LOCK_PATIENCE):
+                holder = _live_holder(os.read(fd, 64).decode("ascii", "replace"))
                 os.close(fd)
+                if holder is None:  # a reader's lock, or a writer elsewhere, on a stale file
+                    raise MotosimError(
+                        f"{folder}: another process is writing this result or reading its "
+                        "status; wait for it to end or choose another folder"
+                    )
                 raise MotosimError(
-                    f"{folder}: another run ({holder}) is writing this result; wait for it to "
-                    "end or choose another folder"
-                ) from None
+                    f"{folder}: another run (pid {holder}) is writing this result; wait for it "
+                    "to end or choose another folder"
+                )
             try:
                 same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
             except FileNotFoundError:
@@ -266,8 +309,8 @@ def is_locked(folder: str | Path) -> bool:
     """Whether a process holds the lock of a run writing ``folder`` (:func:`folder_lock`).
 
     Tries the lock without waiting and, if it gets it, lets it go at once; writes nothing
-    (a missing lock file is no holder). A writer that tries the lock in that instant is
-    refused as if the folder were being written: try again.
+    (a missing lock file is no holder). A writer that tries the lock in that instant tries
+    again for 50 ms before it is refused.
 
     Parameters
     ----------
@@ -327,7 +370,8 @@ def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
     Raises
     ------
     MotosimError
-        If another run holds it, or it cannot be created (naming the folder).
+        If another process still holds it after 50 ms (naming the run's pid if the lock file
+        names a live one), or it cannot be created (naming the folder).
     """
     target = Path(folder).absolute()
     try:
@@ -345,53 +389,83 @@ _LEFTOVER = r"[0-9a-f]{12}"
 """The random part of a temporary file's name, ``.NAME.<12 hex digits>.partial``."""
 
 
+def _sidecar(temporary: Path) -> Path:
+    """The empty file whose lock says a write of ``temporary`` is going on:
+    ``.NAME.XXXXXXXXXXXX.partial.lock``."""
+    return temporary.with_name(temporary.name + ".lock")
+
+
 def _remove_leftovers(real: Path) -> None:
     """Delete the temporary files of earlier writes of ``real`` that no process writes.
 
-    A writer holds an exclusive ``flock`` on its temporary file while it writes, and the
-    operating system releases it when the process ends, however it ends (on NFS too, where
-    ``flock`` is a lock of the server's). A leftover ``.NAME.*.partial`` of the same file
-    whose lock this call can take without waiting is a killed write's (SIGKILL, a power cut):
-    it is deleted. One whose lock is held (a write going on, in this process or another,
-    on any machine or container), or that cannot be opened or deleted, is left.
+    A writer holds an exclusive ``flock`` on an empty sidecar, ``.NAME.XXXX.partial.lock``,
+    which it creates (and locks) before its temporary file ``.NAME.XXXX.partial`` and deletes
+    after it; the operating system releases the lock when the process ends, however it ends.
+    The lock is on the sidecar, never read or written, not on the file written: on SMB/CIFS a
+    lock is mandatory, and the writes, made through descriptors of their own, would fail.
+    Both are opened for writing, as an exclusive lock needs on NFS.
+
+    A leftover of the same file whose sidecar's lock this call can take without waiting is a
+    killed write's (SIGKILL, a power cut): the temporary file, then the sidecar, are deleted;
+    a sidecar alone (a writer killed before it created its temporary file) too. One whose lock
+    is held (a write going on, in this process or another), or that cannot be opened or
+    deleted, is left. A temporary file without a sidecar is no write of this version going on
+    (the sidecar is created first and deleted last): it is deleted if a lock on the file
+    itself can be taken (an earlier version's writer held that one).
     """
-    pattern = re.compile(rf"\.{re.escape(real.name)}\.{_LEFTOVER}\.partial")
+    pattern = re.compile(rf"\.{re.escape(real.name)}\.({_LEFTOVER})\.partial(\.lock)?")
     try:
-        names = [entry.name for entry in os.scandir(real.parent) if pattern.fullmatch(entry.name)]
+        tokens = {
+            found.group(1)
+            for entry in os.scandir(real.parent)
+            if (found := pattern.fullmatch(entry.name)) is not None
+        }
     except OSError:
         return
-    for name in names:
-        path = real.parent / name
+    for token in sorted(tokens):
+        temporary = real.with_name(f".{real.name}.{token}.partial")
+        sidecar = _sidecar(temporary)
         try:
-            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+            fd = os.open(sidecar, os.O_RDWR | os.O_NOFOLLOW)
+        except FileNotFoundError:  # none, or its write has just ended (and its file is gone)
+            sidecar = temporary
+            try:
+                fd = os.open(temporary, os.O_RDWR | os.O_NOFOLLOW)
+            except OSError:
+                continue
         except OSError:
             continue
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            if os.fstat(fd).st_ino == os.stat(path).st_ino:
-                path.unlink()  # under its lock: no writer can take it up meanwhile
-                _log.info("removed %s, left by a write that was killed", name)
+            if os.fstat(fd).st_ino == os.stat(sidecar).st_ino:
+                # under its lock: no writer can take it up meanwhile
+                temporary.unlink(missing_ok=True)
+                sidecar.unlink(missing_ok=True)
+                _log.info("removed %s, left by a write that was killed", temporary.name)
         except OSError as err:  # BlockingIOError: a write going on
-            _log.debug("leaving %s: %s", name, err)
+            _log.debug("leaving %s: %s", temporary.name, err)
         finally:
             os.close(fd)
 
 
 def _open_temporary(real: Path) -> tuple[Path, int]:
-    """Create a new temporary file beside ``real`` and lock it (see :func:`_remove_leftovers`);
-    its name and the descriptor that holds the lock."""
+    """Create a new temporary file beside ``real``, after its sidecar, locked (see
+    :func:`_remove_leftovers`); its name and the descriptor of the sidecar, which holds the
+    lock."""
     while True:
         temporary = real.with_name(f".{real.name}.{secrets.token_hex(6)}.partial")
-        fd = os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)  # umask applies
+        sidecar = _sidecar(temporary)
+        fd = os.open(sidecar, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)  # umask applies
         try:
             fcntl.flock(fd, fcntl.LOCK_EX)  # at once, unless a cleaner is trying it
-            if os.fstat(fd).st_ino == os.stat(temporary).st_ino:
+            if os.fstat(fd).st_ino == os.stat(sidecar).st_ino:
+                os.close(os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666))
                 return temporary, fd
         except FileNotFoundError:  # a cleaner took it between its creation and the lock
             pass
         except BaseException:
             os.close(fd)
-            temporary.unlink(missing_ok=True)
+            sidecar.unlink(missing_ok=True)
             raise
         os.close(fd)
 
@@ -422,11 +496,11 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
 
     Notes
     -----
-    The writer holds an exclusive ``flock`` on its temporary file until the rename. A process
-    killed while it writes (SIGKILL, a power cut) leaves the file, and its lock goes with the
-    process: the next write of the same file deletes such leftovers, those whose lock it can
-    take (before writing: their space is free for it); a write going on, in any process, on
-    any machine sharing the folder, keeps its file.
+    The writer holds an exclusive ``flock`` on an empty sidecar, ``.NAME.XXXX.partial.lock``,
+    until the rename; both are then deleted. A process killed while it writes (SIGKILL, a
+    power cut) leaves both files, and its lock goes with the process: the next write of the
+    same file deletes such leftovers, those whose lock it can take (before writing: their
+    space is free for it); a write going on keeps its files (see :func:`_remove_leftovers`).
     """
     target = Path(path)
     real = Path(os.path.realpath(target))  # through a link, as writing in place did
@@ -452,7 +526,12 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
         raise
     finally:
         if fd >= 0:
-            os.close(fd)  # the lock goes with it
+            os.close(fd)  # the lock goes with it; the temporary file is gone already
+        if temporary is not None:
+            try:
+                _sidecar(temporary).unlink(missing_ok=True)
+            except OSError:  # a lone unlocked sidecar: the next write's cleaner takes it
+                pass
     return target
 
 
