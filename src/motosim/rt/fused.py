@@ -280,8 +280,10 @@ class PeriodArrays(NamedTuple):
 
 
 @njit(cache=True)
-def take_frames(a: PeriodArrays, first: int, end: int) -> int:
-    """Handle the frames ``first`` .. ``end - 1`` of ``a.rx``; the number of status frames.
+def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
+    """Handle the frames ``first`` .. ``end - 1`` of ``a.rx``, read by the period whose
+    deadline (or, paced by the bus, the wait's time) is ``t`` [s]; the number of status
+    frames.
 
     A status frame is decoded and checked by the safety stage (checksum, alive counter, the
     drive's fault flag); if valid and fresh, its angle and current are kept. An E-stop frame
@@ -306,9 +308,9 @@ def take_frames(a: PeriodArrays, first: int, end: int) -> int:
             r[R_STATUS_FRAMES] += 1.0
             values = a.status_values
             ok = decode_frame(a.status, a.rx[j], start, length, values)
-            if safety_status_frame(
-                s, a.limits, ok, values[q[Q_COUNTER]], values[q[Q_DRIVE_FAULT]] > 0.5
-            ):
+            fault = values[q[Q_DRIVE_FAULT]] > 0.5
+            # the safety stage's time: the loop's since the first deadline (NaN before it)
+            if safety_status_frame(s, a.limits, ok, values[q[Q_COUNTER]], fault, t - r[R_T0]):
                 r[R_THETA] = values[q[Q_ANGLE]]
                 r[R_CURRENT] = values[q[Q_CURRENT]]
                 r[R_FRESH] = 1.0
@@ -499,7 +501,7 @@ def fused_period(
     stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`
     (whose value it returns)."""
     r = a.runner
-    take_frames(a, 0, frames)
+    take_frames(a, 0, frames, t)
     if begin(a, k, t):
         stack_reset(model, data, force, side_force, stack_state, r[R_THETA], r[R_CURRENT])
     command = 0.0

@@ -293,7 +293,7 @@ class RealtimeRunner:
         their compiled overloads (called without numba's dispatch): before the first
         deadline, nothing is compiled inside the loop."""
         a = self._arrays
-        self._take = compiled(fused.take_frames, a, 0, 0)
+        self._take = compiled(fused.take_frames, a, 0, 0, 0.0)
         self._begin = compiled(fused.begin, a, 0, 0.0)
         self._finish = compiled(fused.finish, a, 0.0, 0.0, 0.0, 0.0)
         self._kernel: Callable[..., int] | None = None
@@ -528,7 +528,7 @@ class RealtimeRunner:
                 if self._r[fused.R_STARTED]:
                     self.safety.silent()
                 return False
-            if self._read_bus(0, remaining) and self._take(a, 0, 1):
+            if self._read_bus(0, remaining) and self._take(a, 0, 1, now()):
                 return True
 
     def period(self, k: int, t: float) -> bool:
@@ -590,7 +590,7 @@ class RealtimeRunner:
         self, a: PeriodArrays, frames: int, k: int, t: float, woke: float, done_read: float
     ) -> int:
         """A period around a stack in Python: the compiled steps one by one."""
-        self._take(a, 0, frames)
+        self._take(a, 0, frames, t)
         r = self._r
         if self._begin(a, k, t):
             self.stepper.reset(float(r[fused.R_THETA]), float(r[fused.R_CURRENT]))
