@@ -98,9 +98,10 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS,
-) = range(38)  # fmt: skip
-RUNNER_STATE_SIZE = 38
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS, R_K_BASE,
+    R_K_LAST,
+) = range(40)  # fmt: skip
+RUNNER_STATE_SIZE = 40
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
 the angle of the last fresh status frame, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
@@ -118,7 +119,9 @@ whether the stack is warmed before each deadline (1, :func:`context_warm_until`)
 for a stack without a rate in its row, the deadline of the period that read the last fresh
 status frame [s] and the handlebar's rate between the last two [rad/s]; and the heartbeat
 due next (its index: the period's index on the loop's time since the first deadline, over
-``heartbeat_every``)."""
+``heartbeat_every``); the loop's deadlines before its current run (its ``k`` of the runs
+before, each run's last ``k`` plus one) and its ``k`` of the last period (-1 before the
+first: :func:`begin` takes a ``k`` not above it for a new run of the loop)."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -358,6 +361,9 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
     r, s = a.runner, a.safety
     if r[R_T0] != r[R_T0]:
         r[R_T0] = t
+    if k <= r[R_K_LAST]:  # a new run of the loop (motosim run's fade-out): k from 0 again
+        r[R_K_BASE] += r[R_K_LAST] + 1.0
+    r[R_K_LAST] = k
     fresh = r[R_FRESH] != 0.0  # cleared by finish: the stack reads it in between
     started = r[R_STARTED] != 0.0
     if not started and k >= r[R_START_TIMEOUT]:
@@ -388,9 +394,11 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     ``NON_FINITE`` as an inf does (the stage takes NaN for "no estimate": a stack without
     one).
 
-    ``t`` is the period's deadline [s]: the period's index is taken on the loop's time
-    since the first deadline, not from the loop's ``k``, which a second run of the loop
-    (motosim run's fade-out after the duration) counts from 0 again. ``woke`` and
+    ``t`` is the period's deadline [s]: the heartbeat's period index is taken on the loop's
+    time since the first deadline, not from the loop's ``k``, which a second run of the loop
+    (motosim run's fade-out after the duration) counts from 0 again; the row's count of
+    deadlines skipped is the loop's own (its ``k`` as :func:`begin` carries it across the
+    runs), which the time between two runs does not add to. ``woke`` and
     ``done_read`` are the period's wake-up and the end of the bus read on the loop's clock
     [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
     whether the run goes on, whether the heartbeat frame is to be sent this period, and the
@@ -464,7 +472,9 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     row[7] = t
     row[8] = woke - t
     row[9] = math.nan  # compute, done_control, done_send: by the runner after the send
-    row[10] = n - r[R_CALLS]  # deadlines skipped before this one
+    # deadlines the loop skipped before this one, by its own count (its k, the runs before
+    # included), not on its time: the time between two runs skipped none
+    row[10] = r[R_K_BASE] + r[R_K_LAST] - r[R_CALLS]
     row[11] = done_read - woke
     row[12] = math.nan
     row[13] = math.nan

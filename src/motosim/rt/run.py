@@ -260,6 +260,7 @@ class RealtimeRunner:
         r = np.zeros(fused.RUNNER_STATE_SIZE)
         r[[fused.R_T0, fused.R_THETA, fused.R_CURRENT, fused.R_PREV_THETA]] = math.nan
         r[fused.R_STACK_TIME] = math.nan  # measured by the fused period only
+        r[fused.R_K_LAST] = -1.0  # no period yet
         r[fused.R_LINGER] = max(1, round(linger * rate))
         r[fused.R_START_TIMEOUT] = max(1, round(start_timeout * rate))
         r[fused.R_HEARTBEAT_EVERY] = max(1, round(0.1 * rate))
@@ -459,9 +460,13 @@ class RealtimeRunner:
         """End a run that reached its duration: fade the torque out like a stop request
         (without counting as one); the most periods the fade-out needs (the fade, then the
         slew-rate limit's way down from the clamp; 0 when the torque is already off);
-        :meth:`period` returns False once the torque is off."""
+        :meth:`period` returns False once the torque is off (in a new run of the loop: its
+        ``k`` from 0 again)."""
+        r = self._r
+        r[fused.R_K_BASE] += r[fused.R_K_LAST] + 1.0  # the loop's deadlines so far
+        r[fused.R_K_LAST] = -1.0
         if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
-            self._r[fused.R_FINISHING] = 1.0
+            r[fused.R_FINISHING] = 1.0
             self.safety.request_stop()
             limits = self.safety.limits
             fade = math.ceil(self.safety.envelope * limits.fade_in / self.dt)
