@@ -406,3 +406,49 @@ def test_run_holds_the_folder_until_its_timing_and_report_are_written(tmp_path: 
     assert not lock_file(out).exists()
     with folder_lock(out):  # released once the report is written
         pass
+
+
+def test_run_ends_at_once_when_its_folder_gains_a_file_of_another_kind(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # a file dropped into the result folder while run writes it: the writer process's close
+    # refused to replace the folder and raised; it died without an answer and motosim run
+    # waited 120 s for one, then printed the writer's traceback and "did not finish".
+    # Now: one line naming where the rows are, at once (capfd: the writer's stderr too)
+    pytest.importorskip("can", reason="motosim run needs the rt group (python-can)")
+    import threading
+
+    out = tmp_path / "run"
+    staging = partial_folder(out)
+    ended = threading.Event()
+
+    def drop() -> None:  # once the writer has opened the result (the loop starts then)
+        while not ended.is_set():
+            if staging.is_dir():
+                out.mkdir(exist_ok=True)
+                (out / "notes.txt").write_text("mine\n", encoding="utf-8")
+                return
+            time.sleep(0.005)
+
+    thread = threading.Thread(target=drop)
+    thread.start()
+    begun = time.monotonic()
+    try:
+        code = main(["run", str(ROOT / "scenarios" / "realtime_square.toml"), "--bus", "virtual",
+                     "--out", str(out), "--duration", "0.9", "--telemetry", "off"])  # fmt: skip
+    finally:
+        ended.set()
+        thread.join()
+    took = time.monotonic() - begun
+    err = capfd.readouterr().err
+    assert code == 2, err
+    lines = [line for line in err.splitlines() if line.startswith("motosim: error")]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert "holds files that are not a motosim result" in lines[0], err
+    assert f"the complete result is in {staging}" in lines[0], err
+    assert took < 60.0, took  # not the 120 s wait for an answer that never came
+    assert (out / "notes.txt").read_text(encoding="utf-8") == "mine\n"  # left as it is
+    result = load_result(staging)  # the rows where the line says
+    assert result.complete and result.t.size > 100
+    assert result.metadata["realtime"]["bus"] == "virtual"
+    assert not lock_file(out).exists()

@@ -432,6 +432,7 @@ def _write_result(
             pending.clear()
 
     summary: dict[str, Any] = {}
+    failed = None
     try:
         with writer:
             k = 0
@@ -465,11 +466,18 @@ def _write_result(
             writer.close(summary)
     except _EarlyStopError:
         pass
+    except MotosimError as err:
+        # a write failed (a full disk) or the folder gained files of another kind while the
+        # run went: the message says where the rows are; motosim run ends with it at once
+        failed = str(err)
     finally:
         stream = stop_relay()
         ring.close()
         if server is not None:
             server.stop()
+    if failed is not None:
+        conn.send(("error", failed))
+        return False
     profile = profile_stats(np.vstack(stamps), stamp_names) if stamps else {}
     conn.send(("done", summary, str(writer.location), profile, stream))
     return True
@@ -874,15 +882,12 @@ def _loop(
         daemon=True,
     )  # fmt: skip
     writer.start()
+    theirs.close()  # the writer holds its copy: EOF here at once if it ends without a word
     done = False  # the result closed: the writer holds the folder's lock until released
     if view is not None:
         view.control.close()  # the writer holds its copy: EOF here once it ends
     try:
-        if not ours.poll(120.0):
-            raise MotosimError(f"{folder}: the result writer did not start")
-        answer = ours.recv()
-        if answer[0] == "error":
-            raise MotosimError(answer[1])
+        answer = _answer(ours, folder, "start")
         if view is not None:
             threading.Thread(target=_controls, args=(buttons, runner), daemon=True).start()
             url = answer[1]
@@ -933,10 +938,11 @@ def _loop(
         extra: dict[str, Any] = {f"rt_{k}": float(v) for k, v in stats.as_dict().items()}
         if runner.left_range is not None and runner.safety.fault.name == "NONE":
             extra["failure"] = runner.left_range  # the motorcycle fell: flagged, as offline
-        ours.send(("close", complete, extra))
-        if not ours.poll(120.0):
-            raise MotosimError(f"{folder}: the result writer did not finish")
-        _, summary, location, profile, stream = ours.recv()
+        try:
+            ours.send(("close", complete, extra))
+        except OSError:  # the writer has ended (a write failed): its answer is read below
+            pass
+        _, summary, location, profile, stream = _answer(ours, folder, "finish")
         summary = summary | {"profile": profile, "state_stream": stream}
         done = True
     finally:
@@ -945,6 +951,21 @@ def _loop(
         runner.ring.close()
         signal.signal(signal.SIGINT, previous)
     return stats, privileges, summary, Path(location), lambda: _end_writer(writer, ours)
+
+
+def _answer(conn: Any, folder: Path, what: str) -> tuple[Any, ...]:
+    """The writer process's answer on ``conn``: ("ready", ...) or ("done", ...); its
+    ("error", text) raised as :class:`MotosimError`, and so are no answer within 120 s and
+    the end of ``conn`` (the writer ended without one)."""
+    try:
+        if conn.poll(120.0):
+            answer: tuple[Any, ...] = conn.recv()
+            if answer[0] == "error":
+                raise MotosimError(answer[1])
+            return answer
+    except (EOFError, OSError):
+        pass
+    raise MotosimError(f"{folder}: the result writer did not {what}")
 
 
 def _no_writer() -> None:

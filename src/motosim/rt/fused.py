@@ -98,9 +98,10 @@ Ints = NDArray[np.int64]
     R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS,
-) = range(38)  # fmt: skip
-RUNNER_STATE_SIZE = 38
+    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS, R_K_BASE,
+    R_K_LAST,
+) = range(40)  # fmt: skip
+RUNNER_STATE_SIZE = 40
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
 the angle of the last fresh status frame, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
@@ -118,7 +119,9 @@ whether the stack is warmed before each deadline (1, :func:`context_warm_until`)
 for a stack without a rate in its row, the deadline of the period that read the last fresh
 status frame [s] and the handlebar's rate between the last two [rad/s]; and the heartbeat
 due next (its index: the period's index on the loop's time since the first deadline, over
-``heartbeat_every``)."""
+``heartbeat_every``); the loop's deadlines before its current run (its ``k`` of the runs
+before, each run's last ``k`` plus one) and its ``k`` of the last period (-1 before the
+first: :func:`begin` takes a ``k`` not above it for a new run of the loop)."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -280,8 +283,10 @@ class PeriodArrays(NamedTuple):
 
 
 @njit(cache=True)
-def take_frames(a: PeriodArrays, first: int, end: int) -> int:
-    """Handle the frames ``first`` .. ``end - 1`` of ``a.rx``; the number of status frames.
+def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
+    """Handle the frames ``first`` .. ``end - 1`` of ``a.rx``, read by the period whose
+    deadline (or, paced by the bus, the wait's time) is ``t`` [s]; the number of status
+    frames.
 
     A status frame is decoded and checked by the safety stage (checksum, alive counter, the
     drive's fault flag); if valid and fresh, its angle and current are kept. An E-stop frame
@@ -306,9 +311,9 @@ def take_frames(a: PeriodArrays, first: int, end: int) -> int:
             r[R_STATUS_FRAMES] += 1.0
             values = a.status_values
             ok = decode_frame(a.status, a.rx[j], start, length, values)
-            if safety_status_frame(
-                s, a.limits, ok, values[q[Q_COUNTER]], values[q[Q_DRIVE_FAULT]] > 0.5
-            ):
+            fault = values[q[Q_DRIVE_FAULT]] > 0.5
+            # the safety stage's time: the loop's since the first deadline (NaN before it)
+            if safety_status_frame(s, a.limits, ok, values[q[Q_COUNTER]], fault, t - r[R_T0]):
                 r[R_THETA] = values[q[Q_ANGLE]]
                 r[R_CURRENT] = values[q[Q_CURRENT]]
                 r[R_FRESH] = 1.0
@@ -356,6 +361,9 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
     r, s = a.runner, a.safety
     if r[R_T0] != r[R_T0]:
         r[R_T0] = t
+    if k <= r[R_K_LAST]:  # a new run of the loop (motosim run's fade-out): k from 0 again
+        r[R_K_BASE] += r[R_K_LAST] + 1.0
+    r[R_K_LAST] = k
     fresh = r[R_FRESH] != 0.0  # cleared by finish: the stack reads it in between
     started = r[R_STARTED] != 0.0
     if not started and k >= r[R_START_TIMEOUT]:
@@ -386,9 +394,11 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     ``NON_FINITE`` as an inf does (the stage takes NaN for "no estimate": a stack without
     one).
 
-    ``t`` is the period's deadline [s]: the period's index is taken on the loop's time
-    since the first deadline, not from the loop's ``k``, which a second run of the loop
-    (motosim run's fade-out after the duration) counts from 0 again. ``woke`` and
+    ``t`` is the period's deadline [s]: the heartbeat's period index is taken on the loop's
+    time since the first deadline, not from the loop's ``k``, which a second run of the loop
+    (motosim run's fade-out after the duration) counts from 0 again; the row's count of
+    deadlines skipped is the loop's own (its ``k`` as :func:`begin` carries it across the
+    runs), which the time between two runs does not add to. ``woke`` and
     ``done_read`` are the period's wake-up and the end of the bus read on the loop's clock
     [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
     whether the run goes on, whether the heartbeat frame is to be sent this period, and the
@@ -462,7 +472,9 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     row[7] = t
     row[8] = woke - t
     row[9] = math.nan  # compute, done_control, done_send: by the runner after the send
-    row[10] = n - r[R_CALLS]  # deadlines skipped before this one
+    # deadlines the loop skipped before this one, by its own count (its k, the runs before
+    # included), not on its time: the time between two runs skipped none
+    row[10] = r[R_K_BASE] + r[R_K_LAST] - r[R_CALLS]
     row[11] = done_read - woke
     row[12] = math.nan
     row[13] = math.nan
@@ -499,7 +511,7 @@ def fused_period(
     stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`
     (whose value it returns)."""
     r = a.runner
-    take_frames(a, 0, frames)
+    take_frames(a, 0, frames, t)
     if begin(a, k, t):
         stack_reset(model, data, force, side_force, stack_state, r[R_THETA], r[R_CURRENT])
     command = 0.0

@@ -260,6 +260,7 @@ class RealtimeRunner:
         r = np.zeros(fused.RUNNER_STATE_SIZE)
         r[[fused.R_T0, fused.R_THETA, fused.R_CURRENT, fused.R_PREV_THETA]] = math.nan
         r[fused.R_STACK_TIME] = math.nan  # measured by the fused period only
+        r[fused.R_K_LAST] = -1.0  # no period yet
         r[fused.R_LINGER] = max(1, round(linger * rate))
         r[fused.R_START_TIMEOUT] = max(1, round(start_timeout * rate))
         r[fused.R_HEARTBEAT_EVERY] = max(1, round(0.1 * rate))
@@ -293,7 +294,7 @@ class RealtimeRunner:
         their compiled overloads (called without numba's dispatch): before the first
         deadline, nothing is compiled inside the loop."""
         a = self._arrays
-        self._take = compiled(fused.take_frames, a, 0, 0)
+        self._take = compiled(fused.take_frames, a, 0, 0, 0.0)
         self._begin = compiled(fused.begin, a, 0, 0.0)
         self._finish = compiled(fused.finish, a, 0.0, 0.0, 0.0, 0.0)
         self._kernel: Callable[..., int] | None = None
@@ -459,9 +460,13 @@ class RealtimeRunner:
         """End a run that reached its duration: fade the torque out like a stop request
         (without counting as one); the most periods the fade-out needs (the fade, then the
         slew-rate limit's way down from the clamp; 0 when the torque is already off);
-        :meth:`period` returns False once the torque is off."""
+        :meth:`period` returns False once the torque is off (in a new run of the loop: its
+        ``k`` from 0 again)."""
+        r = self._r
+        r[fused.R_K_BASE] += r[fused.R_K_LAST] + 1.0  # the loop's deadlines so far
+        r[fused.R_K_LAST] = -1.0
         if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
-            self._r[fused.R_FINISHING] = 1.0
+            r[fused.R_FINISHING] = 1.0
             self.safety.request_stop()
             limits = self.safety.limits
             fade = math.ceil(self.safety.envelope * limits.fade_in / self.dt)
@@ -528,7 +533,7 @@ class RealtimeRunner:
                 if self._r[fused.R_STARTED]:
                     self.safety.silent()
                 return False
-            if self._read_bus(0, remaining) and self._take(a, 0, 1):
+            if self._read_bus(0, remaining) and self._take(a, 0, 1, now()):
                 return True
 
     def period(self, k: int, t: float) -> bool:
@@ -590,7 +595,7 @@ class RealtimeRunner:
         self, a: PeriodArrays, frames: int, k: int, t: float, woke: float, done_read: float
     ) -> int:
         """A period around a stack in Python: the compiled steps one by one."""
-        self._take(a, 0, frames)
+        self._take(a, 0, frames, t)
         r = self._r
         if self._begin(a, k, t):
             self.stepper.reset(float(r[fused.R_THETA]), float(r[fused.R_CURRENT]))

@@ -287,8 +287,10 @@ def safety_status_frame(
     checksum_ok: bool,
     counter: float,
     drive_fault: bool,
+    now: float,
 ) -> bool:
-    """:meth:`SafetyStage.status_frame` on the state and parameter arrays."""
+    """:meth:`SafetyStage.status_frame` on the state and parameter arrays (``now`` NaN: the
+    frame is taken as one period after the last step)."""
     if not checksum_ok:
         safety_trip(s, 3)  # CHECKSUM
         return False
@@ -307,8 +309,13 @@ def safety_status_frame(
         # frame (none this period either), and the counter has gone on by as many frames
         # as the silence lasted (within one: the frames' jitter); older frames come
         # without that silence, and a gateway replaying its last frames trips the watchdog
-        # first unless it is longer than 13 frames.
-        frames = (s[S_MISSING] + 1.0) / p[P_PER_FRAME]  # since the last valid frame
+        # first unless it is longer than 13 frames. The periods since the last step are
+        # counted from ``now`` (as the step counts them): a loop late as the frames come
+        # back has skipped deadlines that its next step would count only after them.
+        since = 1.0
+        if now == now:
+            since = max(1.0, math.floor((now - s[S_T]) / p[P_DT] + 0.5))
+        frames = (s[S_MISSING] + since) / p[P_PER_FRAME]  # since the last valid frame
         silence = (
             s[S_FRESH] == 0.0
             and frames >= MAX_COUNTER_STEP + 1
@@ -622,7 +629,9 @@ class SafetyStage:
         s[S_HANDS_OFF] = 0.0
 
     # --- frames ------------------------------------------------------------------------
-    def status_frame(self, *, checksum_ok: bool, counter: float, drive_fault: bool) -> bool:
+    def status_frame(
+        self, *, checksum_ok: bool, counter: float, drive_fault: bool, now: float | None = None
+    ) -> bool:
         """Check a received status frame; True if it is valid and fresh (use its values).
 
         A wrong checksum trips CHECKSUM; a drive fault flag trips DRIVE_FAULT; a counter
@@ -632,12 +641,18 @@ class SafetyStage:
         :data:`MAX_COUNTER_STEP` counts the lost frames. Two frames in a row one count
         apart, both beyond that window, after :data:`MAX_COUNTER_STEP` frame periods
         without a valid frame (the silence of 7 or more frames lost: the periods stepped
-        since the last valid frame, the deadlines a late loop skipped included), are 7 or
-        more frames lost: the second is valid (the counter taken up again). Without that
-        silence they are older frames (delivered late, or replayed) and both are refused.
+        since the last valid frame, and those since the last step, the deadlines a late loop
+        skipped included, counted from ``now``), are 7 or more frames lost: the second is
+        valid (the counter taken up again). Without that silence they are older frames
+        (delivered late, or replayed) and both are refused.
+
+        ``now`` is the time of the period that reads the frame [s], on the clock of
+        :meth:`step`'s ``now`` (by default, and for a stage stepped without one: one period
+        after the last step).
         """
+        t = math.nan if now is None else float(now)
         return bool(safety_status_frame(self._s, self._p, bool(checksum_ok), float(counter),
-                                        bool(drive_fault)))  # fmt: skip
+                                        bool(drive_fault), t))  # fmt: skip
 
     def silent(self) -> None:
         """The watchdog's whole time passed without a valid status frame (a bus-paced loop's

@@ -546,3 +546,32 @@ def test_the_alive_counter_wraps_round_without_a_loss() -> None:
         stage.status_frame(checksum_ok=True, counter=c, drive_fault=False) for c in (14, 15, 0, 1)
     ]
     assert fresh == [True] * 4 and stage.frames_lost == 0 and stage.frames_stale == 0
+
+
+@pytest.mark.parametrize("late", [0, 15, 25])
+def test_a_long_gap_is_taken_up_when_the_loop_is_late_as_the_frames_come_back(late: int) -> None:
+    # 100 Hz status frames under a 1 kHz loop, frames 50..56 lost (7: the counter jumps
+    # beyond the window), the watchdog 9 frames: the gap is taken up at the second frame
+    # after it (57 read as older, 58 one count on after the silence), with 2 frame periods
+    # to spare. The loop is late by `late` periods as the frames come back: both are read
+    # in the period after its skipped deadlines, which its step counts only after them.
+    # Before, the silence was judged as one period since the last step (7.7 frames, not
+    # 9.2 at 15 late): both frames were refused and the watchdog tripped. Reproducer of
+    # the review (/tmp/rv2/late_one.py): 0 late held, 15 and 25 late tripped.
+    limits = SafetyLimits(**{**_fields(LIMITS), "watchdog_periods": 9})
+    stage = SafetyStage(limits, dt=1e-3, periods_per_frame=10)
+    stage.enable()
+    sent = [(10 * i + 3, i & 0xF) for i in range(120) if not 50 <= i < 57]  # period, counter
+    previous, k, out = -1, 0, []
+    while k < 1200:
+        if k == 570:
+            k += late  # the deadlines a late loop skipped as frame 57 (due at 573) comes
+        for due, counter in sent:  # the frames come in order, read by the next period
+            if previous < due <= k:
+                stage.status_frame(
+                    checksum_ok=True, counter=counter, drive_fault=False, now=k * 1e-3
+                )
+        out.append(stage.step(5.0, theta=0.0, omega=0.0, tau_hat=math.nan, now=k * 1e-3))
+        previous, k = k, k + 1
+    assert stage.fault == Fault.NONE and out[-1] == 5.0
+    assert stage.frames_lost == 7 and stage.frames_stale == 0
