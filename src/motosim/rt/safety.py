@@ -281,6 +281,15 @@ def safety_trip(s: NDArray[np.float64], fault: int) -> None:
 
 
 @njit(cache=True)
+def _periods_since(s: NDArray[np.float64], p: NDArray[np.float64], now: float) -> float:
+    """Periods since the last step at time ``now`` [s], at least 1 (1 if ``now`` is NaN): the
+    deadlines a late loop skipped passed without a status frame too."""
+    if now != now:
+        return 1.0
+    return max(1.0, float(math.floor((now - s[S_T]) / p[P_DT] + 0.5)))
+
+
+@njit(cache=True)
 def safety_status_frame(
     s: NDArray[np.float64],
     p: NDArray[np.float64],
@@ -312,10 +321,8 @@ def safety_status_frame(
         # first unless it is longer than 13 frames. The periods since the last step are
         # counted from ``now`` (as the step counts them): a loop late as the frames come
         # back has skipped deadlines that its next step would count only after them.
-        since = 1.0
-        if now == now:
-            since = max(1.0, math.floor((now - s[S_T]) / p[P_DT] + 0.5))
-        frames = (s[S_MISSING] + since) / p[P_PER_FRAME]  # since the last valid frame
+        # frame periods since the last valid frame
+        frames = (s[S_MISSING] + _periods_since(s, p, now)) / p[P_PER_FRAME]
         silence = (
             s[S_FRESH] == 0.0
             and frames >= MAX_COUNTER_STEP + 1
@@ -376,12 +383,8 @@ def safety_step(
     periods; else the periods since the last step are counted from ``now``, so that the
     deadlines a late loop skipped count for the watchdog)."""
     dt = p[P_DT]
-    if now != now:
-        periods = 1.0
-        s[S_T] += dt
-    else:  # deadlines the loop skipped since the last step passed without a status frame too
-        periods = max(1.0, math.floor((now - s[S_T]) / dt + 0.5))
-        s[S_T] = now
+    periods = _periods_since(s, p, now)
+    s[S_T] = s[S_T] + dt if now != now else now
     if s[S_FRESH] != 0.0:
         s[S_MISSING] = 0.0
         s[S_FRESH] = 0.0
