@@ -10,6 +10,10 @@ cueing``, whose ``--preview road`` is the default: the test fails without the pr
 ``none`` run is checked to miss), and at 30 m/s without the preview's terminal force band
 and its lean leading by a distance (3.22 % false cues: a counter-tilt held after the
 manoeuvre, docs/guide/cueing.md).
+
+Each claim is stated with the margins of :mod:`cueing_claims`: on the lane change at 30 m/s
+the false cues with the preview are comparable to the washout's (0.92-1.01 of them across
+CPUs' BLAS kernels), not fewer; its roll and pitch errors are lower.
 """
 
 import json
@@ -18,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cueing_claims import beats, comparable, misses
 
 from motosim.cli.main import main
 from motosim.sim.road import scenario_road
@@ -53,10 +58,15 @@ def test_lane_change_mpc_with_road_preview_beats_the_washout(
         assert s["violations"] == 0
         false = np.mean([s[f"{c}_false_cue_share"] for c in CHANNELS])
         scores[label] = (false, s["roll_rms_error"], s["pitch_rms_error"])
-    assert scores["road"][0] < scores["washout"][0], scores
-    assert scores["road"][1] < scores["washout"][1], scores
-    assert scores["road"][2] < scores["washout"][2], scores
-    assert scores["none"][0] > scores["washout"][0], scores  # the causal plan misses
+    road, washout, causal = scores["road"], scores["washout"], scores["none"]
+    if "lane_change_20" in scenario:
+        assert beats(road[0], washout[0]), scores
+        assert misses(causal[0], washout[0]), scores  # the causal plan misses
+    else:
+        assert comparable(road[0], washout[0]), scores
+    assert beats(road[1], washout[1]), scores
+    assert beats(road[2], washout[2]), scores
+    assert beats(road[1], causal[1]), scores  # the preview is what lowers the roll error
 
 
 def test_a_rider_torque_scenario_has_no_road() -> None:
@@ -86,7 +96,7 @@ def test_unseen_swerve_at_18_mps_mpc_with_road_preview_beats_the_washout(
         assert s["violations"] == 0
         false = np.mean([s[f"{c}_false_cue_share"] for c in CHANNELS])
         scores[label] = (false, s["roll_rms_error"], s["pitch_rms_error"])
-    assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
+    assert all(beats(r, w) for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
 
 
 def _against_the_washout(
@@ -136,8 +146,8 @@ def test_long_curve_mpc_with_the_band_scheduled_by_persistence_beats_the_washout
     scores = _against_the_washout(
         tmp_path, capsys, "opendrive_curve_25", ("sustained_force_false_cue_weight", "0.0", "2.25")
     )
-    assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
-    assert scores["variant"][1] > scores["washout"][1], scores  # the miss before
+    assert all(beats(r, w) for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
+    assert misses(scores["variant"][1], scores["washout"][1]), scores  # the miss before
 
 
 def test_unseen_swerve_at_22_mps_mpc_with_the_huber_roll_cost_beats_the_washout(
@@ -150,14 +160,15 @@ def test_unseen_swerve_at_22_mps_mpc_with_the_huber_roll_cost_beats_the_washout(
     chosen on the training runs, and the transient force band's weight chosen again with it,
     2.25: 3.11 against 4.18 % false cues, 14.91 against 15.99 deg/s roll; with the weight
     1.5 before it 3.64 %; squared, ``roll_canal_corner = 0.0``, with 1.5, 4.29 %). The
-    variant sets both back, the design before both: squared with 2.25 the swerve is met by
-    0.02 % (4.16 against 4.18 %, *The held-out swerve at 19 m/s*)."""
+    variant sets both back, the design before both: its false cues are comparable to the
+    washout's (0.97-1.03 of them across CPUs' BLAS kernels), and the two changes cut them by
+    over a fifth."""
     scores = _against_the_washout(
         tmp_path, capsys, "avoidance_22", ("roll_canal_corner", "4.0", "0.0"),
         ("preview_force_false_cue_weight", "2.25", "1.5"),
     )  # fmt: skip
-    assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
-    assert scores["variant"][0] > scores["washout"][0], scores  # the miss before
+    assert all(beats(r, w) for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
+    assert beats(scores["road"][0], scores["variant"][0]), scores  # what the two changes win
 
 
 def test_heldout_swerve_at_19_mps_mpc_with_the_band_weight_chosen_again_beats_the_washout(
@@ -174,5 +185,5 @@ def test_heldout_swerve_at_19_mps_mpc_with_the_band_weight_chosen_again_beats_th
     scores = _against_the_washout(
         tmp_path, capsys, "heldout/avoidance_19", ("preview_force_false_cue_weight", "2.25", "1.5")
     )
-    assert all(r < w for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
-    assert scores["variant"][0] > scores["washout"][0], scores  # the miss before
+    assert all(beats(r, w) for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
+    assert misses(scores["variant"][0], scores["washout"][0]), scores  # the miss before
