@@ -267,3 +267,34 @@ def test_bad_parameters_are_refused_in_one_line() -> None:
         replace(p, R_c=0.29, R_0=0.28)
     with pytest.raises(MotosimError, match="lateral relaxation length"):
         replace(p, sigma_c0=0.0, sigma_c1=-1e-6)
+
+
+def test_pneumatic_trail_at_small_slip_is_the_tables(
+    tyre: tuple[str, TyreParameters, TyreCoefficients],
+) -> None:
+    # t0 = D_t = q_Dz1 R_c F_z / F_z0 (Table 9.3, R_c standing for R_o): at F_z0 front
+    # 0.19796 x 0.06 = 11.9 mm, rear 0.26331 x 0.09 = 23.7 mm; the moment aligns (M_z < 0)
+    _, p, c = tyre
+    _, F_y, M_z, _ = mf_forces(c, p.F_z0, 0.0, 1e-6, 0.0, 1.0)
+    assert -M_z / F_y == pytest.approx(p.q_Dz1 * p.R_c, rel=1e-6)
+
+
+@given(
+    kappa=st.floats(-1.0, 1.0),
+    alpha=st.floats(-1.2, 1.2),
+    gamma=st.floats(-1.0, 1.0),
+    load=st.floats(0.05, 3.0),
+    mu=st.floats(0.05, 1.5),
+)
+def test_forces_never_exceed_the_friction_limit(
+    kappa: float, alpha: float, gamma: float, load: float, mu: float
+) -> None:
+    for name in (FRONT, REAR):
+        p = load_parameters(name, "tyre")
+        c = tyre_coefficients(p)
+        F_z = load * p.F_z0
+        dfz = load - 1.0
+        F_x, F_y, M_z, M_x = mf_forces(c, F_z, kappa, alpha, gamma, mu)
+        assert all(math.isfinite(v) for v in (F_x, F_y, M_z, M_x))
+        assert abs(F_x) <= (p.p_Dx1 + p.p_Dx2 * dfz) * mu / p.mu_0 * F_z * (1 + 1e-12)
+        assert abs(F_y) <= p.p_Dy1 * mu / p.mu_0 * F_z * (1 + 1e-12)
