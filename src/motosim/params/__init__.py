@@ -37,11 +37,13 @@ from motosim.params.checks import (
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.params.toml import parse_toml, read_toml
+from motosim.params.tyre import TyreParameters
 
 __all__ = [
     "HandlebarParameters",
     "ParameterSet",
     "SharpParameters",
+    "TyreParameters",
     "check_number",
     "derived_geometry",
     "dump_parameter_set",
@@ -52,12 +54,13 @@ __all__ = [
     "read_toml",
 ]
 
-Parameters: TypeAlias = SharpParameters | HandlebarParameters
-ModelKind: TypeAlias = Literal["sharp", "handlebar"]
+Parameters: TypeAlias = SharpParameters | HandlebarParameters | TyreParameters
+ModelKind: TypeAlias = Literal["sharp", "handlebar", "tyre"]
 
-_MODELS: dict[str, type[SharpParameters] | type[HandlebarParameters]] = {
+_MODELS: dict[str, type[SharpParameters] | type[HandlebarParameters] | type[TyreParameters]] = {
     "sharp": SharpParameters,
     "handlebar": HandlebarParameters,
+    "tyre": TyreParameters,
 }
 _SET_KEYS = ("name", "model", "title", "source")
 _ENTRY_KEYS = ("value", "unit", "source", "note")
@@ -71,13 +74,13 @@ class ParameterSet:
     ----------
     name : str
         Short name, e.g. ``"sharp1971"``.
-    model : {"sharp", "handlebar"}
+    model : {"sharp", "handlebar", "tyre"}
         Which model the values belong to.
     title : str
         One-line description.
     source : str
         Where the set as a whole comes from.
-    values : SharpParameters or HandlebarParameters
+    values : SharpParameters, HandlebarParameters or TyreParameters
         The validated values, SI units.
     sources : Mapping[str, str]
         Per-parameter source (paper, table, equation) or, for assumed values, the reason.
@@ -242,6 +245,8 @@ def load_parameters(
     name_or_path: str | Path, model: Literal["handlebar"]
 ) -> HandlebarParameters: ...
 @overload
+def load_parameters(name_or_path: str | Path, model: Literal["tyre"]) -> TyreParameters: ...
+@overload
 def load_parameters(name_or_path: str | Path, model: None = None) -> Parameters: ...
 def load_parameters(name_or_path: str | Path, model: ModelKind | None = None) -> Parameters:
     """Load only the validated values of a parameter set.
@@ -250,12 +255,12 @@ def load_parameters(name_or_path: str | Path, model: ModelKind | None = None) ->
     ----------
     name_or_path : str or Path
         A packaged set name or a file path.
-    model : {"sharp", "handlebar"}, optional
+    model : {"sharp", "handlebar", "tyre"}, optional
         When given, the set must be of this model.
 
     Returns
     -------
-    SharpParameters or HandlebarParameters
+    SharpParameters, HandlebarParameters or TyreParameters
 
     Raises
     ------
