@@ -166,5 +166,6 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
     for nodeid, duration in _unmarked_slow:
         terminalreporter.write_line(
-            f"{nodeid} took {duration:.1f} s: add it to SLOW_TESTS in tests/conftest.py"
+            f"{nodeid} took {duration:.1f} s: if it does on a second run too (the first test"
+            " to compile the stack takes the compile), add it to SLOW_TESTS in tests/conftest.py"
         )
