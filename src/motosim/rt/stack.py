@@ -31,7 +31,15 @@ from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.sim.stack import StackData, StackModel, new_data, reset, step_scaled
+from motosim.sim.stack import (
+    Held,
+    MotorcycleState,
+    StackData,
+    StackModel,
+    new_data,
+    reset,
+    step_scaled,
+)
 
 __all__ = [
     "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "compiled", "result_block", "stack_period",
@@ -46,6 +54,17 @@ STACK_SIGNALS = (
 )  # fmt: skip
 """The stack's row: its estimate, the measurement it used, its command [A] and the virtual
 motorcycle's states (names of :mod:`motosim.signals`)."""
+
+_ROW_FROM_HELD = tuple(
+    (STACK_SIGNALS.index(h.name), int(h)) for h in Held if h.name in STACK_SIGNALS
+)
+"""The row's columns of the stack's held outputs, each with its position in them."""
+_ROW_FROM_MOTORCYCLE = tuple(
+    (STACK_SIGNALS.index(m.name), int(m)) for m in MotorcycleState if m.name in STACK_SIGNALS
+)
+"""The row's columns of the motorcycle's states, each with its position in the state."""
+_ROW_COMMAND = STACK_SIGNALS.index("i_m")
+"""The row's column of the command [A] (the one returned, not the held one)."""
 
 RESULT_SIGNALS = ("t", "theta_h", "tau_m", *STACK_SIGNALS)
 """Columns of a real-time run's result files. ``i_m`` is the current *sent* (after the safety
@@ -174,10 +193,11 @@ def stack_period(
     state[1] = scale * command
     state[0] = k + 1
     held, z = data.held, data.motorcycle
-    row[0], row[1], row[2], row[3] = held[3], held[0], held[2], command
-    row[4], row[5], row[6], row[7] = z[5], z[8], z[0], z[1]
-    row[8], row[9], row[10], row[11] = z[2], z[3], z[4], z[6]
-    row[12], row[13], row[14], row[15] = z[7], z[9], z[10], z[11]
+    for column, at in _ROW_FROM_HELD:
+        row[column] = held[at]
+    row[_ROW_COMMAND] = command
+    for column, at in _ROW_FROM_MOTORCYCLE:
+        row[column] = z[at]
     return command
 
 
