@@ -25,8 +25,7 @@ does (see :mod:`motosim.rt.run`):
 The runner holds every argument of :func:`fused_period` in one :class:`PeriodContext` (a
 numba ``structref`` built before the first deadline) and calls :func:`context_period` on it:
 numba unboxes one pointer per call instead of the stack's model and data records and every
-array of :class:`PeriodArrays` (about 20 arrays: 4.6 us per call against 0.4 us, measured
-with empty functions of the same arguments).
+array of :class:`PeriodArrays` (about 20 arrays; the cost of both in ``docs/performance.md``).
 
 On the clock with the fast ``udp_multicast`` link (Linux), the runner's
 :meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead,

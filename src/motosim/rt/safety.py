@@ -35,8 +35,8 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   [N*m] for ``hands_off_time`` [s], the stack's command is scaled by ``hands_off_gain``
   (before the limits: the end stops' spring is not scaled; a period without an estimate
   keeps the flag as it is); once the rider's torque is back, the command is whole again at
-  once, as fast as the slew-rate limit lets it (a ramp at the fade-in's pace was tried: the
-  stack's tracking at the start of a manoeuvre suffered, see the realtime guide);
+  once, as fast as the slew-rate limit lets it (a rider who starts a manoeuvre needs the
+  stack's feedback at once: the realtime guide, "Safety");
 - a frozen-sensor monitor (given the handlebar's parameters): the angle has not changed
   while the motor torque has moved so far from its value at the angle's last change that a
   free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault

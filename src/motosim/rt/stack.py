@@ -205,7 +205,7 @@ def compiled(kernel: Any, *args: Any) -> Any:
     """The compiled ``kernel`` for the types of ``args``, called without numba's dispatch.
 
     A numba dispatcher works out the types of its arguments on every call: for the stack's
-    model and data structures that costs about three times the step itself (measured in
+    model and data structures that costs more than the step itself (``docs/performance.md``,
     ``bench/bench_rt_period.py``). The overload compiled (or loaded from the cache) here for
     the types of ``args`` has an ``entry_point`` that unboxes the same arguments and runs the
     same machine code; nothing is run. Without numba's JIT (``NUMBA_DISABLE_JIT=1``) the

@@ -75,8 +75,8 @@ FEEDFORWARD_FRICTION_WIDTH = 0.002
 The term follows the motorcycle's steer rate, a noise-free model state, so it can be much
 narrower than the observer's compensation, which reads a quantised, differentiated angle:
 the handlebar then follows the slow steering of a lane change (a few mrad/s) instead of
-sticking. (At 0.02 rad/s the crosswind run's tracking error was 9 % of its peak steer angle
-against 3 % at this width.)"""
+sticking (a wider tanh triples the crosswind run's tracking error: ``docs/performance.md``,
+"Figures behind the code's constants")."""
 DELAY_FRICTION_WIDTH = 0.05
 """Rate scale of the tanh of the dry friction in the prediction over a measurement's age
 [rad/s] with an estimator that has none; with the Walcott-Zak observer its own
@@ -342,14 +342,11 @@ def default_prediction(measurement_rate: float) -> bool:
     """Whether a stack that cancels the estimated rider torque predicts it, by default.
 
     On from :data:`PREDICTION_RATE` and at the paper's :data:`PREDICTION_PAPER_RATE`, the
-    rates where it was measured on runs. At 1 kHz it keeps the robustness grid's margins on
-    as many handlebars as the plain cancellation or more and cuts the tracking error the
-    estimate's lag leaves on fast manoeuvres. At 100 Hz it cuts that error too (7 of the
-    unseen runs' tracking misses to 5), keeps the grid (5/3/3 against 4/3/3 at 10/20/30 m/s)
-    and the real-time safety stage's frozen-angle measure on Fig. 15's run stays below a
-    third of its 0.05 rad fault (0.0072 against 0.0047 rad). Between, off: not measured on
-    runs, and at 500 Hz it costs a grid point (the design guide, "The predicted
-    cancellation").
+    rates where it was measured on runs: there it keeps the robustness grid's margins, cuts
+    the tracking error the estimate's lag leaves on fast manoeuvres and keeps the real-time
+    safety stage's frozen-angle measure well below its fault; between, off (the design
+    guide, "The predicted cancellation"; the figures in ``docs/performance.md``, "Figures
+    behind the code's constants").
 
     Examples
     --------
@@ -539,11 +536,10 @@ def account_for_delay(
     differentiator and the observer read the measured one, and the observer is told the
     current carried over its step [t - d, t + h - d]: i_p for d, the new command for h - d,
     as the share d / h of i_p (else the change of command at t reads as rider torque for
-    d, and a cancelling loop feeds it back). Designed for a fresh sample, the 100 Hz stack
-    of the lane change with the plain cancellation keeps 7.8 dB and 55 deg of margins; read
-    5.5 ms old, 0.7 dB and 7 deg (unstable); accounting for the age, 7.6 dB and 49 deg
-    (:func:`motosim.sim.loop_analysis.stack_loop` with ``delay``; with the predicted
-    cancellation, the 100 Hz default: 7.8 dB and 53 deg, unstable, 6.9 dB and 48 deg).
+    d, and a cancelling loop feeds it back). Designed for a fresh sample, a stack read a
+    bus latency late can lose its margins altogether; accounting for the age keeps them
+    (:func:`motosim.sim.loop_analysis.stack_loop` with ``delay``; the figures of the 100 Hz
+    lane change in ``docs/performance.md``, "Figures behind the code's constants").
     """
     h = model.dt * model.measure_every
     return model._replace(delay=_delay(delay, h, handlebar, model.estimator))
