@@ -196,15 +196,6 @@ class LoopColumn(IntEnum):
     stack = 14
 
 
-_IDLE = int(State.IDLE)
-_FADE_IN = int(State.FADE_IN)
-_RUNNING = int(State.RUNNING)
-_FAULT = int(State.FAULT)
-_STOPPING = int(State.STOPPING)
-_NON_FINITE = int(Fault.NON_FINITE)
-_NO_DRIVE = int(Fault.NO_DRIVE)
-
-
 @njit(cache=True)
 def monotonic_ns() -> int:
     """The machine's monotonic clock [ns], read from compiled code (the clock of
@@ -402,7 +393,7 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
     fresh = r[R_FRESH] != 0.0  # cleared by finish: the stack reads it in between
     started = r[R_STARTED] != 0.0
     if not started and k >= r[R_START_TIMEOUT]:
-        safety_trip(s, _NO_DRIVE)
+        safety_trip(s, Fault.NO_DRIVE)
     reset = False
     if fresh and not started:
         r[R_STARTED] = 1.0
@@ -461,7 +452,7 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
         omega = 0.0
     tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
     if started and tau_at >= 0 and tau_hat != tau_hat:  # NaN: no estimate only without one
-        safety_trip(s, _NON_FINITE)
+        safety_trip(s, Fault.NON_FINITE)
     phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
     if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
         phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
@@ -479,7 +470,7 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     state = s.state
     values = a.command_values
     values[q[Q_COMMAND_CURRENT]] = out
-    live = state == _FADE_IN or state == _RUNNING or state == _STOPPING
+    live = state == State.FADE_IN or state == State.RUNNING or state == State.STOPPING
     values[q[Q_ENABLE]] = 1.0 if live else 0.0
     sent = int(r[R_SENT])
     values[q[Q_COMMAND_COUNTER]] = sent & 0xF
@@ -519,11 +510,11 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     n_loop = q[Q_LOOP_COLUMNS]
     for j in range(a.stack_row.size):  # before the stack starts: its initial row
         row[n_loop + j] = a.stack_row[j]
-    if state == _FAULT:
+    if state == State.FAULT:
         r[R_AFTER_FAULT] += 1.0
         carry_on = r[R_AFTER_FAULT] < r[R_LINGER]
     else:
-        carry_on = not ((r[R_STOP] != 0.0 or r[R_FINISHING] != 0.0) and state == _IDLE)
+        carry_on = not ((r[R_STOP] != 0.0 or r[R_FINISHING] != 0.0) and state == State.IDLE)
     r[R_HEARTBEAT_DUE] = 1.0 if beat else 0.0
     r[R_SLOT] = slot
     return bool(carry_on)

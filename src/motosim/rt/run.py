@@ -618,8 +618,7 @@ class RealtimeRunner:
         if row is not None and self.telemetry is not None:
             self.telemetry(k, elapsed, row)
         if self.platform is not None:
-            s = self.safety
-            self.platform.step(k, elapsed, row, s.state, s.fault, s.envelope)
+            self.platform.step(k, elapsed, row, *self.safety.brief())
 
     def counters(self) -> RunCounters:
         """What happened on the bus and in the safety stage so far."""

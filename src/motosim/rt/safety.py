@@ -54,9 +54,11 @@ allocates nothing per period.
 """
 
 import math
-from dataclasses import dataclass
+from collections import namedtuple
+from collections.abc import Callable
+from dataclasses import dataclass, fields
 from enum import IntEnum
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numba import njit
@@ -212,52 +214,25 @@ frames lost); a larger one is an older frame delivered after a newer."""
 # --- the compiled stage ---------------------------------------------------------------
 # The stage's state (a numba structref) and limits (a named tuple) are what compiled code
 # (the fused period of :mod:`motosim.rt.fused`) and :class:`SafetyStage` step with the very
-# same functions. The codes of :class:`State` and :class:`Fault` as constants numba folds:
-
-_IDLE = int(State.IDLE)
-_FADE_IN = int(State.FADE_IN)
-_RUNNING = int(State.RUNNING)
-_FAULT = int(State.FAULT)
-_STOPPING = int(State.STOPPING)
-_NONE = int(Fault.NONE)
-_WATCHDOG = int(Fault.WATCHDOG)
-_NON_FINITE = int(Fault.NON_FINITE)
-_CHECKSUM = int(Fault.CHECKSUM)
-_ESTOP_CAN = int(Fault.ESTOP_CAN)
-_DRIVE_FAULT = int(Fault.DRIVE_FAULT)
-_END_STOP = int(Fault.END_STOP)
-_FROZEN_SENSOR = int(Fault.FROZEN_SENSOR)
+# same functions, which name the codes of :class:`State` and :class:`Fault` (numba takes the
+# members of a global IntEnum as constants).
 
 
-class SafetyParams(NamedTuple):
-    """The limits as the compiled stage reads them (:func:`safety_params`)."""
-
-    max_current: float
-    max_slew: float
-    max_speed: float
-    speed_band: float
-    soft_stop: float
-    hard_stop: float
-    end_stop_gain: float
-    hands_off_torque: float
-    hands_off_time: float
-    hands_off_gain: float
-    fade_in: float
-    frozen_angle: float
-    watchdog: float
-    """Control periods without a valid status frame that trip the watchdog."""
-    dt: float
-    """The control period [s]."""
-    per_frame: float
-    """Control periods per status frame."""
-    monitor: bool
-    """Whether the frozen-sensor monitor is on (a handlebar given)."""
-    torque_per_amp: float
-    """The handlebar's N k_t [N*m/A]."""
-    band: float
-    """Twice its dry friction, the monitor's dead band [N*m]."""
-    beta: float
-    """Its beta_eq [N*m*s/rad]."""
+_LIMITS = tuple(f.name for f in fields(SafetyLimits) if f.name != "watchdog_periods")
+"""The limits the compiled stage reads as they are."""
+SafetyParams: Any = cast(
+    Any,
+    namedtuple(
+        "SafetyParams",
+        (*_LIMITS, "watchdog", "dt", "per_frame", "monitor", "torque_per_amp", "band", "beta"),
+    ),
+)
+SafetyParams.__doc__ = """The limits as the compiled stage reads them (:func:`safety_params`):
+the fields of :class:`SafetyLimits` but ``watchdog_periods``, then the control periods
+without a valid status frame that trip the watchdog, the control period [s], the control
+periods per status frame, whether the frozen-sensor monitor is on, and its handlebar's
+N k_t [N*m/A], twice its dry friction (the monitor's dead band) [N*m] and beta_eq
+[N*m*s/rad]."""
 
 
 def safety_params(
@@ -265,32 +240,21 @@ def safety_params(
     dt: float,
     periods_per_frame: int,
     handlebar: HandlebarParameters | None,
-) -> SafetyParams:
+) -> Any:
     """The limits, the period [s], the watchdog's periods (``watchdog_periods`` frame
     periods of ``periods_per_frame`` control periods), the control periods per status frame
     and the frozen-sensor monitor's handlebar (N k_t [N*m/A], twice the dry friction [N*m],
     beta_eq [N*m*s/rad]) as the compiled stage reads them."""
-    return SafetyParams(
-        max_current=float(limits.max_current),
-        max_slew=float(limits.max_slew),
-        max_speed=float(limits.max_speed),
-        speed_band=float(limits.speed_band),
-        soft_stop=float(limits.soft_stop),
-        hard_stop=float(limits.hard_stop),
-        end_stop_gain=float(limits.end_stop_gain),
-        hands_off_torque=float(limits.hands_off_torque),
-        hands_off_time=float(limits.hands_off_time),
-        hands_off_gain=float(limits.hands_off_gain),
-        fade_in=float(limits.fade_in),
-        frozen_angle=float(limits.frozen_angle),
-        watchdog=float(limits.watchdog_periods * periods_per_frame),
-        dt=float(dt),
-        per_frame=float(periods_per_frame),
-        monitor=handlebar is not None,
-        torque_per_amp=0.0 if handlebar is None else float(handlebar.torque_per_amp),
-        band=0.0 if handlebar is None else 2.0 * float(handlebar.beta_s),
-        beta=0.0 if handlebar is None else float(handlebar.beta_eq),
+    monitor = (
+        (0.0, 0.0, 0.0)
+        if handlebar is None
+        else (float(handlebar.torque_per_amp), 2.0 * handlebar.beta_s, float(handlebar.beta_eq))
     )
+    derived = (
+        float(limits.watchdog_periods * periods_per_frame), float(dt), float(periods_per_frame),
+        handlebar is not None, *monitor,
+    )  # fmt: skip
+    return SafetyParams(*(float(getattr(limits, name)) for name in _LIMITS), *derived)
 
 
 @structref.register
@@ -325,8 +289,8 @@ class SafetyState(structref.StructRefProxy):
 
     def __new__(cls) -> "SafetyState":
         made: SafetyState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, _IDLE, _NONE, math.nan, 0.0, 0.0, 0.0, -1, False, 0.0, 0.0, False, math.nan,
-            0.0, 0.0, 0, 0, -1,
+            cls, int(State.IDLE), int(Fault.NONE), math.nan, 0.0, 0.0, 0.0, -1, False, 0.0, 0.0,
+            False, math.nan, 0.0, 0.0, 0, 0, -1,
         )  # fmt: skip
         return made
 
@@ -372,11 +336,17 @@ def safety_snapshot(s: Any) -> SafetySnapshot:
 
 
 @njit(cache=True)
+def safety_brief(s: Any) -> tuple[int, int, float]:
+    """The stage's state and fault codes and its fade envelope [-]."""
+    return s.state, s.fault, s.envelope
+
+
+@njit(cache=True)
 def safety_clear(s: Any) -> None:
     """:meth:`SafetyStage.clear` on the state."""
-    s.fault = _NONE
+    s.fault = Fault.NONE
     s.fault_time = math.nan
-    s.state = _IDLE
+    s.state = State.IDLE
     s.missing = 0.0
     s.counter = -1
     s.behind = -1
@@ -391,10 +361,10 @@ def safety_trip(s: Any, fault: int) -> None:
     """Latch ``fault`` (a :class:`Fault` code) now: the next step returns 0."""
     if fault == 0:
         return
-    if s.fault == _NONE:
+    if s.fault == Fault.NONE:
         s.fault = fault
         s.fault_time = s.t
-    s.state = _FAULT
+    s.state = State.FAULT
     s.envelope = 0.0
     s.last = 0.0
 
@@ -420,10 +390,10 @@ def safety_status_frame(
     """:meth:`SafetyStage.status_frame` on the state and limits (``now`` NaN: the
     frame is taken as one period after the last step)."""
     if not checksum_ok:
-        safety_trip(s, _CHECKSUM)
+        safety_trip(s, Fault.CHECKSUM)
         return False
     if drive_fault:  # whatever its counter: a drive that reports a fault is believed
-        safety_trip(s, _DRIVE_FAULT)
+        safety_trip(s, Fault.DRIVE_FAULT)
     c = int(counter) & 0xF
     last = s.counter
     step = (c - last) & 0xF
@@ -466,9 +436,9 @@ def safety_status_frame(
 def safety_estop_frame(s: Any, checksum_ok: bool, pressed: bool) -> None:
     """:meth:`SafetyStage.estop_frame` on the state."""
     if not checksum_ok:
-        safety_trip(s, _CHECKSUM)
+        safety_trip(s, Fault.CHECKSUM)
     elif pressed:
-        safety_trip(s, _ESTOP_CAN)
+        safety_trip(s, Fault.ESTOP_CAN)
 
 
 @njit(cache=True)
@@ -476,7 +446,7 @@ def _frozen_monitor(s: Any, p: Any, theta: float) -> None:
     """The frozen-sensor monitor of one period (see :class:`SafetyStage`, Notes)."""
     torque = p.torque_per_amp * s.last
     state = s.state
-    if theta != s.ref_theta or state == _IDLE or state == _STOPPING:
+    if theta != s.ref_theta or state == State.IDLE or state == State.STOPPING:
         s.ref_theta = theta
         s.ref_torque = torque
         s.free = 0.0
@@ -485,7 +455,7 @@ def _frozen_monitor(s: Any, p: Any, theta: float) -> None:
     if drive > 0.0:
         s.free += drive / p.beta * p.dt
         if s.free > p.frozen_angle:
-            safety_trip(s, _FROZEN_SENSOR)
+            safety_trip(s, Fault.FROZEN_SENSOR)
 
 
 @njit(cache=True)
@@ -509,18 +479,18 @@ def safety_step(
         s.fresh = False
     else:
         s.missing += periods
-        if s.missing >= p.watchdog and s.state != _IDLE:
-            safety_trip(s, _WATCHDOG)
+        if s.missing >= p.watchdog and s.state != State.IDLE:
+            safety_trip(s, Fault.WATCHDOG)
     if not (math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)) or math.isinf(
         tau_hat
     ):
-        safety_trip(s, _NON_FINITE)
+        safety_trip(s, Fault.NON_FINITE)
     elif abs(theta) > p.hard_stop:
-        safety_trip(s, _END_STOP)
+        safety_trip(s, Fault.END_STOP)
     elif p.monitor:
         _frozen_monitor(s, p, theta)
     state = s.state
-    if state == _FAULT or state == _IDLE:
+    if state == State.FAULT or state == State.IDLE:
         s.last = 0.0
         s.envelope = 0.0
         return 0.0
@@ -554,10 +524,10 @@ def safety_step(
     last = s.last
     i = min(max(i, last - step), last + step)
     s.last = i
-    if state == _STOPPING and s.envelope == 0.0 and i == 0.0:  # faded out, sent 0
-        s.state = _IDLE
-    elif state == _FADE_IN and s.envelope >= 1.0:  # faded in
-        s.state = _RUNNING
+    if state == State.STOPPING and s.envelope == 0.0 and i == 0.0:  # faded out, sent 0
+        s.state = State.IDLE
+    elif state == State.FADE_IN and s.envelope >= 1.0:  # faded in
+        s.state = State.RUNNING
     return float(i)
 
 
@@ -628,7 +598,7 @@ class SafetyStage:
     (0.0, 'communication watchdog: no valid status frame for 3 periods (t = 0.630 s)')
     """
 
-    __slots__ = ("_p", "_s", "_watchdog", "dt", "limits")
+    __slots__ = ("_brief", "_p", "_s", "_snapshot", "_watchdog", "dt", "limits")
 
     def __init__(
         self,
@@ -653,9 +623,15 @@ class SafetyStage:
         self.dt = float(dt)
         self._s = new_safety_state()
         self._p = safety_params(limits, self.dt, int(periods_per_frame), handlebar)
+        from motosim.rt.stack import compiled  # the stack's numba, loaded with the stage
+
+        self._brief: Callable[[SafetyState], tuple[int, int, float]] = compiled(
+            safety_brief, self._s
+        )
+        self._snapshot: Callable[[SafetyState], SafetySnapshot] = compiled(safety_snapshot, self._s)
 
     @property
-    def compiled_parts(self) -> tuple[SafetyState, SafetyParams]:
+    def compiled_parts(self) -> tuple[SafetyState, Any]:
         """The state and limits the compiled functions work on (the state shared, not a
         copy: the fused period of :mod:`motosim.rt.fused` steps this very stage)."""
         return self._s, self._p
@@ -669,33 +645,33 @@ class SafetyStage:
     @property
     def state(self) -> State:
         """IDLE, FADE_IN, RUNNING, FAULT or STOPPING."""
-        return State(int(safety_snapshot(self._s).state))
+        return State(self._brief(self._s)[0])
 
     @property
     def fault(self) -> Fault:
         """The latched fault (NONE when there is none)."""
-        return Fault(int(safety_snapshot(self._s).fault))
+        return Fault(self._brief(self._s)[1])
 
     @property
     def fault_time(self) -> float:
         """When the fault was detected [s since the stage started] (NaN without a fault)."""
-        return float(safety_snapshot(self._s).fault_time)
+        return float(self._snapshot(self._s).fault_time)
 
     @property
     def hands_off(self) -> bool:
         """Whether nobody seems to hold the handlebar."""
-        return bool(safety_snapshot(self._s).hands_off)
+        return bool(self._snapshot(self._s).hands_off)
 
     @property
     def free_turn(self) -> float:
         """The frozen-sensor monitor's turn of a free handlebar since the angle last changed
         [rad] (see Notes)."""
-        return float(safety_snapshot(self._s).free)
+        return float(self._snapshot(self._s).free)
 
     @property
     def envelope(self) -> float:
         """The fade-in/fade-out scale of the command, in [0, 1]."""
-        return float(safety_snapshot(self._s).envelope)
+        return self._brief(self._s)[2]
 
     @property
     def scale(self) -> float:
@@ -706,13 +682,19 @@ class SafetyStage:
     @property
     def frames_lost(self) -> int:
         """Status frames lost (alive counter jumps)."""
-        return int(safety_snapshot(self._s).lost)
+        return int(self._snapshot(self._s).lost)
 
     @property
     def frames_stale(self) -> int:
         """Status frames whose alive counter had not moved (stale or duplicated) or went
         back (an older frame delivered after a newer)."""
-        return int(safety_snapshot(self._s).stale)
+        return int(self._snapshot(self._s).stale)
+
+    def brief(self) -> tuple[State, Fault, float]:
+        """The state, the fault and the fade envelope [-] in one call (each period's
+        telemetry)."""
+        state, fault, envelope = self._brief(self._s)
+        return State(state), Fault(fault), envelope
 
     def describe(self) -> str:
         """The latched fault's reason and time, in words."""
@@ -817,7 +799,7 @@ def safety_scale(s: Any, p: Any) -> float:
     gain while nobody holds the handlebar; 0 while the stage is idle or faulted. The clamp,
     the slew and the speed and end-stop limits, which depend on the command, are not in it.
     """
-    if s.state == _IDLE or s.state == _FAULT:  # the drive is disabled
+    if s.state == State.IDLE or s.state == State.FAULT:  # the drive is disabled
         return 0.0
     return float(_ramped_envelope(s, p) * (p.hands_off_gain if s.hands_off else 1.0))
 
@@ -827,9 +809,9 @@ def _ramped_envelope(s: Any, p: Any) -> float:
     """The fade envelope after this period's ramp: up while fading in, down while stopping,
     as it is otherwise."""
     ramp = p.dt / p.fade_in
-    if s.state == _FADE_IN:
+    if s.state == State.FADE_IN:
         return float(min(1.0, s.envelope + ramp))
-    if s.state == _STOPPING:
+    if s.state == State.STOPPING:
         return float(max(0.0, s.envelope - ramp))
     return float(s.envelope)
 
@@ -837,19 +819,19 @@ def _ramped_envelope(s: Any, p: Any) -> float:
 @njit(cache=True)
 def safety_enable(s: Any) -> None:
     """:meth:`SafetyStage.enable` on the state."""
-    if s.state == _IDLE or s.state == _STOPPING:
-        s.state = _FADE_IN
+    if s.state == State.IDLE or s.state == State.STOPPING:
+        s.state = State.FADE_IN
 
 
 @njit(cache=True)
 def safety_request_stop(s: Any) -> None:
     """:meth:`SafetyStage.request_stop` on the state."""
-    if s.state == _FADE_IN or s.state == _RUNNING:
-        s.state = _STOPPING
+    if s.state == State.FADE_IN or s.state == State.RUNNING:
+        s.state = State.STOPPING
 
 
 @njit(cache=True)
 def safety_silent(s: Any) -> None:
     """:meth:`SafetyStage.silent` on the state."""
-    if s.state != _IDLE:
-        safety_trip(s, _WATCHDOG)
+    if s.state != State.IDLE:
+        safety_trip(s, Fault.WATCHDOG)

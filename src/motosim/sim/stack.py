@@ -224,18 +224,8 @@ NO_FEEDFORWARD = Feedforward(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 NO_DELAY = Delay(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 """A fresh measurement."""
 
-_V_Y = int(MotorcycleState.v_y)
-_DELTA_DOT = int(MotorcycleState.delta_dot)
-_DELTA = int(MotorcycleState.delta)
-_V_X = int(MotorcycleState.v_x)
-_THETA = int(Held.theta_h_meas)
-_COMMAND = int(Held.i_m)
-_RATE = int(Held.theta_h_dot_hat)
-_ESTIMATE = int(Held.tau_r_hat)
-_ESTIMATE_RATE = int(Held.tau_r_hat_rate)
-_NOTCH_0 = int(Held.notch_0)
-_NOTCH_1 = int(Held.notch_1)
-_LOW_PASS = int(Held.low_pass)
+_LATERAL = int(MotorcycleState.v_x)
+"""The motorcycle's lateral states, Sharp 1971's eight, come before v_x."""
 
 
 class StackModel(NamedTuple):
@@ -642,9 +632,9 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
     start_kernel(model.estimator, data.estimator, theta, 0.0, current)
     data.controller[:] = 0.0
     data.motorcycle[:] = 0.0
-    data.motorcycle[_V_X] = model.speed
+    data.motorcycle[MotorcycleState.v_x] = model.speed
     data.held[:] = 0.0
-    data.held[_THETA] = theta
+    data.held[Held.theta_h_meas] = theta
     data.periods[0] = 0
 
 
@@ -659,7 +649,7 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     if not model.feedback:
         return 0.0
     z = data.motorcycle
-    e = theta_meas - z[_DELTA]
+    e = theta_meas - z[MotorcycleState.delta]
     x, tmp = data.controller, data.controller_work
     n = x.size
     u = model.Dd[0, 0] * e
@@ -675,16 +665,17 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     ff = model.feedforward
     torque = 0.0
     if ff.cancellation > 0.0:  # cancel what the rider is estimated to apply
-        cancelled = data.held[_ESTIMATE]
+        cancelled = data.held[Held.tau_r_hat]
         if model.prediction.lead > 0.0:  # predicted: tau_r_hat + T_d LP(notch(d tau_r_hat / dt))
-            cancelled += model.prediction.lead * data.held[_ESTIMATE_RATE]
+            cancelled += model.prediction.lead * data.held[Held.tau_r_hat_rate]
         torque -= ff.cancellation * cancelled
     if ff.reference > 0.0:  # J delta'' + beta delta' + beta_s sign(delta'), delta'' from the model
-        v = z[_V_X]
-        dd = model.Bv[_DELTA_DOT] * data.held[_ESTIMATE]
-        for c in range(_V_X):  # the lateral states
-            dd += (model.A0[_DELTA_DOT, c] + v * model.A1[_DELTA_DOT, c]) * z[c]
-        rate = z[_DELTA_DOT]
+        v = z[MotorcycleState.v_x]
+        j = MotorcycleState.delta_dot
+        dd = model.Bv[j] * data.held[Held.tau_r_hat]
+        for c in range(_LATERAL):
+            dd += (model.A0[j, c] + v * model.A1[j, c]) * z[c]
+        rate = z[MotorcycleState.delta_dot]
         torque += ff.J_eq * dd + ff.beta_eq * rate + ff.beta_s * math.tanh(rate / ff.friction_width)
     if ff.cancellation > 0.0 or ff.reference > 0.0:
         u += torque / ff.torque_per_amp
@@ -760,45 +751,45 @@ def step_scaled(
     """
     held = data.held
     if data.periods[0] % model.measure_every == 0:
-        held[_THETA] = theta_meas
+        held[Held.theta_h_meas] = theta_meas
         g = model.differentiator
         z1_before = data.differentiator[1]
         z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, g.h, g.k1, g.k0, True)
         dl = model.delay
         if dl.age > 0.0:  # a measurement d old: the angle now, predicted over d
-            previous = held[_COMMAND]  # the command carried since the last measurement
+            previous = held[Held.i_m]  # the command carried since the last measurement
             rate = z1 + 0.5 * (z1 - z1_before)  # the backward difference, at the sample
-            torque = dl.torque_per_amp * current_scale * previous + held[_ESTIMATE]
+            torque = dl.torque_per_amp * current_scale * previous + held[Held.tau_r_hat]
             slide = math.tanh(rate / dl.friction_width)
             stick = min(max(torque, -dl.beta_s), dl.beta_s)
             torque -= dl.beta_s * slide + (1.0 - abs(slide)) * stick
             predicted = theta_meas + dl.per_rate * rate + dl.per_torque * torque
-            held[_COMMAND] = _command(model, data, predicted)
-            told = (1.0 - dl.carried) * held[_COMMAND] + dl.carried * previous
+            held[Held.i_m] = _command(model, data, predicted)
+            told = (1.0 - dl.carried) * held[Held.i_m] + dl.carried * previous
         else:
-            held[_COMMAND] = _command(model, data, theta_meas)
-            told = held[_COMMAND]
+            held[Held.i_m] = _command(model, data, theta_meas)
+            told = held[Held.i_m]
         data.differentiator[0] = z0
         data.differentiator[1] = z1
-        held[_RATE] = z1
+        held[Held.theta_h_dot_hat] = z1
         estimate = step_kernel(
             model.estimator, data.estimator, theta_meas, z1, current_scale * told + current_error
         )
         c = model.prediction
         if c.lead > 0.0:
             # the estimate's rate through the notch and the low-pass (transposed form II)
-            x = (estimate - held[_ESTIMATE]) / g.h
-            y = c.b0 * x + held[_NOTCH_0]
-            held[_NOTCH_0] = c.b1 * x - c.a1 * y + held[_NOTCH_1]
-            held[_NOTCH_1] = c.b2 * x - c.a2 * y
-            held[_ESTIMATE_RATE] = c.g * y + held[_LOW_PASS]
-            held[_LOW_PASS] = c.g * y + c.pole * held[_ESTIMATE_RATE]
-        held[_ESTIMATE] = estimate
+            x = (estimate - held[Held.tau_r_hat]) / g.h
+            y = c.b0 * x + held[Held.notch_0]
+            held[Held.notch_0] = c.b1 * x - c.a1 * y + held[Held.notch_1]
+            held[Held.notch_1] = c.b2 * x - c.a2 * y
+            held[Held.tau_r_hat_rate] = c.g * y + held[Held.low_pass]
+            held[Held.low_pass] = c.g * y + c.pole * held[Held.tau_r_hat_rate]
+        held[Held.tau_r_hat] = estimate
     data.periods[0] += 1
-    steer = rider_torque if model.true_torque else held[_ESTIMATE]
+    steer = rider_torque if model.true_torque else held[Held.tau_r_hat]
     mc = model.motorcycle
     h = model.dt / model.motorcycle_substeps
     for _ in range(model.motorcycle_substeps):
         bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, model.Bw,
                  side_force, force, mc.m, mc.m_eq, mc.min_speed, h)  # fmt: skip
-    return float(held[_COMMAND])
+    return float(held[Held.i_m])
