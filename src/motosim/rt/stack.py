@@ -24,6 +24,7 @@ bookkeeping of the real-time loop:
 ``motosim simulate`` writes, so that ``motosim report`` reads a real-time run as it is.
 """
 
+from enum import IntEnum
 from typing import Any
 
 import numpy as np
@@ -42,8 +43,8 @@ from motosim.sim.stack import (
 )
 
 __all__ = [
-    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "compiled", "result_block", "stack_period",
-    "stack_reset",
+    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "LoopState", "compiled", "result_block",
+    "stack_period", "stack_reset",
 ]  # fmt: skip
 
 Array = NDArray[np.float64]
@@ -70,6 +71,18 @@ RESULT_SIGNALS = ("t", "theta_h", "tau_m", *STACK_SIGNALS)
 """Columns of a real-time run's result files. ``i_m`` is the current *sent* (after the safety
 stage), ``tau_m`` = N k_t i_m of the nominal handlebar, and ``theta_h`` the measured angle:
 the true one, like ``tau_r``, is not known in real time."""
+
+
+class LoopState(IntEnum):
+    """Positions in what :func:`stack_period` keeps between periods
+    (:attr:`CompiledStack.state`)."""
+
+    period = 0
+    """The period's index since the stack's reset."""
+    expected_current = 1
+    """The current the drive was expected to carry in the last period [A]."""
+    since_measurement = 2
+    """The periods since the last measurement."""
 
 
 class CompiledStack:
@@ -103,10 +116,9 @@ class CompiledStack:
         self.data = new_data(model)
         self.force = _series(force, "force")
         self.side_force = _series(side_force, "side_force")
-        self.state = np.zeros(3)
-        """The period's index, the current the drive was expected to carry in the last
-        period [A] and the periods since the last measurement (what :func:`stack_period`
-        keeps)."""
+        self.state = np.zeros(len(LoopState))
+        """What :func:`stack_period` keeps between periods, in the order of
+        :class:`LoopState`."""
         self._row = np.zeros(len(STACK_SIGNALS))
         # before its first step: the motorcycle upright and straight at its speed, as reset
         self._row[STACK_SIGNALS.index("v_x")] = model.speed
@@ -149,9 +161,9 @@ def stack_reset(
     """:func:`~motosim.sim.stack.reset` at the measured angle [rad] and current [A]; the
     period's index to 0 and the last command to the measured current."""
     reset(model, data, theta, current)
-    state[0] = 0.0
-    state[1] = current
-    state[2] = 0.0
+    state[LoopState.period] = 0.0
+    state[LoopState.expected_current] = current
+    state[LoopState.since_measurement] = 0.0
 
 
 @njit(cache=True)
@@ -172,7 +184,8 @@ def stack_period(
     :func:`~motosim.sim.stack.step_scaled` with this period's forces (the last ones held),
     ``scale`` the share of the command the safety stage will pass
     (:func:`~motosim.rt.safety.safety_scale`) and ``current_error`` the measured current
-    minus the one expected in the last period (``state[1]``); the stack's row
+    minus the one expected in the last period (``LoopState.expected_current``); the
+    stack's row
     (:data:`STACK_SIGNALS`) into ``row``. With a measurement every
     ``model.measure_every`` > 1 periods, the stack measures in the period a ``fresh``
     status frame came, or 1.5 measurement periods after the last one if none came (the
@@ -180,18 +193,19 @@ def stack_period(
     """
     every = model.measure_every
     if every > 1:
-        if fresh or state[2] >= every + every // 2:
+        if fresh or state[LoopState.since_measurement] >= every + every // 2:
             data.periods[0] = 0
-            state[2] = 0.0
+            state[LoopState.since_measurement] = 0.0
         elif data.periods[0] % every == 0:
             data.periods[0] += 1  # the frame is late: wait for it
-        state[2] += 1.0
-    k = int(state[0])
+        state[LoopState.since_measurement] += 1.0
+    k = int(state[LoopState.period])
     f = force[k] if k < force.size else force[-1]
     fy = side_force[k] if k < side_force.size else side_force[-1]
-    command = step_scaled(model, data, theta_meas, i_meas - state[1], 0.0, f, fy, scale)
-    state[1] = scale * command
-    state[0] = k + 1
+    expected = state[LoopState.expected_current]
+    command = step_scaled(model, data, theta_meas, i_meas - expected, 0.0, f, fy, scale)
+    state[LoopState.expected_current] = scale * command
+    state[LoopState.period] = k + 1
     held, z = data.held, data.motorcycle
     for column, at in _ROW_FROM_HELD:
         row[column] = held[at]
