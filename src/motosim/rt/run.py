@@ -579,15 +579,15 @@ class RealtimeRunner:
         done_control = now() if now is not None else math.nan
         if not self._send_command():
             self.send_errors += 1
-        if r[fused.R_HEARTBEAT_DUE] and not self._send_heartbeat():
+        if r[fused.R_HEARTBEAT_DUE] != 0.0 and not self._send_heartbeat():
             self.send_errors += 1
         done_send = now() if now is not None else math.nan
         if self.telemetry is not None or self.platform is not None:
             self._publish(k, t)
-        row = a.ring[int(r[fused.R_SLOT])]
-        row[_DONE_CONTROL] = done_control - woke
-        row[_DONE_SEND] = done_send - woke
-        row[_COMPUTE] = (now() - woke) if now is not None else math.nan
+        slot, ring = int(r[fused.R_SLOT]), a.ring
+        ring[slot, _DONE_CONTROL] = done_control - woke
+        ring[slot, _DONE_SEND] = done_send - woke
+        ring[slot, _COMPUTE] = (now() - woke) if now is not None else math.nan
         a.ring_head[0] += 1
         return bool(goes_on)
 
