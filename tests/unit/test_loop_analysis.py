@@ -53,7 +53,7 @@ def test_linear_loop_reproduces_the_simulated_step(rate, prediction):
     cancellation (its notch and low-pass on the estimate's rate) or the plain one."""
     inputs = _inputs(rate, prediction=prediction)
     model = build_stack(inputs)
-    assert (model.prediction[0] > 0.0) == prediction
+    assert (model.prediction.lead > 0.0) == prediction
     run = simulate(inputs, rng=np.random.default_rng(0))
     loop = stack_loop(model, inputs.true_handlebar, inputs.scenario.motorcycle.speed)
     every = round(inputs.scenario.rates.control / rate)

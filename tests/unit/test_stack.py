@@ -9,7 +9,7 @@ from motosim.control.torque_feedback import PAPER_CONTROLLER, discretize
 from motosim.estimation.registry import ESTIMATORS, estimate
 from motosim.model.handlebar import step_exact
 from motosim.params import load_parameters
-from motosim.sim.stack import design_stack, new_data, reset, step
+from motosim.sim.stack import Held, MotorcycleState, design_stack, new_data, reset, step
 
 HB = load_parameters("simacom_handlebar", "handlebar")
 BIKE = load_parameters("sharp1971", "sharp")
@@ -42,7 +42,7 @@ def test_command_is_the_discretised_controller() -> None:
         want.append(float((K.C @ xs)[0] + K.D[0, 0] * ek))
         xs = K.A @ xs + K.B[:, 0] * ek
     np.testing.assert_allclose(ours, want, rtol=1e-12, atol=1e-12)
-    assert np.all(data.motorcycle[:8] == 0.0)
+    assert np.all(data.motorcycle[: MotorcycleState.v_x] == 0.0)
 
 
 def test_saturation_and_no_feedback() -> None:
@@ -71,7 +71,7 @@ def test_estimate_in_the_stack_is_the_estimator(name: str) -> None:
     ours = []
     for k in range(t.size):
         step(model, data, theta[k], current[k], 0.0, 0.0, 0.0)
-        ours.append(data.held[3])
+        ours.append(data.held[Held.tau_r_hat])
     np.testing.assert_allclose(ours, want, rtol=1e-9, atol=1e-9)
 
 
@@ -126,18 +126,18 @@ def test_prediction_reaches_the_step() -> None:
     lead's torque, -T_d r / (N k_t) with r the held filtered rate of the estimate; without
     prediction the model carries no lead and the filter's states stay at zero."""
     plain, hb = _cancelling(0.0)
-    assert not plain.prediction.any()
+    assert not any(plain.prediction)
     predicted, _ = _cancelling(0.012)
-    assert predicted.prediction[0] == 0.012
+    assert predicted.prediction.lead == 0.012
     data = new_data(predicted)
     reset(predicted, data, 0.0, 0.0)
     for k in range(200):
         step(predicted, data, 1e-4 * k, 0.0, 0.0, 0.0, 0.0)
-    assert abs(data.held[4]) > 0.0
+    assert abs(data.held[Held.tau_r_hat_rate]) > 0.0
     twin = new_data(plain)
     for mine, other in zip(twin, data, strict=True):
         mine[...] = other
-    lead = -0.012 * data.held[4] / hb.torque_per_amp
+    lead = -0.012 * data.held[Held.tau_r_hat_rate] / hb.torque_per_amp
     ours = step(predicted, data, 0.02, 0.0, 0.0, 0.0, 0.0)
     theirs = step(plain, twin, 0.02, 0.0, 0.0, 0.0, 0.0)
     assert ours - theirs == pytest.approx(lead, rel=1e-9)
@@ -157,7 +157,8 @@ def _ramp_lag(model, hb, slope: float = 5.0, duration: float = 1.5) -> float:
     for k in range(n):
         current = step(model, data, theta, 0.0, 0.0, 0.0, 0.0)
         if k == n - 1:
-            read = data.held[3] + model.prediction[0] * data.held[4]  # the next command's
+            held = data.held  # the next command's
+            read = held[Held.tau_r_hat] + model.prediction.lead * held[Held.tau_r_hat_rate]
         for j in range(10):
             t = (k + (j + 0.5) / 10) * h
             torque = slope * t + hb.torque_per_amp * current
@@ -194,10 +195,11 @@ def test_the_prediction_over_a_measurements_age_is_the_handlebars_own(delay: flo
     model = account_for_delay(_stack(measurement=100.0), delay, HB)
     a = HB.beta_eq / HB.J_eq
     per_rate = -np.expm1(-a * delay) / a
-    assert model.delay[0] == delay and model.delay[1] == pytest.approx(delay / 0.01)
-    assert model.delay[2] == pytest.approx(per_rate, rel=1e-12)
-    assert model.delay[3] == pytest.approx((delay - per_rate) / HB.beta_eq, rel=1e-9)
-    assert model.delay[2] + HB.beta_eq * model.delay[3] == pytest.approx(delay, rel=1e-12)
+    assert model.delay.age == delay and model.delay.carried == pytest.approx(delay / 0.01)
+    assert model.delay.per_rate == pytest.approx(per_rate, rel=1e-12)
+    assert model.delay.per_torque == pytest.approx((delay - per_rate) / HB.beta_eq, rel=1e-9)
+    both = model.delay.per_rate + HB.beta_eq * model.delay.per_torque
+    assert both == pytest.approx(delay, rel=1e-12)
 
 
 def test_a_fresh_measurement_and_a_delay_beyond_one_step() -> None:
@@ -228,6 +230,6 @@ def test_the_prediction_over_a_measurements_age_takes_the_observers_friction_wid
         BIKE, kernel, PAPER_CONTROLLER, control_rate=1000.0, measurement_rate=100.0,
         lipschitz=300.0, max_current=30.0, speed=20.0,
     )  # fmt: skip
-    assert account_for_delay(model, 0.005, HB).delay[6] == 0.02
+    assert account_for_delay(model, 0.005, HB).delay.friction_width == 0.02
     other = account_for_delay(_stack(name="inverse_dynamics", measurement=100.0), 0.005, HB)
-    assert other.delay[6] == DELAY_FRICTION_WIDTH
+    assert other.delay.friction_width == DELAY_FRICTION_WIDTH

@@ -25,8 +25,7 @@ does (see :mod:`motosim.rt.run`):
 The runner holds every argument of :func:`fused_period` in one :class:`PeriodContext` (a
 numba ``structref`` built before the first deadline) and calls :func:`context_period` on it:
 numba unboxes one pointer per call instead of the stack's model and data records and every
-array of :class:`PeriodArrays` (about 20 arrays: 4.6 us per call against 0.4 us, measured
-with empty functions of the same arguments).
+array of :class:`PeriodArrays` (about 20 arrays; the cost of both in ``docs/performance.md``).
 
 On the clock with the fast ``udp_multicast`` link (Linux), the runner's
 :meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead,
@@ -46,6 +45,7 @@ import errno
 import math
 import socket
 import sys
+from enum import IntEnum
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -58,8 +58,9 @@ from numpy.typing import NDArray
 
 from motosim.io.can import decode_frame, encode_frame, unpack_frame
 from motosim.rt.safety import (
-    S_FAULT,
-    S_STATE,
+    Fault,
+    SafetyParams,
+    State,
     safety_enable,
     safety_estop_frame,
     safety_request_stop,
@@ -74,6 +75,7 @@ __all__ = [
     "RECV_AVAILABLE",
     "RUNNER_STATE_SIZE",
     "WARM_MARGIN_NS",
+    "LoopColumn",
     "PeriodArrays",
     "PeriodContext",
     "begin",
@@ -99,9 +101,9 @@ Ints = NDArray[np.int64]
     R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
     R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
     R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS, R_K_BASE,
-    R_K_LAST,
-) = range(40)  # fmt: skip
-RUNNER_STATE_SIZE = 40
+    R_K_LAST, R_HEARTBEAT_DUE, R_SLOT,
+) = range(42)  # fmt: skip
+RUNNER_STATE_SIZE = 42
 """The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
 the angle of the last fresh status frame, flags (started, a fresh status frame, stop requested,
 finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
@@ -121,7 +123,9 @@ status frame [s] and the handlebar's rate between the last two [rad/s]; and the 
 due next (its index: the period's index on the loop's time since the first deadline, over
 ``heartbeat_every``); the loop's deadlines before its current run (its ``k`` of the runs
 before, each run's last ``k`` plus one) and its ``k`` of the last period (-1 before the
-first: :func:`begin` takes a ``k`` not above it for a new run of the loop)."""
+first: :func:`begin` takes a ``k`` not above it for a new run of the loop); what the last
+:func:`finish` left to the runner: whether the heartbeat frame is to be sent this period (1)
+and the ring's slot the row went to."""
 
 (
     Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
@@ -169,6 +173,27 @@ def _clock_gettime_ns(typingctx: Any) -> tuple[Any, Any]:
         return builder.add(builder.mul(seconds, ir.Constant(i64, 1_000_000_000)), nanoseconds)
 
     return types.int64(), codegen
+
+
+class LoopColumn(IntEnum):
+    """The loop's own columns of the ring's rows, before the stack's, in order (their names
+    are the rows' signal names; :data:`motosim.rt.run.LOOP_SIGNALS`)."""
+
+    t = 0
+    theta_h_meas = 1
+    i_m_meas = 2
+    i_cmd = 3
+    i_safe = 4
+    state = 5
+    fault = 6
+    t_clock = 7
+    wake = 8
+    compute = 9
+    missed = 10
+    done_read = 11
+    done_control = 12
+    done_send = 13
+    stack = 14
 
 
 @njit(cache=True)
@@ -244,9 +269,10 @@ class PeriodArrays(NamedTuple):
     """The runner's state (``R_*``)."""
     positions: Ints
     """Signal and byte positions (``Q_*``)."""
-    safety: Array
-    """The safety stage's state (:func:`motosim.rt.safety.new_safety_state`)."""
-    limits: Array
+    safety: Any
+    """The safety stage's state, a :class:`~motosim.rt.safety.SafetyState`
+    (:func:`motosim.rt.safety.new_safety_state`)."""
+    limits: SafetyParams
     """Its limits (:func:`motosim.rt.safety.safety_params`)."""
     status: Array
     """The status frame's codec (:func:`motosim.io.can.codec_table`)."""
@@ -367,7 +393,7 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
     fresh = r[R_FRESH] != 0.0  # cleared by finish: the stack reads it in between
     started = r[R_STARTED] != 0.0
     if not started and k >= r[R_START_TIMEOUT]:
-        safety_trip(s, 8)  # NO_DRIVE
+        safety_trip(s, Fault.NO_DRIVE)
     reset = False
     if fresh and not started:
         r[R_STARTED] = 1.0
@@ -387,7 +413,7 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
 
 
 @njit(cache=True)
-def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: float) -> int:
+def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: float) -> bool:
     """The safety stage on the stack's ``command`` [A], the frames to send, the row.
 
     The stack's estimate of the rider's torque (its row's ``tau_r_hat``) NaN trips
@@ -400,10 +426,10 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
     deadlines skipped is the loop's own (its ``k`` as :func:`begin` carries it across the
     runs), which the time between two runs does not add to. ``woke`` and
     ``done_read`` are the period's wake-up and the end of the bus read on the loop's clock
-    [s] (NaN without one). Returns ``carry_on + 2 * heartbeat + 4 * slot``:
-    whether the run goes on, whether the heartbeat frame is to be sent this period, and the
-    ring's slot the row went to (the runner writes the send's time stamps there, then
-    advances the ring's head).
+    [s] (NaN without one). Returns whether the run goes on; leaves in the runner's state
+    whether the heartbeat frame is to be sent this period (``R_HEARTBEAT_DUE``) and the
+    ring's slot the row went to (``R_SLOT``: the runner writes the send's time stamps there,
+    then advances the ring's head).
     """
     r, q, s = a.runner, a.positions, a.safety
     fresh = r[R_FRESH] != 0.0
@@ -426,7 +452,7 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
         omega = 0.0
     tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
     if started and tau_at >= 0 and tau_hat != tau_hat:  # NaN: no estimate only without one
-        safety_trip(s, 2)  # NON_FINITE
+        safety_trip(s, Fault.NON_FINITE)
     phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
     if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
         phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
@@ -441,10 +467,10 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
             safety_request_stop(s)
     theta = theta_now if started else 0.0
     out = safety_step(s, a.limits, command, theta, omega, tau_hat, t - r[R_T0])
-    state = s[S_STATE]
+    state = s.state
     values = a.command_values
     values[q[Q_COMMAND_CURRENT]] = out
-    live = state == 1.0 or state == 2.0 or state == 4.0  # FADE_IN, RUNNING, STOPPING
+    live = state == State.FADE_IN or state == State.RUNNING or state == State.STOPPING
     values[q[Q_ENABLE]] = 1.0 if live else 0.0
     sent = int(r[R_SENT])
     values[q[Q_COMMAND_COUNTER]] = sent & 0xF
@@ -457,38 +483,41 @@ def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: fl
         r[R_BEATS] = n // every + 1
         values = a.heartbeat_values
         values[q[Q_STATE]] = state
-        values[q[Q_FAULT]] = s[S_FAULT]
+        values[q[Q_FAULT]] = s.fault
         values[q[Q_HEARTBEAT_COUNTER]] = (n // every) & 0xF
         encode_frame(a.heartbeat, values, a.heartbeat_frame, q[Q_HEARTBEAT_AT])
     slot = int(a.ring_head[0] % a.ring.shape[0])
     row = a.ring[slot]
-    row[0] = t - r[R_T0]
-    row[1] = theta_now
-    row[2] = r[R_CURRENT]
-    row[3] = command
-    row[4] = out
-    row[5] = state
-    row[6] = s[S_FAULT]
-    row[7] = t
-    row[8] = woke - t
-    row[9] = math.nan  # compute, done_control, done_send: by the runner after the send
+    row[LoopColumn.t] = t - r[R_T0]
+    row[LoopColumn.theta_h_meas] = theta_now
+    row[LoopColumn.i_m_meas] = r[R_CURRENT]
+    row[LoopColumn.i_cmd] = command
+    row[LoopColumn.i_safe] = out
+    row[LoopColumn.state] = state
+    row[LoopColumn.fault] = s.fault
+    row[LoopColumn.t_clock] = t
+    row[LoopColumn.wake] = woke - t
+    # compute, done_control, done_send: by the runner after the send
+    row[LoopColumn.compute] = math.nan
     # deadlines the loop skipped before this one, by its own count (its k, the runs before
     # included), not on its time: the time between two runs skipped none
-    row[10] = r[R_K_BASE] + r[R_K_LAST] - r[R_CALLS]
-    row[11] = done_read - woke
-    row[12] = math.nan
-    row[13] = math.nan
-    row[14] = r[R_STACK_TIME]
+    row[LoopColumn.missed] = r[R_K_BASE] + r[R_K_LAST] - r[R_CALLS]
+    row[LoopColumn.done_read] = done_read - woke
+    row[LoopColumn.done_control] = math.nan
+    row[LoopColumn.done_send] = math.nan
+    row[LoopColumn.stack] = r[R_STACK_TIME]
     r[R_CALLS] += 1.0
     n_loop = q[Q_LOOP_COLUMNS]
     for j in range(a.stack_row.size):  # before the stack starts: its initial row
         row[n_loop + j] = a.stack_row[j]
-    if state == 3.0:  # FAULT
+    if state == State.FAULT:
         r[R_AFTER_FAULT] += 1.0
         carry_on = r[R_AFTER_FAULT] < r[R_LINGER]
     else:
-        carry_on = not ((r[R_STOP] != 0.0 or r[R_FINISHING] != 0.0) and state == 0.0)
-    return (1 if carry_on else 0) + (2 if beat else 0) + 4 * slot
+        carry_on = not ((r[R_STOP] != 0.0 or r[R_FINISHING] != 0.0) and state == State.IDLE)
+    r[R_HEARTBEAT_DUE] = 1.0 if beat else 0.0
+    r[R_SLOT] = slot
+    return bool(carry_on)
 
 
 @njit(cache=True)
@@ -508,8 +537,8 @@ def fused_period(
     """One whole period of a runner whose stack is compiled: :func:`take_frames` of the
     ``frames`` read, :func:`begin`, the stack (:func:`~motosim.rt.stack.stack_reset`,
     :func:`~motosim.rt.stack.stack_period`, with ``model``, ``data``, the forces and the
-    stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`
-    (whose value it returns)."""
+    stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`;
+    1 if the run goes on, else 0."""
     r = a.runner
     take_frames(a, 0, frames, t)
     if begin(a, k, t):
@@ -524,7 +553,7 @@ def fused_period(
         )  # fmt: skip
         if start >= 0:
             r[R_STACK_TIME] = (monotonic_ns() - start) * 1e-9
-    return finish(a, command, t, woke, done_read)
+    return 1 if finish(a, command, t, woke, done_read) else 0
 
 
 @njit(cache=True)

@@ -57,10 +57,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-LOOP_SIGNALS = (
-    "t", "theta_h_meas", "i_m_meas", "i_cmd", "i_safe", "state", "fault",
-    "t_clock", "wake", "compute", "missed", "done_read", "done_control", "done_send", "stack",
-)  # fmt: skip
+LOOP_SIGNALS = tuple(column.name for column in fused.LoopColumn)
 """The loop's own columns, before the stack's: time [s], the measured angle [rad] and current
 [A] used this period, the stack's command and the one sent [A], the safety state and fault
 codes (:class:`~motosim.rt.safety.State`, :class:`~motosim.rt.safety.Fault`); the period's
@@ -71,6 +68,9 @@ safety stage had run and the command frame was sent (NaN without ``now``;
 :func:`profile_stats` summarises them; the rest, up to ``compute``, is the telemetry
 datagram, the platform's stage and the row); and the stack's own time [s], measured inside the
 compiled period (NaN for a stack in Python)."""
+_COMPUTE = int(fused.LoopColumn.compute)
+_DONE_CONTROL = int(fused.LoopColumn.done_control)
+_DONE_SEND = int(fused.LoopColumn.done_send)
 
 
 class StackStepper(Protocol):
@@ -271,7 +271,7 @@ class RealtimeRunner:
         r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = (math.inf, -math.inf, math.inf)
         r[fused.R_S_PHI] = names.index("phi") if "phi" in names else -1
         r[fused.R_S_SPEED] = names.index("v_x") if "v_x" in names else -1
-        safety, limits = self.safety.arrays
+        safety, limits = self.safety.compiled_parts
         ring, head = self.ring.arrays
         if isinstance(stepper, CompiledStack):
             stack_row = stepper.row()  # the stack writes its row where the period reads it
@@ -546,10 +546,10 @@ class RealtimeRunner:
         frames = self._read_bus()
         done_read = now() if now is not None else math.nan
         if self._kernel is not None:
-            flags: int = self._kernel(self._context, frames, k, t, woke, done_read, -1)
+            goes_on: int = self._kernel(self._context, frames, k, t, woke, done_read, -1)
         else:
-            flags = self._stack_period(self._arrays, frames, k, t, woke, done_read)
-        return self._send(flags, k, t, woke)
+            goes_on = self._stack_period(self._arrays, frames, k, t, woke, done_read)
+        return self._send(goes_on, k, t, woke)
 
     def wait_period(self, k: int, t: float) -> bool:
         """:meth:`period` that waits for its deadline ``t`` [s] on the machine's monotonic
@@ -563,33 +563,33 @@ class RealtimeRunner:
         """
         if self._cycle is None:
             raise MotosimError("wait_period needs compile_wait() first (and its True)")
-        flags: int = self._cycle(self._context, self._fd, k, t)
-        return self._send(flags, k, t, self._r[fused.R_WOKE])
+        goes_on: int = self._cycle(self._context, self._fd, k, t)
+        return self._send(goes_on, k, t, self._r[fused.R_WOKE])
 
     def woke(self) -> float:
         """When the last :meth:`wait_period` woke up [s on the monotonic clock]."""
         return float(self._r[fused.R_WOKE])
 
-    def _send(self, flags: int, k: int, t: float, woke: float) -> bool:
+    def _send(self, goes_on: int, k: int, t: float, woke: float) -> bool:
         """The end of a period: the frames sent, the telemetry, the row's stamps; whether
-        the run goes on (``flags``: the compiled period's value)."""
+        the run goes on (``goes_on``: the compiled period's value)."""
         now = self._now
         a = self._arrays
+        r = self._r
         done_control = now() if now is not None else math.nan
         if not self._send_command():
             self.send_errors += 1
-        if flags & 2 and not self._send_heartbeat():
+        if r[fused.R_HEARTBEAT_DUE] != 0.0 and not self._send_heartbeat():
             self.send_errors += 1
         done_send = now() if now is not None else math.nan
         if self.telemetry is not None or self.platform is not None:
             self._publish(k, t)
-        slot = flags >> 2
-        ring = a.ring
-        ring[slot, 12] = done_control - woke
-        ring[slot, 13] = done_send - woke
-        ring[slot, 9] = (now() - woke) if now is not None else math.nan
+        slot, ring = int(r[fused.R_SLOT]), a.ring
+        ring[slot, _DONE_CONTROL] = done_control - woke
+        ring[slot, _DONE_SEND] = done_send - woke
+        ring[slot, _COMPUTE] = (now() - woke) if now is not None else math.nan
         a.ring_head[0] += 1
-        return bool(flags & 1)
+        return bool(goes_on)
 
     def _stack_period(
         self, a: PeriodArrays, frames: int, k: int, t: float, woke: float, done_read: float
@@ -606,8 +606,8 @@ class RealtimeRunner:
                 float(safety_scale(a.safety, a.limits)),
             )  # fmt: skip
             a.stack_row[:] = self.stepper.row()
-        flags: int = self._finish(a, float(command), t, woke, done_read)
-        return flags
+        goes_on: bool = self._finish(a, float(command), t, woke, done_read)
+        return int(goes_on)
 
     def _publish(self, k: int, t: float) -> None:
         """The stack's row to the telemetry (after the command, which thus leaves a datagram
@@ -618,8 +618,7 @@ class RealtimeRunner:
         if row is not None and self.telemetry is not None:
             self.telemetry(k, elapsed, row)
         if self.platform is not None:
-            s = self.safety
-            self.platform.step(k, elapsed, row, s.state, s.fault, s.envelope)
+            self.platform.step(k, elapsed, row, *self.safety.brief())
 
     def counters(self) -> RunCounters:
         """What happened on the bus and in the safety stage so far."""

@@ -35,8 +35,8 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   [N*m] for ``hands_off_time`` [s], the stack's command is scaled by ``hands_off_gain``
   (before the limits: the end stops' spring is not scaled; a period without an estimate
   keeps the flag as it is); once the rider's torque is back, the command is whole again at
-  once, as fast as the slew-rate limit lets it (a ramp at the fade-in's pace was tried: the
-  stack's tracking at the start of a manoeuvre suffered, see the realtime guide);
+  once, as fast as the slew-rate limit lets it (a rider who starts a manoeuvre needs the
+  stack's feedback at once: the realtime guide, "Safety");
 - a frozen-sensor monitor (given the handlebar's parameters): the angle has not changed
   while the motor torque has moved so far from its value at the angle's last change that a
   free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault
@@ -48,18 +48,22 @@ what an earlier one took away (the slew-rate limit only delays it: it holds a de
 as it holds an increase, by at most ``max_current / max_slew`` seconds).
 A fault gives a zero command in the same period it is detected, without slew limiting, and
 stays latched until :meth:`SafetyStage.clear`; enabling again starts a new fade-in. The stage
-keeps its state in a float64 array stepped by compiled functions (:func:`safety_step` and
+keeps its state in a numba structref stepped by compiled functions (:func:`safety_step` and
 the others), which the fused period of :mod:`motosim.rt.fused` calls as they are; it
 allocates nothing per period.
 """
 
 import math
-from dataclasses import dataclass
+from collections import namedtuple
+from collections.abc import Callable
+from dataclasses import dataclass, fields
 from enum import IntEnum
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
+from numba.core import types
+from numba.experimental import structref
 
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
@@ -208,26 +212,27 @@ MAX_COUNTER_STEP = 7
 frames lost); a larger one is an older frame delivered after a newer."""
 
 # --- the compiled stage ---------------------------------------------------------------
-# The stage's state and limits are two float64 arrays so that compiled code (the fused
-# period of :mod:`motosim.rt.fused`) and :class:`SafetyStage` run the very same functions.
+# The stage's state (a numba structref) and limits (a named tuple) are what compiled code
+# (the fused period of :mod:`motosim.rt.fused`) and :class:`SafetyStage` step with the very
+# same functions, which name the codes of :class:`State` and :class:`Fault` (numba takes the
+# members of a global IntEnum as constants).
 
-S_STATE, S_FAULT, S_FAULT_TIME, S_T, S_ENVELOPE, S_LAST, S_COUNTER, S_FRESH = range(8)
-S_MISSING, S_QUIET, S_HANDS_OFF, S_REF_THETA, S_REF_TORQUE, S_FREE, S_LOST, S_STALE = range(8, 16)
-S_BEHIND = 16
-SAFETY_STATE_SIZE = 17
-"""Positions in the stage's state array (state and fault codes, the fault's time [s], the
-stage's time [s], the fade envelope, the last command [A], the last alive counter, a fresh
-frame flag, periods without a fresh frame, hands-off time [s] and flag, the frozen-sensor
-monitor's reference angle [rad], torque [N*m] and free turn [rad], frames lost and stale,
-the alive counter of the last frame refused as older, -1 if the last frame was
-not one)."""
 
-(
-    P_MAX_CURRENT, P_MAX_SLEW, P_MAX_SPEED, P_SPEED_BAND, P_SOFT_STOP, P_HARD_STOP,
-    P_END_STOP_GAIN, P_HANDS_OFF_TORQUE, P_HANDS_OFF_TIME, P_HANDS_OFF_GAIN, P_FADE_IN,
-    P_FROZEN_ANGLE, P_WATCHDOG, P_DT, P_MONITOR, P_TORQUE_PER_AMP, P_BAND, P_BETA, P_PER_FRAME,
-) = range(19)  # fmt: skip
-SAFETY_PARAMS_SIZE = 19
+_LIMITS = tuple(f.name for f in fields(SafetyLimits) if f.name != "watchdog_periods")
+"""The limits the compiled stage reads as they are."""
+SafetyParams: Any = cast(
+    Any,
+    namedtuple(
+        "SafetyParams",
+        (*_LIMITS, "watchdog", "dt", "per_frame", "monitor", "torque_per_amp", "band", "beta"),
+    ),
+)
+SafetyParams.__doc__ = """The limits as the compiled stage reads them (:func:`safety_params`):
+the fields of :class:`SafetyLimits` but ``watchdog_periods``, then the control periods
+without a valid status frame that trip the watchdog, the control period [s], the control
+periods per status frame, whether the frozen-sensor monitor is on, and its handlebar's
+N k_t [N*m/A], twice its dry friction (the monitor's dead band) [N*m] and beta_eq
+[N*m*s/rad]."""
 
 
 def safety_params(
@@ -235,81 +240,165 @@ def safety_params(
     dt: float,
     periods_per_frame: int,
     handlebar: HandlebarParameters | None,
-) -> NDArray[np.float64]:
+) -> Any:
     """The limits, the period [s], the watchdog's periods (``watchdog_periods`` frame
     periods of ``periods_per_frame`` control periods), the control periods per status frame
     and the frozen-sensor monitor's handlebar (N k_t [N*m/A], twice the dry friction [N*m],
-    beta_eq [N*m*s/rad]) as the array the compiled stage reads."""
-    p = np.zeros(SAFETY_PARAMS_SIZE)
-    p[:P_WATCHDOG] = [
-        limits.max_current, limits.max_slew, limits.max_speed, limits.speed_band,
-        limits.soft_stop, limits.hard_stop, limits.end_stop_gain, limits.hands_off_torque,
-        limits.hands_off_time, limits.hands_off_gain, limits.fade_in, limits.frozen_angle,
-    ]  # fmt: skip
-    p[P_WATCHDOG] = limits.watchdog_periods * periods_per_frame
-    p[P_DT] = dt
-    p[P_PER_FRAME] = periods_per_frame
-    if handlebar is not None:
-        p[P_MONITOR] = 1.0
-        p[P_TORQUE_PER_AMP] = handlebar.torque_per_amp
-        p[P_BAND] = 2.0 * handlebar.beta_s
-        p[P_BETA] = handlebar.beta_eq
-    return p
+    beta_eq [N*m*s/rad]) as the compiled stage reads them."""
+    monitor = (
+        (0.0, 0.0, 0.0)
+        if handlebar is None
+        else (float(handlebar.torque_per_amp), 2.0 * handlebar.beta_s, float(handlebar.beta_eq))
+    )
+    derived = (
+        float(limits.watchdog_periods * periods_per_frame), float(dt), float(periods_per_frame),
+        handlebar is not None, *monitor,
+    )  # fmt: skip
+    return SafetyParams(*(float(getattr(limits, name)) for name in _LIMITS), *derived)
 
 
-def new_safety_state() -> NDArray[np.float64]:
-    """A stage's state array, IDLE without a fault."""
-    s = np.zeros(SAFETY_STATE_SIZE)
-    s[S_FAULT_TIME] = math.nan
-    s[S_COUNTER] = -1.0
-    s[S_REF_THETA] = math.nan
-    s[S_BEHIND] = -1.0
-    return s
+@structref.register
+class SafetyStateType(types.StructRef):
+    """numba's type of :class:`SafetyState`."""
+
+    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
+        """The fields' types without literal values."""
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
+
+
+_SAFETY_FIELDS = (
+    "state", "fault", "fault_time", "t", "envelope", "last", "counter", "fresh", "missing",
+    "quiet", "hands_off", "ref_theta", "ref_torque", "free", "lost", "stale", "behind",
+)  # fmt: skip
+
+
+class SafetyState(structref.StructRefProxy):
+    """The stage's state, shared by :class:`SafetyStage` and compiled code.
+
+    Fields: ``state`` and ``fault`` (codes of :class:`State` and :class:`Fault`),
+    ``fault_time`` [s] (NaN without a fault), ``t`` the stage's time [s], ``envelope`` the
+    fade's scale [-], ``last`` the last command sent [A], ``counter`` the last alive counter
+    (-1 before the first frame), ``fresh`` whether a valid frame came this period,
+    ``missing`` periods without one, ``quiet`` the time the rider's torque has stayed low
+    [s], ``hands_off`` its flag, ``ref_theta`` [rad] and ``ref_torque`` [N*m] the
+    frozen-sensor monitor's references and ``free`` its free turn [rad], ``lost`` and
+    ``stale`` the frames lost and refused, ``behind`` the alive counter of the last frame
+    refused as older (-1 if the last frame was not one). Python reads them through
+    :func:`safety_snapshot`.
+    """
+
+    def __new__(cls) -> "SafetyState":
+        made: SafetyState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
+            cls, int(State.IDLE), int(Fault.NONE), math.nan, 0.0, 0.0, 0.0, -1, False, 0.0, 0.0,
+            False, math.nan, 0.0, 0.0, 0, 0, -1,
+        )  # fmt: skip
+        return made
+
+
+structref.define_proxy(SafetyState, SafetyStateType, list(_SAFETY_FIELDS))  # type: ignore[no-untyped-call]
+
+
+class SafetySnapshot(NamedTuple):
+    """The fields of a :class:`SafetyState` at one instant."""
+
+    state: int
+    fault: int
+    fault_time: float
+    t: float
+    envelope: float
+    last: float
+    counter: int
+    fresh: bool
+    missing: float
+    quiet: float
+    hands_off: bool
+    ref_theta: float
+    ref_torque: float
+    free: float
+    lost: int
+    stale: int
+    behind: int
+
+
+def new_safety_state() -> SafetyState:
+    """A stage's state, IDLE without a fault."""
+    return SafetyState()
 
 
 @njit(cache=True)
-def safety_trip(s: NDArray[np.float64], fault: int) -> None:
+def safety_snapshot(s: Any) -> SafetySnapshot:
+    """The stage's state fields now, for Python."""
+    return SafetySnapshot(
+        s.state, s.fault, s.fault_time, s.t, s.envelope, s.last, s.counter, s.fresh,
+        s.missing, s.quiet, s.hands_off, s.ref_theta, s.ref_torque, s.free, s.lost,
+        s.stale, s.behind,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def safety_brief(s: Any) -> tuple[int, int, float]:
+    """The stage's state and fault codes and its fade envelope [-]."""
+    return s.state, s.fault, s.envelope
+
+
+@njit(cache=True)
+def safety_clear(s: Any) -> None:
+    """:meth:`SafetyStage.clear` on the state."""
+    s.fault = Fault.NONE
+    s.fault_time = math.nan
+    s.state = State.IDLE
+    s.missing = 0.0
+    s.counter = -1
+    s.behind = -1
+    s.ref_theta = math.nan
+    s.free = 0.0
+    s.quiet = 0.0
+    s.hands_off = False
+
+
+@njit(cache=True)
+def safety_trip(s: Any, fault: int) -> None:
     """Latch ``fault`` (a :class:`Fault` code) now: the next step returns 0."""
     if fault == 0:
         return
-    if s[S_FAULT] == 0.0:
-        s[S_FAULT] = fault
-        s[S_FAULT_TIME] = s[S_T]
-    s[S_STATE] = 3.0  # FAULT
-    s[S_ENVELOPE] = 0.0
-    s[S_LAST] = 0.0
+    if s.fault == Fault.NONE:
+        s.fault = fault
+        s.fault_time = s.t
+    s.state = State.FAULT
+    s.envelope = 0.0
+    s.last = 0.0
 
 
 @njit(cache=True)
-def _periods_since(s: NDArray[np.float64], p: NDArray[np.float64], now: float) -> float:
+def _periods_since(s: Any, p: Any, now: float) -> float:
     """Periods since the last step at time ``now`` [s], at least 1 (1 if ``now`` is NaN): the
     deadlines a late loop skipped passed without a status frame too."""
     if now != now:
         return 1.0
-    return max(1.0, float(math.floor((now - s[S_T]) / p[P_DT] + 0.5)))
+    return max(1.0, float(math.floor((now - s.t) / p.dt + 0.5)))
 
 
 @njit(cache=True)
 def safety_status_frame(
-    s: NDArray[np.float64],
-    p: NDArray[np.float64],
+    s: Any,
+    p: Any,
     checksum_ok: bool,
     counter: float,
     drive_fault: bool,
     now: float,
 ) -> bool:
-    """:meth:`SafetyStage.status_frame` on the state and parameter arrays (``now`` NaN: the
+    """:meth:`SafetyStage.status_frame` on the state and limits (``now`` NaN: the
     frame is taken as one period after the last step)."""
     if not checksum_ok:
-        safety_trip(s, 3)  # CHECKSUM
+        safety_trip(s, Fault.CHECKSUM)
         return False
     if drive_fault:  # whatever its counter: a drive that reports a fault is believed
-        safety_trip(s, 6)  # DRIVE_FAULT
+        safety_trip(s, Fault.DRIVE_FAULT)
     c = int(counter) & 0xF
-    last = int(s[S_COUNTER])
+    last = s.counter
     step = (c - last) & 0xF
-    behind = int(s[S_BEHIND])
-    s[S_BEHIND] = -1.0
+    behind = s.behind
+    s.behind = -1
     if last >= 0 and (step == 0 or step > MAX_COUNTER_STEP):
         # Two frames in a row one count apart, both beyond the window, are the drive's
         # counter gone on while 7 or more frames were lost, or two older frames (delivered
@@ -322,123 +411,123 @@ def safety_status_frame(
         # counted from ``now`` (as the step counts them): a loop late as the frames come
         # back has skipped deadlines that its next step would count only after them.
         # frame periods since the last valid frame
-        frames = (s[S_MISSING] + _periods_since(s, p, now)) / p[P_PER_FRAME]
+        frames = (s.missing + _periods_since(s, p, now)) / p.per_frame
         silence = (
-            s[S_FRESH] == 0.0
+            not s.fresh
             and frames >= MAX_COUNTER_STEP + 1
             and (c - last - math.floor(frames + 0.5) + 1) & 0xF <= 2
         )
         if step == 0 or behind < 0 or c != (behind + 1) & 0xF or not silence:
-            s[S_STALE] += 1.0  # the same frame again, or an older one after a newer
+            s.stale += 1  # the same frame again, or an older one after a newer
             if step != 0:
-                s[S_BEHIND] = c
+                s.behind = c
             return False
         # taken up again from the second
-        s[S_LOST] += ((behind - last) & 0xF) - 1
-        s[S_STALE] -= 1.0  # the first was no older frame: it was fresh, though not used
+        s.lost += ((behind - last) & 0xF) - 1
+        s.stale -= 1  # the first was no older frame: it was fresh, though not used
     elif last >= 0:
-        s[S_LOST] += step - 1
-    s[S_COUNTER] = c
-    s[S_FRESH] = 1.0
+        s.lost += step - 1
+    s.counter = c
+    s.fresh = True
     return True
 
 
 @njit(cache=True)
-def safety_estop_frame(s: NDArray[np.float64], checksum_ok: bool, pressed: bool) -> None:
-    """:meth:`SafetyStage.estop_frame` on the state array."""
+def safety_estop_frame(s: Any, checksum_ok: bool, pressed: bool) -> None:
+    """:meth:`SafetyStage.estop_frame` on the state."""
     if not checksum_ok:
-        safety_trip(s, 3)  # CHECKSUM
+        safety_trip(s, Fault.CHECKSUM)
     elif pressed:
-        safety_trip(s, 4)  # ESTOP_CAN
+        safety_trip(s, Fault.ESTOP_CAN)
 
 
 @njit(cache=True)
-def _frozen_monitor(s: NDArray[np.float64], p: NDArray[np.float64], theta: float) -> None:
+def _frozen_monitor(s: Any, p: Any, theta: float) -> None:
     """The frozen-sensor monitor of one period (see :class:`SafetyStage`, Notes)."""
-    torque = p[P_TORQUE_PER_AMP] * s[S_LAST]
-    state = s[S_STATE]
-    if theta != s[S_REF_THETA] or state == 0.0 or state == 4.0:  # IDLE, STOPPING
-        s[S_REF_THETA] = theta
-        s[S_REF_TORQUE] = torque
-        s[S_FREE] = 0.0
+    torque = p.torque_per_amp * s.last
+    state = s.state
+    if theta != s.ref_theta or state == State.IDLE or state == State.STOPPING:
+        s.ref_theta = theta
+        s.ref_torque = torque
+        s.free = 0.0
         return
-    drive = abs(torque - s[S_REF_TORQUE]) - p[P_BAND]
+    drive = abs(torque - s.ref_torque) - p.band
     if drive > 0.0:
-        s[S_FREE] += drive / p[P_BETA] * p[P_DT]
-        if s[S_FREE] > p[P_FROZEN_ANGLE]:
-            safety_trip(s, 9)  # FROZEN_SENSOR
+        s.free += drive / p.beta * p.dt
+        if s.free > p.frozen_angle:
+            safety_trip(s, Fault.FROZEN_SENSOR)
 
 
 @njit(cache=True)
 def safety_step(
-    s: NDArray[np.float64],
-    p: NDArray[np.float64],
+    s: Any,
+    p: Any,
     command: float,
     theta: float,
     omega: float,
     tau_hat: float,
     now: float,
 ) -> float:
-    """:meth:`SafetyStage.step` on the state array (``now`` NaN: the stage counts its own
+    """:meth:`SafetyStage.step` on the state (``now`` NaN: the stage counts its own
     periods; else the periods since the last step are counted from ``now``, so that the
     deadlines a late loop skipped count for the watchdog)."""
-    dt = p[P_DT]
+    dt = p.dt
     periods = _periods_since(s, p, now)
-    s[S_T] = s[S_T] + dt if now != now else now
-    if s[S_FRESH] != 0.0:
-        s[S_MISSING] = 0.0
-        s[S_FRESH] = 0.0
+    s.t = s.t + dt if now != now else now
+    if s.fresh:
+        s.missing = 0.0
+        s.fresh = False
     else:
-        s[S_MISSING] += periods
-        if s[S_MISSING] >= p[P_WATCHDOG] and s[S_STATE] != 0.0:
-            safety_trip(s, 1)  # WATCHDOG
+        s.missing += periods
+        if s.missing >= p.watchdog and s.state != State.IDLE:
+            safety_trip(s, Fault.WATCHDOG)
     if not (math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)) or math.isinf(
         tau_hat
     ):
-        safety_trip(s, 2)  # NON_FINITE
-    elif abs(theta) > p[P_HARD_STOP]:
-        safety_trip(s, 7)  # END_STOP
-    elif p[P_MONITOR] != 0.0:
+        safety_trip(s, Fault.NON_FINITE)
+    elif abs(theta) > p.hard_stop:
+        safety_trip(s, Fault.END_STOP)
+    elif p.monitor:
         _frozen_monitor(s, p, theta)
-    state = s[S_STATE]
-    if state == 3.0 or state == 0.0:  # FAULT, IDLE
-        s[S_LAST] = 0.0
-        s[S_ENVELOPE] = 0.0
+    state = s.state
+    if state == State.FAULT or state == State.IDLE:
+        s.last = 0.0
+        s.envelope = 0.0
         return 0.0
     # hands-off: reduce the stack's command while nobody holds the handlebar (the flag
     # kept as it is without an estimate); not the end stops' spring, added after
-    if p[P_HANDS_OFF_TORQUE] > 0.0 and tau_hat == tau_hat:
-        if abs(tau_hat) < p[P_HANDS_OFF_TORQUE]:
-            s[S_QUIET] += dt
-            s[S_HANDS_OFF] = 1.0 if s[S_QUIET] >= p[P_HANDS_OFF_TIME] else 0.0
+    if p.hands_off_torque > 0.0 and tau_hat == tau_hat:
+        if abs(tau_hat) < p.hands_off_torque:
+            s.quiet += dt
+            s.hands_off = s.quiet >= p.hands_off_time
         else:
-            s[S_QUIET] = 0.0
-            s[S_HANDS_OFF] = 0.0
-    i = command * p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else command
+            s.quiet = 0.0
+            s.hands_off = False
+    i = command * p.hands_off_gain if s.hands_off else command
     # soft end stops
-    over = abs(theta) - p[P_SOFT_STOP]
+    over = abs(theta) - p.soft_stop
     if over > 0.0:
         out = 1.0 if theta > 0.0 else -1.0
         if i * out > 0.0:
             i = 0.0
-        i -= out * p[P_END_STOP_GAIN] * over
+        i -= out * p.end_stop_gain * over
     # speed limiter: only reduces what pushes the handlebar faster (the end stops' spring
     # included: it must not speed up a handlebar already too fast on its way back)
-    excess = abs(omega) - p[P_MAX_SPEED]
+    excess = abs(omega) - p.max_speed
     if excess > 0.0 and i * omega > 0.0:
-        i *= max(0.0, 1.0 - excess / p[P_SPEED_BAND])
+        i *= max(0.0, 1.0 - excess / p.speed_band)
     # clamp, fade, slew
-    i = min(max(i, -p[P_MAX_CURRENT]), p[P_MAX_CURRENT])
-    s[S_ENVELOPE] = _ramped_envelope(s, p)
-    i *= s[S_ENVELOPE]
-    step = p[P_MAX_SLEW] * dt
-    last = s[S_LAST]
+    i = min(max(i, -p.max_current), p.max_current)
+    s.envelope = _ramped_envelope(s, p)
+    i *= s.envelope
+    step = p.max_slew * dt
+    last = s.last
     i = min(max(i, last - step), last + step)
-    s[S_LAST] = i
-    if state == 4.0 and s[S_ENVELOPE] == 0.0 and i == 0.0:  # STOPPING, faded out, sent 0
-        s[S_STATE] = 0.0
-    elif state == 1.0 and s[S_ENVELOPE] >= 1.0:  # FADE_IN, faded in
-        s[S_STATE] = 2.0
+    s.last = i
+    if state == State.STOPPING and s.envelope == 0.0 and i == 0.0:  # faded out, sent 0
+        s.state = State.IDLE
+    elif state == State.FADE_IN and s.envelope >= 1.0:  # faded in
+        s.state = State.RUNNING
     return float(i)
 
 
@@ -509,7 +598,7 @@ class SafetyStage:
     (0.0, 'communication watchdog: no valid status frame for 3 periods (t = 0.630 s)')
     """
 
-    __slots__ = ("_p", "_s", "_watchdog", "dt", "limits")
+    __slots__ = ("_brief", "_p", "_s", "_snapshot", "_watchdog", "dt", "limits")
 
     def __init__(
         self,
@@ -534,11 +623,17 @@ class SafetyStage:
         self.dt = float(dt)
         self._s = new_safety_state()
         self._p = safety_params(limits, self.dt, int(periods_per_frame), handlebar)
+        from motosim.rt.stack import compiled  # the stack's numba, loaded with the stage
+
+        self._brief: Callable[[SafetyState], tuple[int, int, float]] = compiled(
+            safety_brief, self._s
+        )
+        self._snapshot: Callable[[SafetyState], SafetySnapshot] = compiled(safety_snapshot, self._s)
 
     @property
-    def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The state and parameter arrays the compiled functions work on (shared, not
-        copies: the fused period of :mod:`motosim.rt.fused` steps this very stage)."""
+    def compiled_parts(self) -> tuple[SafetyState, Any]:
+        """The state and limits the compiled functions work on (the state shared, not a
+        copy: the fused period of :mod:`motosim.rt.fused` steps this very stage)."""
         return self._s, self._p
 
     @property
@@ -550,33 +645,33 @@ class SafetyStage:
     @property
     def state(self) -> State:
         """IDLE, FADE_IN, RUNNING, FAULT or STOPPING."""
-        return State(int(self._s[S_STATE]))
+        return State(self._brief(self._s)[0])
 
     @property
     def fault(self) -> Fault:
         """The latched fault (NONE when there is none)."""
-        return Fault(int(self._s[S_FAULT]))
+        return Fault(self._brief(self._s)[1])
 
     @property
     def fault_time(self) -> float:
         """When the fault was detected [s since the stage started] (NaN without a fault)."""
-        return float(self._s[S_FAULT_TIME])
+        return float(self._snapshot(self._s).fault_time)
 
     @property
     def hands_off(self) -> bool:
         """Whether nobody seems to hold the handlebar."""
-        return bool(self._s[S_HANDS_OFF])
+        return bool(self._snapshot(self._s).hands_off)
 
     @property
     def free_turn(self) -> float:
         """The frozen-sensor monitor's turn of a free handlebar since the angle last changed
         [rad] (see Notes)."""
-        return float(self._s[S_FREE])
+        return float(self._snapshot(self._s).free)
 
     @property
     def envelope(self) -> float:
         """The fade-in/fade-out scale of the command, in [0, 1]."""
-        return float(self._s[S_ENVELOPE])
+        return self._brief(self._s)[2]
 
     @property
     def scale(self) -> float:
@@ -587,13 +682,19 @@ class SafetyStage:
     @property
     def frames_lost(self) -> int:
         """Status frames lost (alive counter jumps)."""
-        return int(self._s[S_LOST])
+        return int(self._snapshot(self._s).lost)
 
     @property
     def frames_stale(self) -> int:
         """Status frames whose alive counter had not moved (stale or duplicated) or went
         back (an older frame delivered after a newer)."""
-        return int(self._s[S_STALE])
+        return int(self._snapshot(self._s).stale)
+
+    def brief(self) -> tuple[State, Fault, float]:
+        """The state, the fault and the fade envelope [-] in one call (each period's
+        telemetry)."""
+        state, fault, envelope = self._brief(self._s)
+        return State(state), Fault(fault), envelope
 
     def describe(self) -> str:
         """The latched fault's reason and time, in words."""
@@ -619,17 +720,7 @@ class SafetyStage:
     def clear(self) -> None:
         """Forget a latched fault and go IDLE (the watchdog, the alive counter, the
         frozen-sensor monitor and hands-off detection start afresh)."""
-        s = self._s
-        s[S_FAULT] = 0.0
-        s[S_FAULT_TIME] = math.nan
-        s[S_STATE] = 0.0
-        s[S_MISSING] = 0.0
-        s[S_COUNTER] = -1.0
-        s[S_BEHIND] = -1.0
-        s[S_REF_THETA] = math.nan
-        s[S_FREE] = 0.0
-        s[S_QUIET] = 0.0
-        s[S_HANDS_OFF] = 0.0
+        safety_clear(self._s)
 
     # --- frames ------------------------------------------------------------------------
     def status_frame(
@@ -702,45 +793,45 @@ class SafetyStage:
 
 
 @njit(cache=True)
-def safety_scale(s: NDArray[np.float64], p: NDArray[np.float64]) -> float:
+def safety_scale(s: Any, p: Any) -> float:
     """The share of its command the stage will pass in the coming period [-], as far as it
     is known before the command: the fade envelope (its ramp taken) times the hands-off
     gain while nobody holds the handlebar; 0 while the stage is idle or faulted. The clamp,
     the slew and the speed and end-stop limits, which depend on the command, are not in it.
     """
-    if s[S_STATE] == 0.0 or s[S_STATE] == 3.0:  # IDLE, FAULT: the drive is disabled
+    if s.state == State.IDLE or s.state == State.FAULT:  # the drive is disabled
         return 0.0
-    return float(_ramped_envelope(s, p) * (p[P_HANDS_OFF_GAIN] if s[S_HANDS_OFF] != 0.0 else 1.0))
+    return float(_ramped_envelope(s, p) * (p.hands_off_gain if s.hands_off else 1.0))
 
 
 @njit(cache=True)
-def _ramped_envelope(s: NDArray[np.float64], p: NDArray[np.float64]) -> float:
+def _ramped_envelope(s: Any, p: Any) -> float:
     """The fade envelope after this period's ramp: up while fading in, down while stopping,
     as it is otherwise."""
-    ramp = p[P_DT] / p[P_FADE_IN]
-    if s[S_STATE] == 1.0:  # FADE_IN
-        return float(min(1.0, s[S_ENVELOPE] + ramp))
-    if s[S_STATE] == 4.0:  # STOPPING
-        return float(max(0.0, s[S_ENVELOPE] - ramp))
-    return float(s[S_ENVELOPE])
+    ramp = p.dt / p.fade_in
+    if s.state == State.FADE_IN:
+        return float(min(1.0, s.envelope + ramp))
+    if s.state == State.STOPPING:
+        return float(max(0.0, s.envelope - ramp))
+    return float(s.envelope)
 
 
 @njit(cache=True)
-def safety_enable(s: NDArray[np.float64]) -> None:
-    """:meth:`SafetyStage.enable` on the state array."""
-    if s[S_STATE] == 0.0 or s[S_STATE] == 4.0:  # IDLE, STOPPING
-        s[S_STATE] = 1.0  # FADE_IN
+def safety_enable(s: Any) -> None:
+    """:meth:`SafetyStage.enable` on the state."""
+    if s.state == State.IDLE or s.state == State.STOPPING:
+        s.state = State.FADE_IN
 
 
 @njit(cache=True)
-def safety_request_stop(s: NDArray[np.float64]) -> None:
-    """:meth:`SafetyStage.request_stop` on the state array."""
-    if s[S_STATE] == 1.0 or s[S_STATE] == 2.0:  # FADE_IN, RUNNING
-        s[S_STATE] = 4.0  # STOPPING
+def safety_request_stop(s: Any) -> None:
+    """:meth:`SafetyStage.request_stop` on the state."""
+    if s.state == State.FADE_IN or s.state == State.RUNNING:
+        s.state = State.STOPPING
 
 
 @njit(cache=True)
-def safety_silent(s: NDArray[np.float64]) -> None:
-    """:meth:`SafetyStage.silent` on the state array."""
-    if s[S_STATE] != 0.0:
-        safety_trip(s, 1)  # WATCHDOG
+def safety_silent(s: Any) -> None:
+    """:meth:`SafetyStage.silent` on the state."""
+    if s.state != State.IDLE:
+        safety_trip(s, Fault.WATCHDOG)

@@ -24,6 +24,7 @@ bookkeeping of the real-time loop:
 ``motosim simulate`` writes, so that ``motosim report`` reads a real-time run as it is.
 """
 
+from enum import IntEnum
 from typing import Any
 
 import numpy as np
@@ -31,11 +32,19 @@ from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.sim.stack import StackData, StackModel, new_data, reset, step_scaled
+from motosim.sim.stack import (
+    Held,
+    MotorcycleState,
+    StackData,
+    StackModel,
+    new_data,
+    reset,
+    step_scaled,
+)
 
 __all__ = [
-    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "compiled", "result_block", "stack_period",
-    "stack_reset",
+    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "LoopState", "compiled", "result_block",
+    "stack_period", "stack_reset",
 ]  # fmt: skip
 
 Array = NDArray[np.float64]
@@ -47,10 +56,33 @@ STACK_SIGNALS = (
 """The stack's row: its estimate, the measurement it used, its command [A] and the virtual
 motorcycle's states (names of :mod:`motosim.signals`)."""
 
+_ROW_FROM_HELD = tuple(
+    (STACK_SIGNALS.index(h.name), int(h)) for h in Held if h.name in STACK_SIGNALS
+)
+"""The row's columns of the stack's held outputs, each with its position in them."""
+_ROW_FROM_MOTORCYCLE = tuple(
+    (STACK_SIGNALS.index(m.name), int(m)) for m in MotorcycleState if m.name in STACK_SIGNALS
+)
+"""The row's columns of the motorcycle's states, each with its position in the state."""
+_ROW_COMMAND = STACK_SIGNALS.index("i_m")
+"""The row's column of the command [A] (the one returned, not the held one)."""
+
 RESULT_SIGNALS = ("t", "theta_h", "tau_m", *STACK_SIGNALS)
 """Columns of a real-time run's result files. ``i_m`` is the current *sent* (after the safety
 stage), ``tau_m`` = N k_t i_m of the nominal handlebar, and ``theta_h`` the measured angle:
 the true one, like ``tau_r``, is not known in real time."""
+
+
+class LoopState(IntEnum):
+    """Positions in what :func:`stack_period` keeps between periods
+    (:attr:`CompiledStack.state`)."""
+
+    period = 0
+    """The period's index since the stack's reset."""
+    expected_current = 1
+    """The current the drive was expected to carry in the last period [A]."""
+    since_measurement = 2
+    """The periods since the last measurement."""
 
 
 class CompiledStack:
@@ -84,10 +116,9 @@ class CompiledStack:
         self.data = new_data(model)
         self.force = _series(force, "force")
         self.side_force = _series(side_force, "side_force")
-        self.state = np.zeros(3)
-        """The period's index, the current the drive was expected to carry in the last
-        period [A] and the periods since the last measurement (what :func:`stack_period`
-        keeps)."""
+        self.state = np.zeros(len(LoopState))
+        """What :func:`stack_period` keeps between periods, in the order of
+        :class:`LoopState`."""
         self._row = np.zeros(len(STACK_SIGNALS))
         # before its first step: the motorcycle upright and straight at its speed, as reset
         self._row[STACK_SIGNALS.index("v_x")] = model.speed
@@ -130,9 +161,9 @@ def stack_reset(
     """:func:`~motosim.sim.stack.reset` at the measured angle [rad] and current [A]; the
     period's index to 0 and the last command to the measured current."""
     reset(model, data, theta, current)
-    state[0] = 0.0
-    state[1] = current
-    state[2] = 0.0
+    state[LoopState.period] = 0.0
+    state[LoopState.expected_current] = current
+    state[LoopState.since_measurement] = 0.0
 
 
 @njit(cache=True)
@@ -153,7 +184,8 @@ def stack_period(
     :func:`~motosim.sim.stack.step_scaled` with this period's forces (the last ones held),
     ``scale`` the share of the command the safety stage will pass
     (:func:`~motosim.rt.safety.safety_scale`) and ``current_error`` the measured current
-    minus the one expected in the last period (``state[1]``); the stack's row
+    minus the one expected in the last period (``LoopState.expected_current``); the
+    stack's row
     (:data:`STACK_SIGNALS`) into ``row``. With a measurement every
     ``model.measure_every`` > 1 periods, the stack measures in the period a ``fresh``
     status frame came, or 1.5 measurement periods after the last one if none came (the
@@ -161,23 +193,25 @@ def stack_period(
     """
     every = model.measure_every
     if every > 1:
-        if fresh or state[2] >= every + every // 2:
+        if fresh or state[LoopState.since_measurement] >= every + every // 2:
             data.periods[0] = 0
-            state[2] = 0.0
+            state[LoopState.since_measurement] = 0.0
         elif data.periods[0] % every == 0:
             data.periods[0] += 1  # the frame is late: wait for it
-        state[2] += 1.0
-    k = int(state[0])
+        state[LoopState.since_measurement] += 1.0
+    k = int(state[LoopState.period])
     f = force[k] if k < force.size else force[-1]
     fy = side_force[k] if k < side_force.size else side_force[-1]
-    command = step_scaled(model, data, theta_meas, i_meas - state[1], 0.0, f, fy, scale)
-    state[1] = scale * command
-    state[0] = k + 1
+    expected = state[LoopState.expected_current]
+    command = step_scaled(model, data, theta_meas, i_meas - expected, 0.0, f, fy, scale)
+    state[LoopState.expected_current] = scale * command
+    state[LoopState.period] = k + 1
     held, z = data.held, data.motorcycle
-    row[0], row[1], row[2], row[3] = held[3], held[0], held[2], command
-    row[4], row[5], row[6], row[7] = z[5], z[8], z[0], z[1]
-    row[8], row[9], row[10], row[11] = z[2], z[3], z[4], z[6]
-    row[12], row[13], row[14], row[15] = z[7], z[9], z[10], z[11]
+    for column, at in _ROW_FROM_HELD:
+        row[column] = held[at]
+    row[_ROW_COMMAND] = command
+    for column, at in _ROW_FROM_MOTORCYCLE:
+        row[column] = z[at]
     return command
 
 
@@ -185,7 +219,7 @@ def compiled(kernel: Any, *args: Any) -> Any:
     """The compiled ``kernel`` for the types of ``args``, called without numba's dispatch.
 
     A numba dispatcher works out the types of its arguments on every call: for the stack's
-    model and data structures that costs about three times the step itself (measured in
+    model and data structures that costs more than the step itself (``docs/performance.md``,
     ``bench/bench_rt_period.py``). The overload compiled (or loaded from the cache) here for
     the types of ``args`` has an ``entry_point`` that unboxes the same arguments and runs the
     same machine code; nothing is run. Without numba's JIT (``NUMBA_DISABLE_JIT=1``) the

@@ -39,6 +39,8 @@ from motosim.sim.loop_analysis import prediction_lead
 from motosim.sim.rider import design_rider, rider_torque
 from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
 from motosim.sim.stack import (
+    Held,
+    MotorcycleState,
     StackData,
     StackModel,
     default_prediction,
@@ -73,6 +75,10 @@ _COL: Any = _Columns(*range(len(RECORDED)))
 compiled loop, taken from :data:`motosim.signals.RECORDED` when it is compiled."""
 _LAYOUT_KEY = zlib.crc32(" ".join(RECORDED).encode())
 """Fingerprint of the column layout, frozen into the compiled code beside the columns."""
+_COLUMNS_OF_MOTORCYCLE = tuple(
+    (RECORDED.index(m.name), int(m)) for m in MotorcycleState if m.name in RECORDED
+)
+"""The recorded columns of the motorcycle's states, each with its position in the state."""
 
 
 @njit(cache=True)
@@ -254,7 +260,7 @@ def build_stack(inputs: RunInputs) -> StackModel:
     predict = sc.controller.prediction
     if predict is None:
         predict = est.name == "walcott_zak" and default_prediction(sc.rates.measurement)
-    if predict and model.feedforward[0] > 0.0:
+    if predict and model.feedforward.cancellation > 0.0:
         model = build(prediction_lead(model, inputs.nominal_handlebar))
     return model
 
@@ -424,7 +430,9 @@ def _run_chunk(
         e_y = 0.0
         if rig.virtual_rider:
             tau_rider, idx, e_y = rider_torque(
-                z[:8], z[8], z[9], z[10], z[11], int(world.path_index[0]), rig.path, rig.path_ds,
+                z[: MotorcycleState.v_x], z[MotorcycleState.v_x], z[MotorcycleState.psi],
+                z[MotorcycleState.x], z[MotorcycleState.y], int(world.path_index[0]), rig.path,
+                rig.path_ds,
                 rig.rider_speeds, rig.rider_K, rig.rider_x_ss, rig.rider_tau_ss,
                 rig.rider_limits[0], rig.rider_limits[1],
             )  # fmt: skip
@@ -438,28 +446,17 @@ def _run_chunk(
         o[_COL.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
         o[_COL.theta_h] = hb[0]
         o[_COL.theta_h_dot] = hb[1]
-        o[_COL.v_y], o[_COL.psi_dot], o[_COL.phi_dot], o[_COL.delta_dot] = (
-            z[0],
-            z[1],
-            z[2],
-            z[3],
-        )
-        o[_COL.phi], o[_COL.delta], o[_COL.F_yr], o[_COL.F_yf] = (
-            z[4],
-            z[5],
-            z[6],
-            z[7],
-        )
-        o[_COL.v_x], o[_COL.psi], o[_COL.x], o[_COL.y] = z[8], z[9], z[10], z[11]
+        for column, at in _COLUMNS_OF_MOTORCYCLE:
+            o[column] = z[at]
         o[_COL.e_y] = e_y
         # the stack: command, estimate, virtual motorcycle
         i_cmd = step(
             stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k],
             rig.side_force[k],
         )  # fmt: skip
-        o[_COL.theta_h_meas] = data.held[0]
-        o[_COL.theta_h_dot_hat] = data.held[2]
-        o[_COL.tau_r_hat] = data.held[3]
+        o[_COL.theta_h_meas] = data.held[Held.theta_h_meas]
+        o[_COL.theta_h_dot_hat] = data.held[Held.theta_h_dot_hat]
+        o[_COL.tau_r_hat] = data.held[Held.tau_r_hat]
         o[_COL.i_m] = i_cmd
         o[_COL.tau_m] = nkt * i_cmd
         # the true handlebar over the period, the current held: one exact step while the

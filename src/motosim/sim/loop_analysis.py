@@ -34,7 +34,13 @@ from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
-from motosim.sim.stack import StackModel, default_prediction, design_stack
+from motosim.sim.stack import (
+    NO_DELAY,
+    NO_PREDICTION,
+    StackModel,
+    default_prediction,
+    design_stack,
+)
 
 __all__ = [
     "FEEL_BAND",
@@ -158,7 +164,7 @@ def stack_loop(
         Forward speed at which the motorcycle is linearised [m/s].
     delay : float, optional
         The measurement's true age d [s], 0 to the measurement step; by default the one the
-        stack accounts for (``model.delay[0]``).
+        stack accounts for (``model.delay.age``).
 
     Returns
     -------
@@ -186,7 +192,7 @@ def stack_loop(
     """
     h = model.dt * model.measure_every
     dl = model.delay
-    bus = float(dl[0]) if delay is None else float(delay)
+    bus = float(dl.age) if delay is None else float(delay)
     if not (math.isfinite(bus) and 0.0 <= bus <= h * (1.0 + 1e-12)):
         raise MotosimError(f"delay = {delay!r} s; expected 0 to one measurement step ({h:g} s)")
     if model.estimator.kind != WALCOTT_ZAK:
@@ -205,8 +211,8 @@ def stack_loop(
     Am, Bm = zoh(Av, model.Bv[:, None], h)
     nc = model.Ad.shape[0]
     c = model.prediction
-    predicted = ff[0] > 0.0 and c[0] > 0.0
-    delayed = dl[0] > 0.0  # the stack accounts for a delay
+    predicted = ff.cancellation > 0.0 and c.lead > 0.0
+    delayed = dl.age > 0.0  # the stack accounts for a delay
     sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "estimate": 1,
              "prediction": 4 if predicted else 0, "controller": nc, "motorcycle": 8,
              "before": 2 if bus > 0.0 else 0, "carried": 1 if delayed else 0}  # fmt: skip
@@ -228,24 +234,24 @@ def stack_loop(
     error = measured - delta
     if delayed:  # the angle predicted over d, by the carried current and the estimate
         carried = state("carried")
-        error = error + dl[2] * (z1 + 0.5 * (z1 - state("rate_prev")))
-        error = error + dl[3] * (dl[5] * carried + held)
+        error = error + dl.per_rate * (z1 + 0.5 * (z1 - state("rate_prev")))
+        error = error + dl.per_torque * (dl.torque_per_amp * carried + held)
     command = model.Dd[0, 0] * error
     for j in range(nc):
         command = command + model.Cd[0, j] * state("controller", j)
-    cancelled = held + c[0] * state("prediction") if predicted else held
-    torque = -ff[0] * cancelled
-    if ff[1] > 0.0:  # the friction term's tanh is left out with the friction itself
+    cancelled = held + c.lead * state("prediction") if predicted else held
+    torque = -ff.cancellation * cancelled
+    if ff.reference > 0.0:  # the friction term's tanh is left out with the friction itself
         steer_acc = model.Bv[3] * held + Av[3] @ eye[start["motorcycle"] : start["motorcycle"] + 8]
-        torque = torque + ff[2] * steer_acc + ff[3] * delta_rate
-    if ff[0] > 0.0 or ff[1] > 0.0:
-        command = command + torque / ff[5]
+        torque = torque + ff.J_eq * steer_acc + ff.beta_eq * delta_rate
+    if ff.cancellation > 0.0 or ff.reference > 0.0:
+        command = command + torque / ff.torque_per_amp
     x0, x1 = state("observer", 0), state("observer", 1)
     E = injection * (g[0] * (rate_used - x0) + g[1] * (measured - x1))
     estimate = held + alpha * (E - held)
 
     # the cancellation's break point: a torque w added to the estimate it reads
-    cancel = -ff[0] / ff[5] if ff[0] > 0.0 else 0.0
+    cancel = -ff.cancellation / ff.torque_per_amp if ff.cancellation > 0.0 else 0.0
 
     A = np.zeros((n, n + 1))  # rows over the states and the measurement's n
     B = np.zeros((n, 4))
@@ -264,8 +270,8 @@ def stack_loop(
     if delayed:
         A[start["carried"]] = command
         B[start["carried"], 1:3] = (1.0, cancel)
-        share = 1.0 - dl[1]
-        told = share * command + dl[1] * carried
+        share = 1.0 - dl.carried
+        told = share * command + dl.carried * carried
     A[start["theta_prev"]] = measured
     A[start["rate_prev"]] = z1
     for r in range(2):
@@ -279,12 +285,12 @@ def stack_loop(
     A[start["estimate"]] = estimate
     if predicted:  # the estimate's rate through the notch, the low-pass (as step does)
         x = (estimate - held) / h
-        y = c[3] * x + state("prediction", 1)
-        rate_filtered = c[1] * y + state("prediction", 3)
+        y = c.b0 * x + state("prediction", 1)
+        rate_filtered = c.g * y + state("prediction", 3)
         A[start["prediction"]] = rate_filtered
-        A[start["prediction"] + 1] = c[4] * x - c[6] * y + state("prediction", 2)
-        A[start["prediction"] + 2] = c[5] * x - c[7] * y
-        A[start["prediction"] + 3] = c[1] * y + c[2] * rate_filtered
+        A[start["prediction"] + 1] = c.b1 * x - c.a1 * y + state("prediction", 2)
+        A[start["prediction"] + 2] = c.b2 * x - c.a2 * y
+        A[start["prediction"] + 3] = c.g * y + c.pole * rate_filtered
     for r in range(nc):
         row = model.Bd[r, 0] * error
         for j in range(nc):
@@ -353,7 +359,7 @@ def prediction_lead(model: StackModel, handlebar: HandlebarParameters) -> float:
     float
         [s].
     """
-    plain = model._replace(prediction=np.zeros_like(model.prediction))
+    plain = model._replace(prediction=NO_PREDICTION)
     f = np.array([PREDICTION_FREQUENCY])
     F = estimate_filter(plain, handlebar, model.speed, f)[0]
     return float(-np.angle(F) / (2.0 * math.pi * f[0]))
@@ -676,8 +682,10 @@ def analyse_stack(
         cancellation_phase_margin_deg=float(inner_phase),
         feel_magnitude_db=feel_db,
         feel_phase_deg=feel_deg,
-        prediction_lead=float(model.prediction[0]) if model.feedforward[0] > 0.0 else 0.0,
-        measurement_delay=float(model.delay[0]) if delay is None else float(delay),
+        prediction_lead=(
+            float(model.prediction.lead) if model.feedforward.cancellation > 0.0 else 0.0
+        ),
+        measurement_delay=float(model.delay.age) if delay is None else float(delay),
         limit_cycles=tuple(cycles) if handlebar.beta_s > 0.0 else (),
     )
 
@@ -780,7 +788,7 @@ def analyse_design(
     for speed in speeds:
         model = build(speed)
         if predict:  # the lead of the stack designed for a fresh sample, as build_stack's
-            fresh = model._replace(delay=np.zeros_like(model.delay))
+            fresh = model._replace(delay=NO_DELAY)
             model = build(speed, prediction_lead(fresh, handlebar))
         grid = [a for _, a in robustness_grid(model, handlebar, speed, delay=delay)]
         summary = GridSummary(

@@ -18,6 +18,7 @@ as Python). Both records are named tuples so that compiled code takes them as th
 """
 
 import math
+from enum import IntEnum
 from typing import NamedTuple
 
 import numpy as np
@@ -39,10 +40,20 @@ from motosim.params.sharp import SharpParameters, derived_geometry
 
 __all__ = [
     "DELAY_FRICTION_WIDTH",
+    "NO_DELAY",
+    "NO_FEEDFORWARD",
+    "NO_PREDICTION",
     "PREDICTION_CORNER",
     "PREDICTION_NOTCH",
     "PREDICTION_PAPER_RATE",
     "PREDICTION_RATE",
+    "Delay",
+    "DifferentiatorGains",
+    "Feedforward",
+    "Held",
+    "MotorcycleMass",
+    "MotorcycleState",
+    "Prediction",
     "StackData",
     "StackModel",
     "account_for_delay",
@@ -64,8 +75,8 @@ FEEDFORWARD_FRICTION_WIDTH = 0.002
 The term follows the motorcycle's steer rate, a noise-free model state, so it can be much
 narrower than the observer's compensation, which reads a quantised, differentiated angle:
 the handlebar then follows the slow steering of a lane change (a few mrad/s) instead of
-sticking. (At 0.02 rad/s the crosswind run's tracking error was 9 % of its peak steer angle
-against 3 % at this width.)"""
+sticking (a wider tanh triples the crosswind run's tracking error: ``docs/performance.md``,
+"Figures behind the code's constants")."""
 DELAY_FRICTION_WIDTH = 0.05
 """Rate scale of the tanh of the dry friction in the prediction over a measurement's age
 [rad/s] with an estimator that has none; with the Walcott-Zak observer its own
@@ -85,6 +96,138 @@ rate: the lead vanishes there, where the robustness grid's phase margins are set
 feedback's crossover, 10 Hz by default), and stays small about the motorcycle's wobble."""
 
 
+class MotorcycleState(IntEnum):
+    """Positions in the virtual motorcycle's state (:attr:`StackData.motorcycle`), the
+    order of :func:`motosim.model.sharp.bike_rk4`: Sharp 1971's eight lateral states, then
+    eq. (2)'s speed and the ground track; the names are those of :mod:`motosim.signals`."""
+
+    v_y = 0
+    psi_dot = 1
+    phi_dot = 2
+    delta_dot = 3
+    phi = 4
+    delta = 5
+    F_yr = 6
+    F_yf = 7
+    v_x = 8
+    psi = 9
+    x = 10
+    y = 11
+
+
+class Held(IntEnum):
+    """Positions in the outputs held between measurements (:attr:`StackData.held`)."""
+
+    theta_h_meas = 0
+    """The measured handlebar angle [rad]."""
+    i_m = 1
+    """The current command [A]."""
+    theta_h_dot_hat = 2
+    """The differentiated handlebar rate [rad/s]."""
+    tau_r_hat = 3
+    """The estimated rider torque [N*m]."""
+    tau_r_hat_rate = 4
+    """The predicted cancellation's filtered rate of tau_r_hat [N*m/s]."""
+    notch_0 = 5
+    """The first state of the prediction's notch [N*m/s]."""
+    notch_1 = 6
+    """Its second state [N*m/s]."""
+    low_pass = 7
+    """The state of its low-pass [N*m/s]."""
+
+
+class DifferentiatorGains(NamedTuple):
+    """The super-twisting differentiator's step and gains."""
+
+    h: float
+    """Its step, the measurement step [s]."""
+    k1: float
+    """lambda_1 L^(1/2) [rad^(1/2)/s]."""
+    k0: float
+    """lambda_0 L [rad/s^2]."""
+
+
+class Prediction(NamedTuple):
+    """The predicted cancellation, tau_r_hat + T_d r with r the estimate's rate through a
+    notch and a low-pass (see :func:`step`); all zero for none."""
+
+    lead: float
+    """T_d [s] (0: the cancellation reads tau_r_hat as it is)."""
+    g: float
+    """The low-pass's gain, g (1 + 1/z) / (1 - p / z) [-]."""
+    pole: float
+    """Its pole p [-]."""
+    b0: float
+    """The notch's numerator, b0 + b1 / z + b2 / z^2 [-]."""
+    b1: float
+    b2: float
+    a1: float
+    """Its denominator, 1 + a1 / z + a2 / z^2 [-]."""
+    a2: float
+
+
+class Feedforward(NamedTuple):
+    """The feedforward terms on the nominal handlebar (see :func:`step`)."""
+
+    cancellation: float
+    """The rider-torque cancellation's gain (0 to 1)."""
+    reference: float
+    """The reference inverse dynamics' gain (0 or 1)."""
+    J_eq: float
+    """[kg*m^2]."""
+    beta_eq: float
+    """[N*m*s/rad]."""
+    beta_s: float
+    """[N*m]."""
+    torque_per_amp: float
+    """N k_t [N*m/A]."""
+    friction_width: float
+    """The tanh width of the friction term [rad/s]."""
+
+
+class Delay(NamedTuple):
+    """How the stack accounts for a measurement's age d (see :func:`step_scaled` and
+    :func:`account_for_delay`); all zero for a fresh measurement."""
+
+    age: float
+    """d [s] (0: fresh, nothing else is read)."""
+    carried: float
+    """d / h, the share of the observer's step over which the previous command was
+    carried [-]."""
+    per_rate: float
+    """The nominal handlebar's angle per initial rate over d [s]."""
+    per_torque: float
+    """Its angle per torque over d [rad/(N*m)]."""
+    beta_s: float
+    """Its dry friction [N*m]."""
+    torque_per_amp: float
+    """Its N k_t [N*m/A]."""
+    friction_width: float
+    """The rate scale of the friction's tanh [rad/s]."""
+
+
+class MotorcycleMass(NamedTuple):
+    """What eq. (2) needs of the motorcycle."""
+
+    m: float
+    """Its mass [kg]."""
+    m_eq: float
+    """m + J_R / r_D^2 [kg]."""
+    min_speed: float
+    """The lowest speed of the model [m/s]."""
+
+
+NO_PREDICTION = Prediction(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+"""No predicted cancellation (the cancellation reads tau_r_hat as it is)."""
+NO_FEEDFORWARD = Feedforward(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+"""No feedforward term."""
+NO_DELAY = Delay(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+"""A fresh measurement."""
+
+_LATERAL = int(MotorcycleState.v_x)
+"""The motorcycle's lateral states, Sharp 1971's eight, come before v_x."""
+
+
 class StackModel(NamedTuple):
     """Everything the stack needs that a run does not change (build with :func:`design_stack`).
 
@@ -97,29 +240,25 @@ class StackModel(NamedTuple):
         ``measure_every``-th call (the first included) and hold their outputs in between.
     estimator : EstimatorKernel
         The rider-torque estimator, discretised at the measurement step.
-    differentiator : ndarray, shape (3,)
-        [h_meas [s], lambda_1 L^(1/2), lambda_0 L] of the super-twisting differentiator.
+    differentiator : DifferentiatorGains
+        The super-twisting differentiator's step and gains.
     Ad, Bd, Cd, Dd : ndarray
         Discrete controller at the measurement step (x+ = Ad x + Bd e, i = Cd x + Dd e,
         e = theta_h - delta [rad], i [A]); order 0 with Dd = 0 when there is no feedback.
     feedback : bool
         Whether the controller commands the motor (False: Fig. 9, 0 A).
-    prediction : ndarray, shape (8,)
-        The predicted cancellation: [lead T_d [s] (0: the cancellation reads tau_r_hat as it
-        is), the low-pass's g and p (g (1 + 1/z) / (1 - p / z)), the notch's b0, b1, b2, a1,
-        a2] (see :func:`step`).
-    feedforward : ndarray, shape (7,)
-        [rider-torque cancellation gain (0 to 1), reference inverse-dynamics gain (0 or 1),
-        J_eq [kg*m^2], beta_eq [N*m*s/rad], beta_s [N*m], N k_t [N*m/A], tanh width of the
-        friction term [rad/s]] of the nominal handlebar (see :func:`step`).
+    prediction : Prediction
+        The predicted cancellation (see :func:`step`).
+    feedforward : Feedforward
+        The feedforward terms of the nominal handlebar (see :func:`step`).
     max_current : float
         Current command limit [A].
     A0, A1, Bv : ndarray
         The motorcycle's lateral matrices, A_v = A0 + v_x A1 (8x8), B_v (8,).
     Bw : ndarray, shape (8,)
         The side force's input (:func:`motosim.model.sharp.side_force_input`).
-    motorcycle : ndarray, shape (3,)
-        [m [kg], m + J_R / r_D^2 [kg], lowest speed [m/s]] of eq. (2).
+    motorcycle : MotorcycleMass
+        What eq. (2) needs of the motorcycle.
     motorcycle_substeps : int
         RK4 steps of the motorcycle per period.
     speed : float
@@ -127,36 +266,32 @@ class StackModel(NamedTuple):
     true_torque : bool
         Drive the motorcycle with the rider's true torque instead of the estimate
         (a simulation-only reference run).
-    delay : ndarray, shape (7,)
-        The measurement's age d when the stack reads it (a status frame's latency on the
-        bus): [d [s] (0: fresh, nothing else is read), d / h the share of the observer's
-        step over which the previous command was carried [-], the nominal handlebar's angle
-        per initial rate [s] and per torque [rad/(N*m)] over d, its beta_s [N*m] and N k_t
-        [N*m/A], the rate scale of the friction's tanh [rad/s]] (see :func:`step_scaled`
-        and :func:`account_for_delay`).
+    delay : Delay
+        How the stack accounts for the measurement's age d when it reads it (a status
+        frame's latency on the bus).
     """
 
     dt: float
     measure_every: int
     estimator: EstimatorKernel
-    differentiator: Array
+    differentiator: DifferentiatorGains
     Ad: Array
     Bd: Array
     Cd: Array
     Dd: Array
     feedback: bool
-    prediction: Array
-    feedforward: Array
+    prediction: Prediction
+    feedforward: Feedforward
     max_current: float
     A0: Array
     A1: Array
     Bv: Array
     Bw: Array
-    motorcycle: Array
+    motorcycle: MotorcycleMass
     motorcycle_substeps: int
     speed: float
     true_torque: bool
-    delay: Array
+    delay: Delay
 
 
 class StackData(NamedTuple):
@@ -171,11 +306,10 @@ class StackData(NamedTuple):
     controller : ndarray, shape (n,)
         The discrete controller's state.
     motorcycle : ndarray, shape (12,)
-        [v_y, psi', phi', delta', phi, delta, F_yr, F_yf, v_x, psi, x, y] (SI units).
+        The virtual motorcycle's state, in the order of :class:`MotorcycleState` (SI units;
+        an array: its RK4 steps it whole).
     held : ndarray, shape (8,)
-        Outputs held between measurements: [theta_h measured [rad], i_m command [A],
-        theta_h'_hat [rad/s], tau_r_hat [N*m], the predicted cancellation's filtered rate of
-        tau_r_hat [N*m/s]], then the states of its notch (two) and low-pass [N*m/s].
+        Outputs held between measurements, in the order of :class:`Held`.
     periods : ndarray of int64, shape (1,)
         Periods since :func:`reset`.
     work : ndarray, shape (13, 12)
@@ -198,14 +332,11 @@ def default_prediction(measurement_rate: float) -> bool:
     """Whether a stack that cancels the estimated rider torque predicts it, by default.
 
     On from :data:`PREDICTION_RATE` and at the paper's :data:`PREDICTION_PAPER_RATE`, the
-    rates where it was measured on runs. At 1 kHz it keeps the robustness grid's margins on
-    as many handlebars as the plain cancellation or more and cuts the tracking error the
-    estimate's lag leaves on fast manoeuvres. At 100 Hz it cuts that error too (7 of the
-    unseen runs' tracking misses to 5), keeps the grid (5/3/3 against 4/3/3 at 10/20/30 m/s)
-    and the real-time safety stage's frozen-angle measure on Fig. 15's run stays below a
-    third of its 0.05 rad fault (0.0072 against 0.0047 rad). Between, off: not measured on
-    runs, and at 500 Hz it costs a grid point (the design guide, "The predicted
-    cancellation").
+    rates where it was measured on runs: there it keeps the robustness grid's margins, cuts
+    the tracking error the estimate's lag leaves on fast manoeuvres and keeps the real-time
+    safety stage's frozen-angle measure well below its fault; between, off (the design
+    guide, "The predicted cancellation"; the figures in ``docs/performance.md``, "Figures
+    behind the code's constants").
 
     Examples
     --------
@@ -313,16 +444,20 @@ def design_stack(
     if (rider_feedforward or reference_feedforward) and handlebar is None:
         raise MotosimError("feedforward needs the nominal handlebar; give handlebar=")
     on = controller is not None
-    prediction = np.zeros(8)
+    prediction = NO_PREDICTION
     if on and rider_feedforward and prediction_lead != 0.0:
         prediction = _prediction(prediction_lead, h_meas)
-    ff = np.zeros(7)
+    ff = NO_FEEDFORWARD
     if handlebar is not None:
-        ff[:] = (
-            float(on and rider_feedforward), float(on and reference_feedforward),
-            handlebar.J_eq, handlebar.beta_eq, handlebar.beta_s, handlebar.torque_per_amp,
-            FEEDFORWARD_FRICTION_WIDTH,
-        )  # fmt: skip
+        ff = Feedforward(
+            cancellation=float(on and rider_feedforward),
+            reference=float(on and reference_feedforward),
+            J_eq=float(handlebar.J_eq),
+            beta_eq=float(handlebar.beta_eq),
+            beta_s=float(handlebar.beta_s),
+            torque_per_amp=float(handlebar.torque_per_amp),
+            friction_width=FEEDFORWARD_FRICTION_WIDTH,
+        )
     h = 1.0 / control_rate
     d = derived_geometry(sharp)
     A0, A1, Bv = sharp_model.lpv_matrices(sharp)
@@ -330,7 +465,9 @@ def design_stack(
         dt=h,
         measure_every=round(ratio),
         estimator=estimator,
-        differentiator=np.array([h_meas, LAMBDA_1 * math.sqrt(lipschitz), LAMBDA_0 * lipschitz]),
+        differentiator=DifferentiatorGains(
+            h_meas, LAMBDA_1 * math.sqrt(lipschitz), LAMBDA_0 * lipschitz
+        ),
         Ad=np.ascontiguousarray(Ad),
         Bd=np.ascontiguousarray(Bd),
         Cd=np.ascontiguousarray(Cd),
@@ -343,7 +480,7 @@ def design_stack(
         A1=A1,
         Bv=Bv,
         Bw=sharp_model.side_force_input(sharp, height=side_force_height),
-        motorcycle=np.array([d["m"], d["m_eq"], sharp_model.MIN_SPEED]),
+        motorcycle=MotorcycleMass(float(d["m"]), float(d["m_eq"]), float(sharp_model.MIN_SPEED)),
         motorcycle_substeps=max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9)),
         speed=float(speed),
         true_torque=bool(true_torque),
@@ -389,11 +526,10 @@ def account_for_delay(
     differentiator and the observer read the measured one, and the observer is told the
     current carried over its step [t - d, t + h - d]: i_p for d, the new command for h - d,
     as the share d / h of i_p (else the change of command at t reads as rider torque for
-    d, and a cancelling loop feeds it back). Designed for a fresh sample, the 100 Hz stack
-    of the lane change with the plain cancellation keeps 7.8 dB and 55 deg of margins; read
-    5.5 ms old, 0.7 dB and 7 deg (unstable); accounting for the age, 7.6 dB and 49 deg
-    (:func:`motosim.sim.loop_analysis.stack_loop` with ``delay``; with the predicted
-    cancellation, the 100 Hz default: 7.8 dB and 53 deg, unstable, 6.9 dB and 48 deg).
+    d, and a cancelling loop feeds it back). Designed for a fresh sample, a stack read a
+    bus latency late can lose its margins altogether; accounting for the age keeps them
+    (:func:`motosim.sim.loop_analysis.stack_loop` with ``delay``; the figures of the 100 Hz
+    lane change in ``docs/performance.md``, "Figures behind the code's constants").
     """
     h = model.dt * model.measure_every
     return model._replace(delay=_delay(delay, h, handlebar, model.estimator))
@@ -401,38 +537,41 @@ def account_for_delay(
 
 def _delay(
     delay: float, h: float, handlebar: HandlebarParameters | None, estimator: EstimatorKernel
-) -> Array:
+) -> Delay:
     """:attr:`StackModel.delay` for a measurement ``delay`` d [s] at the measurement step
     ``h`` [s] on the nominal ``handlebar``, the friction's tanh as wide as the Walcott-Zak
     ``estimator``'s (else :data:`DELAY_FRICTION_WIDTH`); MotosimError if d is not in [0, h],
     or is positive without a handlebar."""
-    out = np.zeros(7)
     if not (math.isfinite(delay) and 0.0 <= delay <= h * (1.0 + 1e-12)):
         raise MotosimError(
             f"measurement delay = {delay!r} s; expected 0 to one measurement step ({h:g} s)"
         )
     if delay == 0.0:
-        return out
+        return NO_DELAY
     if handlebar is None:
         raise MotosimError("a measurement delay needs the nominal handlebar; give handlebar=")
     hb = handlebar_matrices(handlebar)
     phi, gamma = zoh(hb.A, hb.D[:, None], delay)
-    out[:] = (
-        delay, min(delay / h, 1.0), phi[1, 0], gamma[1, 0], handlebar.beta_s,
-        handlebar.torque_per_amp, _friction_width(estimator),
-    )  # fmt: skip
-    return out
+    return Delay(
+        age=float(delay),
+        carried=min(delay / h, 1.0),
+        per_rate=float(phi[1, 0]),
+        per_torque=float(gamma[1, 0]),
+        beta_s=float(handlebar.beta_s),
+        torque_per_amp=float(handlebar.torque_per_amp),
+        friction_width=_friction_width(estimator),
+    )
 
 
 def _friction_width(estimator: EstimatorKernel) -> float:
     """The rate scale of the Walcott-Zak observer's friction tanh [rad/s] (its setting
-    ``friction_width``, ``p[5]`` of its kernel), else :data:`DELAY_FRICTION_WIDTH`."""
+    ``friction_width``, in its kernel's parameters), else :data:`DELAY_FRICTION_WIDTH`."""
     if estimator.kind == WALCOTT_ZAK and estimator.p[5] > 0.0:
         return float(estimator.p[5])
     return DELAY_FRICTION_WIDTH
 
 
-def _prediction(lead: float, h: float) -> Array:
+def _prediction(lead: float, h: float) -> Prediction:
     """:attr:`StackModel.prediction` for a lead ``lead`` [s] at the measurement step ``h`` [s].
 
     The notch s^2 + w0^2 over s^2 + (w0 / Q) s + w0^2 and the low-pass w_c / (s + w_c), by
@@ -453,11 +592,16 @@ def _prediction(lead: float, h: float) -> Array:
     den = k * k + w0 * k / q + w0 * w0
     t = math.tan(math.pi * PREDICTION_CORNER * h)
     pole = (1.0 - t) / (1.0 + t)
-    return np.array([
-        lead, 0.5 * (1.0 - pole), pole,
-        (k * k + w0 * w0) / den, 2.0 * (w0 * w0 - k * k) / den, (k * k + w0 * w0) / den,
-        2.0 * (w0 * w0 - k * k) / den, (k * k - w0 * k / q + w0 * w0) / den,
-    ])  # fmt: skip
+    return Prediction(
+        lead=float(lead),
+        g=0.5 * (1.0 - pole),
+        pole=pole,
+        b0=(k * k + w0 * w0) / den,
+        b1=2.0 * (w0 * w0 - k * k) / den,
+        b2=(k * k + w0 * w0) / den,
+        a1=2.0 * (w0 * w0 - k * k) / den,
+        a2=(k * k - w0 * k / q + w0 * w0) / den,
+    )
 
 
 def new_data(model: StackModel) -> StackData:
@@ -488,11 +632,9 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
     start_kernel(model.estimator, data.estimator, theta, 0.0, current)
     data.controller[:] = 0.0
     data.motorcycle[:] = 0.0
-    data.motorcycle[8] = model.speed
-    data.held[0] = theta
-    data.held[1] = 0.0
-    data.held[2] = 0.0
-    data.held[3:] = 0.0
+    data.motorcycle[MotorcycleState.v_x] = model.speed
+    data.held[:] = 0.0
+    data.held[Held.theta_h_meas] = theta
     data.periods[0] = 0
 
 
@@ -507,7 +649,7 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     if not model.feedback:
         return 0.0
     z = data.motorcycle
-    e = theta_meas - z[5]
+    e = theta_meas - z[MotorcycleState.delta]
     x, tmp = data.controller, data.controller_work
     n = x.size
     u = model.Dd[0, 0] * e
@@ -522,19 +664,21 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
         x[r] = tmp[r]
     ff = model.feedforward
     torque = 0.0
-    if ff[0] > 0.0:  # cancel what the rider is estimated to apply
-        cancelled = data.held[3]
-        if model.prediction[0] > 0.0:  # predicted: tau_r_hat + T_d LP(notch(d tau_r_hat / dt))
-            cancelled += model.prediction[0] * data.held[4]
-        torque -= ff[0] * cancelled
-    if ff[1] > 0.0:  # J delta'' + beta delta' + beta_s sign(delta'), delta'' from the model
-        v = z[8]
-        dd = model.Bv[3] * data.held[3]
-        for c in range(8):
-            dd += (model.A0[3, c] + v * model.A1[3, c]) * z[c]
-        torque += ff[2] * dd + ff[3] * z[3] + ff[4] * math.tanh(z[3] / ff[6])
-    if ff[0] > 0.0 or ff[1] > 0.0:
-        u += torque / ff[5]
+    if ff.cancellation > 0.0:  # cancel what the rider is estimated to apply
+        cancelled = data.held[Held.tau_r_hat]
+        if model.prediction.lead > 0.0:  # predicted: tau_r_hat + T_d LP(notch(d tau_r_hat / dt))
+            cancelled += model.prediction.lead * data.held[Held.tau_r_hat_rate]
+        torque -= ff.cancellation * cancelled
+    if ff.reference > 0.0:  # J delta'' + beta delta' + beta_s sign(delta'), delta'' from the model
+        v = z[MotorcycleState.v_x]
+        j = MotorcycleState.delta_dot
+        dd = model.Bv[j] * data.held[Held.tau_r_hat]
+        for c in range(_LATERAL):
+            dd += (model.A0[j, c] + v * model.A1[j, c]) * z[c]
+        rate = z[MotorcycleState.delta_dot]
+        torque += ff.J_eq * dd + ff.beta_eq * rate + ff.beta_s * math.tanh(rate / ff.friction_width)
+    if ff.cancellation > 0.0 or ff.reference > 0.0:
+        u += torque / ff.torque_per_amp
     return float(min(max(u, -model.max_current), model.max_current))
 
 
@@ -607,45 +751,45 @@ def step_scaled(
     """
     held = data.held
     if data.periods[0] % model.measure_every == 0:
-        held[0] = theta_meas
-        p = model.differentiator
+        held[Held.theta_h_meas] = theta_meas
+        g = model.differentiator
         z1_before = data.differentiator[1]
-        z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, p[0], p[1], p[2], True)
-        if model.delay[0] > 0.0:  # a measurement d old: the angle now, predicted over d
-            dl = model.delay
-            previous = held[1]  # the command carried since the last measurement
+        z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, g.h, g.k1, g.k0, True)
+        dl = model.delay
+        if dl.age > 0.0:  # a measurement d old: the angle now, predicted over d
+            previous = held[Held.i_m]  # the command carried since the last measurement
             rate = z1 + 0.5 * (z1 - z1_before)  # the backward difference, at the sample
-            torque = dl[5] * current_scale * previous + held[3]
-            slide = math.tanh(rate / dl[6])
-            stick = min(max(torque, -dl[4]), dl[4])
-            torque -= dl[4] * slide + (1.0 - abs(slide)) * stick
-            predicted = theta_meas + dl[2] * rate + dl[3] * torque
-            held[1] = _command(model, data, predicted)
-            told = (1.0 - dl[1]) * held[1] + dl[1] * previous
+            torque = dl.torque_per_amp * current_scale * previous + held[Held.tau_r_hat]
+            slide = math.tanh(rate / dl.friction_width)
+            stick = min(max(torque, -dl.beta_s), dl.beta_s)
+            torque -= dl.beta_s * slide + (1.0 - abs(slide)) * stick
+            predicted = theta_meas + dl.per_rate * rate + dl.per_torque * torque
+            held[Held.i_m] = _command(model, data, predicted)
+            told = (1.0 - dl.carried) * held[Held.i_m] + dl.carried * previous
         else:
-            held[1] = _command(model, data, theta_meas)
-            told = held[1]
+            held[Held.i_m] = _command(model, data, theta_meas)
+            told = held[Held.i_m]
         data.differentiator[0] = z0
         data.differentiator[1] = z1
-        held[2] = z1
+        held[Held.theta_h_dot_hat] = z1
         estimate = step_kernel(
             model.estimator, data.estimator, theta_meas, z1, current_scale * told + current_error
         )
         c = model.prediction
-        if c[0] > 0.0:
+        if c.lead > 0.0:
             # the estimate's rate through the notch and the low-pass (transposed form II)
-            x = (estimate - held[3]) / p[0]
-            y = c[3] * x + held[5]
-            held[5] = c[4] * x - c[6] * y + held[6]
-            held[6] = c[5] * x - c[7] * y
-            held[4] = c[1] * y + held[7]
-            held[7] = c[1] * y + c[2] * held[4]
-        held[3] = estimate
+            x = (estimate - held[Held.tau_r_hat]) / g.h
+            y = c.b0 * x + held[Held.notch_0]
+            held[Held.notch_0] = c.b1 * x - c.a1 * y + held[Held.notch_1]
+            held[Held.notch_1] = c.b2 * x - c.a2 * y
+            held[Held.tau_r_hat_rate] = c.g * y + held[Held.low_pass]
+            held[Held.low_pass] = c.g * y + c.pole * held[Held.tau_r_hat_rate]
+        held[Held.tau_r_hat] = estimate
     data.periods[0] += 1
-    steer = rider_torque if model.true_torque else held[3]
+    steer = rider_torque if model.true_torque else held[Held.tau_r_hat]
     mc = model.motorcycle
     h = model.dt / model.motorcycle_substeps
     for _ in range(model.motorcycle_substeps):
         bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, model.Bw,
-                 side_force, force, mc[0], mc[1], mc[2], h)  # fmt: skip
-    return float(held[1])
+                 side_force, force, mc.m, mc.m_eq, mc.min_speed, h)  # fmt: skip
+    return float(held[Held.i_m])
