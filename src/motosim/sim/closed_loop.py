@@ -36,7 +36,7 @@ from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
 from motosim.sim.loop_analysis import prediction_lead
-from motosim.sim.rider import design_rider, rider_torque
+from motosim.sim.rider import RiderGains, design_rider, rider_torque
 from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
 from motosim.sim.stack import (
     StackData,
@@ -57,6 +57,7 @@ __all__ = [
     "build_rig",
     "build_stack",
     "prepare",
+    "rider_design",
     "route_length",
     "run_metadata",
     "simulate",
@@ -111,6 +112,10 @@ class RunInputs:
         Walcott-Zak settings from a design file; None for the defaults at the measurement step.
     tables : Mapping of str to TimeSeries
         CSV profiles by file name.
+    rider : RiderGains or None
+        The virtual rider's gain schedule, :func:`~motosim.sim.rider.design_rider` of
+        ``sharp`` with :func:`rider_design` of the scenario, designed beforehand (a design
+        cache's, or one shared by a campaign's runs); None to design it in :func:`build_rig`.
     """
 
     scenario: Scenario
@@ -120,6 +125,7 @@ class RunInputs:
     controller: StateSpace | None
     tables: Mapping[str, TimeSeries]
     observer: ObserverSettings | None = None
+    rider: RiderGains | None = None
 
 
 def prepare(
@@ -131,12 +137,15 @@ def prepare(
     controller: StateSpace | None,
     observer: ObserverSettings | None = None,
     tables: Mapping[str, TimeSeries] | None = None,
+    rider: RiderGains | None = None,
 ) -> RunInputs:
     """Apply the scenario's perturbations to the true handlebar and bundle the inputs.
 
     The true handlebar's J_eq and beta_eq are scaled by the scenario's factors and its dry
     friction removed when ``friction = false``; the nominal one is used as given (also without
-    dry friction then, as the paper neglects it in that case).
+    dry friction then, as the paper neglects it in that case). ``rider`` is the virtual
+    rider's schedule designed for ``sharp`` and :func:`rider_design` of ``scenario`` (None:
+    :func:`build_rig` designs it).
     """
     hb = scenario.handlebar
     true = perturbed(
@@ -150,7 +159,26 @@ def prepare(
     )
     if _feedback(scenario) and controller is None:
         raise MotosimError('the scenario needs a controller: give one (or kind = "none")')
-    return RunInputs(scenario, sharp, true, nominal, controller, tables or {}, observer)
+    return RunInputs(scenario, sharp, true, nominal, controller, tables or {}, observer, rider)
+
+
+def rider_design(scenario: Scenario) -> dict[str, Any]:
+    """The keyword arguments of :func:`~motosim.sim.rider.design_rider` for ``scenario``.
+
+    Everything the virtual rider's schedule depends on besides the motorcycle: a rider of
+    torque profiles gets a two-speed placeholder schedule, which :func:`build_rig` carries
+    but the loop does not read.
+    """
+    rider = scenario.rider
+    if rider.kind == "torque":
+        return {"speeds": np.array([1.0, 2.0])}
+    return {
+        "lateral_tolerance": rider.lateral_tolerance,
+        "course_tolerance": rider.course_tolerance,
+        "torque_scale": rider.torque_scale,
+        "preview": rider.preview,
+        "max_torque": rider.max_torque,
+    }
 
 
 STACK_OBSERVER_INERTIA = (200.0, 2.0)
@@ -354,20 +382,14 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
         else:  # a profile of its own values only: the same array for every such run
             profile = _plant_rate_profile(rider.profile, n, n_sub, h)
         path_arr, path_ds = np.zeros((4, 2)), 1.0
-        gains = design_rider(inputs.sharp, speeds=np.array([1.0, 2.0]))
     else:
         assert rider.path is not None
         profile = np.zeros(1)
         route = rider.path.build(route_length(sc))
         path_arr, path_ds = np.vstack([route.x, route.y, route.psi, route.kappa]), route.ds
-        gains = design_rider(
-            inputs.sharp,
-            lateral_tolerance=rider.lateral_tolerance,
-            course_tolerance=rider.course_tolerance,
-            torque_scale=rider.torque_scale,
-            preview=rider.preview,
-            max_torque=rider.max_torque,
-        )
+    gains = inputs.rider
+    if gains is None:
+        gains = design_rider(inputs.sharp, **rider_design(sc))
     mc = sc.motorcycle
     r_D = derived_geometry(inputs.sharp)["r_D"]
     drive = mc.drive_torque.sample(t, inputs.tables)

@@ -1,0 +1,93 @@
+"""``motosim cache``: show or clear the design cache; the ``--no-cache`` option of the others."""
+
+import argparse
+import sys
+from typing import TYPE_CHECKING, Any
+
+from motosim.cli._common import print_json
+
+if TYPE_CHECKING:
+    from motosim.io.cache import DesignCache
+
+__all__ = ["add_cache_option", "design_cache", "register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``cache`` (``info``, ``clear``) to the subcommands."""
+    parser = sub.add_parser(
+        "cache",
+        help="show or clear the cache of designs (controllers, riders)",
+        description=(
+            "Designs (controller syntheses, the virtual rider's schedules, the stacks) are "
+            "computed once and kept in the cache folder: $MOTOSIM_CACHE_DIR, else "
+            "$XDG_CACHE_HOME/motosim, else ~/.cache/motosim. Each is keyed by a hash of all "
+            "it depends on, motosim's version and its code included, so it is never stale; "
+            "clearing it only costs the next runs their design time."
+        ),
+    )
+    actions = parser.add_subparsers(dest="action", required=True, metavar="ACTION")
+    info = actions.add_parser("info", help="the cache folder, its entries and their size")
+    info.add_argument("--json", action="store_true", help="print JSON")
+    actions.add_parser("clear", help="remove every entry")
+    parser.set_defaults(func=run)
+
+
+def add_cache_option(parser: argparse.ArgumentParser) -> None:
+    """Add ``--no-cache`` to a command that designs."""
+    parser.add_argument(
+        "--no-cache",
+        dest="cache",
+        action="store_false",
+        help="design again instead of reading the design cache, and store nothing "
+        "(see motosim cache)",
+    )
+
+
+def _announce(label: str, seconds: float | None) -> None:
+    if seconds is None:
+        print(f"motosim: {label}: designing (once: kept in the design cache)...", end="",
+              file=sys.stderr, flush=True)  # fmt: skip
+    else:
+        print(f" {seconds:.1f} s", file=sys.stderr, flush=True)
+
+
+def design_cache(args: argparse.Namespace, *, quiet: bool = False) -> "DesignCache":
+    """The design cache of a command's ``--no-cache``; it says on stderr when it designs."""
+    from motosim.io.cache import DesignCache
+
+    return DesignCache.default(
+        enabled=getattr(args, "cache", True), on_design=None if quiet else _announce
+    )
+
+
+def _size(n: int) -> str:
+    if n < 1000:
+        return f"{n} B"
+    value = float(n)
+    for unit in ("kB", "MB", "GB"):
+        value /= 1000.0
+        if value < 1000.0 or unit == "GB":
+            break
+    return f"{value:.1f} {unit}"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Show or clear the cache."""
+    from motosim.io.cache import DesignCache
+
+    cache = DesignCache.default()
+    if args.action == "clear":
+        removed = cache.clear()
+        print(f"removed {removed} design(s) from {cache.folder}")
+        return 0
+    info = cache.info()
+    if args.json:
+        print_json(
+            {"folder": str(info.folder), "entries": info.entries,
+             "count": sum(info.entries.values()), "bytes": info.size}
+        )  # fmt: skip
+        return 0
+    count = sum(info.entries.values())
+    kinds = ", ".join(f"{n} {k}" for k, n in info.entries.items())
+    print(f"{info.folder}: {count} design(s){f' ({kinds})' if kinds else ''}, {_size(info.size)}")
+    return 0
