@@ -56,8 +56,11 @@ __all__ = [
     "RunInputs",
     "build_rig",
     "build_stack",
+    "perturb_rig",
     "prepare",
     "rider_design",
+    "rider_route",
+    "rig_key",
     "route_length",
     "run_metadata",
     "simulate",
@@ -354,6 +357,39 @@ def route_length(scenario: Scenario) -> float:
     return max(scenario.motorcycle.speed, 20.0) * scenario.duration * 1.5 + 200.0
 
 
+def rider_route(scenario: Scenario) -> tuple[Array, float]:
+    """The virtual rider's path of ``scenario`` as the rig holds it: rows x, y [m], heading
+    [rad], curvature [1/m], and its spacing [m]."""
+    assert scenario.rider.path is not None
+    route = scenario.rider.path.build(route_length(scenario))
+    return np.vstack([route.x, route.y, route.psi, route.kappa]), float(route.ds)
+
+
+def perturb_rig(rig: RigModel, inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
+    """``rig``, built for a run that differs from ``inputs`` only in its true handlebar and its
+    seed, made ``inputs``' in place: the handlebar's parameters and the current sensor's noise
+    (drawn from ``rng`` as :func:`build_rig` draws it).
+
+    A campaign's worker builds the rig once and perturbs it run after run; the caller
+    checks that the runs differ only there (:func:`rig_key`).
+    """
+    hb = inputs.true_handlebar
+    rig.handlebar[:] = (hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp)
+    noise = inputs.scenario.measurement.current_noise
+    if noise:
+        rng.standard_normal(out=rig.current_noise)  # rng.normal(0, noise, n), in place
+        np.multiply(rig.current_noise, noise, out=rig.current_noise)
+    return rig
+
+
+def rig_key(scenario: Scenario) -> Scenario:
+    """What a run's rig depends on besides its true handlebar and its seed: two runs with
+    equal keys (and equal motorcycles and tables) share a rig up to :func:`perturb_rig`."""
+    return dataclasses.replace(scenario, seed=0, handlebar=dataclasses.replace(
+        scenario.handlebar, inertia_factor=1.0, damping_factor=1.0
+    ))  # fmt: skip
+
+
 def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array:
     """``profile`` at the ``n * n_sub`` plant sub-steps of a run, read-only.
 
@@ -366,8 +402,14 @@ def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array
     return values
 
 
-def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
-    """The world of a run: true handlebar, sensors (noise drawn from ``rng``), rider, inputs."""
+def build_rig(
+    inputs: RunInputs, *, rng: np.random.Generator, route: "tuple[Array, float] | None" = None
+) -> RigModel:
+    """The world of a run: true handlebar, sensors (noise drawn from ``rng``), rider, inputs.
+
+    ``route`` is the virtual rider's path as :func:`rider_route` builds it for the scenario
+    (a campaign's worker reuses it across the runs that share it); by default built here.
+    """
     sc = inputs.scenario
     h = 1.0 / sc.rates.control
     n_sub = round(sc.rates.plant / sc.rates.control)
@@ -383,10 +425,8 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
             profile = _plant_rate_profile(rider.profile, n, n_sub, h)
         path_arr, path_ds = np.zeros((4, 2)), 1.0
     else:
-        assert rider.path is not None
         profile = np.zeros(1)
-        route = rider.path.build(route_length(sc))
-        path_arr, path_ds = np.vstack([route.x, route.y, route.psi, route.kappa]), route.ds
+        path_arr, path_ds = rider_route(sc) if route is None else route
     gains = inputs.rider
     if gains is None:
         gains = design_rider(inputs.sharp, **rider_design(sc))
@@ -532,6 +572,7 @@ def simulate(
     chunk: float = 1.0,
     keep: bool = True,
     stop_outside: tuple[float, float, float] | None = None,
+    rig: RigModel | None = None,
 ) -> TimeSeries:
     """Simulate a scenario, block by block.
 
@@ -555,6 +596,9 @@ def simulate(
         (largest roll [rad], lowest speed [m/s], highest speed [m/s]): stop at the first
         instant beyond them, that instant the last row (the model's range of validity,
         :func:`motosim.sim.metrics.validity_limits`). By default the run goes to its end.
+    rig : RigModel, optional
+        The run's world, built beforehand (:func:`build_rig`, :func:`perturb_rig`; ``rng``
+        is then not read); by default :func:`build_rig` of ``inputs`` with ``rng``.
 
     Returns
     -------
@@ -572,7 +616,7 @@ def simulate(
     """
     sc = inputs.scenario
     model = build_stack(inputs) if stack is None else stack
-    rig = build_rig(inputs, rng=rng)
+    rig = build_rig(inputs, rng=rng) if rig is None else rig
     _ensure_current_layout()
     data = new_data(model)
     world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
