@@ -154,3 +154,33 @@ def test_info_and_clear(tmp_path: Path) -> None:
     info = cache.info()
     assert info.entries == {"rider": 2} and info.size > 0
     assert cache.clear() == 2 and cache.info().entries == {}
+
+
+def test_the_commands_say_once_that_they_design_and_use_the_cache(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from motosim.cli.main import main
+
+    monkeypatch.setenv("MOTOSIM_CACHE_DIR", str(tmp_path / "cache"))
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        '[scenario]\nname = "short"\nduration = 0.2\n[controller]\nkind = "paper"\n'
+        '[rider]\nkind = "virtual"\n'
+        'path = { kind = "lane_change", offset = 3.5, length = 60.0, start = 5.0 }\n'
+    )
+    args = ["simulate", str(scenario), "--out", str(tmp_path / "r"), "--no-report"]
+    assert main([*args]) == 0
+    err = capsys.readouterr().err
+    assert err.count("short: designing") == 1 and " s\n" in err
+    assert main([*args, "--overwrite"]) == 0
+    assert "designing" not in capsys.readouterr().err
+    assert main([*args, "--overwrite", "--no-cache"]) == 0
+    assert "designing" in capsys.readouterr().err
+    assert main(["cache", "info", "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["folder"] == str(tmp_path / "cache") and info["entries"] == {"rider": 1, "stack": 1}
+    assert main(["cache", "clear"]) == 0
+    assert "removed 2 design(s)" in capsys.readouterr().out
+    assert not list((tmp_path / "cache").glob("*.npz"))
