@@ -164,6 +164,7 @@ def test_the_commands_say_once_that_they_design_and_use_the_cache(
     from motosim.cli.main import main
 
     monkeypatch.setenv("MOTOSIM_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr("motosim.cli.cache.ANNOUNCE_AFTER", 0.0)  # however quick the design
     scenario = tmp_path / "s.toml"
     scenario.write_text(
         '[scenario]\nname = "short"\nduration = 0.2\n[controller]\nkind = "paper"\n'
@@ -174,6 +175,7 @@ def test_the_commands_say_once_that_they_design_and_use_the_cache(
     assert main([*args]) == 0
     err = capsys.readouterr().err
     assert err.count("short: designing") == 1 and " s\n" in err
+    assert len(err.splitlines()) == 1
     assert main([*args, "--overwrite"]) == 0
     assert "designing" not in capsys.readouterr().err
     assert main([*args, "--overwrite", "--no-cache"]) == 0

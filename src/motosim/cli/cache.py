@@ -2,6 +2,7 @@
 
 import argparse
 import sys
+import threading
 from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import print_json
@@ -43,12 +44,42 @@ def add_cache_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _announce(label: str, seconds: float | None) -> None:
-    if seconds is None:
-        print(f"motosim: {label}: designing (once: kept in the design cache)...", end="",
-              file=sys.stderr, flush=True)  # fmt: skip
-    else:
-        print(f" {seconds:.1f} s", file=sys.stderr, flush=True)
+ANNOUNCE_AFTER = 0.3
+"""Seconds a design runs before the command says it is designing (a quick one says nothing)."""
+
+
+class _Announcer:
+    """Says on stderr that a run is designing, once it has taken :data:`ANNOUNCE_AFTER`, and
+    how long it took when done: one line."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._shown = self._done = False
+
+    def _show(self, label: str) -> None:
+        with self._lock:
+            if not self._done:
+                print(f"motosim: {label}: designing (once: kept in the design cache)...",
+                      end="", file=sys.stderr, flush=True)  # fmt: skip
+                self._shown = True
+
+    def __call__(self, label: str, seconds: float | None) -> None:
+        if seconds is None:
+            self._shown = self._done = False
+            if ANNOUNCE_AFTER <= 0.0:
+                self._show(label)
+                return
+            self._timer = threading.Timer(ANNOUNCE_AFTER, self._show, (label,))
+            self._timer.daemon = True
+            self._timer.start()
+            return
+        with self._lock:
+            self._done = True
+            if self._timer is not None:
+                self._timer.cancel()
+            if self._shown:
+                print(f" {seconds:.1f} s", file=sys.stderr, flush=True)
 
 
 def design_cache(args: argparse.Namespace, *, quiet: bool = False) -> "DesignCache":
@@ -56,7 +87,7 @@ def design_cache(args: argparse.Namespace, *, quiet: bool = False) -> "DesignCac
     from motosim.io.cache import DesignCache
 
     return DesignCache.default(
-        enabled=getattr(args, "cache", True), on_design=None if quiet else _announce
+        enabled=getattr(args, "cache", True), on_design=None if quiet else _Announcer()
     )
 
 

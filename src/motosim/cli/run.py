@@ -629,13 +629,13 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             latency, pace=args.pace, control_rate=rate, measurement_rate=sc.rates.measurement,
             origin=args.scenario,
         )  # fmt: skip
-        with cache.designing(sc.name):
-            model = cached_stack(cache, inputs)
         if args.pace not in run_paces(rate, sc.rates.measurement):
             raise MotosimError(
                 f"--pace bus with control = {rate:g} Hz and measurement = "
                 f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"
             )
+        with cache.designing(sc.name):
+            model = cached_stack(cache, inputs)
         model = account_for_delay(model, age, inputs.nominal_handlebar)  # the frames' age
         world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
         codecs = handlebar_codecs()
