@@ -400,7 +400,7 @@ def cached_rider(cache: DesignCache, inputs: "RunInputs") -> "RiderGains":
 def cached_stack(cache: DesignCache, inputs: "RunInputs") -> "StackModel":
     """The stack of a run (:func:`motosim.sim.build_stack`), keyed by the whole scenario and
     the designed parts it is built from."""
-    from motosim.sim.closed_loop import build_stack
+    from motosim.sim import build_stack
     from motosim.sim.scenario import scenario_dict
     from motosim.sim.stack import StackModel
 
