@@ -570,6 +570,8 @@ def _fill(
     the first ``limit`` of the plan when given."""
     if store.previous == "stopped":
         _log.info("%s: its last call stopped while running (killed, or a full disk); resuming", out)
+    if limit is not None and limit >= len(plan.runs):
+        limit = None  # the whole plan
     planned = plan.runs if limit is None else plan.runs[:limit]
     todo = [r for r in planned if r.run_id not in store.done]
     skipped = len(planned) - len(todo)
