@@ -1,24 +1,40 @@
-"""The closed loop of Fig. 7: compiled step, plain Python, python-control, and a campaign.
+"""The closed loop of Fig. 7: the compiled loop, the same loop in plain Python and with
+SciPy's integrator, python-control, and the feedforward's cost.
 
-Four measurements in one run, on the same loop (square rider torque, SIMACOM handlebar with
-dry friction, Walcott-Zak observer, first-order H-infinity controller, Sharp motorcycle at
-20 m/s, 1 kHz):
+The loop: square rider torque, SIMACOM handlebar with dry friction (exact stick-slip), a
+14-bit encoder, Walcott-Zak observer, first-order H-infinity controller, Sharp motorcycle at
+20 m/s, 1 kHz. Every figure is a rate in stack periods per second of wall time and of CPU
+time (``time.thread_time`` in this process, ``time.process_time`` in a subprocess), with the
+load average; which computation each one times:
 
-1. the compiled stack step (numba), as ``motosim simulate`` runs it;
-2. the same code with ``NUMBA_DISABLE_JIT=1`` (plain Python), in a subprocess;
-3. the same loop written as one python-control ``nlsys`` in continuous time and simulated by
-   ``input_output_response`` with an output every millisecond (python-control's idiom);
-4. a campaign of 1000 perturbed 10 s runs (J_eq and beta_eq drawn in [0.5, 1.5] x nominal)
-   on both cores.
+1. the compiled loop alone (``_run_chunk``: the rider, the encoder, the stack's step, the
+   true handlebar's exact step, the row), the stack designed and the rig built beforehand;
+2. the whole ``simulate()`` call (the rig built, the loop, the blocks checked);
+3. the same loop alone, the same code with ``NUMBA_DISABLE_JIT=1`` (plain Python and NumPy),
+   in a subprocess;
+4. the same sampled, quantised loop with the true handlebar integrated between samples by
+   ``scipy.integrate.solve_ivp`` (RK45, the stick-slip by a terminal event at zero rate and a
+   stick test, as the exact step does) and the stack's compiled step called from Python each
+   period: a like-for-like baseline, the integrator apart;
+5. python-control's ``input_output_response`` on a *different*, simpler loop written in its
+   idiom (continuous time, tanh friction, no encoder, no differentiator, the controller
+   continuous, no feedforward, adaptive RK45 with an output every millisecond), as
+   interconnected blocks and as one hand-written ``nlsys``: it compares idioms, not the
+   same computation;
+6. the stack step's slowdown from the observer's stick projection and from the feedforward.
+
+The campaign's figures are measured on the ``motosim campaign`` command itself
+(``bench/bench_campaign.py``), the whole ``motosim simulate`` command by
+``bench/bench_time_to_result.py``.
 """
 
+import math
 import os
 import subprocess
 import sys
 import time
 import tomllib
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from numba import njit
@@ -65,27 +81,108 @@ def _controller():  # type: ignore[no-untyped-def]
     return _CTRL
 
 
-def _compiled(duration: float) -> float:
+def _loop_alone(duration: float) -> tuple[float, float]:
+    """(periods/s of wall time, of thread CPU time) of the loop alone, best of three."""
+    from motosim.signals import RECORDED
+    from motosim.sim.closed_loop import RigData, _ensure_current_layout, _run_chunk, build_rig
+
     inputs = _inputs(duration)
-    simulate(inputs, rng=np.random.default_rng(0), keep=False)
-    start = time.perf_counter()
-    simulate(inputs, rng=np.random.default_rng(0), keep=False, chunk=duration)
-    return duration * 1000.0 / (time.perf_counter() - start)
+    model = build_stack(inputs)
+    _ensure_current_layout()
+    best = (0.0, 0.0)
+    for _ in range(1 if os.environ.get("NUMBA_DISABLE_JIT") == "1" else 4):  # the first compiles
+        rig = build_rig(inputs, rng=np.random.default_rng(0))
+        data = new_data(model)
+        reset(model, data, 0.0, 0.0)
+        world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
+        n = rig.current_noise.size
+        out = np.full((n, len(RECORDED)), np.nan)
+        limits = np.array([np.inf, -np.inf, np.inf])
+        wall, cpu = time.perf_counter(), time.thread_time()
+        _run_chunk(0, out, model, data, rig, world, limits)
+        rate = (n / (time.perf_counter() - wall), n / (time.thread_time() - cpu))
+        best = max(best, rate)
+    return best
 
 
-def _plain_python(duration: float) -> float:
+def _whole_simulate(duration: float) -> tuple[float, float]:
+    """(periods/s of wall time, of thread CPU time) of a whole ``simulate()``, best of three."""
+    inputs = _inputs(duration)
+    stack = build_stack(inputs)
+    simulate(inputs, rng=np.random.default_rng(0), stack=stack, keep=False)
+    best = (0.0, 0.0)
+    n = round(duration * 1000.0)
+    for _ in range(3):
+        wall, cpu = time.perf_counter(), time.thread_time()
+        simulate(inputs, rng=np.random.default_rng(0), stack=stack, keep=False, chunk=duration)
+        best = max(best, (n / (time.perf_counter() - wall), n / (time.thread_time() - cpu)))
+    return best
+
+
+def _plain_python(duration: float) -> tuple[float, float]:
+    """The loop alone with the JIT off, in a subprocess: (periods/s wall, CPU)."""
     code = (
-        "import time, numpy as np, sys; sys.path.insert(0, 'bench');"
-        "from bench_closed_loop import _inputs; from motosim.sim import simulate;"
-        f"inp = _inputs({duration}); t0 = time.perf_counter();"
-        f"simulate(inp, rng=np.random.default_rng(0), keep=False, chunk={duration});"
-        f"print({duration} * 1000.0 / (time.perf_counter() - t0))"
+        "import sys; sys.path.insert(0, 'bench'); from bench_closed_loop import _loop_alone;"
+        f"print(*_loop_alone({duration}))"
     )
     env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
     )
-    return float(out.stdout.strip().splitlines()[-1])
+    wall, cpu = out.stdout.strip().splitlines()[-1].split()
+    return float(wall), float(cpu)
+
+
+def _solve_ivp_loop(duration: float) -> tuple[float, float]:
+    """The sampled, quantised loop with the handlebar by ``solve_ivp``: (periods/s wall, CPU)."""
+    from scipy.integrate import solve_ivp
+
+    from motosim.sim.closed_loop import build_rig
+
+    inputs = _inputs(duration)
+    model = build_stack(inputs)
+    rig = build_rig(inputs, rng=np.random.default_rng(0))
+    data = new_data(model)
+    reset(model, data, 0.0, 0.0)
+    step(model, data, 0.0, 0.0, 0.0, 0.0, 0.0)  # compiled before the clock starts
+    reset(model, data, 0.0, 0.0)
+    J, beta, beta_s, nkt = (float(v) for v in rig.handlebar)
+    q, h, n_sub = rig.quantum, model.dt, rig.plant_substeps
+
+    def period(theta: float, omega: float, torque: float, t0: float, t1: float) -> list[float]:
+        while t0 < t1:
+            if omega == 0.0:
+                if abs(torque) <= beta_s:
+                    return [theta, 0.0]  # stuck for the rest of the period (torque held)
+                s = 1.0 if torque > 0.0 else -1.0
+            else:
+                s = 1.0 if omega > 0.0 else -1.0
+
+            def rhs(t: float, y: np.ndarray, s: float = s) -> list[float]:
+                return [y[1], (torque - beta * y[1] - beta_s * s) / J]
+
+            def stops(t: float, y: np.ndarray) -> float:
+                return float(y[1])
+
+            stops.terminal = True  # type: ignore[attr-defined]
+            stops.direction = -s  # type: ignore[attr-defined]
+            sol = solve_ivp(rhs, (t0, t1), [theta, omega], events=stops, rtol=1e-8, atol=1e-10)
+            if sol.status == 1:
+                theta, omega, t0 = float(sol.y_events[0][0][0]), 0.0, float(sol.t_events[0][0])
+            else:
+                return [float(sol.y[0, -1]), float(sol.y[1, -1])]
+        return [theta, omega]
+
+    n = round(duration / h)
+    theta, omega = 0.0, 0.0
+    wall, cpu = time.perf_counter(), time.thread_time()
+    for k in range(n):
+        meas = math.floor(theta / q + 0.5) * q if q > 0.0 else theta
+        tau_r = float(rig.rider_profile[k * n_sub])
+        i_cmd = step(model, data, meas, rig.current_noise[k], tau_r, rig.force[k],
+                     rig.side_force[k])  # fmt: skip
+        theta, omega = period(theta, omega, tau_r + nkt * i_cmd, k * h, (k + 1) * h)
+    return n / (time.perf_counter() - wall), n / (time.thread_time() - cpu)
 
 
 def _python_control(duration: float, *, blocks: bool) -> float:
@@ -173,29 +270,6 @@ def _python_control(duration: float, *, blocks: bool) -> float:
     return t.size / (time.perf_counter() - start)
 
 
-def _campaign_share(seeds: list[int]) -> int:
-    stack = build_stack(_inputs(10.0))  # designed once, run on every perturbed handlebar
-    steps = 0
-    for seed in seeds:
-        rng = np.random.default_rng(seed)
-        inertia, damping = rng.uniform(0.5, 1.5, 2)
-        inputs = _inputs(10.0, inertia, damping)
-        run = simulate(inputs, rng=rng, stack=stack, keep=False, chunk=10.0)
-        steps += 10_000 if run.t.size else 0
-    return steps
-
-
-def _campaign(runs: int) -> float:
-    with ProcessPoolExecutor(2) as pool:
-        list(pool.map(_campaign_share, [[0], [1]]))  # compile and design in each worker
-        start = time.perf_counter()
-        shares = [list(range(2, runs + 2, 2)), list(range(3, runs + 2, 2))]
-        total = sum(pool.map(_campaign_share, shares))
-        elapsed = time.perf_counter() - start
-    assert total == runs * 10_000
-    return elapsed
-
-
 @njit(cache=True)
 def _drive_stack(model, data, theta, torque):  # type: ignore[no-untyped-def]
     """The stack step alone, fed a recorded angle and rider torque; returns a checksum."""
@@ -245,23 +319,33 @@ def _without_feedforward(model: StackModel) -> StackModel:
 
 
 def run() -> dict[str, float]:
-    """Steps per second of each, the ratios, and the campaign's wall time."""
+    """Periods per second of each (wall and CPU time), the ratios, the feedforward's cost."""
+    load = os.getloadavg()[0]
     projection = _ratio(20.0, _without_projection)
     feedforward = _ratio(20.0, _without_feedforward)
-    compiled = max(_compiled(60.0) for _ in range(3))
-    plain = _plain_python(0.5)
+    loop_wall, loop_cpu = _loop_alone(60.0)
+    whole_wall, whole_cpu = _whole_simulate(60.0)
+    plain_wall, plain_cpu = _plain_python(0.5)
+    ivp_wall, ivp_cpu = _solve_ivp_loop(0.5)
     blocks = _python_control(0.5, blocks=True)
     single = _python_control(0.5, blocks=False)
-    campaign = _campaign(1000)
     return {
-        "compiled closed loop [steps/s]": compiled,
-        "plain Python, same code [steps/s]": plain,
-        "python-control, interconnected blocks [samples/s]": blocks,
-        "python-control, one hand-written nlsys [samples/s]": single,
-        "compiled / plain Python": compiled / plain,
-        "compiled / python-control blocks": compiled / blocks,
-        "compiled / python-control one nlsys": compiled / single,
+        "load average (1 min) before": load,
+        "compiled loop alone [periods/s of CPU]": loop_cpu,
+        "compiled loop alone [periods/s of wall time]": loop_wall,
+        "whole simulate() (rig built, loop, checks) [periods/s of CPU]": whole_cpu,
+        "whole simulate() [periods/s of wall time]": whole_wall,
+        "same loop, plain Python and NumPy [periods/s of CPU]": plain_cpu,
+        "same loop, plain Python and NumPy [periods/s of wall time]": plain_wall,
+        "same loop, handlebar by solve_ivp, step compiled [periods/s of CPU]": ivp_cpu,
+        "same loop, handlebar by solve_ivp [periods/s of wall time]": ivp_wall,
+        "python-control, simpler loop, interconnected blocks [samples/s wall]": blocks,
+        "python-control, simpler loop, one nlsys [samples/s wall]": single,
+        "compiled / plain Python, same loop (CPU)": loop_cpu / plain_cpu,
+        "compiled / solve_ivp, same loop (CPU)": loop_cpu / ivp_cpu,
+        "compiled / python-control blocks (different loops, wall)": loop_wall / blocks,
+        "compiled / python-control one nlsys (different loops, wall)": loop_wall / single,
         "stick projection on / off (time of a run)": projection,
         "both feedforward terms on / off (time of a run)": feedforward,
-        "1000 perturbed 10 s runs at 1 kHz, 2 processes [s]": campaign,
+        "load average (1 min) after": os.getloadavg()[0],
     }

@@ -2,7 +2,10 @@
 
 Each benchmark module ``bench/bench_*.py`` has ``run() -> dict`` that measures the project's
 code and a baseline in the same run and returns the figures (speeds and ratios). Timings are
-wall-clock best-of-N on this machine; compare ratios, not absolute numbers, across machines.
+best-of-N on this machine, in wall-clock time and, where the module says so, CPU time
+(``time.thread_time``, ``time.process_time`` or a subprocess's ``RUSAGE_CHILDREN``) beside
+the load average (``os.getloadavg``): on a shared machine the CPU time is the figure to
+compare; compare ratios, not absolute numbers, across machines.
 """
 
 import argparse

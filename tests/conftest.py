@@ -5,6 +5,8 @@ most of the suite's time; ``make check`` runs the others (``pytest -m "not slow"
 a minute and ``make test`` runs them all.
 """
 
+import hashlib
+
 import pytest
 from hypothesis import settings
 
@@ -130,6 +132,21 @@ otherwise."""
 UNMARKED_SLOW = 2.0
 """A test outside both lists that runs longer than this [s] is named at the end of a
 ``-m "not slow"`` run (``make check``), to be added to them."""
+
+
+@pytest.fixture(autouse=True)
+def _design_cache(
+    request: pytest.FixtureRequest,
+    tmp_path_factory: pytest.TempPathFactory,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Each test its own design cache (motosim.io.cache), made only when a design is stored:
+    no test reads a design another test stored (one that patches a design function sees it
+    called, whatever the order), and none touches the user's cache; the commands a test
+    runs inherit it."""
+    base = tmp_path_factory.getbasetemp()
+    name = hashlib.sha1(request.node.nodeid.encode()).hexdigest()[:16]
+    monkeypatch.setenv("MOTOSIM_CACHE_DIR", str(base / "design-cache" / name))
 
 
 @pytest.fixture(scope="session")

@@ -63,6 +63,7 @@ def test_ctrl_c_while_the_stack_is_built_stops_the_run(
     code = main([
         "run", str(SCENARIOS / "realtime_square.toml"), "--bus", "virtual", "--out", str(out),
         "--duration", "2", "--no-report", "--telemetry", "off",
+        "--no-cache",  # the stack built here, not read from the design cache
     ])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 130, err

@@ -40,13 +40,24 @@ from motosim.campaign.spec import TRUE_HANDLEBAR, Campaign, Factor
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError, RunFailedError
 from motosim.estimation.walcott_zak import ObserverSettings
+from motosim.io.cache import DesignCache, cached_stack
 from motosim.io.results import folder_lock
 from motosim.io.runs import parameter_source, resolve
 from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
-from motosim.sim import build_stack, prepare, simulate
+from motosim.sim import RunInputs, Scenario, build_stack, prepare, simulate
+from motosim.sim.closed_loop import (
+    RigModel,
+    build_rig,
+    perturb_rig,
+    rider_design,
+    rider_route,
+    rig_key,
+    route_length,
+)
 from motosim.sim.metrics import range_reason, run_metrics, validity_limits
+from motosim.sim.rider import RiderGains, design_rider
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
@@ -93,6 +104,12 @@ class Design:
         CSV profiles.
     true_handlebars : Mapping of str to HandlebarParameters
         The true handlebar sets the runs name.
+    rider : RiderGains or None
+        The virtual rider's schedule for the design's first run's rider settings
+        (:func:`motosim.sim.closed_loop.rider_design`); the runs whose rider differs design
+        their own, once per worker.
+    rider_settings : str
+        Those settings, as :class:`_Worker` compares them.
     """
 
     key: str
@@ -103,6 +120,8 @@ class Design:
     observer: ObserverSettings | None
     tables: Mapping[str, TimeSeries]
     true_handlebars: Mapping[str, HandlebarParameters]
+    rider: RiderGains | None = None
+    rider_settings: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -156,6 +175,9 @@ class CampaignSummary:
     overhead : float
         Fraction of the workers' time in the run phase not spent in a task (start-up,
         scheduling, transfer, writing, waiting on the last tasks).
+    shortened_to : int or None
+        With ``runs`` (``--runs``): the number of the plan's first runs this call was
+        limited to.
     """
 
     name: str
@@ -173,25 +195,76 @@ class CampaignSummary:
     cpu: float
     compute: float
     overhead: float
+    shortened_to: int | None = None
 
 
-def design_for(plan: Plan, key: str) -> Design:
-    """Design the stack shared by the runs of design ``key`` (once per distinct design)."""
+def design_for(plan: Plan, key: str, *, cache: DesignCache | None = None) -> Design:
+    """Design the stack shared by the runs of design ``key`` (once per distinct design).
+
+    With a ``cache`` (:class:`motosim.io.cache.DesignCache`), the designs are read from it
+    when they were made before (by any command), else made and stored.
+    """
     first = next(r for r in plan.runs if r.design == key)
     scenario, _ = scenario_of(plan.base, plan.campaign.factors, first)
     folder = Path(plan.folder)
-    inputs = resolve(scenario, folder)
+    if cache is None:
+        inputs = resolve(scenario, folder)
+        stack = build_stack(inputs)
+    else:
+        with cache.designing(f"{plan.campaign.name}, design {key}"):
+            inputs = resolve(scenario, folder, cache=cache)
+            stack = cached_stack(cache, inputs)
     nominal = load_parameters(parameter_source(scenario.handlebar.nominal, folder), "handlebar")
     return Design(
         key=key,
-        stack=build_stack(inputs),
+        stack=stack,
         sharp=inputs.sharp,
         nominal=nominal,
         controller=inputs.controller,
         observer=inputs.observer,
         tables=inputs.tables,
         true_handlebars=plan.true_handlebars,
+        rider=inputs.rider,
+        rider_settings=repr(sorted(rider_design(inputs.scenario).items())),
     )
+
+
+class _Worker:
+    """What a worker builds once and reuses run after run of a task: the rig (perturbed in
+    place while the runs differ only in their true handlebar and seed), the virtual rider's
+    paths and gain schedules."""
+
+    def __init__(self) -> None:
+        self.rig_key: Any = None
+        self.last_rig: RigModel | None = None
+        self.routes: dict[Any, tuple[np.ndarray, float]] = {}
+        self.riders: dict[tuple[str, str], RiderGains] = {}
+
+    def rider(self, design: Design, scenario: Scenario) -> RiderGains:
+        """The schedule of ``scenario``'s rider: the design's, or one designed here once."""
+        settings = rider_design(scenario)
+        key = (design.key, repr(sorted(settings.items())))
+        if key not in self.riders:
+            shared = design.rider if key[1] == design.rider_settings else None
+            self.riders[key] = shared or design_rider(design.sharp, **settings)
+        return self.riders[key]
+
+    def rig(self, design: Design, inputs: RunInputs, rng: np.random.Generator) -> RigModel:
+        """The rig of a run: the previous run's perturbed, or built (with a shared path)."""
+        sc = inputs.scenario
+        key = (design.key, rig_key(sc))
+        if self.last_rig is not None and key == self.rig_key:
+            return perturb_rig(self.last_rig, inputs, rng=rng)
+        route = None
+        if sc.rider.kind == "virtual":
+            where = (sc.rider.path, route_length(sc))
+            if where not in self.routes:
+                if len(self.routes) >= 8:
+                    self.routes.clear()
+                self.routes[where] = rider_route(sc)
+            route = self.routes[where]
+        self.last_rig, self.rig_key = build_rig(inputs, rng=rng, route=route), key
+        return self.last_rig
 
 
 _NEEDS = {
@@ -223,11 +296,15 @@ def _metrics(ts: TimeSeries, names: Sequence[str]) -> list[float]:
 
 
 def _run_one(
-    task: Task, planned: PlannedRun
+    task: Task, planned: PlannedRun, worker: _Worker | None = None
 ) -> tuple[str, str, float, list[float], TimeSeries | None]:
-    """Simulate one run: (status, reason, failure time [s], metrics, signals or None)."""
+    """Simulate one run: (status, reason, failure time [s], metrics, signals or None).
+
+    ``worker`` holds what the task's previous runs built (by default nothing is reused).
+    """
     nan = [math.nan] * len(task.metrics)
     d = task.design
+    worker = _Worker() if worker is None else worker
     try:
         scenario, overrides = scenario_of(task.base, task.factors, planned)
         true = d.true_handlebars[scenario.handlebar.true]
@@ -241,14 +318,16 @@ def _run_one(
             controller=d.controller,
             observer=d.observer,
             tables=d.tables,
+            rider=worker.rider(d, scenario),
         )
     except MotosimError as err:
         return "failed", f"invalid: {err}", math.nan, nan, None
     limits = validity_limits(scenario.motorcycle.speed)
     try:
+        rig = worker.rig(d, inputs, np.random.default_rng(scenario.seed))
         ts = simulate(
             inputs, rng=np.random.default_rng(scenario.seed), stack=d.stack,
-            chunk=scenario.duration, stop_outside=limits,
+            chunk=scenario.duration, stop_outside=limits, rig=rig,
         )  # fmt: skip
     except RunFailedError as err:
         return "failed", str(err), math.nan if err.time is None else err.time, nan, None
@@ -279,9 +358,10 @@ def run_task(task: Task) -> tuple[dict[str, list[Any]], float, float]:
     }
     columns.update({p: [] for p in paths})
     columns.update({m: [] for m in task.metrics})
+    worker = _Worker()
     for planned in task.runs:
         t0 = time.perf_counter()
-        status, reason, failed_at, values, ts = _run_one(task, planned)
+        status, reason, failed_at, values, ts = _run_one(task, planned, worker)
         if task.series is not None and ts is not None:
             task.series.write(planned.run_id, planned.seed, ts)
         columns["elapsed"].append(time.perf_counter() - t0)
@@ -405,6 +485,8 @@ def run_campaign(
     scheduler: str | None = None,
     jobs: int | None = None,
     on_progress: Callable[[int, int, int], None] | None = None,
+    runs: int | None = None,
+    cache: DesignCache | None = None,
 ) -> CampaignSummary:
     """Run a campaign into the folder ``out``, skipping the runs it already holds.
 
@@ -425,6 +507,13 @@ def run_campaign(
         Local worker processes (default: every core); 1 runs in this process.
     on_progress : callable, optional
         Called as ``on_progress(done, total, failed)`` after each task.
+    runs : int, optional
+        Run only the first ``runs`` of the plan (a shortened campaign: its manifest says
+        ``"shortened"`` until the whole plan is written; a call without ``runs`` completes
+        it).
+    cache : DesignCache, optional
+        Where the designs are read from and stored (:mod:`motosim.io.cache`); by default
+        designed in this call.
 
     Returns
     -------
@@ -441,6 +530,8 @@ def run_campaign(
     if chosen == "joblib" and scheduler is not None:
         raise MotosimError("--scheduler is for --backend dask")
     workers = _workers(chosen, jobs, scheduler)
+    if runs is not None and not 1 <= runs:
+        raise MotosimError(f"--runs {runs}; expected at least 1 run")
     plan = plan_campaign(campaign)
     kinds: list[type] = []
     for f in campaign.factors:
@@ -456,7 +547,10 @@ def run_campaign(
             factors=[(f.path, k) for f, k in zip(campaign.factors, kinds, strict=True)],
             metrics=campaign.metrics,
         )
-        return _fill(campaign, out, plan, store, chosen, workers, scheduler, start, on_progress)
+        return _fill(
+            campaign, out, plan, store, chosen, workers, scheduler, start, on_progress,
+            runs, cache,
+        )  # fmt: skip
 
 
 def _fill(
@@ -469,14 +563,20 @@ def _fill(
     scheduler: str | None,
     start: float,
     on_progress: Callable[[int, int, int], None] | None,
+    limit: int | None = None,
+    cache: DesignCache | None = None,
 ) -> CampaignSummary:
-    """Run the campaign's runs that ``store`` does not hold yet (:func:`run_campaign`)."""
+    """Run the campaign's runs that ``store`` does not hold yet (:func:`run_campaign`), of
+    the first ``limit`` of the plan when given."""
     if store.previous == "stopped":
         _log.info("%s: its last call stopped while running (killed, or a full disk); resuming", out)
-    todo = [r for r in plan.runs if r.run_id not in store.done]
-    skipped = len(plan.runs) - len(todo)
+    if limit is not None and limit >= len(plan.runs):
+        limit = None  # the whole plan
+    planned = plan.runs if limit is None else plan.runs[:limit]
+    todo = [r for r in planned if r.run_id not in store.done]
+    skipped = len(planned) - len(todo)
     needed = sorted({r.design for r in todo})
-    designs = {key: design_for(plan, key) for key in needed}
+    designs = {key: design_for(plan, key, cache=cache) for key in needed}
     series = None
     if campaign.series:
         open_series_store(out, campaign.series, campaign.every)
@@ -494,8 +594,10 @@ def _fill(
         "backend": chosen,
         "workers": workers,
         "status": "running",
-        "written": skipped,
+        "written": len(store.done & {r.run_id for r in plan.runs}),
     }
+    if limit is not None:
+        manifest["shortened_to"] = len(planned)  # --runs: the first runs of the plan
     # "running" holds only while this process holds the folder's lock: a reader that can take
     # the lock reads the campaign as stopped (read_manifest), however this call ends
     store.write_manifest(manifest)
@@ -506,7 +608,7 @@ def _fill(
     status = "interrupted"
     try:
         if on_progress is not None:
-            on_progress(done, len(plan.runs), failed)
+            on_progress(done, len(planned), failed)
         if tasks and workers == 1 and chosen == "joblib":
             results = _serial(tasks)
         elif tasks and chosen == "joblib":
@@ -521,8 +623,9 @@ def _fill(
             done += len(columns["run_id"])
             failed += sum(s != "ok" for s in columns["status"])
             if on_progress is not None:
-                on_progress(done, len(plan.runs), failed)
-        status = "complete"
+                on_progress(done, len(planned), failed)
+        whole = store.done >= {r.run_id for r in plan.runs}
+        status = "complete" if whole else "shortened"
     except BaseException as err:
         if not isinstance(err, KeyboardInterrupt | SystemExit):  # a full disk, a worker lost
             status = "failed"
@@ -553,6 +656,7 @@ def _fill(
             cpu=cpu,
             compute=compute,
             overhead=max(overhead, 0.0),
+            shortened_to=None if limit is None else len(planned),
         )
         manifest.update(
             status=status,

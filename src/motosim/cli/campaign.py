@@ -5,10 +5,12 @@ import math
 import os
 import re
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
 from motosim.cli._common import check_folder_target, check_output, print_json
+from motosim.cli.cache import add_cache_option, design_cache
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -41,21 +43,32 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--no-report", dest="report", action="store_false", help="skip DIR/report.html"
     )
+    parser.add_argument(
+        "--runs",
+        type=int,
+        metavar="N",
+        help="run only the first N runs of the plan (a shortened campaign, said so in its "
+        "manifest and report; run again without --runs to complete it)",
+    )
     parser.add_argument("--rerun", metavar="RUN_ID", help="run one run again and compare it")
     parser.add_argument(
         "--write-scenario",
         metavar="FILE",
         help="with --rerun: also write the run as a scenario file for motosim simulate",
     )
+    add_cache_option(parser)
     parser.set_defaults(func=run)
 
 
-def _progress_bar(enabled: bool) -> Any:
+def _progress_bar(enabled: bool, total: int, initial: int) -> Any:
     if not enabled:
         return None
     from tqdm import tqdm
 
-    return tqdm(unit=" runs", file=sys.stderr, leave=False, dynamic_ncols=True)
+    return tqdm(
+        total=total, initial=initial, unit=" runs", file=sys.stderr, leave=False,
+        dynamic_ncols=True,
+    )  # fmt: skip
 
 
 def _same_series(out: str, run_id: str, series: dict[str, Any]) -> bool:
@@ -125,6 +138,10 @@ def _check_options(args: argparse.Namespace) -> None:
         from motosim.campaign.results import check_store_folder
 
         check_store_folder(out)
+    if args.runs is not None and not 1 <= args.runs <= 10_000_000:
+        raise MotosimError(f"--runs {short_repr(args.runs)}; expected 1 to 10000000 runs")
+    if args.runs is not None and args.rerun is not None:
+        raise MotosimError("--runs is for running a campaign, not with --rerun")
     if args.jobs is not None and not 1 <= args.jobs <= 4096:
         raise MotosimError(f"--jobs {short_repr(args.jobs)}; expected 1 to 4096 worker processes")
     address = re.fullmatch(
@@ -158,13 +175,17 @@ def run(args: argparse.Namespace) -> int:
         return _rerun(args)
     from motosim.campaign import load_campaign, run_campaign
 
+    start = time.perf_counter()
     campaign = load_campaign(args.campaign)
-    bar = _progress_bar(not args.json and sys.stderr.isatty())
+    bars: list[Any] = []  # drawn from the first call on, once planned and designed
 
     def progress(done: int, total: int, failed: int) -> None:
+        if not bars:
+            # the runs already in the folder are not counted in the rate, nor the design
+            bars.append(_progress_bar(not args.json and sys.stderr.isatty(), total, done))
+        bar = bars[0]
         if bar is not None:
-            bar.total = total
-            bar.n = done
+            bar.update(done - bar.n)
             bar.set_postfix_str(f"{failed} failed", refresh=False)
             bar.refresh()
 
@@ -180,6 +201,8 @@ def run(args: argparse.Namespace) -> int:
                 scheduler=args.scheduler,
                 jobs=args.jobs,
                 on_progress=progress,
+                runs=args.runs,
+                cache=design_cache(args, quiet=args.json),
             )
         except KeyboardInterrupt:
             print(
@@ -189,26 +212,41 @@ def run(args: argparse.Namespace) -> int:
             )
             return 130
         finally:
-            if bar is not None:
-                bar.close()
+            if bars and bars[0] is not None:
+                bars[0].close()
         report = None
+        report_start = time.perf_counter()
         if args.report:
             from motosim.report.campaign import build_campaign_report
 
             report = build_campaign_report(args.out)
+    end = time.perf_counter()
     if args.json:
         import dataclasses
 
-        print_json({**dataclasses.asdict(summary), "report": str(report) if report else None})
+        print_json(
+            {**dataclasses.asdict(summary), "report": str(report) if report else None,
+             "command_wall": end - start, "report_time": end - report_start}
+        )  # fmt: skip
         return 0
     s = summary
-    print(
-        f"{s.name}: {s.runs} runs in {s.folder} ({s.skipped} already there, {s.computed} run "
-        f"now, {s.failed} failed); {s.designs} design(s), {s.tasks} tasks on {s.workers} workers"
+    shortened = (
+        f" (--runs {s.shortened_to}: the first {s.shortened_to} of the plan's {s.runs})"
+        if s.shortened_to is not None
+        else ""
     )
-    rate = s.computed / (s.wall - s.design_time) if s.computed and s.wall > s.design_time else 0
+    planned = s.runs if s.shortened_to is None else s.shortened_to
     print(
-        f"  wall {s.wall:.2f} s (planning and design {s.design_time:.2f} s), {rate:.1f} runs/s, "
+        f"{s.name}: {planned} runs{shortened} in {s.folder} ({s.skipped} already there, "
+        f"{s.computed} run now, {s.failed} failed); {s.designs} design(s), {s.tasks} tasks on "
+        f"{s.workers} workers"
+    )
+    run_phase = s.wall - s.design_time
+    rate = s.computed / run_phase if s.computed and run_phase > 0 else 0.0
+    per_run = f", {1e3 * s.cpu / s.computed:.1f} ms of CPU per run" if s.computed else ""
+    print(
+        f"  wall {end - start:.2f} s: planning and design {s.design_time:.2f} s, runs "
+        f"{run_phase:.2f} s ({rate:.1f} runs/s{per_run}), report {end - report_start:.2f} s; "
         f"scheduler overhead {100 * s.overhead:.1f} % of the workers' time"
     )
     if report:

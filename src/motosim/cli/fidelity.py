@@ -11,6 +11,7 @@ from motosim.cli._common import (
     save_figure,
     warn_atypical,
 )
+from motosim.cli.cache import add_cache_option, design_cache
 from motosim.errors import MotosimError
 
 EXCITATIONS = ("multisine", "chirp")  # motosim.sim.fidelity.EXCITATIONS, without importing SciPy
@@ -66,6 +67,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--overwrite", action="store_true", help="replace the --plot file if it exists"
     )
+    add_cache_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -83,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from motosim.io.runs import load_scenario, resolve
+    from motosim.cli.simulate import resolve_cached
+    from motosim.io.runs import load_scenario
     from motosim.sim import simulate
     from motosim.sim.fidelity import feel_scenario, periodic_feel, rendered_feel
     from motosim.sim.scenario import MultisineProfile, Scenario
@@ -133,10 +136,11 @@ def run(args: argparse.Namespace) -> int:
             base, speed=args.speed, amplitude=args.amplitude, band=band, duration=duration,
             excitation="chirp" if chirp else "multisine", period=args.period, periods=args.periods,
         )  # fmt: skip
-        inputs = resolve(scenario, folder)
+        cache = design_cache(args, quiet=getattr(args, "json", False))
+        inputs, stack = resolve_cached(scenario, folder, cache)
     for option in ("--speed", "--duration", "--amplitude"):
         warn_atypical("fidelity", option, getattr(args, option[2:]))
-    result = simulate(inputs, rng=np.random.default_rng(scenario.seed), keep=True)
+    result = simulate(inputs, rng=np.random.default_rng(scenario.seed), stack=stack, keep=True)
     signals = (result.t, result["tau_r"], result["theta_h"], result["delta"], inputs.sharp)
     probe = scenario.rider.probe
     if isinstance(probe, MultisineProfile):

@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import check_output_folder, print_json, show_progress, write_text
-from motosim.cli.simulate import run_scenario
+from motosim.cli.cache import add_cache_option, design_cache
+from motosim.cli.simulate import resolve_cached, run_scenario
 from motosim.errors import MotosimError
 from motosim.params.toml import parse_toml
 
@@ -37,6 +38,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--overwrite", action="store_true", help="replace what an existing --out folder holds"
     )
+    add_cache_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -149,9 +151,9 @@ def run(args: argparse.Namespace) -> int:
     except OSError as err:
         raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
     from motosim.io.results import folder_lock, load_result
-    from motosim.io.runs import resolve
     from motosim.report import build_report  # matplotlib: seconds, only once the output is fine
 
+    cache = design_cache(args, quiet=args.json)
     summaries: dict[str, dict[str, Any]] = {}
     runs: dict[str, SimResult] = {}
     scenarios = paper_scenarios()
@@ -160,10 +162,10 @@ def run(args: argparse.Namespace) -> int:
         if not args.json:
             print(f"[{k}/{len(scenarios)}] {scenario.name}: {scenario.description}")
         with folder_lock(folder, shared=True):  # until its report is written (as simulate)
+            inputs, stack = resolve_cached(scenario, Path("."), cache)
             summaries[scenario.name] = run_scenario(
-                resolve(scenario, Path(".")), folder, progress=show_progress(args.json),
-                overwrite=True,
-            )  # fmt: skip
+                inputs, folder, progress=show_progress(args.json), overwrite=True, stack=stack
+            )
             build_report(folder)
             runs[scenario.name] = load_result(folder)
     figures = _figures(runs, out)

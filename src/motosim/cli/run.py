@@ -19,6 +19,7 @@ from motosim.cli._common import (
     warn_atypical,
     write_text,
 )
+from motosim.cli.cache import add_cache_option, design_cache
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
@@ -35,6 +36,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from motosim.cueing import CueingConfig
+    from motosim.io.cache import DesignCache
     from motosim.rt.rig import RigSettings
     from motosim.sim import RunInputs, Scenario
 
@@ -133,6 +135,7 @@ def register(sub: Any) -> None:
         "--no-report", dest="report", action="store_false", help="skip the HTML report"
     )
     add_privilege_options(parser)
+    add_cache_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -192,7 +195,7 @@ def check_rt_options(args: argparse.Namespace) -> RtOptions:
 
 
 def load_realtime(
-    path: str, *, safety: bool = False, pace: str | None = None
+    path: str, *, safety: bool = False, pace: str | None = None, cache: "DesignCache | None" = None
 ) -> tuple["RunInputs", dict[str, Any]]:
     """Read a scenario file: its resolved run and its ``[realtime]`` table.
 
@@ -206,7 +209,8 @@ def load_realtime(
     The rig thus keeps a latency that ``run --pace clock`` refuses and ``run --pace bus``
     takes (equal control and measurement rates: up to a frame period against half a control
     period less). The rig's own ``[realtime.rig]`` latency, the bus it emulates, is not
-    bounded by the frame period: a slow bus is what it is there to show ``run``.
+    bounded by the frame period: a slow bus is what it is there to show ``run``. The designs
+    come from ``cache`` when one is given.
     """
     from motosim.io.runs import resolve
     from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, split_realtime
@@ -230,7 +234,10 @@ def load_realtime(
         control_rate=rates.control, measurement_rate=rates.measurement, origin=str(path),
     )  # fmt: skip
     rig_settings(scenario, realtime, origin=str(path))
-    return resolve(scenario, source.parent), realtime
+    if cache is None:
+        return resolve(scenario, source.parent), realtime
+    with cache.designing(scenario.name):
+        return resolve(scenario, source.parent, cache=cache), realtime
 
 
 def rig_settings(scenario: "Scenario", realtime: dict[str, Any], *, origin: str) -> "RigSettings":
@@ -585,11 +592,12 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     given back to the handler ``sigint`` once the loop has ended."""
     import numpy as np
 
+    from motosim.io.cache import cached_stack
     from motosim.io.can import UdpMulticastLink, handlebar_codecs, open_link
     from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, within_safety
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
-    from motosim.sim import build_rig, build_stack, run_metadata
+    from motosim.sim import build_rig, run_metadata
     from motosim.sim.metrics import validity_limits
     from motosim.sim.stack import account_for_delay
 
@@ -598,7 +606,8 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     with deferred_warnings():  # the scenario's, once every check has passed
-        inputs, realtime = load_realtime(args.scenario, safety=True, pace=args.pace)
+        cache = design_cache(args, quiet=args.json)
+        inputs, realtime = load_realtime(args.scenario, safety=True, pace=args.pace, cache=cache)
         sc = inputs.scenario
         if sc.motorcycle.input == "true":
             raise MotosimError(
@@ -620,12 +629,13 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             latency, pace=args.pace, control_rate=rate, measurement_rate=sc.rates.measurement,
             origin=args.scenario,
         )  # fmt: skip
-        model = build_stack(inputs)
         if args.pace not in run_paces(rate, sc.rates.measurement):
             raise MotosimError(
                 f"--pace bus with control = {rate:g} Hz and measurement = "
                 f"{sc.rates.measurement:g} Hz; expected equal rates (one period per status frame)"
             )
+        with cache.designing(sc.name):
+            model = cached_stack(cache, inputs)
         model = account_for_delay(model, age, inputs.nominal_handlebar)  # the frames' age
         world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
         codecs = handlebar_codecs()

@@ -11,12 +11,15 @@ from motosim.cli._common import (
     print_json,
     show_progress,
 )
+from motosim.cli.cache import add_cache_option, design_cache
 from motosim.errors import RunFailedError
 
 if TYPE_CHECKING:
-    from motosim.sim import RunInputs
+    from motosim.io.cache import DesignCache
+    from motosim.sim import RunInputs, Scenario
+    from motosim.sim.stack import StackModel
 
-__all__ = ["register", "run_scenario"]
+__all__ = ["register", "resolve_cached", "run_scenario"]
 
 
 def register(sub: Any) -> None:
@@ -38,46 +41,74 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--no-report", dest="report", action="store_false", help="skip the HTML report"
     )
+    add_cache_option(parser)
     parser.set_defaults(func=run)
     report = sub.add_parser("report", help="build the HTML report of a result folder")
     report.add_argument("folder", help="a result folder written by motosim simulate")
     report.set_defaults(func=run_report)
 
 
+def resolve_cached(
+    scenario: "Scenario", base: Path, cache: "DesignCache"
+) -> tuple["RunInputs", "StackModel"]:
+    """The run of ``scenario`` (files relative to ``base``) and its stack, designed through
+    ``cache``: one line on stderr when something is designed, with its time."""
+    from motosim.io.cache import cached_stack
+    from motosim.io.runs import resolve
+
+    with cache.designing(scenario.name):
+        inputs = resolve(scenario, base, cache=cache)
+        return inputs, cached_stack(cache, inputs)
+
+
 def run_scenario(
-    inputs: "RunInputs", folder: Path, *, progress: bool, overwrite: bool = False
+    inputs: "RunInputs",
+    folder: Path,
+    *,
+    progress: bool,
+    overwrite: bool = False,
+    stack: "StackModel | None" = None,
 ) -> dict[str, Any]:
-    """Simulate into ``folder``, with a progress bar on a terminal; returns the metrics."""
+    """Simulate into ``folder``, with a progress bar on a terminal; returns the metrics.
+
+    ``stack`` is the run's designed stack (:func:`resolve_cached`); by default it is
+    designed here.
+    """
     from motosim.io.runs import run_to_folder
 
     sc = inputs.scenario
     if not progress:
-        return run_to_folder(inputs, folder, overwrite=overwrite)
+        return run_to_folder(inputs, folder, overwrite=overwrite, stack=stack)
     from tqdm import tqdm
 
     n = round(sc.duration * sc.rates.control)
     with tqdm(
         total=n, unit=" steps", desc=sc.name, file=sys.stderr, leave=False, unit_scale=True
     ) as bar:
-        return run_to_folder(inputs, folder, overwrite=overwrite, on_rows=bar.update)
+        return run_to_folder(inputs, folder, overwrite=overwrite, on_rows=bar.update, stack=stack)
 
 
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     from motosim.io.results import folder_lock, is_complete_result, partial_folder
-    from motosim.io.runs import load_scenario, resolve
+    from motosim.io.runs import load_scenario
     from motosim.sim.metrics import warnings
 
+    cache = design_cache(args, quiet=args.json)
     with deferred_warnings():  # shown once the files it names are read too
         scenario = load_scenario(args.scenario)
-        inputs = resolve(scenario, Path(args.scenario).parent)
+        inputs, stack = resolve_cached(scenario, Path(args.scenario).parent, cache)
     # the folder stays locked until its report is written: a concurrent --overwrite of the
     # same folder is refused until then, not let in between the result and its report
     with folder_lock(folder, shared=True):
         try:
             summary = run_scenario(
-                inputs, folder, progress=show_progress(args.json), overwrite=args.overwrite
+                inputs,
+                folder,
+                progress=show_progress(args.json),
+                overwrite=args.overwrite,
+                stack=stack,
             )
         except KeyboardInterrupt:
             staged = partial_folder(folder)

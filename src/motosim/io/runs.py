@@ -5,7 +5,8 @@ The command line and any script build and run a scenario through these functions
 (parameter sets, a design file, CSV profiles, an OpenDRIVE road; relative to the scenario's
 folder) and designs
 what it asks for, :func:`load_run` does both, and :func:`run_to_folder` simulates into a
-result folder as the run goes. Nothing is cached between calls: a campaign that runs one
+result folder as the run goes. The designs are read from a design cache
+(:mod:`motosim.io.cache`) when one is passed in, never otherwise; a campaign that runs one
 design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`) and passes
 it to :func:`motosim.sim.simulate`.
 """
@@ -18,18 +19,14 @@ from typing import Any
 
 import numpy as np
 
-from motosim.control.torque_feedback import (
-    INTEGRAL_CORNER,
-    PAPER_CONTROLLER,
-    handlebar_bandwidth,
-    synthesize_controller,
-)
 from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
+from motosim.io.cache import DesignCache, cached_controller, cached_rider
 from motosim.io.design_file import read_design
 from motosim.io.logs import read_log
 from motosim.io.opendrive import read_opendrive
 from motosim.io.results import ResultWriter
+from motosim.model.linear import StateSpace
 from motosim.params import HandlebarParameters, load_parameters
 from motosim.params.toml import read_toml
 from motosim.sim import (
@@ -43,6 +40,7 @@ from motosim.sim import (
 )
 from motosim.sim.metrics import failure, range_reason, run_metrics, validity_limits
 from motosim.sim.scenario import CsvProfile, OpenDrivePath, implausible
+from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -97,14 +95,16 @@ def parameter_source(name: str, base: str | Path) -> str | Path:
     return candidate if candidate.suffix == ".toml" and candidate.is_file() else name
 
 
-def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
+def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None = None) -> RunInputs:
     """Load what ``scenario`` names, relative to the folder ``base``, and design its controller.
 
     The controller is the scenario's: none, the paper's eq. (26), the one of a design file
     (whose observer settings the run then uses too), or ours synthesised for the nominal
     handlebar at the scenario's bandwidth (by default
     :func:`~motosim.control.torque_feedback.handlebar_bandwidth` of the handlebar at the
-    measurement rate), order and integral corner.
+    measurement rate), order and integral corner. With a ``cache``
+    (:class:`motosim.io.cache.DesignCache`) the synthesis and the virtual rider's schedule
+    are read from it when they were designed before, else designed and stored.
 
     Raises
     ------
@@ -130,6 +130,8 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     c = scenario.controller
     controller, observer = None, None
     if c.kind == "paper":
+        from motosim.control.torque_feedback import PAPER_CONTROLLER
+
         controller = PAPER_CONTROLLER
     elif c.kind == "ours" and c.design is not None:
         design = read_design(parameter_source(c.design, folder))
@@ -143,22 +145,46 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
             _check_observer_rate(c.design, design.rate, observer, nominal, rate)
         _warn_other_handlebar(c.design, design.handlebar, nominal)
     elif c.kind == "ours":
-        bandwidth = c.bandwidth
-        if bandwidth is None:
-            bandwidth, controller = handlebar_bandwidth(
-                nominal, rate=scenario.rates.measurement, n_starts=4
+        rate = scenario.rates.measurement
+
+        def synthesis() -> StateSpace:  # SciPy: only when the design is not cached
+            from motosim.control.torque_feedback import (
+                INTEGRAL_CORNER,
+                handlebar_bandwidth,
+                synthesize_controller,
             )
-        if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
-            controller = synthesize_controller(
-                nominal,
-                rng=np.random.default_rng(0),
-                bandwidth=bandwidth,
-                order=c.order,
-                rate=scenario.rates.measurement,
-                n_starts=4,
-                integral_corner=c.integral_corner,
-            )
-    return prepare(
+
+            bandwidth = c.bandwidth
+            if bandwidth is None:
+                bandwidth, controller = handlebar_bandwidth(nominal, rate=rate, n_starts=4)
+            if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
+                controller = synthesize_controller(
+                    nominal,
+                    rng=np.random.default_rng(0),
+                    bandwidth=bandwidth,
+                    order=c.order,
+                    rate=rate,
+                    n_starts=4,
+                    integral_corner=c.integral_corner,
+                )
+            return controller
+
+        if cache is None:
+            controller = synthesis()
+        else:
+            with cache.designing(scenario.name):
+                settings = {
+                    "rate": rate,
+                    "bandwidth": c.bandwidth,
+                    "order": c.order,
+                    "integral_corner": c.integral_corner,
+                    "n_starts": 4,
+                    "seed": 0,
+                }
+                controller = cached_controller(
+                    cache, synthesis, handlebar=nominal, settings=settings
+                )
+    inputs = prepare(
         scenario,
         sharp=load_parameters(parameter_source(mc.params, folder), "sharp"),
         true_handlebar=load_parameters(parameter_source(hb.true, folder), "handlebar"),
@@ -167,6 +193,10 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
         observer=observer,
         tables=tables,
     )
+    if cache is None:
+        return inputs
+    with cache.designing(scenario.name):
+        return dataclasses.replace(inputs, rider=cached_rider(cache, inputs))
 
 
 def _check_observer_rate(
@@ -217,9 +247,9 @@ def _warn_other_handlebar(
         )
 
 
-def load_run(path: str | Path) -> RunInputs:
+def load_run(path: str | Path, *, cache: DesignCache | None = None) -> RunInputs:
     """Read a scenario file and resolve it (:func:`load_scenario` then :func:`resolve`)."""
-    return resolve(load_scenario(path), Path(path).parent)
+    return resolve(load_scenario(path), Path(path).parent, cache=cache)
 
 
 def run_to_folder(
@@ -228,6 +258,7 @@ def run_to_folder(
     *,
     overwrite: bool = False,
     on_rows: Callable[[int], None] | None = None,
+    stack: StackModel | None = None,
 ) -> dict[str, Any]:
     """Simulate ``inputs`` into ``folder`` (``result.h5``, ``result.csv``), block by block.
 
@@ -241,6 +272,9 @@ def run_to_folder(
         Replace a result already there.
     on_rows : callable, optional
         Called with the number of rows of each block written (for a progress bar).
+    stack : StackModel, optional
+        The run's designed stack (:func:`motosim.io.cache.cached_stack`); by default
+        :func:`motosim.sim.build_stack` of ``inputs``.
 
     Returns
     -------
@@ -271,8 +305,9 @@ def run_to_folder(
                     on_rows(block.shape[0])
 
             run = simulate(
-                inputs, rng=np.random.default_rng(sc.seed), on_block=on_block, stop_outside=limits
-            )
+                inputs, rng=np.random.default_rng(sc.seed), stack=stack, on_block=on_block,
+                stop_outside=limits,
+            )  # fmt: skip
             stopped = run.t.size < rows
             summary: dict[str, Any] = run_metrics(
                 run.t, run.get, complete=not stopped, max_current=sc.controller.max_current

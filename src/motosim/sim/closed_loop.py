@@ -36,7 +36,7 @@ from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
 from motosim.sim.loop_analysis import prediction_lead
-from motosim.sim.rider import design_rider, rider_torque
+from motosim.sim.rider import RiderGains, design_rider, rider_torque
 from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
 from motosim.sim.stack import (
     Held,
@@ -58,7 +58,11 @@ __all__ = [
     "RunInputs",
     "build_rig",
     "build_stack",
+    "perturb_rig",
     "prepare",
+    "rider_design",
+    "rider_route",
+    "rig_key",
     "route_length",
     "run_metadata",
     "simulate",
@@ -117,6 +121,10 @@ class RunInputs:
         Walcott-Zak settings from a design file; None for the defaults at the measurement step.
     tables : Mapping of str to TimeSeries
         CSV profiles by file name.
+    rider : RiderGains or None
+        The virtual rider's gain schedule, :func:`~motosim.sim.rider.design_rider` of
+        ``sharp`` with :func:`rider_design` of the scenario, designed beforehand (a design
+        cache's, or one shared by a campaign's runs); None to design it in :func:`build_rig`.
     """
 
     scenario: Scenario
@@ -126,6 +134,7 @@ class RunInputs:
     controller: StateSpace | None
     tables: Mapping[str, TimeSeries]
     observer: ObserverSettings | None = None
+    rider: RiderGains | None = None
 
 
 def prepare(
@@ -137,12 +146,15 @@ def prepare(
     controller: StateSpace | None,
     observer: ObserverSettings | None = None,
     tables: Mapping[str, TimeSeries] | None = None,
+    rider: RiderGains | None = None,
 ) -> RunInputs:
     """Apply the scenario's perturbations to the true handlebar and bundle the inputs.
 
     The true handlebar's J_eq and beta_eq are scaled by the scenario's factors and its dry
     friction removed when ``friction = false``; the nominal one is used as given (also without
-    dry friction then, as the paper neglects it in that case).
+    dry friction then, as the paper neglects it in that case). ``rider`` is the virtual
+    rider's schedule designed for ``sharp`` and :func:`rider_design` of ``scenario`` (None:
+    :func:`build_rig` designs it).
     """
     hb = scenario.handlebar
     true = perturbed(
@@ -156,7 +168,26 @@ def prepare(
     )
     if _feedback(scenario) and controller is None:
         raise MotosimError('the scenario needs a controller: give one (or kind = "none")')
-    return RunInputs(scenario, sharp, true, nominal, controller, tables or {}, observer)
+    return RunInputs(scenario, sharp, true, nominal, controller, tables or {}, observer, rider)
+
+
+def rider_design(scenario: Scenario) -> dict[str, Any]:
+    """The keyword arguments of :func:`~motosim.sim.rider.design_rider` for ``scenario``.
+
+    Everything the virtual rider's schedule depends on besides the motorcycle: a rider of
+    torque profiles gets a two-speed placeholder schedule, which :func:`build_rig` carries
+    but the loop does not read.
+    """
+    rider = scenario.rider
+    if rider.kind == "torque":
+        return {"speeds": np.array([1.0, 2.0])}
+    return {
+        "lateral_tolerance": rider.lateral_tolerance,
+        "course_tolerance": rider.course_tolerance,
+        "torque_scale": rider.torque_scale,
+        "preview": rider.preview,
+        "max_torque": rider.max_torque,
+    }
 
 
 STACK_OBSERVER_INERTIA = (200.0, 2.0)
@@ -332,6 +363,39 @@ def route_length(scenario: Scenario) -> float:
     return max(scenario.motorcycle.speed, 20.0) * scenario.duration * 1.5 + 200.0
 
 
+def rider_route(scenario: Scenario) -> tuple[Array, float]:
+    """The virtual rider's path of ``scenario`` as the rig holds it: rows x, y [m], heading
+    [rad], curvature [1/m], and its spacing [m]."""
+    assert scenario.rider.path is not None
+    route = scenario.rider.path.build(route_length(scenario))
+    return np.vstack([route.x, route.y, route.psi, route.kappa]), float(route.ds)
+
+
+def perturb_rig(rig: RigModel, inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
+    """``rig``, built for a run that differs from ``inputs`` only in its true handlebar and its
+    seed, made ``inputs``' in place: the handlebar's parameters and the current sensor's noise
+    (drawn from ``rng`` as :func:`build_rig` draws it).
+
+    A campaign's worker builds the rig once and perturbs it run after run; the caller
+    checks that the runs differ only there (:func:`rig_key`).
+    """
+    hb = inputs.true_handlebar
+    rig.handlebar[:] = (hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp)
+    noise = inputs.scenario.measurement.current_noise
+    if noise:
+        rng.standard_normal(out=rig.current_noise)  # rng.normal(0, noise, n), in place
+        np.multiply(rig.current_noise, noise, out=rig.current_noise)
+    return rig
+
+
+def rig_key(scenario: Scenario) -> Scenario:
+    """What a run's rig depends on besides its true handlebar and its seed: two runs with
+    equal keys (and equal motorcycles and tables) share a rig up to :func:`perturb_rig`."""
+    return dataclasses.replace(scenario, seed=0, handlebar=dataclasses.replace(
+        scenario.handlebar, inertia_factor=1.0, damping_factor=1.0
+    ))  # fmt: skip
+
+
 def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array:
     """``profile`` at the ``n * n_sub`` plant sub-steps of a run, read-only.
 
@@ -344,8 +408,14 @@ def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array
     return values
 
 
-def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
-    """The world of a run: true handlebar, sensors (noise drawn from ``rng``), rider, inputs."""
+def build_rig(
+    inputs: RunInputs, *, rng: np.random.Generator, route: "tuple[Array, float] | None" = None
+) -> RigModel:
+    """The world of a run: true handlebar, sensors (noise drawn from ``rng``), rider, inputs.
+
+    ``route`` is the virtual rider's path as :func:`rider_route` builds it for the scenario
+    (a campaign's worker reuses it across the runs that share it); by default built here.
+    """
     sc = inputs.scenario
     h = 1.0 / sc.rates.control
     n_sub = round(sc.rates.plant / sc.rates.control)
@@ -360,20 +430,12 @@ def build_rig(inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
         else:  # a profile of its own values only: the same array for every such run
             profile = _plant_rate_profile(rider.profile, n, n_sub, h)
         path_arr, path_ds = np.zeros((4, 2)), 1.0
-        gains = design_rider(inputs.sharp, speeds=np.array([1.0, 2.0]))
     else:
-        assert rider.path is not None
         profile = np.zeros(1)
-        route = rider.path.build(route_length(sc))
-        path_arr, path_ds = np.vstack([route.x, route.y, route.psi, route.kappa]), route.ds
-        gains = design_rider(
-            inputs.sharp,
-            lateral_tolerance=rider.lateral_tolerance,
-            course_tolerance=rider.course_tolerance,
-            torque_scale=rider.torque_scale,
-            preview=rider.preview,
-            max_torque=rider.max_torque,
-        )
+        path_arr, path_ds = rider_route(sc) if route is None else route
+    gains = inputs.rider
+    if gains is None:
+        gains = design_rider(inputs.sharp, **rider_design(sc))
     mc = sc.motorcycle
     r_D = derived_geometry(inputs.sharp)["r_D"]
     drive = mc.drive_torque.sample(t, inputs.tables)
@@ -507,6 +569,7 @@ def simulate(
     chunk: float = 1.0,
     keep: bool = True,
     stop_outside: tuple[float, float, float] | None = None,
+    rig: RigModel | None = None,
 ) -> TimeSeries:
     """Simulate a scenario, block by block.
 
@@ -530,6 +593,9 @@ def simulate(
         (largest roll [rad], lowest speed [m/s], highest speed [m/s]): stop at the first
         instant beyond them, that instant the last row (the model's range of validity,
         :func:`motosim.sim.metrics.validity_limits`). By default the run goes to its end.
+    rig : RigModel, optional
+        The run's world, built beforehand (:func:`build_rig`, :func:`perturb_rig`; ``rng``
+        is then not read); by default :func:`build_rig` of ``inputs`` with ``rng``.
 
     Returns
     -------
@@ -547,7 +613,7 @@ def simulate(
     """
     sc = inputs.scenario
     model = build_stack(inputs) if stack is None else stack
-    rig = build_rig(inputs, rng=rng)
+    rig = build_rig(inputs, rng=rng) if rig is None else rig
     _ensure_current_layout()
     data = new_data(model)
     world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
