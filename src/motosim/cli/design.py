@@ -50,6 +50,12 @@ MAX_SEED = 2**63 - 1
 RATE_RANGE = (10.0, 100_000.0)
 """Control rates admitted [Hz]: a real-time loop runs at 100 Hz to tens of kHz."""
 
+LOWEST_BANDWIDTH = 0.1
+"""Lowest ``--bandwidth`` admitted [Hz]; the highest is a fifth of ``--rate``
+(:func:`motosim.control.torque_feedback.check_options`). A rider steers at 0.1-5 Hz: a loop
+slower than the slowest of it renders no feel, and far below it the loop-shaping weight's
+integrator corner and the Riccati equations of the synthesis lose their precision."""
+
 
 def register(sub: Any) -> None:
     """Add ``design`` to the subcommands."""
@@ -220,6 +226,19 @@ def run(args: argparse.Namespace) -> int:
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
     check_number(args.latency, where="--latency", lower=0.0, upper=1.0 / args.rate, unit="s")
+    if args.bandwidth is not None:
+        check_number(args.bandwidth, where="--bandwidth", lower=LOWEST_BANDWIDTH,
+                     upper=args.rate / 5, unit="Hz")  # fmt: skip
+    speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
+    for speed in speeds:
+        check_number(
+            speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
+        )
+    if args.out is not None:
+        check_output(
+            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
+        )
+    hb = load_parameters(args.handlebar, "handlebar")
     import numpy as np
 
     from motosim.control.torque_feedback import (
@@ -241,16 +260,6 @@ def run(args: argparse.Namespace) -> int:
         rate=args.rate,
         integral_corner=args.integral_corner,
     )
-    speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
-    for speed in speeds:
-        check_number(
-            speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
-        )
-    if args.out is not None:
-        check_output(
-            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
-        )
-    hb = load_parameters(args.handlebar, "handlebar")
     warn_atypical("design", "--speeds", speeds)
     warn_atypical("design", "--rate", args.rate)
     if args.bandwidth is not None:

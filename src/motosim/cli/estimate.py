@@ -3,7 +3,7 @@
 import argparse
 from typing import Any
 
-from motosim.cli._common import check_output, print_json
+from motosim.cli._common import check_input, check_output, print_json
 from motosim.params import load_parameters
 from motosim.params.checks import check_number
 
@@ -65,6 +65,7 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, estimate, write and summarise."""
+    check_input(args.log, "log file", text=True)
     check_output(args.out, overwrite=args.overwrite, reads=(("log", args.log),))
     check_number(args.lipschitz, where="--lipschitz", lower=1e-3, upper=1e7, unit="rad/s^2")
     hb = load_parameters(args.handlebar, "handlebar")

@@ -5,7 +5,13 @@ import math
 import signal
 from typing import Any
 
-from motosim.cli._common import deferred_warnings, print_json, warn_atypical
+from motosim.cli._common import (
+    check_named_input,
+    check_scenario_inputs,
+    deferred_warnings,
+    print_json,
+    warn_atypical,
+)
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
@@ -77,6 +83,8 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
     check_udp_only_options(args)  # before the numerical stack is imported
+    check_scenario_inputs(args.scenario)
+    check_named_input(args.platform, "platform file")
     from motosim.cli.run import _Presses
 
     presses = _Presses()  # Ctrl-C while the rig starts: counted, not lost in a C callback

@@ -13,7 +13,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
+    check_named_input,
     check_result_folder,
+    check_scenario_inputs,
     deferred_warnings,
     print_json,
     warn_atypical,
@@ -572,6 +574,9 @@ def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
     check_udp_only_options(args)  # before the numerical stack is imported
     _check_wait(args)
+    check_scenario_inputs(args.scenario)
+    check_named_input(args.platform, "platform file")
+    check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     presses = _Presses()
     previous = signal.signal(signal.SIGINT, presses)
     try:

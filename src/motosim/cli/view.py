@@ -7,7 +7,7 @@ import sys
 import time
 from typing import Any
 
-from motosim.cli._common import check_output, warn_atypical
+from motosim.cli._common import check_output, check_result_input, warn_atypical
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -93,6 +93,9 @@ def register(sub: Any) -> None:
 
 def run_view(args: argparse.Namespace) -> int:
     """Serve the view of a result until interrupted."""
+    check_result_input(args.folder)
+    if args.cueing is not None:
+        check_result_input(args.cueing, "cueing folder")
     import json
     from pathlib import Path
 
@@ -141,6 +144,9 @@ def run_view(args: argparse.Namespace) -> int:
 
 def run_telemetry(args: argparse.Namespace) -> int:
     """Write and/or stream a result's telemetry."""
+    check_result_input(args.folder)
+    if args.mcap:
+        check_output(args.mcap, overwrite=False, option="--mcap", suffixes=(".mcap",))
     import numpy as np
 
     from motosim.io.results import load_result

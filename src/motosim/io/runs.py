@@ -42,7 +42,7 @@ from motosim.sim import (
     simulate,
 )
 from motosim.sim.metrics import failure, range_reason, run_metrics, validity_limits
-from motosim.sim.scenario import CsvProfile, OpenDrivePath, implausible
+from motosim.sim.scenario import CsvProfile, OpenDrivePath, check_profile_values, implausible
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -117,15 +117,26 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
-    profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force, mc.side_wind]
-    profiles += [p for p in (scenario.rider.profile, scenario.rider.probe) if p is not None]
-    for profile in profiles:
+    profiles = {
+        f"[motorcycle] {key}": getattr(mc, key)
+        for key in ("drive_torque", "brake_torque", "wind_force", "side_wind")
+    } | {"[rider] profile": scenario.rider.profile, "[rider] probe": scenario.rider.probe}
+    for where, profile in profiles.items():
         if isinstance(profile, CsvProfile):
             tables[profile.file] = read_log(
                 folder / profile.file,
                 required=(profile.column,),
                 min_samples=2,
                 remedy=f"the file's header must name t and the column = {profile.column!r}",
+            )
+            # its values in their legal range, as a profile written in the scenario: a huge
+            # one would overflow in the run's metrics before the run failed
+            values = tables[profile.file][profile.column]
+            check_profile_values(
+                where,
+                float(np.min(values)),
+                float(np.max(values)),
+                key=f"{profile.file}: column {profile.column!r} ({where})",
             )
     c = scenario.controller
     controller, observer = None, None

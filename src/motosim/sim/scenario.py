@@ -54,7 +54,16 @@ import math
 import types
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar, Literal, Union, get_args, get_origin, get_type_hints
+from typing import (
+    Any,
+    ClassVar,
+    Literal,
+    NamedTuple,
+    Union,
+    get_args,
+    get_origin,
+    get_type_hints,
+)
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,6 +80,7 @@ __all__ = [
     "FEEDFORWARD",
     "PATHS",
     "PROFILES",
+    "PROFILE_LIMITS",
     "VALIDATED_SPEEDS",
     "AvoidancePath",
     "ChirpProfile",
@@ -94,6 +104,7 @@ __all__ = [
     "StepsProfile",
     "StraightPath",
     "TurnPath",
+    "check_profile_values",
     "implausible",
     "parse_scenario",
     "scenario_dict",
@@ -303,6 +314,107 @@ PROFILES: dict[str, type[Profile]] = {
 """Profile types by ``kind``."""
 
 
+class ProfileLimit(NamedTuple):
+    """The legal and the typical range of a profile's values, and why.
+
+    A value outside ``[low, high]`` is refused; beyond ``typical`` in magnitude it is legal
+    but warned about (:func:`implausible`).
+    """
+
+    low: float
+    high: float
+    typical: float
+    unit: str
+    why: str
+
+
+PROFILE_LIMITS: dict[str, ProfileLimit] = {
+    "[rider] profile": ProfileLimit(
+        -1000.0, 1000.0, 100.0, "N*m", "a rider applies tens of N*m to a handlebar"
+    ),
+    "[rider] probe": ProfileLimit(
+        -1000.0, 1000.0, 100.0, "N*m", "a rider applies tens of N*m to a handlebar"
+    ),
+    "[motorcycle] drive_torque": ProfileLimit(
+        -5000.0,
+        5000.0,
+        1500.0,
+        "N*m",
+        "a road motorcycle's engine gives up to about 1500 N*m "
+        "at the rear wheel in first gear, and its tyres transmit about 1 g",
+    ),
+    "[motorcycle] brake_torque": ProfileLimit(
+        0.0,
+        5000.0,
+        1500.0,
+        "N*m",
+        "the tyres of a motorcycle transmit about 1 g of "
+        "deceleration, and a brake only slows: a negative value is a drive torque",
+    ),
+    "[motorcycle] wind_force": ProfileLimit(
+        -5000.0,
+        5000.0,
+        2000.0,
+        "N",
+        "the drag of a motorcycle and rider is about 0.5 x 1.2 "
+        "kg/m^3 x 0.6 m^2 x v^2: 1 kN at 50 m/s, 3 kN in a 40 m/s headwind at 50 m/s",
+    ),
+    "[motorcycle] side_wind": ProfileLimit(
+        -3000.0,
+        3000.0,
+        1000.0,
+        "N",
+        "a 30 m/s storm gust on a motorcycle and rider's side (about 1 m^2) pushes about 540 N",
+    ),
+}
+"""Range of each profile's values, by where it is in a scenario. The legal bounds are a few
+times the most a real ride sees, so that a unit slip (kN*m for N*m) or a typo (1e6) is refused
+before the run rather than found as a run that left the model's range."""
+
+
+def _profile_bounds(profile: Any) -> tuple[float, float] | None:
+    """The least and the greatest value a profile takes (None: read from a file)."""
+    if isinstance(profile, ConstantProfile):
+        return profile.value, profile.value
+    if isinstance(profile, SquareProfile):
+        return min(profile.low, profile.high), max(profile.low, profile.high)
+    if isinstance(profile, ChirpProfile):
+        a = abs(profile.amplitude)
+        return profile.offset - a, profile.offset + a
+    if isinstance(profile, MultisineProfile):
+        return -abs(profile.amplitude), abs(profile.amplitude)
+    if isinstance(profile, StepsProfile):  # 0 before the first step
+        return min(0.0, *profile.values), max(0.0, *profile.values)
+    return None
+
+
+def check_profile_values(where: str, low: float, high: float, *, key: str | None = None) -> None:
+    """Refuse profile values outside the legal range of :data:`PROFILE_LIMITS` ``[where]``.
+
+    Parameters
+    ----------
+    where : str
+        Where the profile is, a key of :data:`PROFILE_LIMITS` (``"[motorcycle] wind_force"``).
+    low, high : float
+        The least and the greatest value the profile takes, in its unit.
+    key : str, optional
+        How the message names the profile (default: ``where``).
+
+    Raises
+    ------
+    MotosimError
+        One line naming the profile, the value and the legal range, with why.
+    """
+    limit = PROFILE_LIMITS[where]
+    name = where if key is None else key
+    for value in (low, high):
+        if not (math.isfinite(value) and limit.low <= value <= limit.high):
+            raise MotosimError(
+                f"{name} reaches {value:g} {limit.unit}; expected {limit.low:g} to "
+                f"{limit.high:g} {limit.unit} ({limit.why})"
+            )
+
+
 # --- paths: what the virtual rider follows ------------------------------------------------
 
 
@@ -509,6 +621,10 @@ class Motorcycle:
     def __post_init__(self) -> None:
         _check("speed", self.speed, low=1.0, high=100.0, unit="m/s")
         _check("side_wind_height", self.side_wind_height, low=0.0, high=3.0, unit="m")
+        for key in ("drive_torque", "brake_torque", "wind_force", "side_wind"):
+            bounds = _profile_bounds(getattr(self, key))
+            if bounds is not None:
+                check_profile_values(f"[motorcycle] {key}", *bounds, key=key)
 
 
 @dataclass(frozen=True, slots=True)
@@ -541,6 +657,10 @@ class Rider:
         _check("torque_scale", self.torque_scale, low=1e-2, high=1000.0, unit="N*m")
         _check("preview", self.preview, low=0.0, high=5.0, unit="s")
         _check("max_torque", self.max_torque, low=0.0, low_open=True, high=500.0, unit="N*m")
+        for key in ("profile", "probe"):
+            bounds = _profile_bounds(getattr(self, key))
+            if bounds is not None:
+                check_profile_values(f"[rider] {key}", *bounds, key=key)
 
 
 @dataclass(frozen=True, slots=True)
@@ -613,6 +733,11 @@ class Controller:
     prediction: bool | None = None
 
     def __post_init__(self) -> None:
+        if self.design is not None and self.kind != "ours":
+            raise MotosimError(
+                f"design = {short_repr(self.design)} with kind = {self.kind!r}: a design file "
+                'is the controller of kind = "ours"; expected kind = "ours" with it, or no design'
+            )
         if self.feedforward is None:
             default = FEEDFORWARD if self.kind == "ours" else ()
             object.__setattr__(self, "feedforward", default)
@@ -780,6 +905,15 @@ def implausible(scenario: "Scenario") -> list[str]:
             f"[rider] path angle = {path.angle:g} rad ({math.degrees(path.angle):.0f} deg) is "
             "legal but more than a full circle; the angle is in radians (90 deg = 1.571)"
         )
+    mc = scenario.motorcycle
+    for key in ("drive_torque", "brake_torque", "wind_force", "side_wind"):
+        bound = PROFILE_LIMITS[f"[motorcycle] {key}"]
+        peak = _profile_peak(getattr(mc, key))
+        if peak > bound.typical:
+            lines.append(
+                f"[motorcycle] {key} reaches {peak:g} {bound.unit}, legal but beyond the "
+                f"typical {bound.typical:g} {bound.unit}: {bound.why}"
+            )
     if scenario.rider.profile is not None:
         peak = _profile_peak(scenario.rider.profile)
         if peak > TYPICAL_RIDER_TORQUE:
