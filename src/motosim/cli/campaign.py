@@ -142,8 +142,7 @@ def _check_inputs(path: str) -> None:
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    """Refuse absurd options before the campaign is planned."""
-    _check_inputs(args.campaign)
+    """Refuse absurd options before the campaign is planned, then unreadable inputs."""
     out = check_folder_target(args.out, "--out", "a result folder")
     if args.rerun is None and out.is_dir() and any(out.iterdir()):  # before the base scenario
         from motosim.campaign.results import check_store_folder
@@ -171,6 +170,7 @@ def _check_options(args: argparse.Namespace) -> None:
                     f"--write-scenario {args.write_scenario}: {path} exists; expected a new file "
                     "name (the scenario and its true handlebar file are never replaced)"
                 )
+    _check_inputs(args.campaign)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,6 +1,7 @@
 """``motosim design``: the observer and the torque-feedback controller for a handlebar."""
 
 import argparse
+import math
 import sys
 from datetime import date
 from typing import TYPE_CHECKING, Any
@@ -226,9 +227,14 @@ def run(args: argparse.Namespace) -> int:
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
     check_number(args.latency, where="--latency", lower=0.0, upper=1.0 / args.rate, unit="s")
-    if args.bandwidth is not None:
-        check_number(args.bandwidth, where="--bandwidth", lower=LOWEST_BANDWIDTH,
-                     upper=args.rate / 5, unit="Hz")  # fmt: skip
+    if args.bandwidth is not None and not (
+        math.isfinite(args.bandwidth) and LOWEST_BANDWIDTH <= args.bandwidth <= args.rate / 5
+    ):
+        raise MotosimError(
+            f"--bandwidth {short_repr(args.bandwidth)} Hz; expected {LOWEST_BANDWIDTH:g} to "
+            f"{args.rate / 5:g} Hz: at least the slowest of a rider's steering and at most a "
+            f"fifth of the {args.rate:g} Hz control rate"
+        )
     speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
     for speed in speeds:
         check_number(

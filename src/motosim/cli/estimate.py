@@ -65,7 +65,7 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, estimate, write and summarise."""
-    check_input(args.log, "log file", text=True)
+    check_input(args.log, "log file (CSV)", text=True)
     check_output(args.out, overwrite=args.overwrite, reads=(("log", args.log),))
     check_number(args.lipschitz, where="--lipschitz", lower=1e-3, upper=1e7, unit="rad/s^2")
     hb = load_parameters(args.handlebar, "handlebar")

@@ -122,9 +122,9 @@ _UNITS = {"J_eq": "kg*m^2", "beta_eq": "N*m*s/rad", "beta_s": "N*m"}
 
 def run(args: argparse.Namespace) -> int:
     """Identify, report, and optionally write the parameter file and the figure."""
-    check_input(args.log, "log file", text=True)
+    check_input(args.log, "log file (CSV)", text=True)
     if args.validate:
-        check_input(args.validate, "log file", text=True)
+        check_input(args.validate, "log file (CSV)", text=True)
     if args.plot:
         check_figure_path(args.plot, overwrite=args.overwrite)
     if args.out:

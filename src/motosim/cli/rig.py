@@ -15,6 +15,7 @@ from motosim.cli._common import (
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
+    check_privilege_options,
     check_udp_only_options,
     clock_from_args,
     privileges_from_args,
@@ -83,6 +84,7 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
     check_udp_only_options(args)  # before the numerical stack is imported
+    check_privilege_options(args)  # the options first, then the files
     check_scenario_inputs(args.scenario)
     check_named_input(args.platform, "platform file")
     from motosim.cli.run import _Presses

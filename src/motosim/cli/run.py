@@ -574,6 +574,7 @@ def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
     check_udp_only_options(args)  # before the numerical stack is imported
     _check_wait(args)
+    check_privilege_options(args)  # the options first, then the files
     check_scenario_inputs(args.scenario)
     check_named_input(args.platform, "platform file")
     check_result_folder(args.out, args.scenario, overwrite=args.overwrite)

@@ -274,9 +274,9 @@ def read_log(
         a time that does not strictly increase, too few samples.
     """
     source = Path(path)
-    problem = path_problem(source, "log file")
+    problem = path_problem(source, "log file (CSV)")
     if problem is not None:
-        raise MotosimError(problem.replace("expected a log file", "expected a log file (CSV)"))
+        raise MotosimError(problem)
     lines = _decode(source, str(path))
     if not lines:
         raise MotosimError(f"{path}: empty log; expected a header row and data rows")
