@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from motosim.cli.main import main
+from motosim.errors import MotosimError
 
 ROOT = Path(__file__).parents[2]
 SCENARIO = ROOT / "scenarios" / "lane_change_20.toml"
@@ -68,6 +69,9 @@ def files(tmp_path: Path) -> Path:
     (tmp_path / "s.toml").write_text(text, encoding="utf-8")
     (tmp_path / "nodesign.toml").write_text(
         text + '\n[controller]\ndesign = "nope.toml"\n', encoding="utf-8"
+    )
+    (tmp_path / "nohb.toml").write_text(
+        text + '\n[handlebar]\ntrue = "gone_hb.toml"\n', encoding="utf-8"
     )
     (tmp_path / "c.toml").write_text(
         '[campaign]\nscenario = "gone.toml"\nruns = 4\n[factors]\n'
@@ -155,6 +159,8 @@ def test_unreadable_inputs_are_named_for_what_they_are(files: Path) -> None:
     _refused_early(["simulate", ".", "--out", "r"], files, "is a directory")
     _refused_early(["simulate", "nodesign.toml", "--out", "r"], files, "nope.toml",
                    "no such design file")  # fmt: skip
+    _refused_early(["rig", "nohb.toml", "--bus", "virtual"], files, "gone_hb.toml",
+                   "no such parameter file")  # fmt: skip
     _refused_early(["campaign", "c.toml", "--out", "out"], files, "gone.toml",
                    "no such scenario file")  # fmt: skip
 
@@ -244,6 +250,40 @@ def test_a_linear_algebra_failure_is_a_failed_run_in_one_line(
     err = capsys.readouterr().err
     assert err.startswith("motosim: run failed: ") and err.count("\n") == 1, err
     assert "LinAlgError: Singular matrix" in err and "internal error" not in err
+
+
+def test_a_synthesis_that_fails_on_checked_options_is_a_failed_design(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the search's own refusal (its start points all unstable) on a plausible bandwidth
+    def unstable(*args: object, **kwargs: object) -> None:
+        raise MotosimError("no stabilising controller of order 1 was found; try order + 1")
+
+    monkeypatch.setattr("motosim.control.torque_feedback.design_torque_feedback", unstable)
+    assert main(["design", "--bandwidth", "10", "--json"]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("motosim: run failed: the design for "), err
+    assert "10 Hz bandwidth, order 1 failed: no stabilising controller" in err
+
+
+def test_a_scenarios_absurd_bandwidth_is_bad_input_and_a_failing_synthesis_a_failed_run(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _scenario(tmp_path, tail="\n[controller]\nbandwidth = 1e-12\n")
+    assert main(["simulate", str(path), "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "[controller]: bandwidth = 1e-12; expected" in err, err
+    assert ">= 0.1 and <= 1000 [Hz]" in err
+
+    def unstable(*args: object, **kwargs: object) -> None:
+        raise MotosimError("no stabilising controller of order 1 was found; try order + 1")
+
+    monkeypatch.setattr("motosim.io.runs.synthesize_controller", unstable)
+    path = _scenario(tmp_path, tail="\n[controller]\nbandwidth = 10.0\n")
+    assert main(["simulate", str(path), "--out", str(tmp_path / "r")]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("motosim: run failed: lane_change_20: "), err
+    assert "the controller's design failed ([controller] order 1): no stabilising" in err
 
 
 # --- 4. messages -----------------------------------------------------------------------------

@@ -372,8 +372,10 @@ def check_scenario_inputs(path: str | Path) -> Path:
     """Check a scenario file and the files it names before the scenario model is imported.
 
     The scenario is read as TOML (a light module); its design file (``[controller] design``),
-    CSV profiles (``kind = "csv"``, ``file``) and OpenDRIVE road (``[rider] path``, ``file``)
-    are looked for relative to its folder, as :func:`motosim.io.runs.resolve` reads them. The
+    parameter files (``[motorcycle] params``, ``[handlebar] true`` and ``nominal`` when they
+    name a ``.toml`` file rather than a packaged set), CSV profiles (``kind = "csv"``,
+    ``file``) and OpenDRIVE road (``[rider] path``, ``file``) are looked for as
+    :func:`motosim.io.runs.resolve` reads them, relative to its folder. The
     scenario's values are checked afterwards, by :func:`motosim.sim.parse_scenario`.
 
     Parameters
@@ -397,11 +399,22 @@ def check_scenario_inputs(path: str | Path) -> Path:
     source = check_input(path, "scenario file", text=True)
     data = read_toml(source, what="scenario file")
     base = source.parent
+
+    def named_file(name: str, what: str) -> None:
+        # as motosim.io.runs.parameter_source: a .toml beside the scenario, else the name
+        candidate = base / name
+        if candidate.suffix == ".toml" and candidate.is_file():
+            check_input(candidate, what, text=True)
+        elif name.lower().endswith(".toml") or "/" in name or os.sep in name:
+            check_input(name if os.path.lexists(name) else candidate, what, text=True)
+
     controller = data.get("controller")
     if isinstance(controller, dict) and isinstance(controller.get("design"), str):
-        name = controller["design"]
-        candidate = base / name
-        check_input(candidate if candidate.suffix == ".toml" else name, "design file", text=True)
+        named_file(controller["design"], "design file")
+    for table, key in (("motorcycle", "params"), ("handlebar", "true"), ("handlebar", "nominal")):
+        section = data.get(table)
+        if isinstance(section, dict) and isinstance(section.get(key), str):
+            named_file(section[key], "parameter file")
     for table, keys in (
         ("motorcycle", ("drive_torque", "brake_torque", "wind_force", "side_wind")),
         ("rider", ("profile", "probe", "path")),

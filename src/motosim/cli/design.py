@@ -14,7 +14,7 @@ from motosim.cli._common import (
     warn_atypical,
     write_text,
 )
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, RunFailedError
 from motosim.params import load_parameters
 from motosim.params.checks import check_number, short_repr
 from motosim.params.handlebar import HandlebarParameters
@@ -273,17 +273,27 @@ def run(args: argparse.Namespace) -> int:
     if not args.json:
         print(f"designing for {args.handlebar} ({args.starts} starts) ...", file=sys.stderr)
     bandwidth = args.bandwidth
-    if bandwidth is None:
-        bandwidth, _ = handlebar_bandwidth(hb, rate=args.rate, n_starts=args.starts, seed=args.seed)
-    ctrl = design_torque_feedback(
-        hb,
-        rng=np.random.default_rng(args.seed),
-        bandwidth=bandwidth,
-        order=args.order,
-        rate=args.rate,
-        n_starts=args.starts,
-        integral_corner=args.integral_corner,
-    )
+    # every input is checked by now: the synthesis failing on them is a failed design (exit 3)
+    try:
+        if bandwidth is None:
+            bandwidth, _ = handlebar_bandwidth(
+                hb, rate=args.rate, n_starts=args.starts, seed=args.seed
+            )
+        ctrl = design_torque_feedback(
+            hb,
+            rng=np.random.default_rng(args.seed),
+            bandwidth=bandwidth,
+            order=args.order,
+            rate=args.rate,
+            n_starts=args.starts,
+            integral_corner=args.integral_corner,
+        )
+    except MotosimError as err:
+        raise RunFailedError(
+            f"the design for {args.handlebar} at {args.rate:g} Hz"
+            + ("" if bandwidth is None else f", {bandwidth:g} Hz bandwidth")
+            + f", order {args.order} failed: {err}"
+        ) from None
     settings = observer_settings(args.rate)
     obs = design_with(hb, settings)
     paper = analyse_loop(hb, PAPER_CONTROLLER, rate=args.rate)

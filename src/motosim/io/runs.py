@@ -21,6 +21,7 @@ import numpy as np
 from motosim.control.torque_feedback import (
     INTEGRAL_CORNER,
     PAPER_CONTROLLER,
+    check_options,
     handlebar_bandwidth,
     synthesize_controller,
 )
@@ -109,7 +110,9 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
     Raises
     ------
     MotosimError
-        On a missing or invalid file, or an impossible design.
+        On a missing or invalid file, or a bandwidth beyond a fifth of the measurement rate.
+    RunFailedError
+        If the controller's synthesis fails on the checked scenario.
     """
     folder = Path(base)
     scenario = read_road(scenario, folder)
@@ -154,21 +157,32 @@ def resolve(scenario: Scenario, base: str | Path) -> RunInputs:
             _check_observer_rate(c.design, design.rate, observer, nominal, rate)
         _warn_other_handlebar(c.design, design.handlebar, nominal)
     elif c.kind == "ours":
-        bandwidth = c.bandwidth
-        if bandwidth is None:
-            bandwidth, controller = handlebar_bandwidth(
-                nominal, rate=scenario.rates.measurement, n_starts=4
-            )
-        if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
-            controller = synthesize_controller(
-                nominal,
-                rng=np.random.default_rng(0),
-                bandwidth=bandwidth,
-                order=c.order,
-                rate=scenario.rates.measurement,
-                n_starts=4,
-                integral_corner=c.integral_corner,
-            )
+        rate = scenario.rates.measurement
+        if c.bandwidth is not None:  # bad input, before the synthesis
+            try:
+                check_options(bandwidth=c.bandwidth, rate=rate, integral_corner=c.integral_corner)
+            except MotosimError as err:
+                raise MotosimError(f"[controller] {err}") from None
+        # the scenario is checked by now: a synthesis failing on it is a failed run (exit 3)
+        try:
+            bandwidth = c.bandwidth
+            if bandwidth is None:
+                bandwidth, controller = handlebar_bandwidth(nominal, rate=rate, n_starts=4)
+            if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
+                controller = synthesize_controller(
+                    nominal,
+                    rng=np.random.default_rng(0),
+                    bandwidth=bandwidth,
+                    order=c.order,
+                    rate=rate,
+                    n_starts=4,
+                    integral_corner=c.integral_corner,
+                )
+        except MotosimError as err:
+            raise RunFailedError(
+                f"{scenario.name}: the controller's design failed ([controller] order "
+                f"{c.order}): {err}"
+            ) from None
     return prepare(
         scenario,
         sharp=load_parameters(parameter_source(mc.params, folder), "sharp"),

@@ -698,6 +698,9 @@ class Estimator:
         _check("lipschitz", self.lipschitz, low=0.0, low_open=True, high=1e7, unit="rad/s^2")
 
 
+LOWEST_BANDWIDTH = 0.1
+"""Lowest ``[controller] bandwidth`` [Hz]: a rider steers at 0.1-5 Hz, and far below that the
+synthesis's weight and Riccati equations lose their precision (``design --bandwidth`` too)."""
 MAX_RECORDED_ROWS = 10_000_000
 """Most rows a run may record (one per control period, about 200 bytes each in memory)."""
 MAX_PLANT_STEPS = 100_000_000
@@ -752,8 +755,8 @@ class Controller:
                 'prediction = true predicts the rider-torque cancellation; expected "rider" in '
                 "feedforward"
             )
-        if self.bandwidth is not None:
-            _check("bandwidth", self.bandwidth, low=0.0, low_open=True, high=1000.0, unit="Hz")
+        if self.bandwidth is not None:  # from the slowest of a rider's steering
+            _check("bandwidth", self.bandwidth, low=LOWEST_BANDWIDTH, high=1000.0, unit="Hz")
         if not 0 <= self.order <= MAX_ORDER:
             raise MotosimError(f"order = {self.order}; expected an integer from 0 to {MAX_ORDER}")
         _check("integral_corner", self.integral_corner, low=0.0, low_open=True, high=0.5)
