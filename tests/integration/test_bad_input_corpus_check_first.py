@@ -197,6 +197,29 @@ def test_a_scenario_value_out_of_its_range_is_bad_input_not_a_failed_run(
     assert not (tmp_path / "r").exists()
 
 
+@pytest.mark.parametrize(
+    ("old", "new", "named"),
+    [
+        ("offset = 3.5", "offset = 3500.0", "offset = 3500.0; expected a finite number >= -100"),
+        ("length = 60.0", "length = 1e9", "length = 1000000000.0; expected"),
+        ('kind = "virtual"', 'kind = "torque"\nprofile = { kind = "square", low = 0.0, high = '
+         '5.0, period = 2.0, start = 1e9 }', "start = 1000000000.0; expected"),
+    ],
+    ids=["lane_offset", "lane_length", "profile_start"],
+)  # fmt: skip
+def test_a_path_or_profile_far_beyond_any_ride_is_refused(
+    old: str, new: str, named: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = SCENARIO.read_text(encoding="utf-8").replace(old, new)
+    if "square" in new:
+        text = text.replace('path = { kind = "lane_change", offset = 3.5, length = 60.0, '
+                            "start = 50.0 }\n", "")  # fmt: skip
+    (tmp_path / "v.toml").write_text(text, encoding="utf-8")
+    assert main(["simulate", str(tmp_path / "v.toml"), "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and named in err, err
+
+
 def test_a_huge_csv_rider_torque_is_refused_before_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], recwarn: pytest.WarningsRecorder
 ) -> None:

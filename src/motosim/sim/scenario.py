@@ -120,6 +120,15 @@ micrometre, a microsecond or a millionth is no lane change, period or handlebar,
 or a unit slip (and 1e-300 would reach the integrator as a division by zero)."""
 
 
+MAX_TIME = 3600.0
+"""Largest magnitude of a time in a profile [s]: the longest run a scenario admits."""
+MAX_DISTANCE = 1e6
+"""Largest length, radius or position along a path [m]: farther than any run travels (100 m/s
+for the longest run, 3600 s, is 360 km); a straight is a ``straight`` path."""
+MAX_OFFSET = 100.0
+"""Largest lateral offset or amplitude of a path [m]: a road is tens of metres wide."""
+
+
 def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
            low_open: bool = False, unit: str = "") -> None:  # fmt: skip
     """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error).
@@ -165,6 +174,8 @@ class StepsProfile:
             )
         if any(b <= a for a, b in zip(self.times, self.times[1:], strict=False)):
             raise MotosimError(f"times = {list(self.times)}; expected increasing times")
+        for time in (self.times[0], self.times[-1]):
+            _check("times", time, low=-MAX_TIME, high=MAX_TIME, unit="s")
 
     def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
         """Values at the times ``t`` [s]."""
@@ -186,8 +197,8 @@ class SquareProfile:
     def __post_init__(self) -> None:
         _check("low", self.low)
         _check("high", self.high)
-        _check("period", self.period, low=0.0, low_open=True, unit="s")
-        _check("start", self.start, unit="s")
+        _check("period", self.period, low=0.0, low_open=True, high=MAX_TIME, unit="s")
+        _check("start", self.start, low=-MAX_TIME, high=MAX_TIME, unit="s")
 
     def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
         """Values at the times ``t`` [s]."""
@@ -213,7 +224,7 @@ class ChirpProfile:
         # it is sampled at it would alias: refused by Scenario, which knows the rates
         _check("f0", self.f0, low=0.0, high=1e4, unit="Hz")
         _check("f1", self.f1, low=0.0, high=1e4, unit="Hz")
-        _check("start", self.start, unit="s")
+        _check("start", self.start, low=-MAX_TIME, high=MAX_TIME, unit="s")
         _check("offset", self.offset)
 
     def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
@@ -250,7 +261,7 @@ class MultisineProfile:
         _check("f0", self.f0, low=1.0 / self.period, unit="Hz")
         _check("f1", self.f1, low=self.f0, low_open=True, high=1e4, unit="Hz")
         _check("per_decade", self.per_decade, low=1, high=1000)
-        _check("start", self.start, unit="s")
+        _check("start", self.start, low=-MAX_TIME, high=MAX_TIME, unit="s")
 
     def frequencies(self) -> Array:
         """The excited lines [Hz]: distinct harmonics of 1 / ``period`` nearest a log grid."""
@@ -439,9 +450,9 @@ class LaneChangePath:
     kind: ClassVar[str] = "lane_change"
 
     def __post_init__(self) -> None:
-        _check("offset", self.offset, unit="m")
-        _check("length", self.length, low=0.0, low_open=True, unit="m")
-        _check("start", self.start, unit="m")
+        _check("offset", self.offset, low=-MAX_OFFSET, high=MAX_OFFSET, unit="m")
+        _check("length", self.length, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
@@ -459,10 +470,10 @@ class SlalomPath:
     kind: ClassVar[str] = "slalom"
 
     def __post_init__(self) -> None:
-        _check("amplitude", self.amplitude, low=0.0, low_open=True, unit="m")
-        _check("wavelength", self.wavelength, low=0.0, low_open=True, unit="m")
-        _check("cycles", self.cycles, low=0.0, low_open=True)
-        _check("start", self.start, unit="m")
+        _check("amplitude", self.amplitude, low=0.0, low_open=True, high=MAX_OFFSET, unit="m")
+        _check("wavelength", self.wavelength, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("cycles", self.cycles, low=0.0, low_open=True, high=1e4)
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
@@ -483,15 +494,16 @@ class TurnPath:
     kind: ClassVar[str] = "turn"
 
     def __post_init__(self) -> None:
-        _check("radius", self.radius, unit="m")
+        _check("radius", self.radius, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
         if abs(self.radius) < 1.0:
             raise MotosimError(
                 f"radius = {self.radius!r} m; expected a radius of at least 1 m either way "
                 "(negative: left), beyond a motorcycle's wheelbase"
             )
-        _check("angle", self.angle, unit="rad")
-        _check("start", self.start, unit="m")
-        _check("transition", self.transition, low=0.0, low_open=True, unit="m")
+        # ten full circles; beyond one, a warning says the angle is in radians
+        _check("angle", self.angle, low=-20 * math.pi, high=20 * math.pi, unit="rad")
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
+        _check("transition", self.transition, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
@@ -512,10 +524,10 @@ class AvoidancePath:
     kind: ClassVar[str] = "avoidance"
 
     def __post_init__(self) -> None:
-        _check("offset", self.offset, unit="m")
-        _check("length", self.length, low=0.0, low_open=True, unit="m")
-        _check("hold", self.hold, low=0.0, low_open=True, unit="m")
-        _check("start", self.start, unit="m")
+        _check("offset", self.offset, low=-MAX_OFFSET, high=MAX_OFFSET, unit="m")
+        _check("length", self.length, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("hold", self.hold, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
