@@ -426,7 +426,7 @@ def check_scenario_inputs(path: str | Path) -> Path:
             spec = section.get(key)
             if not (isinstance(spec, dict) and isinstance(spec.get("file"), str)):
                 continue
-            what = "OpenDRIVE file" if key == "path" else "CSV profile"
+            what = "OpenDRIVE file" if key == "path" else "log file (CSV)"
             if spec.get("kind") in ("csv", "opendrive"):
                 check_input(base / spec["file"], what, text=True)
     return source
