@@ -142,3 +142,13 @@ def test_the_probe_leaves_nothing_behind(tmp_path: Path) -> None:
     check_output(tmp_path / "o.csv", overwrite=True)
     check_output_folder(tmp_path / "out", overwrite=True)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_input_this_user_may_not_read_is_named_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text("x = 1\n", encoding="utf-8")
+    monkeypatch.setattr(os, "access", lambda *args, **kwargs: False)  # root reads anything
+    with pytest.raises(MotosimError, match=r"s.toml: cannot read the scenario file: Permission"):
+        check_input(path, "scenario file", text=True)
