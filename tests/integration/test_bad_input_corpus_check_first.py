@@ -111,6 +111,8 @@ def test_paper_and_rt_check_refuse_early_too(files: Path) -> None:
     # the two commands that read no file: an output that takes none, an option out of range
     _refused_early(["paper", "--out", "/proc/p"], files, "/proc", "cannot write")
     _refused_early(["rt-check", "--rate", "abc"], files, "'abc'")
+    # an option checked deeper in the library is checked before it is imported too
+    _refused_early(["fidelity", "--band", "3:1"], files, "--band '3:1'", "<= 20 Hz")
 
 
 # --- 1. paths: outputs that cannot be written, inputs that cannot be read -------------------

@@ -75,6 +75,9 @@ def _band(text: str) -> tuple[float, float]:
         low, high = (float(x) for x in text.split(":"))
     except ValueError:
         raise MotosimError(f"--band {text!r}; expected LOW:HIGH in Hz, e.g. 0.1:5") from None
+    # the band motosim.sim.fidelity.feel_scenario admits, checked before it is imported
+    if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high <= 20.0):
+        raise MotosimError(f"--band {text!r}; expected LOW:HIGH with 0 < LOW < HIGH <= 20 Hz")
     return low, high
 
 
