@@ -235,6 +235,12 @@ def run(args: argparse.Namespace) -> int:
             f"{args.rate / 5:g} Hz: at least the slowest of a rider's steering and at most a "
             f"fifth of the {args.rate:g} Hz control rate"
         )
+    # the range of motosim.control.torque_feedback.check_options, before SciPy is imported
+    if not (math.isfinite(args.integral_corner) and 1e-6 <= args.integral_corner <= 0.5):
+        raise MotosimError(
+            f"--integral-corner {short_repr(args.integral_corner)}: integral_corner = "
+            f"{args.integral_corner!r}; expected a fraction of the bandwidth from 1e-06 to 0.5"
+        )
     speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
     for speed in speeds:
         check_number(

@@ -69,13 +69,14 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, overwrite=args.overwrite, reads=(("log", args.log),))
     check_number(args.lipschitz, where="--lipschitz", lower=1e-3, upper=1e7, unit="rad/s^2")
     hb = load_parameters(args.handlebar, "handlebar")
+    from motosim.io import parse_columns, read_rig_log, write_log
+
+    columns = parse_columns(args.columns) if args.columns else None
     import numpy as np
 
     from motosim.estimation import estimate
-    from motosim.io import parse_columns, read_rig_log, write_log
     from motosim.timeseries import TimeSeries
 
-    columns = parse_columns(args.columns) if args.columns else None
     rig = read_rig_log(args.log, required=("theta_h", "i_m"), columns=columns)
     log = rig.series
     rate, tau_hat = estimate(

@@ -132,10 +132,13 @@ def run(args: argparse.Namespace) -> int:
     motor = _motor(args)
     hb = motor.values
     assert isinstance(hb, HandlebarParameters)
-    from motosim.identification import back_emf_damping, drive_from_columns, identify, validate
     from motosim.io import parse_columns, read_rig_log
 
     columns = parse_columns(args.columns) if args.columns else None
+    # its bound by the log's length is checked once the log is read
+    check_number(args.current_delay, where="--current-delay", lower=0.0, upper=1.0, unit="s")
+    from motosim.identification import back_emf_damping, drive_from_columns, identify, validate
+
     rig = read_rig_log(args.log, required=("theta_h",), columns=columns)
     second = (
         read_rig_log(args.validate, required=("theta_h",), columns=columns)

@@ -99,17 +99,18 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, presses: Any) -> int:
     """:func:`run`, with Ctrl-C counted by ``presses`` until the loop takes it over."""
+    from motosim.cli.run import check_rt_options, load_realtime, rig_settings
+
+    options = check_rt_options(args)  # before the rig and the simulator are imported
+    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
+        raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     import numpy as np
 
-    from motosim.cli.run import check_rt_options, load_realtime, rig_settings
     from motosim.io.can import handlebar_codecs, open_link
     from motosim.rt.loop import RateLoop
     from motosim.rt.privileges import freeze_gc, thaw_gc
     from motosim.rt.rig import VirtualRig
 
-    options = check_rt_options(args)
-    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
-        raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     with deferred_warnings():  # the scenario's, once its checks have passed
         inputs, realtime = load_realtime(args.scenario)
         sc = inputs.scenario

@@ -589,6 +589,7 @@ def run(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     """:func:`run`, with Ctrl-C counted by ``presses`` until the loop takes it over, and
     given back to the handler ``sigint`` once the loop has ended."""
+    options = check_rt_options(args)  # before the stack and the simulator are imported
     import numpy as np
 
     from motosim.io.can import UdpMulticastLink, handlebar_codecs, open_link
@@ -599,7 +600,6 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     from motosim.sim.metrics import validity_limits
     from motosim.sim.stack import account_for_delay
 
-    options = check_rt_options(args)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
