@@ -6,11 +6,17 @@ those modules imported before they built their parsers from light modules only (
 h5py and the compiled models), then runs the same ``--help``. Each subcommand's ``--help`` and
 a usage error (an unknown option) are timed too, the slowest reported; their baseline is
 ``motosim simulate --help`` after importing the modules ``motosim.cli.simulate`` imported
-before. All run in a fresh interpreter, best of N wall-clock runs.
+before. The time to the error line of a misspelt file (:data:`MISSPELT`: the command's input,
+or the output of a command that reads none) and of a misspelt option is timed for every
+command (target 0.5 s). All run in a fresh interpreter, best of N wall-clock runs, from a
+scratch folder.
 """
 
+import json
+import os
 import subprocess
 import sys
+import tempfile
 import time
 
 _STACK = (
@@ -38,6 +44,29 @@ _EAGER = (
     "main(['--help'])\n"
 )
 _COMMAND = "from motosim.cli.main import main; main([{name!r}, {option!r}])"
+MISSPELT: dict[str, list[str]] = {
+    "params": ["params", "show", "nope.toml"],
+    "modes": ["modes", "--params", "nope.toml"],
+    "excite": ["excite", "--handlebar", "nope.toml", "--out", "x.csv"],
+    "identify": ["identify", "nope.csv"],
+    "estimate": ["estimate", "nope.csv", "--out", "x.csv"],
+    "design": ["design", "--handlebar", "nope.toml"],
+    "simulate": ["simulate", "nope.toml", "--out", "r"],
+    "report": ["report", "nope"],
+    "paper": ["paper", "--out", "nope/out"],
+    "view": ["view", "nope"],
+    "telemetry": ["telemetry", "nope", "--mcap", "x.mcap"],
+    "campaign": ["campaign", "nope.toml", "--out", "c"],
+    "fidelity": ["fidelity", "nope.toml"],
+    "cueing": ["cueing", "nope", "--out", "q"],
+    "run": ["run", "nope.toml", "--bus", "virtual", "--out", "r"],
+    "rig": ["rig", "nope.toml", "--bus", "virtual"],
+    "rt-check": ["rt-check", "--rate", "abc"],
+}
+"""A misspelt file for each command (rt-check reads none: a misspelt number)."""
+_ARGV = (
+    "import json, sys\nfrom motosim.cli.main import main\nsys.exit(main(json.loads(sys.argv[1])))"
+)
 _SIMULATE_EAGER = (
     f"import {', '.join(_SIMULATE_STACK)}\n"
     "from motosim.cli.main import main\n"
@@ -45,20 +74,39 @@ _SIMULATE_EAGER = (
 )
 
 
-def _best(code: str, repeats: int = 5) -> float:
+def _best(code: str, repeats: int = 5, *args: str, cwd: str | None = None) -> float:
     best = float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
-        done = subprocess.run([sys.executable, "-c", code], check=False, capture_output=True)
+        done = subprocess.run(
+            [sys.executable, "-c", code, *args], check=False, capture_output=True, cwd=cwd
+        )
         if done.returncode not in (0, 2):  # 2: the usage error asked for
-            raise RuntimeError(f"{code!r} failed: {done.stderr.decode()[-300:]}")
+            raise RuntimeError(f"{code!r} {args} failed: {done.stderr.decode()[-300:]}")
         best = min(best, time.perf_counter() - start)
     return best
 
 
+def time_to_error() -> dict[str, dict[str, float]]:
+    """Seconds to the error line of a misspelt file and of a misspelt option, per command."""
+    from motosim.cli.main import COMMANDS
+
+    env_path = os.pathsep.join(sys.path)
+    os.environ["PYTHONPATH"] = env_path  # the scratch folder is not where motosim is
+    out: dict[str, dict[str, float]] = {}
+    with tempfile.TemporaryDirectory() as scratch:
+        for name in COMMANDS:
+            out[name] = {
+                "misspelt_file_s": _best(_ARGV, 3, json.dumps(MISSPELT[name]), cwd=scratch),
+                "misspelt_option_s": _best(_ARGV, 3, json.dumps([name, "--no-such"]), cwd=scratch),
+            }
+    return out
+
+
 def run() -> dict[str, float | str]:
     """Seconds to print ``motosim --help`` (lazy and eager), the slowest subcommand's
-    ``--help`` and usage error, the baseline ``simulate --help``, and their ratios."""
+    ``--help`` and usage error, the baseline ``simulate --help``, and their ratios; the time
+    to the error line of a misspelt file and option for every command."""
     from motosim.cli.main import COMMANDS
 
     lazy, eager = _best(_LAZY), _best(_EAGER)
@@ -66,7 +114,13 @@ def run() -> dict[str, float | str]:
     errors = {name: _best(_COMMAND.format(name=name, option="--no-such"), 3) for name in COMMANDS}
     slow_help, slow_error = max(helps, key=helps.__getitem__), max(errors, key=errors.__getitem__)
     baseline = _best(_SIMULATE_EAGER, 3)
+    to_error = time_to_error()
+    slow_file = max(to_error, key=lambda n: to_error[n]["misspelt_file_s"])
     return {
+        "misspelt_file_slowest": slow_file,
+        "misspelt_file_slowest_s": to_error[slow_file]["misspelt_file_s"],
+        "misspelt_option_slowest_s": max(v["misspelt_option_s"] for v in to_error.values()),
+        "time_to_error": to_error,
         "help_lazy_s": lazy,
         "help_eager_s": eager,
         "ratio": eager / lazy,
@@ -81,4 +135,7 @@ def run() -> dict[str, float | str]:
 
 
 if __name__ == "__main__":
-    print(run())
+    if sys.argv[1:] == ["--errors"]:
+        print(json.dumps(time_to_error(), indent=1))
+    else:
+        print(run())

@@ -63,14 +63,16 @@ DESCRIPTIONS: dict[str, str] = {
         '`"estimate"`: the motorcycle is driven by the estimated rider torque (the '
         'simulator); `"true"`: by the true torque (for comparison).'
     ),
-    "motorcycle.drive_torque": "Drive torque at the rear wheel [N*m], eq. (2).",
-    "motorcycle.brake_torque": "Brake torque [N*m], eq. (2).",
-    "motorcycle.wind_force": "Longitudinal wind force [N], eq. (2).",
-    "motorcycle.side_wind": "Lateral wind force, to the right [N], with its yaw and roll moments.",
+    "motorcycle.drive_torque": "Drive torque at the rear wheel [N*m], eq. (2); -5000 to 5000.",
+    "motorcycle.brake_torque": "Brake torque [N*m], eq. (2); 0 to 5000.",
+    "motorcycle.wind_force": "Longitudinal wind force [N], eq. (2); -5000 to 5000.",
+    "motorcycle.side_wind": (
+        "Lateral wind force, to the right [N], with its yaw and roll moments; -3000 to 3000."
+    ),
     "motorcycle.side_wind_height": "Height at which the side wind acts [m].",
     # [rider]
     "rider.kind": '`"torque"`: a torque profile; `"virtual"`: a rider steering along a path.',
-    "rider.profile": "The rider's torque [N*m] (kind `torque`).",
+    "rider.profile": "The rider's torque [N*m] (kind `torque`); -1000 to 1000.",
     "rider.path": "The path the virtual rider follows (kind `virtual`; default straight).",
     "rider.probe": "A torque profile added to the virtual rider's (e.g. a chirp) [N*m].",
     "rider.lateral_tolerance": (

@@ -106,7 +106,7 @@ def test_a_probe_within_the_dry_friction_is_refused(capsys: pytest.CaptureFixtur
     ("args", "message"),
     [
         (["--speed", "100"], "--speed 100.0; expected 3 to 60 m/s"),
-        (["--band", "3:1"], "band = 3:1"),
+        (["--band", "3:1"], "--band '3:1'; expected LOW:HIGH with 0 < LOW < HIGH <= 20 Hz"),
         (["--band", "x"], "--band 'x'"),
         (["--excitation", "chirp", "--duration", "1"], "--duration 1.0"),
         (["--duration", "30"], "--duration 30.0 is the chirp's length"),

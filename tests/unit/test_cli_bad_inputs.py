@@ -197,8 +197,9 @@ def test_rig_refuses_a_rate_above_its_plant_rate_before_opening_the_bus(
 def test_a_scenario_refused_after_its_warnings_prints_only_the_error(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # the warning of the speed (58 m/s) was printed, then the missing design file (or the
-    # missing safety table) refused it: two lines, where a refused command prints only its error
+    # the warning of the speed (58 m/s) was printed, then the missing design file refused it:
+    # two lines, where a refused command prints only its error (the design file is now looked
+    # for before the scenario is read, the safety table of run after)
     scenario = tmp_path / "s.toml"
     scenario.write_text(
         '[scenario]\nname = "s"\nduration = 0.2\n[motorcycle]\nspeed = 58.0\n[rider]\n'
@@ -212,7 +213,7 @@ def test_a_scenario_refused_after_its_warnings_prints_only_the_error(
         "rig": ["rig", str(scenario), "--bus", "virtual"],
     }[command]
     assert main(argv) == 2
-    _refused(capsys, "[realtime.safety] is missing" if command == "run" else "no such design")
+    _refused(capsys, "no such design")
 
 
 def test_a_complete_result_without_its_csv_is_not_replaced_without_overwrite(

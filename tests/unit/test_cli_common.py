@@ -1,16 +1,22 @@
 """Helpers of the command line: strict JSON, outputs refused unless --overwrite, progress."""
 
+import errno
 import json
 import math
 import os
+import re
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
 
 from motosim.cli._common import (
+    check_folder_target,
+    check_input,
     check_output,
     check_output_folder,
+    check_result_input,
     print_json,
     show_progress,
     write_text,
@@ -66,3 +72,83 @@ def test_progress_only_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
     assert not show_progress()
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     assert show_progress() and not show_progress(quiet=True)
+
+
+def test_inputs_are_refused_for_what_they_are(tmp_path: Path) -> None:
+    (tmp_path / "a").symlink_to("b")
+    (tmp_path / "b").symlink_to("a")
+    (tmp_path / "dangling").symlink_to("gone.toml")
+    (tmp_path / "bin.csv").write_bytes(b"t,x\n0,\x00")
+    (tmp_path / "latin1.csv").write_bytes("t,x\n# caf\xe9\n".encode("latin-1"))
+    (tmp_path / "utf16.toml").write_bytes("x = 1".encode("utf-16"))
+    (tmp_path / "ok.toml").write_text("x = 1  # caf\u00e9\n", encoding="utf-8")
+    cases = {
+        "a": "a: is a symbolic link loop (it leads back to itself); expected a scenario file",
+        "dangling": "is a symbolic link to gone.toml, which does not exist",
+        "missing.toml": "missing.toml: no such scenario file",
+        ".": "is a directory; expected a scenario file",
+        "bin.csv": "is binary (a NUL byte at offset 6)",
+        "latin1.csv": "is not UTF-8 text (byte 0xe9 at offset 9)",
+        "utf16.toml": "is UTF-16 text; expected UTF-8",
+    }
+    for name, message in cases.items():
+        with pytest.raises(MotosimError, match=re.escape(message)):
+            check_input(tmp_path / name, "scenario file", text=True)
+    assert check_input(tmp_path / "ok.toml", "scenario file", text=True) == tmp_path / "ok.toml"
+    with pytest.raises(MotosimError, match="is a file; expected a result folder"):
+        check_input(tmp_path / "ok.toml", "result folder", folder=True)
+    with pytest.raises(MotosimError, match="no such result folder"):
+        check_result_input(tmp_path / "run")
+    (tmp_path / "run.partial").mkdir()  # a stopped run: its reader names where its rows are
+    assert check_result_input(tmp_path / "run") == tmp_path / "run"
+
+
+def test_a_text_sample_cut_inside_a_character_is_not_refused(tmp_path: Path) -> None:
+    path = tmp_path / "long.csv"
+    path.write_bytes(b"a" * 65_535 + "\u00e9".encode())  # the two bytes across the sample's end
+    assert check_input(path, "log file", text=True) == path
+
+
+def test_an_output_named_with_a_trailing_slash_is_a_folder(tmp_path: Path) -> None:
+    with pytest.raises(MotosimError, match=r"--out new/ ends in /, which names a folder"):
+        check_output("new/", overwrite=True)
+    assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.parametrize("folder", ["/proc", "/sys"])
+def test_an_output_where_no_file_can_be_made_is_refused_at_once(folder: str) -> None:
+    if not os.path.isdir(folder):
+        pytest.skip(f"no {folder} here")
+    with pytest.raises(MotosimError, match=f"cannot write in the folder {folder}"):
+        check_output(f"{folder}/o.csv", overwrite=True)
+    with pytest.raises(MotosimError, match=f"cannot write in the folder {folder}"):
+        check_output_folder(f"{folder}/out", overwrite=True)
+
+
+def test_a_read_only_mount_is_found_by_the_probe(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def read_only(*args: object, **kwargs: object) -> None:
+        raise OSError(errno.EROFS, "Read-only file system")
+
+    monkeypatch.setattr(tempfile, "mkstemp", read_only)
+    with pytest.raises(MotosimError, match=r"cannot write in the folder .* \(Read-only file sys"):
+        check_output(tmp_path / "o.csv", overwrite=True)
+    with pytest.raises(MotosimError, match="Read-only file system"):
+        check_folder_target(tmp_path / "out", "--out", "a result folder")
+
+
+def test_the_probe_leaves_nothing_behind(tmp_path: Path) -> None:
+    check_output(tmp_path / "o.csv", overwrite=True)
+    check_output_folder(tmp_path / "out", overwrite=True)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_input_this_user_may_not_read_is_named_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text("x = 1\n", encoding="utf-8")
+    monkeypatch.setattr(os, "access", lambda *args, **kwargs: False)  # root reads anything
+    with pytest.raises(MotosimError, match=r"s.toml: cannot read the scenario file: Permission"):
+        check_input(path, "scenario file", text=True)

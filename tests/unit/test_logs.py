@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, MotosimWarning
 from motosim.io import log_timing, parse_columns, read_log, read_rig_log, resample, write_log
 from motosim.timeseries import TimeSeries
 
@@ -140,7 +140,8 @@ def test_jitter_is_reported_and_resampled(tmp_path: Path) -> None:
     jitter = rng.uniform(-0.002, 0.002, N_RIG)
     jitter[0] = jitter[-1] = 0.0
     text = "t,theta_h,i_m\n" + _rig_rows(jitter=jitter)
-    log = _rig(tmp_path, text)
+    with pytest.warns(MotosimWarning, match=r"periods deviate by up to \d+ % .* 10 ms period"):
+        log = _rig(tmp_path, text)
     assert log.timing.resampled and 0.1 < log.timing.jitter < 0.5
     assert log.series.t.size == N_RIG
     np.testing.assert_allclose(np.diff(log.series.t), 0.01, rtol=1e-9)

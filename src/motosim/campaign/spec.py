@@ -406,6 +406,12 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
         for key in ("runs", "seed", "every"):
             if key in head:
                 kwargs[key] = _integer(head[key], key)
+        sampling = kwargs.get("sampling", "lhs")
+        if kwargs.get("runs") == 0 and sampling != "grid":
+            raise MotosimError(
+                f"runs = 0; expected 1 to {_MAX_RUNS}, the number of runs of the {sampling} "
+                "sampling"
+            )
         if "task_seconds" in head:
             kwargs["task_seconds"] = _number(head["task_seconds"], "task_seconds")
         if "metrics" in head:

@@ -1,19 +1,28 @@
 """Helpers shared by the subcommands: option parsing, output files, JSON, figures, progress.
 
-Every command that writes follows the same rules, checked *before* any work is done by
-:func:`check_output` (a file) or :func:`check_output_folder` (a folder):
+Every command checks what it reads and writes *before* any heavy import (SciPy, numba, h5py,
+the compiled stack) or work: its inputs with :func:`check_input` (and a scenario's named files
+with :func:`check_scenario_inputs`), its outputs with :func:`check_output` (a file) or
+:func:`check_output_folder` (a folder):
 
+* an input must be there, be a file (or a folder where one is meant), be readable, not be a
+  symbolic link loop, and a text input must be UTF-8 text;
 * an existing output is refused unless ``--overwrite`` is given;
-* the folder that receives the output must exist (nothing is created silently);
+* an output file's name ending in ``/`` names a folder, and is refused where a file is meant;
+* the folder that receives the output must exist (nothing is created silently) and take a
+  file: a probe file is created and removed there, so that ``/proc``, a read-only mount or a
+  folder without write permission is refused at once rather than after the work;
 * files are written beside their target under a temporary name and renamed over it only when
   complete (:func:`write_text`, :func:`save_figure`), so a failure (a full disk) leaves the
   previous file intact and reports one line.
 """
 
+import codecs
 import json
 import math
 import os
 import sys
+import tempfile
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
@@ -21,15 +30,19 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from motosim.errors import MotosimError, MotosimWarning, warn
-from motosim.params.checks import short_repr
+from motosim.params.checks import path_problem, short_repr
 
 __all__ = [
     "TYPICAL_OPTIONS",
     "check_figure_path",
     "check_folder_target",
+    "check_input",
+    "check_named_input",
     "check_output",
     "check_output_folder",
     "check_result_folder",
+    "check_result_input",
+    "check_scenario_inputs",
     "deferred_warnings",
     "parse_float_list",
     "parse_range",
@@ -235,6 +248,190 @@ def show_progress(quiet: bool = False) -> bool:
     return not quiet and sys.stderr.isatty()
 
 
+_SNIFF_BYTES = 65_536
+"""Bytes of a text input read to tell it from a binary or non-UTF-8 file."""
+
+
+def check_input(path: str | Path, what: str, *, folder: bool = False, text: bool = False) -> Path:
+    """Refuse an input the command cannot read, before any work, in one line naming it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file or folder to read.
+    what : str
+        What it should be, for messages ("scenario file", "result folder", ...).
+    folder : bool, optional
+        Whether a folder is meant (else a regular file).
+    text : bool, optional
+        Whether the file is text: its first bytes must then be UTF-8 without NUL bytes.
+
+    Returns
+    -------
+    Path
+        The input.
+
+    Raises
+    ------
+    MotosimError
+        If it is missing, a symbolic link loop or a link to nothing, a folder where a file is
+        meant (or the reverse), a device, unreadable, or (``text``) binary or not UTF-8.
+    """
+    source = Path(path)
+    problem = path_problem(source, what, folder=folder)
+    if problem is not None:
+        raise MotosimError(problem)
+    if text:
+        try:
+            with source.open("rb") as handle:
+                head = handle.read(_SNIFF_BYTES)
+        except OSError as err:
+            raise MotosimError(f"{path}: cannot read the {what}: {err.strerror}") from None
+        _refuse_binary(head, str(path), what)
+    return source
+
+
+def _refuse_binary(head: bytes, origin: str, what: str) -> None:
+    """Refuse the first bytes of a text file that are UTF-16, binary or not UTF-8."""
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise MotosimError(
+            f"{origin}: the {what} is UTF-16 text; expected UTF-8 (save it again as UTF-8)"
+        )
+    nul = head.find(b"\0")
+    if nul >= 0:
+        raise MotosimError(
+            f"{origin}: the {what} is binary (a NUL byte at offset {nul}); expected a UTF-8 "
+            "text file"
+        )
+    try:
+        # a multi-byte character cut at the end of the sample is not an error
+        decoder = codecs.getincrementaldecoder("utf-8")()
+        decoder.decode(head, final=len(head) < _SNIFF_BYTES)
+    except UnicodeDecodeError as err:
+        raise MotosimError(
+            f"{origin}: the {what} is not UTF-8 text (byte 0x{head[err.start]:02x} at offset "
+            f"{err.start}); expected a UTF-8 text file (convert it, e.g. iconv -f latin1 -t "
+            "utf-8)"
+        ) from None
+
+
+def check_result_input(path: str | Path, what: str = "result folder") -> Path:
+    """Refuse a result folder (or its ``result.h5``) the command cannot read, before h5py.
+
+    A missing folder whose run was stopped (its rows in ``NAME.partial``) is left to
+    :func:`motosim.io.results.load_result`, whose message names that folder.
+
+    Parameters
+    ----------
+    path : str or Path
+        The result folder, or the file in it.
+    what : str, optional
+        What it should be, for messages.
+
+    Returns
+    -------
+    Path
+        The input.
+
+    Raises
+    ------
+    MotosimError
+        What :func:`check_input` refuses of a folder (a file is taken as the result file).
+    """
+    source = Path(path)
+    if not os.path.lexists(source) and source.with_name(source.name + ".partial").is_dir():
+        return source
+    if source.is_file():
+        return check_input(source, what)
+    return check_input(source, what, folder=True)
+
+
+def check_named_input(name: str | Path, what: str) -> None:
+    """Check ``name`` as a file when it names one (a ``.toml`` suffix or a folder in it).
+
+    A packaged set's or platform's name (``simacom_handlebar``) is left to its loader.
+
+    Parameters
+    ----------
+    name : str or Path
+        A packaged name or a file.
+    what : str
+        What the file should be, for messages ("platform file").
+
+    Raises
+    ------
+    MotosimError
+        What :func:`check_input` refuses, for a name that is a file's.
+    """
+    text = str(name)
+    if text.lower().endswith(".toml") or os.sep in text or "/" in text:
+        check_input(text, what, text=True)
+
+
+def check_scenario_inputs(path: str | Path) -> Path:
+    """Check a scenario file and the files it names before the scenario model is imported.
+
+    The scenario is read as TOML (a light module); its design file (``[controller] design``),
+    parameter files (``[motorcycle] params``, ``[handlebar] true`` and ``nominal`` when they
+    name a ``.toml`` file rather than a packaged set), CSV profiles (``kind = "csv"``,
+    ``file``) and OpenDRIVE road (``[rider] path``, ``file``) are looked for as
+    :func:`motosim.io.runs.resolve` reads them, relative to its folder. The
+    scenario's values are checked afterwards, by :func:`motosim.sim.parse_scenario`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The scenario file.
+
+    Returns
+    -------
+    Path
+        The scenario file.
+
+    Raises
+    ------
+    MotosimError
+        One line naming the first file that cannot be read (:func:`check_input`), or the
+        scenario's TOML error.
+    """
+    from motosim.params.toml import read_toml
+
+    source = check_input(path, "scenario file", text=True)
+    data = read_toml(source, what="scenario file")
+    base = source.parent
+
+    def named_file(name: str, what: str) -> None:
+        # as motosim.io.runs.parameter_source: a .toml beside the scenario, else the name
+        candidate = base / name
+        if candidate.suffix == ".toml" and candidate.is_file():
+            check_input(candidate, what, text=True)
+        elif name.lower().endswith(".toml") or "/" in name or os.sep in name:
+            check_input(name if os.path.lexists(name) else candidate, what, text=True)
+
+    controller = data.get("controller")
+    if isinstance(controller, dict) and isinstance(controller.get("design"), str):
+        named_file(controller["design"], "design file")
+    for table, key in (("motorcycle", "params"), ("handlebar", "true"), ("handlebar", "nominal")):
+        section = data.get(table)
+        if isinstance(section, dict) and isinstance(section.get(key), str):
+            named_file(section[key], "parameter file")
+    for table, keys in (
+        ("motorcycle", ("drive_torque", "brake_torque", "wind_force", "side_wind")),
+        ("rider", ("profile", "probe", "path")),
+    ):
+        section = data.get(table)
+        if not isinstance(section, dict):
+            continue
+        for key in keys:
+            spec = section.get(key)
+            if not (isinstance(spec, dict) and isinstance(spec.get("file"), str)):
+                continue
+            what = "OpenDRIVE file" if key == "path" else "log file (CSV)"
+            if spec.get("kind") in ("csv", "opendrive"):
+                check_input(base / spec["file"], what, text=True)
+    return source
+
+
 def refuse_special(target: Path, option: str, expected: str) -> None:
     """Refuse an output path that is a broken or looping link, or a device, pipe or socket.
 
@@ -334,6 +531,10 @@ def check_folder_target(
     if target.exists() and not target.is_dir():
         raise MotosimError(f"{option} {target} is a file; expected {expected}")
     _refuse_missing_parent(target, option)
+    # the lock beside the folder is written in its parent, the files in the folder
+    _refuse_unwritable(target.parent, option, target)
+    if target.is_dir():
+        _refuse_unwritable(target, option, target)
     return target
 
 
@@ -383,6 +584,33 @@ def _refuse_missing_parent(target: Path, option: str) -> None:
         )
 
 
+def _refuse_unwritable(folder: Path, option: str, target: Path) -> None:
+    """Refuse a folder that takes no file, found by creating and removing a probe file in it.
+
+    ``os.access`` alone answers yes for ``/proc`` and ``/sys`` to root; the probe is what a
+    write then meets: a read-only mount, a pseudo file system, a missing permission.
+    """
+    try:
+        handle, name = tempfile.mkstemp(dir=folder, prefix=".motosim-probe-")
+    except OSError as err:
+        raise MotosimError(
+            f"{option} {target}: cannot write in the folder {folder} ({err.strerror}); "
+            "expected a folder this user may write (not /proc, /sys or a read-only mount)"
+        ) from None
+    os.close(handle)
+    os.unlink(name)
+
+
+def _refuse_folder_name(path: str | Path, option: str) -> None:
+    """Refuse a file output whose name ends in ``/``: it names a folder, not a file."""
+    text = str(path)
+    if text.endswith(("/", os.sep)) and text.strip("/" + os.sep):
+        raise MotosimError(
+            f"{option} {text} ends in /, which names a folder; expected a file name (such as "
+            f"{text}NAME)"
+        )
+
+
 def check_output(
     path: str | Path,
     *,
@@ -415,11 +643,12 @@ def check_output(
     Raises
     ------
     MotosimError
-        If the suffix is not admitted, the target is a folder, its folder does not exist, or
-        it exists and ``overwrite`` is false.
+        If the name ends in ``/`` or its suffix is not admitted, the target is a folder, its
+        folder does not exist or takes no file, or it exists and ``overwrite`` is false.
     """
     if not str(path).strip():
         raise MotosimError(f"{option} is empty; expected a file name")
+    _refuse_folder_name(path, option)
     target = Path(path)
     if suffixes and target.suffix.lower() not in suffixes:
         raise MotosimError(
@@ -433,6 +662,7 @@ def check_output(
     _refuse_missing_parent(target, option)
     if target.exists() and not overwrite:
         raise MotosimError(f"{option} {target} exists; give --overwrite to replace it")
+    _refuse_unwritable(target.parent, option, target)
     return target
 
 

@@ -9,10 +9,16 @@ import time
 from pathlib import Path
 from typing import Any
 
-from motosim.cli._common import check_folder_target, check_output, print_json
+from motosim.cli._common import (
+    check_folder_target,
+    check_input,
+    check_output,
+    check_scenario_inputs,
+    print_json,
+)
 from motosim.cli.cache import add_cache_option, design_cache
 from motosim.errors import MotosimError
-from motosim.params.checks import short_repr
+from motosim.params.checks import path_problem, short_repr
 
 __all__ = ["register"]
 
@@ -131,8 +137,25 @@ def _rerun(args: argparse.Namespace) -> int:
     return 0 if match is not False else 1
 
 
+def _check_inputs(path: str) -> None:
+    """Check the campaign file and its base scenario's files before anything heavy is imported.
+
+    The campaign's values are checked by :func:`motosim.campaign.load_campaign`, after.
+    """
+    from motosim.params.toml import read_toml
+
+    source = check_input(path, "campaign file", text=True)
+    head = read_toml(source, what="campaign file").get("campaign")
+    if isinstance(head, dict) and isinstance(head.get("scenario"), str):
+        base = source.parent / head["scenario"]
+        problem = path_problem(base, "scenario file")
+        if problem is not None:
+            raise MotosimError(f"{path} [campaign] scenario: {problem}")
+        check_scenario_inputs(base)
+
+
 def _check_options(args: argparse.Namespace) -> None:
-    """Refuse absurd options before the campaign is planned."""
+    """Refuse absurd options before the campaign is planned, then unreadable inputs."""
     out = check_folder_target(args.out, "--out", "a result folder")
     if args.rerun is None and out.is_dir() and any(out.iterdir()):  # before the base scenario
         from motosim.campaign.results import check_store_folder
@@ -164,6 +187,7 @@ def _check_options(args: argparse.Namespace) -> None:
                     f"--write-scenario {args.write_scenario}: {path} exists; expected a new file "
                     "name (the scenario and its true handlebar file are never replaced)"
                 )
+    _check_inputs(args.campaign)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -211,6 +235,13 @@ def run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return 130
+        except OSError as err:  # a full disk, a folder gone: name where, if the error does not
+            if err.filename is not None:
+                raise
+            raise MotosimError(
+                f"{args.out}: cannot write the campaign's results ({err.strerror or err}); the "
+                "runs written are kept there: free space and run the same command to resume"
+            ) from None
         finally:
             if bars and bars[0] is not None:
                 bars[0].close()

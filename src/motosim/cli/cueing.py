@@ -7,7 +7,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
+    check_named_input,
     check_output_folder,
+    check_result_input,
     print_json,
     save_figure,
     warn_atypical,
@@ -95,6 +97,8 @@ def run(args: argparse.Namespace) -> int:
     """Cue, write, plot and summarise."""
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 10_000.0):
         raise MotosimError(f"--rate {args.rate}; expected a loop rate from 1 to 10000 Hz")
+    check_result_input(args.result)
+    check_named_input(args.platform, "platform file")
     check_output_folder(args.out, overwrite=args.overwrite, reads=(("result", args.result),))
     import numpy as np
 

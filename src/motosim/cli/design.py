@@ -1,6 +1,7 @@
 """``motosim design``: the observer and the torque-feedback controller for a handlebar."""
 
 import argparse
+import math
 import sys
 from datetime import date
 from typing import TYPE_CHECKING, Any
@@ -13,7 +14,7 @@ from motosim.cli._common import (
     warn_atypical,
     write_text,
 )
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, RunFailedError
 from motosim.params import load_parameters
 from motosim.params.checks import check_number, short_repr
 from motosim.params.handlebar import HandlebarParameters
@@ -49,6 +50,12 @@ MAX_SEED = 2**63 - 1
 
 RATE_RANGE = (10.0, 100_000.0)
 """Control rates admitted [Hz]: a real-time loop runs at 100 Hz to tens of kHz."""
+
+LOWEST_BANDWIDTH = 0.1
+"""Lowest ``--bandwidth`` admitted [Hz]; the highest is a fifth of ``--rate``
+(:func:`motosim.control.torque_feedback.check_options`). A rider steers at 0.1-5 Hz: a loop
+slower than the slowest of it renders no feel, and far below it the loop-shaping weight's
+integrator corner and the Riccati equations of the synthesis lose their precision."""
 
 
 def register(sub: Any) -> None:
@@ -220,6 +227,30 @@ def run(args: argparse.Namespace) -> int:
         )
     check_number(args.rate, where="--rate", lower=RATE_RANGE[0], upper=RATE_RANGE[1], unit="Hz")
     check_number(args.latency, where="--latency", lower=0.0, upper=1.0 / args.rate, unit="s")
+    if args.bandwidth is not None and not (
+        math.isfinite(args.bandwidth) and LOWEST_BANDWIDTH <= args.bandwidth <= args.rate / 5
+    ):
+        raise MotosimError(
+            f"--bandwidth {short_repr(args.bandwidth)} Hz; expected {LOWEST_BANDWIDTH:g} to "
+            f"{args.rate / 5:g} Hz: at least the slowest of a rider's steering and at most a "
+            f"fifth of the {args.rate:g} Hz control rate"
+        )
+    # the range of motosim.control.torque_feedback.check_options, before SciPy is imported
+    if not (math.isfinite(args.integral_corner) and 1e-6 <= args.integral_corner <= 0.5):
+        raise MotosimError(
+            f"--integral-corner {short_repr(args.integral_corner)}: integral_corner = "
+            f"{args.integral_corner!r}; expected a fraction of the bandwidth from 1e-06 to 0.5"
+        )
+    speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
+    for speed in speeds:
+        check_number(
+            speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
+        )
+    if args.out is not None:
+        check_output(
+            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
+        )
+    hb = load_parameters(args.handlebar, "handlebar")
     import numpy as np
 
     from motosim.control.torque_feedback import (
@@ -241,16 +272,6 @@ def run(args: argparse.Namespace) -> int:
         rate=args.rate,
         integral_corner=args.integral_corner,
     )
-    speeds = parse_float_list("--speeds", args.speeds, max_items=MAX_SPEEDS)
-    for speed in speeds:
-        check_number(
-            speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
-        )
-    if args.out is not None:
-        check_output(
-            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
-        )
-    hb = load_parameters(args.handlebar, "handlebar")
     warn_atypical("design", "--speeds", speeds)
     warn_atypical("design", "--rate", args.rate)
     if args.bandwidth is not None:
@@ -258,17 +279,27 @@ def run(args: argparse.Namespace) -> int:
     if not args.json:
         print(f"designing for {args.handlebar} ({args.starts} starts) ...", file=sys.stderr)
     bandwidth = args.bandwidth
-    if bandwidth is None:
-        bandwidth, _ = handlebar_bandwidth(hb, rate=args.rate, n_starts=args.starts, seed=args.seed)
-    ctrl = design_torque_feedback(
-        hb,
-        rng=np.random.default_rng(args.seed),
-        bandwidth=bandwidth,
-        order=args.order,
-        rate=args.rate,
-        n_starts=args.starts,
-        integral_corner=args.integral_corner,
-    )
+    # every input is checked by now: the synthesis failing on them is a failed design (exit 3)
+    try:
+        if bandwidth is None:
+            bandwidth, _ = handlebar_bandwidth(
+                hb, rate=args.rate, n_starts=args.starts, seed=args.seed
+            )
+        ctrl = design_torque_feedback(
+            hb,
+            rng=np.random.default_rng(args.seed),
+            bandwidth=bandwidth,
+            order=args.order,
+            rate=args.rate,
+            n_starts=args.starts,
+            integral_corner=args.integral_corner,
+        )
+    except MotosimError as err:
+        raise RunFailedError(
+            f"the design for {args.handlebar} at {args.rate:g} Hz"
+            + ("" if bandwidth is None else f", {bandwidth:g} Hz bandwidth")
+            + f", order {args.order} failed: {err}"
+        ) from None
     settings = observer_settings(args.rate)
     obs = design_with(hb, settings)
     paper = analyse_loop(hb, PAPER_CONTROLLER, rate=args.rate)

@@ -3,7 +3,7 @@
 import argparse
 from typing import Any
 
-from motosim.cli._common import check_output, print_json
+from motosim.cli._common import check_input, check_output, print_json
 from motosim.params import load_parameters
 from motosim.params.checks import check_number
 
@@ -65,16 +65,18 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, estimate, write and summarise."""
+    check_input(args.log, "log file (CSV)", text=True)
     check_output(args.out, overwrite=args.overwrite, reads=(("log", args.log),))
     check_number(args.lipschitz, where="--lipschitz", lower=1e-3, upper=1e7, unit="rad/s^2")
     hb = load_parameters(args.handlebar, "handlebar")
+    from motosim.io import parse_columns, read_rig_log, write_log
+
+    columns = parse_columns(args.columns) if args.columns else None
     import numpy as np
 
     from motosim.estimation import estimate
-    from motosim.io import parse_columns, read_rig_log, write_log
     from motosim.timeseries import TimeSeries
 
-    columns = parse_columns(args.columns) if args.columns else None
     rig = read_rig_log(args.log, required=("theta_h", "i_m"), columns=columns)
     log = rig.series
     rate, tau_hat = estimate(

@@ -5,7 +5,7 @@ import math
 from typing import Any
 
 from motosim.cli._common import check_output, print_json, warn_atypical
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, warn
 from motosim.params import HandlebarParameters, load_parameters
 from motosim.params.checks import check_number, short_repr
 
@@ -69,14 +69,12 @@ def register(sub: Any) -> None:
 
 def _plan(args: argparse.Namespace) -> int:
     """Recommend the chirp, print it, optionally write the current command."""
-    import numpy as np
-
-    from motosim.identification import plan_excitation
-    from motosim.io import write_log
-    from motosim.timeseries import TimeSeries
-
     if args.max_current is None:
         raise MotosimError("--plan needs --max-current A; expected the drive's current limit")
+    if args.out:
+        check_output(
+            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
+        )
     hb = load_parameters(args.handlebar, "handlebar")
     given = {
         "J_eq": args.inertia,
@@ -96,6 +94,12 @@ def _plan(args: argparse.Namespace) -> int:
     check_number(args.max_current, where="--max-current", lower=0.01, upper=1000.0, unit="A")
     check_number(args.angle_limit, where="--angle-limit", lower=1e-3, upper=math.pi, unit="rad")
     rough = {name: getattr(hb, name) if value is None else value for name, value in given.items()}
+    import numpy as np
+
+    from motosim.identification import plan_excitation
+    from motosim.io import write_log
+    from motosim.timeseries import TimeSeries
+
     plan = plan_excitation(
         J_eq=rough["J_eq"],
         beta_eq=rough["beta_eq"],
@@ -117,9 +121,6 @@ def _plan(args: argparse.Namespace) -> int:
         "notes": list(plan.notes),
     }
     if args.out:
-        check_output(
-            args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
-        )
         t = np.arange(round(plan.duration * args.rate) + 1) / args.rate
         phase = plan.f0 * t + 0.5 * (plan.f1 - plan.f0) / plan.duration * t**2
         command = plan.amplitude * np.sin(2.0 * np.pi * phase)
@@ -169,15 +170,21 @@ def run(args: argparse.Namespace) -> int:
     _check_options(args)
     if args.plan:
         return _plan(args)
+    if not args.out:
+        raise MotosimError("excite needs --out RUN.csv; expected the log file to write")
+    check_output(args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),))
+    hb = load_parameters(args.handlebar, "handlebar")
+    if args.signal == "chirp" and args.f0 > args.f1:
+        warn(
+            f"--f0 {args.f0:g} Hz is above --f1 {args.f1:g} Hz: a down-chirp, from high to low "
+            "frequencies; legal, but an identification run usually sweeps up (swap them if "
+            "that is what was meant)"
+        )
     import numpy as np
 
     from motosim.identification import MeasurementModel, excitation_run
     from motosim.io import write_log
 
-    if not args.out:
-        raise MotosimError("excite needs --out RUN.csv; expected the log file to write")
-    check_output(args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),))
-    hb = load_parameters(args.handlebar, "handlebar")
     measurement = MeasurementModel(
         sample_rate=args.rate,
         counts_per_revolution=args.counts,

@@ -6,6 +6,7 @@ from typing import Any
 
 from motosim.cli._common import (
     check_figure_path,
+    check_scenario_inputs,
     deferred_warnings,
     print_json,
     save_figure,
@@ -76,21 +77,16 @@ def _band(text: str) -> tuple[float, float]:
         low, high = (float(x) for x in text.split(":"))
     except ValueError:
         raise MotosimError(f"--band {text!r}; expected LOW:HIGH in Hz, e.g. 0.1:5") from None
+    # the band motosim.sim.fidelity.feel_scenario admits, checked before it is imported
+    if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high <= 20.0):
+        raise MotosimError(f"--band {text!r}; expected LOW:HIGH with 0 < LOW < HIGH <= 20 Hz")
     return low, high
 
 
 def run(args: argparse.Namespace) -> int:
     """Simulate the feel measurement and print the comparison."""
-    from pathlib import Path
-
-    import numpy as np
-
-    from motosim.cli.simulate import resolve_cached
-    from motosim.io.runs import load_scenario
-    from motosim.sim import simulate
-    from motosim.sim.fidelity import feel_scenario, periodic_feel, rendered_feel
-    from motosim.sim.scenario import MultisineProfile, Scenario
-
+    if args.scenario:
+        check_scenario_inputs(args.scenario)
     if not (math.isfinite(args.speed) and 3.0 <= args.speed <= 60.0):
         raise MotosimError(
             f"--speed {args.speed!r}; expected 3 to 60 m/s (the virtual rider's schedule)"
@@ -129,6 +125,16 @@ def run(args: argparse.Namespace) -> int:
             f"--period {args.period:g} with --band {args.band}; expected a period of at least "
             f"1 / LOW = {1.0 / band[0]:g} s (the lowest line is 1 / period)"
         )
+    from pathlib import Path
+
+    import numpy as np
+
+    from motosim.cli.simulate import resolve_cached
+    from motosim.io.runs import load_scenario
+    from motosim.sim import simulate
+    from motosim.sim.fidelity import feel_scenario, periodic_feel, rendered_feel
+    from motosim.sim.scenario import MultisineProfile, Scenario
+
     with deferred_warnings():  # the scenario's, once the files it names are read too
         base = load_scenario(args.scenario) if args.scenario else Scenario(name="default")
         folder = Path(args.scenario).parent if args.scenario else Path(".")

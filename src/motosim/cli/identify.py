@@ -9,6 +9,7 @@ from typing import Any
 
 from motosim.cli._common import (
     check_figure_path,
+    check_input,
     check_output,
     print_json,
     save_figure,
@@ -121,6 +122,9 @@ _UNITS = {"J_eq": "kg*m^2", "beta_eq": "N*m*s/rad", "beta_s": "N*m"}
 
 def run(args: argparse.Namespace) -> int:
     """Identify, report, and optionally write the parameter file and the figure."""
+    check_input(args.log, "log file (CSV)", text=True)
+    if args.validate:
+        check_input(args.validate, "log file (CSV)", text=True)
     if args.plot:
         check_figure_path(args.plot, overwrite=args.overwrite)
     if args.out:
@@ -128,10 +132,13 @@ def run(args: argparse.Namespace) -> int:
     motor = _motor(args)
     hb = motor.values
     assert isinstance(hb, HandlebarParameters)
-    from motosim.identification import back_emf_damping, drive_from_columns, identify, validate
     from motosim.io import parse_columns, read_rig_log
 
     columns = parse_columns(args.columns) if args.columns else None
+    # its bound by the log's length is checked once the log is read
+    check_number(args.current_delay, where="--current-delay", lower=0.0, upper=1.0, unit="s")
+    from motosim.identification import back_emf_damping, drive_from_columns, identify, validate
+
     rig = read_rig_log(args.log, required=("theta_h",), columns=columns)
     second = (
         read_rig_log(args.validate, required=("theta_h",), columns=columns)

@@ -299,6 +299,16 @@ def _exit_on_stop_signals(code: int) -> None:
         signal.signal(sig, leave)
 
 
+def _is_numerical_failure(err: Exception) -> bool:
+    """Whether ``err`` is a linear-algebra failure (NumPy's ``LinAlgError``, which SciPy's is).
+
+    The inputs were checked against their plausible ranges first, so a singular matrix or a
+    diverged solver on them is a failed run (exit 3), not bad input and not a bug.
+    """
+    numpy = sys.modules.get("numpy")
+    return numpy is not None and isinstance(err, numpy.linalg.LinAlgError)
+
+
 def _main(words: list[str]) -> int:
     """:func:`main` on the words of a command line."""
     try:
@@ -336,6 +346,14 @@ def _main(words: list[str]) -> int:
     except Exception as err:  # a bug of ours: one line, exit 1, the traceback on request
         if "--debug" in words:
             raise
+        if _is_numerical_failure(err):
+            message = " ".join(str(err).split())[:300]
+            print(
+                f"motosim: run failed: the computation failed numerically on inputs that passed "
+                f"their checks ({type(err).__name__}: {message})",
+                file=sys.stderr,
+            )
+            return EXIT_RUN_FAILED
         message = " ".join(str(err).split())[:300]
         print(
             f"motosim: internal error: {type(err).__name__}: {message} (a bug: please report "

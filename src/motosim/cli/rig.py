@@ -5,10 +5,17 @@ import math
 import signal
 from typing import Any
 
-from motosim.cli._common import deferred_warnings, print_json, warn_atypical
+from motosim.cli._common import (
+    check_named_input,
+    check_scenario_inputs,
+    deferred_warnings,
+    print_json,
+    warn_atypical,
+)
 from motosim.cli.rtcheck import (
     add_link_option,
     add_privilege_options,
+    check_privilege_options,
     check_udp_only_options,
     clock_from_args,
     privileges_from_args,
@@ -77,6 +84,9 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the rig until Ctrl-C or the duration; print what it did."""
     check_udp_only_options(args)  # before the numerical stack is imported
+    check_privilege_options(args)  # the options first, then the files
+    check_scenario_inputs(args.scenario)
+    check_named_input(args.platform, "platform file")
     from motosim.cli.run import _Presses
 
     presses = _Presses()  # Ctrl-C while the rig starts: counted, not lost in a C callback
@@ -89,17 +99,18 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, presses: Any) -> int:
     """:func:`run`, with Ctrl-C counted by ``presses`` until the loop takes it over."""
+    from motosim.cli.run import check_rt_options, load_realtime, rig_settings
+
+    options = check_rt_options(args)  # before the rig and the simulator are imported
+    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
+        raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     import numpy as np
 
-    from motosim.cli.run import check_rt_options, load_realtime, rig_settings
     from motosim.io.can import handlebar_codecs, open_link
     from motosim.rt.loop import RateLoop
     from motosim.rt.privileges import freeze_gc, thaw_gc
     from motosim.rt.rig import VirtualRig
 
-    options = check_rt_options(args)
-    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
-        raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
     with deferred_warnings():  # the scenario's, once its checks have passed
         inputs, realtime = load_realtime(args.scenario)
         sc = inputs.scenario

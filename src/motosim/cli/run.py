@@ -13,7 +13,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
+    check_named_input,
     check_result_folder,
+    check_scenario_inputs,
     deferred_warnings,
     print_json,
     warn_atypical,
@@ -579,6 +581,10 @@ def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a safety fault."""
     check_udp_only_options(args)  # before the numerical stack is imported
     _check_wait(args)
+    check_privilege_options(args)  # the options first, then the files
+    check_scenario_inputs(args.scenario)
+    check_named_input(args.platform, "platform file")
+    check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     presses = _Presses()
     previous = signal.signal(signal.SIGINT, presses)
     try:
@@ -590,6 +596,7 @@ def run(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     """:func:`run`, with Ctrl-C counted by ``presses`` until the loop takes it over, and
     given back to the handler ``sigint`` once the loop has ended."""
+    options = check_rt_options(args)  # before the stack and the simulator are imported
     import numpy as np
 
     from motosim.io.cache import cached_stack
@@ -601,7 +608,6 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     from motosim.sim.metrics import validity_limits
     from motosim.sim.stack import account_for_delay
 
-    options = check_rt_options(args)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)

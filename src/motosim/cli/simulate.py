@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
     check_result_folder,
+    check_result_input,
+    check_scenario_inputs,
     deferred_warnings,
     print_json,
     show_progress,
@@ -90,6 +92,7 @@ def run_scenario(
 
 def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
+    check_scenario_inputs(args.scenario)
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     from motosim.io.results import folder_lock, is_complete_result, partial_folder
     from motosim.io.runs import load_scenario
@@ -157,6 +160,7 @@ def run(args: argparse.Namespace) -> int:
 
 def run_report(args: argparse.Namespace) -> int:
     """Build the report of a result folder."""
+    check_result_input(args.folder)
     from motosim.report import build_report
 
     print(f"wrote {build_report(Path(args.folder))}")

@@ -7,7 +7,7 @@ import sys
 import time
 from typing import Any
 
-from motosim.cli._common import check_output, warn_atypical
+from motosim.cli._common import check_output, check_result_input, warn_atypical
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
@@ -93,19 +93,23 @@ def register(sub: Any) -> None:
 
 def run_view(args: argparse.Namespace) -> int:
     """Serve the view of a result until interrupted."""
-    import json
-    from pathlib import Path
-
-    from motosim.io.results import load_result
     from motosim.rt.telemetry import is_host
-    from motosim.view.app import ServerThread, create_app, new_token
-    from motosim.view.feeds import ReplayFeed, merge_signals, road_from_xy
 
     if not 0 <= args.port < 65536:
         raise MotosimError(f"--port {short_repr(args.port)}; expected 0..65535")
     if not is_host(args.host):
         raise MotosimError(f"--host {short_repr(args.host)}; expected an IP address or host name")
     _check_rate(args.rate)
+    check_result_input(args.folder)
+    if args.cueing is not None:
+        check_result_input(args.cueing, "cueing folder")
+    import json
+    from pathlib import Path
+
+    from motosim.io.results import load_result
+    from motosim.view.app import ServerThread, create_app, new_token
+    from motosim.view.feeds import ReplayFeed, merge_signals, road_from_xy
+
     result = load_result(args.folder)
     series = result if args.cueing is None else merge_signals(result, _cueing(args.cueing))
     warn_atypical("view", "--rate", args.rate)
@@ -141,6 +145,14 @@ def run_view(args: argparse.Namespace) -> int:
 
 def run_telemetry(args: argparse.Namespace) -> int:
     """Write and/or stream a result's telemetry."""
+    if not (args.mcap or args.plotjuggler or args.esmini):
+        raise MotosimError("nothing to do; expected --mcap, --plotjuggler or --esmini")
+    _check_rate(args.rate)
+    if not 1 <= args.every <= 1_000_000:
+        raise MotosimError(f"--every {short_repr(args.every)}; expected 1 to 1000000")
+    check_result_input(args.folder)
+    if args.mcap:
+        check_output(args.mcap, overwrite=False, option="--mcap", suffixes=(".mcap",))
     import numpy as np
 
     from motosim.io.results import load_result
@@ -152,13 +164,6 @@ def run_telemetry(args: argparse.Namespace) -> int:
         write_mcap,
     )
 
-    if not (args.mcap or args.plotjuggler or args.esmini):
-        raise MotosimError("nothing to do; expected --mcap, --plotjuggler or --esmini")
-    _check_rate(args.rate)
-    if not 1 <= args.every <= 1_000_000:
-        raise MotosimError(f"--every {short_repr(args.every)}; expected 1 to 1000000")
-    if args.mcap:
-        check_output(args.mcap, overwrite=False, option="--mcap", suffixes=(".mcap",))
     addresses = [
         _address("--plotjuggler", args.plotjuggler, PLOTJUGGLER_PORT) if args.plotjuggler else None,
         _address("--esmini", args.esmini, ESMINI_PORT) if args.esmini else None,

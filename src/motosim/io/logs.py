@@ -33,7 +33,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, warn
+from motosim.params.checks import path_problem
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -96,6 +97,11 @@ MIN_PERIOD = 1e-6
 
 JITTER_TOLERANCE = 0.01
 """Largest deviation of a sample period from the median, as a fraction, left unresampled."""
+JITTER_WARNING = 0.05
+"""Deviation of a sample period from the median, as a fraction, beyond which a rig log's
+resampling is warned about: a drive's clocked log jitters by well under a percent, a log
+timestamped by a PC's scheduler by a few milliseconds, which linear interpolation turns into
+errors in the derivatives that identification and estimation take of the angle."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -268,12 +274,9 @@ def read_log(
         a time that does not strictly increase, too few samples.
     """
     source = Path(path)
-    if source.is_dir():
-        raise MotosimError(f"{path}: is a directory; expected a log file (CSV)")
-    if not source.exists():
-        raise MotosimError(f"{path}: no such log file")
-    if not source.is_file():
-        raise MotosimError(f"{path}: is a device, a pipe or a socket; expected a log file (CSV)")
+    problem = path_problem(source, "log file (CSV)")
+    if problem is not None:
+        raise MotosimError(problem)
     lines = _decode(source, str(path))
     if not lines:
         raise MotosimError(f"{path}: empty log; expected a header row and data rows")
@@ -548,6 +551,14 @@ def read_rig_log(
             f"{path}: {timing.longest_gap:.4g} s without samples after t = {series.t[k]:g} s; "
             f"expected gaps of at most {MAX_GAP_PERIODS} sample periods "
             f"({MAX_GAP_PERIODS * timing.period:.3g} s): split the log there"
+        )
+    if timing.jitter > JITTER_WARNING:
+        warn(
+            f"{path}: the sample periods deviate by up to {100 * timing.jitter:.0f} % "
+            f"({1e3 * timing.jitter * timing.period:.2g} ms) from the "
+            f"{1e3 * timing.period:.3g} ms period, timestamps jittered; the log is resampled "
+            "onto a uniform grid, which distorts the angle's derivatives: log with the "
+            "drive's clock if it can"
         )
     if timing.gaps or timing.jitter > JITTER_TOLERANCE:
         series = resample(series, timing.period)

@@ -39,7 +39,7 @@ from motosim.sim import (
     simulate,
 )
 from motosim.sim.metrics import failure, range_reason, run_metrics, validity_limits
-from motosim.sim.scenario import CsvProfile, OpenDrivePath, implausible
+from motosim.sim.scenario import CsvProfile, OpenDrivePath, check_profile_values, implausible
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
@@ -109,7 +109,9 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
     Raises
     ------
     MotosimError
-        On a missing or invalid file, or an impossible design.
+        On a missing or invalid file, or a bandwidth beyond a fifth of the measurement rate.
+    RunFailedError
+        If the controller's synthesis fails on the checked scenario.
     """
     folder = Path(base)
     scenario = read_road(scenario, folder)
@@ -117,15 +119,26 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
     nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
-    profiles = [mc.drive_torque, mc.brake_torque, mc.wind_force, mc.side_wind]
-    profiles += [p for p in (scenario.rider.profile, scenario.rider.probe) if p is not None]
-    for profile in profiles:
+    profiles = {
+        f"[motorcycle] {key}": getattr(mc, key)
+        for key in ("drive_torque", "brake_torque", "wind_force", "side_wind")
+    } | {"[rider] profile": scenario.rider.profile, "[rider] probe": scenario.rider.probe}
+    for where, profile in profiles.items():
         if isinstance(profile, CsvProfile):
             tables[profile.file] = read_log(
                 folder / profile.file,
                 required=(profile.column,),
                 min_samples=2,
                 remedy=f"the file's header must name t and the column = {profile.column!r}",
+            )
+            # its values in their legal range, as a profile written in the scenario: a huge
+            # one would overflow in the run's metrics before the run failed
+            values = tables[profile.file][profile.column]
+            check_profile_values(
+                where,
+                float(np.min(values)),
+                float(np.max(values)),
+                key=f"{profile.file}: column {profile.column!r} ({where})",
             )
     c = scenario.controller
     controller, observer = None, None
@@ -146,6 +159,13 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
         _warn_other_handlebar(c.design, design.handlebar, nominal)
     elif c.kind == "ours":
         rate = scenario.rates.measurement
+        if c.bandwidth is not None:  # bad input, before the synthesis
+            from motosim.control.torque_feedback import check_options
+
+            try:
+                check_options(bandwidth=c.bandwidth, rate=rate, integral_corner=c.integral_corner)
+            except MotosimError as err:
+                raise MotosimError(f"[controller] {err}") from None
 
         def synthesis() -> StateSpace:  # SciPy: only when the design is not cached
             from motosim.control.torque_feedback import (
@@ -169,21 +189,28 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
                 )
             return controller
 
-        if cache is None:
-            controller = synthesis()
-        else:
-            with cache.designing(scenario.name):
-                settings = {
-                    "rate": rate,
-                    "bandwidth": c.bandwidth,
-                    "order": c.order,
-                    "integral_corner": c.integral_corner,
-                    "n_starts": 4,
-                    "seed": 0,
-                }
-                controller = cached_controller(
-                    cache, synthesis, handlebar=nominal, settings=settings
-                )
+        # the scenario is checked by now: a synthesis failing on it is a failed run (exit 3)
+        try:
+            if cache is None:
+                controller = synthesis()
+            else:
+                with cache.designing(scenario.name):
+                    settings = {
+                        "rate": rate,
+                        "bandwidth": c.bandwidth,
+                        "order": c.order,
+                        "integral_corner": c.integral_corner,
+                        "n_starts": 4,
+                        "seed": 0,
+                    }
+                    controller = cached_controller(
+                        cache, synthesis, handlebar=nominal, settings=settings
+                    )
+        except MotosimError as err:
+            raise RunFailedError(
+                f"{scenario.name}: the controller's design failed ([controller] order "
+                f"{c.order}): {err}"
+            ) from None
     inputs = prepare(
         scenario,
         sharp=load_parameters(parameter_source(mc.params, folder), "sharp"),

@@ -18,6 +18,7 @@ one-line message naming the value and the expected range.
 """
 
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from importlib import resources
@@ -225,7 +226,7 @@ def load_parameter_set(name_or_path: str | Path) -> ParameterSet:
         data = parse_toml(text, origin=origin)
     else:
         path = Path(name_or_path)
-        if not path.exists():
+        if not os.path.lexists(path):  # a link loop or a broken link: read_toml names it
             sets = list_parameter_sets()
             raise MotosimError(
                 f"{origin}: no such parameter file or packaged set{suggestion(origin, sets)} "

@@ -9,8 +9,11 @@ where a name goes, and :func:`check_table` anything but a table where a table go
 """
 
 import difflib
+import errno
 import math
+import os
 from collections.abc import Iterable, Mapping
+from pathlib import Path
 from typing import Any
 
 from motosim.errors import MotosimError
@@ -21,6 +24,7 @@ __all__ = [
     "check_table",
     "check_text",
     "describe_range",
+    "path_problem",
     "short_repr",
     "suggestion",
 ]
@@ -121,6 +125,63 @@ def check_table(value: Any, *, where: str) -> Mapping[str, Any]:
 
 
 _REPR_LIMIT = 40
+
+
+def path_problem(path: str | Path, what: str, *, folder: bool = False) -> str | None:
+    """Why ``path`` cannot be read as ``what``, in one line naming it; None when it can.
+
+    The cases, in the order they are told apart: a symbolic link loop, a link to nothing,
+    nothing there, a folder where a file is meant (or a file where a folder is), a device, a
+    pipe or a socket, and what the process may not read.
+
+    Parameters
+    ----------
+    path : str or Path
+        The input.
+    what : str
+        What it should be, for the message, e.g. ``"scenario file"`` or ``"result folder"``.
+    folder : bool, optional
+        Whether a folder is meant (else a regular file).
+
+    Returns
+    -------
+    str or None
+        The message, e.g. ``"x.toml: no such scenario file"``.
+
+    Examples
+    --------
+    >>> path_problem("/no/such.toml", "scenario file")
+    '/no/such.toml: no such scenario file'
+    """
+    origin = str(path)
+    article = "an" if what[:1].lower() in "aeiou" else "a"
+    try:
+        os.stat(origin)
+    except OSError as err:
+        if err.errno == errno.ELOOP:
+            return (
+                f"{origin}: is a symbolic link loop (it leads back to itself); expected "
+                f"{article} {what}"
+            )
+        if os.path.islink(origin):
+            return (
+                f"{origin}: is a symbolic link to {os.readlink(origin)}, which does not exist; "
+                f"expected {article} {what}"
+            )
+        if err.errno in (errno.ENOENT, errno.ENOTDIR):
+            return f"{origin}: no such {what}"
+        return f"{origin}: cannot read the {what}: {err.strerror}"
+    target = Path(origin)
+    if folder and not target.is_dir():
+        kind = "a file" if target.is_file() else "a device, a pipe or a socket"
+        return f"{origin}: is {kind}; expected {article} {what}"
+    if not folder and target.is_dir():
+        return f"{origin}: is a directory; expected {article} {what}"
+    if not folder and not target.is_file():
+        return f"{origin}: is a device, a pipe or a socket; expected {article} {what}"
+    if not os.access(origin, os.R_OK | (os.X_OK if folder else 0)):
+        return f"{origin}: cannot read the {what}: Permission denied"
+    return None
 
 
 def short_repr(value: Any, limit: int = _REPR_LIMIT) -> str:

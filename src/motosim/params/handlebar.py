@@ -112,7 +112,12 @@ class HandlebarParameters:
     TYPICAL: ClassVar[dict[str, tuple[float, float, str]]] = {
         "J_eq": (0.01, 1.0, "a handlebar with its motor; Table I: 0.0415"),
         "beta_eq": (0.1, 100.0, "bearings, belt and a motor's drag; Table I: 13.956"),
-        "beta_s": (0.0, 10.0, "dry friction a rider overcomes unnoticed; Table I: 1.734"),
+        "beta_s": (
+            0.01,
+            10.0,
+            "dry friction a rider overcomes unnoticed, at least the hundredths of N*m of a "
+            "handlebar's bearings and belt; Table I: 1.734",
+        ),
         "N": (1.0, 30.0, "a direct drive to a one-stage belt; the paper's belt: 12"),
         "k_t": (0.01, 2.0, "servo motors of 50 W to 2 kW; the paper's motor: 0.25"),
         "R": (0.05, 20.0, "armatures of such motors"),

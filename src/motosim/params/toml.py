@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from motosim.errors import MotosimError
-from motosim.params.checks import short_repr
+from motosim.params.checks import path_problem, short_repr
 
 __all__ = [
     "MAX_DEPTH", "MAX_FILE_BYTES", "MAX_MAGNITUDE", "parse_toml", "read_limited", "read_toml",
@@ -157,16 +157,10 @@ def read_limited(path: Path, *, what: str, max_bytes: int) -> bytes:
         ``max_bytes``.
     """
     origin = str(path)
-    article = "an" if what[:1].lower() in "aeiou" else "a"
+    problem = path_problem(path, what)
+    if problem is not None:
+        raise MotosimError(problem)
     try:
-        if path.is_dir():
-            raise MotosimError(f"{origin}: is a directory; expected {article} {what}")
-        if not path.exists():
-            raise MotosimError(f"{origin}: no such {what}")
-        if not path.is_file():
-            raise MotosimError(
-                f"{origin}: is a device, a pipe or a socket; expected {article} {what}"
-            )
         size = path.stat().st_size
         if size > max_bytes:
             raise MotosimError(

@@ -54,7 +54,16 @@ import math
 import types
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar, Literal, Union, get_args, get_origin, get_type_hints
+from typing import (
+    Any,
+    ClassVar,
+    Literal,
+    NamedTuple,
+    Union,
+    get_args,
+    get_origin,
+    get_type_hints,
+)
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,6 +80,7 @@ __all__ = [
     "FEEDFORWARD",
     "PATHS",
     "PROFILES",
+    "PROFILE_LIMITS",
     "VALIDATED_SPEEDS",
     "AvoidancePath",
     "ChirpProfile",
@@ -94,6 +104,7 @@ __all__ = [
     "StepsProfile",
     "StraightPath",
     "TurnPath",
+    "check_profile_values",
     "implausible",
     "parse_scenario",
     "scenario_dict",
@@ -107,6 +118,15 @@ SMALLEST = 1e-6
 """Smallest positive length [m], time [s], rate [Hz], gain or factor a scenario accepts: a
 micrometre, a microsecond or a millionth is no lane change, period or handlebar, only a typo
 or a unit slip (and 1e-300 would reach the integrator as a division by zero)."""
+
+
+MAX_TIME = 3600.0
+"""Largest magnitude of a time in a profile [s]: the longest run a scenario admits."""
+MAX_DISTANCE = 1e6
+"""Largest length, radius or position along a path [m]: farther than any run travels (100 m/s
+for the longest run, 3600 s, is 360 km); a straight is a ``straight`` path."""
+MAX_OFFSET = 100.0
+"""Largest lateral offset or amplitude of a path [m]: a road is tens of metres wide."""
 
 
 def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
@@ -154,6 +174,8 @@ class StepsProfile:
             )
         if any(b <= a for a, b in zip(self.times, self.times[1:], strict=False)):
             raise MotosimError(f"times = {list(self.times)}; expected increasing times")
+        for time in (self.times[0], self.times[-1]):
+            _check("times", time, low=-MAX_TIME, high=MAX_TIME, unit="s")
 
     def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
         """Values at the times ``t`` [s]."""
@@ -175,8 +197,8 @@ class SquareProfile:
     def __post_init__(self) -> None:
         _check("low", self.low)
         _check("high", self.high)
-        _check("period", self.period, low=0.0, low_open=True, unit="s")
-        _check("start", self.start, unit="s")
+        _check("period", self.period, low=0.0, low_open=True, high=MAX_TIME, unit="s")
+        _check("start", self.start, low=-MAX_TIME, high=MAX_TIME, unit="s")
 
     def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
         """Values at the times ``t`` [s]."""
@@ -202,7 +224,7 @@ class ChirpProfile:
         # it is sampled at it would alias: refused by Scenario, which knows the rates
         _check("f0", self.f0, low=0.0, high=1e4, unit="Hz")
         _check("f1", self.f1, low=0.0, high=1e4, unit="Hz")
-        _check("start", self.start, unit="s")
+        _check("start", self.start, low=-MAX_TIME, high=MAX_TIME, unit="s")
         _check("offset", self.offset)
 
     def sample(self, t: Array, tables: Mapping[str, TimeSeries]) -> Array:
@@ -239,7 +261,7 @@ class MultisineProfile:
         _check("f0", self.f0, low=1.0 / self.period, unit="Hz")
         _check("f1", self.f1, low=self.f0, low_open=True, high=1e4, unit="Hz")
         _check("per_decade", self.per_decade, low=1, high=1000)
-        _check("start", self.start, unit="s")
+        _check("start", self.start, low=-MAX_TIME, high=MAX_TIME, unit="s")
 
     def frequencies(self) -> Array:
         """The excited lines [Hz]: distinct harmonics of 1 / ``period`` nearest a log grid."""
@@ -303,6 +325,107 @@ PROFILES: dict[str, type[Profile]] = {
 """Profile types by ``kind``."""
 
 
+class ProfileLimit(NamedTuple):
+    """The legal and the typical range of a profile's values, and why.
+
+    A value outside ``[low, high]`` is refused; beyond ``typical`` in magnitude it is legal
+    but warned about (:func:`implausible`).
+    """
+
+    low: float
+    high: float
+    typical: float
+    unit: str
+    why: str
+
+
+PROFILE_LIMITS: dict[str, ProfileLimit] = {
+    "[rider] profile": ProfileLimit(
+        -1000.0, 1000.0, 100.0, "N*m", "a rider applies tens of N*m to a handlebar"
+    ),
+    "[rider] probe": ProfileLimit(
+        -1000.0, 1000.0, 100.0, "N*m", "a rider applies tens of N*m to a handlebar"
+    ),
+    "[motorcycle] drive_torque": ProfileLimit(
+        -5000.0,
+        5000.0,
+        1500.0,
+        "N*m",
+        "a road motorcycle's engine gives up to about 1500 N*m "
+        "at the rear wheel in first gear, and its tyres transmit about 1 g",
+    ),
+    "[motorcycle] brake_torque": ProfileLimit(
+        0.0,
+        5000.0,
+        1500.0,
+        "N*m",
+        "the tyres of a motorcycle transmit about 1 g of "
+        "deceleration, and a brake only slows: a negative value is a drive torque",
+    ),
+    "[motorcycle] wind_force": ProfileLimit(
+        -5000.0,
+        5000.0,
+        2000.0,
+        "N",
+        "the drag of a motorcycle and rider is about 0.5 x 1.2 "
+        "kg/m^3 x 0.6 m^2 x v^2: 1 kN at 50 m/s, 3 kN in a 40 m/s headwind at 50 m/s",
+    ),
+    "[motorcycle] side_wind": ProfileLimit(
+        -3000.0,
+        3000.0,
+        1000.0,
+        "N",
+        "a 30 m/s storm gust on a motorcycle and rider's side (about 1 m^2) pushes about 540 N",
+    ),
+}
+"""Range of each profile's values, by where it is in a scenario. The legal bounds are a few
+times the most a real ride sees, so that a unit slip (kN*m for N*m) or a typo (1e6) is refused
+before the run rather than found as a run that left the model's range."""
+
+
+def _profile_bounds(profile: Any) -> tuple[float, float] | None:
+    """The least and the greatest value a profile takes (None: read from a file)."""
+    if isinstance(profile, ConstantProfile):
+        return profile.value, profile.value
+    if isinstance(profile, SquareProfile):
+        return min(profile.low, profile.high), max(profile.low, profile.high)
+    if isinstance(profile, ChirpProfile):
+        a = abs(profile.amplitude)
+        return profile.offset - a, profile.offset + a
+    if isinstance(profile, MultisineProfile):
+        return -abs(profile.amplitude), abs(profile.amplitude)
+    if isinstance(profile, StepsProfile):  # 0 before the first step
+        return min(0.0, *profile.values), max(0.0, *profile.values)
+    return None
+
+
+def check_profile_values(where: str, low: float, high: float, *, key: str | None = None) -> None:
+    """Refuse profile values outside the legal range of :data:`PROFILE_LIMITS` ``[where]``.
+
+    Parameters
+    ----------
+    where : str
+        Where the profile is, a key of :data:`PROFILE_LIMITS` (``"[motorcycle] wind_force"``).
+    low, high : float
+        The least and the greatest value the profile takes, in its unit.
+    key : str, optional
+        How the message names the profile (default: ``where``).
+
+    Raises
+    ------
+    MotosimError
+        One line naming the profile, the value and the legal range, with why.
+    """
+    limit = PROFILE_LIMITS[where]
+    name = where if key is None else key
+    for value in (low, high):
+        if not (math.isfinite(value) and limit.low <= value <= limit.high):
+            raise MotosimError(
+                f"{name} reaches {value:g} {limit.unit}; expected {limit.low:g} to "
+                f"{limit.high:g} {limit.unit} ({limit.why})"
+            )
+
+
 # --- paths: what the virtual rider follows ------------------------------------------------
 
 
@@ -327,9 +450,9 @@ class LaneChangePath:
     kind: ClassVar[str] = "lane_change"
 
     def __post_init__(self) -> None:
-        _check("offset", self.offset, unit="m")
-        _check("length", self.length, low=0.0, low_open=True, unit="m")
-        _check("start", self.start, unit="m")
+        _check("offset", self.offset, low=-MAX_OFFSET, high=MAX_OFFSET, unit="m")
+        _check("length", self.length, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
@@ -347,10 +470,10 @@ class SlalomPath:
     kind: ClassVar[str] = "slalom"
 
     def __post_init__(self) -> None:
-        _check("amplitude", self.amplitude, low=0.0, low_open=True, unit="m")
-        _check("wavelength", self.wavelength, low=0.0, low_open=True, unit="m")
-        _check("cycles", self.cycles, low=0.0, low_open=True)
-        _check("start", self.start, unit="m")
+        _check("amplitude", self.amplitude, low=0.0, low_open=True, high=MAX_OFFSET, unit="m")
+        _check("wavelength", self.wavelength, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("cycles", self.cycles, low=0.0, low_open=True, high=1e4)
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
@@ -371,15 +494,16 @@ class TurnPath:
     kind: ClassVar[str] = "turn"
 
     def __post_init__(self) -> None:
-        _check("radius", self.radius, unit="m")
+        _check("radius", self.radius, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
         if abs(self.radius) < 1.0:
             raise MotosimError(
                 f"radius = {self.radius!r} m; expected a radius of at least 1 m either way "
                 "(negative: left), beyond a motorcycle's wheelbase"
             )
-        _check("angle", self.angle, unit="rad")
-        _check("start", self.start, unit="m")
-        _check("transition", self.transition, low=0.0, low_open=True, unit="m")
+        # ten full circles; beyond one, a warning says the angle is in radians
+        _check("angle", self.angle, low=-20 * math.pi, high=20 * math.pi, unit="rad")
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
+        _check("transition", self.transition, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
@@ -400,10 +524,10 @@ class AvoidancePath:
     kind: ClassVar[str] = "avoidance"
 
     def __post_init__(self) -> None:
-        _check("offset", self.offset, unit="m")
-        _check("length", self.length, low=0.0, low_open=True, unit="m")
-        _check("hold", self.hold, low=0.0, low_open=True, unit="m")
-        _check("start", self.start, unit="m")
+        _check("offset", self.offset, low=-MAX_OFFSET, high=MAX_OFFSET, unit="m")
+        _check("length", self.length, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("hold", self.hold, low=0.0, low_open=True, high=MAX_DISTANCE, unit="m")
+        _check("start", self.start, low=-MAX_DISTANCE, high=MAX_DISTANCE, unit="m")
 
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
@@ -509,6 +633,10 @@ class Motorcycle:
     def __post_init__(self) -> None:
         _check("speed", self.speed, low=1.0, high=100.0, unit="m/s")
         _check("side_wind_height", self.side_wind_height, low=0.0, high=3.0, unit="m")
+        for key in ("drive_torque", "brake_torque", "wind_force", "side_wind"):
+            bounds = _profile_bounds(getattr(self, key))
+            if bounds is not None:
+                check_profile_values(f"[motorcycle] {key}", *bounds, key=key)
 
 
 @dataclass(frozen=True, slots=True)
@@ -541,6 +669,10 @@ class Rider:
         _check("torque_scale", self.torque_scale, low=1e-2, high=1000.0, unit="N*m")
         _check("preview", self.preview, low=0.0, high=5.0, unit="s")
         _check("max_torque", self.max_torque, low=0.0, low_open=True, high=500.0, unit="N*m")
+        for key in ("profile", "probe"):
+            bounds = _profile_bounds(getattr(self, key))
+            if bounds is not None:
+                check_profile_values(f"[rider] {key}", *bounds, key=key)
 
 
 @dataclass(frozen=True, slots=True)
@@ -578,6 +710,9 @@ class Estimator:
         _check("lipschitz", self.lipschitz, low=0.0, low_open=True, high=1e7, unit="rad/s^2")
 
 
+LOWEST_BANDWIDTH = 0.1
+"""Lowest ``[controller] bandwidth`` [Hz]: a rider steers at 0.1-5 Hz, and far below that the
+synthesis's weight and Riccati equations lose their precision (``design --bandwidth`` too)."""
 MAX_RECORDED_ROWS = 10_000_000
 """Most rows a run may record (one per control period, about 200 bytes each in memory)."""
 MAX_PLANT_STEPS = 100_000_000
@@ -613,6 +748,11 @@ class Controller:
     prediction: bool | None = None
 
     def __post_init__(self) -> None:
+        if self.design is not None and self.kind != "ours":
+            raise MotosimError(
+                f"design = {short_repr(self.design)} with kind = {self.kind!r}: a design file "
+                'is the controller of kind = "ours"; expected kind = "ours" with it, or no design'
+            )
         if self.feedforward is None:
             default = FEEDFORWARD if self.kind == "ours" else ()
             object.__setattr__(self, "feedforward", default)
@@ -627,8 +767,8 @@ class Controller:
                 'prediction = true predicts the rider-torque cancellation; expected "rider" in '
                 "feedforward"
             )
-        if self.bandwidth is not None:
-            _check("bandwidth", self.bandwidth, low=0.0, low_open=True, high=1000.0, unit="Hz")
+        if self.bandwidth is not None:  # from the slowest of a rider's steering
+            _check("bandwidth", self.bandwidth, low=LOWEST_BANDWIDTH, high=1000.0, unit="Hz")
         if not 0 <= self.order <= MAX_ORDER:
             raise MotosimError(f"order = {self.order}; expected an integer from 0 to {MAX_ORDER}")
         _check("integral_corner", self.integral_corner, low=0.0, low_open=True, high=0.5)
@@ -780,6 +920,15 @@ def implausible(scenario: "Scenario") -> list[str]:
             f"[rider] path angle = {path.angle:g} rad ({math.degrees(path.angle):.0f} deg) is "
             "legal but more than a full circle; the angle is in radians (90 deg = 1.571)"
         )
+    mc = scenario.motorcycle
+    for key in ("drive_torque", "brake_torque", "wind_force", "side_wind"):
+        bound = PROFILE_LIMITS[f"[motorcycle] {key}"]
+        peak = _profile_peak(getattr(mc, key))
+        if peak > bound.typical:
+            lines.append(
+                f"[motorcycle] {key} reaches {peak:g} {bound.unit}, legal but beyond the "
+                f"typical {bound.typical:g} {bound.unit}: {bound.why}"
+            )
     if scenario.rider.profile is not None:
         peak = _profile_peak(scenario.rider.profile)
         if peak > TYPICAL_RIDER_TORQUE:
