@@ -303,7 +303,7 @@ def test_a_scenarios_absurd_bandwidth_is_bad_input_and_a_failing_synthesis_a_fai
     def unstable(*args: object, **kwargs: object) -> None:
         raise MotosimError("no stabilising controller of order 1 was found; try order + 1")
 
-    monkeypatch.setattr("motosim.io.runs.synthesize_controller", unstable)
+    monkeypatch.setattr("motosim.control.torque_feedback.synthesize_controller", unstable)
     path = _scenario(tmp_path, tail="\n[controller]\nbandwidth = 10.0\n")
     assert main(["simulate", str(path), "--out", str(tmp_path / "r")]) == 3
     err = capsys.readouterr().err
