@@ -6,6 +6,7 @@ from typing import Any
 
 from motosim.cli._common import print_json
 from motosim.params import derived_geometry, list_parameter_sets, load_parameter_set
+from motosim.params.multibody import MultibodyParameters
 from motosim.params.sharp import SharpParameters
 
 __all__ = ["register"]
@@ -51,15 +52,17 @@ def _show(args: argparse.Namespace) -> int:
         line = f"  {name:<{width}}  {value:>14.6g}  {specs[name].unit:<10}"
         source = pset.sources.get(name, "")
         print(f"{line}  {source}" if source else line)
-    derived = (
-        derived_geometry(pset.values)
-        if isinstance(pset.values, SharpParameters)
-        else {
+    if isinstance(pset.values, SharpParameters):
+        derived = derived_geometry(pset.values)
+    elif isinstance(pset.values, MultibodyParameters):
+        x_G, z_G = pset.values.mass_centre
+        derived = {"mass": pset.values.mass, "x_G": x_G, "z_G": z_G}
+    else:
+        derived = {
             "J_h": pset.values.J_h,
             "beta_vh": pset.values.beta_vh,
             "N*k_t": pset.values.torque_per_amp,
         }
-    )
     print("\nderived:")
     for name, value in derived.items():
         print(f"  {name:<{width}}  {value:>14.6g}")
