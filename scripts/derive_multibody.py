@@ -38,6 +38,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET = ROOT / "src" / "motosim" / "model" / "_generated_whipple.py"
+TARGET_TYRED = ROOT / "src" / "motosim" / "model" / "_generated_tyred.py"
 
 PARAMETERS = (
     "rR rF tR tF d1 d2 d3 l1 l2 l3 l4 g mC mD mE mF "
@@ -146,7 +147,14 @@ def _to_symbols(exprs: list[sm.Expr], q: list[sm.Function], u: list[sm.Function]
     return [me.msubs(e, names) for e in exprs]
 
 
-def _function(name: str, doc: str, args: str, outputs: list[tuple[str, sm.Matrix]]) -> str:
+def _function(
+    name: str,
+    doc: str,
+    args: str,
+    outputs: list[tuple[str, sm.Matrix]],
+    parameters: tuple[str, ...] | list[str] = tuple(PARAMETERS),
+    inputs: tuple[str, ...] = INPUTS,
+) -> str:
     """Python source of one function computing ``outputs`` with common subexpressions."""
     printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True})
     flat = [e for _, m in outputs for e in m]
@@ -155,10 +163,10 @@ def _function(name: str, doc: str, args: str, outputs: list[tuple[str, sm.Matrix
     result = "Array" if len(outputs) == 1 else f"tuple[{', '.join(['Array'] * len(outputs))}]"
     lines = [f"def {name}({typed}) -> {result}:", f'    """{doc}"""']
     used = set().union(*(e.free_symbols for e in flat)) if flat else set()
-    unpack = [(f"p[{i}]", s) for i, s in enumerate(PARAMETERS) if sm.Symbol(s) in used]
+    unpack = [(f"p[{i}]", s) for i, s in enumerate(parameters) if sm.Symbol(s) in used]
     unpack += [(f"q[{i - 1}]", f"q{i}") for i in range(1, 10) if sm.Symbol(f"q{i}") in used]
     unpack += [(f"u[{i - 1}]", f"u{i}") for i in range(1, 10) if sm.Symbol(f"u{i}") in used]
-    unpack += [(f"r[{i}]", s) for i, s in enumerate(INPUTS) if sm.Symbol(s) in used]
+    unpack += [(f"r[{i}]", s) for i, s in enumerate(inputs) if sm.Symbol(s) in used]
     lines += [f"    {symbol} = {source}" for source, symbol in unpack]
     lines += [f"    {t} = {printer.doprint(e)}" for t, e in temps]
     k = 0
@@ -262,6 +270,203 @@ def derive_whipple() -> str:
     return "\n\n".join(parts)
 
 
+PARAMETERS_TYRED = (*PARAMETERS, "la1", "la2")
+"""The tyred model's parameter vector: the rigid model's and the aerodynamic centre (la1, la2,
+in the rear frame's axes from the rear wheel centre, as l1, l2)."""
+
+INPUTS_TYRED = ("Ts", "Tr", "Tf")
+"""The tyred model's input torques [N*m]: steer (front frame on rear frame), rear wheel (on
+the wheel, reacted by the rear frame), front wheel (on the wheel, reacted by the front frame)."""
+
+
+def derive_tyred() -> str:
+    """The generated module's text for the model with tyres (the rear frame free in space).
+
+    Coordinates: q1, q2, q3 the rear wheel centre in the ground axes (z down), q4 yaw, q5
+    roll, q6 the rear frame's pitch, q7 the rear wheel's angle, q8 steer, q9 the front
+    wheel's angle. Speeds: u1, u2, u3 the rear wheel centre's velocity in the yaw frame's
+    axes (forward, right, down), u4..u9 the angles' rates.
+    """
+    q = me.dynamicsymbols("q1:10")
+    u = me.dynamicsymbols("u1:10")
+    p = dict(zip(PARAMETERS_TYRED, sm.symbols(PARAMETERS_TYRED), strict=True))
+    Ts, Tr, Tf = sm.symbols(INPUTS_TYRED)
+
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", (q[3], N.z))
+    B = A.orientnew("B", "Axis", (q[4], A.x))
+    C = B.orientnew("C", "Axis", (q[5], B.y))
+    D = C.orientnew("D", "Axis", (q[6], C.y))
+    E = C.orientnew("E", "Axis", (q[7], C.z))
+    F = E.orientnew("F", "Axis", (q[8], E.y))
+    A.set_ang_vel(N, u[3] * N.z)
+    B.set_ang_vel(A, u[4] * A.x)
+    C.set_ang_vel(B, u[5] * B.y)
+    D.set_ang_vel(C, u[6] * C.y)
+    E.set_ang_vel(C, u[7] * C.z)
+    F.set_ang_vel(E, u[8] * E.y)
+
+    origin = me.Point("O")
+    origin.set_vel(N, 0)
+    do = origin.locatenew("do", q[0] * N.x + q[1] * N.y + q[2] * N.z)
+    do.set_vel(N, u[0] * A.x + u[1] * A.y + u[2] * A.z)
+    kinematics = [
+        q[0].diff() - (u[0] * sm.cos(q[3]) - u[1] * sm.sin(q[3])),
+        q[1].diff() - (u[0] * sm.sin(q[3]) + u[1] * sm.cos(q[3])),
+        q[2].diff() - u[2],
+        *[qi.diff() - ui for qi, ui in zip(q[3:], u[3:], strict=True)],
+    ]
+    qd_to_u = sm.solve(kinematics, [qi.diff() for qi in q], dict=True)[0]
+
+    ce = do.locatenew("ce", p["d1"] * C.x)
+    fo = ce.locatenew("fo", p["d2"] * C.z + p["d3"] * E.x)
+    co = do.locatenew("co", p["l1"] * C.x + p["l2"] * C.z)
+    eo = fo.locatenew("eo", p["l3"] * E.x + p["l4"] * E.z)
+    ao = do.locatenew("ao", p["la1"] * C.x + p["la2"] * C.z)  # aerodynamic centre
+    for point, frame, base in ((ce, C, do), (fo, E, ce), (co, C, do), (eo, E, fo), (ao, C, do)):
+        point.v2pt_theory(base, N, frame)
+
+    def contact(centre: me.Point, axle: me.Vector, r: sm.Symbol, t: sm.Symbol) -> me.Point:
+        down = A.z - A.z.dot(axle) * axle
+        down = down / sm.sqrt(1 - A.z.dot(axle) ** 2)
+        return centre.locatenew("P", (r - t) * down + t * A.z)
+
+    rear = contact(do, C.y, p["rR"], p["tR"])
+    front = contact(fo, E.y, p["rF"], p["tF"])
+
+    bodies = [
+        me.RigidBody(
+            "rear_frame",
+            co,
+            C,
+            p["mC"],
+            (me.inertia(C, p["IC11"], p["IC22"], p["IC33"], 0, 0, p["IC31"]), co),
+        ),
+        me.RigidBody(
+            "rear_wheel", do, D, p["mD"], (me.inertia(C, p["ID11"], p["ID22"], p["ID11"]), do)
+        ),
+        me.RigidBody(
+            "front_frame",
+            eo,
+            E,
+            p["mE"],
+            (me.inertia(E, p["IE11"], p["IE22"], p["IE33"], 0, 0, p["IE31"]), eo),
+        ),
+        me.RigidBody(
+            "front_wheel", fo, F, p["mF"], (me.inertia(E, p["IF11"], p["IF22"], p["IF11"]), fo)
+        ),
+    ]
+    loads = [(body.masscenter, body.mass * p["g"] * A.z) for body in bodies]
+    loads += [(D, Tr * C.y), (C, -Tr * C.y - Ts * C.z), (E, Ts * C.z - Tf * E.y), (F, Tf * E.y)]
+    kane = me.KanesMethod(N, q_ind=q, u_ind=u, kd_eqs=kinematics)
+    kane.kanes_equations(bodies, loads)
+    mass = kane.mass_matrix
+    forcing = kane.forcing.xreplace(qd_to_u)
+
+    def rows(point: me.Point, centre: me.Point, wheel: me.ReferenceFrame, axle: me.Vector):
+        """The contact's kinematics and the Jacobian of its force and moments."""
+        heading = axle.cross(A.z)
+        heading = heading / sm.sqrt(1 - A.z.dot(axle) ** 2)
+        lateral = A.z.cross(heading)
+        v_material = centre.vel(N) + wheel.ang_vel_in(N).cross(point.pos_from(centre))
+        height = point.pos_from(origin).dot(N.z)
+        kinematic = sm.Matrix(
+            [
+                point.pos_from(origin).dot(N.x),
+                point.pos_from(origin).dot(N.y),
+                height,
+                height.diff(me.dynamicsymbols._t).xreplace(qd_to_u),
+                v_material.dot(heading),
+                v_material.dot(lateral),
+                centre.vel(N).dot(heading),
+                axle.dot(A.z),
+            ]
+        )
+        omega = wheel.ang_vel_in(N)
+        jacobian = sm.Matrix(
+            [
+                [v_material.dot(heading).diff(ui) for ui in u],
+                [v_material.dot(lateral).diff(ui) for ui in u],
+                [v_material.dot(A.z).diff(ui) for ui in u],
+                [omega.dot(heading).diff(ui) for ui in u],
+                [omega.dot(A.z).diff(ui) for ui in u],
+            ]
+        )
+        return kinematic, jacobian
+
+    kin_r, jac_r = rows(rear, do, D, C.y)
+    kin_f, jac_f = rows(front, fo, F, E.y)
+    aero = sm.Matrix([[ao.vel(N).dot(A.x).diff(ui) for ui in u]])
+    qdot = sm.Matrix([qd_to_u[qi.diff()] for qi in q])
+    energy = sm.Matrix(
+        [
+            sum(body.kinetic_energy(N) for body in bodies)
+            - sum(body.mass * p["g"] * body.masscenter.pos_from(origin).dot(N.z) for body in bodies)
+        ]
+    )
+
+    def sym(m: sm.Matrix) -> sm.Matrix:
+        return sm.Matrix(m.shape[0], m.shape[1], _to_symbols(list(m), q, u))
+
+    header = (
+        '"""Generated by scripts/derive_multibody.py (Kane\'s method, SymPy): do not edit.\n\n'
+        "The multibody motorcycle with tyres: the rear frame free in space (q1..q6), the wheels'\n"
+        "angles q7, q9 and steer q8; u1..u3 the rear wheel centre's velocity in the yaw axes.\n"
+        "``p`` is the parameter vector of ``PARAMETERS``, ``r`` the input torques of ``INPUTS``.\n"
+        '"""\n\n'
+        "from typing import Any, TypeAlias\n\n"
+        "import numpy as np\nimport numpy.typing as npt\nfrom numpy import cos, sin, sqrt\n\n"
+        '__all__ = [\n    "INPUTS",\n    "PARAMETERS",\n    "aero_jacobian",\n'
+        '    "contacts",\n    "energy",\n    "kinematics",\n    "mass_forcing",\n]\n\n'
+        "Array: TypeAlias = npt.NDArray[Any]\n\n"
+        f"PARAMETERS = {PARAMETERS_TYRED!r}\n"
+        f"INPUTS = {INPUTS_TYRED!r}\n"
+    )
+    common = {"parameters": PARAMETERS_TYRED, "inputs": INPUTS_TYRED}
+    parts = [
+        header,
+        _function(
+            "mass_forcing",
+            "Mass matrix M(q) and forcing f(q, u, r) without tyre forces: M u' = f + Q_tyres.",
+            "p, q, u, r",
+            [("M", sym(mass)), ("f", sym(forcing))],
+            **common,
+        ),
+        _function(
+            "kinematics",
+            "The coordinates' derivatives q' from the speeds.",
+            "p, q, u",
+            [("qd", sym(qdot))],
+            **common,
+        ),
+        _function(
+            "contacts",
+            "Per wheel (rear, front): contact x, y, depth below the ground, its rate, the\n"
+            "    wheel's material point's velocity along the heading and across it, the wheel\n"
+            "    centre's velocity along the heading, sin(camber); and the Jacobians (rows:\n"
+            "    force along the heading, across, down; moment about the heading, the normal).",
+            "p, q, u",
+            [("kr", sym(kin_r)), ("kf", sym(kin_f)), ("Jr", sym(jac_r)), ("Jf", sym(jac_f))],
+            **common,
+        ),
+        _function(
+            "aero_jacobian",
+            "Partial velocities of the aerodynamic centre along the yaw frame's x axis.",
+            "p, q",
+            [("Ja", sym(aero))],
+            **common,
+        ),
+        _function(
+            "energy",
+            "Kinetic plus gravitational potential energy [J] (zero potential at the ground).",
+            "p, q, u",
+            [("e", sym(energy))],
+            **common,
+        ),
+    ]
+    return "\n\n".join(parts)
+
+
 def main() -> int:
     """Write (or with ``--check`` compare) the generated module."""
     parser = argparse.ArgumentParser(description=__doc__)
@@ -270,15 +475,17 @@ def main() -> int:
     if os.environ.get("PYTHONHASHSEED") != "0":  # SymPy's term order depends on hashing
         env = dict(os.environ, PYTHONHASHSEED="0")
         return subprocess.call([sys.executable, *sys.argv], env=env)
-    text = derive_whipple()
-    text = _format(text)
-    if args.check:
-        same = TARGET.exists() and TARGET.read_text(encoding="utf-8") == text
-        print(f"{TARGET.name}: {'up to date' if same else 'differs from the derivation'}")
-        return 0 if same else 1
-    TARGET.write_text(text, encoding="utf-8")
-    print(f"wrote {TARGET.relative_to(ROOT)} ({len(text.splitlines())} lines)")
-    return 0
+    status = 0
+    for target, derive in ((TARGET, derive_whipple), (TARGET_TYRED, derive_tyred)):
+        text = _format(derive())
+        if args.check:
+            same = target.exists() and target.read_text(encoding="utf-8") == text
+            print(f"{target.name}: {'up to date' if same else 'differs from the derivation'}")
+            status = status or (0 if same else 1)
+        else:
+            target.write_text(text, encoding="utf-8")
+            print(f"wrote {target.relative_to(ROOT)} ({len(text.splitlines())} lines)")
+    return status
 
 
 def _format(text: str) -> str:
