@@ -22,7 +22,12 @@ import pytest
 from motosim.cli.main import COMMANDS, main
 from motosim.errors import MotosimError
 from motosim.io.design_file import read_design
-from motosim.params import HandlebarParameters, SharpParameters, list_parameter_sets
+from motosim.params import (
+    HandlebarParameters,
+    MultibodyParameters,
+    SharpParameters,
+    list_parameter_sets,
+)
 
 SEED = 16
 HANG = 10.0  # s: a case that takes longer is a hang, whatever the machine
@@ -54,7 +59,12 @@ def _packaged(name: str) -> str:
 def _specs(text: str) -> dict[str, Any]:
     model = re.search(r'^model = "(\w+)"', text, re.MULTILINE)
     assert model is not None
-    return (SharpParameters if model.group(1) == "sharp" else HandlebarParameters).SPECS
+    kinds = {
+        "sharp": SharpParameters,
+        "handlebar": HandlebarParameters,
+        "multibody": MultibodyParameters,
+    }
+    return kinds[model.group(1)].SPECS
 
 
 def _mutate_parameter(text: str, name: str, mutation: str) -> str:

@@ -30,9 +30,11 @@ from typing import Any, NamedTuple, TypeAlias
 import numpy as np
 import numpy.typing as npt
 from numba import njit
+from numpy.typing import ArrayLike
 
 from motosim.errors import MotosimError
 from motosim.model import _generated_tyred as gen
+from motosim.model.sharp import ModeTable, modes
 from motosim.model.whipple import moore_parameters
 from motosim.params.checks import check_number
 from motosim.params.multibody import MultibodyParameters
@@ -51,6 +53,7 @@ __all__ = [
     "linear_tyre_forces",
     "make_model",
     "sharp_machine",
+    "sharp_modes",
     "step",
     "upright_state",
 ]
@@ -590,3 +593,34 @@ def sharp_machine(
         tyre(sharp.C_f1, sharp.C_f2, load_f),
         sharp.K,
     )
+
+
+def sharp_modes(sharp: SharpParameters, speeds: ArrayLike) -> ModeTable:
+    """Capsize, weave and wobble of Sharp's machine through the multibody model on tyres.
+
+    The machine of :func:`sharp_machine` (Sharp's bodies, tyres and steering damper),
+    linearised about upright straight running at each speed (:func:`lateral_matrix`) and
+    classified as :func:`motosim.model.sharp.modes` classifies Sharp's own model.
+
+    Parameters
+    ----------
+    sharp : SharpParameters
+        Sharp's machine.
+    speeds : array_like
+        Forward speeds [m/s].
+
+    Returns
+    -------
+    ModeTable
+    """
+    params, rear, front, damper = sharp_machine(sharp)
+    model = make_model(params, rear, front, steer_damping=damper)
+
+    def spectrum(at: Array) -> npt.NDArray[np.complex128]:
+        out = np.empty((len(at), 8), dtype=complex)
+        for i, speed in enumerate(at):
+            ev = np.linalg.eigvals(lateral_matrix(model, float(speed), params.lam))
+            out[i] = ev[np.lexsort((ev.imag, ev.real))]
+        return out
+
+    return modes(sharp, speeds, spectrum=spectrum)
