@@ -322,6 +322,18 @@ def _brake(torque: float, spin: float, inertia: float) -> float:
 
 
 @njit(cache=True)
+def _add_contact(f: Array, J: Array, fx: float, fy: float, fz: float, mx: float, mz: float) -> None:
+    """Add J^T (F_x, F_y, -F_z, M_x, M_z) to the generalised forces ``f`` in place.
+
+    F_x along the wheel's heading, F_y across it (to the right), F_z the normal load (the
+    ground pushes up), M_x the overturning moment about the heading, M_z the aligning moment
+    about the downward normal, all on the wheel at its contact point.
+    """
+    for i in range(9):
+        f[i] += J[0, i] * fx + J[1, i] * fy - J[2, i] * fz + J[3, i] * mx + J[4, i] * mz
+
+
+@njit(cache=True)
 def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
     q = x[:9]
     u = x[9:18]
@@ -333,9 +345,8 @@ def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
     kr, kf, Jr, Jf = _contacts(model.p, q, u)
     fxr, fyr, fzr, ssr, _, _ = linear_tyre_forces(model.rear, kr, x[18], inputs.friction)
     fxf, fyf, fzf, ssf, _, _ = linear_tyre_forces(model.front, kf, x[19], inputs.friction)
-    for i in range(9):
-        f[i] += Jr[0, i] * fxr + Jr[1, i] * fyr - Jr[2, i] * fzr
-        f[i] += Jf[0, i] * fxf + Jf[1, i] * fyf - Jf[2, i] * fzf
+    _add_contact(f, Jr, fxr, fyr, fzr, 0.0, 0.0)  # the linear tyre has no moments
+    _add_contact(f, Jf, fxf, fyf, fzf, 0.0, 0.0)
     if model.drag > 0.0:
         Ja = _aero_jacobian(model.p, q)
         va = 0.0

@@ -11,6 +11,7 @@ the exact kinematics of the multibody model where Sharp keeps first-order terms.
 differences are below 1 % of each eigenvalue's modulus; 2 % is the requirement.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -98,3 +99,48 @@ def test_friction_ellipse_limits_the_tyre_force() -> None:
     assert kappa == pytest.approx(-0.25)
     assert math.hypot(fx, fy) == pytest.approx(0.8 * fz)
     assert fx < 0.0 and fy > 0.0
+
+
+@pytest.mark.parametrize("crowns", [(0.0, 0.0), (0.08, 0.06)])
+def test_contact_jacobian_is_the_contact_velocity(
+    machine: tuple, crowns: tuple[float, float]
+) -> None:
+    """J u is the material contact point's velocity (so J^T F is the force's generalised
+    force, by virtual power), and its downward part the depth's rate (the torus's lowest
+    point), in a general state: leaning, steered, pitching, sliding; knife edges and tori."""
+    from motosim.model import _generated_tyred as gen
+
+    _, params, _ = machine
+    params = dataclasses.replace(params, t_R=crowns[0], t_F=crowns[1])
+    tyre = tyred.LinearTyre(12.0, 1.0, 20.0, 0.2, 1.5e5, 1e3)
+    model = tyred.make_model(params, tyre, tyre)
+    rng = np.random.default_rng(7)
+    q = np.array([1.0, -2.0, -0.29, 0.3, 0.4, params.lam + 0.02, 1.0, 0.3, 2.0])
+    u = rng.normal(size=9)
+    u[0] = 15.0
+    kr, kf, Jr, Jf = gen.contacts(model.p, q, u)
+    for kin, J in ((kr, Jr), (kf, Jf)):
+        velocity = J @ u
+        assert velocity[0] == pytest.approx(kin[4], abs=1e-12)
+        assert velocity[1] == pytest.approx(kin[5], abs=1e-12)
+        assert velocity[2] == pytest.approx(kin[3], abs=1e-12)
+
+
+def test_a_torus_contact_moves_sideways_with_camber(machine: tuple) -> None:
+    """Leaning a torus (crown radius t) right by gamma puts its lowest point (r - t) sin(gamma)
+    to the left of the wheel centre and (r - t) cos(gamma) + t below it: t sin(gamma) towards
+    the lean from a knife edge's contact."""
+    from motosim.model import _generated_tyred as gen
+
+    _, params, _ = machine
+    roll = 0.5
+    for crown in (0.0, 0.08):
+        torus = dataclasses.replace(params, t_R=crown)
+        tyre = tyred.LinearTyre(12.0, 1.0, 20.0, 0.2, 1.5e5, 1e3)
+        model = tyred.make_model(torus, tyre, tyre)
+        q = np.zeros(9)
+        q[4], q[5] = roll, params.lam
+        kr, _, _, _ = gen.contacts(model.p, q, np.zeros(9))
+        assert kr[1] == pytest.approx(-(params.r_R - crown) * math.sin(roll), abs=1e-12)
+        assert kr[2] == pytest.approx(crown + (params.r_R - crown) * math.cos(roll), abs=1e-12)
+        assert math.asin(kr[7]) == pytest.approx(roll)

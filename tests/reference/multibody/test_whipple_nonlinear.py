@@ -1,10 +1,12 @@
 """The rigid-contact model along trajectories: energy, the constraints, the generated code.
 
 Rolling without slip does no work and the benchmark bicycle has no damping, so a free coast
-conserves kinetic plus potential energy exactly; the integrated speeds must keep satisfying
+conserves kinetic plus potential energy exactly (with knife-edge wheels and with toroidal
+ones); the integrated speeds must keep satisfying
 the rolling constraints and the coordinates the ground contact of both wheels.
 """
 
+import dataclasses
 import subprocess
 import sys
 import time
@@ -40,7 +42,11 @@ def _coast(
     return qs, us
 
 
-def test_free_coast_conserves_energy(bike: MultibodyParameters) -> None:
+@pytest.mark.parametrize("crowns", [(0.0, 0.0), (0.03, 0.02)], ids=["knife-edge", "toroidal"])
+def test_free_coast_conserves_energy(
+    bike: MultibodyParameters, crowns: tuple[float, float]
+) -> None:
+    bike = dataclasses.replace(bike, t_R=crowns[0], t_F=crowns[1])
     qs, us = _coast(bike, 1e-3, 5.0)
     energies = np.array([whipple.energy(bike, q, u) for q, u in zip(qs, us, strict=True)])
     kinetic = energies[0] - whipple.energy(bike, qs[0], np.zeros(8))
@@ -49,7 +55,11 @@ def test_free_coast_conserves_energy(bike: MultibodyParameters) -> None:
     assert drift < 1e-9, drift
 
 
-def test_constraints_hold_along_the_coast(bike: MultibodyParameters) -> None:
+@pytest.mark.parametrize("crowns", [(0.0, 0.0), (0.03, 0.02)], ids=["knife-edge", "toroidal"])
+def test_constraints_hold_along_the_coast(
+    bike: MultibodyParameters, crowns: tuple[float, float]
+) -> None:
+    bike = dataclasses.replace(bike, t_R=crowns[0], t_F=crowns[1])
     qs, us = _coast(bike, 1e-3, 5.0)
     p = whipple.moore_parameters(bike)
     for q, u in zip(qs[::100], us[::100], strict=True):
