@@ -54,7 +54,7 @@ def run() -> dict[str, float | str]:
     sharp = load_parameters("sharp1971", "sharp")
     params, rear_tyre, front_tyre, damper = tyred.sharp_machine(sharp)
     model = tyred.make_model(params, rear_tyre, front_tyre, steer_damping=damper, drag=0.25)
-    start = tyred.upright_state(model, 20.0, params.lam)
+    start = tyred.upright_state(model, 20.0)
     t = np.arange(0.0, DURATION, H)
     steer = np.where((t > 1.0) & (t < 1.3), 1.0, 0.0)
     front = np.where(t > 6.0, 150.0, 0.0)

@@ -56,6 +56,7 @@ __all__ = [
     "sharp_modes",
     "step",
     "upright_state",
+    "validate_inputs",
 ]
 
 Array: TypeAlias = npt.NDArray[Any]
@@ -153,6 +154,8 @@ class TyredModel(NamedTuple):
     """The wheels' radii (rear, front) [m]."""
     roll_limit: float
     """|roll| beyond which the machine has fallen [rad]."""
+    lam: float
+    """The steering axis tilt [rad]: the rear frame's pitch when level on undeformed tyres."""
 
 
 class State(NamedTuple):
@@ -267,6 +270,7 @@ def make_model(
         spin_inertia=np.array([params.I_Ryy, params.I_Fyy]),
         radii=np.array([params.r_R, params.r_F]),
         roll_limit=float(roll_limit),
+        lam=float(params.lam),
     )
 
 
@@ -397,6 +401,28 @@ def step(model: TyredModel, state: State, inputs: Inputs, h: float) -> State:
     return _unpack(_rk4(model, _pack(state), inputs, h))
 
 
+def validate_inputs(inputs: Inputs) -> Inputs:
+    """Check the inputs at the edge (the compiled :func:`step` does not).
+
+    Raises
+    ------
+    MotosimError
+        Naming the first input that is not finite, a brake torque below 0, or a friction
+        coefficient outside (0, 3].
+    """
+    for name in ("steer_torque", "drive_torque"):
+        check_number(getattr(inputs, name), where=f"tyred inputs: {name}", unit="N*m")
+    for name in ("front_brake_torque", "rear_brake_torque"):
+        check_number(
+            getattr(inputs, name), where=f"tyred inputs: {name}", lower=0.0, lower_closed=True,
+            unit="N*m",
+        )  # fmt: skip
+    check_number(
+        inputs.friction, where="tyred inputs: friction", lower=0.0, upper=3.0, lower_closed=False
+    )
+    return inputs
+
+
 def derivatives(model: TyredModel, state: State, inputs: Inputs) -> State:
     """The state's time derivative, as a :class:`State` of rates (SI units per second)."""
     return State(*_derivatives(model, np.array(state, dtype=float), inputs))
@@ -450,7 +476,7 @@ def domain(model: TyredModel, state: State) -> Domain:
     return Domain.INSIDE
 
 
-def upright_state(model: TyredModel, speed: float, lam: float) -> State:
+def upright_state(model: TyredModel, speed: float) -> State:
     """Upright straight running at ``speed`` [m/s] on the tyres' static compression.
 
     The height and pitch of the rear frame are those at which the vertical and pitch
@@ -463,12 +489,16 @@ def upright_state(model: TyredModel, speed: float, lam: float) -> State:
         The model.
     speed : float
         Forward speed [m/s].
-    lam : float
-        The machine's steering axis tilt [rad] (the level pitch, the iteration's start).
+
+    Raises
+    ------
+    MotosimError
+        If the speed is not a finite number within +/-150 m/s, or no equilibrium is found.
     """
+    check_number(speed, where="tyred model: speed", lower=-150.0, upper=150.0)
     r_R, r_F = float(model.radii[0]), float(model.radii[1])
     x = np.zeros(N_STATE)
-    x[2], x[5] = -r_R, lam
+    x[2], x[5] = -r_R, model.lam
     x[9], x[15], x[17] = speed, -speed / r_R, -speed / r_F
     inputs = Inputs()
     for _ in range(50):
@@ -495,7 +525,7 @@ _LATERAL = (4, 7, 10, 12, 13, 16, 18, 19)
 """Roll, steer, lateral velocity, yaw rate, roll rate, steer rate, F_y rear, F_y front."""
 
 
-def lateral_matrix(model: TyredModel, speed: float, lam: float) -> Array:
+def lateral_matrix(model: TyredModel, speed: float) -> Array:
     """Linearised lateral dynamics about upright straight running (central differences).
 
     Returns
@@ -504,7 +534,7 @@ def lateral_matrix(model: TyredModel, speed: float, lam: float) -> Array:
         A of x' = A x, x = (roll, steer, lateral velocity, yaw rate, roll rate, steer rate,
         F_y rear, F_y front): the in-plane motion decouples from these by symmetry.
     """
-    x0 = np.array(upright_state(model, speed, lam), dtype=float)
+    x0 = np.array(upright_state(model, speed), dtype=float)
     inputs = Inputs()
     A = np.empty((8, 8))
     for j, index in enumerate(_LATERAL):
@@ -630,7 +660,7 @@ def sharp_modes(sharp: SharpParameters, speeds: ArrayLike) -> ModeTable:
     def spectrum(at: Array) -> npt.NDArray[np.complex128]:
         out = np.empty((len(at), 8), dtype=complex)
         for i, speed in enumerate(at):
-            ev = np.linalg.eigvals(lateral_matrix(model, float(speed), params.lam))
+            ev = np.linalg.eigvals(lateral_matrix(model, float(speed)))
             out[i] = ev[np.lexsort((ev.imag, ev.real))]
         return out
 

@@ -28,6 +28,7 @@ from numba import njit
 
 from motosim.errors import MotosimError
 from motosim.model import _generated_whipple as gen
+from motosim.params.checks import check_number
 from motosim.params.multibody import MultibodyParameters
 
 __all__ = [
@@ -347,7 +348,14 @@ def rk4_step(
 
 
 def upright_state(params: MultibodyParameters, speed: float) -> tuple[Array, Array]:
-    """Upright straight running at ``speed`` [m/s] along x: (q, u), the wheels rolling."""
+    """Upright straight running at ``speed`` [m/s] along x: (q, u), the wheels rolling.
+
+    Raises
+    ------
+    MotosimError
+        If the speed is not a finite number within +/-150 m/s.
+    """
+    check_number(speed, where="whipple: speed", lower=-150.0, upper=150.0, unit="m/s")
     q = np.zeros(8)
     q[4] = pitch(params, 0.0, 0.0)
     u = np.zeros(8)

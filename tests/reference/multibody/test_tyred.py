@@ -36,9 +36,9 @@ def _oscillatory(A: np.ndarray) -> list[complex]:
 
 @pytest.mark.parametrize("speed", [10.0, 20.0, 30.0, 40.0, 50.0])
 def test_weave_and_wobble_match_sharp_1971(machine: tuple, speed: float) -> None:
-    sharp, params, model = machine
+    sharp, _, model = machine
     table = sharp_model.modes(sharp, [speed])
-    osc = _oscillatory(tyred.lateral_matrix(model, speed, params.lam))
+    osc = _oscillatory(tyred.lateral_matrix(model, speed))
     for name, reference in (("weave", table.weave[0]), ("wobble", table.wobble[0])):
         got = min(osc, key=lambda e, r=reference: abs(e - r))
         assert abs(got - reference) < 0.02 * abs(reference), (name, got, reference)
@@ -47,7 +47,7 @@ def test_weave_and_wobble_match_sharp_1971(machine: tuple, speed: float) -> None
 
 def test_upright_running_is_an_equilibrium_with_the_static_loads(machine: tuple) -> None:
     _, params, model = machine
-    state = tyred.upright_state(model, 20.0, params.lam)
+    state = tyred.upright_state(model, 20.0)
     rates = np.array(tyred.derivatives(model, state, tyred.Inputs()))
     np.testing.assert_allclose(rates[9:], 0.0, atol=1e-9)  # no acceleration, no tyre lag
     loads = tyred.contact_loads(model, state, tyred.Inputs())
@@ -65,7 +65,7 @@ def test_braking_transfers_load_forward_and_pitches_nose_down(machine: tuple) ->
     the rigid-body moment balance about the mass centre (m a h / w and the wheels' spin
     momentum, 4 % here); the tyres' compliance changes it by less than 2 %."""
     _, params, model = machine
-    state = tyred.upright_state(model, 20.0, params.lam)
+    state = tyred.upright_state(model, 20.0)
     static = tyred.contact_loads(model, state, tyred.Inputs())
     braking = tyred.Inputs(front_brake_torque=400.0, rear_brake_torque=150.0)
     for _ in range(1000):  # 1 s at 1 kHz: the pitch transient has settled
@@ -78,13 +78,13 @@ def test_braking_transfers_load_forward_and_pitches_nose_down(machine: tuple) ->
     assert deceleration > 0.6 * params.g
     assert transfer == pytest.approx(arm * deceleration / params.w, rel=0.02)
     assert loads["F_zr"] == pytest.approx(static["F_zr"] - transfer, rel=0.01)
-    assert state.pitch < tyred.upright_state(model, 20.0, params.lam).pitch - 1e-3  # nose down
+    assert state.pitch < tyred.upright_state(model, 20.0).pitch - 1e-3  # nose down
     assert loads["kappa_f"] < 0.0 and loads["kappa_r"] < 0.0
 
 
 def test_domain_names_why_a_state_is_outside(machine: tuple) -> None:
-    _, params, model = machine
-    state = tyred.upright_state(model, 10.0, params.lam)
+    _, _, model = machine
+    state = tyred.upright_state(model, 10.0)
     assert tyred.domain(model, state._replace(roll=1.4)) is tyred.Domain.FALLEN
     assert tyred.domain(model, state._replace(z=state.z - 0.1)) is tyred.Domain.REAR_LIFTED
     assert tyred.domain(model, state._replace(pitch=state.pitch + 0.1)) is tyred.Domain.FRONT_LIFTED
@@ -144,3 +144,27 @@ def test_a_torus_contact_moves_sideways_with_camber(machine: tuple) -> None:
         assert kr[1] == pytest.approx(-(params.r_R - crown) * math.sin(roll), abs=1e-12)
         assert kr[2] == pytest.approx(crown + (params.r_R - crown) * math.cos(roll), abs=1e-12)
         assert math.asin(kr[7]) == pytest.approx(roll)
+
+
+@pytest.mark.parametrize(
+    ("inputs", "match"),
+    [
+        (tyred.Inputs(front_brake_torque=-1.0), "front_brake_torque"),
+        (tyred.Inputs(friction=0.0), "friction"),
+        (tyred.Inputs(steer_torque=math.nan), "steer_torque"),
+    ],
+)
+def test_bad_inputs_are_refused_at_the_edge(inputs: tyred.Inputs, match: str) -> None:
+    from motosim.errors import MotosimError
+
+    with pytest.raises(MotosimError, match=match):
+        tyred.validate_inputs(inputs)
+    assert tyred.validate_inputs(tyred.Inputs(rear_brake_torque=100.0, friction=0.4))
+
+
+def test_a_bad_speed_is_refused_in_one_line(machine: tuple) -> None:
+    from motosim.errors import MotosimError
+
+    _, _, model = machine
+    with pytest.raises(MotosimError, match="speed"):
+        tyred.upright_state(model, math.inf)
