@@ -24,6 +24,7 @@ from motosim.errors import MotosimError
 from motosim.io.design_file import read_design
 from motosim.params import (
     HandlebarParameters,
+    MultibodyParameters,
     SharpParameters,
     TyreParameters,
     list_parameter_sets,
@@ -59,7 +60,12 @@ def _packaged(name: str) -> str:
 def _specs(text: str) -> dict[str, Any]:
     model = re.search(r'^model = "(\w+)"', text, re.MULTILINE)
     assert model is not None
-    kinds = {"sharp": SharpParameters, "handlebar": HandlebarParameters, "tyre": TyreParameters}
+    kinds = {
+        "sharp": SharpParameters,
+        "handlebar": HandlebarParameters,
+        "tyre": TyreParameters,
+        "multibody": MultibodyParameters,
+    }
     return kinds[model.group(1)].SPECS
 
 

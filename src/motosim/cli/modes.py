@@ -1,4 +1,9 @@
-"""``motosim modes``: capsize, weave and wobble of the Sharp motorcycle against speed."""
+"""``motosim modes``: capsize, weave and wobble of the motorcycle against speed.
+
+``--model sharp1971`` is Sharp's linear model, ``--model multibody`` the same machine
+through the multibody model on its linear relaxing tyres; the default follows the
+parameter set's kind.
+"""
 
 import argparse
 from typing import TYPE_CHECKING, Any
@@ -11,7 +16,9 @@ from motosim.cli._common import (
     save_figure,
     warn_atypical,
 )
-from motosim.params import load_parameters
+from motosim.errors import MotosimError
+from motosim.params import load_parameter_set
+from motosim.params.sharp import SharpParameters
 
 if TYPE_CHECKING:
     import numpy as np
@@ -39,6 +46,11 @@ def register(sub: Any) -> None:
     )
     parser.add_argument(
         "--params", default="sharp1971", help="Sharp parameter set name or TOML file"
+    )
+    parser.add_argument(
+        "--model",
+        choices=("sharp1971", "multibody"),
+        help="Sharp's linear model or the multibody model on tyres (default: the set's kind)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--plot", metavar="FILE", help="save a figure (.png, .svg or .pdf)")
@@ -107,10 +119,21 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
-    params = load_parameters(args.params, "sharp")
-    from motosim.model.sharp import modes
+    pset = load_parameter_set(args.params)
+    model = args.model or ("multibody" if pset.model == "multibody" else "sharp1971")
+    if not isinstance(pset.values, SharpParameters):
+        raise MotosimError(
+            f"--params {args.params}: is a {pset.model} parameter set; expected a sharp "
+            "parameter set (the modes of a multibody set need its tyres' linearisation)"
+        )
+    if model == "multibody":
+        from motosim.model.tyred import sharp_modes
 
-    table = modes(params, speeds)
+        table = sharp_modes(pset.values, speeds)
+    else:
+        from motosim.model.sharp import modes
+
+        table = modes(pset.values, speeds)
     if args.speeds is not None or args.speed_range is not None:  # the default spans 2-60 m/s
         warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)
     if args.json:

@@ -11,6 +11,7 @@ from motosim.params import (
     list_parameter_sets,
     load_parameter_set,
 )
+from motosim.params.multibody import MultibodyParameters
 from motosim.params.sharp import SharpParameters
 
 __all__ = ["register"]
@@ -59,6 +60,9 @@ def _show(args: argparse.Namespace) -> int:
     derived: dict[str, float] = {}
     if isinstance(pset.values, SharpParameters):
         derived = derived_geometry(pset.values)
+    elif isinstance(pset.values, MultibodyParameters):
+        x_G, z_G = pset.values.mass_centre
+        derived = {"mass": pset.values.mass, "x_G": x_G, "z_G": z_G}
     elif isinstance(pset.values, HandlebarParameters):
         derived = {
             "J_h": pset.values.J_h,

@@ -14,6 +14,7 @@ omits (E27, E28, E44, E48 and the tyre rows) are included.
 """
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -365,7 +366,12 @@ def _follow(path: NDArray[np.complex128]) -> NDArray[np.complex128]:
     return out
 
 
-def modes(p: SharpParameters, speeds: ArrayLike) -> ModeTable:
+def modes(
+    p: SharpParameters,
+    speeds: ArrayLike,
+    *,
+    spectrum: Callable[[Array], NDArray[np.complex128]] | None = None,
+) -> ModeTable:
     """Classify capsize, weave and wobble at each speed, following them continuously.
 
     The modes are named at 20 m/s, where they are distinct, and followed eigenvalue by
@@ -378,6 +384,10 @@ def modes(p: SharpParameters, speeds: ArrayLike) -> ModeTable:
         The motorcycle.
     speeds : array_like
         Forward speeds [m/s], at least :data:`MIN_SPEED`, in any order.
+    spectrum : callable, optional
+        The eigenvalues at given speeds, shape (n_speeds, 8), each row sorted by real part;
+        by default :func:`eigenvalues` of Sharp's model (another model of the same machine,
+        e.g. the multibody one, can be classified the same way).
 
     Returns
     -------
@@ -396,13 +406,19 @@ def modes(p: SharpParameters, speeds: ArrayLike) -> ModeTable:
     True
     """
     v = _speeds_array(speeds)
+
+    def eigenvalues_at(at: ArrayLike) -> NDArray[np.complex128]:
+        if spectrum is None:
+            return eigenvalues(p, at)
+        return spectrum(_speeds_array(at))
+
     lo, hi = min(v.min(), _REFERENCE_SPEED), max(v.max(), _REFERENCE_SPEED)
     down = np.append(np.arange(_REFERENCE_SPEED, lo, -_TRACK_STEP), lo)
     up = np.append(np.arange(_REFERENCE_SPEED, hi, _TRACK_STEP), hi)
-    ref = eigenvalues(p, [_REFERENCE_SPEED])[0]
+    ref = eigenvalues_at([_REFERENCE_SPEED])[0]
     idx = _classify(ref)
-    branches_down = _follow(eigenvalues(p, down))
-    branches_up = _follow(eigenvalues(p, up))
+    branches_down = _follow(eigenvalues_at(down))
+    branches_up = _follow(eigenvalues_at(up))
     grid = np.concatenate([down[::-1], up[1:]])
     branches = np.concatenate([branches_down[::-1], branches_up[1:]])
     order = np.argsort(grid, kind="stable")
@@ -415,14 +431,14 @@ def modes(p: SharpParameters, speeds: ArrayLike) -> ModeTable:
     chosen = {name: np.empty(v.size, dtype=complex) for name in MODE_NAMES}
     for n, s in enumerate(v):
         row = branches[int(np.argmin(np.abs(grid - s)))]
-        exact = eigenvalues(p, [s])[0]
+        exact = eigenvalues_at([s])[0]
         for name in MODE_NAMES:
             # the grid value identifies the branch; report the exact eigenvalue at s
             approx = pick(name, row)
             chosen[name][n] = exact[int(np.argmin(np.abs(exact - approx)))]
     return ModeTable(
         speeds=v,
-        eigenvalues=eigenvalues(p, v),
+        eigenvalues=eigenvalues_at(v),
         capsize=chosen["capsize"],
         weave=chosen["weave"],
         wobble=chosen["wobble"],

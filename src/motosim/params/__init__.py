@@ -20,7 +20,7 @@ one-line message naming the value and the expected range.
 import math
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, TypeAlias, overload
@@ -36,12 +36,14 @@ from motosim.params.checks import (
     suggestion,
 )
 from motosim.params.handlebar import HandlebarParameters
+from motosim.params.multibody import MultibodyParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.params.toml import parse_toml, read_toml
 from motosim.params.tyre import TyreParameters
 
 __all__ = [
     "HandlebarParameters",
+    "MultibodyParameters",
     "ParameterSet",
     "SharpParameters",
     "TyreParameters",
@@ -55,15 +57,24 @@ __all__ = [
     "read_toml",
 ]
 
-Parameters: TypeAlias = SharpParameters | HandlebarParameters | TyreParameters
-ModelKind: TypeAlias = Literal["sharp", "handlebar", "tyre"]
+Parameters: TypeAlias = SharpParameters | HandlebarParameters | TyreParameters | MultibodyParameters
+ModelKind: TypeAlias = Literal["sharp", "handlebar", "tyre", "multibody"]
 
-_MODELS: dict[str, type[SharpParameters] | type[HandlebarParameters] | type[TyreParameters]] = {
+_MODELS: dict[
+    str,
+    type[SharpParameters]
+    | type[HandlebarParameters]
+    | type[TyreParameters]
+    | type[MultibodyParameters],
+] = {
     "sharp": SharpParameters,
     "handlebar": HandlebarParameters,
     "tyre": TyreParameters,
+    "multibody": MultibodyParameters,
 }
 _SET_KEYS = ("name", "model", "title", "source")
+_TYRE_KEYS = ("front_tyre", "rear_tyre")
+"""Optional ``[set]`` keys of a multibody set: the names of its tyres' parameter sets."""
 _ENTRY_KEYS = ("value", "unit", "source", "note")
 
 
@@ -75,16 +86,19 @@ class ParameterSet:
     ----------
     name : str
         Short name, e.g. ``"sharp1971"``.
-    model : {"sharp", "handlebar", "tyre"}
+    model : {"sharp", "handlebar", "tyre", "multibody"}
         Which model the values belong to.
     title : str
         One-line description.
     source : str
         Where the set as a whole comes from.
-    values : SharpParameters, HandlebarParameters or TyreParameters
+    values : SharpParameters, HandlebarParameters, TyreParameters or MultibodyParameters
         The validated values, SI units.
     sources : Mapping[str, str]
         Per-parameter source (paper, table, equation) or, for assumed values, the reason.
+    tyres : Mapping[str, str]
+        For a multibody set, the ``[set]`` keys ``front_tyre`` and ``rear_tyre`` that are
+        given: the names of the tyres' parameter sets. Empty otherwise.
     """
 
     name: str
@@ -93,6 +107,7 @@ class ParameterSet:
     source: str
     values: Parameters
     sources: Mapping[str, str]
+    tyres: Mapping[str, str] = field(default_factory=dict)
 
 
 def _packaged_dir() -> Any:
@@ -143,7 +158,9 @@ def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet
     if "set" not in data:
         raise MotosimError(f"{origin}: missing table [set] with name and model")
     head = check_table(data["set"], where=f"{origin}: set")
-    check_keys(head, _SET_KEYS, where=f"{origin}: [set]", what="key")
+    model_given = head.get("model")
+    set_keys = _SET_KEYS + (_TYRE_KEYS if model_given == "multibody" else ())
+    check_keys(head, set_keys, where=f"{origin}: [set]", what="key")
     if "model" not in head:
         raise MotosimError(f"{origin}: [set] has no model; expected one of {', '.join(_MODELS)}")
     model = check_text(head["model"], where=f"{origin}: [set] model")
@@ -155,6 +172,11 @@ def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet
     texts = {
         key: check_text(head.get(key, ""), where=f"{origin}: [set] {key}", one_line=key == "name")
         for key in ("name", "title", "source")
+    }
+    tyres = {
+        key: check_text(head[key], where=f"{origin}: [set] {key}")
+        for key in _TYRE_KEYS
+        if key in head
     }
     cls = _MODELS[model]
     specs = cls.SPECS
@@ -199,6 +221,7 @@ def parse_parameter_set(data: Mapping[str, Any], *, origin: str) -> ParameterSet
         source=texts["source"],
         values=params,
         sources=sources,
+        tyres=tyres,
     )
 
 
@@ -248,6 +271,10 @@ def load_parameters(
 @overload
 def load_parameters(name_or_path: str | Path, model: Literal["tyre"]) -> TyreParameters: ...
 @overload
+def load_parameters(
+    name_or_path: str | Path, model: Literal["multibody"]
+) -> MultibodyParameters: ...
+@overload
 def load_parameters(name_or_path: str | Path, model: None = None) -> Parameters: ...
 def load_parameters(name_or_path: str | Path, model: ModelKind | None = None) -> Parameters:
     """Load only the validated values of a parameter set.
@@ -256,12 +283,12 @@ def load_parameters(name_or_path: str | Path, model: ModelKind | None = None) ->
     ----------
     name_or_path : str or Path
         A packaged set name or a file path.
-    model : {"sharp", "handlebar", "tyre"}, optional
+    model : {"sharp", "handlebar", "tyre", "multibody"}, optional
         When given, the set must be of this model.
 
     Returns
     -------
-    SharpParameters, HandlebarParameters or TyreParameters
+    SharpParameters, HandlebarParameters, TyreParameters or MultibodyParameters
 
     Raises
     ------
@@ -306,6 +333,7 @@ def dump_parameter_set(pset: ParameterSet) -> str:
         f"title = {_toml_string(pset.title)}",
         f"source = {_toml_string(pset.source)}",
     ]
+    lines += [f"{key} = {_toml_string(value)}" for key, value in pset.tyres.items()]
     specs = type(pset.values).SPECS
     for f in fields(pset.values):
         value = float(getattr(pset.values, f.name))

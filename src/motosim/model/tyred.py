@@ -1,0 +1,667 @@
+"""The multibody motorcycle on tyres: the rear frame free in space, forces at the contacts.
+
+The four bodies of :mod:`motosim.model.whipple` without the rolling constraints: the rear
+frame moves freely (position of the rear wheel centre, yaw, roll, pitch), the wheels spin and
+the front frame steers (9 coordinates, 9 speeds). Each wheel is a torus (crown radius t; a
+knife edge when t = 0); its contact point is the torus's lowest point, which moves sideways
+with camber. The ground pushes on each wheel at that point with
+
+* a normal load from the radial compression (how far the point is below the ground) times
+  the tyre's radial stiffness, plus a radial damping, never pulling;
+* a longitudinal force from the longitudinal slip and a side force from the sideslip and the
+  camber, relaxed to its steady value over the relaxation length
+  (sigma / |V| F_y' + F_y = F_y,ss), both limited together by a friction ellipse of
+  radius mu F_z (:func:`linear_tyre_forces`, a linear tyre with saturation);
+* no aligning or overturning moment in this tyre law (the generated Jacobian takes them).
+
+The generated code (``scripts/derive_multibody.py``, Kane's method) gives the mass matrix,
+the forcing without tyre forces and the contact kinematics (positions, the slips'
+ingredients, camber) with the Jacobians J, so that the tyres' generalised forces are J^T F.
+Inputs: steer torque, rear drive torque, front and rear brake torques, road friction; the
+aerodynamic drag rho C_d A / 2 v^2 acts at an aerodynamic centre on the rear frame, a
+steering damper between the frames.
+"""
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Any, NamedTuple, TypeAlias
+
+import numpy as np
+import numpy.typing as npt
+from numba import njit
+from numpy.typing import ArrayLike
+
+from motosim.errors import MotosimError
+from motosim.model import _generated_tyred as gen
+from motosim.model.sharp import ModeTable, modes
+from motosim.model.whipple import moore_parameters
+from motosim.params.checks import check_number
+from motosim.params.multibody import MultibodyParameters
+from motosim.params.sharp import SharpParameters, derived_geometry
+
+__all__ = [
+    "Domain",
+    "Inputs",
+    "LinearTyre",
+    "State",
+    "TyredModel",
+    "contact_loads",
+    "derivatives",
+    "domain",
+    "lateral_matrix",
+    "linear_tyre_forces",
+    "make_model",
+    "sharp_machine",
+    "sharp_modes",
+    "step",
+    "upright_state",
+    "validate_inputs",
+]
+
+Array: TypeAlias = npt.NDArray[Any]
+
+_MIN_SPEED = 0.5
+"""Reference speed [m/s] below which the slips are divided by this speed instead (the slips'
+definitions lose their meaning at a standstill)."""
+_BRAKE_RATE = 500.0
+"""The brakes' viscous zone around a locked wheel is at most this fast [1/s]: the torque
+ramps from zero at lock to its full value over a spin rate of T_b / (500 I_yy), at least
+0.5 rad/s, so that RK4 at 1 ms stays stable while a wheel locks."""
+_MIN_BRAKE_SPIN = 0.5
+
+_mass_forcing = njit(cache=True)(gen.mass_forcing)
+_contacts = njit(cache=True)(gen.contacts)
+_kinematics = njit(cache=True)(gen.kinematics)
+_aero_jacobian = njit(cache=True)(gen.aero_jacobian)
+
+
+@dataclass(frozen=True, slots=True)
+class LinearTyre:
+    """A linear tyre with first-order side-force relaxation, per unit normal load.
+
+    Attributes
+    ----------
+    cornering : float
+        Cornering stiffness per unit load, dF_y/dalpha / F_z [1/rad].
+    camber : float
+        Camber stiffness per unit load, dF_y/dgamma / F_z [1/rad].
+    longitudinal : float
+        Longitudinal slip stiffness per unit load, dF_x/dkappa / F_z [1].
+    relaxation_length : float
+        sigma [m].
+    radial_stiffness : float
+        Normal load per unit radial compression [N/m].
+    radial_damping : float
+        Normal load per unit compression rate [N*s/m].
+    """
+
+    cornering: float
+    camber: float
+    longitudinal: float
+    relaxation_length: float
+    radial_stiffness: float
+    radial_damping: float
+
+    def __post_init__(self) -> None:
+        for name, low, high in (
+            ("cornering", 0.0, 100.0),
+            ("camber", 0.0, 10.0),
+            ("longitudinal", 0.0, 200.0),
+            ("relaxation_length", 1e-3, 2.0),
+            ("radial_stiffness", 1e3, 1e7),
+            ("radial_damping", 0.0, 1e5),
+        ):
+            check_number(
+                getattr(self, name),
+                where=f"linear tyre: {name}",
+                lower=low,
+                upper=high,
+                lower_closed=True,
+                upper_closed=True,
+            )
+
+    def as_array(self) -> Array:
+        """The values in the compiled kernel's order (the attributes' order)."""
+        return np.array(
+            [
+                self.cornering,
+                self.camber,
+                self.longitudinal,
+                self.relaxation_length,
+                self.radial_stiffness,
+                self.radial_damping,
+            ]
+        )
+
+
+class TyredModel(NamedTuple):
+    """The compiled model's constants (build it with :func:`make_model`)."""
+
+    p: Array
+    """The generated code's parameter vector (``_generated_tyred.PARAMETERS``)."""
+    rear: Array
+    """The rear tyre (:meth:`LinearTyre.as_array`)."""
+    front: Array
+    """The front tyre."""
+    drag: float
+    """rho C_d A / 2 [kg/m]."""
+    steer_damping: float
+    """Steering damper [N*m*s/rad]."""
+    spin_inertia: Array
+    """The wheels' spin inertias (rear, front) [kg*m^2], for the brakes' lock zone."""
+    radii: Array
+    """The wheels' radii (rear, front) [m]."""
+    roll_limit: float
+    """|roll| beyond which the machine has fallen [rad]."""
+    lam: float
+    """The steering axis tilt [rad]: the rear frame's pitch when level on undeformed tyres."""
+
+
+class State(NamedTuple):
+    """The tyred model's state: coordinates, speeds and the relaxing side forces (SI)."""
+
+    x: float
+    """Rear wheel centre, ground x [m]."""
+    y: float
+    """Rear wheel centre, ground y (right) [m]."""
+    z: float
+    """Rear wheel centre, ground z (down: -height) [m]."""
+    yaw: float
+    roll: float
+    pitch: float
+    """The rear frame's pitch [rad] (the steering axis tilt when level)."""
+    rear_angle: float
+    steer: float
+    front_angle: float
+    forward: float
+    """Rear wheel centre's velocity along the heading [m/s]."""
+    lateral: float
+    """Its velocity to the right, in the yaw frame [m/s]."""
+    vertical: float
+    """Its velocity downwards [m/s]."""
+    yaw_rate: float
+    roll_rate: float
+    pitch_rate: float
+    rear_spin: float
+    """Rear wheel's spin relative to the rear frame about its axle [rad/s] (< 0 forward)."""
+    steer_rate: float
+    front_spin: float
+    """Front wheel's spin relative to the front frame [rad/s] (< 0 rolling forward)."""
+    Fy_r: float
+    """Rear side force, relaxed [N] (+ to the right)."""
+    Fy_f: float
+    """Front side force, relaxed [N]."""
+
+
+class Inputs(NamedTuple):
+    """The rider's and the road's inputs."""
+
+    steer_torque: float = 0.0
+    """On the handlebar about the steering axis [N*m] (+ steers right)."""
+    drive_torque: float = 0.0
+    """On the rear wheel [N*m], positive driving forward."""
+    front_brake_torque: float = 0.0
+    """Front brake [N*m], >= 0, opposing the wheel's spin."""
+    rear_brake_torque: float = 0.0
+    """Rear brake [N*m], >= 0."""
+    friction: float = 1.0
+    """Road friction coefficient mu."""
+
+
+class Domain(IntEnum):
+    """Why a state is outside the model's domain (``INSIDE`` when it is not)."""
+
+    INSIDE = 0
+    FALLEN = 1
+    REAR_LIFTED = 2
+    FRONT_LIFTED = 3
+    NOT_FINITE = 4
+
+
+N_STATE = len(State._fields)
+
+
+def make_model(
+    params: MultibodyParameters,
+    rear: LinearTyre,
+    front: LinearTyre,
+    *,
+    drag: float = 0.0,
+    aero_centre: tuple[float, float] | None = None,
+    steer_damping: float = 0.0,
+    roll_limit: float = 1.3,
+) -> TyredModel:
+    """Assemble the compiled model's constants.
+
+    Parameters
+    ----------
+    params : MultibodyParameters
+        The machine.
+    rear, front : LinearTyre
+        The tyres.
+    drag : float, optional
+        rho C_d A / 2 [kg/m]; no drag by default.
+    aero_centre : (float, float), optional
+        Where the drag acts, (x, z) in Meijaard's upright axes [m]; by default the rear
+        frame's mass centre.
+    steer_damping : float, optional
+        Steering damper [N*m*s/rad].
+    roll_limit : float, optional
+        |roll| beyond which :func:`domain` says the machine has fallen [rad].
+    """
+    check_number(drag, where="tyred model: drag", lower=0.0, upper=10.0, lower_closed=True)
+    check_number(
+        steer_damping, where="tyred model: steer_damping", lower=0.0, upper=1e3, lower_closed=True
+    )
+    check_number(roll_limit, where="tyred model: roll_limit", lower=0.1, upper=math.pi / 2)
+    x_a, z_a = aero_centre if aero_centre is not None else (params.x_B, params.z_B)
+    cl, sl = math.cos(params.lam), math.sin(params.lam)
+    rel_z = z_a + params.r_R
+    la1, la2 = x_a * cl - rel_z * sl, x_a * sl + rel_z * cl
+    p = np.concatenate([moore_parameters(params), [la1, la2]])
+    assert len(p) == len(gen.PARAMETERS)
+    return TyredModel(
+        p=p,
+        rear=rear.as_array(),
+        front=front.as_array(),
+        drag=float(drag),
+        steer_damping=float(steer_damping),
+        spin_inertia=np.array([params.I_Ryy, params.I_Fyy]),
+        radii=np.array([params.r_R, params.r_F]),
+        roll_limit=float(roll_limit),
+        lam=float(params.lam),
+    )
+
+
+@njit(cache=True)
+def linear_tyre_forces(
+    tyre: Array, kin: Array, side_force: float, friction: float
+) -> tuple[float, float, float, float, float, float]:
+    """The linear tyre at one contact: (F_x, F_y, F_z, F_y steady, kappa, alpha).
+
+    Parameters
+    ----------
+    tyre : ndarray
+        :meth:`LinearTyre.as_array`.
+    kin : ndarray, shape (8,)
+        The contact's kinematics from the generated ``contacts``.
+    side_force : float
+        The relaxed side force state [N].
+    friction : float
+        mu.
+
+    Returns
+    -------
+    tuple of float
+        Longitudinal and side forces on the wheel [N] (saturated by the friction ellipse),
+        the normal load [N] (>= 0), the steady-state side force the relaxation tends to [N],
+        the longitudinal slip and the sideslip [rad].
+    """
+    depth, depth_rate = kin[2], kin[3]
+    load = 0.0
+    if depth > 0.0:
+        load = max(0.0, tyre[4] * depth + tyre[5] * depth_rate)
+    speed = max(abs(kin[6]), _MIN_SPEED)
+    kappa = -kin[4] / speed
+    alpha = math.atan(-kin[5] / speed)
+    camber = math.asin(min(1.0, max(-1.0, kin[7])))
+    steady = load * (tyre[0] * alpha + tyre[1] * camber)
+    fx = load * tyre[2] * kappa
+    fy = side_force
+    limit = friction * load
+    total = math.sqrt(fx * fx + fy * fy)
+    if total > limit:
+        scale = limit / total if total > 0.0 else 0.0
+        fx *= scale
+        fy *= scale
+    return fx, fy, load, steady, kappa, alpha
+
+
+@njit(cache=True)
+def _brake(torque: float, spin: float, inertia: float) -> float:
+    """Brake torque on the wheel about its axle, opposing the relative spin."""
+    zone = max(_MIN_BRAKE_SPIN, torque / (_BRAKE_RATE * max(inertia, 1e-6)))
+    return -torque * min(1.0, max(-1.0, spin / zone))
+
+
+@njit(cache=True)
+def _add_contact(f: Array, J: Array, fx: float, fy: float, fz: float, mx: float, mz: float) -> None:
+    """Add J^T (F_x, F_y, -F_z, M_x, M_z) to the generalised forces ``f`` in place.
+
+    F_x along the wheel's heading, F_y across it (to the right), F_z the normal load (the
+    ground pushes up), M_x the overturning moment about the heading, M_z the aligning moment
+    about the downward normal, all on the wheel at its contact point.
+    """
+    for i in range(9):
+        f[i] += J[0, i] * fx + J[1, i] * fy - J[2, i] * fz + J[3, i] * mx + J[4, i] * mz
+
+
+@njit(cache=True)
+def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
+    q = x[:9]
+    u = x[9:18]
+    steer = inputs.steer_torque - model.steer_damping * u[7]
+    rear = -inputs.drive_torque + _brake(inputs.rear_brake_torque, u[6], model.spin_inertia[0])
+    front = _brake(inputs.front_brake_torque, u[8], model.spin_inertia[1])
+    r = np.array([steer, rear, front])
+    M, f = _mass_forcing(model.p, q, u, r)
+    kr, kf, Jr, Jf = _contacts(model.p, q, u)
+    fxr, fyr, fzr, ssr, _, _ = linear_tyre_forces(model.rear, kr, x[18], inputs.friction)
+    fxf, fyf, fzf, ssf, _, _ = linear_tyre_forces(model.front, kf, x[19], inputs.friction)
+    _add_contact(f, Jr, fxr, fyr, fzr, 0.0, 0.0)  # the linear tyre has no moments
+    _add_contact(f, Jf, fxf, fyf, fzf, 0.0, 0.0)
+    if model.drag > 0.0:
+        Ja = _aero_jacobian(model.p, q)
+        va = 0.0
+        for i in range(9):
+            va += Ja[0, i] * u[i]
+        drag = -model.drag * va * abs(va)
+        for i in range(9):
+            f[i] += Ja[0, i] * drag
+    out = np.empty(N_STATE)
+    out[:9] = _kinematics(model.p, q, u)
+    out[9:18] = np.linalg.solve(M, f)
+    out[18] = max(abs(kr[6]), _MIN_SPEED) / model.rear[3] * (ssr - x[18])
+    out[19] = max(abs(kf[6]), _MIN_SPEED) / model.front[3] * (ssf - x[19])
+    return out
+
+
+@njit(cache=True)
+def _rk4(model: TyredModel, x: Array, inputs: Inputs, h: float) -> Array:
+    k1 = _derivatives(model, x, inputs)
+    k2 = _derivatives(model, x + 0.5 * h * k1, inputs)
+    k3 = _derivatives(model, x + 0.5 * h * k2, inputs)
+    k4 = _derivatives(model, x + h * k3, inputs)
+    return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@njit(cache=True)
+def _pack(s: State) -> Array:
+    x = np.empty(N_STATE)
+    x[0], x[1], x[2], x[3], x[4] = s.x, s.y, s.z, s.yaw, s.roll
+    x[5], x[6], x[7], x[8] = s.pitch, s.rear_angle, s.steer, s.front_angle
+    x[9], x[10], x[11], x[12], x[13] = s.forward, s.lateral, s.vertical, s.yaw_rate, s.roll_rate
+    x[14], x[15], x[16], x[17] = s.pitch_rate, s.rear_spin, s.steer_rate, s.front_spin
+    x[18], x[19] = s.Fy_r, s.Fy_f
+    return x
+
+
+@njit(cache=True)
+def _unpack(x: Array) -> State:
+    return State(
+        x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9],
+        x[10], x[11], x[12], x[13], x[14], x[15], x[16], x[17], x[18], x[19],
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def step(model: TyredModel, state: State, inputs: Inputs, h: float) -> State:
+    """One classical Runge-Kutta step of length ``h`` [s] (compiled; no input checks)."""
+    return _unpack(_rk4(model, _pack(state), inputs, h))
+
+
+def validate_inputs(inputs: Inputs) -> Inputs:
+    """Check the inputs at the edge (the compiled :func:`step` does not).
+
+    Raises
+    ------
+    MotosimError
+        Naming the first input that is not finite, a brake torque below 0, or a friction
+        coefficient outside (0, 3].
+    """
+    for name in ("steer_torque", "drive_torque"):
+        check_number(getattr(inputs, name), where=f"tyred inputs: {name}", unit="N*m")
+    for name in ("front_brake_torque", "rear_brake_torque"):
+        check_number(
+            getattr(inputs, name), where=f"tyred inputs: {name}", lower=0.0, lower_closed=True,
+            unit="N*m",
+        )  # fmt: skip
+    check_number(
+        inputs.friction, where="tyred inputs: friction", lower=0.0, upper=3.0, lower_closed=False
+    )
+    return inputs
+
+
+def derivatives(model: TyredModel, state: State, inputs: Inputs) -> State:
+    """The state's time derivative, as a :class:`State` of rates (SI units per second)."""
+    return State(*_derivatives(model, np.array(state, dtype=float), inputs))
+
+
+def contact_loads(model: TyredModel, state: State, inputs: Inputs) -> dict[str, float]:
+    """The tyre forces and slips at both contacts.
+
+    Returns
+    -------
+    dict of str to float
+        ``F_xr``, ``F_yr``, ``F_zr``, ``kappa_r``, ``alpha_r`` and the same for the front
+        (``_f``) [N, 1, rad], ``camber_r``, ``camber_f`` [rad].
+    """
+    x = np.array(state, dtype=float)
+    kr, kf, _, _ = gen.contacts(model.p, x[:9], x[9:18])
+    out: dict[str, float] = {}
+    for suffix, tyre, kin, side in (("r", model.rear, kr, x[18]), ("f", model.front, kf, x[19])):
+        fx, fy, fz, _, kappa, alpha = linear_tyre_forces(tyre, kin, side, inputs.friction)
+        out |= {
+            f"F_x{suffix}": fx,
+            f"F_y{suffix}": fy,
+            f"F_z{suffix}": fz,
+            f"kappa_{suffix}": kappa,
+            f"alpha_{suffix}": alpha,
+            f"camber_{suffix}": math.asin(max(-1.0, min(1.0, kin[7]))),
+        }
+    return out
+
+
+def domain(model: TyredModel, state: State) -> Domain:
+    """Whether the state is one the model describes, and if not why.
+
+    Returns
+    -------
+    Domain
+        ``NOT_FINITE`` for a NaN or infinite value, ``FALLEN`` when |roll| exceeds the
+        model's roll limit, ``REAR_LIFTED`` / ``FRONT_LIFTED`` when a wheel is off the ground,
+        ``INSIDE`` otherwise.
+    """
+    x = np.array(state, dtype=float)
+    if not np.all(np.isfinite(x)):
+        return Domain.NOT_FINITE
+    if abs(state.roll) > model.roll_limit:
+        return Domain.FALLEN
+    kr, kf, _, _ = gen.contacts(model.p, x[:9], x[9:18])
+    if kr[2] <= 0.0:
+        return Domain.REAR_LIFTED
+    if kf[2] <= 0.0:
+        return Domain.FRONT_LIFTED
+    return Domain.INSIDE
+
+
+def upright_state(model: TyredModel, speed: float) -> State:
+    """Upright straight running at ``speed`` [m/s] on the tyres' static compression.
+
+    The height and pitch of the rear frame are those at which the vertical and pitch
+    accelerations vanish (Newton's iteration), the wheels roll without slip. With drag the
+    state is not an equilibrium (nothing drives against it).
+
+    Parameters
+    ----------
+    model : TyredModel
+        The model.
+    speed : float
+        Forward speed [m/s].
+
+    Raises
+    ------
+    MotosimError
+        If the speed is not a finite number within +/-150 m/s, or no equilibrium is found.
+    """
+    check_number(speed, where="tyred model: speed", lower=-150.0, upper=150.0)
+    r_R, r_F = float(model.radii[0]), float(model.radii[1])
+    x = np.zeros(N_STATE)
+    x[2], x[5] = -r_R, model.lam
+    x[9], x[15], x[17] = speed, -speed / r_R, -speed / r_F
+    inputs = Inputs()
+    for _ in range(50):
+        residual = _derivatives(model, x, inputs)[[11, 14]]
+        jac = np.empty((2, 2))
+        for j, index in enumerate((2, 5)):
+            dx = np.zeros(N_STATE)
+            dx[index] = 1e-7
+            jac[:, j] = (
+                _derivatives(model, x + dx, inputs)[[11, 14]]
+                - _derivatives(model, x - dx, inputs)[[11, 14]]
+            ) / 2e-7
+        change = np.linalg.solve(jac, residual)
+        x[2] -= change[0]
+        x[5] -= change[1]
+        if np.max(np.abs(change)) < 1e-13:
+            break
+    else:
+        raise MotosimError(f"tyred model: no static equilibrium found at {speed:g} m/s")
+    return State(*x)
+
+
+_LATERAL = (4, 7, 10, 12, 13, 16, 18, 19)
+"""Roll, steer, lateral velocity, yaw rate, roll rate, steer rate, F_y rear, F_y front."""
+
+
+def lateral_matrix(model: TyredModel, speed: float) -> Array:
+    """Linearised lateral dynamics about upright straight running (central differences).
+
+    Returns
+    -------
+    numpy.ndarray, shape (8, 8)
+        A of x' = A x, x = (roll, steer, lateral velocity, yaw rate, roll rate, steer rate,
+        F_y rear, F_y front): the in-plane motion decouples from these by symmetry.
+    """
+    x0 = np.array(upright_state(model, speed), dtype=float)
+    inputs = Inputs()
+    A = np.empty((8, 8))
+    for j, index in enumerate(_LATERAL):
+        delta = 1e-6 * max(1.0, abs(x0[index]))
+        dx = np.zeros(N_STATE)
+        dx[index] = delta
+        diff = _derivatives(model, x0 + dx, inputs) - _derivatives(model, x0 - dx, inputs)
+        A[:, j] = diff[list(_LATERAL)] / (2 * delta)
+    return A
+
+
+def sharp_machine(
+    sharp: SharpParameters, *, radial_stiffness: float = 1.5e5, radial_damping: float = 1.5e3
+) -> tuple[MultibodyParameters, LinearTyre, LinearTyre, float]:
+    """Sharp's (1971) standard machine as multibody parameters with his linear tyres.
+
+    Sharp's two bodies carry the wheels: the rear frame (with the rider, the rear wheel and
+    the engine's flywheel) and the front frame (fork, handlebar, front wheel). Here the wheels
+    are massless bodies at their centres with Sharp's spin inertias (i_Ry, i_fy) and half of
+    them as diametral inertias, taken out of the frames' inertias so that each assembly keeps
+    Sharp's inertia. The rear frame's pitch inertia is not in Sharp's lateral model; it is
+    assumed 0.9 (I_Bxx + I_Bzz), a body thin across its plane.
+
+    Parameters
+    ----------
+    sharp : SharpParameters
+        Sharp's standard machine (the packaged ``sharp1971`` set).
+    radial_stiffness, radial_damping : float, optional
+        Both tyres' radial stiffness [N/m] and damping [N*s/m]: not in Sharp (rigid wheels);
+        the defaults are of a motorcycle tyre's order.
+
+    Returns
+    -------
+    params : MultibodyParameters
+        Meijaard-style parameters: wheelbase b + l, trail t / cos(eps) on the ground, the
+        mass centres at (b, -h) and (b + k, -j).
+    rear, front : LinearTyre
+        Sharp's cornering and camber stiffnesses per unit of the static loads of this
+        geometry, his relaxation length; the longitudinal stiffness (not in Sharp) 20.
+    steer_damping : float
+        Sharp's steering damper K [N*m*s/rad].
+    """
+    geo = derived_geometry(sharp)
+    eps = sharp.epsilon
+    ce, se = math.cos(eps), math.sin(eps)
+    half_r, half_f = sharp.i_Ry / 2, sharp.i_fy / 2
+    i1, i3 = sharp.I_fx - half_f, sharp.I_fz - half_f
+    bxx, bzz = sharp.I_rx - half_r, sharp.I_rz - half_r
+    params = MultibodyParameters(
+        w=geo["wheelbase"],
+        c=sharp.t / ce,
+        lam=eps,
+        g=9.80665,
+        r_R=sharp.R_r,
+        m_R=0.0,
+        I_Rxx=half_r,
+        I_Ryy=sharp.i_Ry,
+        x_B=sharp.b,
+        z_B=-sharp.h,
+        m_B=sharp.m_r,
+        I_Bxx=bxx,
+        I_Byy=0.9 * (bxx + bzz),
+        I_Bzz=bzz,
+        I_Bxz=-sharp.C_rxz,
+        x_H=sharp.b + geo["k"],
+        z_H=-geo["j"],
+        m_H=sharp.m_f,
+        I_Hxx=i1 * ce**2 + i3 * se**2,
+        I_Hyy=i1,
+        I_Hzz=i1 * se**2 + i3 * ce**2,
+        I_Hxz=(i3 - i1) * se * ce,
+        r_F=sharp.R_f,
+        m_F=0.0,
+        I_Fxx=half_f,
+        I_Fyy=sharp.i_fy,
+        t_R=0.0,
+        t_F=0.0,
+    )
+    x_G, _ = params.mass_centre
+    weight = params.mass * params.g
+    load_f = weight * x_G / params.w
+    load_r = weight - load_f
+
+    def tyre(cornering: float, camber: float, load: float) -> LinearTyre:
+        return LinearTyre(
+            cornering=cornering / load,
+            camber=camber / load,
+            longitudinal=20.0,
+            relaxation_length=sharp.sigma,
+            radial_stiffness=radial_stiffness,
+            radial_damping=radial_damping,
+        )
+
+    return (
+        params,
+        tyre(sharp.C_r1, sharp.C_r2, load_r),
+        tyre(sharp.C_f1, sharp.C_f2, load_f),
+        sharp.K,
+    )
+
+
+def sharp_modes(sharp: SharpParameters, speeds: ArrayLike) -> ModeTable:
+    """Capsize, weave and wobble of Sharp's machine through the multibody model on tyres.
+
+    The machine of :func:`sharp_machine` (Sharp's bodies, tyres and steering damper),
+    linearised about upright straight running at each speed (:func:`lateral_matrix`) and
+    classified as :func:`motosim.model.sharp.modes` classifies Sharp's own model.
+
+    Parameters
+    ----------
+    sharp : SharpParameters
+        Sharp's machine.
+    speeds : array_like
+        Forward speeds [m/s].
+
+    Returns
+    -------
+    ModeTable
+    """
+    params, rear, front, damper = sharp_machine(sharp)
+    model = make_model(params, rear, front, steer_damping=damper)
+
+    def spectrum(at: Array) -> npt.NDArray[np.complex128]:
+        out = np.empty((len(at), 8), dtype=complex)
+        for i, speed in enumerate(at):
+            ev = np.linalg.eigvals(lateral_matrix(model, float(speed)))
+            out[i] = ev[np.lexsort((ev.imag, ev.real))]
+        return out
+
+    return modes(sharp, speeds, spectrum=spectrum)
