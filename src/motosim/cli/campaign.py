@@ -32,7 +32,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--out", required=True, help="result folder")
     parser.add_argument("--backend", choices=("joblib", "dask"), help="joblib (default) or dask")
     parser.add_argument(
-        "--scheduler", metavar="ADDRESS", help="a running Dask scheduler (tcp://host:8786)"
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a running Dask scheduler (tcp://host:8786; default: a local cluster)",
     )
     parser.add_argument(
         "--jobs", type=int, metavar="N", help="local worker processes (default: every core)"
@@ -41,11 +43,18 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--no-report", dest="report", action="store_false", help="skip DIR/report.html"
     )
-    parser.add_argument("--rerun", metavar="RUN_ID", help="run one run again and compare it")
+    parser.add_argument(
+        "--rerun",
+        metavar="RUN_ID",
+        help="run one run again and compare it (default: run the campaign)",
+    )
     parser.add_argument(
         "--write-scenario",
         metavar="FILE",
-        help="with --rerun: also write the run as a scenario file for motosim simulate",
+        help=(
+            "with --rerun: also write the run as a scenario file for motosim simulate "
+            "(default: none written)"
+        ),
     )
     parser.set_defaults(func=run)
 

@@ -75,8 +75,8 @@ def register(sub: Any) -> None:
         type=float,
         default=None,
         help=(
-            "tracking bandwidth [Hz] (10; a fifth of --rate below 50 Hz; from 1 kHz up to 20 "
-            "for a handlebar whose loop would be softer at 1 Hz than the packaged one's)"
+            "tracking bandwidth [Hz] (default: 10; a fifth of --rate below 50 Hz; from 1 kHz up "
+            "to 20 for a handlebar whose loop would be softer at 1 Hz than the packaged one's)"
         ),
     )
     parser.add_argument(
@@ -119,7 +119,9 @@ def register(sub: Any) -> None:
         help="speeds of the whole-stack analysis [m/s], comma-separated (10,20,30)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.add_argument("--out", metavar="DESIGN.toml", help="write the design file")
+    parser.add_argument(
+        "--out", metavar="DESIGN.toml", help="write the design file (default: none)"
+    )
     parser.add_argument(
         "--overwrite", action="store_true", help="replace the --out file if it exists"
     )
