@@ -164,3 +164,26 @@ def test_report_of_a_cueing_result_shows_its_figures_and_claims_no_flag_check(
     images = text.split('src="data:image/png;base64,')[1:]
     assert len(images) == 2
     assert all(base64.b64decode(i.split('"', 1)[0]) == png for i in images)
+
+
+def test_report_names_the_observer_and_shows_units(tmp_path: Path) -> None:
+    # a run of the default stack: no design file, so the metadata's observer gains are None
+    metadata = {
+        "scenario": {
+            "name": "lane",
+            "estimator": {"name": "walcott_zak"},
+            "controller": {"kind": "paper"},
+        },
+        "observer": None,
+        "controller": None,
+    }
+    with ResultWriter(tmp_path, NAMES, metadata) as writer:
+        writer.append(_rows())
+        writer.close({"samples": 60.0, "rms_tracking_error": 0.02, "flag_fall": 0.0})
+    text = " ".join(build_report(tmp_path).read_text(encoding="utf-8").split())
+    assert "<td>observer</td><td>Walcott-Zak observer" in text
+    assert "None" not in text.split("<h2>Metrics</h2>")[0]
+    assert "the paper&#x27;s, eq. (26)" in text
+    assert '<td class="num">60</td>' in text  # a count as an integer, not 60.0 or 6e+01
+    assert '<td class="num">1.146</td><td>deg</td>' in text  # 0.02 rad
+    assert '<td class="num">no</td>' in text  # the fall flag

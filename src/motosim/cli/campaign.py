@@ -112,9 +112,10 @@ def _rerun(args: argparse.Namespace) -> int:
         print_json({"run": row, "identical_to_stored": match, "written": [str(p) for p in written]})
         return 0
     print(f"run {args.rerun}: {row['status']}" + (f" ({row['reason']})" if row["reason"] else ""))
-    for key, value in row.items():
-        if key not in ("run_id", "status", "reason"):
-            print(f"  {key:<32} {value!r}")
+    from motosim.report.units import summary_lines
+
+    shown = {k: v for k, v in row.items() if k not in ("run_id", "status", "reason")}
+    print("\n".join(summary_lines(shown)))  # degrees and per cent; --json is SI
     if match is None:
         print(f"  not in {args.out}: nothing to compare with")
     else:
