@@ -43,3 +43,13 @@ def test_every_number_a_run_summarises_has_its_unit() -> None:
 def test_simulate_prints_the_unit(key: str, si: float, line: str) -> None:
     (printed,) = summary_lines({key: si})
     assert " ".join(printed.split()) == line
+
+
+def test_a_campaign_rows_other_columns_are_shown_as_they_are() -> None:
+    # motosim campaign --rerun prints its row: factors, None, strings, the campaign's metrics
+    row = {"J_eq": 0.0415, "failed_at": None, "design": "d0", "max_abs_i_m": 3.25,
+           "max_abs_tracking_error": math.radians(1.5), "index": 3}  # fmt: skip
+    assert [" ".join(line.split()) for line in summary_lines(row)] == [
+        "J_eq 0.0415", "failed_at None", "design d0", "max_abs_i_m 3.25 A",
+        "max_abs_tracking_error 1.5 deg", "index 3",
+    ]  # fmt: skip
