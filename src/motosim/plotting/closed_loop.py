@@ -587,7 +587,7 @@ def plot_spectrum(
         ax.axvline(BUZZ_CUTOFF, color="0.5", ls=":", lw=1.0)
         ax.set_xlim(0.0, min(50.0, 0.5 / dt))
         ax.set_ylabel(f"{name} amplitude [{unit}]")
-        ax.legend(loc="upper right", fontsize="small")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
         ax.grid(True, which="both", alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]")
     fig.suptitle(_title(result, title))
@@ -615,7 +615,7 @@ def plot_feel(feel: Any, *, speed: float) -> Figure:
     mag.set_ylabel("magnitude [dB rad/(N m)]")
     phase.set_ylabel("phase [deg]")
     phase.set_xlabel("frequency [Hz]")
-    mag.legend(loc="lower left", fontsize="small")
+    mag.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
     for ax in (mag, phase):
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(f"Rendered steering feel at {speed:g} m/s")
