@@ -113,7 +113,7 @@ _ESTIMATOR_NAMES = {
     "kalman": "Kalman filter",
 }
 _CONTROLLER_NAMES = {
-    "ours": "ours: H-infinity loop shaping of fixed order",
+    "ours": "ours: H-infinity loop shaping",
     "paper": "the paper's, eq. (26)",
     "none": "none (open loop)",
 }
