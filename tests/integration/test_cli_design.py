@@ -112,3 +112,19 @@ def test_bad_design_file(tmp_path: Path) -> None:
     bad.write_text("[design]\nrate = -1.0\n")
     with pytest.raises(MotosimError, match=r"rate = -1\.0"):
         read_design(bad)
+
+
+def test_design_explains_the_paper_controller_beside_ours(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    code, out, _ = _run(capsys, "design", "--starts", "1", "--speeds", "20")
+    assert code == 0
+    text = " ".join(out.split())
+    # each column and row said, and why eq. (26) reads as it does: its crossover on this
+    # handlebar, 0.09 rad/s (docs/paper.md), is where its tracking bandwidth ends
+    assert "ours, just designed, beside the paper's published eq. (26)" in text
+    assert "tracking bandwidth: where theta_h / delta falls 3 dB" in text
+    assert "inf: integral action holds the angle against a steady torque" in text
+    crossover = float(text.split("its loop crosses over at ")[1].split()[0])
+    assert crossover == pytest.approx(0.09 / (2 * 3.141592653589793), rel=0.05)
+    assert "evaluated as published, not broken" in text

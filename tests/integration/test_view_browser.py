@@ -117,7 +117,7 @@ def _panels(browser: Browser) -> dict[str, dict[str, object]]:
     return panels
 
 
-def test_the_dashboard_plots_and_its_buttons_act(
+def test_the_dashboard_of_a_replay_plots_the_run_and_has_replay_controls(
     cued: tuple[ReplayFeed, str], tmp_path: Path
 ) -> None:
     feed, url = cued
@@ -125,32 +125,47 @@ def test_the_dashboard_plots_and_its_buttons_act(
     try:
         browser.wait_for("window.motosimDash && motosimDash.messages > 2")
         assert browser.evaluate("document.querySelectorAll('#plots canvas').length") >= 8
-        browser.evaluate("document.getElementById('arm').click()")
-        browser.wait_for("motosimDash.lastControl && motosimDash.lastControl.status === 200")
-        assert feed.state() == "playing"
-        rows = browser.wait_for("motosimDash.rows > 200 && motosimDash.rows")
-        before = _panels(browser)
-        time.sleep(1.0)
-        assert browser.evaluate("motosimDash.rows") > rows  # still growing
-        after = _panels(browser)
-        # each key signal has its plot, drawn and scrolling
+        # a recording cannot be armed: Play/Pause and a position instead of Arm and Stop
+        hidden = "[...document.querySelectorAll('#arm, #stop, #play, #position')]"
+        shown = browser.evaluate(f"{hidden}.map((e) => e.offsetParent !== null)")
+        assert shown == [False, False, True, True]
+        # paused at the start, the panels already hold the whole run (5 s), not nothing
+        assert feed.state() == "paused"
+        browser.wait_for("motosimDash.panels.torque.points > 100")
+        paused = _panels(browser)
         drawn = ("torque", "steer", "roll", "speed", "platform")
         for panel in drawn:
-            assert after[panel]["points"] > 100, (panel, after[panel])
-            assert after[panel]["lastT"] > before[panel]["lastT"], panel
-        assert after["torque"]["lines"] == ["tau_r", "tau_r_hat"]
-        assert after["platform"]["lines"] == ["phi_s", "theta_s", "psi_s", "phi_vis"]
+            assert paused[panel]["points"] > 100, (panel, paused[panel])
+        assert paused["torque"]["lines"] == ["tau_r", "tau_r_hat"]
+        assert paused["platform"]["lines"] == ["phi_s", "theta_s", "psi_s", "phi_vis"]
         # a simulated run has no real-time loop: its panels say so instead of plotting
         for panel in ("timing", "missed", "safety"):
-            assert after[panel]["lines"] == [] and after[panel]["points"] == 0
+            assert paused[panel]["lines"] == [] and paused[panel]["points"] == 0
         safety = browser.evaluate("document.getElementById('safety').textContent")
         assert "no safety stage" in safety
         pixels = browser.evaluate(f"{CANVAS_PIXELS}('#plots canvas[data-panel=platform]')")
         assert pixels["colours"] >= 3 and pixels["top"] < 0.99, pixels
-        _save(browser, tmp_path, "dashboard.png")
-        browser.evaluate("document.getElementById('stop').click()")
+        _save(browser, tmp_path, "dashboard_replay_paused.png")
+        browser.evaluate("document.getElementById('play').click()")
+        browser.wait_for("motosimDash.lastControl && motosimDash.lastControl.status === 200")
+        assert feed.state() == "playing"
+        browser.wait_for("document.getElementById('play').textContent === 'Pause'")
+        before = browser.wait_for("motosimDash.cursor > 0 && motosimDash.cursor")
+        time.sleep(1.0)
+        after = browser.evaluate("motosimDash.cursor")
+        assert after > before + 0.5  # the cursor moves with the replay
+        assert _panels(browser)["torque"]["lastT"] == pytest.approx(after, abs=0.2)
+        _save(browser, tmp_path, "dashboard_replay_playing.png")
+        browser.evaluate("document.getElementById('play').click()")
         browser.wait_for("motosimDash.state === 'paused'")
         assert feed.state() == "paused"
+        # the position slider seeks
+        browser.evaluate(
+            "(() => { const p = document.getElementById('position'); p.value = 4;"
+            " p.dispatchEvent(new Event('change')); })()"
+        )
+        browser.wait_for("motosimDash.cursor > 3.9")
+        assert feed.status()["t"] == pytest.approx(4.0, abs=0.01)
     finally:
         browser.close()
 
@@ -162,7 +177,7 @@ def test_without_the_token_the_buttons_do_nothing(
     browser = Browser(f"{url}/dashboard", tmp_path / "profile")
     try:
         browser.wait_for("window.motosimDash && motosimDash.messages > 0")
-        browser.evaluate("document.getElementById('arm').click()")
+        browser.evaluate("document.getElementById('play').click()")
         browser.wait_for("motosimDash.lastControl")
         assert browser.evaluate("motosimDash.lastControl.status") == 403
         assert feed.state() == "paused"
@@ -184,6 +199,14 @@ def test_a_live_simulated_run_drives_the_view_and_the_dashboard(tmp_path: Path) 
             assert rig.state() == "running"  # the run lasts 6 s of wall-clock time
             view.wait_for("motosimStats.lastPose && motosimStats.lastPose.t > 1.0")
             dash.wait_for("motosimDash.rows > 100")
+            shown = dash.evaluate(
+                "[...document.querySelectorAll('#arm, #stop, #play')]"
+                ".map((e) => e.offsetParent !== null)"
+            )
+            assert shown == [True, True, False]  # a live run is armed and stopped
+            dash.wait_for("motosimDash.panels.torque.points > 50")
+            for panel in ("torque", "steer", "roll", "speed"):
+                assert dash.evaluate(f"motosimDash.panels.{panel}.points") > 50, panel
             _save(view, tmp_path, "live_view.png")
             _save(dash, tmp_path, "live_dashboard.png")
             # the lag report path: the rig stamps its rows with the monotonic clock, the page
@@ -225,5 +248,52 @@ def test_the_render_scale_steps_down_on_a_slow_renderer_unless_fixed(
         browser.wait_for("window.motosimStats && motosimStats.ready")
         assert browser.evaluate("[motosimStats.antialias, motosimStats.adaptive]") == [True, False]
         assert browser.evaluate(slow) == 1
+    finally:
+        browser.close()
+
+
+def test_the_riders_view_has_the_cockpit_turning_and_leaning_with_the_motorcycle(
+    replay: tuple[ReplayFeed, str], tmp_path: Path
+) -> None:
+    feed, url = replay
+    browser = Browser(f"{url}/?token={TOKEN}&readback=1", tmp_path / "cockpit")
+    try:
+        browser.wait_for("window.motosimStats && motosimStats.ready && motosimStats.poses > 0")
+        # in the lane change: the handlebar turned and the motorcycle leaning
+        feed.seek(3.6)
+        browser.wait_for("motosimStats.lastPose && motosimStats.lastPose.t > 3.5")
+        time.sleep(0.3)  # a frame drawn with that pose
+        pose = browser.evaluate("motosimStats.lastPose")
+        assert abs(pose["theta_h"]) > math.radians(0.2) and abs(pose["phi"]) > math.radians(2)
+        turned = browser.evaluate("motosimStats.bars.rotation.y")
+        assert turned == pytest.approx(-pose["theta_h"], abs=1e-9)  # turns with theta_h
+        # the horizon rolls: the camera leans with the motorcycle and the cockpit with it
+        lean = "[motosimStats.camera.rotation.z, motosimStats.cockpit.rotation.z]"
+        assert browser.evaluate(lean) == pytest.approx([-pose["phi"], 0.0], abs=1e-9)
+        meshes = "(() => { let k = 0; motosimStats.cockpit.traverse((o) => { if (o.isMesh) k++; });"
+        assert browser.evaluate(meshes + " return k; })()") >= 10
+        # the tank's red and the instruments' black fill the bottom of the picture
+        bottom = """
+        (() => {
+          const s = document.querySelector('#scene');
+          const c = document.createElement('canvas'); c.width = 160; c.height = 90;
+          const g = c.getContext('2d'); g.drawImage(s, 0, 0, 160, 90);
+          const d = g.getImageData(40, 60, 80, 30).data;
+          let red = 0, dark = 0;
+          for (let i = 0; i < d.length; i += 4) {
+            if (d[i] > 140 && d[i + 1] < 80 && d[i + 2] < 80) red++;
+            if (d[i] < 60 && d[i + 1] < 60 && d[i + 2] < 60) dark++;
+          }
+          return [red, dark];
+        })()
+        """
+        red, dark = browser.evaluate(bottom)
+        _save(browser, tmp_path, "view_cockpit.png")
+        assert red > 50 and dark > 20, (red, dark)
+        # the horizon held level: the view does not roll, the cockpit leans in it
+        browser.evaluate("document.getElementById('roll-toggle').click()")
+        time.sleep(0.3)
+        assert browser.evaluate(lean) == pytest.approx([0.0, -pose["phi"]], abs=1e-9)
+        _save(browser, tmp_path, "view_cockpit_level_horizon.png")
     finally:
         browser.close()

@@ -77,8 +77,15 @@ def test_plots_draw_what_there_is(plot: Callable[[SimResult], Figure]) -> None:
 def test_plot_comparison() -> None:
     runs = {"nominal": _result(), "perturbed": _result(("t", "tau_r", "tau_r_hat", "delta"))}
     fig = plot_comparison(runs, [("tau_r", "tau_r_hat"), ("delta", "theta_h")])
-    assert isinstance(fig, Figure) and len(fig.axes) == 2
+    # one panel per run and pair, each with its two series only, told by colour
+    assert isinstance(fig, Figure) and len(fig.axes) == 4
     fig.canvas.draw()
+    assert [len(ax.get_lines()) for ax in fig.axes] == [2, 2, 2, 1]
+    for ax in fig.axes:
+        colours = {str(line.get_color()) for line in ax.get_lines()}
+        assert len(colours) == len(ax.get_lines())
+    assert fig.axes[0].get_ylabel() == "rider torque [N m]"
+    assert fig.axes[2].get_ylabel() == "handlebar and steer angle [deg]"
     with pytest.raises(MotosimError, match="different units"):
         plot_comparison(runs, [("tau_r", "theta_h")])
     with pytest.raises(MotosimError, match="expected at least one of each"):
@@ -164,3 +171,91 @@ def test_report_of_a_cueing_result_shows_its_figures_and_claims_no_flag_check(
     images = text.split('src="data:image/png;base64,')[1:]
     assert len(images) == 2
     assert all(base64.b64decode(i.split('"', 1)[0]) == png for i in images)
+
+
+def test_report_names_the_observer_and_shows_units(tmp_path: Path) -> None:
+    # a run of the default stack: no design file, so the metadata's observer gains are None
+    metadata = {
+        "scenario": {
+            "name": "lane",
+            "estimator": {"name": "walcott_zak"},
+            "controller": {"kind": "paper"},
+        },
+        "observer": None,
+        "controller": None,
+    }
+    with ResultWriter(tmp_path, NAMES, metadata) as writer:
+        writer.append(_rows())
+        writer.close({"samples": 60.0, "rms_tracking_error": 0.02, "flag_fall": 0.0})
+    text = " ".join(build_report(tmp_path).read_text(encoding="utf-8").split())
+    assert "<td>observer</td><td>Walcott-Zak observer" in text
+    assert "None" not in text.split("<h2>Metrics</h2>")[0]
+    assert "the paper&#x27;s, eq. (26)" in text
+    assert '<td class="num">60</td>' in text  # a count as an integer, not 60.0 or 6e+01
+    assert '<td class="num">1.146</td><td>deg</td>' in text  # 0.02 rad
+    assert '<td class="num">no</td>' in text  # the fall flag
+
+
+def test_the_rate_figure_shows_the_encoders_resolution() -> None:
+    # a 14-bit encoder read at 1 kHz: one count a sample is 2 pi / 2^14 * 1000 rad/s, 21.97
+    # deg/s, the band drawn about zero and the step named under the figure
+    result = _result()
+    scenario = {"measurement": {"encoder_bits": 14}, "rates": {"measurement": 1000.0}}
+    shown = SimResult(result.t, result.data, result.names, {"scenario": scenario}, {}, True)
+    fig = plot_rate(shown)
+    fig.canvas.draw()
+    main = fig.axes[0]
+    band = [p for p in main.patches if "encoder count" in str(p.get_label())]
+    assert len(band) == 1 and "q/dt = 22 deg/s" in str(band[0].get_label())
+    labels = [line.get_label() for line in main.get_lines()]
+    assert any("moving average" in str(label) for label in labels)
+    assert main.get_ylabel() == "handlebar rate [deg/s]"
+    assert "0.022 deg" in fig.get_supxlabel()
+
+
+def test_the_modes_labels_stay_off_the_curves() -> None:
+    from motosim.model import sharp
+    from motosim.params import load_parameters
+    from motosim.plotting.modes import plot_modes
+
+    bike = load_parameters("sharp1971", "sharp")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = plot_modes(sharp.modes(bike, np.arange(2.0, 60.5, 2.0)))
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    ax = fig.axes[0]
+    renderer = canvas.get_renderer()
+    texts = [t for t in ax.texts if t.get_text().endswith("unstable")]
+    assert {t.get_text() for t in texts} >= {"weave unstable", "wobble unstable"}
+    for text in texts:
+        box = text.get_window_extent(renderer)
+        for line in ax.get_lines():
+            xy = ax.transData.transform(line.get_xydata())
+            inside = (xy[:, 0] >= box.x0) & (xy[:, 0] <= box.x1)
+            assert not np.any(xy[inside, 1] >= box.y0), (text.get_text(), line.get_label())
+    assert ax.get_legend() is not None
+    legend = ax.get_legend().get_window_extent(renderer)
+    assert legend.x0 >= ax.get_window_extent(renderer).x1  # beside the axes
+
+
+def test_the_papers_figures_are_numbered_once(tmp_path: Path) -> None:
+    import re
+
+    from motosim.cli.paper import _figures
+
+    names = ("fig11_nominal", "fig11_perturbed", "fig14_compensated", "fig14_uncompensated",
+             "fig15_riding")  # fmt: skip
+    written = _figures({name: _result() for name in names}, tmp_path)
+    numbers: dict[str, list[str]] = {}
+    for file, caption in written:
+        assert (tmp_path / file).read_bytes().startswith(b"\x89PNG")
+        assert "Figs. " not in caption.split(":")[0], caption  # no range of figures
+        found = re.match(r"Fig\. (\d+)( \((left|right)\))?:", caption)
+        if found:
+            numbers.setdefault(found.group(1), []).append(found.group(3) or "whole")
+    # the paper's Figs. 11, 13 (its two halves), 14, 15, 16, 17 and 18, each once
+    assert numbers == {
+        "11": ["whole"], "13": ["left", "right"], "14": ["whole"], "15": ["whole"],
+        "16": ["whole"], "17": ["whole"], "18": ["whole"],
+    }  # fmt: skip

@@ -40,7 +40,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--out", required=True, help="result folder")
     parser.add_argument("--backend", choices=("joblib", "dask"), help="joblib (default) or dask")
     parser.add_argument(
-        "--scheduler", metavar="ADDRESS", help="a running Dask scheduler (tcp://host:8786)"
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a running Dask scheduler (tcp://host:8786; default: a local cluster)",
     )
     parser.add_argument(
         "--jobs", type=int, metavar="N", help="local worker processes (default: every core)"
@@ -54,13 +56,20 @@ def register(sub: Any) -> None:
         type=int,
         metavar="N",
         help="run only the first N runs of the plan (a shortened campaign, said so in its "
-        "manifest and report; run again without --runs to complete it)",
+        "manifest and report; run again without --runs to complete it; default: every run)",
     )
-    parser.add_argument("--rerun", metavar="RUN_ID", help="run one run again and compare it")
+    parser.add_argument(
+        "--rerun",
+        metavar="RUN_ID",
+        help="run one run again and compare it (default: run the campaign)",
+    )
     parser.add_argument(
         "--write-scenario",
         metavar="FILE",
-        help="with --rerun: also write the run as a scenario file for motosim simulate",
+        help=(
+            "with --rerun: also write the run as a scenario file for motosim simulate "
+            "(default: none written)"
+        ),
     )
     add_cache_option(parser)
     parser.set_defaults(func=run)
@@ -122,9 +131,10 @@ def _rerun(args: argparse.Namespace) -> int:
         print_json({"run": row, "identical_to_stored": match, "written": [str(p) for p in written]})
         return 0
     print(f"run {args.rerun}: {row['status']}" + (f" ({row['reason']})" if row["reason"] else ""))
-    for key, value in row.items():
-        if key not in ("run_id", "status", "reason"):
-            print(f"  {key:<32} {value!r}")
+    from motosim.report.units import summary_lines
+
+    shown = {k: v for k, v in row.items() if k not in ("run_id", "status", "reason")}
+    print("\n".join(summary_lines(shown)))  # degrees and per cent; --json is SI
     if match is None:
         print(f"  not in {args.out}: nothing to compare with")
     else:

@@ -161,10 +161,17 @@ def run(args: argparse.Namespace) -> int:
     else:
         how = f"{args.algorithm}, road preview" if road is not None else args.algorithm
         print(f"{name}: {how} commands in {folder} ({summary['violations']} violations)")
-        print(f"  {'channel':<8} {'rms':>9} {'corr':>6} {'lag s':>6} {'false %':>8} {'miss %':>7}")
+        # the perceived error: canal rates in deg/s, otolith specific forces in m/s^2
+        units = {"roll": "deg/s", "pitch": "deg/s", "yaw": "deg/s"}
+        print(
+            f"  {'channel':<8} {'rms error':>10} {'unit':<6} {'corr':>6} {'lag [s]':>8} "
+            f"{'false [%]':>10} {'missing [%]':>12}"
+        )
         for channel, cs in outcome.score.channels.items():
+            unit = units.get(channel, "m/s^2")
+            rms = math.degrees(cs.rms_error) if unit == "deg/s" else cs.rms_error
             print(
-                f"  {channel:<8} {cs.rms_error:9.4f} {cs.correlation:6.2f} {cs.lag:6.2f} "
-                f"{100 * cs.false_cue_share:8.1f} {100 * cs.missing_cue_share:7.1f}"
+                f"  {channel:<8} {rms:10.4f} {unit:<6} {cs.correlation:6.2f} {cs.lag:8.2f} "
+                f"{100 * cs.false_cue_share:10.1f} {100 * cs.missing_cue_share:12.1f}"
             )
     return 0

@@ -53,7 +53,10 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--columns",
         metavar="MAP",
-        help="the log's columns with units, e.g. t=time:ms,theta_h=angle:deg,i_m=cur:mA",
+        help=(
+            "the log's columns with units, e.g. t=time:ms,theta_h=angle:deg,i_m=cur:mA "
+            "(default: the columns t, theta_h, i_m in their header's units, else s, rad, A)"
+        ),
     )
     parser.add_argument("--out", required=True, help="CSV file to write")
     parser.add_argument("--json", action="store_true", help="print a JSON summary")

@@ -43,7 +43,9 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--handlebar", default="simacom_handlebar", help="handlebar set name or TOML file"
     )
-    parser.add_argument("--out", help="CSV log to write (with --plan: the current command)")
+    parser.add_argument(
+        "--out", help="CSV log to write (with --plan: the current command; default: none)"
+    )
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
     parser.add_argument(
         "--overwrite", action="store_true", help="replace the --out file if it exists"
@@ -55,12 +57,24 @@ def register(sub: Any) -> None:
         "current limit; --out then writes the command t [s], i_cmd [A]",
     )
     plan.add_argument("--plan", action="store_true", help="recommend instead of simulating")
-    plan.add_argument("--max-current", type=float, help="current limit of the drive [A]")
-    plan.add_argument("--inertia", type=float, help="rough J_eq [kg*m^2]")
-    plan.add_argument("--damping", type=float, help="rough beta_eq [N*m*s/rad]")
-    plan.add_argument("--dry-friction", type=float, help="rough beta_s [N*m]")
+    plan.add_argument(
+        "--max-current",
+        type=float,
+        help="current limit of the drive [A] (required with --plan; no default)",
+    )
+    plan.add_argument(
+        "--inertia", type=float, help="rough J_eq [kg*m^2] (default: from --handlebar)"
+    )
+    plan.add_argument(
+        "--damping", type=float, help="rough beta_eq [N*m*s/rad] (default: from --handlebar)"
+    )
+    plan.add_argument(
+        "--dry-friction", type=float, help="rough beta_s [N*m] (default: from --handlebar)"
+    )
     plan.add_argument("--ratio", type=float, help="belt ratio N (default: from --handlebar)")
-    plan.add_argument("--torque-constant", type=float, help="k_t [N*m/A] (from --handlebar)")
+    plan.add_argument(
+        "--torque-constant", type=float, help="k_t [N*m/A] (default: from --handlebar)"
+    )
     plan.add_argument(
         "--angle-limit", type=float, default=0.5, help="largest angle from the start [rad] (0.5)"
     )

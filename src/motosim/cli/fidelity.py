@@ -64,7 +64,9 @@ def register(sub: Any) -> None:
         "--duration", type=float, default=None, help="length of the chirp [s] (default 60)"
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.add_argument("--plot", metavar="FILE", help="save the Bode figure (.png, .svg, .pdf)")
+    parser.add_argument(
+        "--plot", metavar="FILE", help="save the Bode figure (.png, .svg, .pdf; default: none)"
+    )
     parser.add_argument(
         "--overwrite", action="store_true", help="replace the --plot file if it exists"
     )

@@ -60,7 +60,8 @@ def register(sub: Any) -> None:
         metavar="MAP",
         help=(
             "the log's columns for motosim's signals, with units: e.g. "
-            "t=time:ms,theta_h=angle_deg:deg,i_m=cur:A (units s, ms, us, rad, deg, A, mA, V, mV)"
+            "t=time:ms,theta_h=angle_deg:deg,i_m=cur:A (units s, ms, us, rad, deg, A, mA, V, "
+            "mV) (default: the columns t, theta_h, i_m in their header's units, else s, rad, A)"
         ),
     )
     parser.add_argument("--method", choices=METHODS, default="output_error")
@@ -81,15 +82,21 @@ def register(sub: Any) -> None:
         help="how late the logged current is [s], e.g. one sample of CAN latency (0)",
     )
     parser.add_argument(
-        "--validate", metavar="LOG", help="a second run to replay the identified model on"
+        "--validate",
+        metavar="LOG",
+        help="a second run to replay the identified model on (default: none)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.add_argument("--out", metavar="PARAMS.toml", help="write a handlebar parameter file")
+    parser.add_argument(
+        "--out", metavar="PARAMS.toml", help="write a handlebar parameter file (default: none)"
+    )
     parser.add_argument(
         "--overwrite", action="store_true", help="replace the --out and --plot files if they exist"
     )
     parser.add_argument(
-        "--plot", metavar="FIG.png", help="fit, validation, input, residual and parameters"
+        "--plot",
+        metavar="FIG.png",
+        help="fit, validation, input, residual and parameters (default: none)",
     )
     parser.set_defaults(func=run)
 

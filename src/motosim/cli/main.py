@@ -10,6 +10,7 @@ one line ``motosim: error: ...`` with exit code 2, without a traceback.
 """
 
 import argparse
+import copy
 import importlib
 import logging
 import os
@@ -21,7 +22,7 @@ import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from types import FrameType
-from typing import NoReturn, TextIO
+from typing import Any, NoReturn, TextIO
 
 from motosim import __version__
 from motosim.errors import (
@@ -94,8 +95,63 @@ COMMANDS: dict[str, tuple[str, str]] = {
 """Subcommand name -> (module that registers it, one-line help shown by ``motosim --help``)."""
 
 
+def render_default(value: object) -> str:
+    """An option's default as a person types it: ``100`` for 100.0, ``10,20,30`` for a list."""
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, list | tuple):
+        return ",".join(render_default(item) for item in value)
+    return str(value)
+
+
+class _DefaultsFormatter(argparse.HelpFormatter):
+    """A help formatter that states every option's default.
+
+    An option whose help already speaks of its default is left as it is; a help ending in the
+    default in parentheses (``length [s] (60)``) reads ``(default: 60)``; any other option
+    with a default gets `` (default: VALUE)`` appended. Flags (``store_true``) and options
+    without a default say what they do when absent in their own text.
+    """
+
+    def _format_action(self, action: argparse.Action) -> str:
+        if not action.help and has_default(action):  # no text: the default alone
+            action = copy.copy(action)
+            action.help = ""
+            action.help = f"default: {render_default(action.default)}".replace("%", "%%")
+        return super()._format_action(action)
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help
+        if text is None or text == argparse.SUPPRESS or not has_default(action):
+            return text
+        if "default" in text.lower():
+            return text
+        shown = render_default(action.default).replace("%", "%%")
+        for mark in ")", ";", ":", ",", " ":
+            if f"({shown}{mark}" in text:
+                return text.replace(f"({shown}{mark}", f"(default: {shown}{mark}", 1)
+        return f"{text} (default: {shown})" if text else f"default: {shown}"
+
+
+def has_default(action: argparse.Action) -> bool:
+    """Whether ``action`` is an option whose default a user reads in ``--help``.
+
+    Flags (``store_true``, ``store_false``, ``--help``, ``--version``), positional arguments
+    and required options have none to state; an option whose default is None states what
+    happens when it is absent in its own help text.
+    """
+    if not action.option_strings or action.required or action.nargs == 0:
+        return False
+    return action.default is not None and action.default != argparse.SUPPRESS
+
+
 class _Parser(argparse.ArgumentParser):
-    """An argument parser whose usage errors are one line, exit code 2."""
+    """An argument parser whose usage errors are one line, exit code 2, and whose help states
+    every option's default (:class:`_DefaultsFormatter`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _DefaultsFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         message = _one_line(message)

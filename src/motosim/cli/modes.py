@@ -40,7 +40,9 @@ def register(sub: Any) -> None:
         description="Capsize, weave and wobble of Sharp's (1971) motorcycle at each speed.",
     )
     where = parser.add_mutually_exclusive_group()
-    where.add_argument("--speeds", help="comma-separated speeds [m/s], e.g. 3,5,10")
+    where.add_argument(
+        "--speeds", help="comma-separated speeds [m/s], e.g. 3,5,10 (default: --range)"
+    )
     where.add_argument(
         "--range", dest="speed_range", help=f"start:stop:step [m/s] (default {_DEFAULT_RANGE})"
     )
@@ -53,7 +55,9 @@ def register(sub: Any) -> None:
         help="Sharp's linear model or the multibody model on tyres (default: the set's kind)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--plot", metavar="FILE", help="save a figure (.png, .svg or .pdf)")
+    parser.add_argument(
+        "--plot", metavar="FILE", help="save a figure (.png, .svg or .pdf; default: none)"
+    )
     parser.add_argument(
         "--overwrite", action="store_true", help="replace the --plot file if it exists"
     )

@@ -61,51 +61,78 @@ def _figures(runs: dict[str, "SimResult"], out: Path) -> list[tuple[str, str]]:
         plot_motor_torque,
         plot_motorcycle,
         plot_rate,
+        plot_torque,
         plot_tracking,
     )
 
+    riding = runs["fig15_riding"]
     specs: list[tuple[str, str, Callable[[], Any]]] = [
         (
             "fig11_torque_estimation.png",
-            "Fig. 11: rider torque and its estimate, nominal and +50 % handlebar",
+            "Fig. 11: rider torque and its estimate, nominal handlebar and one whose true "
+            "J_eq and beta_eq are 50 % above the nominal ones",
             lambda: plot_comparison(
-                {k: runs[k] for k in ("fig11_nominal", "fig11_perturbed")},
+                {
+                    "nominal handlebar": runs["fig11_nominal"],
+                    "true J_eq, beta_eq +50 %": runs["fig11_perturbed"],
+                },
                 [("tau_r", "tau_r_hat")],
-                title="Fig. 11: rider torque (solid) and estimate (dashed)",
+                title="Fig. 11: rider torque and its estimate",
             ),
         ),
         (
-            "fig12_state_estimation.png",
-            "Fig. 12-13: handlebar angle against the steer reference",
+            "fig13_tracking.png",
+            "Fig. 13 (left): the robust controller: handlebar angle against the virtual steer "
+            "angle (Fig. 12, the observer's own state estimate, is not recorded by the runs)",
             lambda: plot_tracking(
-                runs["fig11_nominal"], title="Figs. 12-13: handlebar angle and steer angle"
+                runs["fig11_nominal"], title="Fig. 13 (left): handlebar angle and steer angle"
             ),
         ),
         (
             "fig13_differentiator.png",
-            "Fig. 13 (right), Fig. 17: handlebar rate and its robust differentiation",
-            lambda: plot_rate(runs["fig11_nominal"], title="Fig. 13: rate and differentiator"),
+            "Fig. 13 (right): handlebar rate and the robust differentiator's, against the "
+            "encoder's resolution",
+            lambda: plot_rate(
+                runs["fig11_nominal"], title="Fig. 13 (right): handlebar rate, differentiated"
+            ),
         ),
         (
             "fig14_friction_compensation.png",
-            "Fig. 14: dry friction, with and without compensation",
+            "Fig. 14: dry friction, with and without its compensation: the rider-torque "
+            "estimate (top) and the handlebar against the steer angle (bottom)",
             lambda: plot_comparison(
-                {k: runs[k] for k in ("fig14_compensated", "fig14_uncompensated")},
+                {
+                    "friction compensated": runs["fig14_compensated"],
+                    "not compensated": runs["fig14_uncompensated"],
+                },
                 [("tau_r", "tau_r_hat"), ("theta_h", "delta")],
-                title="Fig. 14: estimate and steer angle, friction compensated or not",
+                title="Fig. 14: compensation of the dry friction",
             ),
+        ),
+        (
+            "fig15_tracking.png",
+            "Fig. 15: the riding run: handlebar angle against the virtual steer angle",
+            lambda: plot_tracking(riding, title="Fig. 15: riding run, handlebar and steer"),
+        ),
+        (
+            "fig16_torque_estimation.png",
+            "Fig. 16: the riding run: rider torque and its Walcott-Zak estimate",
+            lambda: plot_torque(riding, title="Fig. 16: riding run, rider torque estimate"),
+        ),
+        (
+            "fig17_differentiator.png",
+            "Fig. 17: the riding run: handlebar rate and the differentiator's (100 Hz CAN)",
+            lambda: plot_rate(riding, title="Fig. 17: riding run, handlebar rate"),
         ),
         (
             "fig18_motor_torque.png",
             "Fig. 18: estimated rider torque against the motor torque N k_t i_m",
-            lambda: plot_motor_torque(
-                runs["fig15_riding"], title="Fig. 18: estimate and motor torque"
-            ),
+            lambda: plot_motor_torque(riding, title="Fig. 18: estimate and motor torque"),
         ),
         (
-            "fig15_motorcycle.png",
-            "Figs. 15-16: the riding run: path, roll angle and speed",
-            lambda: plot_motorcycle(runs["fig15_riding"], title="Riding run: path, roll, speed"),
+            "riding_motorcycle.png",
+            "The riding run's virtual motorcycle: path, roll angle, speed (no figure of the paper)",
+            lambda: plot_motorcycle(riding, title="Riding run: path, roll, speed"),
         ),
     ]
     from motosim.io.results import write_whole
@@ -119,12 +146,18 @@ def _figures(runs: dict[str, "SimResult"], out: Path) -> list[tuple[str, str]]:
 
 
 def _index(out: Path, figures: list[tuple[str, str]], summaries: dict[str, dict[str, Any]]) -> Path:
+    from motosim.report.units import METRICS, shown
+
     keys = ["rms_tau_r_error", "rms_tracking_error", "rms_rate_error", "max_abs_phi", "max_abs_e_y"]
     rows = "".join(
         f"<tr><td><a href='{html.escape(name)}/report.html'>{html.escape(name)}</a></td>"
-        + "".join(f"<td>{summary.get(k, float('nan')):.4g}</td>" for k in keys)
+        + "".join(f"<td>{shown(k, summary.get(k, float('nan')))[0]}</td>" for k in keys)
         + "</tr>"
         for name, summary in summaries.items()
+    )
+    header = "".join(
+        f"<th>{html.escape(METRICS[k].label)} [{html.escape(METRICS[k].display_unit)}]</th>"
+        for k in keys
     )
     figs = "".join(
         f"<figure><img src='{html.escape(f)}' alt='{html.escape(c)}'><figcaption>{html.escape(c)}"
@@ -137,8 +170,9 @@ def _index(out: Path, figures: list[tuple[str, str]], summaries: dict[str, dict[
 table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}}
 td:first-child{{text-align:left}}img{{max-width:100%}}figure{{margin:2em 0}}</style></head><body>
 <h1>Nehaoua, Arioui &amp; Mammar (2012), section V, regenerated by motosim</h1>
-<p>Each run has its own report (click its name). Units: N*m, rad, rad/s, m.</p>
-<table><tr><th>run</th>{"".join(f"<th>{k}</th>" for k in keys)}</tr>{rows}</table>
+<p>Each run has its own report (click its name). Angles in degrees; the result files and
+<code>--json</code> keep SI units (rad, rad/s).</p>
+<table><tr><th>run</th>{header}</tr>{rows}</table>
 {figs}</body></html>"""
     return write_text(out / "index.html", page)
 

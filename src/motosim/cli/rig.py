@@ -43,7 +43,9 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--bus", required=True, help="python-can INTERFACE[:CHANNEL]: udp_multicast, ..."
     )
-    parser.add_argument("--duration", type=float, help="stop after this long [s]")
+    parser.add_argument(
+        "--duration", type=float, help="stop after this long [s] (default: until stopped)"
+    )
     add_link_option(parser)
     parser.add_argument(
         "--rate",

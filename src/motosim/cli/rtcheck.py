@@ -65,9 +65,14 @@ def add_privilege_options(parser: argparse.ArgumentParser) -> None:
         "--fifo",
         type=int,
         metavar="PRIORITY",
-        help="run under SCHED_FIFO at this priority, 1..99 (needs root, CAP_SYS_NICE or ulimit -r)",
+        help=(
+            "run under SCHED_FIFO at this priority, 1..99 (needs root, CAP_SYS_NICE or "
+            "ulimit -r; default: the normal scheduler)"
+        ),
     )
-    parser.add_argument("--cpu", metavar="LIST", help="pin the process to these CPUs, e.g. 1")
+    parser.add_argument(
+        "--cpu", metavar="LIST", help="pin the process to these CPUs, e.g. 1 (default: any CPU)"
+    )
     parser.add_argument(
         "--mlock", action="store_true", help="lock the process's memory in RAM (mlockall)"
     )

@@ -67,7 +67,9 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--out", required=True, help="folder for the result")
     add_link_option(parser)
-    parser.add_argument("--duration", type=float, help="run for this long [s] (the scenario's)")
+    parser.add_argument(
+        "--duration", type=float, help="run for this long [s] (default: the scenario's)"
+    )
     parser.add_argument(
         "--pace",
         choices=("clock", "bus"),

@@ -150,11 +150,10 @@ def run(args: argparse.Namespace) -> int:
             }
         )
     else:
+        from motosim.report.units import summary_lines
+
         print(f"{scenario.name}: result in {folder}" + (f", report {report}" if report else ""))
-        for key, value in summary.items():
-            print(
-                f"  {key:<32} {value:.4g}" if isinstance(value, float) else f"  {key:<32} {value}"
-            )
+        print("\n".join(summary_lines(dict(summary))))  # degrees and per cent; --json is SI
     return 0
 
 

@@ -66,7 +66,10 @@ def register(sub: Any) -> None:
     view.add_argument(
         "--cueing",
         metavar="DIR",
-        help="a folder written by motosim cueing for this result: plot its platform commands",
+        help=(
+            "a folder written by motosim cueing for this result: plot its platform commands "
+            "(default: none)"
+        ),
     )
     view.set_defaults(func=run_view)
 
@@ -79,13 +82,17 @@ def register(sub: Any) -> None:
         ),
     )
     telemetry.add_argument("folder", help="a result folder written by motosim simulate")
-    telemetry.add_argument("--mcap", help="MCAP file to write")
+    telemetry.add_argument("--mcap", help="MCAP file to write (default: none)")
     telemetry.add_argument("--every", type=int, default=1, help="keep one row in EVERY (MCAP)")
     telemetry.add_argument(
-        "--plotjuggler", metavar="HOST[:PORT]", help="stream UDP JSON to PlotJuggler (port 9870)"
+        "--plotjuggler",
+        metavar="HOST[:PORT]",
+        help="stream UDP JSON to PlotJuggler (port 9870; default: off)",
     )
     telemetry.add_argument(
-        "--esmini", metavar="HOST[:PORT]", help="stream the pose to esmini's UDP driver (49950)"
+        "--esmini",
+        metavar="HOST[:PORT]",
+        help="stream the pose to esmini's UDP driver (port 49950; default: off)",
     )
     telemetry.add_argument("--rate", type=float, default=1.0, help="stream speed (1: real time)")
     telemetry.set_defaults(func=run_telemetry)

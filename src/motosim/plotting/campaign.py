@@ -68,7 +68,7 @@ def plot_metric_vs_factors(
     for ax in axes[n:]:
         ax.set_visible(False)
     if failed.any():
-        axes[0].legend(loc="best", fontsize="small")
+        axes[0].legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
     return fig
 
 
@@ -132,5 +132,5 @@ def plot_failures(
         ax.set_yticks(range(len(y_labels)), y_labels)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.legend(loc="best", fontsize="small")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
     return fig

@@ -39,6 +39,14 @@ _LABELS = {
     "theta_h_dot": "true rate theta_h_dot",
     "theta_h_dot_hat": "differentiator theta_h_dot_hat",
 }
+_QUANTITIES = {
+    "tau_r": "rider torque",
+    "tau_r_hat": "rider torque",
+    "theta_h": "handlebar and steer angle",
+    "delta": "handlebar and steer angle",
+    "theta_h_dot": "handlebar rate",
+    "theta_h_dot_hat": "handlebar rate",
+}
 _STYLES: dict[str, dict[str, Any]] = {
     "tau_r": {"color": "k", "lw": 1.0},
     "theta_h": {"color": "k", "lw": 1.0},
@@ -127,15 +135,19 @@ def _pair_figure(
     figure: str,
     title: str,
     error_label: str,
+    quantity: str,
 ) -> Figure:
-    """Two signals against time and, when both exist, their difference below."""
+    """Two signals against time and, when both exist, their difference below.
+
+    ``quantity`` names what both signals are, for the y axes (``"rider torque"``).
+    """
     have = _present(result, pair, figure)
     _, unit = _display(have[0], result[have[0]])
     both = len(have) == 2
     if not both or result.t.size < 8:
         fig = Figure(figsize=(9.0, 3.4), layout="constrained")
         ax = fig.subplots()
-        _time_panel(ax, result, have, f"[{unit}]")
+        _time_panel(ax, result, have, f"{quantity} [{unit}]")
         ax.set_xlabel("time [s]")
         fig.suptitle(_title(result, title))
         return _finish(fig)
@@ -149,7 +161,7 @@ def _pair_figure(
     first, _ = _display(pair[0], result[pair[0]])
     second, _ = _display(pair[1], result[pair[1]])
     error = second - first
-    _time_panel(main, result, have, f"[{unit}]")
+    _time_panel(main, result, have, f"{quantity} [{unit}]")
     error_ax.plot(result.t, error, color="tab:purple", lw=0.8)
     error_ax.set_ylabel(f"{error_label} [{unit}]")
     error_ax.grid(True, alpha=0.3)
@@ -160,7 +172,7 @@ def _pair_figure(
         zoom.plot(result.t[inside], values[inside], **_STYLES.get(name, {}))
     zoom.set_title(f"zoom {low:.2f}-{high:.2f} s", fontsize=9)
     zoom.set_xlabel("time [s]")
-    zoom.set_ylabel(f"[{unit}]")
+    zoom.set_ylabel(f"{quantity} [{unit}]")
     zoom.grid(True, alpha=0.3)
     for ax in (main, error_ax):
         ax.axvspan(low, high, color="0.85", zorder=0)
@@ -196,6 +208,7 @@ def plot_torque(result: SimResult, *, title: str = "Rider torque and its estimat
         figure="plot_torque",
         title=title,
         error_label="tau_r_hat - tau_r",
+        quantity="rider torque",
     )
 
 
@@ -229,14 +242,21 @@ def plot_tracking(
         figure="plot_tracking",
         title=title,
         error_label="theta_h - delta",
+        quantity="steer and handlebar angle",
     )
 
 
 def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimate") -> Figure:
     """True handlebar rate ``theta_h_dot`` and the differentiator's ``theta_h_dot_hat``.
 
-    Fig. 13 (right) and Fig. 17 of Nehaoua, Arioui & Mammar (2012), in [deg/s]. When both
-    exist, a second panel shows the error ``theta_h_dot_hat - theta_h_dot``.
+    Fig. 13 (right) and Fig. 17 of Nehaoua, Arioui & Mammar (2012), in [deg/s]. The
+    differentiator reads the encoder's angle, quantised to q = 2 pi / 2^bits rad: one count
+    between two samples reads as a rate of q / dt, so while the handlebar creeps its output
+    steps by about that much, which no differentiator of the quantised angle can resolve. The
+    figure draws that resolution, +/- q / dt (when the result's scenario gives the encoder and
+    the measurement rate), the differentiator's output faint and its centred moving average
+    over 20 ms (at least 5 samples) over it, so the rate it follows reads under the steps;
+    below, the error of both; on the right, a zoom where the averaged error is largest.
 
     Parameters
     ----------
@@ -254,13 +274,88 @@ def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimat
     MotosimError
         If the result has neither signal.
     """
-    return _pair_figure(
-        result,
-        ("theta_h_dot", "theta_h_dot_hat"),
-        figure="plot_rate",
-        title=title,
-        error_label="estimate - true",
-    )
+    names = ("theta_h_dot", "theta_h_dot_hat")
+    have = _present(result, names, "plot_rate")
+    if len(have) < 2 or result.t.size < 8:
+        return _pair_figure(
+            result, names, figure="plot_rate", title=title, error_label="estimate - true",
+            quantity="handlebar rate",
+        )  # fmt: skip
+    true = np.rad2deg(result["theta_h_dot"])
+    raw = np.rad2deg(result["theta_h_dot_hat"])
+    dt = float(np.median(np.diff(result.t)))
+    width = max(5, round(0.02 / dt))
+    smooth = _moving_average(raw, width)
+    encoder = _encoder(result)
+    step = None if encoder is None else encoder[0] * encoder[1]
+    fig = Figure(figsize=(11.0, 5.8), layout="constrained")
+    grid = fig.add_gridspec(2, 2, width_ratios=[2.2, 1.0], height_ratios=[2, 1])
+    main = fig.add_subplot(grid[0, 0])
+    error_ax = fig.add_subplot(grid[1, 0], sharex=main)
+    zoom = fig.add_subplot(grid[:, 1])
+    average = f"differentiator, {1e3 * width * dt:.0f} ms moving average"
+    low, high = _zoom_window(result.t, smooth - true)
+    inside = (result.t >= low) & (result.t <= high)
+    for ax, part in ((main, slice(None)), (zoom, inside)):
+        t = result.t[part]
+        if step is not None:
+            band = f"+/- one encoder count per sample, q/dt = {step:.3g} deg/s"
+            ax.axhspan(-step, step, color="tab:orange", alpha=0.12, lw=0, label=band)
+        ax.plot(t, raw[part], color="tab:red", lw=0.6, alpha=0.3,
+                label="differentiator theta_h_dot_hat (each sample)")  # fmt: skip
+        ax.plot(t, smooth[part], color="tab:red", lw=1.2, label=average)
+        ax.plot(t, true[part], color="k", lw=1.0, ls="--", label="true rate theta_h_dot")
+        ax.set_ylabel("handlebar rate [deg/s]")
+        ax.grid(True, alpha=0.3)
+    _legend_above(main, columns=2)
+    zoom.set_title(f"zoom {low:.2f}-{high:.2f} s", fontsize=9)
+    zoom.set_xlabel("time [s]")
+    error_ax.plot(result.t, raw - true, color="tab:purple", lw=0.5, alpha=0.3,
+                  label="each sample")  # fmt: skip
+    error_ax.plot(result.t, smooth - true, color="tab:purple", lw=1.0, label="averaged")
+    if step is not None:
+        for sign in (-1.0, 1.0):
+            error_ax.axhline(sign * step, color="tab:orange", lw=0.8, ls=":")
+    error_ax.set_ylabel("estimate - true [deg/s]")
+    error_ax.set_xlabel("time [s]")
+    error_ax.grid(True, alpha=0.3)
+    error_ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7, frameon=False)
+    for ax in (main, error_ax):
+        ax.axvspan(low, high, color="0.85", zorder=0)
+    if encoder is not None and step is not None:
+        fig.supxlabel(
+            f"The encoder's step q is {encoder[0]:.3g} deg: one count between two "
+            f"measurements {1e3 / encoder[1]:.3g} ms apart reads as {step:.3g} deg/s, the "
+            "steps of the differentiator's output while the handlebar creeps\n(the shaded "
+            "band); "
+            "averaged, the output follows the true rate.",
+            fontsize=8, color="0.3",
+        )  # fmt: skip
+    fig.suptitle(_title(result, title))
+    return _finish(fig)
+
+
+def _moving_average(values: NDArray[np.float64], width: int) -> NDArray[np.float64]:
+    """Centred moving average over ``width`` samples, the ends averaged over what there is."""
+    kernel = np.ones(width)
+    total = np.convolve(values, kernel, mode="same")
+    count = np.convolve(np.ones_like(values), kernel, mode="same")
+    out: NDArray[np.float64] = total / count
+    return out
+
+
+def _encoder(result: SimResult) -> tuple[float, float] | None:
+    """The run's encoder step q [deg] and measurement rate [Hz], when its scenario says."""
+    scenario = result.metadata.get("scenario")
+    if not isinstance(scenario, dict):
+        return None
+    measurement, rates = scenario.get("measurement"), scenario.get("rates")
+    if not isinstance(measurement, dict) or not isinstance(rates, dict):
+        return None
+    bits, rate = measurement.get("encoder_bits"), rates.get("measurement")
+    if not isinstance(bits, int) or bits <= 0 or not isinstance(rate, int | float) or rate <= 0:
+        return None
+    return float(np.rad2deg(2.0 * np.pi / 2**bits)), float(rate)
 
 
 def plot_motor_torque(
@@ -388,11 +483,12 @@ def plot_comparison(
     *,
     title: str = "Comparison of runs",
 ) -> Figure:
-    """Overlay several runs: one panel per pair of signals, one colour per run.
+    """Several runs side by side: one panel per run and pair of signals.
 
     For Figs. 11 and 14 of Nehaoua, Arioui & Mammar (2012): nominal against perturbed plant,
-    friction compensation on and off. In each panel the first signal of the pair is drawn
-    solid and the second dashed, in the colour of the run.
+    friction compensation on and off. One column per run and one row per pair, the rows
+    sharing their y axis: in each panel the first signal of the pair (the truth) in black
+    over the second (its estimate or reference) in the run's colour, the legend beside.
 
     Parameters
     ----------
@@ -427,22 +523,31 @@ def plot_comparison(
             )
         if not any(first in r or second in r for r in results.values()):
             raise MotosimError(f"plot_comparison: no run has {first} or {second}")
-    fig = Figure(figsize=(9.0, 2.6 * len(signal_pairs) + 0.8), layout="constrained")
-    axes = fig.subplots(len(signal_pairs), 1, sharex=True, squeeze=False)[:, 0]
-    colours = [f"C{i % 10}" for i in range(len(results))]
-    for ax, (first, second) in zip(axes, signal_pairs, strict=True):
+    rows, columns = len(signal_pairs), len(results)
+    fig = Figure(figsize=(4.6 * columns + 1.0, 2.6 * rows + 1.0), layout="constrained")
+    axes = fig.subplots(rows, columns, sharex=True, sharey="row", squeeze=False)
+    colours = [f"C{i % 10}" for i in range(columns)]
+    for row, (first, second) in enumerate(signal_pairs):
         _, unit = _display(first, np.zeros(1))
-        for colour, (label, result) in zip(colours, results.items(), strict=True):
-            for name, style in ((first, "-"), (second, "--")):
-                if name in result:
-                    values, _ = _display(name, result[name])
-                    ax.plot(
-                        result.t, values, color=colour, ls=style, lw=1.0, label=f"{label}: {name}"
-                    )
-        ax.set_ylabel(f"{first}, {second} [{unit}]")
-        ax.grid(True, alpha=0.3)
-        _legend_above(ax, columns=4, fontsize=7)
-    axes[-1].set_xlabel("time [s]")
+        for column, (label, result) in enumerate(results.items()):
+            ax = axes[row, column]
+            # the second (the estimate, the reference) in the run's colour under the first
+            # (the truth, the handlebar) in black: two series a panel, each told by colour
+            if second in result:
+                values, _ = _display(second, result[second])
+                ax.plot(result.t, values, color=colours[column], lw=0.9,
+                        label=_LABELS.get(second, second))  # fmt: skip
+            if first in result:
+                values, _ = _display(first, result[first])
+                ax.plot(result.t, values, color="k", lw=1.1, label=_LABELS.get(first, first))
+            ax.grid(True, alpha=0.3)
+            if row == 0:  # above the legend, which is above the data
+                ax.set_title(label, fontsize=9, pad=16)
+            if column == 0:
+                ax.set_ylabel(f"{_QUANTITIES.get(first, first)} [{unit}]")
+            _legend_above(ax, columns=2, fontsize=7)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
     fig.suptitle(title)
     return _finish(fig)
 
@@ -482,7 +587,7 @@ def plot_spectrum(
         ax.axvline(BUZZ_CUTOFF, color="0.5", ls=":", lw=1.0)
         ax.set_xlim(0.0, min(50.0, 0.5 / dt))
         ax.set_ylabel(f"{name} amplitude [{unit}]")
-        ax.legend(loc="upper right", fontsize="small")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
         ax.grid(True, which="both", alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]")
     fig.suptitle(_title(result, title))
@@ -510,7 +615,7 @@ def plot_feel(feel: Any, *, speed: float) -> Figure:
     mag.set_ylabel("magnitude [dB rad/(N m)]")
     phase.set_ylabel("phase [deg]")
     phase.set_xlabel("frequency [Hz]")
-    mag.legend(loc="lower left", fontsize="small")
+    mag.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
     for ax in (mag, phase):
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(f"Rendered steering feel at {speed:g} m/s")

@@ -53,7 +53,7 @@ def plot_perception(run: CueingRun, *, thresholds: tuple[float, ...], title: str
             loc="left",
         )
         ax.grid(alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize=8)
+    axes[0].legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=8, frameon=False)
     axes[-1].set_xlabel("t [s]")
     if title:
         fig.suptitle(title)
@@ -89,7 +89,7 @@ def plot_commands(run: CueingRun, *, limits: tuple[float, float, float], title: 
     axes[0].plot(t, run.commands["phi_vis"] * deg, color="tab:blue", lw=1.0, label="phi_vis")
     axes[1].plot(t, run.vehicle["theta"] * deg, color="k", lw=0.8, label="motorcycle pitch")
     for ax in axes[:2]:
-        ax.legend(loc="upper right", fontsize=8)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=8, frameon=False)
     axes[-1].set_xlabel("t [s]")
     if title:
         fig.suptitle(title)

@@ -38,10 +38,10 @@ def plot_torque_estimates(
     for ax, (label, run) in zip(axes, runs.items(), strict=True):
         ax.plot(run.t, run.tau_r, color="k", lw=1.0, label="tau_r")
         ax.plot(run.t, run.tau_r_hat, color="tab:red", lw=1.0, ls="--", label="estimate")
-        ax.set_ylabel("[N m]")
+        ax.set_ylabel("rider torque [N m]")
         ax.set_title(label, fontsize=9)
         ax.grid(True, alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize=8)
+    axes[0].legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=8, frameon=False)
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(title)
     return fig

@@ -59,24 +59,28 @@ def plot_modes(table: ModeTable, *, title: str = "") -> Figure:
         for lo, hi in _unstable_spans(v, unstable):
             for ax in (ax_re, ax_f):
                 ax.axvspan(lo, hi, color=_COLOURS[name], alpha=0.12, lw=0)
-            ax_re.annotate(
+            # in a band above every curve (the axis' top fifth, kept free below), not on the
+            # zero line the unstable mode's curve crosses
+            ax_re.text(
+                (lo + hi) / 2,
+                0.97,
                 f"{name} unstable",
-                xy=((lo + hi) / 2, 0),
-                xytext=(0, 6),
-                textcoords="offset points",
+                transform=ax_re.get_xaxis_transform(),
                 ha="center",
+                va="top",
                 fontsize=8,
                 color=_COLOURS[name],
             )
     lowest = min(float(np.min(table.mode(n).real)) for n in MODE_NAMES)
     highest = max(float(np.max(table.mode(n).real)) for n in MODE_NAMES)
-    ax_re.set_ylim(min(1.25 * lowest, -1.0), max(1.25 * highest, 1.0))
+    bottom, top = min(1.25 * lowest, -1.0), max(1.25 * highest, 1.0)
+    ax_re.set_ylim(bottom, top + 0.15 * (top - bottom))
     ax_re.axhline(0.0, color="k", lw=0.8)
-    ax_re.set_ylabel("real part [1/s]")
-    ax_re.legend(loc="lower left", fontsize=8)
-    ax_f.set_ylabel("frequency [Hz]")
+    ax_re.set_ylabel("real part of the eigenvalue [1/s]")
+    ax_f.set_ylabel("mode frequency [Hz]")
     ax_f.set_xlabel("forward speed [m/s]")
-    ax_f.legend(loc="center right", fontsize=8)
+    for ax in (ax_re, ax_f):  # beside the axes, off the curves
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     for ax in (ax_re, ax_f):
         ax.grid(True, alpha=0.3)
     fig.suptitle(title or "Sharp (1971) motorcycle: modes against speed (shaded: unstable)")

@@ -10,10 +10,9 @@ import base64
 import html
 import io
 import json
-import math
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -27,6 +26,7 @@ from motosim.plotting.closed_loop import (
     plot_torque,
     plot_tracking,
 )
+from motosim.report.units import METRICS, shown
 from motosim.sim.metrics import run_metrics
 
 __all__ = ["build_report", "metrics"]
@@ -34,35 +34,6 @@ __all__ = ["build_report", "metrics"]
 _REPORT_NAME = "report.html"
 
 
-class _Metric(NamedTuple):
-    label: str
-    unit: str
-    scale: float  # display value = scale * stored SI value
-    display_unit: str
-
-
-_METRICS: dict[str, _Metric] = {
-    "duration": _Metric("duration", "s", 1.0, "s"),
-    "samples": _Metric("recorded instants", "", 1.0, ""),
-    "complete": _Metric("run complete (1) or interrupted (0)", "", 1.0, ""),
-    "rms_tau_r_error": _Metric("RMS of tau_r_hat - tau_r", "N*m", 1.0, "N m"),
-    "rms_tracking_error": _Metric("RMS of theta_h - delta", "rad", 180.0 / math.pi, "deg"),
-    "rms_rate_error": _Metric(
-        "RMS of theta_h_dot_hat - theta_h_dot", "rad/s", 180.0 / math.pi, "deg/s"
-    ),
-    "max_abs_phi": _Metric("max |phi| (roll)", "rad", 180.0 / math.pi, "deg"),
-    "max_abs_e_y": _Metric("max |e_y| (lateral path error)", "m", 1.0, "m"),
-    "peak_steer": _Metric("peak |delta| (steer angle)", "rad", 180.0 / math.pi, "deg"),
-    "tracking_rms_fraction": _Metric("RMS of theta_h - delta / peak steer", "", 100.0, "%"),
-    "tracking_peak_fraction": _Metric("max |theta_h - delta| / peak steer", "", 100.0, "%"),
-    "peak_rider_torque": _Metric("peak |tau_r|", "N*m", 1.0, "N m"),
-    "estimate_rms_fraction": _Metric("RMS of tau_r_hat - tau_r / peak |tau_r|", "", 100.0, "%"),
-    "stick_share": _Metric("time with the handlebar sticking", "", 100.0, "%"),
-    "rms_tau_r_error_moving": _Metric("RMS of tau_r_hat - tau_r outside stick", "N*m", 1.0, "N m"),
-    "buzz_current_p2p": _Metric("current above 3 Hz, last 2 s, peak to peak", "A", 1.0, "A"),
-    "buzz_frequency": _Metric("its strongest frequency", "Hz", 1.0, "Hz"),
-    "saturated_share": _Metric("time at the current limit", "", 100.0, "%"),
-}
 _SAVED_FIGURES = (
     ("perception.png", "Perceived motion, motorcycle against platform (motosim cueing)"),
     ("commands.png", "Platform commands against their limits (motosim cueing)"),
@@ -136,6 +107,47 @@ def _is_scalar(value: Any) -> bool:
     return value is None or isinstance(value, bool | int | float | str)
 
 
+_ESTIMATOR_NAMES = {
+    "walcott_zak": "Walcott-Zak observer (the paper's)",
+    "inverse_dynamics": "inverse dynamics of the handlebar (no observer)",
+    "kalman": "Kalman filter",
+}
+_CONTROLLER_NAMES = {
+    "ours": "ours: H-infinity loop shaping",
+    "paper": "the paper's, eq. (26)",
+    "none": "none (open loop)",
+}
+
+
+def _stack_rows(meta: Mapping[str, Any], scenario: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """The rider-torque estimator and the controller the run used, named.
+
+    The run's metadata holds the observer's and the controller's gains only when they came
+    from a design file (``observer`` is None otherwise: the gains were designed for the
+    scenario's nominal handlebar); which estimator ran is the scenario's ``[estimator]``.
+    """
+    rows = []
+    estimator = scenario.get("estimator")
+    if isinstance(estimator, dict) and "name" in estimator:
+        name = str(estimator["name"])
+        source = (
+            "gains from the scenario's design file"
+            if isinstance(meta.get("observer"), dict)
+            else "designed for the nominal handlebar at the run's rate"
+        )
+        rows.append(("observer", f"{_ESTIMATOR_NAMES.get(name, name)}; {source}"))
+    controller = scenario.get("controller")
+    if isinstance(controller, dict) and "kind" in controller:
+        kind = str(controller["kind"])
+        text = _CONTROLLER_NAMES.get(kind, kind)
+        if kind == "ours" and "order" in controller:
+            text += f", order {controller['order']}"
+        if controller.get("design"):
+            text += f"; design file {controller['design']}"
+        rows.append(("controller", text))
+    return rows
+
+
 def _run_rows(result: SimResult, folder: Path) -> list[tuple[str, str]]:
     """Key facts of the run: folder, scenario, seed, version, rates, then scalar metadata."""
     meta = result.metadata
@@ -152,7 +164,8 @@ def _run_rows(result: SimResult, folder: Path) -> list[tuple[str, str]]:
     if result.t.size > 1:
         step = float(np.median(np.diff(result.t)))
         rows.append(("recording rate (median)", f"{1.0 / step:.6g} Hz (dt = {step:.6g} s)"))
-    shown = {"scenario", "seed", "version"}
+    rows += _stack_rows(meta, scenario_map)
+    shown = {"scenario", "seed", "version", "observer", "controller"}
     rows += [(k, _format(v)) for k, v in meta.items() if k not in shown and _is_scalar(v)]
     rows += [
         (f"scenario.{k}", _format(v))
@@ -168,9 +181,10 @@ def _metric_rows(result: SimResult) -> tuple[list[tuple[str, str, str]], str]:
     values.update(result.summary)
     rows = []
     for key, value in values.items():
-        info = _METRICS.get(key)
+        info = METRICS.get(key)
         if info is not None and isinstance(value, int | float) and not isinstance(value, bool):
-            rows.append((info.label, f"{info.scale * value:.6g}", info.display_unit))
+            text, unit = shown(key, value)
+            rows.append((info.label, text, unit))
         else:
             rows.append((key, _format(value), ""))
     if result.summary:

@@ -13,6 +13,8 @@ One Starlette application (https://www.starlette.io) per feed, served by uvicorn
   (answered ``{"pong": ms, "server": s}``, the server's monotonic clock) and
   ``{"frames": [[sample, drawn], ...]}``: for each animation frame, the loop-clock time of
   the sample it drew and when it drew it, on the same clock [s];
+- ``GET /api/replay`` a replay's whole run, its dashboard signals (at most 4000 rows), which
+  the dashboard of a replay plots at once, a cursor at the replay time;
 - ``GET /api/lag`` those frames summarised: the view's lag behind the loop and its frame rate;
 - ``WS /ws/signals`` new rows of the dashboard's signals at ``signal_rate`` (30 Hz), JSON;
 - ``POST /api/control`` arm, stop (and for a replay: seek, rate), only with the run's token
@@ -67,6 +69,7 @@ steer and handlebar, roll, speed, the real-time loop's timing and safety codes
 
 _POSE: Final = ("t", "x", "y", "psi", "phi", "delta", "v_x", "theta_h")
 _DASHBOARD_RATE: Final = 200.0  # Hz, rows per second kept for the plots
+_REPLAY_POINTS: Final = 4000  # rows of a whole replayed run sent to the dashboard
 _PEAKS: Final = ("period", "compute", "wake")  # decimated by their maximum, not a sample
 _UNITS: Final = {"t_clock": "s", "wake": "s", "compute": "s", "period": "s", "missed": "1",
                  "state": "1", "fault": "1"}  # fmt: skip
@@ -276,6 +279,16 @@ def create_app(
             }
         )
 
+    def replay_rows(request: Request) -> Response:
+        """The whole run's dashboard signals, at most ``_REPLAY_POINTS`` rows (a replay)."""
+        if not isinstance(feed, ReplayFeed):
+            return JSONResponse({"error": "not a replay: the rows come over /ws/signals"},
+                                status_code=404)  # fmt: skip
+        rows = feed.rows()[:, dash_cols]
+        stride = max(1, -(-rows.shape[0] // _REPLAY_POINTS))
+        rows = _decimate(rows, 0, stride, peak_cols)
+        return JSONResponse({"names": dash_names, "rows": [_finite(r) for r in rows]})
+
     def lag(request: Request) -> Response:
         try:
             window = float(request.query_params.get("window", "10"))
@@ -412,6 +425,7 @@ def create_app(
             Route("/api/info", info),
             Route("/api/control", control, methods=["POST"]),
             Route("/api/lag", lag),
+            Route("/api/replay", replay_rows),
             WebSocketRoute("/ws/pose", pose),
             WebSocketRoute("/ws/signals", signals),
             Mount("/static", StaticFiles(directory=STATIC), name="static"),

@@ -273,6 +273,12 @@ class ReplayFeed:
         self._clock.since = self._clock.now()
         self._clock.rate = float(rate)
 
+    def rows(self) -> Array:
+        """Every row of the run, ``names`` its columns (the dashboard of a replay plots them
+        all, a cursor at the replay time)."""
+        out: Array = self._table.copy()
+        return out
+
     # Feed -------------------------------------------------------------------------------
     def read_since(self, cursor: int) -> tuple[Array, int]:
         """Rows from ``cursor`` to the replay time (from the start again if ``cursor`` is ahead)."""

@@ -1,10 +1,13 @@
-// The dashboard: scrolling plots of /ws/signals on plain canvases, the run's state, the
-// safety stage's state and fault, the loop's timing, and the arm/stop buttons (with the token).
+// The dashboard: plots of the run's signals on plain canvases, the run's state, the safety
+// stage's state and fault, the loop's timing, and its controls (with the token). A live run
+// scrolls the last WINDOW seconds of /ws/signals and has Arm and Stop; a replay plots the whole
+// recorded run at once (GET /api/replay), a cursor at the replay time, and has Play/Pause and
+// a position slider instead (a recording cannot be armed).
 const WINDOW = 10;  // s of history shown
 const token = new URLSearchParams(location.search).get('token') || '';
 const $ = (id) => document.getElementById(id);
 const stats = { messages: 0, rows: 0, draws: 0, state: null, lastControl: null, panels: {},
-  safety: null, faultTime: null };
+  safety: null, faultTime: null, replay: false, cursor: null };
 window.motosimDash = stats;
 for (const a of document.querySelectorAll('a')) a.href += location.search;
 
@@ -54,11 +57,34 @@ const clear = () => {
   t = []; columns = {}; for (const n of info.dashboard) columns[n] = []; dirty = true;
 };
 clear();
+const replay = info.replay === true;
+stats.replay = replay;
+let cursor = null;  // the replay time on the recording's clock [s]
+if (replay) {
+  $('live-controls').hidden = true;
+  $('replay-controls').hidden = false;
+  const whole = await (await fetch('/api/replay')).json();
+  const ti = whole.names.indexOf('t');
+  for (const row of whole.rows) {
+    t.push(row[ti]);
+    whole.names.forEach((n, j) => columns[n].push(row[j]));
+  }
+  stats.rows = whole.rows.length;
+  if (info.status && info.status.duration) $('position').max = info.status.duration;
+}
+let dragging = false;
 
 function showStatus(status) {
   stats.state = status.state;
   $('state').textContent = status.state;
   $('clock').textContent = (status.t || 0).toFixed(1);
+  if (replay) {
+    const now = (t.length ? t[0] : 0) + (status.t || 0);
+    if (now !== cursor) { cursor = now; stats.cursor = now; dirty = true; }
+    $('play').textContent = status.state === 'playing' ? 'Pause' : 'Play';
+    if (!dragging) $('position').value = status.t || 0;
+    $('position-text').textContent = `${(status.t || 0).toFixed(1)} of ${(status.duration || 0).toFixed(1)} s`;
+  }
   if (status.safety) {
     const s = status.safety;
     const when = stats.faultTime == null ? '' : ` at t = ${stats.faultTime.toFixed(3)} s`;
@@ -77,6 +103,11 @@ function connect() {
   const ws = new WebSocket(`ws://${location.host}/ws/signals`);
   ws.onmessage = (event) => {
     const m = JSON.parse(event.data);
+    if (replay) {  // the whole run is plotted: only the replay time moves
+      stats.messages++;
+      showStatus(m.status);
+      return;
+    }
     if (m.start_over) clear();
     const ti = m.names.indexOf('t'), fi = m.names.indexOf('fault');
     for (const row of m.rows) {
@@ -109,7 +140,7 @@ function draw(p) {
     return;
   }
   if (t.length < 2) return;
-  const t1 = t[t.length - 1], t0 = t1 - WINDOW;
+  const t1 = t[t.length - 1], t0 = replay ? t[0] : t1 - WINDOW, span = t1 - t0 || 1;
   let lo = Infinity, hi = -Infinity;
   for (const [n, k] of p.lines) for (const v of columns[n]) if (v !== null) {
     lo = Math.min(lo, v * k); hi = Math.max(hi, v * k);
@@ -117,7 +148,7 @@ function draw(p) {
   if (!isFinite(lo)) return;
   if (hi - lo < 1e-9) { lo -= 1; hi += 1; }
   const pad = 0.08 * (hi - lo); lo -= pad; hi += pad;
-  const X = (v) => left + ((v - t0) / WINDOW) * (w - left - 6);
+  const X = (v) => left + ((v - t0) / span) * (w - left - 6);
   const Y = (v) => top + (1 - (v - lo) / (hi - lo)) * (h - top - bottom);
   g.strokeStyle = '#ddd'; g.beginPath();
   for (const v of [lo + pad, (lo + hi) / 2, hi - pad]) { g.moveTo(left, Y(v)); g.lineTo(w - 6, Y(v)); }
@@ -144,8 +175,12 @@ function draw(p) {
     g.stroke();
     g.fillStyle = color; g.fillText(n, w - 90 - 70 * (p.lines.length - 1 - j), 13);
   });
+  if (replay && cursor !== null) {  // where the replay is
+    g.strokeStyle = '#000'; g.lineWidth = 1; g.beginPath();
+    g.moveTo(X(cursor), top); g.lineTo(X(cursor), h - bottom); g.stroke();
+  }
   stats.panels[p.id].points = points;
-  stats.panels[p.id].lastT = t1;
+  stats.panels[p.id].lastT = replay ? cursor : t1;
 }
 
 // redraw only when rows came in (the signals arrive at 30 Hz) or the page was resized
@@ -156,14 +191,21 @@ function frame() {
 }
 requestAnimationFrame(frame);
 
-async function command(action) {
+async function command(action, extra = {}) {
   const response = await fetch('/api/control', {
     method: 'POST', headers: { 'Content-Type': 'application/json', 'X-Motosim-Token': token },
-    body: JSON.stringify({ action }),
+    body: JSON.stringify({ action, ...extra }),
   });
   const answer = await response.json();
   stats.lastControl = { action, status: response.status, answer };
   $('message').textContent = response.ok ? `${action}: ${answer.status.state}` : answer.error;
+  if (response.ok) showStatus(answer.status);
 }
 $('arm').onclick = () => command('arm');
 $('stop').onclick = () => command('stop');
+$('play').onclick = () => command(stats.state === 'playing' ? 'stop' : 'arm');
+$('position').oninput = () => { dragging = true; };
+$('position').onchange = async () => {
+  await command('seek', { t: Number($('position').value) });
+  dragging = false;
+};

@@ -60,7 +60,7 @@ scene.background = sky;
 // not show, and the road's chunks farther away (or behind the eye) are culled whole.
 const FAR = 600;
 scene.fog = new THREE.Fog(sky, 120, FAR);
-const camera = new THREE.PerspectiveCamera(70, 1, 0.3, FAR);
+const camera = new THREE.PerspectiveCamera(70, 1, 0.1, FAR);
 camera.rotation.order = 'YXZ';
 Object.assign(stats, { camera, renderer, scene });
 
@@ -188,6 +188,50 @@ for (const { pos, col } of objects) {
   if (pos.length) scene.add(new THREE.Mesh(coloured(pos, col), objectMaterial));
 }
 
+// --- the motorcycle's cockpit: tank, fork, headlight shell, instruments and the handlebar --
+// In the camera's frame (X right, Y up, -Z ahead), so it stays below the eye. The cockpit
+// leans with the motorcycle: when the horizon does not roll (the toggle off) it rolls by phi
+// in the view instead. The handlebar turns by theta_h about the steering axis, raked back by
+// RAKE; theta_h and phi positive steer and lean to the right (motosim's axes: z down).
+const RAKE = 0.45;  // rad, steering axis from the vertical (about 26 deg)
+const cockpit = new THREE.Group();
+const steering = new THREE.Group();  // at the steering head, its Y axis the steering axis
+const bars = new THREE.Group();      // turns by theta_h about steering's Y axis
+{
+  const mesh = (geometry, color) => new THREE.Mesh(geometry,
+    new THREE.MeshBasicMaterial({ color: srgb(color) }));
+  const add = (parent, object, x, y, z, rx = 0, ry = 0, rz = 0) => {
+    object.position.set(x, y, z); object.rotation.set(rx, ry, rz); parent.add(object);
+    return object;
+  };
+  add(cockpit, mesh(new THREE.BoxGeometry(0.36, 0.16, 0.42), 0xb3202a), 0, -0.46, -0.44, 0.35);  // tank
+  add(cockpit, mesh(new THREE.BoxGeometry(0.24, 0.05, 0.36), 0xd8343f), 0, -0.37, -0.46, 0.35);  // its top
+  add(steering, mesh(new THREE.BoxGeometry(0.22, 0.08, 0.08), 0x1c1c1c), 0, 0.07, -0.04);  // instruments
+  add(steering, mesh(new THREE.BoxGeometry(0.08, 0.055, 0.01), 0xe8e8d0), -0.05, 0.075, 0.0);  // dials
+  add(steering, mesh(new THREE.BoxGeometry(0.08, 0.055, 0.01), 0xe8e8d0), 0.05, 0.075, 0.0);
+  add(steering, mesh(new THREE.CylinderGeometry(0.13, 0.1, 0.16, 10), 0x2a2a2a),
+    0, -0.05, -0.1, Math.PI / 2);  // headlight shell
+  for (const side of [-1, 1]) {  // fork tubes, clamped below the bar
+    add(steering, mesh(new THREE.CylinderGeometry(0.022, 0.022, 0.5, 8), 0x9a9a9a),
+      side * 0.12, -0.25, 0.0);
+  }
+  add(bars, mesh(new THREE.CylinderGeometry(0.013, 0.013, 0.62, 8), 0xc8c8c8),
+    0, 0, 0, 0, 0, Math.PI / 2);  // the bar across
+  for (const side of [-1, 1]) {
+    add(bars, mesh(new THREE.CylinderGeometry(0.02, 0.02, 0.13, 8), 0x111111),
+      side * 0.29, 0, 0, 0, 0, Math.PI / 2);  // grips
+    add(bars, mesh(new THREE.BoxGeometry(0.08, 0.015, 0.02), 0x444444),
+      side * 0.2, 0.005, 0.06, 0, side * 0.3, 0);  // levers
+  }
+  add(bars, mesh(new THREE.BoxGeometry(0.12, 0.04, 0.06), 0x333333), 0, 0, 0);  // top clamp
+  steering.add(bars);
+  add(cockpit, steering, 0, -0.34, -0.78, -RAKE);
+  for (const part of [cockpit, steering, bars]) part.traverse((o) => { o.renderOrder = 1; });
+  camera.add(cockpit);
+  scene.add(camera);
+  stats.cockpit = cockpit; stats.bars = bars;
+}
+
 // --- pose, and the lag of each frame behind the loop --------------------------------------
 // A pose stamped with the loop's clock (`clock`: when the loop wrote it, the machine's
 // monotonic clock [s]) lets the page measure how far behind the loop each frame is: the
@@ -252,6 +296,8 @@ function aim() {
   const right = EYE * Math.sin(phi), up = EYE * Math.cos(phi);
   camera.position.set(pose.x - right * Math.sin(psi), up, pose.y + right * Math.cos(psi));
   camera.rotation.set(-0.04, -psi - Math.PI / 2, -roll);
+  cockpit.rotation.z = -(phi - roll);  // the motorcycle's lean that the view does not show
+  bars.rotation.y = -(pose.theta_h || 0);
 }
 
 function resize() {
@@ -278,7 +324,7 @@ let fpsFrames = 0, fpsSince = performance.now();
 let shownKey = '';
 function frame(now) {
   readPose(); resize();
-  const key = `${pose.t} ${pose.x} ${pose.y} ${pose.psi} ${pose.phi} ${rollToggle.checked} ${canvas.width} ${canvas.height}`;
+  const key = `${pose.t} ${pose.x} ${pose.y} ${pose.psi} ${pose.phi} ${pose.theta_h} ${rollToggle.checked} ${canvas.width} ${canvas.height}`;
   if (key !== shownKey) {
     shownKey = key;
     aim();
