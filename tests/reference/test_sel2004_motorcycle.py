@@ -4,8 +4,7 @@ scripts/sel2004_bodies.py reduces the paper's body table (taken from a public tr
 see the script); these checks re-derive its arithmetic independently: the total mass and the
 whole machine's mass centre and inertia are the same from the seven bodies of the table and
 from the four of the reduction, the trail is the manufacturer's, and the committed parameter
-file is what the script writes. The file stays in tests/data until the multibody parameter
-kind exists (``[set]`` keys front_tyre and rear_tyre, model "multibody").
+file is what the script writes and loads as the packaged multibody set with its two tyres.
 """
 
 import importlib.util
@@ -17,7 +16,7 @@ from types import ModuleType
 import pytest
 
 ROOT = Path(__file__).parents[2]
-DATA = ROOT / "tests" / "data" / "sel2004_motorcycle.toml"
+DATA = ROOT / "src" / "motosim" / "params" / "data" / "sel2004_motorcycle.toml"
 
 
 @pytest.fixture(scope="module")
@@ -103,3 +102,17 @@ def test_inertias_are_physical() -> None:
         Ixx, Iyy, Izz, Ixz = (p[f"I_{body}{a}"] for a in ("xx", "yy", "zz", "xz"))
         assert Ixx * Izz > Ixz**2  # positive definite in the x-z plane
         assert Ixx + Izz >= Iyy - 1e-9 and Iyy + Izz >= Ixx and Ixx + Iyy >= Izz  # triangle
+
+
+def test_the_packaged_set_loads_with_its_tyres() -> None:
+    from motosim.params import load_parameter_set, load_parameters
+
+    pset = load_parameter_set("sel2004_motorcycle")
+    assert pset.model == "multibody"
+    assert pset.tyres == {
+        "front_tyre": "sel2004_front_120_70_zr17",
+        "rear_tyre": "sel2004_rear_180_55_zr17",
+    }
+    for name in pset.tyres.values():
+        load_parameters(name, "tyre")
+    assert pset.values.mass == pytest.approx(250.65, abs=0.01)  # the seven bodies' total
