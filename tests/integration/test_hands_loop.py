@@ -145,3 +145,30 @@ def test_torque_sensor_tracks_no_worse_than_the_observer() -> None:
         if name == "sensor":
             np.testing.assert_array_equal(out["tau_r_hat"], out["tau_r"])
     assert rms["sensor"] <= rms["observer"]
+
+
+def test_estimate_reads_a_logs_measured_torque(tmp_path: Path) -> None:
+    """``motosim estimate --estimator torque_sensor`` on a log with ``tau_r_meas`` [N*m]:
+    the estimate is the measured torque; without the column the log is refused."""
+    import sys
+
+    from motosim.cli.main import main
+    from motosim.io import read_log, write_log
+    from motosim.timeseries import TimeSeries
+
+    t = np.arange(500) * 1e-3
+    tau = 5.0 * np.sin(2 * np.pi * 2.0 * t)
+    columns = np.column_stack([0.01 * np.sin(t), np.zeros_like(t), tau])
+    log = tmp_path / "log.csv"
+    write_log(log, TimeSeries(t, columns, ("theta_h", "i_m", "tau_r_meas")))
+    out = tmp_path / "est.csv"
+    with pytest.raises(SystemExit) as info:
+        sys.exit(main(["estimate", str(log), "--estimator", "torque_sensor", "--out", str(out)]))
+    assert info.value.code in (0, None)
+    np.testing.assert_allclose(read_log(out, required=("tau_r_hat",))["tau_r_hat"], tau)
+    bare = tmp_path / "bare.csv"
+    write_log(bare, TimeSeries(t, columns[:, :2], ("theta_h", "i_m")))
+    with pytest.raises(SystemExit) as info:
+        sys.exit(main(["estimate", str(bare), "--estimator", "torque_sensor", "--out", str(out),
+                       "--overwrite"]))  # fmt: skip
+    assert info.value.code == 2

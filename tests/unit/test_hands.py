@@ -84,3 +84,18 @@ def test_hands_table_round_trips() -> None:
     sc = parse_scenario(doc, origin="x")
     assert isinstance(sc.rider.hands, Hands)
     assert scenario_from_dict(scenario_dict(sc), origin="metadata") == sc
+
+
+def test_estimate_with_a_torque_sensor_passes_it_through() -> None:
+    from motosim.estimation import estimate
+    from motosim.params import load_parameters
+
+    hb = load_parameters("simacom_handlebar", "handlebar")
+    t = np.arange(200) * 1e-3
+    tau = np.cos(7.0 * t)
+    _, out = estimate("torque_sensor", t, np.zeros_like(t), np.zeros_like(t), hb, torque=tau)
+    np.testing.assert_array_equal(out, tau)
+    with pytest.raises(MotosimError, match="needs it"):
+        estimate("torque_sensor", t, np.zeros_like(t), np.zeros_like(t), hb)
+    with pytest.raises(MotosimError, match="for 'torque_sensor' only"):
+        estimate("kalman", t, np.zeros_like(t), np.zeros_like(t), hb, torque=tau)

@@ -187,13 +187,15 @@ def estimate(
     *,
     lipschitz: float = 300.0,
     friction_compensation: bool = True,
+    torque: ArrayLike | None = None,
 ) -> tuple[Array, Array]:
     """Estimate the rider torque from logged, uniformly sampled angle and current.
 
     Parameters
     ----------
     name : str
-        A key of :data:`ESTIMATORS`.
+        A key of :data:`ESTIMATORS`, or :data:`SENSOR_ESTIMATOR` (the torque sensor's
+        ``torque``, as measured).
     t : array_like, shape (n,)
         Uniformly spaced sample times [s], n >= 2.
     theta_h : array_like, shape (n,)
@@ -206,6 +208,9 @@ def estimate(
         L, a bound on |theta_h''| for the differentiator [rad/s^2].
     friction_compensation : bool
         Subtract the nominal dry friction from the estimate (section V.A).
+    torque : array_like, shape (n,), optional
+        The rider's torque measured by a torque sensor [N*m] (a log's ``tau_r_meas``), read
+        by :data:`SENSOR_ESTIMATOR` only, which needs it.
 
     Returns
     -------
@@ -219,8 +224,14 @@ def estimate(
     MotosimError
         On an unknown name, bad shapes, non-finite samples or non-uniform sampling.
     """
-    if name not in ESTIMATORS:
-        raise MotosimError(f"estimator {name!r} is unknown; expected one of {sorted(ESTIMATORS)}")
+    if name not in ESTIMATORS and name != SENSOR_ESTIMATOR:
+        known = [*sorted(ESTIMATORS), SENSOR_ESTIMATOR]
+        raise MotosimError(f"estimator {name!r} is unknown; expected one of {known}")
+    if (name == SENSOR_ESTIMATOR) != (torque is not None):
+        raise MotosimError(
+            f"estimator {name!r} with torque {'given' if torque is not None else 'missing'}; "
+            f"the measured torque is for {SENSOR_ESTIMATOR!r} only, which needs it"
+        )
     tt = np.asarray(t, dtype=float)
     if tt.ndim != 1 or tt.size < 2 or not np.all(np.isfinite(tt)):
         raise MotosimError(f"t has shape {tt.shape}; expected (n,) finite with n >= 2")
@@ -233,15 +244,26 @@ def estimate(
             f"of {dt:g} s; expected a constant rate (within 1 %)"
         )
     arrays = []
-    for label, values in (("theta_h", theta_h), ("i_m", i_m)):
+    named = [("theta_h", theta_h), ("i_m", i_m)]
+    if torque is not None:
+        named.append(("torque", torque))
+    for label, values in named:
         arr = np.asarray(values, dtype=float)
         if arr.shape != tt.shape:
             raise MotosimError(f"{label} has shape {arr.shape}; expected {tt.shape} like t")
         if not np.all(np.isfinite(arr)):
             raise MotosimError(f"{label} has a NaN or infinite sample; expected finite values")
         arrays.append(arr)
-    theta, current = arrays
+    theta, current = arrays[0], arrays[1]
     rate = differentiate(theta, dt, lipschitz)
+    if torque is not None:  # the sensor's kernel, without a low-pass: the torque as measured
+        record, state = torque_sensor_kernel(dt), np.zeros(4)
+        start_kernel(record, state, theta[0], 0.0, current[0])
+        measured = np.array(
+            [step_kernel(record, state, theta[k], rate[k], current[k], arrays[2][k])
+             for k in range(tt.size)]
+        )  # fmt: skip
+        return rate, measured
     stepper = ESTIMATORS[name](hb, dt, friction_compensation=friction_compensation)
     tau = np.empty(tt.size)
     for k in range(tt.size):
