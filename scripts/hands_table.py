@@ -7,7 +7,9 @@ Each scenario (by default the lane change at 20 m/s, the crosswind at 30 m/s and
 obstacle avoidance at 15 m/s) is simulated at each rate (control and measurement; 1 kHz and
 100 Hz by default) with no hands (a pure torque source, the default), with the ``relaxed``
 and the ``firm`` grips of :data:`motosim.sim.hands.GRIPS`, and with the relaxed grip let go
-from ``--off-from`` [s] (6 by default) to the end (``[rider] hands_off``). Printed as a
+from ``--off-from`` [s] (6 by default) to the end (``[rider] hands_off``), and with the
+relaxed grip read by an ideal torque sensor (``[estimator] name = "torque_sensor"``) instead
+of the observer. Printed as a
 Markdown table from :func:`motosim.sim.metrics.run_metrics`: tracking RMS / peak steer,
 estimate RMS / peak rider torque (the rider's torque is the hands' whole torque, active and
 passive), the motor current's content above 3 Hz over the last 2 s (peak to peak, after the
@@ -23,13 +25,14 @@ from pathlib import Path
 
 import numpy as np
 
+from motosim.estimation.registry import SENSOR_ESTIMATOR
 from motosim.io.runs import load_scenario, resolve
 from motosim.sim import RunInputs, simulate
 from motosim.sim.metrics import run_metrics
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ("lane_change_20.toml", "crosswind_30.toml", "obstacle_avoidance_15.toml")
-GRIPS = ("none", "relaxed", "firm", "relaxed, off")
+GRIPS = ("none", "relaxed", "firm", "relaxed, off", "relaxed, sensor")
 
 
 def _inputs(path: Path, rate: float, grip: str, off_from: float) -> RunInputs:
@@ -43,6 +46,9 @@ def _inputs(path: Path, rate: float, grip: str, off_from: float) -> RunInputs:
         if grip.endswith("off"):
             rider = dataclasses.replace(rider, hands_off=((off_from, sc.duration + 1.0),))
         sc = dataclasses.replace(sc, rider=rider)
+        if grip.endswith("sensor"):  # an ideal torque sensor instead of the observer
+            estimator = dataclasses.replace(sc.estimator, name=SENSOR_ESTIMATOR)
+            sc = dataclasses.replace(sc, estimator=estimator)
     return resolve(sc, path.parent)
 
 
