@@ -35,8 +35,8 @@ Array = NDArray[np.float64]
 
 _LIMITS = (("inertia", 1.0, "kg*m^2"), ("damping", 100.0, "N*m*s/rad"),
            ("stiffness", 1000.0, "N*m/rad"))  # fmt: skip
-"""Largest value of each parameter a scenario accepts: ten times the firmest published
-grip's order of magnitude, beyond which a value is a unit slip."""
+"""Largest value of each parameter a scenario accepts, an order of magnitude above the firm
+grip's: beyond, a value is a unit slip."""
 
 
 @dataclass(frozen=True, slots=True)
