@@ -243,7 +243,7 @@ class Case:
         of 1 s of rows), with ``chunk`` as its compiled loop: the rows, the step's times
         [ns] (timed loop only) and the motorcycle's states at the end."""
         data = new_data(self.model)
-        world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
+        world = RigData(np.zeros(3), np.zeros(1, dtype=np.int64))
         reset(self.model, data, 0.0, 0.0)
         limits = np.array((math.inf, -math.inf, math.inf))
         times = np.zeros(self.n, dtype=np.int64)

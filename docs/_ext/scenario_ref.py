@@ -17,6 +17,7 @@ from motosim.rt.config import RealtimeOptions
 from motosim.rt.rig import RigFaults, RigSettings
 from motosim.rt.safety import SafetyLimits
 from motosim.sim import scenario as sc
+from motosim.sim.hands import GRIPS, Hands
 
 # table -> the dataclass whose fields are its keys
 TABLES: dict[str, type] = {
@@ -28,6 +29,9 @@ TABLES: dict[str, type] = {
     "handlebar": sc.Handlebar,
     "estimator": sc.Estimator,
     "controller": sc.Controller,
+    "sensor": sc.Sensor,
+    "sensor.torque": sc.TorqueSensor,
+    "rider.hands": Hands,
     "realtime": RealtimeOptions,
     "realtime.safety": SafetyLimits,
     "realtime.rig": RigSettings,
@@ -82,6 +86,22 @@ DESCRIPTIONS: dict[str, str] = {
     "rider.torque_scale": "The rider torque [N*m] the two errors are weighed against.",
     "rider.preview": "How far ahead the rider reads the path's curvature [s].",
     "rider.max_torque": "The virtual rider's torque limit [N*m] (70: the paper's Remark 3.3).",
+    "rider.hands": (
+        "The arms' passive impedance at the handlebar, added to the active torque of either "
+        "kind: a grip, " + ", ".join(f'`"{g}"`' for g in GRIPS) + " (`motosim.sim.hands.GRIPS`, "
+        "`off`: nobody holds the handlebar), or a table (below). Default none: a pure torque "
+        "source."
+    ),
+    "rider.hands_off": (
+        "Phases `[[t0, t1], ...]` [s] in which nobody holds the handlebar: no active and no "
+        "passive torque."
+    ),
+    # [rider.hands]
+    "rider.hands.inertia": "J_a, the arms' inertia about the steering axis [kg*m^2], 0 to 1.",
+    "rider.hands.damping": "c_a [N*m*s/rad], 0 to 100.",
+    "rider.hands.stiffness": "k_a about `hold` [N*m/rad], 0 to 1000.",
+    "rider.hands.hold": "The handlebar angle the hands hold [rad].",
+    "rider.hands.source": "Where the values come from.",
     # [handlebar]
     "handlebar.true": "Parameter set of the simulated (true) handlebar.",
     "handlebar.nominal": "Parameter set the observer and the controller are designed for.",
@@ -89,7 +109,11 @@ DESCRIPTIONS: dict[str, str] = {
     "handlebar.damping_factor": "Factor on the true handlebar's beta_eq.",
     "handlebar.friction": "Whether the true handlebar has its dry friction beta_s.",
     # [estimator]
-    "estimator.name": 'Rider-torque estimator: `"walcott_zak"`, `"inverse_dynamics"`, `"kalman"`.',
+    "estimator.name": (
+        'Rider-torque estimator: `"walcott_zak"`, `"inverse_dynamics"`, `"kalman"`, or '
+        '`"torque_sensor"` (the torque measured by the sensor of `[sensor] torque`, ideal '
+        "without it)."
+    ),
     "estimator.friction_compensation": "Subtract the nominal dry friction from the estimate.",
     "estimator.stick_projection": (
         "Walcott-Zak observer: while the handlebar sticks, let the dry friction hold what keeps "
@@ -129,6 +153,14 @@ DESCRIPTIONS: dict[str, str] = {
         'low-pass); needs `"rider"` and the Walcott-Zak observer. Default: on with them '
         "from a 1 kHz measurement rate and at the paper's 100 Hz."
     ),
+    # [sensor]
+    "sensor.torque": (
+        "A rider-torque sensor at the grips (the table below), read by `[estimator] name = "
+        '"torque_sensor"`; the paper\'s stack has none.'
+    ),
+    "sensor.torque.noise": "Standard deviation of its white noise [N*m].",
+    "sensor.torque.offset": "Its offset [N*m].",
+    "sensor.torque.low_pass": "Corner of its first-order low-pass [Hz]; 0: none.",
     # [realtime]
     "realtime.status_latency": (
         "The status frames' latency on the bus, from the drive's sample to the frame's "
@@ -258,7 +290,9 @@ def _type(annotation: Any) -> str:
     if origin in (typing.Union, types.UnionType):
         kinds = [a for a in args if a is not type(None)]
         if all(dataclasses.is_dataclass(a) for a in kinds):
-            return "profile" if kinds[0] in sc.PROFILES.values() else "path"
+            if kinds[0] in sc.PROFILES.values():
+                return "profile"
+            return "path" if kinds[0] in sc.PATHS.values() else "table"
         return " or ".join(_type(a) for a in kinds)
     if dataclasses.is_dataclass(annotation):
         return "table"

@@ -21,6 +21,7 @@ SIGNALS: Final[dict[str, Signal]] = {
     # handlebar
     "tau_r": Signal("rider torque on the handlebar", "N*m"),
     "tau_r_hat": Signal("estimated rider torque", "N*m"),
+    "tau_r_meas": Signal("rider torque measured by a torque sensor at the grips", "N*m"),
     "tau_p": Signal("dry-friction torque on the handlebar axis", "N*m"),
     "tau_m": Signal("motor torque at the handlebar, N k_t i_m", "N*m"),
     "theta_h": Signal("handlebar angle", "rad"),

@@ -59,13 +59,14 @@ def test_choices_written_out_in_the_commands_equal_their_sources() -> None:
     from motosim.control.torque_feedback import INTEGRAL_CORNER, MAX_ORDER
     from motosim.cueing import ALGORITHMS
     from motosim.estimation import ESTIMATORS
+    from motosim.estimation.registry import SENSOR_ESTIMATOR
     from motosim.identification import METHODS
     from motosim.identification.output_error import DRIVES
 
     assert cueing.ALGORITHMS == ALGORITHMS
     assert design.MAX_ORDER == MAX_ORDER
     assert design.INTEGRAL_CORNER == INTEGRAL_CORNER
-    assert estimate.ESTIMATORS == tuple(ESTIMATORS)
+    assert estimate.ESTIMATORS == (*ESTIMATORS, SENSOR_ESTIMATOR)
     assert identify.METHODS == METHODS
     assert identify.DRIVES == DRIVES
 

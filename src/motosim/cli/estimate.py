@@ -9,10 +9,11 @@ from motosim.params.checks import check_number
 
 __all__ = ["ESTIMATORS", "register"]
 
-ESTIMATORS = ("walcott_zak", "inverse_dynamics", "kalman")
+ESTIMATORS = ("walcott_zak", "inverse_dynamics", "kalman", "torque_sensor")
 """The choices of ``--estimator``, the default first: the keys of
-:data:`motosim.estimation.ESTIMATORS`, written out so that the parser is built without
-importing SciPy (a unit test checks that they are equal)."""
+:data:`motosim.estimation.ESTIMATORS` and the torque sensor's
+:data:`~motosim.estimation.registry.SENSOR_ESTIMATOR`, written out so that the parser is
+built without importing SciPy (a unit test checks that they are equal)."""
 
 
 def register(sub: Any) -> None:
@@ -25,7 +26,8 @@ def register(sub: Any) -> None:
             "theta_h [rad] and i_m [A] (units in the header or --columns are converted; jittered "
             "or gappy time stamps are resampled); writes t, theta_h_dot_hat "
             "[rad/s] and tau_r_hat [N*m]. A tau_r column in the log, if present, is taken as "
-            "the truth and the error is reported."
+            "the truth and the error is reported. --estimator torque_sensor reads the torque "
+            "sensor's column tau_r_meas [N*m] instead."
         ),
     )
     parser.add_argument("log", help="CSV log")
@@ -80,7 +82,9 @@ def run(args: argparse.Namespace) -> int:
     from motosim.estimation import estimate
     from motosim.timeseries import TimeSeries
 
-    rig = read_rig_log(args.log, required=("theta_h", "i_m"), columns=columns)
+    sensed = args.estimator == "torque_sensor"
+    required = ("theta_h", "i_m", "tau_r_meas") if sensed else ("theta_h", "i_m")
+    rig = read_rig_log(args.log, required=required, columns=columns)
     log = rig.series
     rate, tau_hat = estimate(
         args.estimator,
@@ -90,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
         hb,
         lipschitz=args.lipschitz,
         friction_compensation=args.compensation,
+        torque=log["tau_r_meas"] if sensed else None,
     )
     path = write_log(
         args.out,

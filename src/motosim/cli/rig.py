@@ -154,9 +154,13 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
         )
     link = open_link(args.bus, fast=args.link != "python-can")
     try:
+        from motosim.sim.hands import hands_array, resolve_hands
+
         rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed)
-        )
+            inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed),
+            hands=hands_array(resolve_hands(sc.rider.hands)),
+            hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
+        )  # fmt: skip
         if twin is not None and args.platform_can:
             rig.on_frame = twin.receive_frame
         status_due = [0.0]

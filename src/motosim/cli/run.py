@@ -622,6 +622,12 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
                 f'{args.scenario}: motorcycle input = "true" is a simulation-only reference; '
                 'expected "estimate" for a real-time run'
             )
+        if sc.estimator.name == "torque_sensor":
+            raise MotosimError(
+                f'{args.scenario}: [estimator] name = "torque_sensor" is not read in real time '
+                "yet (the loop does not take the HB_TORQUE frame); expected an estimator of "
+                "the angle and the current"
+            )
         limits = parse_safety(realtime.get("safety"), origin=args.scenario)
         inputs = within_safety(inputs, limits)  # the stack saturates where the clamp cuts
         sc = inputs.scenario

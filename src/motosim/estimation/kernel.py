@@ -12,7 +12,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["INVERSE_DYNAMICS", "KALMAN", "WALCOTT_ZAK", "EstimatorKernel", "pack"]
+__all__ = ["INVERSE_DYNAMICS", "KALMAN", "TORQUE_SENSOR", "WALCOTT_ZAK", "EstimatorKernel", "pack"]
 
 Array = NDArray[np.float64]
 
@@ -22,6 +22,9 @@ INVERSE_DYNAMICS = 1
 """Kind of :func:`motosim.estimation.baselines.inverse_dynamics_step`."""
 KALMAN = 2
 """Kind of :func:`motosim.estimation.baselines.kalman_step`."""
+TORQUE_SENSOR = 3
+"""Kind of :func:`motosim.estimation.registry.torque_sensor_kernel`: a measured torque
+passed through (its low-pass's coefficient in ``p[0]``)."""
 
 
 class EstimatorKernel(NamedTuple):
@@ -33,7 +36,8 @@ class EstimatorKernel(NamedTuple):
     Attributes
     ----------
     kind : int
-        :data:`WALCOTT_ZAK`, :data:`INVERSE_DYNAMICS` or :data:`KALMAN`.
+        :data:`WALCOTT_ZAK`, :data:`INVERSE_DYNAMICS`, :data:`KALMAN` or
+        :data:`TORQUE_SENSOR`.
     Phi : ndarray, shape (4, 4)
         State transition over one sample.
     Gamma : ndarray, shape (4, 4)

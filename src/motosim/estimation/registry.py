@@ -4,8 +4,15 @@
 estimator's default design; :func:`estimate` differentiates the angle with the implicit
 super-twisting differentiator and runs the stepper over the samples. The command line uses
 these names.
+
+A handlebar with a torque sensor needs no estimate from the angle and the current: the
+kind :data:`~motosim.estimation.kernel.TORQUE_SENSOR` (:func:`torque_sensor_kernel`,
+named :data:`SENSOR_ESTIMATOR` in scenarios) passes the measured torque through, with the
+sensor's low-pass if any. It is not in :data:`ESTIMATORS`, whose estimators read only the
+angle and the current.
 """
 
+import math
 from typing import Protocol
 
 import numpy as np
@@ -24,7 +31,13 @@ from motosim.estimation.baselines import (
     kalman_step,
 )
 from motosim.estimation.differentiator import differentiate
-from motosim.estimation.kernel import INVERSE_DYNAMICS, WALCOTT_ZAK, EstimatorKernel
+from motosim.estimation.kernel import (
+    INVERSE_DYNAMICS,
+    TORQUE_SENSOR,
+    WALCOTT_ZAK,
+    EstimatorKernel,
+    pack,
+)
 from motosim.estimation.walcott_zak import (
     ObserverSettings,
     WalcottZakObserver,
@@ -36,12 +49,14 @@ from motosim.params.handlebar import HandlebarParameters
 
 __all__ = [
     "ESTIMATORS",
+    "SENSOR_ESTIMATOR",
     "EstimatorFactory",
     "TorqueEstimator",
     "estimate",
     "kernel",
     "start_kernel",
     "step_kernel",
+    "torque_sensor_kernel",
     "walcott_zak_for_step",
 ]
 
@@ -123,6 +138,46 @@ ESTIMATORS: dict[str, EstimatorFactory] = {
 The first entry is the default (the paper's observer)."""
 
 
+SENSOR_ESTIMATOR = "torque_sensor"
+"""The scenario name of the estimator that reads a torque sensor (:func:`torque_sensor_kernel`)."""
+
+
+def torque_sensor_kernel(dt: float, *, low_pass: float = 0.0) -> EstimatorKernel:
+    """The record of a torque sensor read every ``dt`` [s], through a low-pass.
+
+    The estimate is the measured torque through the first-order low-pass of corner
+    ``low_pass`` [Hz] discretised exactly for a held input, y+ = y + a (u - y) with
+    a = 1 - exp(-2 pi f_c dt) (``p[0]``; a = 1, the torque as measured, for ``low_pass`` 0).
+
+    Parameters
+    ----------
+    dt : float
+        Sampling step [s].
+    low_pass : float
+        Corner frequency [Hz]; 0 for none.
+
+    Returns
+    -------
+    EstimatorKernel
+
+    Raises
+    ------
+    MotosimError
+        On a step or corner out of range.
+
+    Examples
+    --------
+    >>> float(torque_sensor_kernel(1e-3).p[0])
+    1.0
+    """
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise MotosimError(f"dt = {dt!r}; expected a finite step > 0 [s]")
+    if not (math.isfinite(low_pass) and low_pass >= 0.0):
+        raise MotosimError(f"low_pass = {low_pass!r}; expected a finite corner >= 0 [Hz]")
+    a = 1.0 if low_pass == 0.0 else -math.expm1(-2.0 * math.pi * low_pass * dt)
+    return pack(TORQUE_SENSOR, np.zeros((1, 1)), np.zeros((1, 1)), np.zeros(1), [a], dt)
+
+
 def estimate(
     name: str,
     t: ArrayLike,
@@ -132,13 +187,15 @@ def estimate(
     *,
     lipschitz: float = 300.0,
     friction_compensation: bool = True,
+    torque: ArrayLike | None = None,
 ) -> tuple[Array, Array]:
     """Estimate the rider torque from logged, uniformly sampled angle and current.
 
     Parameters
     ----------
     name : str
-        A key of :data:`ESTIMATORS`.
+        A key of :data:`ESTIMATORS`, or :data:`SENSOR_ESTIMATOR` (the torque sensor's
+        ``torque``, as measured).
     t : array_like, shape (n,)
         Uniformly spaced sample times [s], n >= 2.
     theta_h : array_like, shape (n,)
@@ -151,6 +208,9 @@ def estimate(
         L, a bound on |theta_h''| for the differentiator [rad/s^2].
     friction_compensation : bool
         Subtract the nominal dry friction from the estimate (section V.A).
+    torque : array_like, shape (n,), optional
+        The rider's torque measured by a torque sensor [N*m] (a log's ``tau_r_meas``), read
+        by :data:`SENSOR_ESTIMATOR` only, which needs it.
 
     Returns
     -------
@@ -164,8 +224,14 @@ def estimate(
     MotosimError
         On an unknown name, bad shapes, non-finite samples or non-uniform sampling.
     """
-    if name not in ESTIMATORS:
-        raise MotosimError(f"estimator {name!r} is unknown; expected one of {sorted(ESTIMATORS)}")
+    if name not in ESTIMATORS and name != SENSOR_ESTIMATOR:
+        known = [*sorted(ESTIMATORS), SENSOR_ESTIMATOR]
+        raise MotosimError(f"estimator {name!r} is unknown; expected one of {known}")
+    if (name == SENSOR_ESTIMATOR) != (torque is not None):
+        raise MotosimError(
+            f"estimator {name!r} with torque {'given' if torque is not None else 'missing'}; "
+            f"the measured torque is for {SENSOR_ESTIMATOR!r} only, which needs it"
+        )
     tt = np.asarray(t, dtype=float)
     if tt.ndim != 1 or tt.size < 2 or not np.all(np.isfinite(tt)):
         raise MotosimError(f"t has shape {tt.shape}; expected (n,) finite with n >= 2")
@@ -178,15 +244,26 @@ def estimate(
             f"of {dt:g} s; expected a constant rate (within 1 %)"
         )
     arrays = []
-    for label, values in (("theta_h", theta_h), ("i_m", i_m)):
+    named = [("theta_h", theta_h), ("i_m", i_m)]
+    if torque is not None:
+        named.append(("torque", torque))
+    for label, values in named:
         arr = np.asarray(values, dtype=float)
         if arr.shape != tt.shape:
             raise MotosimError(f"{label} has shape {arr.shape}; expected {tt.shape} like t")
         if not np.all(np.isfinite(arr)):
             raise MotosimError(f"{label} has a NaN or infinite sample; expected finite values")
         arrays.append(arr)
-    theta, current = arrays
+    theta, current = arrays[0], arrays[1]
     rate = differentiate(theta, dt, lipschitz)
+    if torque is not None:  # the sensor's kernel, without a low-pass: the torque as measured
+        record, state = torque_sensor_kernel(dt), np.zeros(4)
+        start_kernel(record, state, theta[0], 0.0, current[0])
+        measured = np.array(
+            [step_kernel(record, state, theta[k], rate[k], current[k], arrays[2][k])
+             for k in range(tt.size)]
+        )  # fmt: skip
+        return rate, measured
     stepper = ESTIMATORS[name](hb, dt, friction_compensation=friction_compensation)
     tau = np.empty(tt.size)
     for k in range(tt.size):
@@ -214,7 +291,9 @@ def start_kernel(
     k: EstimatorKernel, state: Array, theta: float, theta_dot: float, current: float
 ) -> None:
     """Start ``state`` (4,) at the first sample, as the estimator of ``k.kind`` does."""
-    if k.kind == WALCOTT_ZAK:
+    if k.kind == TORQUE_SENSOR:
+        state[:] = 0.0
+    elif k.kind == WALCOTT_ZAK:
         wz_start(state, theta, theta_dot, current)
     elif k.kind == INVERSE_DYNAMICS:
         inverse_dynamics_start(state, theta, theta_dot, current)
@@ -224,7 +303,12 @@ def start_kernel(
 
 @njit(cache=True, inline="always")
 def step_kernel(
-    k: EstimatorKernel, state: Array, theta: float, theta_dot: float, current: float
+    k: EstimatorKernel,
+    state: Array,
+    theta: float,
+    theta_dot: float,
+    current: float,
+    torque: float = 0.0,
 ) -> float:
     """One sample of the estimator of ``k.kind``: updates ``state`` (4,), returns tau_r_hat.
 
@@ -238,12 +322,21 @@ def step_kernel(
         Measured angle [rad] and differentiated rate [rad/s].
     current : float
         Motor current held over the coming step [A].
+    torque : float
+        The rider's torque measured by a torque sensor [N*m], read by the kind
+        :data:`~motosim.estimation.kernel.TORQUE_SENSOR` only.
 
     Returns
     -------
     float
         Rider-torque estimate at this sample [N*m].
     """
+    if k.kind == TORQUE_SENSOR:  # the low-pass's output, started at the first sample
+        if state[1] == 0.0 or k.p[0] >= 1.0:  # started, or no low-pass: as measured
+            state[0], state[1] = torque, 1.0
+        else:
+            state[0] += k.p[0] * (torque - state[0])
+        return float(state[0])
     if k.kind == WALCOTT_ZAK:
         new, _ = wz_step(
             state, theta, theta_dot, current, k.Phi[:2, :2], k.Gamma[:2, :], k.gain[:2], k.p

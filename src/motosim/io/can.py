@@ -481,19 +481,23 @@ class HandlebarMapping:
     heartbeat: str = "HB_HEARTBEAT"
     state: str = "STATE"
     fault: str = "FAULT"
+    torque: str = "HB_TORQUE"
+    rider_torque: str = "RIDER_TORQUE"
     counter: str = "COUNTER"
     checksum: str = "CHECKSUM"
 
 
 @dataclass(frozen=True, slots=True)
 class HandlebarCodecs:
-    """The four frames' codecs and the positions of the signals the loop and the rig use."""
+    """The four frames' codecs and the positions of the signals the loop and the rig use;
+    ``torque``, the optional torque sensor's frame (None when the DBC has none)."""
 
     status: FrameCodec
     command: FrameCodec
     estop: FrameCodec
     heartbeat: FrameCodec
     mapping: HandlebarMapping
+    torque: FrameCodec | None = None
 
     def position(self, frame: FrameCodec, part: str) -> int:
         """Where the signal playing ``part`` (a :class:`HandlebarMapping` field) sits."""
@@ -556,16 +560,27 @@ def handlebar_codecs(
     >>> codecs = handlebar_codecs()
     >>> hex(codecs.status.frame_id), codecs.status.names[codecs.position(codecs.status, "angle")]
     ('0x101', 'ANGLE')
+    >>> t = codecs.torque
+    >>> values = np.zeros(len(t.names)); values[codecs.position(t, "rider_torque")] = -12.34
+    >>> out = np.zeros(len(t.names)); t.decode(t.encode(values), out)
+    True
+    >>> round(float(out[codecs.position(t, "rider_torque")]), 2)
+    -12.34
     """
     mapping = mapping or HandlebarMapping()
     db = load_dbc(path)
+    names = {message.name for message in db.messages}
     codecs = HandlebarCodecs(
         status=_codec(db, mapping.status, mapping),
         command=_codec(db, mapping.command, mapping),
         estop=_codec(db, mapping.estop, mapping),
         heartbeat=_codec(db, mapping.heartbeat, mapping),
         mapping=mapping,
+        torque=_codec(db, mapping.torque, mapping) if mapping.torque in names else None,
     )
+    if codecs.torque is not None:
+        for part in ("rider_torque", "counter", "checksum"):
+            codecs.position(codecs.torque, part)
     for frame, parts in (
         (codecs.status, ("angle", "current", "enabled", "drive_fault", "counter", "checksum")),
         (codecs.command, ("current_command", "enable", "counter", "checksum")),

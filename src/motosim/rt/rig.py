@@ -45,6 +45,7 @@ from motosim.rt.run import FrameLink
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
+from motosim.sim.hands import is_held
 from motosim.sim.rider import rider_torque
 
 __all__ = ["LockstepLink", "RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
@@ -207,19 +208,35 @@ def _plant_steps(
     a_i: float,
     max_i: float,
     h: float,
+    hands: Array,
+    hands_off: Array,
+    t_rider: float,
 ) -> None:
     """Advance [theta, omega, i_m] by ``n`` sub-steps of ``h`` [s] in place.
 
     The current follows its command with ``i += (i_cmd - i) a_i`` (``a_i = 1 - exp(-h/T)``),
     limited to ``max_i``; the rider's torque is ``tau_r[k0 + k]`` (held at its last value).
+    ``hands`` [J_a, c_a, k_a, theta_hold] (:mod:`motosim.sim.hands`; zeros: none) while the
+    rider holds the handlebar (``t_rider`` >= 0, the rider's time at the first sub-step
+    [s], outside the phases ``hands_off``, where no rider torque acts): the arms' inertia
+    and damping add to the handlebar's, their spring is a torque.
     """
     theta, omega, i = x[0], x[1], x[2]
     last = tau_r.size - 1
+    J_a, c_a, k_a, hold = hands[0], hands[1], hands[2], hands[3]
+    arms = J_a > 0.0 or c_a > 0.0 or k_a > 0.0
     for k in range(n):
         i += (i_cmd - i) * a_i
         i = min(max(i, -max_i), max_i)
-        torque = tau_r[min(k0 + k, last)] + torque_per_amp * i
-        theta, omega = step_exact(theta, omega, torque, J, beta, beta_s, h)
+        held = t_rider >= 0.0 and (hands_off.shape[0] == 0 or is_held(t_rider + k * h, hands_off))
+        if not held:
+            theta, omega = step_exact(theta, omega, torque_per_amp * i, J, beta, beta_s, h)
+        elif arms:
+            torque = tau_r[min(k0 + k, last)] + torque_per_amp * i - k_a * (theta - hold)
+            theta, omega = step_exact(theta, omega, torque, J + J_a, beta + c_a, beta_s, h)
+        else:
+            torque = tau_r[min(k0 + k, last)] + torque_per_amp * i
+            theta, omega = step_exact(theta, omega, torque, J, beta, beta_s, h)
     x[0], x[1], x[2] = theta, omega, i
 
 
@@ -250,6 +267,12 @@ class VirtualRig:
         no command for 1 s: its process has gone), the profile starting again with the next
         enable; else the profile runs from the rig's t = 0 whatever the
         drive does.
+    hands : ndarray, shape (4,), optional
+        The rider's arms while the rider holds the handlebar, [J_a [kg*m^2], c_a
+        [N*m*s/rad], k_a [N*m/rad], theta_hold [rad]] (``RigModel.hands`` of
+        :func:`motosim.sim.build_rig`); by default none, a pure torque source.
+    hands_off : ndarray, shape (m, 2), optional
+        Phases [t0, t1] of the rider's time [s] in which nobody holds the handlebar.
     """
 
     def __init__(
@@ -263,6 +286,8 @@ class VirtualRig:
         *,
         theta0: float = 0.0,
         rider_on_enable: bool = True,
+        hands: Array | None = None,
+        hands_off: Array | None = None,
     ) -> None:
         self._policy = rider_torque if callable(rider_torque) else None
         tau = np.zeros(1) if callable(rider_torque) else np.asarray(rider_torque, dtype=float)
@@ -274,6 +299,14 @@ class VirtualRig:
         self.link = link
         self.rng = rng
         self.rider_torque = tau
+        self.hands = np.zeros(4) if hands is None else np.asarray(hands, dtype=np.float64)
+        self.hands_off = (
+            np.zeros((0, 2)) if hands_off is None else np.asarray(hands_off, dtype=np.float64)
+        )
+        if self.hands.shape != (4,) or not np.all(np.isfinite(self.hands)):
+            raise MotosimError("hands: expected [J_a, c_a, k_a, theta_hold], finite")
+        if self.hands_off.ndim != 2 or self.hands_off.shape[1] != 2:
+            raise MotosimError("hands_off: expected rows [t0, t1] [s]")
         self.x = np.array([float(theta0), 0.0, 0.0])
         self.h = 1.0 / settings.plant_rate
         self._sub = round(settings.plant_rate / settings.status_rate)
@@ -311,7 +344,8 @@ class VirtualRig:
             # profile is another one): compiled, or loaded from numba's cache, now rather
             # than on the run's first enabled command, a stall of the status frames that
             # tripped the run's watchdog at its start
-            _plant_steps(self.x.copy(), 0.0, tau_r, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4)
+            _plant_steps(self.x.copy(), 0.0, tau_r, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4,
+                         self.hands, self.hands_off, 0.0)  # fmt: skip
         self.frames_sent = 0
         self.frames_dropped = 0
         self.frames_late = 0
@@ -381,15 +415,17 @@ class VirtualRig:
             # carried it only from there: a command delay of up to a status period)
             n = min(self._sub - self.k % self._sub, max(1, math.ceil(t / self.h - self.k - 1e-9)))
             rider, k0 = self.rider_torque, self.k - self._k_rider
+            t_rider = k0 * self.h
             if self._k_rider < 0:
-                rider, k0 = self._idle, 0
+                rider, k0, t_rider = self._idle, 0, -1.0
             elif self._policy is not None:
                 if self.k % self._sub == 0:
                     self._held[0] = self._policy(k0 * self.h)  # once per status period
                 rider, k0 = self._held, 0
             _plant_steps(
                 self.x, self.i_cmd if live else 0.0, rider, k0, n, hb.J_eq, hb.beta_eq,
-                hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h,
+                hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h, self.hands,
+                self.hands_off, t_rider,
             )  # fmt: skip
             self.k += n
             if self.k % self._sub == 0:

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from motosim import __version__
 from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError, RunFailedError
-from motosim.estimation.registry import ESTIMATORS
+from motosim.estimation.registry import ESTIMATORS, SENSOR_ESTIMATOR, torque_sensor_kernel
 from motosim.estimation.walcott_zak import (
     ObserverSettings,
     WalcottZakObserver,
@@ -35,6 +35,7 @@ from motosim.model.handlebar import perturbed, step_exact
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
+from motosim.sim.hands import hands_array, hands_torque, is_held, resolve_hands
 from motosim.sim.loop_analysis import prediction_lead
 from motosim.sim.rider import RiderGains, design_rider, rider_torque
 from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
@@ -262,6 +263,9 @@ def build_stack(inputs: RunInputs) -> StackModel:
         )
         gains = design_with(inputs.nominal_handlebar, settings)
         kernel = WalcottZakObserver(gains, h_meas, stick_projection=est.stick_projection).kernel
+    elif est.name == SENSOR_ESTIMATOR:
+        sensor = sc.sensor.torque
+        kernel = torque_sensor_kernel(h_meas, low_pass=sensor.low_pass if sensor else 0.0)
     else:
         stepper = ESTIMATORS[est.name](
             inputs.nominal_handlebar, h_meas, friction_compensation=est.friction_compensation
@@ -328,6 +332,16 @@ class RigModel(NamedTuple):
         Side force on the motorcycle (side wind, to the right) each period [N].
     current_noise : ndarray, shape (n,)
         Current-sensor error each period [A].
+    hands : ndarray, shape (4,)
+        The rider's arms at the handlebar, [J_a [kg*m^2], c_a [N*m*s/rad], k_a [N*m/rad],
+        theta_hold [rad]] (:mod:`motosim.sim.hands`); zeros: a pure torque source.
+    hands_off : ndarray, shape (m, 2)
+        Phases [t0, t1] [s] in which nobody holds the handlebar (no torque at all).
+    sensed : bool
+        The stack reads the rider's torque from a torque sensor (the estimator
+        ``torque_sensor``): it is told the rider's torque plus ``torque_error``.
+    torque_error : ndarray, shape (n,)
+        The torque sensor's error each period (offset and noise) [N*m].
     """
 
     handlebar: Array
@@ -346,10 +360,15 @@ class RigModel(NamedTuple):
     force: Array
     side_force: Array
     current_noise: Array
+    hands: Array
+    hands_off: Array
+    sensed: bool
+    torque_error: Array
 
 
 class RigData(NamedTuple):
-    """The world's states: the true handlebar [theta_h, theta_h'] and the rider's path index."""
+    """The world's states: the true handlebar [theta_h, theta_h', theta_h' a period before]
+    and the rider's path index."""
 
     handlebar: Array
     path_index: NDArray[np.int64]
@@ -444,6 +463,14 @@ def build_rig(
     bits = sc.measurement.encoder_bits
     noise = sc.measurement.current_noise
     hb = inputs.true_handlebar
+    current_noise = rng.normal(0.0, noise, n) if noise else np.zeros(n)
+    sensor = sc.sensor.torque
+    torque_error = np.zeros(n)
+    if sensor is not None:  # drawn after the current's noise, which stays as without it
+        torque_error += sensor.offset
+        if sensor.noise:
+            torque_error += rng.normal(0.0, sensor.noise, n)
+    off = np.array(rider.hands_off, dtype=np.float64).reshape(-1, 2)
     return RigModel(
         handlebar=np.array([hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp]),
         plant_substeps=n_sub,
@@ -460,7 +487,11 @@ def build_rig(
         rider_limits=np.array([gains.preview, gains.max_torque]),
         force=force,
         side_force=mc.side_wind.sample(t, inputs.tables),
-        current_noise=rng.normal(0.0, noise, n) if noise else np.zeros(n),
+        current_noise=current_noise,
+        hands=hands_array(resolve_hands(rider.hands)),
+        hands_off=off,
+        sensed=sc.estimator.name == SENSOR_ESTIMATOR,
+        torque_error=torque_error,
     )
 
 
@@ -480,6 +511,8 @@ def _run_chunk(
     ``limits[1]`` to ``limits[2]`` [m/s]; returns the number of rows recorded.
     """
     J, beta, beta_s, nkt = rig.handlebar[0], rig.handlebar[1], rig.handlebar[2], rig.handlebar[3]
+    J_a, c_a, k_a, hold = rig.hands[0], rig.hands[1], rig.hands[2], rig.hands[3]
+    arms = J_a > 0.0 or c_a > 0.0 or k_a > 0.0
     n_sub = rig.plant_substeps
     h = stack.dt
     hb = world.handlebar
@@ -488,6 +521,7 @@ def _run_chunk(
         k = k0 + row
         q = rig.quantum
         theta_meas = math.floor(hb[0] / q + 0.5) * q if q > 0.0 else hb[0]
+        held = rig.hands_off.shape[0] == 0 or is_held(k * h, rig.hands_off)
         # the rider: a profile, or the virtual rider looking at the motorcycle
         e_y = 0.0
         if rig.virtual_rider:
@@ -502,6 +536,15 @@ def _run_chunk(
             tau_rider += rig.rider_probe[k]
         else:
             tau_rider = rig.rider_profile[k * n_sub]
+        active = tau_rider if held else 0.0
+        holding = arms and held
+        if not held:
+            tau_rider = 0.0
+        elif holding:  # the arms' passive torque, theta_h'' the last period's mean
+            accel = (hb[1] - hb[2]) / h if k > 0 else 0.0
+            tau_rider += hands_torque(hb[0], hb[1], accel, J_a, c_a, k_a, hold)
+        if arms:
+            hb[2] = hb[1]
         o = out[row]
         o[_COL.t] = k * h
         o[_COL.tau_r] = tau_rider
@@ -512,8 +555,9 @@ def _run_chunk(
             o[column] = z[at]
         o[_COL.e_y] = e_y
         # the stack: command, estimate, virtual motorcycle
+        told = tau_rider + rig.torque_error[k] if rig.sensed else tau_rider
         i_cmd = step(
-            stack, data, theta_meas, rig.current_noise[k], tau_rider, rig.force[k],
+            stack, data, theta_meas, rig.current_noise[k], told, rig.force[k],
             rig.side_force[k],
         )  # fmt: skip
         o[_COL.theta_h_meas] = data.held[Held.theta_h_meas]
@@ -523,6 +567,22 @@ def _run_chunk(
         o[_COL.tau_m] = nkt * i_cmd
         # the true handlebar over the period, the current held: one exact step while the
         # rider torque is constant over it, else one per plant sub-step
+        if holding:  # the arms' inertia and damping in the plant, their spring a torque
+            Jt, bt = J + J_a, beta + c_a
+            for j in range(n_sub):
+                tr = active if rig.virtual_rider else rig.rider_profile[k * n_sub + j]
+                spring = -k_a * (hb[0] - hold)
+                hb[0], hb[1] = step_exact(
+                    hb[0], hb[1], tr + spring + nkt * i_cmd, Jt, bt, beta_s, h / n_sub
+                )
+            if abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+                return row + 1
+            continue
+        if not held:  # nobody holds the handlebar: the motor alone
+            hb[0], hb[1] = step_exact(hb[0], hb[1], nkt * i_cmd, J, beta, beta_s, h)
+            if abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+                return row + 1
+            continue
         steady = rig.virtual_rider
         if not steady:
             steady = True
@@ -616,7 +676,7 @@ def simulate(
     rig = build_rig(inputs, rng=rng) if rig is None else rig
     _ensure_current_layout()
     data = new_data(model)
-    world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
+    world = RigData(np.zeros(3), np.zeros(1, dtype=np.int64))
     reset(model, data, 0.0, 0.0)
     n = rig.current_noise.size
     rows = max(1, round(chunk * sc.rates.control))

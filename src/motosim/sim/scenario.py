@@ -20,10 +20,14 @@ so that an error is one line naming the key, the value and what was expected. Th
                    side_wind_height = 1 [m] (where the side wind acts)
     [rider]        kind = "torque" with profile = {...}, or kind = "virtual" with path = {...}
                    and lateral_tolerance, course_tolerance, torque_scale, preview, max_torque,
-                   probe = {...} (a torque profile added to the virtual rider's, e.g. a chirp)
+                   probe = {...} (a torque profile added to the virtual rider's, e.g. a chirp);
+                   for either, hands = "relaxed" | "firm" | "off" or a table {inertia
+                   [kg*m^2], damping [N*m*s/rad], stiffness [N*m/rad], hold [rad]} (the arms'
+                   passive impedance, :mod:`motosim.sim.hands`; default none, a pure torque
+                   source) and hands_off = [[t0, t1], ...] [s] (phases with no torque at all)
     [handlebar]    true = "simacom_handlebar", nominal = (true), inertia_factor = 1,
                    damping_factor = 1, friction = true
-    [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman",
+    [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman" | "torque_sensor",
                    friction_compensation = true, lipschitz = 300
     [controller]   kind = "ours" | "paper" | "none", design = "DESIGN.toml" (optional),
                    bandwidth [Hz] (default: 10 Hz, a fifth of the measurement rate below
@@ -34,6 +38,8 @@ so that an error is one line naming the key, the value and what was expected. Th
                    prediction = true | false (cancel the rider torque predicted over the
                    estimate's lag; default: on with "rider" and the Walcott-Zak observer
                    from a 1 kHz measurement rate and at 100 Hz)
+    [sensor]       torque = {noise [N*m], offset [N*m], low_pass [Hz]} (a rider-torque
+                   sensor, read by the estimator "torque_sensor"; without the table, ideal)
 
 Profiles (rider torque, drive, brake, wind) are tables with ``kind``: ``constant`` (value),
 ``steps`` (times, values: the value after each time), ``square`` (low, high, period, start),
@@ -70,9 +76,10 @@ from numpy.typing import NDArray
 
 from motosim.control.torque_feedback import INTEGRAL_CORNER, MAX_ORDER
 from motosim.errors import MotosimError
-from motosim.estimation.registry import ESTIMATORS
+from motosim.estimation.registry import ESTIMATORS, SENSOR_ESTIMATOR
 from motosim.params.checks import check_number, short_repr
 from motosim.sim import paths
+from motosim.sim.hands import GRIPS, Hands
 from motosim.sim.rider import SPEED_RANGE as RIDER_SPEEDS
 from motosim.timeseries import TimeSeries
 
@@ -99,10 +106,12 @@ __all__ = [
     "Rates",
     "Rider",
     "Scenario",
+    "Sensor",
     "SlalomPath",
     "SquareProfile",
     "StepsProfile",
     "StraightPath",
+    "TorqueSensor",
     "TurnPath",
     "check_profile_values",
     "implausible",
@@ -652,8 +661,22 @@ class Rider:
     torque_scale: float = 10.0
     preview: float = 0.3
     max_torque: float = 70.0
+    hands: str | Hands | None = None
+    hands_off: tuple[tuple[float, ...], ...] = ()
 
     def __post_init__(self) -> None:
+        if isinstance(self.hands, str) and self.hands not in GRIPS:
+            raise MotosimError(
+                f"hands = {self.hands!r}; expected one of {', '.join(GRIPS)} or a table "
+                "{ inertia = ..., damping = ..., stiffness = ... }"
+            )
+        for phase in self.hands_off:
+            if len(phase) != 2 or not all(math.isfinite(t) for t in phase):
+                raise MotosimError(
+                    f"hands_off has {list(phase)}; expected [t0, t1] pairs of finite times [s]"
+                )
+            if not 0.0 <= phase[0] < phase[1]:
+                raise MotosimError(f"hands_off has {list(phase)}; expected 0 <= t0 < t1 [s]")
         if self.kind == "torque" and self.profile is None:
             raise MotosimError('missing profile for kind = "torque"')
         if self.kind == "torque" and self.path is not None:
@@ -705,14 +728,43 @@ class Estimator:
     stick_projection: bool = True
 
     def __post_init__(self) -> None:
-        if self.name not in ESTIMATORS:
-            raise MotosimError(f"name = {self.name!r}; expected one of {', '.join(ESTIMATORS)}")
+        if self.name not in ESTIMATORS and self.name != SENSOR_ESTIMATOR:
+            raise MotosimError(
+                f"name = {self.name!r}; expected one of {', '.join(ESTIMATORS)}, {SENSOR_ESTIMATOR}"
+            )
         _check("lipschitz", self.lipschitz, low=0.0, low_open=True, high=1e7, unit="rad/s^2")
 
 
 LOWEST_BANDWIDTH = 0.1
 """Lowest ``[controller] bandwidth`` [Hz]: a rider steers at 0.1-5 Hz, and far below that the
 synthesis's weight and Riccati equations lose their precision (``design --bandwidth`` too)."""
+
+
+@dataclass(frozen=True, slots=True)
+class TorqueSensor:
+    """A torque sensor between the grips and the steering column: the rider's torque on the
+    handlebar (active and passive), plus ``offset`` [N*m] and white noise of standard
+    deviation ``noise`` [N*m], through a first-order low-pass of corner ``low_pass`` [Hz]
+    (0: none) in the estimator ``torque_sensor``."""
+
+    noise: float = 0.0
+    offset: float = 0.0
+    low_pass: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check("noise", self.noise, low=0.0, high=100.0, unit="N*m")
+        _check("offset", self.offset, low=-100.0, high=100.0, unit="N*m")
+        _check("low_pass", self.low_pass, low=0.0, high=1e5, unit="Hz")
+
+
+@dataclass(frozen=True, slots=True)
+class Sensor:
+    """Optional sensors beyond the paper's angle and current: ``torque``, a rider-torque
+    sensor read by ``[estimator] name = "torque_sensor"``."""
+
+    torque: TorqueSensor | None = None
+
+
 MAX_RECORDED_ROWS = 10_000_000
 """Most rows a run may record (one per control period, about 200 bytes each in memory)."""
 MAX_PLANT_STEPS = 100_000_000
@@ -791,6 +843,7 @@ class Scenario:
     handlebar: Handlebar = Handlebar()
     estimator: Estimator = Estimator()
     controller: Controller = Controller()
+    sensor: Sensor = Sensor()
 
     def __post_init__(self) -> None:
         _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
@@ -839,6 +892,11 @@ class Scenario:
                         f"{0.5 * rate:g} Hz, half [rates] {key} = {rate:g} Hz, the rate it is "
                         "sampled at (beyond, it is sampled into another frequency)"
                     )
+        if self.sensor.torque is not None and self.estimator.name != SENSOR_ESTIMATOR:
+            raise MotosimError(
+                f"[sensor] torque is read by [estimator] name = {SENSOR_ESTIMATOR!r}; got "
+                f"{self.estimator.name!r}"
+            )
         if self.controller.prediction and self.estimator.name != "walcott_zak":
             raise MotosimError(
                 f"[controller] prediction = true with [estimator] name = "
@@ -941,7 +999,8 @@ def implausible(scenario: "Scenario") -> list[str]:
 
 # --- the parser: TOML onto the constructors -----------------------------------------------
 
-_TABLES = ("rates", "measurement", "motorcycle", "rider", "handlebar", "estimator", "controller")
+_TABLES = ("rates", "measurement", "motorcycle", "rider", "handlebar", "estimator", "controller",
+           "sensor")  # fmt: skip
 
 
 def _describe(tp: Any) -> str:
@@ -977,6 +1036,15 @@ def _value(tp: Any, value: Any, key: str, where: str) -> Any:
             return _tagged(PROFILES, value, key, where, number=True)
         if options and all(a in PATHS.values() for a in options):
             return _tagged(PATHS, value, key, where, number=False)
+        if Hands in options:  # a grip's name or a table of the arms' impedance
+            if isinstance(value, str):
+                return value
+            if not isinstance(value, Mapping):
+                raise MotosimError(
+                    f"{key} = {short_repr(value)}; expected one of {', '.join(GRIPS)} or a "
+                    "table { inertia = ..., damping = ..., stiffness = ... }"
+                )
+            return _build(Hands, value, f"{where}.{key}")
         return _value(options[0], value, key, where)  # ``str | None``
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, int | float):

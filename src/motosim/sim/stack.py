@@ -734,7 +734,9 @@ def step_scaled(
         Measured minus commanded motor current [A]: sensor noise in simulation, 0 when the
         drive's current loop is taken to follow its command.
     rider_torque : float
-        True rider torque [N*m], used only by a ``model.true_torque`` reference run.
+        Rider torque [N*m]: the true one, read by a ``model.true_torque`` reference run, or
+        the one a torque sensor measures, read by the estimator of kind
+        :data:`~motosim.estimation.kernel.TORQUE_SENSOR` (and then by a reference run too).
     force : float
         Longitudinal force of eq. (2), (tau_d - tau_b) / r_D + F_wx [N].
     side_force : float
@@ -773,8 +775,9 @@ def step_scaled(
         data.differentiator[1] = z1
         held[Held.theta_h_dot_hat] = z1
         estimate = step_kernel(
-            model.estimator, data.estimator, theta_meas, z1, current_scale * told + current_error
-        )
+            model.estimator, data.estimator, theta_meas, z1, current_scale * told + current_error,
+            rider_torque,
+        )  # fmt: skip
         c = model.prediction
         if c.lead > 0.0:
             # the estimate's rate through the notch and the low-pass (transposed form II)

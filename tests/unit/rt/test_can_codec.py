@@ -27,8 +27,9 @@ DB = load_dbc()
 PLATFORM = platform_codecs()
 FRAMES = {
     c.frame_id: c
-    for c in (CODECS.status, CODECS.command, CODECS.estop, CODECS.heartbeat, PLATFORM.command,
-              PLATFORM.status)
+    for c in (CODECS.status, CODECS.command, CODECS.estop, CODECS.heartbeat, CODECS.torque,
+              PLATFORM.command, PLATFORM.status)
+    if c is not None
 }  # fmt: skip
 
 
@@ -143,8 +144,10 @@ def test_udp_multicast_datagrams_are_read_as_python_can_packs_them(
 
 
 def test_every_frame_of_the_dbc_has_a_codec() -> None:
-    # the handlebar's four frames and the platform's PF_COMMAND (0x200) and PF_STATUS (0x201)
-    assert {m.frame_id for m in DB.messages} == set(FRAMES) == {16, 128, 256, 257, 512, 513}
+    # the handlebar's four frames, the optional torque sensor's HB_TORQUE (0x102) and the
+    # platform's PF_COMMAND (0x200) and PF_STATUS (0x201)
+    expected = {16, 128, 256, 257, 258, 512, 513}
+    assert {m.frame_id for m in DB.messages} == set(FRAMES) == expected
 
 
 def test_platform_angles_are_quantised_at_1e4_rad() -> None:

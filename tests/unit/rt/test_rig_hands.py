@@ -1,0 +1,61 @@
+"""The virtual rig's plant with the rider's hands on it (:mod:`motosim.sim.hands`)."""
+
+import numpy as np
+import pytest
+
+from motosim.model.handlebar import step_exact
+from motosim.params import load_parameters
+from motosim.rt.rig import RigSettings, VirtualRig
+
+pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
+
+from motosim.io.can import handlebar_codecs
+
+HB = load_parameters("simacom_handlebar", "handlebar")
+SETTINGS = RigSettings(
+    plant_rate=10_000.0, status_rate=1000.0, encoder_bits=14, current_noise=0.0,
+    max_current=30.0,
+)  # fmt: skip
+
+
+class _Link:
+    def send(self, frame_id: int, data: bytes) -> bool:
+        return True
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        return None
+
+
+def _rig(rider: float, hands: np.ndarray, off: np.ndarray | None = None) -> VirtualRig:
+    return VirtualRig(
+        HB, SETTINGS, handlebar_codecs(), _Link(), np.full(100_000, rider),
+        np.random.default_rng(0), rider_on_enable=False, hands=hands, hands_off=off,
+    )  # fmt: skip
+
+
+def test_rig_hands_are_the_simulators_plant() -> None:
+    """3 N*m of active torque through firm hands about 0.05 rad: the arms' inertia and
+    damping added to the handlebar's, their spring held over each 0.1 ms sub-step."""
+    J_a, c_a, k_a, hold = 0.1, 4.0, 50.0, 0.05
+    rig = _rig(3.0, np.array([J_a, c_a, k_a, hold]))
+    rig.advance_to(0.5)
+    theta, omega = 0.0, 0.0
+    for _ in range(5000):
+        torque = 3.0 - k_a * (theta - hold)
+        theta, omega = step_exact(
+            theta, omega, torque, HB.J_eq + J_a, HB.beta_eq + c_a, HB.beta_s, 1e-4
+        )
+    assert rig.x[0] == pytest.approx(theta, rel=1e-12)
+    assert rig.x[1] == pytest.approx(omega, abs=1e-12)
+
+
+def test_rig_without_hands_is_unchanged_and_hands_off_removes_the_rider() -> None:
+    plain = _rig(3.0, np.zeros(4))
+    plain.advance_to(0.2)
+    theta, omega = 0.0, 0.0
+    for _ in range(2000):
+        theta, omega = step_exact(theta, omega, 3.0, HB.J_eq, HB.beta_eq, HB.beta_s, 1e-4)
+    assert plain.x[0] == theta and plain.x[1] == omega
+    off = _rig(3.0, np.array([0.1, 4.0, 50.0, 0.0]), np.array([[0.0, 1.0]]))
+    off.advance_to(0.2)
+    assert off.x[0] == 0.0 and off.x[1] == 0.0  # nobody holds it, no current: at rest
