@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from motosim.cli.main import main
-from motosim.errors import MotosimWarning
+from motosim.errors import MotosimError, MotosimWarning
 from motosim.io.runs import load_scenario
 from motosim.params import (
     HandlebarParameters,
@@ -114,13 +114,15 @@ def test_implausible_lists_nothing_for_a_default_scenario() -> None:
 
 
 def test_a_turn_of_more_than_a_full_circle_warns_that_the_angle_is_in_radians() -> None:
-    # angle = 90 written in degrees: 90 rad is 14 circles, ridden without a word
+    # an angle written in degrees: more than a full circle in radians
     from motosim.sim.scenario import Rider, TurnPath
 
     def turn(angle: float) -> Scenario:
         path = TurnPath(radius=-60.0, angle=angle, start=30.0, transition=20.0)
         return Scenario(name="x", rider=Rider(kind="virtual", path=path))
 
-    lines = implausible(turn(90.0))
-    assert len(lines) == 1 and "angle = 90 rad" in lines[0] and "radians" in lines[0]
+    lines = implausible(turn(45.0))  # 45 deg written as radians: seven circles, warned
+    assert len(lines) == 1 and "angle = 45 rad" in lines[0] and "radians" in lines[0]
     assert implausible(turn(3.14159 / 2)) == [] and implausible(turn(-6.0)) == []
+    with pytest.raises(MotosimError, match=r"angle = 90\.0; expected .* <= 62\.83"):
+        turn(90.0)  # ten circles and more are refused (scenario's legal range)
