@@ -375,8 +375,9 @@ def check_scenario_inputs(path: str | Path) -> Path:
     parameter files (``[motorcycle] params``, ``[handlebar] true`` and ``nominal`` when they
     name a ``.toml`` file rather than a packaged set), CSV profiles (``kind = "csv"``,
     ``file``) and OpenDRIVE road (``[rider] path``, ``file``) are looked for as
-    :func:`motosim.io.runs.resolve` reads them, relative to its folder. The
-    scenario's values are checked afterwards, by :func:`motosim.sim.parse_scenario`.
+    :func:`motosim.io.runs.resolve` reads them, relative to its folder. Its values are
+    then checked by :func:`motosim.sim.scenario.parse_scenario`, which imports neither SciPy
+    nor numba (its ``[realtime]`` table is checked by the commands that read it).
 
     Parameters
     ----------
@@ -391,8 +392,8 @@ def check_scenario_inputs(path: str | Path) -> Path:
     Raises
     ------
     MotosimError
-        One line naming the first file that cannot be read (:func:`check_input`), or the
-        scenario's TOML error.
+        One line naming the first file that cannot be read (:func:`check_input`), the
+        scenario's TOML error, or its first value out of range.
     """
     from motosim.params.toml import read_toml
 
@@ -429,6 +430,9 @@ def check_scenario_inputs(path: str | Path) -> Path:
             what = "OpenDRIVE file" if key == "path" else "log file (CSV)"
             if spec.get("kind") in ("csv", "opendrive"):
                 check_input(base / spec["file"], what, text=True)
+    from motosim.sim.scenario import parse_scenario  # NumPy: after the files are found
+
+    parse_scenario({k: v for k, v in data.items() if k != "realtime"}, origin=str(path))
     return source
 
 
