@@ -8,7 +8,8 @@ a usage error (an unknown option) are timed too, the slowest reported; their bas
 ``motosim simulate --help`` after importing the modules ``motosim.cli.simulate`` imported
 before. The time to the error line of a misspelt file (:data:`MISSPELT`: the command's input,
 or the output of a command that reads none) and of a misspelt option is timed for every
-command (target 0.5 s). All run in a fresh interpreter, best of N wall-clock runs, from a
+command, and of a scenario value out of range (:data:`OUT_OF_RANGE`) for the commands that
+read a scenario (target 0.5 s). All run in a fresh interpreter, best of N wall-clock runs, from a
 scratch folder.
 """
 
@@ -62,8 +63,20 @@ MISSPELT: dict[str, list[str]] = {
     "run": ["run", "nope.toml", "--bus", "virtual", "--out", "r"],
     "rig": ["rig", "nope.toml", "--bus", "virtual"],
     "rt-check": ["rt-check", "--rate", "abc"],
+    "cache": ["cache", "nope"],
 }
-"""A misspelt file for each command (rt-check reads none: a misspelt number)."""
+"""A misspelt file for each command (rt-check reads none: a misspelt number; cache neither: a
+misspelt action)."""
+OUT_OF_RANGE: dict[str, list[str]] = {
+    "simulate": ["simulate", "bad.toml", "--out", "r"],
+    "campaign": ["campaign", "campaign.toml", "--out", "c"],
+    "run": ["run", "bad.toml", "--bus", "virtual", "--out", "r"],
+    "rig": ["rig", "bad.toml", "--bus", "virtual"],
+}
+"""A scenario value out of range (a drive torque of 1e6 N*m) for each command that reads a
+scenario, the campaign's in its base scenario."""
+_BAD_SCENARIO = '[scenario]\nname = "bad"\n[motorcycle]\ndrive_torque = 1e6\n'
+_BAD_CAMPAIGN = '[campaign]\nscenario = "bad.toml"\nruns = 2\n'
 _ARGV = (
     "import json, sys\nfrom motosim.cli.main import main\nsys.exit(main(json.loads(sys.argv[1])))"
 )
@@ -88,7 +101,8 @@ def _best(code: str, repeats: int = 5, *args: str, cwd: str | None = None) -> fl
 
 
 def time_to_error() -> dict[str, dict[str, float]]:
-    """Seconds to the error line of a misspelt file and of a misspelt option, per command."""
+    """Seconds to the error line of a misspelt file and of a misspelt option, per command,
+    and of a scenario value out of range for the commands that read a scenario."""
     from motosim.cli.main import COMMANDS
 
     env_path = os.pathsep.join(sys.path)
@@ -100,6 +114,12 @@ def time_to_error() -> dict[str, dict[str, float]]:
                 "misspelt_file_s": _best(_ARGV, 3, json.dumps(MISSPELT[name]), cwd=scratch),
                 "misspelt_option_s": _best(_ARGV, 3, json.dumps([name, "--no-such"]), cwd=scratch),
             }
+        with open(os.path.join(scratch, "bad.toml"), "w", encoding="utf-8") as f:
+            f.write(_BAD_SCENARIO)
+        with open(os.path.join(scratch, "campaign.toml"), "w", encoding="utf-8") as f:
+            f.write(_BAD_CAMPAIGN)
+        for name, argv in OUT_OF_RANGE.items():
+            out[name]["out_of_range_s"] = _best(_ARGV, 3, json.dumps(argv), cwd=scratch)
     return out
 
 

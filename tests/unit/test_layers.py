@@ -12,7 +12,7 @@ import pytest
 
 SRC = Path(__file__).parents[2] / "src" / "motosim"
 LAYERS = [
-    {"errors", "__init__"},  # the exception and the version
+    {"errors", "__init__", "choices"},  # the exception, the version, light names
     {"signals", "timeseries"},
     {"params"},
     {"model"},

@@ -43,6 +43,7 @@ __all__ = [
     "check_result_folder",
     "check_result_input",
     "check_scenario_inputs",
+    "check_scenario_values",
     "deferred_warnings",
     "parse_float_list",
     "parse_range",
@@ -376,7 +377,7 @@ def check_scenario_inputs(path: str | Path) -> Path:
     name a ``.toml`` file rather than a packaged set), CSV profiles (``kind = "csv"``,
     ``file``) and OpenDRIVE road (``[rider] path``, ``file``) are looked for as
     :func:`motosim.io.runs.resolve` reads them, relative to its folder. The
-    scenario's values are checked afterwards, by :func:`motosim.sim.parse_scenario`.
+    scenario's values are checked afterwards, by :func:`check_scenario_values`.
 
     Parameters
     ----------
@@ -430,6 +431,26 @@ def check_scenario_inputs(path: str | Path) -> Path:
             if spec.get("kind") in ("csv", "opendrive"):
                 check_input(base / spec["file"], what, text=True)
     return source
+
+
+def check_scenario_values(path: str | Path) -> None:
+    """Check a scenario's values before the numerical stack is imported.
+
+    The file, already checked by :func:`check_scenario_inputs`, is parsed by
+    :func:`motosim.sim.scenario.parse_scenario`, which imports NumPy but neither SciPy,
+    numba nor h5py, so that a value out of range is refused in one line before the work. Its
+    ``[realtime]`` table is left to the commands that read it.
+
+    Raises
+    ------
+    MotosimError
+        One line naming the table, the key, the value and the expected range.
+    """
+    from motosim.params.toml import read_toml
+    from motosim.sim.scenario import parse_scenario
+
+    data = read_toml(Path(path), what="scenario file")
+    parse_scenario({k: v for k, v in data.items() if k != "realtime"}, origin=str(path))
 
 
 def refuse_special(target: Path, option: str, expected: str) -> None:

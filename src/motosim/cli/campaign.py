@@ -14,6 +14,7 @@ from motosim.cli._common import (
     check_input,
     check_output,
     check_scenario_inputs,
+    check_scenario_values,
     print_json,
 )
 from motosim.cli.cache import add_cache_option, design_cache
@@ -162,6 +163,7 @@ def _check_inputs(path: str) -> None:
         if problem is not None:
             raise MotosimError(f"{path} [campaign] scenario: {problem}")
         check_scenario_inputs(base)
+        check_scenario_values(base)
 
 
 def _check_options(args: argparse.Namespace) -> None:

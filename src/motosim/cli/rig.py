@@ -8,6 +8,7 @@ from typing import Any
 from motosim.cli._common import (
     check_named_input,
     check_scenario_inputs,
+    check_scenario_values,
     deferred_warnings,
     print_json,
     warn_atypical,
@@ -89,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     check_privilege_options(args)  # the options first, then the files
     check_scenario_inputs(args.scenario)
     check_named_input(args.platform, "platform file")
+    check_scenario_values(args.scenario)  # before the numerical stack is imported
     from motosim.cli.run import _Presses
 
     presses = _Presses()  # Ctrl-C while the rig starts: counted, not lost in a C callback

@@ -16,6 +16,7 @@ from motosim.cli._common import (
     check_named_input,
     check_result_folder,
     check_scenario_inputs,
+    check_scenario_values,
     deferred_warnings,
     print_json,
     warn_atypical,
@@ -587,6 +588,7 @@ def run(args: argparse.Namespace) -> int:
     check_scenario_inputs(args.scenario)
     check_named_input(args.platform, "platform file")
     check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
+    check_scenario_values(args.scenario)  # before the numerical stack is imported
     presses = _Presses()
     previous = signal.signal(signal.SIGINT, presses)
     try:

@@ -9,6 +9,7 @@ from motosim.cli._common import (
     check_result_folder,
     check_result_input,
     check_scenario_inputs,
+    check_scenario_values,
     deferred_warnings,
     print_json,
     show_progress,
@@ -94,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
     """Simulate the scenario, write the result and the report."""
     check_scenario_inputs(args.scenario)
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
+    check_scenario_values(args.scenario)  # before the numerical stack is imported
     from motosim.io.results import folder_lock, is_complete_result, partial_folder
     from motosim.io.runs import load_scenario
     from motosim.sim.metrics import warnings

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from scipy.linalg import expm
 from scipy.signal import cont2discrete, ss2tf
 
+from motosim.choices import INTEGRAL_CORNER, MAX_ORDER
 from motosim.control.fixed_order import FixedOrderResult, fixed_order_synthesis
 from motosim.control.loops import closed_loop_poles, four_block_norm
 from motosim.control.ncf import ncfsyn
@@ -61,8 +62,6 @@ Array = NDArray[np.float64]
 
 DEFAULT_BANDWIDTH = 10.0
 """Tracking bandwidth at control rates of 50 Hz and above [Hz]."""
-INTEGRAL_CORNER = 0.1
-"""W1's integral corner by default, as a fraction of the bandwidth: a decade below it."""
 MAX_COMPLIANCE = 0.88e-3
 """The most compliance at 1 Hz, |theta_h / w| for a 1 Hz rider torque, that a default design
 keeps from :data:`STIFF_RATE` [rad/(N*m)]: the default design's for the packaged handlebar
@@ -72,9 +71,6 @@ STIFF_RATE = 1000.0
 """Lowest control rate at which :func:`handlebar_bandwidth` raises the bandwidth for a soft
 loop [Hz]: at 100 Hz the lighter handlebar's stack designed at 13.6 Hz keeps 5.7 dB and
 47 deg (7.6 dB and 57 deg at 10 Hz)."""
-MAX_ORDER = 3
-"""Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
-controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
 PAPER_NUM = (-2.355, -613.7)
 """Numerator of eq. (26), highest power first [A/rad]."""
 PAPER_DEN = (1.0, 1445.0)

@@ -10,6 +10,10 @@ kind :data:`~motosim.estimation.kernel.TORQUE_SENSOR` (:func:`torque_sensor_kern
 named :data:`SENSOR_ESTIMATOR` in scenarios) passes the measured torque through, with the
 sensor's low-pass if any. It is not in :data:`ESTIMATORS`, whose estimators read only the
 angle and the current.
+
+A scenario's ``[estimator] name`` is checked against these names without importing numba:
+:data:`motosim.choices.ESTIMATOR_NAMES` holds them, and this module refuses to load unless
+they equal the keys of :data:`ESTIMATORS` in order; :data:`SENSOR_ESTIMATOR` is defined there.
 """
 
 import math
@@ -19,6 +23,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from motosim.choices import ESTIMATOR_NAMES, SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
 from motosim.estimation.baselines import (
     InverseDynamicsEstimator,
@@ -138,8 +143,11 @@ ESTIMATORS: dict[str, EstimatorFactory] = {
 The first entry is the default (the paper's observer)."""
 
 
-SENSOR_ESTIMATOR = "torque_sensor"
-"""The scenario name of the estimator that reads a torque sensor (:func:`torque_sensor_kernel`)."""
+if tuple(ESTIMATORS) != ESTIMATOR_NAMES:  # the light names a scenario is checked against
+    raise AssertionError(
+        f"motosim.choices.ESTIMATOR_NAMES {ESTIMATOR_NAMES} differs from the registry's "
+        f"{tuple(ESTIMATORS)}: write the registry's names there, in its order"
+    )
 
 
 def torque_sensor_kernel(dt: float, *, low_pass: float = 0.0) -> EstimatorKernel:

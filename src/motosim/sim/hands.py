@@ -16,88 +16,20 @@ the stack's estimate sees the passive torque as a real front frame would.
 
 :data:`GRIPS` holds the named grips (``relaxed``, ``firm`` and ``off``, hands off), each
 value with its source; a scenario names one (``[rider] hands = "relaxed"``) or gives its
-own table.
+own table. Both are defined in :mod:`motosim.sim.grips`, which a scenario's check imports
+without numba.
 """
-
-import math
-from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.params.checks import check_number
+from motosim.sim.grips import GRIPS, Hands
 
 __all__ = ["GRIPS", "Hands", "hands_array", "hands_torque", "is_held", "resolve_hands"]
 
 Array = NDArray[np.float64]
-
-_LIMITS = (("inertia", 1.0, "kg*m^2"), ("damping", 100.0, "N*m*s/rad"),
-           ("stiffness", 1000.0, "N*m/rad"))  # fmt: skip
-"""Largest value of each parameter a scenario accepts, an order of magnitude above the firm
-grip's: beyond, a value is a unit slip."""
-
-
-@dataclass(frozen=True, slots=True)
-class Hands:
-    """The arms' passive impedance at the handlebar, reduced to the steering axis.
-
-    Attributes
-    ----------
-    inertia : float
-        J_a, the arms' and hands' inertia about the steering axis [kg*m^2], >= 0.
-    damping : float
-        c_a [N*m*s/rad], >= 0.
-    stiffness : float
-        k_a [N*m/rad], >= 0, about ``hold``.
-    hold : float
-        theta_hold, the handlebar angle the hands hold [rad].
-    source : str
-        Where the values come from.
-
-    Raises
-    ------
-    MotosimError
-        On a negative, non-finite or implausibly large value (one line naming it).
-
-    Examples
-    --------
-    >>> Hands(inertia=0.1, damping=2.0, stiffness=20.0).stiffness
-    20.0
-    """
-
-    inertia: float = 0.0
-    damping: float = 0.0
-    stiffness: float = 0.0
-    hold: float = 0.0
-    source: str = "the scenario"
-
-    def __post_init__(self) -> None:
-        for name, high, unit in _LIMITS:
-            check_number(getattr(self, name), where=name, lower=0.0, upper=high, unit=unit)
-        check_number(self.hold, where="hold", lower=-math.pi, upper=math.pi, unit="rad")
-
-    @property
-    def is_off(self) -> bool:
-        """Whether nothing holds the handlebar (every parameter zero)."""
-        return self.inertia == 0.0 and self.damping == 0.0 and self.stiffness == 0.0
-
-
-_PROVISIONAL = (
-    "provisional, to be checked against Cossalter, Doria, Lot & Massaro, Meccanica 46 (2011) "
-    "279-292 and Massaro & Cole (2012): an arms' inertia about the steering axis of the order "
-    "of 0.1 kg*m^2 (the equivalent J_eq of the handlebar is 0.0415), a damping of a few "
-    "N*m*s/rad and a stiffness rising from about 10 N*m/rad relaxed to tens of N*m/rad with "
-    "the muscles co-contracted"
-)
-
-GRIPS: dict[str, Hands] = {
-    "relaxed": Hands(inertia=0.1, damping=1.0, stiffness=10.0, source=_PROVISIONAL),
-    "firm": Hands(inertia=0.1, damping=4.0, stiffness=50.0, source=_PROVISIONAL),
-    "off": Hands(source="hands off: nothing holds the handlebar"),
-}
-"""The named grips. ``off``: nobody holds the handlebar (no active torque either)."""
 
 
 def hands_array(hands: Hands | None) -> Array:

@@ -21,6 +21,7 @@ from numba import njit
 from numpy.typing import NDArray
 from scipy.linalg import solve_continuous_are
 
+from motosim.choices import RIDER_SPEEDS
 from motosim.errors import MotosimError
 from motosim.model import sharp as sharp_model
 from motosim.params.sharp import SharpParameters
@@ -29,8 +30,9 @@ __all__ = ["SPEED_RANGE", "RiderGains", "design_rider", "rider_torque"]
 
 Array = NDArray[np.float64]
 
-SPEED_RANGE = (3.0, 60.0)
-"""Speeds the virtual rider's gains are scheduled over by default [m/s]."""
+SPEED_RANGE = RIDER_SPEEDS
+"""Speeds the virtual rider's gains are scheduled over by default [m/s]
+(:data:`motosim.choices.RIDER_SPEEDS`)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -74,13 +74,12 @@ from typing import (
 import numpy as np
 from numpy.typing import NDArray
 
-from motosim.control.torque_feedback import INTEGRAL_CORNER, MAX_ORDER
+from motosim.choices import ESTIMATOR_NAMES as ESTIMATORS
+from motosim.choices import INTEGRAL_CORNER, MAX_ORDER, RIDER_SPEEDS, SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
-from motosim.estimation.registry import ESTIMATORS, SENSOR_ESTIMATOR
 from motosim.params.checks import check_number, short_repr
 from motosim.sim import paths
-from motosim.sim.hands import GRIPS, Hands
-from motosim.sim.rider import SPEED_RANGE as RIDER_SPEEDS
+from motosim.sim.grips import GRIPS, Hands
 from motosim.timeseries import TimeSeries
 
 __all__ = [

@@ -1,0 +1,27 @@
+"""Names and limits that a scenario's values are checked against, importable without SciPy.
+
+A scenario file is checked before the numerical stack is imported, so what its check reads
+lives here, in a module that imports nothing: the estimator names (the keys of
+:data:`motosim.estimation.registry.ESTIMATORS`, which the registry checks equal to
+:data:`ESTIMATOR_NAMES`), the tuned controller's largest order and default integral corner
+(:mod:`motosim.control.torque_feedback`) and the speeds the virtual rider is scheduled over
+(:mod:`motosim.sim.rider`). Those modules import their values from here.
+"""
+
+from typing import Final
+
+__all__ = ["ESTIMATOR_NAMES", "INTEGRAL_CORNER", "MAX_ORDER", "RIDER_SPEEDS", "SENSOR_ESTIMATOR"]
+
+ESTIMATOR_NAMES: Final = ("walcott_zak", "inverse_dynamics", "kalman")
+"""The names of :data:`motosim.estimation.registry.ESTIMATORS`, in its order (the default,
+the paper's observer, first)."""
+SENSOR_ESTIMATOR: Final = "torque_sensor"
+"""The scenario name of the estimator that reads a torque sensor
+(:func:`motosim.estimation.registry.torque_sensor_kernel`)."""
+INTEGRAL_CORNER: Final = 0.1
+"""W1's integral corner by default, as a fraction of the bandwidth: a decade below it."""
+MAX_ORDER: Final = 3
+"""Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
+controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
+RIDER_SPEEDS: Final = (3.0, 60.0)
+"""Speeds the virtual rider's gains are scheduled over by default [m/s]."""
