@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
-from motosim.estimation.registry import SENSOR_ESTIMATOR
 from motosim.io.can import CanLink, UdpMulticastLink, handlebar_codecs, open_link
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
