@@ -94,7 +94,7 @@ def _loop_alone(duration: float) -> tuple[float, float]:
         rig = build_rig(inputs, rng=np.random.default_rng(0))
         data = new_data(model)
         reset(model, data, 0.0, 0.0)
-        world = RigData(np.zeros(2), np.zeros(1, dtype=np.int64))
+        world = RigData(np.zeros(3), np.zeros(1, dtype=np.int64))
         n = rig.current_noise.size
         out = np.full((n, len(RECORDED)), np.nan)
         limits = np.array([np.inf, -np.inf, np.inf])

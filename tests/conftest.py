@@ -69,6 +69,7 @@ SLOW_TESTS = frozenset(
         "tests/integration/test_fidelity.py::test_fidelity_command_json",
         "tests/integration/test_fidelity.py::test_friction_free_stack_measured_as_the_linear_analysis_predicts",
         "tests/integration/test_fidelity.py::test_handlebar_renders_the_virtual_steer_closer_with_feedforward",
+        "tests/integration/test_hands_lockstep.py::test_lockstep_rig_holds_the_handlebar_with_the_riders_hands",
         "tests/integration/test_rt_cli.py::test_a_fall_fades_the_torque_out_and_ends_the_run_with_exit_3",
         "tests/integration/test_rt_cli.py::test_ctrl_c_fades_the_torque_out_and_closes_the_files",
         "tests/integration/test_rt_cli.py::test_rig_keeps_a_status_latency_that_run_takes_paced_by_the_bus",

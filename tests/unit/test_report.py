@@ -196,6 +196,33 @@ def test_report_names_the_observer_and_shows_units(tmp_path: Path) -> None:
     assert '<td class="num">no</td>' in text  # the fall flag
 
 
+@pytest.mark.parametrize(
+    ("sensor", "source"),
+    [({}, "as measured"), ({"torque": {"low_pass": 50.0}}, "through a 50 Hz low-pass")],
+)
+def test_report_names_the_torque_sensor_as_no_observer(
+    tmp_path: Path, sensor: dict, source: str
+) -> None:
+    # the estimator torque_sensor designs nothing: the report says so, not "designed for
+    # the nominal handlebar"
+    metadata = {
+        "scenario": {
+            "name": "sensed",
+            "estimator": {"name": "torque_sensor"},
+            "controller": {"kind": "paper"},
+            "sensor": sensor,
+        },
+        "observer": None,
+        "controller": None,
+    }
+    with ResultWriter(tmp_path, NAMES, metadata) as writer:
+        writer.append(_rows())
+        writer.close({"samples": 60.0})
+    text = " ".join(build_report(tmp_path).read_text(encoding="utf-8").split())
+    row = text.split("<td>observer</td><td>")[1].split("</td>")[0]
+    assert row == f"a torque sensor&#x27;s measured torque (no observer); {source}"
+
+
 def test_the_rate_figure_shows_the_encoders_resolution() -> None:
     # a 14-bit encoder read at 1 kHz: one count a sample is 2 pi / 2^14 * 1000 rad/s, 21.97
     # deg/s, the band drawn about zero and the step named under the figure

@@ -117,6 +117,10 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
             + "measurement = 100.0\n",
             "[motorcycle] side_wind: a multisine up to 90 Hz; expected at most 50 Hz",
         ),
+        (  # a list of [t0, t1] pairs, not of tables
+            MINIMAL.replace('kind = "torque"\n', 'kind = "torque"\nhands_off = "0:1"\n'),
+            "hands_off = '0:1'; expected a list of lists of numbers",
+        ),
         ("[rider]\nkind = 'virtual'\n", "missing table [scenario]"),
         (
             "[scenario]\n[motorcycle]\nspeed = 2.0\n[rider]\nkind = 'virtual'\n",

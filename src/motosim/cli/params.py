@@ -41,6 +41,15 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
+_DERIVED_UNITS = {
+    "j": "m", "k": "m", "l": "m", "wheelbase": "m", "m": "kg", "J_R": "kg*m^2", "r_D": "m",
+    "m_eq": "kg", "mass": "kg", "x_G": "m", "z_G": "m", "J_h": "kg*m^2",
+    "beta_vh": "N*m*s/rad", "N*k_t": "N*m/A",
+}  # fmt: skip
+"""The unit of each derived value ``params show`` prints (:func:`derived_geometry`'s, the
+multibody set's mass and mass centre, the handlebar's own inertia, damping and N k_t)."""
+
+
 def _show(args: argparse.Namespace) -> int:
     pset = load_parameter_set(args.name)
     values = {f.name: float(getattr(pset.values, f.name)) for f in fields(pset.values)}
@@ -73,5 +82,5 @@ def _show(args: argparse.Namespace) -> int:
         return 0
     print("\nderived:")
     for name, value in derived.items():
-        print(f"  {name:<{width}}  {value:>14.6g}")
+        print(f"  {name:<{width}}  {value:>14.6g}  {_DERIVED_UNITS[name]}")
     return 0

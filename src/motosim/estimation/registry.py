@@ -340,7 +340,7 @@ def step_kernel(
         Rider-torque estimate at this sample [N*m].
     """
     if k.kind == TORQUE_SENSOR:  # the low-pass's output, started at the first sample
-        if state[1] == 0.0 or k.p[0] >= 1.0:  # started, or no low-pass: as measured
+        if state[1] == 0.0 or k.p[0] >= 1.0:  # the first sample, or no low-pass: as measured
             state[0], state[1] = torque, 1.0
         else:
             state[0] += k.p[0] * (torque - state[0])

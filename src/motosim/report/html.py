@@ -111,6 +111,7 @@ _ESTIMATOR_NAMES = {
     "walcott_zak": "Walcott-Zak observer (the paper's)",
     "inverse_dynamics": "inverse dynamics of the handlebar (no observer)",
     "kalman": "Kalman filter",
+    "torque_sensor": "a torque sensor's measured torque (no observer)",
 }
 _CONTROLLER_NAMES = {
     "ours": "ours: H-infinity loop shaping",
@@ -130,11 +131,15 @@ def _stack_rows(meta: Mapping[str, Any], scenario: Mapping[str, Any]) -> list[tu
     estimator = scenario.get("estimator")
     if isinstance(estimator, dict) and "name" in estimator:
         name = str(estimator["name"])
-        source = (
-            "gains from the scenario's design file"
-            if isinstance(meta.get("observer"), dict)
-            else "designed for the nominal handlebar at the run's rate"
-        )
+        if name == "torque_sensor":  # nothing designed: the sensor's reading, filtered or not
+            sensor = scenario.get("sensor")
+            torque = sensor.get("torque") if isinstance(sensor, dict) else None
+            corner = torque.get("low_pass", 0.0) if isinstance(torque, dict) else 0.0
+            source = f"through a {corner:g} Hz low-pass" if corner else "as measured"
+        elif isinstance(meta.get("observer"), dict):
+            source = "gains from the scenario's design file"
+        else:
+            source = "designed for the nominal handlebar at the run's rate"
         rows.append(("observer", f"{_ESTIMATOR_NAMES.get(name, name)}; {source}"))
     controller = scenario.get("controller")
     if isinstance(controller, dict) and "kind" in controller:

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
 from motosim.io.can import CanLink, UdpMulticastLink, handlebar_codecs, open_link
 from motosim.rt.clock import SimulatedClock
@@ -89,7 +90,9 @@ class Lockstep:
     status frames ``delay`` old (:func:`~motosim.sim.stack.account_for_delay`); the
     virtual rig of its true handlebar with the scenario's rider from the rig's t = 0: its
     torque profile, or its virtual rider (:class:`~motosim.rt.rig.VirtualRider`) steering
-    by the stack's rows, which the runner publishes over UDP on localhost; the runner
+    by the stack's rows, which the runner publishes over UDP on localhost, and its hands
+    and hands-off phases (:mod:`motosim.sim.hands`) as :func:`~motosim.sim.build_rig`
+    holds them; the runner
     (:class:`~motosim.rt.run.RealtimeRunner`) with ``limits``, stamping its rows on the
     simulated clock; the two ends of the virtual bus ``channel``; and the clock, whose
     first deadline is at t = 0 and which advances the rig to each deadline before the
@@ -172,6 +175,12 @@ class Lockstep:
         if not (math.isfinite(delay) and delay >= 0.0):
             raise MotosimError(f"delay = {delay!r} s: expected a non-negative time")
         sc = inputs.scenario
+        if sc.estimator.name == SENSOR_ESTIMATOR:  # as motosim run refuses it
+            raise MotosimError(
+                f'{sc.name}: [estimator] name = "{SENSOR_ESTIMATOR}" is not read in real time '
+                "(the loop does not take the HB_TORQUE frame, the stack would be told no "
+                "torque); expected an estimator of the angle and the current"
+            )
         self._rate = sc.rates.control
         self._periods = round(sc.duration * self._rate)
         model = account_for_delay(build_stack(inputs), delay, inputs.nominal_handlebar)
@@ -200,7 +209,8 @@ class Lockstep:
             self._links.append(drive)
             self.rig = VirtualRig(
                 inputs.true_handlebar, settings or ideal_rig(sc), codecs, drive, rider,
-                np.random.default_rng(seed), rider_on_enable=False,
+                np.random.default_rng(seed), rider_on_enable=False, hands=world.hands,
+                hands_off=world.hands_off,
             )  # fmt: skip
             self.runner = RealtimeRunner(
                 CompiledStack(model, force=world.force, side_force=world.side_force),

@@ -359,7 +359,7 @@ def safety_clear(s: Any) -> None:
 @njit(cache=True)
 def safety_trip(s: Any, fault: int) -> None:
     """Latch ``fault`` (a :class:`Fault` code) now: the next step returns 0."""
-    if fault == 0:
+    if fault == Fault.NONE:
         return
     if s.fault == Fault.NONE:
         s.fault = fault

@@ -392,8 +392,9 @@ def rider_route(scenario: Scenario) -> tuple[Array, float]:
 
 def perturb_rig(rig: RigModel, inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
     """``rig``, built for a run that differs from ``inputs`` only in its true handlebar and its
-    seed, made ``inputs``' in place: the handlebar's parameters and the current sensor's noise
-    (drawn from ``rng`` as :func:`build_rig` draws it).
+    seed, made ``inputs``' in place: the handlebar's parameters, the current sensor's noise
+    and the torque sensor's error (drawn from ``rng`` as :func:`build_rig` draws them, in
+    the same order).
 
     A campaign's worker builds the rig once and perturbs it run after run; the caller
     checks that the runs differ only there (:func:`rig_key`).
@@ -404,6 +405,11 @@ def perturb_rig(rig: RigModel, inputs: RunInputs, *, rng: np.random.Generator) -
     if noise:
         rng.standard_normal(out=rig.current_noise)  # rng.normal(0, noise, n), in place
         np.multiply(rig.current_noise, noise, out=rig.current_noise)
+    sensor = inputs.scenario.sensor.torque
+    if sensor is not None and sensor.noise:  # after the current's noise, as build_rig
+        rig.torque_error[:] = sensor.offset
+        np.add(rig.torque_error, rng.normal(0.0, sensor.noise, rig.torque_error.size),
+               out=rig.torque_error)  # fmt: skip
     return rig
 
 

@@ -1016,6 +1016,8 @@ def _describe(tp: Any) -> str:
         return "one of " + ", ".join(repr(a) for a in get_args(tp))
     if get_origin(tp) is tuple:
         item = get_args(tp)[0]
+        if get_origin(item) is tuple:  # hands_off's [[t0, t1], ...]
+            return "a list of " + _describe(item).replace("a list", "lists", 1)
         return f"a list of {'numbers' if item is float else 'strings' if item is str else 'tables'}"
     return "a table"
 
