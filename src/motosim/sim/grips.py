@@ -59,7 +59,7 @@ class Hands:
 
     @property
     def is_off(self) -> bool:
-        """Whether nothing holds the handlebar (every parameter zero)."""
+        """Whether the arms add nothing to the handlebar (every parameter zero)."""
         return self.inertia == 0.0 and self.damping == 0.0 and self.stiffness == 0.0
 
 
@@ -74,6 +74,8 @@ _PROVISIONAL = (
 GRIPS: dict[str, Hands] = {
     "relaxed": Hands(inertia=0.1, damping=1.0, stiffness=10.0, source=_PROVISIONAL),
     "firm": Hands(inertia=0.1, damping=4.0, stiffness=50.0, source=_PROVISIONAL),
-    "off": Hands(source="hands off: nothing holds the handlebar"),
+    "off": Hands(source="no arms' impedance: the rider's torque alone, as without hands"),
 }
-"""The named grips. ``off``: nobody holds the handlebar (no active torque either)."""
+"""The named grips. ``off``: no passive impedance, the rider a pure torque source as without
+``hands``; a phase where nobody holds the handlebar, active torque included, is the rider's
+``hands_off``."""

@@ -14,7 +14,7 @@ drivers", ASME DSCC 2012, a review). In the simulated rig the arms' inertia adds
 handlebar's J_eq in the plant's integration and the damping and stiffness are torques, so
 the stack's estimate sees the passive torque as a real front frame would.
 
-:data:`GRIPS` holds the named grips (``relaxed``, ``firm`` and ``off``, hands off), each
+:data:`GRIPS` holds the named grips (``relaxed``, ``firm`` and ``off``, no impedance), each
 value with its source; a scenario names one (``[rider] hands = "relaxed"``) or gives its
 own table. Both are defined in :mod:`motosim.sim.grips`, which a scenario's check imports
 without numba.
