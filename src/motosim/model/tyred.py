@@ -36,9 +36,11 @@ from motosim.errors import MotosimError
 from motosim.model import _generated_tyred as gen
 from motosim.model.sharp import ModeTable, modes
 from motosim.model.whipple import moore_parameters
+from motosim.params import load_parameter_set, load_parameters
 from motosim.params.checks import check_number
 from motosim.params.multibody import MultibodyParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
+from motosim.params.tyre import TyreParameters
 
 __all__ = [
     "Domain",
@@ -51,6 +53,8 @@ __all__ = [
     "domain",
     "lateral_matrix",
     "linear_tyre_forces",
+    "linearised_tyre",
+    "load_model",
     "make_model",
     "sharp_machine",
     "sharp_modes",
@@ -665,3 +669,76 @@ def sharp_modes(sharp: SharpParameters, speeds: ArrayLike) -> ModeTable:
         return out
 
     return modes(sharp, speeds, spectrum=spectrum)
+
+
+def linearised_tyre(tyre: TyreParameters, load: float, speed: float) -> LinearTyre:
+    """The linear relaxing tyre that matches a Magic Formula tyre at zero slip and camber.
+
+    Parameters
+    ----------
+    tyre : TyreParameters
+        The MF-MC tyre.
+    load : float
+        The normal load at which the stiffnesses are taken [N] (the static load).
+    speed : float
+        The speed at which the lateral relaxation length is taken [m/s].
+
+    Returns
+    -------
+    LinearTyre
+        The MF-MC's cornering, camber and slip stiffnesses at ``load`` per unit load
+        (:func:`motosim.model.tyres.cornering_stiffness` and its siblings), its lateral
+        relaxation length at ``load`` and ``speed``, its radial stiffness and damping.
+    """
+    from motosim.model import tyres
+
+    check_number(load, where="linearised tyre: load", lower=0.0, upper=1e5, unit="N")
+    check_number(speed, where="linearised tyre: speed", lower=0.0, upper=150.0, unit="m/s")
+    c = tyres.tyre_coefficients(tyre)
+    _, sigma_y = tyres.relaxation_lengths(c, load, speed)
+    return LinearTyre(
+        cornering=tyres.cornering_stiffness(c, load, 0.0) / load,
+        camber=tyres.camber_stiffness(c, load) / load,
+        longitudinal=tyres.slip_stiffness(c, load) / load,
+        relaxation_length=sigma_y,
+        radial_stiffness=tyre.k_z,
+        radial_damping=tyre.c_z,
+    )
+
+
+def load_model(name_or_path: str, *, speed: float = 20.0) -> TyredModel:
+    """The tyred model of a parameter set, by name or TOML path.
+
+    A ``sharp`` set is Sharp's machine of :func:`sharp_machine` (his linear relaxing tyres,
+    knife-edge wheels, his steering damper). A ``multibody`` set that names its tyres
+    (``front_tyre``, ``rear_tyre`` in its ``[set]``) runs on the linear relaxing tyres that
+    match those Magic Formula tyres at the static loads (:func:`linearised_tyre`, the
+    relaxation length at ``speed``), on its toroidal wheels.
+
+    Raises
+    ------
+    MotosimError
+        If the set is unknown, of another kind, or a multibody set without tyres.
+    """
+    pset = load_parameter_set(name_or_path)
+    if isinstance(pset.values, SharpParameters):
+        params, rear, front, damper = sharp_machine(pset.values)
+        return make_model(params, rear, front, steer_damping=damper)
+    if not isinstance(pset.values, MultibodyParameters):
+        raise MotosimError(
+            f"parameter set {name_or_path!r}: is a {pset.model} parameter set; expected a "
+            "sharp or multibody set"
+        )
+    missing = [key for key in ("front_tyre", "rear_tyre") if key not in pset.tyres]
+    if missing:
+        raise MotosimError(
+            f"parameter set {name_or_path!r}: names no {missing[0]}; expected a multibody set "
+            "with tyres (e.g. sel2004_motorcycle)"
+        )
+    params = pset.values
+    x_G, _ = params.mass_centre
+    weight = params.mass * params.g
+    load_f = weight * x_G / params.w
+    front = linearised_tyre(load_parameters(pset.tyres["front_tyre"], "tyre"), load_f, speed)
+    rear = linearised_tyre(load_parameters(pset.tyres["rear_tyre"], "tyre"), weight - load_f, speed)
+    return make_model(params, rear, front)
