@@ -31,7 +31,15 @@ from motosim.model.tyred import Inputs, State, TyredModel, _mass_forcing, contac
 from motosim.model.tyred import upright_state as _upright_state
 from motosim.params.checks import check_number
 
-__all__ = ["NoSteadyTurnError", "Trim", "kinematic_roll", "mass_centre", "steady_turn"]
+__all__ = [
+    "NoSteadyTurnError",
+    "Trim",
+    "handling_curve",
+    "horizontal_tyre_force",
+    "kinematic_roll",
+    "mass_centre",
+    "steady_turn",
+]
 
 _ACCELERATIONS = slice(9, 18)
 """The accelerations' entries of the state's derivative (forward .. front wheel spin)."""
@@ -126,6 +134,11 @@ class Trim:
     def lateral_acceleration(self) -> float:
         """v^2 / R [m/s^2]."""
         return self.speed**2 / self.radius
+
+    @property
+    def lateral_g(self) -> float:
+        """v^2 / (g R), the lateral acceleration in units of gravity [1]."""
+        return math.tan(self.phi_kinematic)
 
 
 def _p(model: TyredModel, name: str) -> float:
@@ -359,3 +372,53 @@ def _check_inside(
                 f"{where}: the {wheel} tyre saturates (beyond the road's friction mu = "
                 f"{friction:g})"
             )
+
+
+def handling_curve(
+    model: TyredModel,
+    speed: float,
+    *,
+    max_lateral_g: float = 0.9,
+    step_g: float = 0.05,
+    friction: float = 1.0,
+) -> list[Trim]:
+    """Steady turns at one speed for lateral accelerations step_g, 2 step_g, ... [g].
+
+    The sweep stops at ``max_lateral_g`` or at the first lateral acceleration the tyres
+    cannot hold (no steady turn), whichever comes first.
+
+    Parameters
+    ----------
+    model : TyredModel
+        The machine.
+    speed : float
+        The mass centre's speed [m/s].
+    max_lateral_g : float, optional
+        The largest lateral acceleration asked for [g], 0.9 by default.
+    step_g : float, optional
+        The sweep's step [g].
+    friction : float, optional
+        Road friction coefficient mu.
+
+    Returns
+    -------
+    list of Trim
+        In increasing lateral acceleration (right turns); empty when even the first fails.
+
+    Raises
+    ------
+    MotosimError
+        If the speed, step or bound is out of range.
+    """
+    check_number(max_lateral_g, where="handling curve: max_lateral_g", lower=0.0, upper=3.0)
+    check_number(step_g, where="handling curve: step_g", lower=1e-3, upper=1.0)
+    g = _p(model, "g")
+    turns: list[Trim] = []
+    count = math.floor(max_lateral_g / step_g + 1e-9)
+    for k in range(1, count + 1):
+        radius = speed**2 / (k * step_g * g)
+        try:
+            turns.append(steady_turn(model, speed, radius, friction=friction))
+        except NoSteadyTurnError:
+            break
+    return turns
