@@ -3,7 +3,7 @@ The handling figure: steer torque and roll in steady turns
 ==========================================================
 
 The Suzuki GSX-R1000 of Sharp, Evangelou & Limebeer (2004) on the multibody model
-(:mod:`motosim.model.tyred`, toroidal wheels, its tyres linearised at the static loads),
+(:mod:`motosim.model.tyred`, toroidal wheels, its Magic Formula tyres),
 trimmed in steady right turns (:func:`motosim.model.trim.steady_turn`) at 10, 20 and 30 m/s
 from 0.05 g to 0.9 g: the rider's steer torque and the roll against lateral acceleration,
 the kinematic roll atan(a_y / g) dashed. The same figure at the command line:

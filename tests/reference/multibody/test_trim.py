@@ -44,7 +44,7 @@ def sel2004() -> tyred.TyredModel:
 
 
 def _thin(spin: float, crown: float) -> tyred.TyredModel:
-    """The GSX-R1000 with its wheels' spin inertias and crown radii scaled down."""
+    """The GSX-R1000 on its MF tyres, its wheels' spin inertias and crown radii scaled."""
     pset = load_parameter_set("sel2004_motorcycle")
     params = dataclasses.replace(
         pset.values,
@@ -53,9 +53,8 @@ def _thin(spin: float, crown: float) -> tyred.TyredModel:
         t_R=pset.values.t_R * crown,
         t_F=pset.values.t_F * crown,
     )
-    base = tyred.load_model("sel2004_motorcycle")
-    rear = tyred.LinearTyre(*base.rear)
-    front = tyred.LinearTyre(*base.front)
+    rear = load_parameters(pset.tyres["rear_tyre"], "tyre")
+    front = load_parameters(pset.tyres["front_tyre"], "tyre")
     return tyred.make_model(params, rear, front)
 
 
@@ -121,12 +120,22 @@ def test_difference_shrinks_with_speed_at_the_same_lateral_acceleration(
 
 
 def test_left_turn_mirrors_right_turn(sel2004: tyred.TyredModel) -> None:
+    """Mirror images, up to the MF-MC's combined slip: its weighting of the side force by the
+    longitudinal slip, B_yk = r_By1 cos(atan(r_By2 (tan(alpha) - r_By3))) with r_By3 = -0.059
+    in Evangelou's fit, is not even in sideslip, so with the drive's slip the small steer
+    angle differs slightly between the two directions; the linear tyres mirror exactly."""
     right = trim.steady_turn(sel2004, 20.0, 80.0)
     left = trim.steady_turn(sel2004, 20.0, -80.0)
+    assert left.phi == pytest.approx(-right.phi, rel=1e-5)
+    assert left.delta == pytest.approx(-right.delta, rel=1e-2)
+    assert left.tau_r == pytest.approx(-right.tau_r, rel=1e-2)
+    assert left.F_zf == pytest.approx(right.F_zf, rel=1e-5)
+    linear = tyred.load_model("sel2004_motorcycle", tyres="linear")
+    right = trim.steady_turn(linear, 20.0, 80.0)
+    left = trim.steady_turn(linear, 20.0, -80.0)
     assert left.phi == pytest.approx(-right.phi, rel=1e-7)
     assert left.delta == pytest.approx(-right.delta, rel=1e-6)
     assert left.tau_r == pytest.approx(-right.tau_r, rel=1e-6)
-    assert left.F_zf == pytest.approx(right.F_zf, rel=1e-8)
 
 
 def test_sharp_machine_turn_is_an_equilibrium() -> None:
