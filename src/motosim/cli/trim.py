@@ -10,7 +10,13 @@ import argparse
 import math
 from typing import TYPE_CHECKING, Any
 
-from motosim.cli._common import check_figure_path, parse_float_list, print_json, save_figure
+from motosim.cli._common import (
+    check_figure_path,
+    parse_float_list,
+    print_json,
+    save_figure,
+    warn_atypical,
+)
 from motosim.errors import MotosimError, RunFailedError
 from motosim.params import load_parameter_set
 
@@ -50,7 +56,7 @@ def register(sub: Any) -> None:
     """Add ``trim`` to the subcommands."""
     parser = sub.add_parser(
         "trim",
-        help="the steady turn of the multibody motorcycle, and the handling figure",
+        help="the steady turn of the multibody motorcycle, the handling figure",
         description=(
             "The steady turn of the multibody motorcycle on tyres at a speed and radius "
             "(the mass centre's; a right turn), or with --handling the steer torque and roll "
@@ -107,6 +113,7 @@ def _check(args: argparse.Namespace) -> list[float]:
         speeds = parse_float_list("--speeds", args.speeds or _DEFAULT_SPEEDS, max_items=_MAX_SPEEDS)
         for speed in speeds:
             _check_speed("--speeds", speed)
+        warn_atypical("trim", "--speeds", speeds)
         return speeds
     if args.speeds is not None or args.plot is not None:
         option = "--speeds" if args.speeds is not None else "--plot"
@@ -115,6 +122,7 @@ def _check(args: argparse.Namespace) -> list[float]:
         missing = "--speed" if args.speed is None else "--radius"
         raise MotosimError(f"{missing} is missing; expected --speed V --radius R (or --handling)")
     _check_speed("--speed", args.speed)
+    warn_atypical("trim", "--speed", args.speed)
     if not (math.isfinite(args.radius) and _RADIUS[0] <= args.radius <= _RADIUS[1]):
         raise MotosimError(
             f"--radius {args.radius:g}; expected a radius from {_RADIUS[0]:g} to {_RADIUS[1]:g} m"
