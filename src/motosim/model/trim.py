@@ -12,7 +12,7 @@ forces' rates vanish, the mass centre moves at v) for the twelve unknowns (heigh
 pitch, steer, the rear wheel centre's forward and lateral velocities, both wheels' spins,
 both side forces, tau_r and the drive torque) with Powell's hybrid method
 (``scipy.optimize.root``), started from the kinematic roll atan(v^2 / (g R)) corrected for
-the tyres' crown radii (Cossalter 2006, *Motorcycle Dynamics*, 2nd ed., section 4.1) and the
+the tyres' crown radii (Cossalter 2006, *Motorcycle Dynamics*, 2nd ed., chapter 4) and the
 kinematic steer w / R.
 
 Only the yaw rate's vertical axis and the mass centre's path are prescribed; the turn's

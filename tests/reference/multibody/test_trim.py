@@ -1,6 +1,6 @@
 """Steady turns of the tyred multibody motorcycle against the toroidal-tyre kinematics.
 
-Reference: Cossalter, V. (2006). *Motorcycle Dynamics*, 2nd ed., Lulu, section 4.1 (steady
+Reference: Cossalter, V. (2006). *Motorcycle Dynamics*, 2nd ed., Lulu, chapter 4 (steady
 turning, the effect of the tyres' thickness): a machine whose wheels are tori of crown radius
 t, its mass centre at height h, turning at speed v on a radius R, rolls by
 
