@@ -81,6 +81,9 @@ _MODES_SWEEP = Typical(
 )  # fmt: skip
 _LOOP_RATE = Typical(100.0, 10_000.0, "Hz", "of a handlebar loop (100 Hz over the paper's CAN "
                      "link, up to a drive's 10 kHz)")  # fmt: skip
+_TURNS = Typical(
+    5.0, 50.0, "m/s", "of a steady turn on a road (a roundabout at 5, a motorway bend at 50)"
+)
 _REPLAY = Typical(0.1, 10.0, "", "replay speeds a person follows")
 
 TYPICAL_OPTIONS: dict[tuple[str, str], Typical] = {
@@ -95,6 +98,8 @@ TYPICAL_OPTIONS: dict[tuple[str, str], Typical] = {
     ),
     ("modes", "--speeds"): _MODES_SWEEP,
     ("modes", "--range"): _MODES_SWEEP,
+    ("trim", "--speed"): _TURNS,
+    ("trim", "--speeds"): _TURNS,
     ("design", "--speeds"): _SPEEDS,
     ("design", "--rate"): _LOOP_RATE,
     ("design", "--bandwidth"): Typical(

@@ -39,6 +39,10 @@ __all__ = ["COMMANDS", "build_parser", "main"]
 COMMANDS: dict[str, tuple[str, str]] = {
     "params": ("motosim.cli.params", "list and show parameter sets"),
     "modes": ("motosim.cli.modes", "eigenvalues and modes of the motorcycle against speed"),
+    "trim": (
+        "motosim.cli.trim",
+        "the steady turn of the multibody motorcycle, the handling figure",
+    ),
     "excite": (
         "motosim.cli.excite",
         "simulate an open-loop excitation run of the handlebar (section II.D)",

@@ -11,8 +11,10 @@ with camber. The ground pushes on each wheel at that point with
 * a longitudinal force from the longitudinal slip and a side force from the sideslip and the
   camber, relaxed to its steady value over the relaxation length
   (sigma / |V| F_y' + F_y = F_y,ss), both limited together by a friction ellipse of
-  radius mu F_z (:func:`linear_tyre_forces`, a linear tyre with saturation);
-* no aligning or overturning moment in this tyre law (the generated Jacobian takes them).
+  radius mu F_z, from either tyre law: a linear tyre (:func:`linear_tyre_forces`, no
+  moments) or the Magic Formula motorcycle tyre of :mod:`motosim.model.tyres`
+  (:func:`magic_tyre_forces`: combined slip, load dependence, the aligning and overturning
+  moments through the contact Jacobians, the lateral relaxation length of the tyre set).
 
 The generated code (``scripts/derive_multibody.py``, Kane's method) gives the mass matrix,
 the forcing without tyre forces and the contact kinematics (positions, the slips'
@@ -35,10 +37,19 @@ from numpy.typing import ArrayLike
 from motosim.errors import MotosimError
 from motosim.model import _generated_tyred as gen
 from motosim.model.sharp import ModeTable, modes
+from motosim.model.tyres import (
+    TyreCoefficients,
+    linear_tyre_coefficients,
+    relaxation_lengths,
+    steady_forces,
+    tyre_coefficients,
+)
 from motosim.model.whipple import moore_parameters
+from motosim.params import load_parameter_set, load_parameters
 from motosim.params.checks import check_number
 from motosim.params.multibody import MultibodyParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
+from motosim.params.tyre import TyreParameters
 
 __all__ = [
     "Domain",
@@ -51,6 +62,9 @@ __all__ = [
     "domain",
     "lateral_matrix",
     "linear_tyre_forces",
+    "linearised_tyre",
+    "load_model",
+    "magic_tyre_forces",
     "make_model",
     "sharp_machine",
     "sharp_modes",
@@ -156,6 +170,13 @@ class TyredModel(NamedTuple):
     """|roll| beyond which the machine has fallen [rad]."""
     lam: float
     """The steering axis tilt [rad]: the rear frame's pitch when level on undeformed tyres."""
+    magic: bool
+    """Whether the tyres are the Magic Formula tyres ``mf_rear``, ``mf_front`` (else the
+    linear tyres ``rear``, ``front``)."""
+    mf_rear: TyreCoefficients
+    """The rear Magic Formula tyre (a placeholder when ``magic`` is false)."""
+    mf_front: TyreCoefficients
+    """The front Magic Formula tyre."""
 
 
 class State(NamedTuple):
@@ -224,8 +245,8 @@ N_STATE = len(State._fields)
 
 def make_model(
     params: MultibodyParameters,
-    rear: LinearTyre,
-    front: LinearTyre,
+    rear: LinearTyre | TyreParameters,
+    front: LinearTyre | TyreParameters,
     *,
     drag: float = 0.0,
     aero_centre: tuple[float, float] | None = None,
@@ -238,8 +259,10 @@ def make_model(
     ----------
     params : MultibodyParameters
         The machine.
-    rear, front : LinearTyre
-        The tyres.
+    rear, front : LinearTyre or TyreParameters
+        The tyres, both linear relaxing tyres or both Magic Formula tyres (MF-MC, with their
+        aligning and overturning moments, lateral relaxation lengths, radial stiffness and
+        damping).
     drag : float, optional
         rho C_d A / 2 [kg/m]; no drag by default.
     aero_centre : (float, float), optional
@@ -255,6 +278,20 @@ def make_model(
         steer_damping, where="tyred model: steer_damping", lower=0.0, upper=1e3, lower_closed=True
     )
     check_number(roll_limit, where="tyred model: roll_limit", lower=0.1, upper=math.pi / 2)
+    magic = isinstance(rear, TyreParameters)
+    if magic != isinstance(front, TyreParameters):
+        raise MotosimError(
+            "tyred model: one linear and one Magic Formula tyre; expected two of one kind"
+        )
+    if isinstance(rear, TyreParameters) and isinstance(front, TyreParameters):
+        mf_rear, mf_front = tyre_coefficients(rear), tyre_coefficients(front)
+        rear_array = np.array([0.0, 0.0, 0.0, rear.sigma_x, rear.k_z, rear.c_z])
+        front_array = np.array([0.0, 0.0, 0.0, front.sigma_x, front.k_z, front.c_z])
+    elif isinstance(rear, LinearTyre) and isinstance(front, LinearTyre):
+        mf_rear = mf_front = _PLACEHOLDER
+        rear_array, front_array = rear.as_array(), front.as_array()
+    else:
+        raise MotosimError("tyred model: tyres; expected LinearTyre or TyreParameters")
     x_a, z_a = aero_centre if aero_centre is not None else (params.x_B, params.z_B)
     cl, sl = math.cos(params.lam), math.sin(params.lam)
     rel_z = z_a + params.r_R
@@ -263,15 +300,88 @@ def make_model(
     assert len(p) == len(gen.PARAMETERS)
     return TyredModel(
         p=p,
-        rear=rear.as_array(),
-        front=front.as_array(),
+        rear=rear_array,
+        front=front_array,
         drag=float(drag),
         steer_damping=float(steer_damping),
         spin_inertia=np.array([params.I_Ryy, params.I_Fyy]),
         radii=np.array([params.r_R, params.r_F]),
         roll_limit=float(roll_limit),
         lam=float(params.lam),
+        magic=magic,
+        mf_rear=mf_rear,
+        mf_front=mf_front,
     )
+
+
+_PLACEHOLDER = linear_tyre_coefficients(
+    nominal_load=1.0,
+    cornering_stiffness=1.0,
+    camber_stiffness=0.0,
+    slip_stiffness=1.0,
+    relaxation_length=1.0,
+    radius=1.0,
+)
+"""The Magic Formula slots of a model on linear tyres (never evaluated)."""
+
+
+@njit(cache=True)
+def magic_tyre_forces(
+    c: TyreCoefficients, kin: Array, side_force: float, friction: float
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """The Magic Formula tyre at one contact.
+
+    Parameters
+    ----------
+    c : TyreCoefficients
+        The tyre (:func:`motosim.model.tyres.tyre_coefficients`).
+    kin : ndarray, shape (8,)
+        The contact's kinematics from the generated ``contacts``.
+    side_force : float
+        The relaxed side force state [N].
+    friction : float
+        mu.
+
+    Returns
+    -------
+    tuple of float
+        F_x, F_y (the relaxed side force, both within the friction ellipse), F_z [N], the
+        steady side force the relaxation tends to [N], kappa, alpha [rad], the aligning and
+        overturning moments [N*m] (steady, scaled with the relaxed side force's share of the
+        steady one) and the lateral relaxation length [m].
+    """
+    depth, depth_rate = kin[2], kin[3]
+    load = 0.0
+    if depth > 0.0:
+        load = max(0.0, c.k_z * depth + c.c_z * depth_rate)
+    speed = max(abs(kin[6]), _MIN_SPEED)
+    kappa = -kin[4] / speed
+    alpha = math.atan(-kin[5] / speed)
+    camber = math.asin(min(1.0, max(-1.0, kin[7])))
+    fx, steady, mz, mx = steady_forces(c, load, kappa, alpha, camber, friction)
+    _, sigma = relaxation_lengths(c, load, speed)
+    fy = side_force
+    limit = friction * load
+    total = math.sqrt(fx * fx + fy * fy)
+    if total > limit:
+        scale = limit / total if total > 0.0 else 0.0
+        fx *= scale
+        fy *= scale
+    share = min(1.0, max(-1.0, fy / steady)) if abs(steady) > 1e-9 else 1.0
+    return fx, fy, load, steady, kappa, alpha, mz * share, mx * share, sigma
+
+
+@njit(cache=True)
+def _tyre(
+    model: TyredModel, front: bool, kin: Array, side_force: float, friction: float
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """Either tyre law at one contact: as :func:`magic_tyre_forces` returns."""
+    if model.magic:
+        c = model.mf_front if front else model.mf_rear
+        return magic_tyre_forces(c, kin, side_force, friction)
+    tyre = model.front if front else model.rear
+    fx, fy, fz, steady, kappa, alpha = linear_tyre_forces(tyre, kin, side_force, friction)
+    return fx, fy, fz, steady, kappa, alpha, 0.0, 0.0, tyre[3]
 
 
 @njit(cache=True)
@@ -347,10 +457,10 @@ def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
     r = np.array([steer, rear, front])
     M, f = _mass_forcing(model.p, q, u, r)
     kr, kf, Jr, Jf = _contacts(model.p, q, u)
-    fxr, fyr, fzr, ssr, _, _ = linear_tyre_forces(model.rear, kr, x[18], inputs.friction)
-    fxf, fyf, fzf, ssf, _, _ = linear_tyre_forces(model.front, kf, x[19], inputs.friction)
-    _add_contact(f, Jr, fxr, fyr, fzr, 0.0, 0.0)  # the linear tyre has no moments
-    _add_contact(f, Jf, fxf, fyf, fzf, 0.0, 0.0)
+    fxr, fyr, fzr, ssr, _, _, mzr, mxr, sigma_r = _tyre(model, False, kr, x[18], inputs.friction)
+    fxf, fyf, fzf, ssf, _, _, mzf, mxf, sigma_f = _tyre(model, True, kf, x[19], inputs.friction)
+    _add_contact(f, Jr, fxr, fyr, fzr, mxr, mzr)
+    _add_contact(f, Jf, fxf, fyf, fzf, mxf, mzf)
     if model.drag > 0.0:
         Ja = _aero_jacobian(model.p, q)
         va = 0.0
@@ -362,8 +472,8 @@ def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
     out = np.empty(N_STATE)
     out[:9] = _kinematics(model.p, q, u)
     out[9:18] = np.linalg.solve(M, f)
-    out[18] = max(abs(kr[6]), _MIN_SPEED) / model.rear[3] * (ssr - x[18])
-    out[19] = max(abs(kf[6]), _MIN_SPEED) / model.front[3] * (ssf - x[19])
+    out[18] = max(abs(kr[6]), _MIN_SPEED) / sigma_r * (ssr - x[18])
+    out[19] = max(abs(kf[6]), _MIN_SPEED) / sigma_f * (ssf - x[19])
     return out
 
 
@@ -434,15 +544,17 @@ def contact_loads(model: TyredModel, state: State, inputs: Inputs) -> dict[str, 
     Returns
     -------
     dict of str to float
-        ``F_xr``, ``F_yr``, ``F_zr``, ``kappa_r``, ``alpha_r`` and the same for the front
-        (``_f``) [N, 1, rad], ``camber_r``, ``camber_f`` [rad].
+        ``F_xr``, ``F_yr``, ``F_zr``, ``kappa_r``, ``alpha_r``, ``M_zr``, ``M_xr`` and the
+        same for the front (``_f``) [N, 1, rad, N*m], ``camber_r``, ``camber_f`` [rad].
     """
     x = np.array(state, dtype=float)
     kr, kf, _, _ = gen.contacts(model.p, x[:9], x[9:18])
     out: dict[str, float] = {}
-    for suffix, tyre, kin, side in (("r", model.rear, kr, x[18]), ("f", model.front, kf, x[19])):
-        fx, fy, fz, _, kappa, alpha = linear_tyre_forces(tyre, kin, side, inputs.friction)
+    for suffix, front, kin, side in (("r", False, kr, x[18]), ("f", True, kf, x[19])):
+        fx, fy, fz, _, kappa, alpha, mz, mx, _ = _tyre(model, front, kin, side, inputs.friction)
         out |= {
+            f"M_z{suffix}": mz,
+            f"M_x{suffix}": mx,
             f"F_x{suffix}": fx,
             f"F_y{suffix}": fy,
             f"F_z{suffix}": fz,
@@ -665,3 +777,84 @@ def sharp_modes(sharp: SharpParameters, speeds: ArrayLike) -> ModeTable:
         return out
 
     return modes(sharp, speeds, spectrum=spectrum)
+
+
+def linearised_tyre(tyre: TyreParameters, load: float, speed: float) -> LinearTyre:
+    """The linear relaxing tyre that matches a Magic Formula tyre at zero slip and camber.
+
+    Parameters
+    ----------
+    tyre : TyreParameters
+        The MF-MC tyre.
+    load : float
+        The normal load at which the stiffnesses are taken [N] (the static load).
+    speed : float
+        The speed at which the lateral relaxation length is taken [m/s].
+
+    Returns
+    -------
+    LinearTyre
+        The MF-MC's cornering, camber and slip stiffnesses at ``load`` per unit load
+        (:func:`motosim.model.tyres.cornering_stiffness` and its siblings), its lateral
+        relaxation length at ``load`` and ``speed``, its radial stiffness and damping.
+    """
+    from motosim.model import tyres
+
+    check_number(load, where="linearised tyre: load", lower=0.0, upper=1e5, unit="N")
+    check_number(speed, where="linearised tyre: speed", lower=0.0, upper=150.0, unit="m/s")
+    c = tyres.tyre_coefficients(tyre)
+    _, sigma_y = tyres.relaxation_lengths(c, load, speed)
+    return LinearTyre(
+        cornering=tyres.cornering_stiffness(c, load, 0.0) / load,
+        camber=tyres.camber_stiffness(c, load) / load,
+        longitudinal=tyres.slip_stiffness(c, load) / load,
+        relaxation_length=sigma_y,
+        radial_stiffness=tyre.k_z,
+        radial_damping=tyre.c_z,
+    )
+
+
+def load_model(name_or_path: str, *, tyres: str = "magic", speed: float = 20.0) -> TyredModel:
+    """The tyred model of a parameter set, by name or TOML path.
+
+    A ``sharp`` set is Sharp's machine of :func:`sharp_machine` (his linear relaxing tyres,
+    knife-edge wheels, his steering damper). A ``multibody`` set that names its tyres
+    (``front_tyre``, ``rear_tyre`` in its ``[set]``) runs on its toroidal wheels with those
+    Magic Formula tyres (``tyres="magic"``) or with the linear relaxing tyres that match them
+    at the static loads (``tyres="linear"``: :func:`linearised_tyre`, the relaxation length
+    at ``speed`` [m/s]).
+
+    Raises
+    ------
+    MotosimError
+        If the set is unknown, of another kind, a multibody set without tyres, or ``tyres``
+        is neither ``"magic"`` nor ``"linear"``.
+    """
+    if tyres not in ("magic", "linear"):
+        raise MotosimError(f"tyred model: tyres = {tyres!r}; expected 'magic' or 'linear'")
+    pset = load_parameter_set(name_or_path)
+    if isinstance(pset.values, SharpParameters):
+        params, rear, front, damper = sharp_machine(pset.values)
+        return make_model(params, rear, front, steer_damping=damper)
+    if not isinstance(pset.values, MultibodyParameters):
+        raise MotosimError(
+            f"parameter set {name_or_path!r}: is a {pset.model} parameter set; expected a "
+            "sharp or multibody set"
+        )
+    missing = [key for key in ("front_tyre", "rear_tyre") if key not in pset.tyres]
+    if missing:
+        raise MotosimError(
+            f"parameter set {name_or_path!r}: names no {missing[0]}; expected a multibody set "
+            "with tyres (e.g. sel2004_motorcycle)"
+        )
+    params = pset.values
+    front_mf = load_parameters(pset.tyres["front_tyre"], "tyre")
+    rear_mf = load_parameters(pset.tyres["rear_tyre"], "tyre")
+    if tyres == "magic":
+        return make_model(params, rear_mf, front_mf)
+    x_G, _ = params.mass_centre
+    weight = params.mass * params.g
+    load_f = weight * x_G / params.w
+    front = linearised_tyre(front_mf, load_f, speed)
+    rear = linearised_tyre(rear_mf, weight - load_f, speed)
+    return make_model(params, rear, front)
