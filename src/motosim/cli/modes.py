@@ -37,7 +37,8 @@ def register(sub: Any) -> None:
     parser = sub.add_parser(
         "modes",
         help="eigenvalues and modes of the motorcycle against speed",
-        description="Capsize, weave and wobble of Sharp's (1971) motorcycle at each speed.",
+        description="Capsize, weave and wobble of Sharp's (1971) machine at each speed: its "
+        "linear model, or the machine through the multibody model on tyres (--model multibody).",
     )
     where = parser.add_mutually_exclusive_group()
     where.add_argument(
@@ -52,7 +53,8 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--model",
         choices=("sharp1971", "multibody"),
-        help="Sharp's linear model or the multibody model on tyres (default: the set's kind)",
+        help="Sharp's linear model or the multibody model on tyres, for a sharp parameter set "
+        "(default: sharp1971)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument(
@@ -124,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     pset = load_parameter_set(args.params)
-    model = args.model or ("multibody" if pset.model == "multibody" else "sharp1971")
+    model = args.model or "sharp1971"
     if not isinstance(pset.values, SharpParameters):
         raise MotosimError(
             f"--params {args.params}: is a {pset.model} parameter set; expected a sharp "
