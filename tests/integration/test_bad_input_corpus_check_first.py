@@ -115,6 +115,13 @@ def test_paper_and_rt_check_refuse_early_too(files: Path) -> None:
     _refused_early(["fidelity", "--band", "3:1"], files, "--band '3:1'", "<= 20 Hz")
 
 
+@pytest.mark.parametrize("command", ["run", "rig"])
+def test_a_bad_bus_is_refused_before_the_can_codec_is_compiled(command: str, files: Path) -> None:
+    scenario = str(Path(__file__).parents[2] / "scenarios" / "realtime_square.toml")
+    argv = [command, scenario, "--bus", "nope", *(["--out", "r"] if command == "run" else [])]
+    _refused_early(argv, files, "--bus 'nope'", "INTERFACE[:CHANNEL]")  # numba not imported
+
+
 # --- 1. paths: outputs that cannot be written, inputs that cannot be read -------------------
 
 

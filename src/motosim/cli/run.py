@@ -178,7 +178,7 @@ class RtOptions:
 def check_rt_options(args: argparse.Namespace) -> RtOptions:
     """Refuse the options of run and rig before any work: --bus, --duration, --telemetry,
     --platform-udp, --platform, --fifo, --cpu, --spin (one line each); return those parsed."""
-    from motosim.io.can import check_bus
+    from motosim.io.bus_spec import check_bus
     from motosim.rt.telemetry import parse_address
 
     check_bus(args.bus)
