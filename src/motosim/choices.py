@@ -4,13 +4,21 @@ A scenario file is checked before the numerical stack is imported, so what its c
 lives here, in a module that imports nothing: the estimator names (the keys of
 :data:`motosim.estimation.registry.ESTIMATORS`, which the registry checks equal to
 :data:`ESTIMATOR_NAMES`), the tuned controller's largest order and default integral corner
-(:mod:`motosim.control.torque_feedback`) and the speeds the virtual rider is scheduled over
-(:mod:`motosim.sim.rider`). Those modules import their values from here.
+(:mod:`motosim.control.torque_feedback`), its lowest bandwidth and the speeds the virtual
+rider is scheduled over (:mod:`motosim.sim.rider`). Those modules, and the command line's
+parsers, import their values from here.
 """
 
 from typing import Final
 
-__all__ = ["ESTIMATOR_NAMES", "INTEGRAL_CORNER", "MAX_ORDER", "RIDER_SPEEDS", "SENSOR_ESTIMATOR"]
+__all__ = [
+    "ESTIMATOR_NAMES",
+    "INTEGRAL_CORNER",
+    "LOWEST_BANDWIDTH",
+    "MAX_ORDER",
+    "RIDER_SPEEDS",
+    "SENSOR_ESTIMATOR",
+]
 
 ESTIMATOR_NAMES: Final = ("walcott_zak", "inverse_dynamics", "kalman")
 """The names of :data:`motosim.estimation.registry.ESTIMATORS`, in its order (the default,
@@ -23,5 +31,10 @@ INTEGRAL_CORNER: Final = 0.1
 MAX_ORDER: Final = 3
 """Highest controller order: the shaped plant W1 G_h has 3 states (handlebar 2, weight 1), and a
 controller of that order already reaches the full-order optimum (Glover & McFarlane 1989)."""
+LOWEST_BANDWIDTH: Final = 0.1
+"""Lowest tuned-controller bandwidth admitted [Hz] (``[controller] bandwidth``, ``design
+--bandwidth``): a rider steers at 0.1-5 Hz, a loop slower than the slowest of it renders no
+feel, and far below it the loop-shaping weight's integrator corner and the Riccati equations
+of the synthesis lose their precision."""
 RIDER_SPEEDS: Final = (3.0, 60.0)
 """Speeds the virtual rider's gains are scheduled over by default [m/s]."""

@@ -8,6 +8,7 @@ from datetime import date
 from typing import TYPE_CHECKING, Any
 
 from motosim import __version__
+from motosim.choices import INTEGRAL_CORNER, LOWEST_BANDWIDTH, MAX_ORDER
 from motosim.cli._common import (
     check_output,
     parse_float_list,
@@ -33,14 +34,6 @@ SPEED_RANGE = (3.0, 60.0)
 
 __all__ = ["INTEGRAL_CORNER", "MAX_ORDER", "MAX_STARTS", "register"]
 
-INTEGRAL_CORNER = 0.1
-""":data:`motosim.control.torque_feedback.INTEGRAL_CORNER`, written out as :data:`MAX_ORDER`
-is."""
-MAX_ORDER = 3
-"""Highest order of the tuned controller: :data:`motosim.control.torque_feedback.MAX_ORDER`,
-written out so that the parser is built without importing SciPy (a unit test checks that they
-are equal)."""
-
 
 MAX_STARTS = 32
 """Most random starts of the fixed-order search: each takes a fraction of a second at order 1
@@ -51,12 +44,6 @@ MAX_SEED = 2**63 - 1
 
 RATE_RANGE = (10.0, 100_000.0)
 """Control rates admitted [Hz]: a real-time loop runs at 100 Hz to tens of kHz."""
-
-LOWEST_BANDWIDTH = 0.1
-"""Lowest ``--bandwidth`` admitted [Hz]; the highest is a fifth of ``--rate``
-(:func:`motosim.control.torque_feedback.check_options`). A rider steers at 0.1-5 Hz: a loop
-slower than the slowest of it renders no feel, and far below it the loop-shaping weight's
-integrator corner and the Riccati equations of the synthesis lose their precision."""
 
 
 def register(sub: Any) -> None:

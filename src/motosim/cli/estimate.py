@@ -3,17 +3,16 @@
 import argparse
 from typing import Any
 
+from motosim.choices import ESTIMATOR_NAMES, SENSOR_ESTIMATOR
 from motosim.cli._common import check_input, check_output, print_json
 from motosim.params import load_parameters
 from motosim.params.checks import check_number
 
 __all__ = ["ESTIMATORS", "register"]
 
-ESTIMATORS = ("walcott_zak", "inverse_dynamics", "kalman", "torque_sensor")
-"""The choices of ``--estimator``, the default first: the keys of
-:data:`motosim.estimation.ESTIMATORS` and the torque sensor's
-:data:`~motosim.estimation.registry.SENSOR_ESTIMATOR`, written out so that the parser is
-built without importing SciPy (a unit test checks that they are equal)."""
+ESTIMATORS = (*ESTIMATOR_NAMES, SENSOR_ESTIMATOR)
+"""The choices of ``--estimator``, the default first: the registry's estimators and the torque
+sensor's, from :mod:`motosim.choices` (light: the parser is built without SciPy)."""
 
 
 def register(sub: Any) -> None:

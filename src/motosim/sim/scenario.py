@@ -75,7 +75,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.choices import ESTIMATOR_NAMES as ESTIMATORS
-from motosim.choices import INTEGRAL_CORNER, MAX_ORDER, RIDER_SPEEDS, SENSOR_ESTIMATOR
+from motosim.choices import (
+    INTEGRAL_CORNER,
+    LOWEST_BANDWIDTH,
+    MAX_ORDER,
+    RIDER_SPEEDS,
+    SENSOR_ESTIMATOR,
+)
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
 from motosim.sim import paths
@@ -732,11 +738,6 @@ class Estimator:
                 f"name = {self.name!r}; expected one of {', '.join(ESTIMATORS)}, {SENSOR_ESTIMATOR}"
             )
         _check("lipschitz", self.lipschitz, low=0.0, low_open=True, high=1e7, unit="rad/s^2")
-
-
-LOWEST_BANDWIDTH = 0.1
-"""Lowest ``[controller] bandwidth`` [Hz]: a rider steers at 0.1-5 Hz, and far below that the
-synthesis's weight and Riccati equations lose their precision (``design --bandwidth`` too)."""
 
 
 @dataclass(frozen=True, slots=True)
