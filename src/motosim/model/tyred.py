@@ -52,7 +52,9 @@ from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.params.tyre import TyreParameters
 
 __all__ = [
+    "ContactLoads",
     "Domain",
+    "Index",
     "Inputs",
     "LinearTyre",
     "State",
@@ -66,6 +68,7 @@ __all__ = [
     "load_model",
     "magic_tyre_forces",
     "make_model",
+    "observe",
     "sharp_machine",
     "sharp_modes",
     "step",
@@ -241,6 +244,33 @@ class Domain(IntEnum):
 
 
 N_STATE = len(State._fields)
+
+Index = IntEnum("Index", [(name, i) for i, name in enumerate(State._fields)])  # type: ignore[misc]
+"""Position of each :class:`State` field in the compiled state array (``x[Index.roll]``)."""
+
+
+class ContactLoads(NamedTuple):
+    """The tyre forces and slips at both contacts, and where the rear contact is (SI)."""
+
+    F_xr: float
+    """Rear longitudinal force on the wheel, along its heading [N] (< 0 braking)."""
+    F_yr: float
+    """Rear side force, relaxed and within the friction ellipse [N] (+ to the right)."""
+    F_zr: float
+    """Rear normal load [N]."""
+    kappa_r: float
+    """Rear longitudinal slip [-] (< 0 braking, -1 locked)."""
+    alpha_r: float
+    """Rear sideslip [rad]."""
+    F_xf: float
+    F_yf: float
+    F_zf: float
+    kappa_f: float
+    alpha_f: float
+    x_r: float
+    """The rear contact's ground x [m]."""
+    y_r: float
+    """Its ground y (right) [m]."""
 
 
 def make_model(
@@ -478,6 +508,34 @@ def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
 
 
 @njit(cache=True)
+def observe(model: TyredModel, x: Array, friction: float) -> ContactLoads:
+    """The tyre forces and slips of the compiled state ``x`` on a road of ``friction`` mu."""
+    kr, kf, _, _ = _contacts(model.p, x[:9], x[9:18])
+    fxr, fyr, fzr, _, kappa_r, alpha_r, _, _, _ = _tyre(model, False, kr, x[Index.Fy_r], friction)
+    fxf, fyf, fzf, _, kappa_f, alpha_f, _, _, _ = _tyre(model, True, kf, x[Index.Fy_f], friction)
+    return ContactLoads(
+        fxr, fyr, fzr, kappa_r, alpha_r, fxf, fyf, fzf, kappa_f, alpha_f, kr[0], kr[1]
+    )
+
+
+@njit(cache=True)
+def outside(model: TyredModel, x: Array) -> int:
+    """Why the compiled state ``x`` is outside the model's domain, as a :class:`Domain` code
+    (``Domain.INSIDE`` when it is not): :func:`domain` for compiled callers."""
+    for i in range(x.size):
+        if not math.isfinite(x[i]):
+            return Domain.NOT_FINITE
+    if abs(x[Index.roll]) > model.roll_limit:
+        return Domain.FALLEN
+    kr, kf, _, _ = _contacts(model.p, x[:9], x[9:18])
+    if kr[2] <= 0.0:
+        return Domain.REAR_LIFTED
+    if kf[2] <= 0.0:
+        return Domain.FRONT_LIFTED
+    return Domain.INSIDE
+
+
+@njit(cache=True)
 def _rk4(model: TyredModel, x: Array, inputs: Inputs, h: float) -> Array:
     k1 = _derivatives(model, x, inputs)
     k2 = _derivatives(model, x + 0.5 * h * k1, inputs)
@@ -575,17 +633,7 @@ def domain(model: TyredModel, state: State) -> Domain:
         model's roll limit, ``REAR_LIFTED`` / ``FRONT_LIFTED`` when a wheel is off the ground,
         ``INSIDE`` otherwise.
     """
-    x = np.array(state, dtype=float)
-    if not np.all(np.isfinite(x)):
-        return Domain.NOT_FINITE
-    if abs(state.roll) > model.roll_limit:
-        return Domain.FALLEN
-    kr, kf, _, _ = gen.contacts(model.p, x[:9], x[9:18])
-    if kr[2] <= 0.0:
-        return Domain.REAR_LIFTED
-    if kf[2] <= 0.0:
-        return Domain.FRONT_LIFTED
-    return Domain.INSIDE
+    return Domain(outside(model, np.array(state, dtype=float)))
 
 
 def upright_state(model: TyredModel, speed: float) -> State:
