@@ -245,8 +245,33 @@ class Domain(IntEnum):
 
 N_STATE = len(State._fields)
 
-Index = IntEnum("Index", [(name, i) for i, name in enumerate(State._fields)])  # type: ignore[misc]
-"""Position of each :class:`State` field in the compiled state array (``x[Index.roll]``)."""
+
+class Index(IntEnum):
+    """Position of each :class:`State` field in the compiled state array (``x[Index.roll]``)."""
+
+    x = 0
+    y = 1
+    z = 2
+    yaw = 3
+    roll = 4
+    pitch = 5
+    rear_angle = 6
+    steer = 7
+    front_angle = 8
+    forward = 9
+    lateral = 10
+    vertical = 11
+    yaw_rate = 12
+    roll_rate = 13
+    pitch_rate = 14
+    rear_spin = 15
+    steer_rate = 16
+    front_spin = 17
+    Fy_r = 18
+    Fy_f = 19
+
+
+assert tuple(Index.__members__) == State._fields
 
 
 class ContactLoads(NamedTuple):
