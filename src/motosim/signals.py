@@ -40,6 +40,15 @@ SIGNALS: Final[dict[str, Signal]] = {
     "delta": Signal("steer angle, the controller's reference", "rad"),
     "F_yr": Signal("rear tyre side force", "N"),
     "F_yf": Signal("front tyre side force", "N"),
+    # the multibody motorcycle's tyres (Sharp 1971: its constant loads, no slips)
+    "F_xr": Signal("rear tyre longitudinal force, along the wheel's heading (< 0 braking)", "N"),
+    "F_xf": Signal("front tyre longitudinal force, along the wheel's heading (< 0 braking)", "N"),
+    "F_zr": Signal("rear tyre normal load", "N"),
+    "F_zf": Signal("front tyre normal load", "N"),
+    "kappa_r": Signal("rear tyre longitudinal slip (< 0 braking, -1 locked)", "1"),
+    "kappa_f": Signal("front tyre longitudinal slip (< 0 braking, -1 locked)", "1"),
+    "alpha_r": Signal("rear tyre sideslip angle", "rad"),
+    "alpha_f": Signal("front tyre sideslip angle", "rad"),
     "psi": Signal("yaw angle", "rad"),
     "x": Signal("position east of the start (ground frame x)", "m"),
     "y": Signal("position (ground frame y, right of the start heading)", "m"),
@@ -74,7 +83,8 @@ SIGNALS: Final[dict[str, Signal]] = {
 RECORDED: Final[tuple[str, ...]] = (
     "t", "tau_r", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot", "theta_h_meas",
     "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot", "phi_dot",
-    "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y",
+    "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y", "F_xr", "F_xf", "F_zr",
+    "F_zf", "kappa_r", "kappa_f", "alpha_r", "alpha_f", "theta",
 )  # fmt: skip
 """The signals a closed-loop run records, in column order (each one is in :data:`SIGNALS`).
 

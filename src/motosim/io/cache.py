@@ -27,6 +27,7 @@ import math
 import os
 import tempfile
 import time
+import types
 import typing
 import zipfile
 from collections.abc import Callable, Iterator, Mapping
@@ -199,6 +200,16 @@ def from_arrays(cls: type[T], arrays: Mapping[str, np.ndarray], prefix: str = ""
         origin = typing.get_origin(hint)
         if origin is None and (dataclasses.is_dataclass(hint) or hasattr(hint, "_fields")):
             values[name] = from_arrays(hint, arrays, f"{key}.")
+            continue
+        if origin in (typing.Union, types.UnionType):  # one of several records: the one stored
+            for member in typing.get_args(hint):
+                try:
+                    values[name] = from_arrays(member, arrays, f"{key}.")
+                    break
+                except (KeyError, TypeError):
+                    continue
+            else:
+                raise KeyError(f"{key}: stored as none of {hint}")
             continue
         stored = arrays[key]
         if hint is bool:
@@ -389,10 +400,11 @@ def cached_rider(cache: DesignCache, inputs: "RunInputs") -> "RiderGains":
     from motosim.sim.rider import RiderGains, design_rider
 
     settings = rider_design(inputs.scenario)
+    motorcycle = inputs.multibody or inputs.sharp
     return cache.fetch(
         "rider",
-        {"sharp": inputs.sharp, **settings},
-        lambda: design_rider(inputs.sharp, **settings),
+        {"sharp": inputs.sharp, "multibody": inputs.multibody, **settings},
+        lambda: design_rider(motorcycle, **settings),
         RiderGains,
     )
 
@@ -407,6 +419,7 @@ def cached_stack(cache: DesignCache, inputs: "RunInputs") -> "StackModel":
     depends_on = {
         "scenario": scenario_dict(inputs.scenario),
         "sharp": inputs.sharp,
+        "multibody": inputs.multibody,
         "nominal_handlebar": inputs.nominal_handlebar,
         "controller": inputs.controller,
         "observer": inputs.observer,

@@ -27,7 +27,7 @@ from motosim.io.logs import read_log
 from motosim.io.opendrive import read_opendrive
 from motosim.io.results import ResultWriter
 from motosim.model.linear import StateSpace
-from motosim.params import HandlebarParameters, load_parameters
+from motosim.params import HandlebarParameters, load_parameter_set, load_parameters
 from motosim.params.toml import read_toml
 from motosim.sim import (
     SIGNALS,
@@ -38,7 +38,14 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
-from motosim.sim.metrics import failure, range_reason, run_metrics, validity_limits
+from motosim.sim.metrics import (
+    failure,
+    multibody_reason,
+    range_reason,
+    run_metrics,
+    validity_limits,
+    wheel_locks,
+)
 from motosim.sim.scenario import CsvProfile, OpenDrivePath, check_profile_values, implausible
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
@@ -84,6 +91,17 @@ def read_road(scenario: Scenario, base: str | Path) -> Scenario:
     return dataclasses.replace(scenario, rider=rider)
 
 
+MULTIBODY_LOWEST_SPEED = 1.0
+"""The lowest speed of a run on the multibody motorcycle [m/s]: its tyres' slips are defined
+down to a walking pace (the virtual rider's schedule ends at 3 m/s, and holds its gains)."""
+
+_MOTORCYCLE_PROFILES = (
+    "drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque", "wind_force",
+    "side_wind",
+)  # fmt: skip
+"""The profiles of a scenario's ``[motorcycle]``."""
+
+
 def parameter_source(name: str, base: str | Path) -> str | Path:
     """Where a scenario's parameter set or design file ``name`` is read from.
 
@@ -119,10 +137,11 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
     nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
-    profiles = {
-        f"[motorcycle] {key}": getattr(mc, key)
-        for key in ("drive_torque", "brake_torque", "wind_force", "side_wind")
-    } | {"[rider] profile": scenario.rider.profile, "[rider] probe": scenario.rider.probe}
+    profiles = {f"[motorcycle] {key}": getattr(mc, key) for key in _MOTORCYCLE_PROFILES} | {
+        "[road] friction": scenario.road.friction,
+        "[rider] profile": scenario.rider.profile,
+        "[rider] probe": scenario.rider.probe,
+    }
     for where, profile in profiles.items():
         if isinstance(profile, CsvProfile):
             tables[profile.file] = read_log(
@@ -211,9 +230,18 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
                 f"{scenario.name}: the controller's design failed ([controller] order "
                 f"{c.order}): {err}"
             ) from None
+    source = sharp_source = parameter_source(mc.params, folder)
+    multibody = None
+    if mc.model == "multibody":
+        from motosim.model.tyred import load_model
+
+        multibody = load_model(str(source), speed=mc.speed)
+        if load_parameter_set(source).model != "sharp":  # Sharp's machine sets the side wind's
+            sharp_source = "sharp1971"  # input, which the multibody model does not read
     inputs = prepare(
         scenario,
-        sharp=load_parameters(parameter_source(mc.params, folder), "sharp"),
+        sharp=load_parameters(sharp_source, "sharp"),
+        multibody=multibody,
         true_handlebar=load_parameters(parameter_source(hb.true, folder), "handlebar"),
         nominal_handlebar=nominal,
         controller=controller,
@@ -322,6 +350,8 @@ def run_to_folder(
     metadata = run_metadata(inputs)
     rows = round(sc.duration * sc.rates.control)
     limits = validity_limits(sc.motorcycle.speed)
+    if inputs.multibody is not None:  # it falls beyond its own roll limit, rolls to 1 m/s
+        limits = (inputs.multibody.roll_limit, min(MULTIBODY_LOWEST_SPEED, limits[1]), limits[2])
     writer = ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows)
     try:
         with writer:
@@ -339,11 +369,17 @@ def run_to_folder(
             summary: dict[str, Any] = run_metrics(
                 run.t, run.get, complete=not stopped, max_current=sc.controller.max_current
             )
-            reason = (
-                range_reason(float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1]), limits)
-                if stopped
-                else failure(summary)
-            )
+            if stopped and inputs.multibody is not None:
+                reason: str | None = multibody_reason(run.t, run.__getitem__, limits[0], limits)
+            elif stopped:
+                reason = range_reason(
+                    float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1]), limits
+                )
+            else:
+                reason = failure(summary)
+                if reason is None and inputs.multibody is not None:
+                    locks = wheel_locks(run.t, run.__getitem__)
+                    reason = ", and ".join(locks) + " to the end of the run" if locks else None
             if reason is not None:
                 summary["failure"] = reason
             writer.close(summary)

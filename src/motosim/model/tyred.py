@@ -59,16 +59,20 @@ __all__ = [
     "LinearTyre",
     "State",
     "TyredModel",
+    "advance",
     "contact_loads",
     "derivatives",
     "domain",
     "lateral_matrix",
+    "lateral_system",
     "linear_tyre_forces",
     "linearised_tyre",
     "load_model",
     "magic_tyre_forces",
     "make_model",
     "observe",
+    "outside",
+    "rates",
     "sharp_machine",
     "sharp_modes",
     "step",
@@ -570,6 +574,19 @@ def _rk4(model: TyredModel, x: Array, inputs: Inputs, h: float) -> Array:
 
 
 @njit(cache=True)
+def advance(model: TyredModel, x: Array, inputs: Inputs, h: float) -> Array:
+    """The compiled state ``x`` one classical Runge-Kutta step of ``h`` [s] later (compiled;
+    no input checks): :func:`step` on the state's array."""
+    return _rk4(model, x, inputs, h)
+
+
+@njit(cache=True)
+def rates(model: TyredModel, x: Array, inputs: Inputs) -> Array:
+    """The compiled state's time derivative (compiled; no input checks)."""
+    return _derivatives(model, x, inputs)
+
+
+@njit(cache=True)
 def _pack(s: State) -> Array:
     x = np.empty(N_STATE)
     x[0], x[1], x[2], x[3], x[4] = s.x, s.y, s.z, s.yaw, s.roll
@@ -729,6 +746,24 @@ def lateral_matrix(model: TyredModel, speed: float) -> Array:
         diff = _derivatives(model, x0 + dx, inputs) - _derivatives(model, x0 - dx, inputs)
         A[:, j] = diff[list(_LATERAL)] / (2 * delta)
     return A
+
+
+def lateral_system(model: TyredModel, speed: float) -> tuple[Array, Array]:
+    """Linearised lateral dynamics about upright straight running, with the steer torque.
+
+    Returns
+    -------
+    A : numpy.ndarray, shape (8, 8)
+        :func:`lateral_matrix`.
+    B : numpy.ndarray, shape (8,)
+        The rates of the same states per unit steer torque [per N*m] (central differences).
+    """
+    x0 = np.array(upright_state(model, speed), dtype=float)
+    torque = 1.0
+    diff = _derivatives(model, x0, Inputs(steer_torque=torque)) - _derivatives(
+        model, x0, Inputs(steer_torque=-torque)
+    )
+    return lateral_matrix(model, speed), diff[list(_LATERAL)] / (2 * torque)
 
 
 def sharp_machine(

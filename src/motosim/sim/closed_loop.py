@@ -32,6 +32,7 @@ from motosim.estimation.walcott_zak import (
     design_with,
 )
 from motosim.model.handlebar import perturbed, step_exact
+from motosim.model.tyred import TyredModel
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
@@ -41,12 +42,16 @@ from motosim.sim.rider import RiderGains, design_rider, rider_torque
 from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
 from motosim.sim.stack import (
     Held,
+    MotorcycleInput,
     MotorcycleState,
     StackData,
     StackModel,
+    contact_loads,
     default_prediction,
     design_stack,
     new_data,
+    outside,
+    pitch,
     reset,
     step,
 )
@@ -136,6 +141,7 @@ class RunInputs:
     tables: Mapping[str, TimeSeries]
     observer: ObserverSettings | None = None
     rider: RiderGains | None = None
+    multibody: TyredModel | None = None
 
 
 def prepare(
@@ -148,6 +154,7 @@ def prepare(
     observer: ObserverSettings | None = None,
     tables: Mapping[str, TimeSeries] | None = None,
     rider: RiderGains | None = None,
+    multibody: TyredModel | None = None,
 ) -> RunInputs:
     """Apply the scenario's perturbations to the true handlebar and bundle the inputs.
 
@@ -169,7 +176,14 @@ def prepare(
     )
     if _feedback(scenario) and controller is None:
         raise MotosimError('the scenario needs a controller: give one (or kind = "none")')
-    return RunInputs(scenario, sharp, true, nominal, controller, tables or {}, observer, rider)
+    if (scenario.motorcycle.model == "multibody") != (multibody is not None):
+        raise MotosimError(
+            f"[motorcycle] model = {scenario.motorcycle.model!r}; expected the multibody model "
+            "given exactly when the scenario asks for it"
+        )
+    return RunInputs(
+        scenario, sharp, true, nominal, controller, tables or {}, observer, rider, multibody
+    )
 
 
 def rider_design(scenario: Scenario) -> dict[str, Any]:
@@ -289,6 +303,7 @@ def build_stack(inputs: RunInputs) -> StackModel:
             reference_feedforward="reference" in (sc.controller.feedforward or ()),
             prediction_lead=lead,
             side_force_height=sc.motorcycle.side_wind_height,
+            multibody=inputs.multibody,
         )
 
     model = build()
@@ -342,6 +357,9 @@ class RigModel(NamedTuple):
         ``torque_sensor``): it is told the rider's torque plus ``torque_error``.
     torque_error : ndarray, shape (n,)
         The torque sensor's error each period (offset and noise) [N*m].
+    motorcycle_inputs : ndarray, shape (n, 4) or (0, 4)
+        The multibody motorcycle's inputs each period, columns in the order of
+        :class:`~motosim.sim.stack.MotorcycleInput`; no rows for Sharp 1971 (``force``).
     """
 
     handlebar: Array
@@ -364,6 +382,7 @@ class RigModel(NamedTuple):
     hands_off: Array
     sensed: bool
     torque_error: Array
+    motorcycle_inputs: Array
 
 
 class RigData(NamedTuple):
@@ -460,12 +479,20 @@ def build_rig(
         path_arr, path_ds = rider_route(sc) if route is None else route
     gains = inputs.rider
     if gains is None:
-        gains = design_rider(inputs.sharp, **rider_design(sc))
+        gains = design_rider(inputs.multibody or inputs.sharp, **rider_design(sc))
     mc = sc.motorcycle
     r_D = derived_geometry(inputs.sharp)["r_D"]
     drive = mc.drive_torque.sample(t, inputs.tables)
     brake = np.maximum(mc.brake_torque.sample(t, inputs.tables), 0.0)
     force = (drive - brake) / r_D + mc.wind_force.sample(t, inputs.tables)
+    motorcycle_inputs = np.zeros((0, len(MotorcycleInput)))
+    if inputs.multibody is not None:
+        motorcycle_inputs = np.zeros((n, len(MotorcycleInput)))
+        motorcycle_inputs[:, MotorcycleInput.drive_torque] = drive
+        for name in ("front_brake_torque", "rear_brake_torque"):
+            torque = getattr(mc, name).sample(t, inputs.tables)
+            motorcycle_inputs[:, MotorcycleInput[name]] = np.maximum(torque, 0.0)
+        motorcycle_inputs[:, MotorcycleInput.friction] = sc.road.friction.sample(t, inputs.tables)
     bits = sc.measurement.encoder_bits
     noise = sc.measurement.current_noise
     hb = inputs.true_handlebar
@@ -498,6 +525,7 @@ def build_rig(
         hands_off=off,
         sensed=sc.estimator.name == SENSOR_ESTIMATOR,
         torque_error=torque_error,
+        motorcycle_inputs=motorcycle_inputs,
     )
 
 
@@ -513,8 +541,9 @@ def _run_chunk(
 ) -> int:
     """Advance ``out.shape[0]`` stack periods from period ``k0``, recording a row each.
 
-    Stops after the first row whose roll exceeds ``limits[0]`` [rad] or whose speed leaves
-    ``limits[1]`` to ``limits[2]`` [m/s]; returns the number of rows recorded.
+    Stops after the first row whose roll exceeds ``limits[0]`` [rad], whose speed leaves
+    ``limits[1]`` to ``limits[2]`` [m/s] or whose motorcycle is outside its model's domain
+    (:func:`~motosim.sim.stack.outside`); returns the number of rows recorded.
     """
     J, beta, beta_s, nkt = rig.handlebar[0], rig.handlebar[1], rig.handlebar[2], rig.handlebar[3]
     J_a, c_a, k_a, hold = rig.hands[0], rig.hands[1], rig.hands[2], rig.hands[3]
@@ -560,6 +589,15 @@ def _run_chunk(
         for column, at in _COLUMNS_OF_MOTORCYCLE:
             o[column] = z[at]
         o[_COL.e_y] = e_y
+        if rig.motorcycle_inputs.shape[0] > 0:
+            data.inputs[:] = rig.motorcycle_inputs[k]
+        left = outside(stack, data) != 0
+        loads = contact_loads(stack, data, rig.force[k])
+        o[_COL.F_xr], o[_COL.F_xf] = loads.F_xr, loads.F_xf
+        o[_COL.F_zr], o[_COL.F_zf] = loads.F_zr, loads.F_zf
+        o[_COL.kappa_r], o[_COL.kappa_f] = loads.kappa_r, loads.kappa_f
+        o[_COL.alpha_r], o[_COL.alpha_f] = loads.alpha_r, loads.alpha_f
+        o[_COL.theta] = pitch(stack, data)
         # the stack: command, estimate, virtual motorcycle
         told = tau_rider + rig.torque_error[k] if rig.sensed else tau_rider
         i_cmd = step(
@@ -581,12 +619,12 @@ def _run_chunk(
                 hb[0], hb[1] = step_exact(
                     hb[0], hb[1], tr + spring + nkt * i_cmd, Jt, bt, beta_s, h / n_sub
                 )
-            if abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+            if left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
                 return row + 1
             continue
         if not held:  # nobody holds the handlebar: the motor alone
             hb[0], hb[1] = step_exact(hb[0], hb[1], nkt * i_cmd, J, beta, beta_s, h)
-            if abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+            if left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
                 return row + 1
             continue
         steady = rig.virtual_rider
@@ -604,7 +642,7 @@ def _run_chunk(
                 hb[0], hb[1] = step_exact(
                     hb[0], hb[1], tr + nkt * i_cmd, J, beta, beta_s, h / n_sub
                 )
-        if abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+        if left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
             return row + 1
     return len(out)
 

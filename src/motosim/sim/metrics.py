@@ -324,6 +324,65 @@ def range_reason(t: float, phi: float, speed: float, limits: tuple[float, float,
     )
 
 
+LOCKED_SLIP = -0.9
+"""A wheel whose longitudinal slip is at or below this is locked (slip -1: not turning)."""
+
+
+def wheel_locks(t: Array, get: Callable[[str], Array]) -> list[str]:
+    """One phrase for each wheel locked at the end of a run, naming when it locked.
+
+    A wheel is locked from the first instant of the last stretch, to the run's end, over
+    which its slip (``kappa_f``, ``kappa_r``) stays at or below :data:`LOCKED_SLIP`.
+
+    Examples
+    --------
+    >>> t = np.arange(5) * 0.5
+    >>> slips = {"kappa_f": np.array([0.0, -0.1, -0.95, -1.0, -1.0]), "kappa_r": np.zeros(5)}
+    >>> wheel_locks(t, slips.__getitem__)
+    ['the front wheel locked at t = 1.000 s']
+    """
+    out = []
+    for wheel, column in (("front", "kappa_f"), ("rear", "kappa_r")):
+        locked = np.asarray(get(column)) <= LOCKED_SLIP
+        if locked.size and locked[-1]:
+            free = np.flatnonzero(~locked)
+            first = 0 if free.size == 0 else int(free[-1]) + 1
+            out.append(f"the {wheel} wheel locked at t = {t[first]:.3f} s")
+    return out
+
+
+def multibody_reason(
+    t: Array, get: Callable[[str], Array], roll_limit: float, limits: tuple[float, float, float]
+) -> str:
+    """Why a run on the multibody motorcycle stopped at its last instant, in one line.
+
+    It fell (roll beyond ``roll_limit`` [rad]), lifted a wheel off the ground (its normal
+    load 0) or left the speeds ``limits`` (:func:`validity_limits`); a wheel locked before
+    is named first (:func:`wheel_locks`).
+    """
+    end = float(t[-1])
+    phi, speed = float(get("phi")[-1]), float(get("v_x")[-1])
+    if abs(phi) > roll_limit:
+        what = (
+            f"the motorcycle fell at t = {end:.3f} s: roll {math.degrees(phi):.1f} deg, beyond "
+            f"{math.degrees(roll_limit):.0f} deg"
+        )
+    elif get("F_zr")[-1] <= 0.0 or get("F_zf")[-1] <= 0.0:
+        wheel = "rear" if get("F_zr")[-1] <= 0.0 else "front"
+        what = (
+            f"the {wheel} wheel left the ground at t = {end:.3f} s (the model keeps both "
+            "wheels on the road)"
+        )
+    else:
+        low, high = limits[1:]
+        what = (
+            f"the speed left the model's range at t = {end:.3f} s: {speed:.5g} m/s, outside "
+            f"{low:g} to {high:g} m/s"
+        )
+    locks = wheel_locks(t, get)
+    return ", and ".join([*locks, what]) + "; the run stopped there"
+
+
 def warnings(metrics: dict[str, float]) -> list[str]:
     """One line for each flag that does not fail a run but that a user must know of."""
     out = []

@@ -376,6 +376,29 @@ PROFILE_LIMITS: dict[str, ProfileLimit] = {
         "the tyres of a motorcycle transmit about 1 g of "
         "deceleration, and a brake only slows: a negative value is a drive torque",
     ),
+    "[motorcycle] front_brake_torque": ProfileLimit(
+        0.0,
+        5000.0,
+        1500.0,
+        "N*m",
+        "a motorcycle's front brake stops it at about 1 g with some 1000-1500 N*m, and a "
+        "brake only slows: a negative value is a drive torque",
+    ),
+    "[motorcycle] rear_brake_torque": ProfileLimit(
+        0.0,
+        5000.0,
+        800.0,
+        "N*m",
+        "the rear wheel unloads while braking: a few hundred N*m lock it",
+    ),
+    "[road] friction": ProfileLimit(
+        0.01,
+        3.0,
+        1.3,
+        "1",
+        "tyre-road friction is about 0.1 on ice, 0.5-0.7 wet and 1-1.3 on dry asphalt "
+        "(racing tyres up to 1.5)",
+    ),
     "[motorcycle] wind_force": ProfileLimit(
         -5000.0,
         5000.0,
@@ -633,13 +656,24 @@ class Measurement:
 
 @dataclass(frozen=True, slots=True)
 class Motorcycle:
-    """The virtual motorcycle and its longitudinal inputs."""
+    """The virtual motorcycle and its longitudinal inputs.
 
+    ``model`` is Sharp's (1971) linear model with eq. (2) (``brake_torque``, ``wind_force``
+    and ``side_wind`` act on it) or the multibody motorcycle on tyres
+    (:mod:`motosim.model.tyred`: ``front_brake_torque`` and ``rear_brake_torque`` on each
+    wheel, ``drive_torque`` on the rear one); ``params`` names a ``sharp`` set (Sharp's
+    machine, through the multibody model on his linear tyres) or, for the multibody model, a
+    ``multibody`` set with its Magic Formula tyres.
+    """
+
+    model: Literal["sharp1971", "multibody"] = "sharp1971"
     params: str = "sharp1971"
     speed: float = 20.0
     input: Literal["estimate", "true"] = "estimate"
     drive_torque: Profile = ConstantProfile(0.0)
     brake_torque: Profile = ConstantProfile(0.0)
+    front_brake_torque: Profile = ConstantProfile(0.0)
+    rear_brake_torque: Profile = ConstantProfile(0.0)
     wind_force: Profile = ConstantProfile(0.0)
     side_wind: Profile = ConstantProfile(0.0)
     side_wind_height: float = 1.0
@@ -647,10 +681,50 @@ class Motorcycle:
     def __post_init__(self) -> None:
         _check("speed", self.speed, low=1.0, high=100.0, unit="m/s")
         _check("side_wind_height", self.side_wind_height, low=0.0, high=3.0, unit="m")
-        for key in ("drive_torque", "brake_torque", "wind_force", "side_wind"):
+        for key in ("drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque",
+                    "wind_force", "side_wind"):  # fmt: skip
             bounds = _profile_bounds(getattr(self, key))
             if bounds is not None:
                 check_profile_values(f"[motorcycle] {key}", *bounds, key=key)
+        unused = (
+            ("brake_torque", "wind_force", "side_wind")
+            if self.model == "multibody"
+            else ("front_brake_torque", "rear_brake_torque")
+        )
+        for key in unused:
+            if getattr(self, key) != ConstantProfile(0.0):
+                other = (
+                    "front_brake_torque and rear_brake_torque (the wheels' brakes; no wind yet)"
+                    if self.model == "multibody"
+                    else 'brake_torque, or model = "multibody" for a brake on each wheel'
+                )
+                raise MotosimError(
+                    f"[motorcycle] {key} does not act on model = {self.model!r}; expected {other}"
+                )
+
+
+@dataclass(frozen=True, slots=True)
+class Road:
+    """The road under the multibody motorcycle's tyres."""
+
+    friction: Profile = ConstantProfile(1.0)
+    """The tyre-road friction coefficient mu over time [-] (dry asphalt about 1, wet 0.5-0.7,
+    ice 0.1); the multibody motorcycle's tyres saturate at mu F_z."""
+
+    def __post_init__(self) -> None:
+        friction = self.friction
+        if isinstance(friction, StepsProfile) and friction.times[0] > 0.0:
+            raise MotosimError(
+                f"[road] friction: steps from t = {friction.times[0]:g} s; expected the first "
+                "at t = 0 (a road has a friction from the start)"
+            )
+        bounds = (
+            (min(friction.values), max(friction.values))
+            if isinstance(friction, StepsProfile)
+            else _profile_bounds(friction)
+        )
+        if bounds is not None:
+            check_profile_values("[road] friction", *bounds, key="friction")
 
 
 @dataclass(frozen=True, slots=True)
@@ -844,8 +918,14 @@ class Scenario:
     estimator: Estimator = Estimator()
     controller: Controller = Controller()
     sensor: Sensor = Sensor()
+    road: Road = Road()
 
     def __post_init__(self) -> None:
+        if self.road != Road() and self.motorcycle.model != "multibody":
+            raise MotosimError(
+                "[road] friction acts on the multibody motorcycle's tyres; expected [motorcycle] "
+                'model = "multibody" (Sharp 1971\'s linear tyres never saturate)'
+            )
         _check("duration", self.duration, low=0.0, low_open=True, high=3600.0, unit="s")
         if self.duration * self.rates.control < 2.0:
             raise MotosimError(
@@ -881,6 +961,9 @@ class Scenario:
             ("[rider] probe", self.rider.probe, rates.control, "control"),
             ("[motorcycle] drive_torque", mc.drive_torque, rates.control, "control"),
             ("[motorcycle] brake_torque", mc.brake_torque, rates.control, "control"),
+            ("[motorcycle] front_brake_torque", mc.front_brake_torque, rates.control, "control"),
+            ("[motorcycle] rear_brake_torque", mc.rear_brake_torque, rates.control, "control"),
+            ("[road] friction", self.road.friction, rates.control, "control"),
             ("[motorcycle] wind_force", mc.wind_force, rates.control, "control"),
             ("[motorcycle] side_wind", mc.side_wind, rates.control, "control"),
         ):
@@ -979,7 +1062,8 @@ def implausible(scenario: "Scenario") -> list[str]:
             "legal but more than a full circle; the angle is in radians (90 deg = 1.571)"
         )
     mc = scenario.motorcycle
-    for key in ("drive_torque", "brake_torque", "wind_force", "side_wind"):
+    for key in ("drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque",
+                "wind_force", "side_wind"):  # fmt: skip
         bound = PROFILE_LIMITS[f"[motorcycle] {key}"]
         peak = _profile_peak(getattr(mc, key))
         if peak > bound.typical:
@@ -1000,7 +1084,7 @@ def implausible(scenario: "Scenario") -> list[str]:
 # --- the parser: TOML onto the constructors -----------------------------------------------
 
 _TABLES = ("rates", "measurement", "motorcycle", "rider", "handlebar", "estimator", "controller",
-           "sensor")  # fmt: skip
+           "sensor", "road")  # fmt: skip
 
 
 def _describe(tp: Any) -> str:

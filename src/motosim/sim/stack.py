@@ -19,10 +19,11 @@ as Python). Both records are named tuples so that compiled code takes them as th
 
 import math
 from enum import IntEnum
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
 from numpy.typing import NDArray
 
 from motosim.control.statespace import StateSpace
@@ -32,6 +33,7 @@ from motosim.estimation.differentiator import LAMBDA_0, LAMBDA_1, std_step
 from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
 from motosim.estimation.registry import start_kernel, step_kernel
 from motosim.model import sharp as sharp_model
+from motosim.model import tyred
 from motosim.model.handlebar import matrices as handlebar_matrices
 from motosim.model.linear import zoh
 from motosim.model.sharp import bike_rk4
@@ -51,15 +53,21 @@ __all__ = [
     "DifferentiatorGains",
     "Feedforward",
     "Held",
-    "MotorcycleMass",
+    "MotorcycleInput",
     "MotorcycleState",
+    "MultibodyMotorcycle",
     "Prediction",
+    "SharpMotorcycle",
     "StackData",
     "StackModel",
     "account_for_delay",
+    "contact_loads",
     "default_prediction",
     "design_stack",
+    "multibody_lateral",
     "new_data",
+    "outside",
+    "pitch",
     "reset",
     "step",
     "step_scaled",
@@ -136,6 +144,21 @@ class Held(IntEnum):
     """The state of its low-pass [N*m/s]."""
 
 
+class MotorcycleInput(IntEnum):
+    """Positions in the multibody motorcycle's inputs this period
+    (:attr:`StackData.inputs`), which the world around the stack sets before a step; Sharp
+    1971 reads eq. (2)'s longitudinal force instead."""
+
+    drive_torque = 0
+    """On the rear wheel [N*m], positive driving forward."""
+    front_brake_torque = 1
+    """[N*m], >= 0."""
+    rear_brake_torque = 2
+    """[N*m], >= 0."""
+    friction = 3
+    """The road's friction coefficient mu [-]."""
+
+
 class DifferentiatorGains(NamedTuple):
     """The super-twisting differentiator's step and gains."""
 
@@ -206,8 +229,8 @@ class Delay(NamedTuple):
     """The rate scale of the friction's tanh [rad/s]."""
 
 
-class MotorcycleMass(NamedTuple):
-    """What eq. (2) needs of the motorcycle."""
+class SharpMotorcycle(NamedTuple):
+    """The virtual motorcycle as Sharp's (1971) linear lateral model with eq. (2)."""
 
     m: float
     """Its mass [kg]."""
@@ -215,6 +238,26 @@ class MotorcycleMass(NamedTuple):
     """m + J_R / r_D^2 [kg]."""
     min_speed: float
     """The lowest speed of the model [m/s]."""
+    substeps: int
+    """RK4 steps per stack period."""
+    rear_load: float
+    """The rear tyre's normal load, m g + Z_f [N]."""
+    front_load: float
+    """The front tyre's, -Z_f [N]."""
+
+
+class MultibodyMotorcycle(NamedTuple):
+    """The virtual motorcycle as the multibody model on tyres (:mod:`motosim.model.tyred`)."""
+
+    model: tyred.TyredModel
+    """Its compiled constants."""
+    start: Array
+    """The compiled state at :func:`reset`: upright straight running at the start speed on
+    the tyres' static compression."""
+    contact_height: float
+    """The rear wheel centre's height above its contact point when upright, r_R - t_R [m]."""
+    substeps: int
+    """RK4 steps per stack period."""
 
 
 NO_PREDICTION = Prediction(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -254,13 +297,14 @@ class StackModel(NamedTuple):
     max_current : float
         Current command limit [A].
     A0, A1, Bv : ndarray
-        The motorcycle's lateral matrices, A_v = A0 + v_x A1 (8x8), B_v (8,).
+        The motorcycle's lateral matrices in the order of :class:`MotorcycleState`,
+        A_v = A0 + v_x A1 (8x8), B_v (8,): Sharp 1971's, or the multibody model's
+        linearised about upright running at the start speed (A1 = 0), which the loop's
+        analysis reads.
     Bw : ndarray, shape (8,)
         The side force's input (:func:`motosim.model.sharp.side_force_input`).
-    motorcycle : MotorcycleMass
-        What eq. (2) needs of the motorcycle.
-    motorcycle_substeps : int
-        RK4 steps of the motorcycle per period.
+    motorcycle : SharpMotorcycle or MultibodyMotorcycle
+        The virtual motorcycle the step advances.
     speed : float
         Forward speed at :func:`reset` [m/s].
     true_torque : bool
@@ -287,8 +331,7 @@ class StackModel(NamedTuple):
     A1: Array
     Bv: Array
     Bw: Array
-    motorcycle: MotorcycleMass
-    motorcycle_substeps: int
+    motorcycle: SharpMotorcycle | MultibodyMotorcycle
     speed: float
     true_torque: bool
     delay: Delay
@@ -307,7 +350,14 @@ class StackData(NamedTuple):
         The discrete controller's state.
     motorcycle : ndarray, shape (12,)
         The virtual motorcycle's state, in the order of :class:`MotorcycleState` (SI units;
-        an array: its RK4 steps it whole).
+        an array: its RK4 steps it whole). With the multibody motorcycle, what its state
+        reads as in these names (the rear wheel centre's lateral velocity, the rear
+        contact's position).
+    multibody : ndarray, shape (20,) or (0,)
+        The multibody motorcycle's state, in the order of :class:`motosim.model.tyred.Index`.
+    inputs : ndarray, shape (4,)
+        The multibody motorcycle's inputs this period, in the order of
+        :class:`MotorcycleInput`.
     held : ndarray, shape (8,)
         Outputs held between measurements, in the order of :class:`Held`.
     periods : ndarray of int64, shape (1,)
@@ -322,6 +372,8 @@ class StackData(NamedTuple):
     differentiator: Array
     controller: Array
     motorcycle: Array
+    multibody: Array
+    inputs: Array
     held: Array
     periods: NDArray[np.int64]
     work: Array
@@ -364,6 +416,7 @@ def design_stack(
     prediction_lead: float = 0.0,
     side_force_height: float = 1.0,
     measurement_delay: float = 0.0,
+    multibody: tyred.TyredModel | None = None,
 ) -> StackModel:
     """Build the stack's model from its designed parts (a pure function).
 
@@ -407,6 +460,9 @@ def design_stack(
         d, the age of the measured angle and current when the stack reads them [s], from 0
         (fresh: the stack as it was designed) to one measurement step; a status frame's
         latency on the bus. The stack then accounts for it (:func:`account_for_delay`).
+    multibody : TyredModel, optional
+        The virtual motorcycle as the multibody model on tyres (:mod:`motosim.model.tyred`)
+        instead of Sharp's ``sharp``, which then only sets the side force's input.
 
     Returns
     -------
@@ -459,8 +515,22 @@ def design_stack(
             friction_width=FEEDFORWARD_FRICTION_WIDTH,
         )
     h = 1.0 / control_rate
-    d = derived_geometry(sharp)
-    A0, A1, Bv = sharp_model.lpv_matrices(sharp)
+    substeps = max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9))
+    motorcycle: SharpMotorcycle | MultibodyMotorcycle
+    if multibody is None:
+        d = derived_geometry(sharp)
+        A0, A1, Bv = sharp_model.lpv_matrices(sharp)
+        motorcycle = SharpMotorcycle(
+            float(d["m"]), float(d["m_eq"]), float(sharp_model.MIN_SPEED), substeps,
+            float(d["m"] * sharp.g + sharp.Z_f), float(-sharp.Z_f),
+        )  # fmt: skip
+    else:
+        A0, Bv = multibody_lateral(multibody, speed)
+        A1 = np.zeros_like(A0)
+        start = np.array(tyred.upright_state(multibody, speed), dtype=np.float64)
+        motorcycle = MultibodyMotorcycle(
+            multibody, start, float(multibody.p[0] - multibody.p[2]), substeps
+        )
     return StackModel(
         dt=h,
         measure_every=round(ratio),
@@ -480,12 +550,24 @@ def design_stack(
         A1=A1,
         Bv=Bv,
         Bw=sharp_model.side_force_input(sharp, height=side_force_height),
-        motorcycle=MotorcycleMass(float(d["m"]), float(d["m_eq"]), float(sharp_model.MIN_SPEED)),
-        motorcycle_substeps=max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9)),
+        motorcycle=motorcycle,
         speed=float(speed),
         true_torque=bool(true_torque),
         delay=_delay(measurement_delay, h_meas, handlebar, estimator),
     )
+
+
+_FROM_TYRED_LATERAL = (2, 3, 4, 5, 0, 1, 6, 7)
+"""Sharp 1971's lateral states (:class:`MotorcycleState` up to ``v_x``) among those of
+:func:`motosim.model.tyred.lateral_system`."""
+
+
+def multibody_lateral(model: tyred.TyredModel, speed: float) -> tuple[Array, Array]:
+    """The multibody motorcycle's lateral A (8x8) and steer-torque input (8,) about upright
+    running at ``speed`` [m/s], in the order of :class:`MotorcycleState`."""
+    A, B = tyred.lateral_system(model, speed)
+    order = list(_FROM_TYRED_LATERAL)
+    return np.ascontiguousarray(A[np.ix_(order, order)]), np.ascontiguousarray(B[order])
 
 
 def account_for_delay(
@@ -612,6 +694,10 @@ def new_data(model: StackModel) -> StackData:
         differentiator=np.zeros(2),
         controller=np.zeros(n),
         motorcycle=np.zeros(12),
+        multibody=np.zeros(
+            tyred.N_STATE if isinstance(model.motorcycle, MultibodyMotorcycle) else 0
+        ),
+        inputs=np.zeros(len(MotorcycleInput)),
         held=np.zeros(8),
         periods=np.zeros(1, dtype=np.int64),
         work=np.zeros((13, 12)),
@@ -631,8 +717,7 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
     data.differentiator[1] = 0.0
     start_kernel(model.estimator, data.estimator, theta, 0.0, current)
     data.controller[:] = 0.0
-    data.motorcycle[:] = 0.0
-    data.motorcycle[MotorcycleState.v_x] = model.speed
+    _start(model.motorcycle, data, model.speed)
     data.held[:] = 0.0
     data.held[Held.theta_h_meas] = theta
     data.periods[0] = 0
@@ -670,11 +755,7 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
             cancelled += model.prediction.lead * data.held[Held.tau_r_hat_rate]
         torque -= ff.cancellation * cancelled
     if ff.reference > 0.0:  # J delta'' + beta delta' + beta_s sign(delta'), delta'' from the model
-        v = z[MotorcycleState.v_x]
-        j = MotorcycleState.delta_dot
-        dd = model.Bv[j] * data.held[Held.tau_r_hat]
-        for c in range(_LATERAL):
-            dd += (model.A0[j, c] + v * model.A1[j, c]) * z[c]
+        dd = _steer_acceleration(model.motorcycle, model, data, data.held[Held.tau_r_hat])
         rate = z[MotorcycleState.delta_dot]
         torque += ff.J_eq * dd + ff.beta_eq * rate + ff.beta_s * math.tanh(rate / ff.friction_width)
     if ff.cancellation > 0.0 or ff.reference > 0.0:
@@ -738,9 +819,10 @@ def step_scaled(
         the one a torque sensor measures, read by the estimator of kind
         :data:`~motosim.estimation.kernel.TORQUE_SENSOR` (and then by a reference run too).
     force : float
-        Longitudinal force of eq. (2), (tau_d - tau_b) / r_D + F_wx [N].
+        Longitudinal force of eq. (2), (tau_d - tau_b) / r_D + F_wx [N] (Sharp 1971; the
+        multibody motorcycle reads its torques in ``data.inputs`` instead).
     side_force : float
-        Side force on the motorcycle (a side wind), to the right [N].
+        Side force on Sharp 1971's motorcycle (a side wind), to the right [N].
     current_scale : float
         The share of the command the drive will carry [-]: 1 offline; in the real-time
         loop the safety stage's fade and hands-off gain, which the estimator must be told
@@ -790,9 +872,235 @@ def step_scaled(
         held[Held.tau_r_hat] = estimate
     data.periods[0] += 1
     steer = rider_torque if model.true_torque else held[Held.tau_r_hat]
-    mc = model.motorcycle
-    h = model.dt / model.motorcycle_substeps
-    for _ in range(model.motorcycle_substeps):
+    _advance(model.motorcycle, model, data, steer, force, side_force)
+    return float(held[Held.i_m])
+
+
+# The virtual motorcycle's parts of the step, one implementation per kind of motorcycle:
+# numba picks the one of the motorcycle's type when it compiles the step (through the
+# overloads below: a stack on Sharp 1971 never compiles the multibody model), and plain
+# Python (NUMBA_DISABLE_JIT=1) dispatches on the type.
+
+
+def _start_sharp(mc: Any, data: StackData, speed: float) -> None:
+    data.motorcycle[:] = 0.0
+    data.motorcycle[MotorcycleState.v_x] = speed
+
+
+def _start_multibody(mc: Any, data: StackData, speed: float) -> None:
+    data.multibody[:] = mc.start
+    data.inputs[:] = 0.0
+    data.inputs[MotorcycleInput.friction] = 1.0
+    _multibody_view(mc, data)
+
+
+def _advance_sharp(
+    mc: Any, model: StackModel, data: StackData, steer: float, force: float,
+    side_force: float,
+) -> None:  # fmt: skip
+    h = model.dt / mc.substeps
+    for _ in range(mc.substeps):
         bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, model.Bw,
                  side_force, force, mc.m, mc.m_eq, mc.min_speed, h)  # fmt: skip
-    return float(held[Held.i_m])
+
+
+@njit(cache=True, inline="always")
+def _multibody_inputs(data: StackData, steer: float) -> tyred.Inputs:
+    u = data.inputs
+    return tyred.Inputs(
+        steer, u[MotorcycleInput.drive_torque], u[MotorcycleInput.front_brake_torque],
+        u[MotorcycleInput.rear_brake_torque], u[MotorcycleInput.friction],
+    )  # fmt: skip
+
+
+def _advance_multibody(
+    mc: Any, model: StackModel, data: StackData, steer: float, force: float,
+    side_force: float,
+) -> None:  # fmt: skip
+    h = model.dt / mc.substeps
+    inputs = _multibody_inputs(data, steer)
+    for _ in range(mc.substeps):
+        data.multibody[:] = tyred.advance(mc.model, data.multibody, inputs, h)
+    _multibody_view(mc, data)
+
+
+@njit(cache=True)
+def _multibody_view(mc: MultibodyMotorcycle, data: StackData) -> None:
+    """The multibody state in the names of :class:`MotorcycleState`: the rear wheel
+    centre's lateral velocity, the rear contact's ground position, the side forces the tyres
+    apply."""
+    x, z = data.multibody, data.motorcycle
+    Ix = tyred.Index
+    loads = tyred.observe(mc.model, x, data.inputs[MotorcycleInput.friction])
+    z[MotorcycleState.v_y] = x[Ix.lateral]
+    z[MotorcycleState.phi_dot] = x[Ix.roll_rate]
+    z[MotorcycleState.psi_dot] = x[Ix.yaw_rate]
+    z[MotorcycleState.delta_dot] = x[Ix.steer_rate]
+    z[MotorcycleState.phi] = x[Ix.roll]
+    z[MotorcycleState.delta] = x[Ix.steer]
+    z[MotorcycleState.F_yr] = loads.F_yr
+    z[MotorcycleState.F_yf] = loads.F_yf
+    z[MotorcycleState.v_x] = x[Ix.forward]
+    z[MotorcycleState.psi] = x[Ix.yaw]
+    z[MotorcycleState.x] = loads.x_r
+    z[MotorcycleState.y] = loads.y_r
+
+
+def _steer_acceleration_sharp(mc: Any, model: StackModel, data: StackData, torque: float) -> float:
+    z = data.motorcycle
+    v = z[MotorcycleState.v_x]
+    j = MotorcycleState.delta_dot
+    dd = model.Bv[j] * torque
+    for c in range(_LATERAL):
+        dd += (model.A0[j, c] + v * model.A1[j, c]) * z[c]
+    return float(dd)
+
+
+def _steer_acceleration_multibody(
+    mc: Any, model: StackModel, data: StackData, torque: float
+) -> float:
+    rates = tyred.rates(mc.model, data.multibody, _multibody_inputs(data, torque))
+    return float(rates[tyred.Index.steer_rate])
+
+
+def _contact_loads_sharp(
+    mc: Any, model: StackModel, data: StackData, force: float
+) -> tyred.ContactLoads:
+    z = data.motorcycle
+    return tyred.ContactLoads(
+        force, z[MotorcycleState.F_yr], mc.rear_load, 0.0, 0.0, 0.0, z[MotorcycleState.F_yf],
+        mc.front_load, 0.0, 0.0, z[MotorcycleState.x], z[MotorcycleState.y],
+    )  # fmt: skip
+
+
+def _contact_loads_multibody(
+    mc: Any, model: StackModel, data: StackData, force: float
+) -> tyred.ContactLoads:
+    return tyred.observe(mc.model, data.multibody, data.inputs[MotorcycleInput.friction])
+
+
+def _is_multibody(mc: Any) -> bool:
+    """Whether ``mc``, a motorcycle or its numba type, is a :class:`MultibodyMotorcycle`."""
+    return isinstance(mc, MultibodyMotorcycle) or (
+        getattr(mc, "instance_class", None) is MultibodyMotorcycle
+    )
+
+
+def _start(mc: Any, data: StackData, speed: float) -> None:
+    """Start the motorcycle upright and straight at ``speed`` [m/s]."""
+    if _is_multibody(mc):
+        return _start_multibody(mc, data, speed)
+    return _start_sharp(mc, data, speed)
+
+
+def _advance(
+    mc: Any, model: StackModel, data: StackData, steer: float, force: float, side_force: float
+) -> None:
+    """Advance the motorcycle one stack period under the steer torque ``steer`` [N*m]."""
+    if _is_multibody(mc):
+        return _advance_multibody(mc, model, data, steer, force, side_force)
+    return _advance_sharp(mc, model, data, steer, force, side_force)
+
+
+def _steer_acceleration(mc: Any, model: StackModel, data: StackData, torque: float) -> float:
+    """The motorcycle's steer acceleration now under the steer torque ``torque`` [rad/s^2]."""
+    if _is_multibody(mc):
+        return _steer_acceleration_multibody(mc, model, data, torque)
+    return _steer_acceleration_sharp(mc, model, data, torque)
+
+
+def _contact_loads(mc: Any, model: StackModel, data: StackData, force: float) -> tyred.ContactLoads:
+    """:func:`contact_loads` of the motorcycle ``mc``."""
+    if _is_multibody(mc):
+        return _contact_loads_multibody(mc, model, data, force)
+    return _contact_loads_sharp(mc, model, data, force)
+
+
+def _outside_sharp(mc: Any, data: StackData) -> int:
+    return tyred.Domain.INSIDE
+
+
+def _outside_multibody(mc: Any, data: StackData) -> int:
+    return tyred.outside(mc.model, data.multibody)
+
+
+def _outside(mc: Any, data: StackData) -> int:
+    """Why the motorcycle is outside its model's domain, as a
+    :class:`~motosim.model.tyred.Domain` code (always inside for Sharp 1971, whose range
+    the loop's roll and speed limits bound)."""
+    if _is_multibody(mc):
+        return _outside_multibody(mc, data)
+    return _outside_sharp(mc, data)
+
+
+@overload(_outside)
+def _outside_typed(mc: Any, data: StackData) -> Any:
+    return _outside_multibody if _is_multibody(mc) else _outside_sharp
+
+
+def _pitch_sharp(mc: Any, data: StackData) -> float:
+    return 0.0
+
+
+def _pitch_multibody(mc: Any, data: StackData) -> float:
+    return float(data.multibody[tyred.Index.pitch] - mc.start[tyred.Index.pitch])
+
+
+def _pitch(mc: Any, data: StackData) -> float:
+    """The motorcycle's pitch from its start, nose up positive [rad] (0 for Sharp 1971)."""
+    if _is_multibody(mc):
+        return _pitch_multibody(mc, data)
+    return _pitch_sharp(mc, data)
+
+
+@overload(_pitch)
+def _pitch_typed(mc: Any, data: StackData) -> Any:
+    return _pitch_multibody if _is_multibody(mc) else _pitch_sharp
+
+
+@overload(_start)
+def _start_typed(mc: Any, data: StackData, speed: float) -> Any:
+    return _start_multibody if _is_multibody(mc) else _start_sharp
+
+
+@overload(_advance)
+def _advance_typed(
+    mc: Any, model: StackModel, data: StackData, steer: float, force: float, side_force: float
+) -> Any:
+    return _advance_multibody if _is_multibody(mc) else _advance_sharp
+
+
+@overload(_steer_acceleration)
+def _steer_acceleration_typed(mc: Any, model: StackModel, data: StackData, torque: float) -> Any:
+    return _steer_acceleration_multibody if _is_multibody(mc) else _steer_acceleration_sharp
+
+
+@overload(_contact_loads)
+def _contact_loads_typed(mc: Any, model: StackModel, data: StackData, force: float) -> Any:
+    return _contact_loads_multibody if _is_multibody(mc) else _contact_loads_sharp
+
+
+@njit(cache=True)
+def outside(model: StackModel, data: StackData) -> int:
+    """Why the virtual motorcycle is outside its model's domain now, as a
+    :class:`~motosim.model.tyred.Domain` code (``INSIDE`` when it is not, and always with
+    Sharp 1971)."""
+    return _outside(model.motorcycle, data)
+
+
+@njit(cache=True)
+def pitch(model: StackModel, data: StackData) -> float:
+    """The virtual motorcycle's pitch from upright running on level ground, nose up positive
+    [rad]: the multibody model's (load transfer on the tyres' radial stiffness); 0 for Sharp
+    1971, which has none."""
+    return _pitch(model.motorcycle, data)
+
+
+@njit(cache=True)
+def contact_loads(model: StackModel, data: StackData, force: float) -> tyred.ContactLoads:
+    """The virtual motorcycle's tyre forces and slips now (:class:`~motosim.model.tyred.
+    ContactLoads`): the multibody model's; Sharp 1971's side forces with its constant normal
+    loads on level ground, eq. (2)'s longitudinal ``force`` [N] at the rear contact and no
+    slips (its tyres have none)."""
+    loads: tyred.ContactLoads = _contact_loads(model.motorcycle, model, data, force)
+    return loads
