@@ -370,7 +370,9 @@ def run_to_folder(
                 run.t, run.get, complete=not stopped, max_current=sc.controller.max_current
             )
             if stopped and inputs.multibody is not None:
-                reason: str | None = multibody_reason(run.t, run.__getitem__, limits[0], limits)
+                reason: str | None = multibody_reason(
+                    run.t, run.__getitem__, limits[0], limits, inputs.multibody.steer_limit
+                )
             elif stopped:
                 reason = range_reason(
                     float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1]), limits

@@ -82,6 +82,9 @@ __all__ = [
 
 Array: TypeAlias = npt.NDArray[Any]
 
+STEER_STOP = math.radians(35.0)
+"""|steer| at a road motorcycle's steering stops [rad] (about 30-35 deg each way): beyond,
+the front wheel has tucked under, the start of a fall."""
 _MIN_SPEED = 0.5
 """Reference speed [m/s] below which the slips are divided by this speed instead (the slips'
 definitions lose their meaning at a standstill)."""
@@ -175,6 +178,9 @@ class TyredModel(NamedTuple):
     """The wheels' radii (rear, front) [m]."""
     roll_limit: float
     """|roll| beyond which the machine has fallen [rad]."""
+    steer_limit: float
+    """|steer| beyond which the front wheel has tucked under, past a motorcycle's steering
+    stops [rad]."""
     lam: float
     """The steering axis tilt [rad]: the rear frame's pitch when level on undeformed tyres."""
     magic: bool
@@ -245,6 +251,7 @@ class Domain(IntEnum):
     REAR_LIFTED = 2
     FRONT_LIFTED = 3
     NOT_FINITE = 4
+    STEER_STOP = 5
 
 
 N_STATE = len(State._fields)
@@ -311,6 +318,7 @@ def make_model(
     aero_centre: tuple[float, float] | None = None,
     steer_damping: float = 0.0,
     roll_limit: float = 1.3,
+    steer_limit: float = STEER_STOP,
 ) -> TyredModel:
     """Assemble the compiled model's constants.
 
@@ -331,12 +339,15 @@ def make_model(
         Steering damper [N*m*s/rad].
     roll_limit : float, optional
         |roll| beyond which :func:`domain` says the machine has fallen [rad].
+    steer_limit : float, optional
+        |steer| beyond which :func:`domain` says the front wheel tucked under [rad].
     """
     check_number(drag, where="tyred model: drag", lower=0.0, upper=10.0, lower_closed=True)
     check_number(
         steer_damping, where="tyred model: steer_damping", lower=0.0, upper=1e3, lower_closed=True
     )
     check_number(roll_limit, where="tyred model: roll_limit", lower=0.1, upper=math.pi / 2)
+    check_number(steer_limit, where="tyred model: steer_limit", lower=0.1, upper=math.pi / 2)
     magic = isinstance(rear, TyreParameters)
     if magic != isinstance(front, TyreParameters):
         raise MotosimError(
@@ -366,6 +377,7 @@ def make_model(
         spin_inertia=np.array([params.I_Ryy, params.I_Fyy]),
         radii=np.array([params.r_R, params.r_F]),
         roll_limit=float(roll_limit),
+        steer_limit=float(steer_limit),
         lam=float(params.lam),
         magic=magic,
         mf_rear=mf_rear,
@@ -556,6 +568,8 @@ def outside(model: TyredModel, x: Array) -> int:
             return Domain.NOT_FINITE
     if abs(x[Index.roll]) > model.roll_limit:
         return Domain.FALLEN
+    if abs(x[Index.steer]) > model.steer_limit:
+        return Domain.STEER_STOP
     kr, kf, _, _ = _contacts(model.p, x[:9], x[9:18])
     if kr[2] <= 0.0:
         return Domain.REAR_LIFTED
@@ -672,7 +686,8 @@ def domain(model: TyredModel, state: State) -> Domain:
     -------
     Domain
         ``NOT_FINITE`` for a NaN or infinite value, ``FALLEN`` when |roll| exceeds the
-        model's roll limit, ``REAR_LIFTED`` / ``FRONT_LIFTED`` when a wheel is off the ground,
+        model's roll limit, ``STEER_STOP`` when |steer| exceeds its steer limit (the front
+        wheel tucked under), ``REAR_LIFTED`` / ``FRONT_LIFTED`` when a wheel is off the ground,
         ``INSIDE`` otherwise.
     """
     return Domain(outside(model, np.array(state, dtype=float)))

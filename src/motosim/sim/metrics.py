@@ -328,11 +328,12 @@ LOCKED_SLIP = -0.9
 """A wheel whose longitudinal slip is at or below this is locked (slip -1: not turning)."""
 
 
-def wheel_locks(t: Array, get: Callable[[str], Array]) -> list[str]:
-    """One phrase for each wheel locked at the end of a run, naming when it locked.
+def wheel_locks(t: Array, get: Callable[[str], Array], *, to_end: bool = True) -> list[str]:
+    """One phrase for each wheel that locked, naming when.
 
-    A wheel is locked from the first instant of the last stretch, to the run's end, over
-    which its slip (``kappa_f``, ``kappa_r``) stays at or below :data:`LOCKED_SLIP`.
+    A wheel locks when its slip (``kappa_f``, ``kappa_r``) falls to :data:`LOCKED_SLIP` or
+    below; named is the start of its last locked stretch, one that lasts to the run's end
+    (``to_end``) or any.
 
     Examples
     --------
@@ -340,32 +341,49 @@ def wheel_locks(t: Array, get: Callable[[str], Array]) -> list[str]:
     >>> slips = {"kappa_f": np.array([0.0, -0.1, -0.95, -1.0, -1.0]), "kappa_r": np.zeros(5)}
     >>> wheel_locks(t, slips.__getitem__)
     ['the front wheel locked at t = 1.000 s']
+    >>> slips["kappa_f"][-1] = 1.0
+    >>> wheel_locks(t, slips.__getitem__), wheel_locks(t, slips.__getitem__, to_end=False)
+    ([], ['the front wheel locked at t = 1.000 s'])
     """
     out = []
     for wheel, column in (("front", "kappa_f"), ("rear", "kappa_r")):
         locked = np.asarray(get(column)) <= LOCKED_SLIP
-        if locked.size and locked[-1]:
-            free = np.flatnonzero(~locked)
-            first = 0 if free.size == 0 else int(free[-1]) + 1
-            out.append(f"the {wheel} wheel locked at t = {t[first]:.3f} s")
+        if not locked.any() or (to_end and not locked[-1]):
+            continue
+        last = int(np.flatnonzero(locked)[-1])
+        free = np.flatnonzero(~locked[: last + 1])
+        first = 0 if free.size == 0 else int(free[-1]) + 1
+        out.append(f"the {wheel} wheel locked at t = {t[first]:.3f} s")
     return out
 
 
 def multibody_reason(
-    t: Array, get: Callable[[str], Array], roll_limit: float, limits: tuple[float, float, float]
+    t: Array,
+    get: Callable[[str], Array],
+    roll_limit: float,
+    limits: tuple[float, float, float],
+    steer_limit: float = math.radians(35.0),
 ) -> str:
     """Why a run on the multibody motorcycle stopped at its last instant, in one line.
 
-    It fell (roll beyond ``roll_limit`` [rad]), lifted a wheel off the ground (its normal
-    load 0) or left the speeds ``limits`` (:func:`validity_limits`); a wheel locked before
-    is named first (:func:`wheel_locks`).
+    It fell (roll beyond ``roll_limit`` [rad], or the front wheel tucked under: steer
+    beyond ``steer_limit`` [rad]), lifted a wheel off the ground (its normal load 0) or left
+    the speeds ``limits`` (:func:`validity_limits`); a wheel locked before is named first
+    (:func:`wheel_locks`).
     """
     end = float(t[-1])
     phi, speed = float(get("phi")[-1]), float(get("v_x")[-1])
+    delta = float(get("delta")[-1])
     if abs(phi) > roll_limit:
         what = (
             f"the motorcycle fell at t = {end:.3f} s: roll {math.degrees(phi):.1f} deg, beyond "
             f"{math.degrees(roll_limit):.0f} deg"
+        )
+    elif abs(delta) > steer_limit:
+        what = (
+            f"the motorcycle fell at t = {end:.3f} s: the front wheel tucked under (steer "
+            f"{math.degrees(delta):.0f} deg, past the {math.degrees(steer_limit):.0f} deg "
+            "steering stop)"
         )
     elif get("F_zr")[-1] <= 0.0 or get("F_zf")[-1] <= 0.0:
         wheel = "rear" if get("F_zr")[-1] <= 0.0 else "front"
@@ -379,7 +397,7 @@ def multibody_reason(
             f"the speed left the model's range at t = {end:.3f} s: {speed:.5g} m/s, outside "
             f"{low:g} to {high:g} m/s"
         )
-    locks = wheel_locks(t, get)
+    locks = wheel_locks(t, get, to_end=False)
     return ", and ".join([*locks, what]) + "; the run stopped there"
 
 

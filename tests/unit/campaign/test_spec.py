@@ -53,7 +53,7 @@ UNIFORM = {"distribution": "uniform", "low": 0.5, "high": 1.5}
             "not a kept metric",
         ),
         (_doc({"x": [1.0]}, runs=3, limits=[1.0]), "table of metric = limit"),
-        (_doc({"x": [1.0]}, runs=3, series=["theta"]), "did you mean 'theta_h'"),
+        (_doc({"x": [1.0]}, runs=3, series=["theta_hh"]), "did you mean 'theta_h'"),
         (_doc({"x": [1.0]}, runs=3, series="delta"), "list of signal names"),
         (_doc({"x": [1.0]}, runs=3, series=["t"]), "unknown signal 't'"),
         (_doc({"x": [1.0]}, runs=3, series=["delta", "delta"]), "each signal once"),
