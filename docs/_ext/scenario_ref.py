@@ -31,6 +31,7 @@ TABLES: dict[str, type] = {
     "controller": sc.Controller,
     "sensor": sc.Sensor,
     "sensor.torque": sc.TorqueSensor,
+    "road": sc.Road,
     "rider.hands": Hands,
     "realtime": RealtimeOptions,
     "realtime.safety": SafetyLimits,
@@ -61,14 +62,26 @@ DESCRIPTIONS: dict[str, str] = {
     "measurement.encoder_bits": "Encoder resolution per handlebar revolution [bits]; 0: exact.",
     "measurement.current_noise": "Standard deviation of the current sensor's noise [A].",
     # [motorcycle]
-    "motorcycle.params": "Parameter set of the virtual motorcycle (a packaged name or a file).",
+    "motorcycle.model": (
+        '`"sharp1971"`: Sharp\'s linear model with eq. (2); `"multibody"`: the multibody '
+        "motorcycle on tyres (load transfer, pitch, slips, tyres that saturate at the road's "
+        "friction; the models guide)."
+    ),
+    "motorcycle.params": (
+        "Parameter set of the virtual motorcycle (a packaged name or a file): a `sharp` set, "
+        "or with the multibody model a `multibody` set with its tyres (`sel2004_motorcycle`)."
+    ),
     "motorcycle.speed": "Initial forward speed [m/s].",
     "motorcycle.input": (
         '`"estimate"`: the motorcycle is driven by the estimated rider torque (the '
         'simulator); `"true"`: by the true torque (for comparison).'
     ),
     "motorcycle.drive_torque": "Drive torque at the rear wheel [N*m], eq. (2); -5000 to 5000.",
-    "motorcycle.brake_torque": "Brake torque [N*m], eq. (2); 0 to 5000.",
+    "motorcycle.brake_torque": "Brake torque [N*m], eq. (2); 0 to 5000 (Sharp 1971 only).",
+    "motorcycle.front_brake_torque": (
+        "Front brake torque [N*m], 0 to 5000, opposing the wheel's spin (the multibody model)."
+    ),
+    "motorcycle.rear_brake_torque": "Rear brake torque [N*m], 0 to 5000 (the multibody model).",
     "motorcycle.wind_force": "Longitudinal wind force [N], eq. (2); -5000 to 5000.",
     "motorcycle.side_wind": (
         "Lateral wind force, to the right [N], with its yaw and roll moments; -3000 to 3000."
@@ -152,6 +165,11 @@ DESCRIPTIONS: dict[str, str] = {
         "estimate filter's delay, r the estimate's rate through a 10 Hz notch and a 3 Hz "
         'low-pass); needs `"rider"` and the Walcott-Zak observer. Default: on with them '
         "from a 1 kHz measurement rate and at the paper's 100 Hz."
+    ),
+    # [road]
+    "road.friction": (
+        "Tyre-road friction coefficient over time (a profile; steps from t = 0), 0.01 to 3: "
+        "about 1 dry, 0.5-0.7 wet, 0.1 on ice (the multibody model)."
     ),
     # [sensor]
     "sensor.torque": (
