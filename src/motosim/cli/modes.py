@@ -54,8 +54,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--params",
         default="sharp1971",
-        help="sharp or multibody (with tyres) parameter set name or TOML file (default: "
-        "sharp1971)",
+        help="sharp or multibody (with tyres) parameter set name or TOML file (default: sharp1971)",
     )
     parser.add_argument(
         "--model",

@@ -78,7 +78,9 @@ def test_weave_and_wobble_are_in_the_published_ranges(table: ModeTable) -> None:
     assert zeta[SPEEDS == 60.0][0] < 0.1 < zeta[SPEEDS == 20.0][0]
 
 
-def _front_frame_hz(params: MultibodyParameters, front: tyred.LinearTyre, load: float, v: float) -> float:
+def _front_frame_hz(
+    params: MultibodyParameters, front: tyred.LinearTyre, load: float, v: float
+) -> float:
     """The rear frame held: the front frame and wheel on the relaxing front tyre [Hz]."""
     lam, w, c = params.lam, params.w, params.c
     z_F = -(params.r_F + params.t_F)
