@@ -1,8 +1,9 @@
 """``motosim modes``: capsize, weave and wobble of the motorcycle against speed.
 
-``--model sharp1971`` is Sharp's linear model, ``--model multibody`` the same machine
-through the multibody model on its linear relaxing tyres; the default follows the
-parameter set's kind.
+``--model sharp1971`` is Sharp's linear model of a ``sharp`` set; ``--model multibody`` is
+the multibody model on tyres linearised about upright straight running: a ``sharp`` set's
+machine on Sharp's linear relaxing tyres, or a ``multibody`` set with its Magic Formula
+tyres (e.g. ``sel2004_motorcycle``). The default follows the parameter set's kind.
 """
 
 import argparse
@@ -17,7 +18,8 @@ from motosim.cli._common import (
     warn_atypical,
 )
 from motosim.errors import MotosimError
-from motosim.params import load_parameter_set
+from motosim.params import ParameterSet, load_parameter_set
+from motosim.params.multibody import MultibodyParameters
 from motosim.params.sharp import SharpParameters
 
 if TYPE_CHECKING:
@@ -37,8 +39,10 @@ def register(sub: Any) -> None:
     parser = sub.add_parser(
         "modes",
         help="eigenvalues and modes of the motorcycle against speed",
-        description="Capsize, weave and wobble of Sharp's (1971) machine at each speed: its "
-        "linear model, or the machine through the multibody model on tyres (--model multibody).",
+        description="Capsize, weave and wobble of a motorcycle at each speed: Sharp's (1971) "
+        "linear model of a sharp set, or the multibody model on tyres linearised about upright "
+        "straight running (--model multibody; a sharp set's machine on Sharp's tyres, or a "
+        "multibody set with its Magic Formula tyres, e.g. sel2004_motorcycle).",
     )
     where = parser.add_mutually_exclusive_group()
     where.add_argument(
@@ -48,13 +52,15 @@ def register(sub: Any) -> None:
         "--range", dest="speed_range", help=f"start:stop:step [m/s] (default {_DEFAULT_RANGE})"
     )
     parser.add_argument(
-        "--params", default="sharp1971", help="Sharp parameter set name or TOML file"
+        "--params",
+        default="sharp1971",
+        help="sharp or multibody (with tyres) parameter set name or TOML file (default: sharp1971)",
     )
     parser.add_argument(
         "--model",
         choices=("sharp1971", "multibody"),
-        help="Sharp's linear model or the multibody model on tyres, for a sharp parameter set "
-        "(default: sharp1971)",
+        help="Sharp's linear model (a sharp set only) or the multibody model on tyres "
+        "(default: sharp1971 for a sharp set, multibody for a multibody set)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument(
@@ -112,6 +118,44 @@ def _print_table(table: "ModeTable") -> None:
         print("  ".join(cells) + note)
 
 
+def _check_model(name: str, pset: ParameterSet, model: str | None) -> str:
+    """The model to linearise: ``model`` if the set admits it, else the set kind's default.
+
+    Raises
+    ------
+    MotosimError
+        If the set is neither a sharp set nor a multibody set with both tyres, or
+        ``sharp1971`` is asked of a multibody set.
+    """
+    if isinstance(pset.values, SharpParameters):
+        return model or "sharp1971"
+    if not isinstance(pset.values, MultibodyParameters):
+        raise MotosimError(
+            f"--params {name}: is a {pset.model} parameter set; expected a sharp parameter set "
+            "or a multibody set with tyres (e.g. sel2004_motorcycle)"
+        )
+    if model == "sharp1971":
+        raise MotosimError(
+            f"--model sharp1971 with --params {name}: Sharp's linear model takes a sharp "
+            "parameter set; expected --model multibody (the default) for a multibody set"
+        )
+    missing = [key for key in ("front_tyre", "rear_tyre") if key not in pset.tyres]
+    if missing:
+        raise MotosimError(
+            f"--params {name}: is a multibody set without tyres (names no {missing[0]}); "
+            "expected a multibody set with tyres (e.g. sel2004_motorcycle), whose "
+            "linearisation the modes need"
+        )
+    return "multibody"
+
+
+def _title(pset: ParameterSet, model: str) -> str:
+    if model == "sharp1971":
+        return f"{pset.name}, Sharp's (1971) linear model: modes against speed (shaded: unstable)"
+    tyres = "Sharp's tyres" if isinstance(pset.values, SharpParameters) else "its MF tyres"
+    return f"{pset.name}, the multibody model on {tyres}: modes against speed (shaded: unstable)"
+
+
 def run(args: argparse.Namespace) -> int:
     """Compute, print and optionally plot the modes."""
     speeds = (
@@ -126,20 +170,19 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     pset = load_parameter_set(args.params)
-    model = args.model or "sharp1971"
-    if not isinstance(pset.values, SharpParameters):
-        raise MotosimError(
-            f"--params {args.params}: is a {pset.model} parameter set; expected a sharp "
-            "parameter set (the modes of a multibody set need its tyres' linearisation)"
-        )
-    if model == "multibody":
+    model = _check_model(args.params, pset, args.model)
+    if isinstance(pset.values, SharpParameters) and model == "sharp1971":
+        from motosim.model.sharp import modes
+
+        table = modes(pset.values, speeds)
+    elif isinstance(pset.values, SharpParameters):
         from motosim.model.tyred import sharp_modes
 
         table = sharp_modes(pset.values, speeds)
     else:
-        from motosim.model.sharp import modes
+        from motosim.model.tyred import lateral_modes, load_model
 
-        table = modes(pset.values, speeds)
+        table = lateral_modes(load_model(args.params), speeds)
     if args.speeds is not None or args.speed_range is not None:  # the default spans 2-60 m/s
         warn_atypical("modes", "--speeds" if args.speeds is not None else "--range", speeds)
     if args.json:
@@ -149,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         from motosim.plotting import plot_modes
 
-        path = save_figure(plot_modes(table), args.plot)
+        path = save_figure(plot_modes(table, title=_title(pset, model)), args.plot)
         if not args.json:
             print(f"\nfigure written to {path}")
     return 0

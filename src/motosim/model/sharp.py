@@ -47,6 +47,7 @@ __all__ = [
     "side_force_input",
     "simulate",
     "stiffness_matrices",
+    "track_modes",
 ]
 
 Array = NDArray[np.float64]
@@ -301,8 +302,9 @@ class ModeTable:
     ----------
     speeds : ndarray, shape (n,)
         Forward speeds [m/s].
-    eigenvalues : ndarray of complex, shape (n, 8)
-        All eigenvalues at each speed [1/s], sorted by real part.
+    eigenvalues : ndarray of complex, shape (n, m)
+        All eigenvalues at each speed [1/s] (m = 8 for Sharp's model and the multibody
+        model's lateral dynamics), sorted by real part.
     capsize, weave, wobble : ndarray of complex, shape (n,)
         The eigenvalue of each mode; for oscillatory modes the one with positive imaginary part.
     """
@@ -336,8 +338,8 @@ _TRACK_STEP = 0.25  # m/s, internal speed step for following the modes
 _REFERENCE_SPEED = 20.0  # m/s, where the three modes are unambiguous for road motorcycles
 
 
-def _classify(ev: NDArray[np.complex128]) -> dict[str, list[int]]:
-    """Indices of capsize, weave and wobble among 8 eigenvalues at the reference speed.
+def _classify(ev: NDArray[np.complex128], speed: float) -> dict[str, list[int]]:
+    """Indices of capsize, weave and wobble among the eigenvalues at the reference speed.
 
     Wobble is the oscillatory pair of highest frequency, weave the other oscillatory pair, and
     capsize the real eigenvalue closest to zero.
@@ -347,7 +349,7 @@ def _classify(ev: NDArray[np.complex128]) -> dict[str, list[int]]:
     if len(osc) < 2 or not real:
         raise MotosimError(
             "cannot identify capsize, weave and wobble: expected two oscillatory modes and a "
-            f"real one at {_REFERENCE_SPEED:g} m/s, found eigenvalues {np.round(ev, 3).tolist()}"
+            f"real one at {speed:g} m/s, found eigenvalues {np.round(ev, 3).tolist()}"
         )
     osc.sort(key=lambda i: ev[i].imag)
     conj = {i: int(np.argmin(np.abs(ev - np.conj(ev[i])))) for i in osc}
@@ -366,17 +368,113 @@ def _follow(path: NDArray[np.complex128]) -> NDArray[np.complex128]:
     return out
 
 
+def track_modes(
+    speeds: ArrayLike,
+    spectrum: Callable[[Array], NDArray[np.complex128]],
+    *,
+    reference_speed: float = _REFERENCE_SPEED,
+) -> ModeTable:
+    """Classify capsize, weave and wobble of any lateral spectrum, following them over speed.
+
+    The modes are named at ``reference_speed``, where they are distinct (wobble the
+    oscillatory pair of highest frequency, weave the next one, capsize the real eigenvalue
+    nearest zero), and followed eigenvalue by eigenvalue along a fine internal grid
+    (0.25 m/s) down and up to the requested speeds, so a mode keeps its name where two modes
+    come close in frequency or a pair splits into two real eigenvalues. Nothing here depends
+    on the model: Sharp's (:func:`modes`) and the multibody model's
+    (:func:`motosim.model.tyred.lateral_modes`) spectra are classified alike.
+
+    Parameters
+    ----------
+    speeds : array_like
+        Forward speeds [m/s], within [:data:`MIN_SPEED`, :data:`MAX_SPEED`], in any order.
+    spectrum : callable
+        ``spectrum(speeds)`` returns the eigenvalues [1/s] at the given speeds [m/s], shape
+        (n_speeds, n) with the same n >= 3 at every speed (e.g. the eigenvalues of a lateral
+        state matrix).
+    reference_speed : float, optional
+        Where the modes are named [m/s] (default 20 m/s, where the three are distinct for
+        road motorcycles).
+
+    Returns
+    -------
+    ModeTable
+        ``eigenvalues`` holds each row sorted by real part, then imaginary part.
+
+    Raises
+    ------
+    MotosimError
+        If a speed is out of range, the spectrum has the wrong shape or is not finite, or the
+        modes cannot be identified at the reference speed.
+
+    Examples
+    --------
+    >>> def spectrum(v):  # a capsize, a weave and a wobble whose frequency rises with speed
+    ...     v = np.asarray(v)[:, None]
+    ...     wobble = -3 + 40j + 0 * v
+    ...     return np.hstack([0.01 * v + 0j, -1 + 1.5j * v, -1 - 1.5j * v, wobble, wobble.conj()])
+    >>> table = track_modes([5.0, 30.0], spectrum)  # the weave passes the wobble at 26.7 m/s
+    >>> table.weave.tolist(), table.wobble.tolist()
+    ([(-1+7.5j), (-1+45j)], [(-3+40j), (-3+40j)])
+    """
+    v = _speeds_array(speeds)
+    check_speed(reference_speed)
+
+    def eigenvalues_at(at: ArrayLike) -> NDArray[np.complex128]:
+        grid = _speeds_array(at)
+        ev = np.asarray(spectrum(grid), dtype=complex)
+        if ev.ndim != 2 or ev.shape[0] != grid.size or ev.shape[1] < 3:
+            raise MotosimError(
+                f"mode spectrum has shape {ev.shape} at {grid.size} speeds; expected "
+                f"({grid.size}, n) with n >= 3 eigenvalues at each speed"
+            )
+        if not np.all(np.isfinite(ev)):
+            raise MotosimError("mode spectrum is not finite; expected finite eigenvalues")
+        order = np.lexsort((ev.imag, ev.real), axis=1)
+        return np.take_along_axis(ev, order, axis=1)
+
+    lo, hi = min(v.min(), reference_speed), max(v.max(), reference_speed)
+    down = np.append(np.arange(reference_speed, lo, -_TRACK_STEP), lo)
+    up = np.append(np.arange(reference_speed, hi, _TRACK_STEP), hi)
+    ref = eigenvalues_at([reference_speed])[0]
+    idx = _classify(ref, reference_speed)
+    branches_down = _follow(eigenvalues_at(down))
+    branches_up = _follow(eigenvalues_at(up))
+    grid = np.concatenate([down[::-1], up[1:]])
+    branches = np.concatenate([branches_down[::-1], branches_up[1:]])
+    order = np.argsort(grid, kind="stable")
+    grid, branches = grid[order], branches[order]
+
+    def pick(name: str, row: NDArray[np.complex128]) -> complex:
+        vals = row[idx[name]]
+        return complex(vals[np.argmax(vals.imag + 1e-12 * vals.real)])
+
+    exact = eigenvalues_at(v)
+    chosen = {name: np.empty(v.size, dtype=complex) for name in MODE_NAMES}
+    for n, s in enumerate(v):
+        row = branches[int(np.argmin(np.abs(grid - s)))]
+        for name in MODE_NAMES:
+            # the grid value identifies the branch; report the exact eigenvalue at s
+            approx = pick(name, row)
+            chosen[name][n] = exact[n][int(np.argmin(np.abs(exact[n] - approx)))]
+    return ModeTable(
+        speeds=v,
+        eigenvalues=exact,
+        capsize=chosen["capsize"],
+        weave=chosen["weave"],
+        wobble=chosen["wobble"],
+    )
+
+
 def modes(
     p: SharpParameters,
     speeds: ArrayLike,
     *,
     spectrum: Callable[[Array], NDArray[np.complex128]] | None = None,
 ) -> ModeTable:
-    """Classify capsize, weave and wobble at each speed, following them continuously.
+    """Capsize, weave and wobble of Sharp's model at each speed, followed continuously.
 
-    The modes are named at 20 m/s, where they are distinct, and followed eigenvalue by
-    eigenvalue along a fine internal grid (0.25 m/s) down and up to the requested speeds, so a
-    mode keeps its name where two modes come close in frequency.
+    :func:`track_modes` of the :func:`eigenvalues` of Sharp's lateral model.
 
     Parameters
     ----------
@@ -385,9 +483,8 @@ def modes(
     speeds : array_like
         Forward speeds [m/s], at least :data:`MIN_SPEED`, in any order.
     spectrum : callable, optional
-        The eigenvalues at given speeds, shape (n_speeds, 8), each row sorted by real part;
-        by default :func:`eigenvalues` of Sharp's model (another model of the same machine,
-        e.g. the multibody one, can be classified the same way).
+        Another spectrum of the same machine to classify instead (e.g. the multibody model's):
+        the eigenvalues at given speeds, shape (n_speeds, n).
 
     Returns
     -------
@@ -405,44 +502,9 @@ def modes(
     >>> bool(table.weave[0].real > 0)    # weave unstable at 10 ft/s (Sharp 1971, Table 1)
     True
     """
-    v = _speeds_array(speeds)
-
-    def eigenvalues_at(at: ArrayLike) -> NDArray[np.complex128]:
-        if spectrum is None:
-            return eigenvalues(p, at)
-        return spectrum(_speeds_array(at))
-
-    lo, hi = min(v.min(), _REFERENCE_SPEED), max(v.max(), _REFERENCE_SPEED)
-    down = np.append(np.arange(_REFERENCE_SPEED, lo, -_TRACK_STEP), lo)
-    up = np.append(np.arange(_REFERENCE_SPEED, hi, _TRACK_STEP), hi)
-    ref = eigenvalues_at([_REFERENCE_SPEED])[0]
-    idx = _classify(ref)
-    branches_down = _follow(eigenvalues_at(down))
-    branches_up = _follow(eigenvalues_at(up))
-    grid = np.concatenate([down[::-1], up[1:]])
-    branches = np.concatenate([branches_down[::-1], branches_up[1:]])
-    order = np.argsort(grid, kind="stable")
-    grid, branches = grid[order], branches[order]
-
-    def pick(name: str, row: NDArray[np.complex128]) -> complex:
-        vals = row[idx[name]]
-        return complex(vals[np.argmax(vals.imag + 1e-12 * vals.real)])
-
-    chosen = {name: np.empty(v.size, dtype=complex) for name in MODE_NAMES}
-    for n, s in enumerate(v):
-        row = branches[int(np.argmin(np.abs(grid - s)))]
-        exact = eigenvalues_at([s])[0]
-        for name in MODE_NAMES:
-            # the grid value identifies the branch; report the exact eigenvalue at s
-            approx = pick(name, row)
-            chosen[name][n] = exact[int(np.argmin(np.abs(exact - approx)))]
-    return ModeTable(
-        speeds=v,
-        eigenvalues=eigenvalues_at(v),
-        capsize=chosen["capsize"],
-        weave=chosen["weave"],
-        wobble=chosen["wobble"],
-    )
+    if spectrum is None:
+        return track_modes(speeds, lambda at: eigenvalues(p, at))
+    return track_modes(speeds, spectrum)
 
 
 def longitudinal_acceleration(

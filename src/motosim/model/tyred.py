@@ -981,3 +981,41 @@ def load_model(name_or_path: str, *, tyres: str = "magic", speed: float = 20.0) 
     front = linearised_tyre(front_mf, load_f, speed)
     rear = linearised_tyre(rear_mf, weight - load_f, speed)
     return make_model(params, rear, front)
+
+
+def lateral_modes(model: TyredModel, speeds: ArrayLike) -> ModeTable:
+    """Capsize, weave and wobble of a tyred model about upright straight running.
+
+    The eigenvalues of :func:`lateral_matrix` at each speed (the lateral states only: the
+    heading and the lateral position, which add two zero eigenvalues, are left out, and the
+    in-plane motion decouples by symmetry), classified and followed over speed by
+    :func:`motosim.model.sharp.track_modes`. On a model whose tyres are Magic Formula tyres
+    the linearisation is that of the MF-MC at zero slip and camber at the static loads
+    (cornering, camber and aligning stiffnesses, the lateral relaxation length at each speed).
+
+    Parameters
+    ----------
+    model : TyredModel
+        The model (:func:`make_model` or :func:`load_model`).
+    speeds : array_like
+        Forward speeds [m/s], within [:data:`motosim.model.sharp.MIN_SPEED`,
+        :data:`motosim.model.sharp.MAX_SPEED`], in any order.
+
+    Returns
+    -------
+    ModeTable
+
+    Raises
+    ------
+    MotosimError
+        If a speed is out of range or the modes cannot be identified.
+    """
+    from motosim.model.sharp import track_modes
+
+    def spectrum(at: Array) -> npt.NDArray[np.complex128]:
+        out = np.empty((len(at), 8), dtype=complex)
+        for i, speed in enumerate(at):
+            out[i] = np.linalg.eigvals(lateral_matrix(model, float(speed)))
+        return out
+
+    return track_modes(speeds, spectrum)

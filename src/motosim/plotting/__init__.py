@@ -6,12 +6,13 @@ Every function returns a :class:`matplotlib.figure.Figure` and never shows it; c
 from motosim.plotting.estimation import plot_torque_estimates
 from motosim.plotting.handling import plot_handling
 from motosim.plotting.identification import plot_identification
-from motosim.plotting.modes import plot_modes
+from motosim.plotting.modes import plot_mode_comparison, plot_modes
 from motosim.plotting.tyres import plot_tyre
 
 __all__ = [
     "plot_handling",
     "plot_identification",
+    "plot_mode_comparison",
     "plot_modes",
     "plot_torque_estimates",
     "plot_tyre",

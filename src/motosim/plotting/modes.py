@@ -1,11 +1,14 @@
 """Capsize, weave and wobble against speed."""
 
+from collections.abc import Mapping
+
 import numpy as np
 from matplotlib.figure import Figure
 
+from motosim.errors import MotosimError
 from motosim.model.sharp import MODE_NAMES, ModeTable
 
-__all__ = ["plot_modes"]
+__all__ = ["plot_mode_comparison", "plot_modes"]
 
 _COLOURS = {"capsize": "tab:blue", "weave": "tab:orange", "wobble": "tab:green"}
 
@@ -30,7 +33,7 @@ def plot_modes(table: ModeTable, *, title: str = "") -> Figure:
     Parameters
     ----------
     table : ModeTable
-        From :func:`motosim.model.sharp.modes`.
+        From :func:`motosim.model.sharp.modes` or :func:`motosim.model.tyred.lateral_modes`.
     title : str
         Figure title.
 
@@ -84,4 +87,59 @@ def plot_modes(table: ModeTable, *, title: str = "") -> Figure:
     for ax in (ax_re, ax_f):
         ax.grid(True, alpha=0.3)
     fig.suptitle(title or "Sharp (1971) motorcycle: modes against speed (shaded: unstable)")
+    return fig
+
+
+_STYLES = ("-", "--", ":", "-.")
+
+
+def plot_mode_comparison(tables: Mapping[str, ModeTable], *, title: str = "") -> Figure:
+    """The three modes of several models against speed, one line style per model.
+
+    Parameters
+    ----------
+    tables : mapping of str to ModeTable
+        Each model's modes (:func:`motosim.model.sharp.modes`,
+        :func:`motosim.model.tyred.lateral_modes`, ...), by the name the legend shows; at most
+        four.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+        Two panels sharing the speed axis [m/s]: the real parts (above zero: unstable) and the
+        weave's and wobble's frequencies [Hz].
+
+    Raises
+    ------
+    MotosimError
+        If there is no table or more than four.
+    """
+    if not 1 <= len(tables) <= len(_STYLES):
+        raise MotosimError(f"mode comparison of {len(tables)} tables; expected 1 to {len(_STYLES)}")
+    fig = Figure(figsize=(8.0, 6.5), layout="constrained")
+    ax_re, ax_f = fig.subplots(2, 1, sharex=True)
+    for style, (label, table) in zip(_STYLES, tables.items(), strict=False):
+        order = np.argsort(table.speeds)
+        v = table.speeds[order]
+        for name in MODE_NAMES:
+            values = table.mode(name)[order]
+            ax_re.plot(v, values.real, ls=style, color=_COLOURS[name], label=f"{name}, {label}")
+            if name != "capsize":
+                ax_f.plot(
+                    v,
+                    ModeTable.frequency_hz(values),
+                    ls=style,
+                    color=_COLOURS[name],
+                    label=f"{name}, {label}",
+                )
+    ax_re.axhline(0.0, color="k", lw=0.8)
+    ax_re.set_ylabel("real part of the eigenvalue [1/s]")
+    ax_f.set_ylabel("mode frequency [Hz]")
+    ax_f.set_xlabel("forward speed [m/s]")
+    for ax in (ax_re, ax_f):
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
+        ax.grid(True, alpha=0.3)
+    fig.suptitle(title or "Modes against speed (above zero: unstable)")
     return fig
