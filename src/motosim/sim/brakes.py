@@ -152,6 +152,13 @@ def design_brakes(
     ------
     MotosimError
         Naming the first setting out of its range.
+
+    Examples
+    --------
+    >>> from motosim.model.tyred import load_model
+    >>> settings = design_brakes(load_model("sel2004_motorcycle"))
+    >>> settings.slip_target, round(settings.min_rear_load)  # 5 % of the static rear load [N]
+    (0.1, 65)
     """
     check_number(slip_target, where="brakes: slip_target", lower=0.0, upper=0.5,
                  lower_closed=False, upper_closed=False)  # fmt: skip

@@ -54,6 +54,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
+from motosim.model import _generated_tyred as gen
 from motosim.model.tyred import ContactLoads, Index, Inputs, State, TyredModel, derivatives
 from motosim.model.tyred import upright_state as _upright_state
 from motosim.params.checks import check_number
@@ -153,7 +154,7 @@ def _trim_point(
     if lean == 0.0:
         state = _upright_state(model, speed)
         return np.array(state, dtype=float), 0.0, 0.0, 0.0
-    g = float(model.p[11])
+    g = float(model.p[gen.PARAMETERS.index("g")])
     radius = speed**2 / (g * math.tan(lean))
     turn = steady_turn(model, speed, radius, friction=friction)
     x = np.array(turn.state, dtype=float)
@@ -295,6 +296,15 @@ def design_multibody_rider(
     MotosimError
         If a setting is out of range, a grid is not increasing, or a grid point has no
         steady turn (:class:`motosim.model.trim.NoSteadyTurnError`, naming it).
+
+    Examples
+    --------
+    >>> from motosim.model.tyred import load_model
+    >>> rider = design_multibody_rider(
+    ...     load_model("sel2004_motorcycle"), speeds=(15.0, 20.0), leans=(0.0, 30.0)
+    ... )
+    >>> round(float(rider.tau_ss[1, 1]), 1)  # trim.py's steer torque at 20 m/s, 30 deg [N*m]
+    -10.8
     """
     v_grid = _grid(speeds, "speeds", SPEEDS, 1.0)
     l_grid = _grid(leans, "leans", LEANS, math.pi / 180.0)
