@@ -47,11 +47,11 @@ def model() -> tyred.TyredModel:
 
 @pytest.fixture(scope="module")
 def rider(model: tyred.TyredModel) -> MultibodyRider:
-    # up to a kinematic lean of 48 deg (1.11 g), which the tyres hold on mu = 1.2
+    # up to a kinematic lean of 48 deg (1.11 g), which the tyres hold on mu = 1.2; the rides
+    # keep 20 m/s within 0.1 m/s
     return design_multibody_rider(
-        model, speeds=(15.0, 20.0, 25.0), leans=(0.0, 10.0, 20.0, 30.0, 40.0, 45.0, 48.0),
-        friction=1.2,
-    )  # fmt: skip
+        model, speeds=(20.0, 22.0), leans=(0.0, 15.0, 30.0, 40.0, 45.0, 48.0), friction=1.2
+    )
 
 
 def ride(
@@ -131,7 +131,7 @@ def test_the_schedule_holds_trim_py_steady_turns(
     model: tyred.TyredModel, rider: MultibodyRider
 ) -> None:
     # the feedforward at each grid point is trim.py's steady turn at that speed and lean
-    i, j = 1, 5  # 20 m/s, 45 deg
+    i, j = 0, 4  # 20 m/s, 45 deg
     turn = steady_turn(model, 20.0, R_45, friction=1.2)
     assert rider.speeds[i] == 20.0
     assert rider.leans[j] == pytest.approx(math.radians(45.0))
@@ -144,7 +144,7 @@ def test_the_schedule_holds_trim_py_steady_turns(
     assert np.all(rider.curvature[:, 0] == 0.0)
     # the rear contact's path curves more tightly as the lean grows
     assert np.all(np.diff(rider.curvature, axis=1) > 0.0)
-    assert rider.K.shape == (3, 7, len(Coupled)) and rider.x_ss.shape[-1] == N_COUPLED
+    assert rider.K.shape == (2, 6, len(Coupled)) and rider.x_ss.shape[-1] == N_COUPLED
 
 
 def test_a_grid_point_without_a_steady_turn_is_refused(model: tyred.TyredModel) -> None:

@@ -51,7 +51,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from motosim.errors import MotosimError
 from motosim.model import _generated_tyred as gen
@@ -237,7 +237,7 @@ def _gain(
     return K
 
 
-def _grid(values: object, name: str, default: tuple[float, ...], scale: float) -> Array:
+def _grid(values: ArrayLike | None, name: str, default: tuple[float, ...], scale: float) -> Array:
     grid = np.asarray(default if values is None else values, dtype=float) * scale
     if grid.ndim != 1 or grid.size < 2 or not np.all(np.isfinite(grid)):
         raise MotosimError(f"multibody rider: {name} = {values!r}; expected 2 or more numbers")
@@ -249,8 +249,8 @@ def _grid(values: object, name: str, default: tuple[float, ...], scale: float) -
 def design_multibody_rider(
     model: TyredModel,
     *,
-    speeds: object = None,
-    leans: object = None,
+    speeds: ArrayLike | None = None,
+    leans: ArrayLike | None = None,
     friction: float = 1.0,
     lateral_tolerance: float = 0.3,
     course_tolerance: float = 0.05,
