@@ -183,3 +183,36 @@ def test_bad_settings_are_refused_in_one_line(
 ) -> None:
     with pytest.raises(MotosimError, match=f"brakes: {setting}"):
         design_brakes(model, **{setting: value})  # type: ignore[arg-type]
+
+
+def test_braking_in_a_turn_keeps_the_rider_on_its_path(model: tyred.TyredModel) -> None:
+    # 20 m/s on a 25 deg (kinematic) turn, then 300 and 100 N*m within 0.5 s: the rider's
+    # schedule follows the falling speed down to 10.5 m/s, the lean with it
+    rider = design_multibody_rider(model, speeds=(10.0, 15.0, 20.0), leans=(0.0, 15.0, 30.0))
+    radius = 20.0**2 / (G * math.tan(math.radians(25.0)))
+    route = paths.constant_radius_turn(radius, angle=3.0, start=20.0, transition=25.0,
+                                       total=400.0)  # fmt: skip
+    path = np.vstack([route.x, route.y, route.psi, route.kappa])
+    x = np.array(tyred.upright_state(model, 20.0), dtype=float)
+    settings, state = design_brakes(model), new_brake_state()
+    k, h, offsets = 0, 1e-3, []
+    for n in range(9000):
+        t = n * h
+        loads = tyred.observe(model, x, 1.0)
+        braking = t >= 4.0
+        tau, drive, k, e_y = multibody_rider_torque(
+            rider, x, loads, k, path, route.ds, 20.0, braking
+        )
+        share = min(max((t - 4.0) / 0.5, 0.0), 1.0)
+        f, r = brake_torques(settings, state, x, 300.0 * share, 100.0 * share, loads, h)
+        if braking:
+            offsets.append(e_y)
+        inputs = Inputs(steer_torque=tau, drive_torque=drive, front_brake_torque=f,
+                        rear_brake_torque=r, friction=1.0)  # fmt: skip
+        x = np.array(tyred.step(model, State(*x), inputs, h), dtype=float)
+        assert tyred.domain(model, State(*x)) == Domain.INSIDE
+        if x[Index.forward] < 10.5:
+            break
+    assert x[Index.forward] < 10.5
+    assert route.kappa[k] == pytest.approx(1.0 / radius)  # still in the turn
+    assert np.max(np.abs(offsets)) < 0.3
