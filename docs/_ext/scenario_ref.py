@@ -99,6 +99,11 @@ DESCRIPTIONS: dict[str, str] = {
     "rider.torque_scale": "The rider torque [N*m] the two errors are weighed against.",
     "rider.preview": "How far ahead the rider reads the path's curvature [s].",
     "rider.max_torque": "The virtual rider's torque limit [N*m] (70: the paper's Remark 3.3).",
+    "rider.brake_control": (
+        "On the multibody motorcycle, the virtual rider modulates the brake demands to a slip "
+        "target and keeps the rear wheel down (an ABS); false: the brakes act as demanded."
+    ),
+    "rider.brake_slip": "The braking slip it holds, -kappa, 0 to 0.5 (0.1: near the tyres' peak).",
     "rider.hands": (
         "The arms' passive impedance at the handlebar, added to the active torque of either "
         "kind: a grip, " + ", ".join(f'`"{g}"`' for g in GRIPS) + " (`motosim.sim.hands.GRIPS`, "

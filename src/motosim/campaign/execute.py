@@ -43,6 +43,7 @@ from motosim.estimation.walcott_zak import ObserverSettings
 from motosim.io.cache import DesignCache, cached_stack
 from motosim.io.results import folder_lock
 from motosim.io.runs import parameter_source, resolve
+from motosim.model.tyred import TyredModel
 from motosim.params import load_parameters
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
@@ -50,14 +51,17 @@ from motosim.sim import RunInputs, Scenario, build_stack, prepare, simulate
 from motosim.sim.closed_loop import (
     RigModel,
     build_rig,
+    design_virtual_rider,
     perturb_rig,
     rider_design,
     rider_route,
     rig_key,
     route_length,
+    run_limits,
 )
-from motosim.sim.metrics import range_reason, run_metrics, validity_limits
-from motosim.sim.rider import RiderGains, design_rider
+from motosim.sim.metrics import multibody_reason, range_reason, run_metrics
+from motosim.sim.multibody_rider import MultibodyRider
+from motosim.sim.rider import RiderGains
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
@@ -104,7 +108,7 @@ class Design:
         CSV profiles.
     true_handlebars : Mapping of str to HandlebarParameters
         The true handlebar sets the runs name.
-    rider : RiderGains or None
+    rider : RiderGains or MultibodyRider or None
         The virtual rider's schedule for the design's first run's rider settings
         (:func:`motosim.sim.closed_loop.rider_design`); the runs whose rider differs design
         their own, once per worker.
@@ -120,8 +124,10 @@ class Design:
     observer: ObserverSettings | None
     tables: Mapping[str, TimeSeries]
     true_handlebars: Mapping[str, HandlebarParameters]
-    rider: RiderGains | None = None
+    rider: RiderGains | MultibodyRider | None = None
     rider_settings: str = ""
+    multibody: TyredModel | None = None
+    """The multibody motorcycle of the runs (None: Sharp 1971's ``sharp``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -226,6 +232,7 @@ def design_for(plan: Plan, key: str, *, cache: DesignCache | None = None) -> Des
         true_handlebars=plan.true_handlebars,
         rider=inputs.rider,
         rider_settings=repr(sorted(rider_design(inputs.scenario).items())),
+        multibody=inputs.multibody,
     )
 
 
@@ -238,15 +245,18 @@ class _Worker:
         self.rig_key: Any = None
         self.last_rig: RigModel | None = None
         self.routes: dict[Any, tuple[np.ndarray, float]] = {}
-        self.riders: dict[tuple[str, str], RiderGains] = {}
+        self.riders: dict[tuple[str, str], RiderGains | MultibodyRider] = {}
 
-    def rider(self, design: Design, scenario: Scenario) -> RiderGains:
+    def rider(self, design: Design, scenario: Scenario) -> RiderGains | MultibodyRider:
         """The schedule of ``scenario``'s rider: the design's, or one designed here once."""
         settings = rider_design(scenario)
         key = (design.key, repr(sorted(settings.items())))
         if key not in self.riders:
             shared = design.rider if key[1] == design.rider_settings else None
-            self.riders[key] = shared or design_rider(design.sharp, **settings)
+            self.riders[key] = shared or design_virtual_rider(
+                RunInputs(scenario, design.sharp, design.nominal, design.nominal, None, {},
+                          multibody=design.multibody)
+            )  # fmt: skip
         return self.riders[key]
 
     def rig(self, design: Design, inputs: RunInputs, rng: np.random.Generator) -> RigModel:
@@ -319,10 +329,11 @@ def _run_one(
             observer=d.observer,
             tables=d.tables,
             rider=worker.rider(d, scenario),
+            multibody=d.multibody,
         )
     except MotosimError as err:
         return "failed", f"invalid: {err}", math.nan, nan, None
-    limits = validity_limits(scenario.motorcycle.speed)
+    limits = run_limits(inputs)
     try:
         rig = worker.rig(d, inputs, np.random.default_rng(scenario.seed))
         ts = simulate(
@@ -334,7 +345,10 @@ def _run_one(
     values = _metrics(ts, task.metrics)
     if ts.t.size < round(scenario.duration * scenario.rates.control):
         t_end = float(ts.t[-1])
-        reason = range_reason(t_end, float(ts["phi"][-1]), float(ts["v_x"][-1]), limits)
+        if d.multibody is not None:
+            reason = multibody_reason(ts.t, ts.__getitem__, d.multibody, limits)
+        else:
+            reason = range_reason(t_end, float(ts["phi"][-1]), float(ts["v_x"][-1]), limits)
         return "failed", reason, t_end, values, ts
     found = dict(zip(task.metrics, values, strict=True))
     beyond = [f"{k} = {found[k]:.4g} > {v:g}" for k, v in task.limits if not found[k] <= v]

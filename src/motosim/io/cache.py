@@ -43,6 +43,7 @@ if typing.TYPE_CHECKING:
     from motosim.model.linear import StateSpace
     from motosim.params import HandlebarParameters
     from motosim.sim.closed_loop import RunInputs
+    from motosim.sim.multibody_rider import MultibodyRider
     from motosim.sim.rider import RiderGains
     from motosim.sim.stack import StackModel
 
@@ -394,18 +395,25 @@ def cached_controller(
     return cache.fetch("controller", {"handlebar": handlebar, **settings}, compute, StateSpace)
 
 
-def cached_rider(cache: DesignCache, inputs: "RunInputs") -> "RiderGains":
-    """The virtual rider's schedule of a run (:func:`motosim.sim.rider.design_rider`)."""
+def cached_rider(cache: DesignCache, inputs: "RunInputs") -> "RiderGains | MultibodyRider":
+    """The virtual rider's schedule of a run
+    (:func:`motosim.sim.closed_loop.design_virtual_rider`)."""
     from motosim.sim.closed_loop import rider_design
+    from motosim.sim.multibody_rider import MultibodyRider, design_multibody_rider
     from motosim.sim.rider import RiderGains, design_rider
 
     settings = rider_design(inputs.scenario)
-    motorcycle = inputs.multibody or inputs.sharp
+    multibody = inputs.multibody
+    if multibody is not None and inputs.scenario.rider.kind == "virtual":
+        return cache.fetch(
+            "multibody_rider",
+            {"multibody": multibody, **settings},
+            lambda: design_multibody_rider(multibody, **settings),
+            MultibodyRider,
+        )
+    sharp = inputs.sharp
     return cache.fetch(
-        "rider",
-        {"sharp": inputs.sharp, "multibody": inputs.multibody, **settings},
-        lambda: design_rider(motorcycle, **settings),
-        RiderGains,
+        "rider", {"sharp": sharp, **settings}, lambda: design_rider(sharp, **settings), RiderGains
     )
 
 

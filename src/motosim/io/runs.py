@@ -38,12 +38,12 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
+from motosim.sim.closed_loop import run_limits
 from motosim.sim.metrics import (
     failure,
     multibody_reason,
     range_reason,
     run_metrics,
-    validity_limits,
     wheel_locks,
 )
 from motosim.sim.scenario import CsvProfile, OpenDrivePath, check_profile_values, implausible
@@ -90,10 +90,6 @@ def read_road(scenario: Scenario, base: str | Path) -> Scenario:
     rider = dataclasses.replace(scenario.rider, path=dataclasses.replace(path, geometry=geometry))
     return dataclasses.replace(scenario, rider=rider)
 
-
-MULTIBODY_LOWEST_SPEED = 1.0
-"""The lowest speed of a run on the multibody motorcycle [m/s]: its tyres' slips are defined
-down to a walking pace (the virtual rider's schedule ends at 3 m/s, and holds its gains)."""
 
 _MOTORCYCLE_PROFILES = (
     "drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque", "wind_force",
@@ -349,9 +345,7 @@ def run_to_folder(
     sc = inputs.scenario
     metadata = run_metadata(inputs)
     rows = round(sc.duration * sc.rates.control)
-    limits = validity_limits(sc.motorcycle.speed)
-    if inputs.multibody is not None:  # it falls beyond its own roll limit, rolls to 1 m/s
-        limits = (inputs.multibody.roll_limit, min(MULTIBODY_LOWEST_SPEED, limits[1]), limits[2])
+    limits = run_limits(inputs)
     writer = ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows)
     try:
         with writer:
@@ -367,11 +361,12 @@ def run_to_folder(
             )  # fmt: skip
             stopped = run.t.size < rows
             summary: dict[str, Any] = run_metrics(
-                run.t, run.get, complete=not stopped, max_current=sc.controller.max_current
-            )
+                run.t, run.get, complete=not stopped, max_current=sc.controller.max_current,
+                limits=limits,
+            )  # fmt: skip
             if stopped and inputs.multibody is not None:
                 reason: str | None = multibody_reason(
-                    run.t, run.__getitem__, limits[0], limits, inputs.multibody.steer_limit
+                    run.t, run.__getitem__, inputs.multibody, limits
                 )
             elif stopped:
                 reason = range_reason(

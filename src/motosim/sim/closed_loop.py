@@ -36,8 +36,15 @@ from motosim.model.tyred import TyredModel
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
+from motosim.sim.brakes import BrakeSettings, brake_torques, design_brakes, new_brake_state
 from motosim.sim.hands import hands_array, hands_torque, is_held, resolve_hands
 from motosim.sim.loop_analysis import prediction_lead
+from motosim.sim.metrics import validity_limits
+from motosim.sim.multibody_rider import (
+    MultibodyRider,
+    design_multibody_rider,
+    multibody_rider_torque,
+)
 from motosim.sim.rider import RiderGains, design_rider, rider_torque
 from motosim.sim.scenario import CsvProfile, Profile, Scenario, scenario_dict
 from motosim.sim.stack import (
@@ -64,12 +71,15 @@ __all__ = [
     "RunInputs",
     "build_rig",
     "build_stack",
+    "design_virtual_rider",
+    "new_world",
     "perturb_rig",
     "prepare",
     "rider_design",
     "rider_route",
     "rig_key",
     "route_length",
+    "run_limits",
     "run_metadata",
     "simulate",
 ]
@@ -127,10 +137,12 @@ class RunInputs:
         Walcott-Zak settings from a design file; None for the defaults at the measurement step.
     tables : Mapping of str to TimeSeries
         CSV profiles by file name.
-    rider : RiderGains or None
+    rider : RiderGains or MultibodyRider or None
         The virtual rider's gain schedule, :func:`~motosim.sim.rider.design_rider` of
-        ``sharp`` with :func:`rider_design` of the scenario, designed beforehand (a design
-        cache's, or one shared by a campaign's runs); None to design it in :func:`build_rig`.
+        ``sharp`` (or :func:`~motosim.sim.multibody_rider.design_multibody_rider` of
+        ``multibody``) with :func:`rider_design` of the scenario, designed beforehand (a
+        design cache's, or one shared by a campaign's runs); None to design it in
+        :func:`build_rig`.
     """
 
     scenario: Scenario
@@ -140,7 +152,7 @@ class RunInputs:
     controller: StateSpace | None
     tables: Mapping[str, TimeSeries]
     observer: ObserverSettings | None = None
-    rider: RiderGains | None = None
+    rider: RiderGains | MultibodyRider | None = None
     multibody: TyredModel | None = None
 
 
@@ -153,7 +165,7 @@ def prepare(
     controller: StateSpace | None,
     observer: ObserverSettings | None = None,
     tables: Mapping[str, TimeSeries] | None = None,
-    rider: RiderGains | None = None,
+    rider: RiderGains | MultibodyRider | None = None,
     multibody: TyredModel | None = None,
 ) -> RunInputs:
     """Apply the scenario's perturbations to the true handlebar and bundle the inputs.
@@ -359,7 +371,14 @@ class RigModel(NamedTuple):
         The torque sensor's error each period (offset and noise) [N*m].
     motorcycle_inputs : ndarray, shape (n, 4) or (0, 4)
         The multibody motorcycle's inputs each period, columns in the order of
-        :class:`~motosim.sim.stack.MotorcycleInput`; no rows for Sharp 1971 (``force``).
+        :class:`~motosim.sim.stack.MotorcycleInput`, the brake torques as the rider demands
+        them; no rows for Sharp 1971 (``force``).
+    multibody_rider : MultibodyRider
+        The virtual rider of the multibody motorcycle (steering, throttle), read when
+        ``virtual_rider`` and ``motorcycle_inputs`` has rows (else a placeholder).
+    brakes : BrakeSettings
+        How the virtual rider modulates the brake demand of the multibody motorcycle
+        (:mod:`motosim.sim.brakes`; ``enabled`` false: as demanded).
     """
 
     handlebar: Array
@@ -383,14 +402,42 @@ class RigModel(NamedTuple):
     sensed: bool
     torque_error: Array
     motorcycle_inputs: Array
+    multibody_rider: MultibodyRider
+    brakes: BrakeSettings
 
 
 class RigData(NamedTuple):
-    """The world's states: the true handlebar [theta_h, theta_h', theta_h' a period before]
-    and the rider's path index."""
+    """The world's states: the true handlebar [theta_h, theta_h', theta_h' a period before],
+    the rider's path index, the speed its throttle holds [m/s] (the start speed, then the
+    speed at which it last braked) and its brake controller's state
+    (:class:`~motosim.sim.brakes.BrakeState`)."""
 
     handlebar: Array
     path_index: NDArray[np.int64]
+    target_speed: Array
+    brakes: Array
+
+
+def new_world(scenario: Scenario) -> RigData:
+    """The world's states at the start of a run of ``scenario``."""
+    return RigData(
+        np.zeros(3), np.zeros(1, dtype=np.int64), np.array([scenario.motorcycle.speed]),
+        new_brake_state(),
+    )  # fmt: skip
+
+
+_NO_MULTIBODY_RIDER = MultibodyRider(
+    speeds=np.array([1.0, 2.0]), leans=np.zeros(2), curvature=np.zeros((2, 2)),
+    x_ss=np.zeros((2, 2, 15)), tau_ss=np.zeros((2, 2)), drive_ss=np.zeros((2, 2)),
+    K=np.zeros((2, 2, 17)), speed_gain=0.0, preview=0.0, max_torque=0.0, max_drive_torque=0.0,
+)  # fmt: skip
+"""The rig's multibody rider when the motorcycle is Sharp's (never read)."""
+_NO_BRAKES = BrakeSettings(
+    enabled=False, slip_target=0.1, time_constant=1.0, radius_front=1.0, radius_rear=1.0,
+    inertia_front=1.0, inertia_rear=1.0, min_rear_load=0.0, rear_load_band=1.0, load_lead=0.0,
+    min_speed=0.0, override_torque=math.inf, rise_rate=math.inf,
+)  # fmt: skip
+"""The brakes of a run that does not modulate them."""
 
 
 @functools.lru_cache(maxsize=8)
@@ -479,7 +526,10 @@ def build_rig(
         path_arr, path_ds = rider_route(sc) if route is None else route
     gains = inputs.rider
     if gains is None:
-        gains = design_rider(inputs.multibody or inputs.sharp, **rider_design(sc))
+        gains = design_virtual_rider(inputs)
+    mb_rider = gains if isinstance(gains, MultibodyRider) else _NO_MULTIBODY_RIDER
+    if isinstance(gains, MultibodyRider):  # the linear-model schedule is not read
+        gains = _placeholder_gains(gains)
     mc = sc.motorcycle
     r_D = derived_geometry(inputs.sharp)["r_D"]
     drive = mc.drive_torque.sample(t, inputs.tables)
@@ -526,7 +576,48 @@ def build_rig(
         sensed=sc.estimator.name == SENSOR_ESTIMATOR,
         torque_error=torque_error,
         motorcycle_inputs=motorcycle_inputs,
+        multibody_rider=mb_rider,
+        brakes=(
+            design_brakes(inputs.multibody, slip_target=rider.brake_slip)
+            if inputs.multibody is not None and rider.kind == "virtual" and rider.brake_control
+            else _NO_BRAKES
+        ),
     )
+
+
+MULTIBODY_LOWEST_SPEED = 1.0
+"""The lowest speed of a run on the multibody motorcycle [m/s]: its tyres' slips are defined
+down to a walking pace."""
+
+
+def run_limits(inputs: RunInputs) -> tuple[float, float, float]:
+    """(largest roll [rad], lowest and highest speed [m/s]) of a run of ``inputs``, for
+    :func:`simulate`'s ``stop_outside``: :func:`motosim.sim.metrics.validity_limits`, and on
+    the multibody motorcycle its own roll limit and speeds from
+    :data:`MULTIBODY_LOWEST_SPEED`."""
+    limits = validity_limits(inputs.scenario.motorcycle.speed)
+    if inputs.multibody is None:
+        return limits
+    return inputs.multibody.roll_limit, min(MULTIBODY_LOWEST_SPEED, limits[1]), limits[2]
+
+
+def design_virtual_rider(inputs: RunInputs) -> RiderGains | MultibodyRider:
+    """The virtual rider's schedule of a run: on Sharp 1971's linear model
+    (:func:`~motosim.sim.rider.design_rider`), or scheduled on speed and lean on the
+    multibody motorcycle (:func:`~motosim.sim.multibody_rider.design_multibody_rider`)."""
+    settings = rider_design(inputs.scenario)
+    if inputs.multibody is None or inputs.scenario.rider.kind != "virtual":
+        return design_rider(inputs.sharp, **settings)
+    return design_multibody_rider(inputs.multibody, **settings)
+
+
+def _placeholder_gains(rider: MultibodyRider) -> RiderGains:
+    """A two-speed schedule for the linear-model rider slots of a rig whose rider is the
+    multibody one (never read)."""
+    return RiderGains(
+        np.array([1.0, 2.0]), np.zeros((2, 10)), np.zeros((2, 8)), np.zeros(2),
+        rider.preview, rider.max_torque,
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -557,9 +648,32 @@ def _run_chunk(
         q = rig.quantum
         theta_meas = math.floor(hb[0] / q + 0.5) * q if q > 0.0 else hb[0]
         held = rig.hands_off.shape[0] == 0 or is_held(k * h, rig.hands_off)
+        # the road and the rider's demands on the multibody motorcycle
+        multibody = rig.motorcycle_inputs.shape[0] > 0
+        if multibody:
+            data.inputs[:] = rig.motorcycle_inputs[k]
         # the rider: a profile, or the virtual rider looking at the motorcycle
         e_y = 0.0
-        if rig.virtual_rider:
+        if rig.virtual_rider and multibody:
+            u = data.inputs
+            demand_f = u[MotorcycleInput.front_brake_torque]
+            demand_r = u[MotorcycleInput.rear_brake_torque]
+            braking = demand_f + demand_r > 0.0
+            if braking:
+                world.target_speed[0] = z[MotorcycleState.v_x]
+            loads = contact_loads(stack, data, 0.0)
+            tau_rider, drive, idx, e_y = multibody_rider_torque(
+                rig.multibody_rider, data.multibody, loads, int(world.path_index[0]), rig.path,
+                rig.path_ds, world.target_speed[0], braking,
+            )  # fmt: skip
+            world.path_index[0] = idx
+            u[MotorcycleInput.drive_torque] += drive
+            u[MotorcycleInput.front_brake_torque], u[MotorcycleInput.rear_brake_torque] = (
+                brake_torques(rig.brakes, world.brakes, data.multibody, demand_f, demand_r,
+                              loads, h)
+            )  # fmt: skip
+            tau_rider += rig.rider_probe[k]
+        elif rig.virtual_rider:
             tau_rider, idx, e_y = rider_torque(
                 z[: MotorcycleState.v_x], z[MotorcycleState.v_x], z[MotorcycleState.psi],
                 z[MotorcycleState.x], z[MotorcycleState.y], int(world.path_index[0]), rig.path,
@@ -589,8 +703,6 @@ def _run_chunk(
         for column, at in _COLUMNS_OF_MOTORCYCLE:
             o[column] = z[at]
         o[_COL.e_y] = e_y
-        if rig.motorcycle_inputs.shape[0] > 0:
-            data.inputs[:] = rig.motorcycle_inputs[k]
         left = outside(stack, data) != 0
         loads = contact_loads(stack, data, rig.force[k])
         o[_COL.F_xr], o[_COL.F_xf] = loads.F_xr, loads.F_xf
@@ -720,7 +832,7 @@ def simulate(
     rig = build_rig(inputs, rng=rng) if rig is None else rig
     _ensure_current_layout()
     data = new_data(model)
-    world = RigData(np.zeros(3), np.zeros(1, dtype=np.int64))
+    world = new_world(sc)
     reset(model, data, 0.0, 0.0)
     n = rig.current_noise.size
     rows = max(1, round(chunk * sc.rates.control))

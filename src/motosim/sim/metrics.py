@@ -14,6 +14,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from motosim.model.tyred import TyredModel
 from motosim.sim.rider import SPEED_RANGE
 
 __all__ = [
@@ -133,6 +134,7 @@ def run_metrics(
     complete: bool,
     max_current: float | None = None,
     running: NDArray[np.bool_] | None = None,
+    limits: tuple[float, float, float] | None = None,
 ) -> dict[str, float]:
     """Summary numbers and flags of a run, in SI units.
 
@@ -154,6 +156,11 @@ def run_metrics(
         true rider torque is not recorded, the rider is taken as holding the handlebar
         steady from the estimate ``tau_r_hat`` below :data:`BUZZ_CUTOFF` (the buzz itself
         swings the estimate above it).
+
+    limits : tuple of float, optional
+        (fall roll [rad], lowest and highest speed [m/s]) that flag a fall and a speed out
+        of range; by default :func:`validity_limits` of the first speed (a multibody run's
+        are :func:`motosim.sim.closed_loop.run_limits`).
 
     Returns
     -------
@@ -209,12 +216,12 @@ def run_metrics(
         values = signal(name)
         if values is not None:
             out[key] = float(np.max(np.abs(values)))
-    if "max_abs_phi" in out:
-        out["flag_fall"] = float(out["max_abs_phi"] > FALL_ROLL)
     speed = signal("v_x")
+    fall, low, high = limits or validity_limits(float(speed[0]) if speed is not None else 20.0)
+    if "max_abs_phi" in out:
+        out["flag_fall"] = float(out["max_abs_phi"] > fall)
     if speed is not None:
         out["min_speed"], out["max_speed"] = float(np.min(speed)), float(np.max(speed))
-        _, low, high = validity_limits(float(speed[0]))
         out["flag_out_of_range"] = float(out["min_speed"] < low or out["max_speed"] > high)
 
     theta, delta = signal("theta_h"), signal("delta")
@@ -358,19 +365,16 @@ def wheel_locks(t: Array, get: Callable[[str], Array], *, to_end: bool = True) -
 
 
 def multibody_reason(
-    t: Array,
-    get: Callable[[str], Array],
-    roll_limit: float,
-    limits: tuple[float, float, float],
-    steer_limit: float = math.radians(35.0),
+    t: Array, get: Callable[[str], Array], model: TyredModel, limits: tuple[float, float, float]
 ) -> str:
     """Why a run on the multibody motorcycle stopped at its last instant, in one line.
 
-    It fell (roll beyond ``roll_limit`` [rad], or the front wheel tucked under: steer
-    beyond ``steer_limit`` [rad]), lifted a wheel off the ground (its normal load 0) or left
-    the speeds ``limits`` (:func:`validity_limits`); a wheel locked before is named first
-    (:func:`wheel_locks`).
+    It fell (roll beyond the ``model``'s roll limit, or the front wheel tucked under: steer
+    beyond its steer limit), lifted a wheel off the ground (its normal load 0) or left the
+    speeds ``limits`` (:func:`motosim.sim.closed_loop.run_limits`); a wheel locked before is
+    named first (:func:`wheel_locks`).
     """
+    roll_limit, steer_limit = model.roll_limit, model.steer_limit
     end = float(t[-1])
     phi, speed = float(get("phi")[-1]), float(get("v_x")[-1])
     delta = float(get("delta")[-1])

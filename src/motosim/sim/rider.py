@@ -14,7 +14,6 @@ what a rider can apply. Gains are interpolated linearly in speed.
 
 import functools
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,9 +24,7 @@ from scipy.linalg import solve_continuous_are
 from motosim.choices import RIDER_SPEEDS
 from motosim.errors import MotosimError
 from motosim.model import sharp as sharp_model
-from motosim.model.tyred import TyredModel
 from motosim.params.sharp import SharpParameters
-from motosim.sim.stack import multibody_lateral
 
 __all__ = ["SPEED_RANGE", "RiderGains", "design_rider", "rider_torque"]
 
@@ -88,26 +85,6 @@ def _schedule(
     torque_scale: float,
 ) -> tuple[Array, Array, Array]:
     """K, x_ss and tau_ss at the design speeds (cached: campaigns reuse one rider)."""
-
-    def lateral(v: float) -> tuple[Array, Array]:
-        lin = sharp_model.linearize(p, v)
-        return lin.A, lin.B[:, 0]
-
-    return _lqr_schedule(
-        lateral, speeds, lateral_tolerance, course_tolerance, roll_tolerance, torque_scale
-    )
-
-
-def _lqr_schedule(
-    lateral: Callable[[float], tuple[Array, Array]],
-    speeds: tuple[float, ...],
-    lateral_tolerance: float,
-    course_tolerance: float,
-    roll_tolerance: float,
-    torque_scale: float,
-) -> tuple[Array, Array, Array]:
-    """K, x_ss and tau_ss at the design speeds of the lateral model ``lateral(v)`` -> (A, B)
-    in the order of Sharp 1971's states."""
     grid = np.asarray(speeds)
     K = np.empty((grid.size, 10))
     x_ss = np.empty((grid.size, 8))
@@ -118,7 +95,8 @@ def _lqr_schedule(
     Q[9, 9] = 1.0 / lateral_tolerance**2
     R = np.array([[1.0 / torque_scale**2]])
     for i, v in enumerate(grid):
-        A, B = lateral(float(v))
+        lin = sharp_model.linearize(p, float(v))
+        A, B = lin.A, lin.B[:, 0]
         Aa = np.zeros((10, 10))
         Ba = np.zeros(10)
         Aa[:8, :8] = A
@@ -134,7 +112,7 @@ def _lqr_schedule(
 
 
 def design_rider(
-    p: SharpParameters | TyredModel,
+    p: SharpParameters,
     *,
     speeds: Array | None = None,
     lateral_tolerance: float = 0.3,
@@ -148,9 +126,8 @@ def design_rider(
 
     Parameters
     ----------
-    p : SharpParameters or TyredModel
-        The motorcycle: Sharp 1971, or the multibody model on tyres linearised about upright
-        running at each speed (its lateral states read as Sharp's).
+    p : SharpParameters
+        The motorcycle.
     speeds : ndarray, optional
         Design speeds [m/s]; by default every 1 m/s from 3 to 60 m/s.
     lateral_tolerance, course_tolerance, roll_tolerance : float
@@ -187,14 +164,10 @@ def design_rider(
             raise MotosimError(f"rider {name} = {value!r}; expected a finite number > 0")
     if not (math.isfinite(preview) and preview >= 0):
         raise MotosimError(f"rider preview = {preview!r}; expected a finite time >= 0 [s]")
-    design = (
-        _schedule(p, tuple(float(v) for v in grid), lateral_tolerance, course_tolerance,
-                  roll_tolerance, torque_scale)
-        if isinstance(p, SharpParameters)
-        else _lqr_schedule(functools.partial(multibody_lateral, p), tuple(float(v) for v in grid),
-                           lateral_tolerance, course_tolerance, roll_tolerance, torque_scale)
+    K, x_ss, tau_ss = _schedule(
+        p, tuple(float(v) for v in grid), lateral_tolerance, course_tolerance, roll_tolerance,
+        torque_scale,
     )  # fmt: skip
-    K, x_ss, tau_ss = design
     return RiderGains(grid, K, x_ss, tau_ss, float(preview), float(max_torque))
 
 

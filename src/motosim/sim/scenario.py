@@ -729,7 +729,12 @@ class Road:
 
 @dataclass(frozen=True, slots=True)
 class Rider:
-    """An open-loop torque profile or a virtual rider following a path."""
+    """An open-loop torque profile or a virtual rider following a path.
+
+    On the multibody motorcycle the virtual rider also holds its speed with the throttle and,
+    with ``brake_control``, modulates the brake demands so that each wheel's longitudinal
+    slip stays at ``brake_slip`` and the rear wheel on the ground (:mod:`motosim.sim.brakes`);
+    without it the brakes act as demanded."""
 
     kind: Literal["torque", "virtual"] = "torque"
     profile: Profile | None = None
@@ -742,6 +747,8 @@ class Rider:
     max_torque: float = 70.0
     hands: str | Hands | None = None
     hands_off: tuple[tuple[float, ...], ...] = ()
+    brake_control: bool = True
+    brake_slip: float = 0.1
 
     def __post_init__(self) -> None:
         if isinstance(self.hands, str) and self.hands not in GRIPS:
@@ -771,6 +778,7 @@ class Rider:
         _check("torque_scale", self.torque_scale, low=1e-2, high=1000.0, unit="N*m")
         _check("preview", self.preview, low=0.0, high=5.0, unit="s")
         _check("max_torque", self.max_torque, low=0.0, low_open=True, high=500.0, unit="N*m")
+        _check("brake_slip", self.brake_slip, low=0.0, low_open=True, high=0.5, unit="1")
         for key in ("profile", "probe"):
             bounds = _profile_bounds(getattr(self, key))
             if bounds is not None:

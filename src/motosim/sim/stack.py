@@ -64,7 +64,6 @@ __all__ = [
     "contact_loads",
     "default_prediction",
     "design_stack",
-    "multibody_lateral",
     "new_data",
     "outside",
     "pitch",
@@ -525,7 +524,7 @@ def design_stack(
             float(d["m"] * sharp.g + sharp.Z_f), float(-sharp.Z_f),
         )  # fmt: skip
     else:
-        A0, Bv = multibody_lateral(multibody, speed)
+        A0, Bv = _multibody_lateral(multibody, speed)
         A1 = np.zeros_like(A0)
         start = np.array(tyred.upright_state(multibody, speed), dtype=np.float64)
         motorcycle = MultibodyMotorcycle(
@@ -562,7 +561,7 @@ _FROM_TYRED_LATERAL = (2, 3, 4, 5, 0, 1, 6, 7)
 :func:`motosim.model.tyred.lateral_system`."""
 
 
-def multibody_lateral(model: tyred.TyredModel, speed: float) -> tuple[Array, Array]:
+def _multibody_lateral(model: tyred.TyredModel, speed: float) -> tuple[Array, Array]:
     """The multibody motorcycle's lateral A (8x8) and steer-torque input (8,) about upright
     running at ``speed`` [m/s], in the order of :class:`MotorcycleState`."""
     A, B = tyred.lateral_system(model, speed)
