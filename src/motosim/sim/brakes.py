@@ -11,12 +11,16 @@ the slip at the target. It works per wheel on the wheel's spin equation (Savares
 so that, the vehicle's deceleration aside, the braking slip s = -kappa changes as
 s' = r (T_b - r |F_x|) / (I u). The torque
 
-    T_slip = r |F_x| + I u (s* - s) / (r tau)
+    T_slip = r |F_x| + I u (s* - s) / (r tau) + T_i,   T_i' = I u (s* - s) / (r tau tau_i)
 
 (the tyre's torque on the wheel, measured in the simulator where an ABS estimates it from the
 wheel's deceleration, plus a correction) therefore brings the slip to its target s* with the
 time constant tau, before, at and beyond the tyre's peak alike: a feedback linearisation of
-the wheel. The front torque also keeps the rear wheel on the ground: braking moves load to
+the wheel. The integral T_i, over tau_i = 5 tau, takes up what the lever r misses (the loaded
+tyre's rolling radius is shorter than the axle height r), which the proportional term alone
+would leave as a slip error growing as 1 / u while the machine slows; it integrates only
+while the slip torque is the one applied, within +-r |F_x|. The front torque also keeps the
+rear wheel on the ground: braking moves load to
 the front in proportion to the deceleration, h / w per unit braking force (Cossalter 2006,
 *Motorcycle Dynamics*, ch. 7), and on the tyres' stiff, lightly damped radial springs the
 machine's pitch overshoots that share when the force rises quickly. The rear load is therefore
@@ -73,6 +77,10 @@ class BrakeState(IntEnum):
     rear_brake_torque = 1
     F_zr = 2
     """The rear normal load of the last period [N], for its rate."""
+    front_slip_integral = 3
+    """The integral term of the front wheel's slip torque [N*m]."""
+    rear_slip_integral = 4
+    """The rear wheel's [N*m]."""
 
 
 class BrakeSettings(NamedTuple):
@@ -200,10 +208,15 @@ def new_brake_state() -> Array:
     return np.zeros(len(BrakeState))
 
 
+_INTEGRAL_TIME = 5.0
+"""tau_i / tau, the slip torque's integral time per its time constant."""
+
+
 @njit(cache=True)
 def _wheel(
     demand: float,
     applied: float,
+    integral: float,
     slip: float,
     force: float,
     speed: float,
@@ -212,15 +225,21 @@ def _wheel(
     target: float,
     settings: BrakeSettings,
     dt: float,
-) -> float:
-    """One wheel's torque: the least of the demand and T_slip, rate-limited [N*m]."""
+) -> tuple[float, float]:
+    """One wheel's torque, the least of the demand and T_slip, rate-limited [N*m], and the
+    slip torque's integral term after this period [N*m]."""
     torque = demand
     if speed >= settings.min_speed:
-        held = radius * max(force, 0.0) + inertia * speed * (target - slip) / (
-            radius * settings.time_constant
-        )
+        correction = inertia * speed * (target - slip) / (radius * settings.time_constant)
+        lever = radius * max(force, 0.0)
+        held = lever + correction + integral
+        if held < demand:
+            step = correction * dt / (_INTEGRAL_TIME * settings.time_constant)
+            integral = min(max(integral + step, -lever), lever)
         torque = min(torque, held)
-    return _rise(max(torque, 0.0), applied, settings, dt)
+    else:
+        integral = 0.0
+    return _rise(max(torque, 0.0), applied, settings, dt), integral
 
 
 @njit(cache=True)
@@ -271,10 +290,10 @@ def brake_torques(
         speed = x[Index.forward]
         front = demand_front
         if demand_front < settings.override_torque:
-            front = _wheel(
-                demand_front, applied_front, -loads.kappa_f, -loads.F_xf, speed,
-                settings.radius_front, settings.inertia_front, settings.slip_target, settings,
-                dt,
+            front, state[BrakeState.front_slip_integral] = _wheel(
+                demand_front, applied_front, state[BrakeState.front_slip_integral],
+                -loads.kappa_f, -loads.F_xf, speed, settings.radius_front,
+                settings.inertia_front, settings.slip_target, settings, dt,
             )  # fmt: skip
             # the rear load a lead time ahead, from its rate
             last = state[BrakeState.F_zr]
@@ -286,9 +305,10 @@ def brake_torques(
                 front = min(front, lift)
         rear = demand_rear
         if demand_rear < settings.override_torque:
-            rear = _wheel(
-                demand_rear, applied_rear, -loads.kappa_r, -loads.F_xr, speed,
-                settings.radius_rear, settings.inertia_rear, settings.slip_target, settings, dt,
+            rear, state[BrakeState.rear_slip_integral] = _wheel(
+                demand_rear, applied_rear, state[BrakeState.rear_slip_integral],
+                -loads.kappa_r, -loads.F_xr, speed, settings.radius_rear,
+                settings.inertia_rear, settings.slip_target, settings, dt,
             )  # fmt: skip
     state[BrakeState.F_zr] = loads.F_zr
     state[BrakeState.front_brake_torque] = front
