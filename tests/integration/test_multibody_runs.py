@@ -222,3 +222,48 @@ def test_profiles_of_the_multibody_keys() -> None:
     )
     assert sc.motorcycle.front_brake_torque == ConstantProfile(200.0)
     assert sc.road.friction == StepsProfile((0.0, 2.0), (1.0, 0.3))
+
+
+REALTIME = """
+[scenario]
+name = "mb_rt"
+duration = 2.0
+[rates]
+plant = 10000.0
+[motorcycle]
+model = "multibody"
+params = "sel2004_motorcycle"
+[rider]
+profile = { kind = "square", low = -5.0, high = 5.0, period = 1.0, start = 0.2 }
+[controller]
+kind = "paper"
+"""
+
+
+def test_the_real_time_loop_steps_the_multibody_motorcycle_as_offline() -> None:
+    """The same compiled step in the real-time loop (lock-step over python-can's virtual bus)
+    as offline: the steer angle within 1e-3 rad (the bus rounds the angle and current)."""
+    pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
+    pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
+    from motosim.rt.lockstep import Lockstep, free_limits
+
+    inputs = resolve(_scenario(REALTIME), ".")
+    offline = closed_loop.simulate(inputs, rng=np.random.default_rng(0))
+    lock = Lockstep(inputs, free_limits(1000.0), channel="rt_multibody")
+    rows = lock.run()
+    col = {name: j for j, name in enumerate(lock.runner.names)}
+    assert rows.shape[0] == offline.t.size and lock.runner.counters().fault == "NONE"
+    assert np.max(np.abs(offline["delta"])) > 1e-3
+    assert np.max(np.abs(rows[:, col["delta"]] - offline["delta"])) < 1e-3
+
+
+def test_real_time_refuses_what_it_does_not_read_of_the_multibody(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "braking.toml"
+    safety = (SCENARIOS / "realtime_square.toml").read_text().split("[realtime.safety]")[1]
+    path.write_text(BRAKING + "\n[realtime.safety]" + safety)
+    code = main(["run", str(path), "--bus", "virtual:x", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "front_brake_torque on the multibody motorcycle is read offline" in err
+    assert err.count("\n") == 1

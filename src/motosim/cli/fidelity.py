@@ -63,6 +63,12 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--duration", type=float, default=None, help="length of the chirp [s] (default 60)"
     )
+    parser.add_argument(
+        "--radius",
+        type=float,
+        default=None,
+        help="measure in a right-hand turn of this radius [m] (default: a straight)",
+    )
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument(
         "--plot", metavar="FILE", help="save the Bode figure (.png, .svg, .pdf; default: none)"
@@ -119,6 +125,14 @@ def run(args: argparse.Namespace) -> int:
         raise MotosimError(
             f"--amplitude {args.amplitude!r}; expected a probe torque of 0.01 to 200 N*m"
         )
+    if args.radius is not None and not (math.isfinite(args.radius) and 10.0 <= args.radius <= 1e4):
+        raise MotosimError(f"--radius {args.radius!r}; expected a turn of 10 to 10000 m")
+    if args.radius is not None and args.speed**2 / (9.81 * args.radius) > 0.85:
+        raise MotosimError(
+            f"--radius {args.radius:g} at --speed {args.speed:g}: "
+            f"{args.speed**2 / (9.81 * args.radius):.2f} g of lateral acceleration; expected "
+            "at most 0.85 g, what a dry road's tyres hold"
+        )
     if args.plot is not None:
         check_figure_path(args.plot, overwrite=args.overwrite)
     band = _band(args.band)
@@ -143,13 +157,16 @@ def run(args: argparse.Namespace) -> int:
         scenario = feel_scenario(
             base, speed=args.speed, amplitude=args.amplitude, band=band, duration=duration,
             excitation="chirp" if chirp else "multisine", period=args.period, periods=args.periods,
+            radius=args.radius,
         )  # fmt: skip
         cache = design_cache(args, quiet=getattr(args, "json", False))
         inputs, stack = resolve_cached(scenario, folder, cache)
     for option in ("--speed", "--duration", "--amplitude"):
         warn_atypical("fidelity", option, getattr(args, option[2:]))
     result = simulate(inputs, rng=np.random.default_rng(scenario.seed), stack=stack, keep=True)
-    signals = (result.t, result["tau_r"], result["theta_h"], result["delta"], inputs.sharp)
+    # the multibody motorcycle's reference is its own response in the run (no linear model)
+    reference = inputs.sharp if inputs.multibody is None else None
+    signals = (result.t, result["tau_r"], result["theta_h"], result["delta"], reference)
     probe = scenario.rider.probe
     if isinstance(probe, MultisineProfile):
         feel = periodic_feel(*signals, args.speed, probe=probe, band=band)
@@ -168,6 +185,8 @@ def run(args: argparse.Namespace) -> int:
     payload: dict[str, Any] = {
         "scenario": args.scenario or "",
         "speed": args.speed,
+        "radius": args.radius,
+        "reference": "linear model" if reference is not None else "the run's delta / tau_r",
         "excitation": probe.kind if probe is not None else "",
         "amplitude": args.amplitude,
         "band_hz": list(band),
@@ -191,7 +210,11 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(payload)
         return 0
-    print(f"rendered steering feel at {args.speed:g} m/s: theta_h / tau_r against delta / tau_r")
+    where = "" if args.radius is None else f" in a {args.radius:g} m turn"
+    print(
+        f"rendered steering feel at {args.speed:g} m/s{where}: theta_h / tau_r against "
+        f"delta / tau_r ({payload['reference']})"
+    )
     print(
         f"  {payload['excitation']} of {args.amplitude:g} N*m peak over {band[0]:g}-{band[1]:g} Hz"
     )

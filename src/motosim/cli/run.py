@@ -239,10 +239,32 @@ def load_realtime(
         control_rate=rates.control, measurement_rate=rates.measurement, origin=str(path),
     )  # fmt: skip
     rig_settings(scenario, realtime, origin=str(path))
+    _check_realtime_motorcycle(scenario, origin=str(path))
     if cache is None:
         return resolve(scenario, source.parent), realtime
     with cache.designing(scenario.name):
         return resolve(scenario, source.parent, cache=cache), realtime
+
+
+def _check_realtime_motorcycle(scenario: "Scenario", *, origin: str) -> None:
+    """Refuse what the real-time loop does not read of a multibody motorcycle: its drive and
+    brake torques and the road's friction change only offline (motosim simulate)."""
+    from motosim.sim.scenario import ConstantProfile, Road
+
+    mc = scenario.motorcycle
+    if mc.model != "multibody":
+        return
+    for key in ("drive_torque", "front_brake_torque", "rear_brake_torque"):
+        if getattr(mc, key) != ConstantProfile(0.0):
+            raise MotosimError(
+                f"{origin}: [motorcycle] {key} on the multibody motorcycle is read offline "
+                "only (motosim simulate); expected none in real time"
+            )
+    if scenario.road != Road():
+        raise MotosimError(
+            f"{origin}: [road] friction is read offline only (motosim simulate); expected "
+            "none in real time (the road's friction 1)"
+        )
 
 
 def rig_settings(scenario: "Scenario", realtime: dict[str, Any], *, origin: str) -> "RigSettings":

@@ -170,7 +170,9 @@ def vehicle_motion(
     series : TimeSeries
         A recorded run at a constant rate with ``v_x``, ``v_y``, ``psi_dot``, ``phi_dot`` and
         ``phi`` (the signals of :mod:`motosim.signals`); with ``tau_d`` and ``tau_b`` (and
-        optionally ``F_wx``) and ``params``, ``v_x'`` is computed by eq. (2).
+        optionally ``F_wx``) and ``params``, ``v_x'`` is computed by eq. (2). A recorded
+        ``theta``, the multibody motorcycle's pitch on its tyres as the load transfers (0
+        on Sharp's model, which has none), adds to the suspension's pitch.
     rider : RiderHead
         The head's position on the motorcycle and the suspension pitch model.
     params : SharpParameters, optional
@@ -180,9 +182,9 @@ def vehicle_motion(
     -------
     TimeSeries
         Columns :data:`HEAD_SIGNALS`: ``a_x`` = v_x' - v_y psi_dot and ``a_y`` = v_y' +
-        v_x psi_dot [m/s^2] of the contact point, suspension pitch ``theta`` [rad] and its
-        rate [rad/s], head angular velocity ``omega_*`` [rad/s] and specific force ``f_*``
-        [m/s^2] in the head frame.
+        v_x psi_dot [m/s^2] of the contact point, pitch ``theta`` [rad] (the suspension's and
+        the recorded one) and its rate [rad/s], head angular velocity ``omega_*`` [rad/s]
+        and specific force ``f_*`` [m/s^2] in the head frame.
 
     Raises
     ------
@@ -212,6 +214,8 @@ def vehicle_motion(
     a_x = v_x_dot - v_y * psi_dot
     a_y = np.gradient(v_y, dt) + v_x * psi_dot
     theta = suspension_pitch(rider, a_x, dt)
+    if "theta" in series.names:  # the multibody motorcycle's pitch on its tyres (0 on Sharp's)
+        theta = theta + series["theta"]
     theta_dot = np.gradient(theta, dt)
     omega, f = head_kinematics(
         np.column_stack([a_x, a_y]), phi, theta, phi_dot, theta_dot, psi_dot,

@@ -6,6 +6,7 @@ Every function returns a :class:`matplotlib.figure.Figure` and never shows it; c
 from motosim.plotting.estimation import plot_torque_estimates
 from motosim.plotting.handling import plot_handling
 from motosim.plotting.identification import plot_identification
+from motosim.plotting.loads import plot_tyre_loads
 from motosim.plotting.modes import plot_mode_comparison, plot_modes
 from motosim.plotting.tyres import plot_tyre
 
@@ -16,4 +17,5 @@ __all__ = [
     "plot_modes",
     "plot_torque_estimates",
     "plot_tyre",
+    "plot_tyre_loads",
 ]

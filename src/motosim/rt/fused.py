@@ -571,6 +571,8 @@ def stack_warm(
     shadow.differentiator[:] = data.differentiator
     shadow.controller[:] = data.controller
     shadow.motorcycle[:] = data.motorcycle
+    shadow.multibody[:] = data.multibody
+    shadow.inputs[:] = data.inputs
     shadow.held[:] = data.held
     shadow.periods[:] = data.periods
     shadow_state[:] = stack_state

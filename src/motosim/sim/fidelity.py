@@ -8,7 +8,9 @@ run that measures it (the virtual rider holds a straight at a speed while a prob
 added to the rider's), and :func:`periodic_feel` (a periodic multisine probe, averaged over
 whole periods) or :func:`rendered_feel` (any probe, Welch cross-spectra) estimates both
 frequency responses from the run, the rider's torque as input, and compares them with the
-linear model's delta / tau_r at that speed.
+linear model's delta / tau_r at that speed. In a steady turn (``radius``) or on the multibody
+motorcycle, where no linearisation about upright running holds, the reference is the
+motorcycle's own delta / tau_r measured in the same run (give ``sharp`` None).
 
 The multisine is the default: a linear chirp over 0.1-5 Hz in 60 s spends about a second
 below 0.2 Hz, and its Welch estimate is 3 dB and 20 deg off there even on a linear stack (no
@@ -35,6 +37,7 @@ from motosim.sim.scenario import (
     Rider,
     Scenario,
     StraightPath,
+    TurnPath,
 )
 
 __all__ = ["EXCITATIONS", "FeelResponse", "feel_scenario", "periodic_feel", "rendered_feel"]
@@ -64,7 +67,8 @@ class FeelResponse:
     steer : ndarray of complex, shape (m,)
         delta / tau_r measured in the run: the virtual motorcycle [rad/(N*m)].
     model : ndarray of complex, shape (m,)
-        delta / tau_r of the linear model at the run's speed [rad/(N*m)].
+        The reference delta / tau_r [rad/(N*m)]: the linear model's at the run's speed, or
+        ``steer`` (the run's own, on the multibody motorcycle).
     coherence : ndarray, shape (m,)
         Coherence of tau_r and theta_h (1: the response is linear and noise-free); for
         :func:`periodic_feel`, the share of theta_h's power at the line that repeats from
@@ -117,8 +121,13 @@ def feel_scenario(
     periods: int = 4,
     lateral_tolerance: float = 3.0,
     course_tolerance: float = 0.5,
+    radius: float | None = None,
 ) -> Scenario:
     """``base`` turned into a feel measurement: a straight at ``speed`` [m/s], a probe torque.
+
+    With ``radius`` [m] the rider holds a right-hand turn of that radius instead (entered
+    over a 30 m clothoid from the start, and turned as long as the run lasts): the feel at
+    the lean v^2 / (g R) asks for.
 
     The virtual rider holds the straight (the machine is unstable on its own above the
     capsize speed) while a probe of peak ``amplitude`` [N*m] over ``band`` [Hz] is added to
@@ -155,9 +164,16 @@ def feel_scenario(
         duration = (periods + 1) * period
     else:
         raise MotosimError(f"excitation = {excitation!r}; expected one of {', '.join(EXCITATIONS)}")
+    path: StraightPath | TurnPath = StraightPath()
+    if radius is not None:
+        if not (math.isfinite(radius) and 10.0 <= radius <= 10_000.0):
+            raise MotosimError(f"radius = {radius!r}; expected a turn of 10 to 10000 m")
+        path = TurnPath(
+            radius, angle=(speed * duration + 100.0) / radius, start=0.0, transition=30.0
+        )
     rider = Rider(
         "virtual",
-        path=StraightPath(),
+        path=path,
         probe=probe,
         lateral_tolerance=lateral_tolerance,
         course_tolerance=course_tolerance,
@@ -181,7 +197,7 @@ def periodic_feel(
     rider_torque: Array,
     handlebar_angle: Array,
     steer_angle: Array,
-    sharp: SharpParameters,
+    sharp: SharpParameters | None,
     speed: float,
     *,
     probe: MultisineProfile,
@@ -202,8 +218,9 @@ def periodic_feel(
         Uniform time [s], from the probe's start.
     rider_torque, handlebar_angle, steer_angle : ndarray, shape (n,)
         tau_r [N*m], theta_h [rad], delta [rad] of a run with the probe in the rider's torque.
-    sharp : SharpParameters
-        The virtual motorcycle, for its linear response at ``speed`` [m/s].
+    sharp : SharpParameters or None
+        The virtual motorcycle, for its linear response at ``speed`` [m/s]; None: the
+        reference is the run's own delta / tau_r (the multibody motorcycle).
     probe : MultisineProfile
         The probe of the run: its period and lines.
     band : tuple of two floats
@@ -247,11 +264,12 @@ def periodic_feel(
     u_mean, y_mean = u.mean(axis=0), y.mean(axis=0)
     power = np.mean(np.abs(y) ** 2, axis=0)
     repeat = np.where(power > 0, np.abs(y_mean) ** 2 / np.where(power > 0, power, 1.0), 0.0)
+    steer = np.asarray(d.mean(axis=0) / u_mean, dtype=np.complex128)
     return FeelResponse(
         frequency=np.asarray(f, dtype=np.float64),
         rendered=np.asarray(y_mean / u_mean, dtype=np.complex128),
-        steer=np.asarray(d.mean(axis=0) / u_mean, dtype=np.complex128),
-        model=_model_response(sharp, speed, f),
+        steer=steer,
+        model=steer if sharp is None else _model_response(sharp, speed, f),
         coherence=np.asarray(repeat, dtype=np.float64),
     )
 
@@ -261,7 +279,7 @@ def rendered_feel(
     rider_torque: Array,
     handlebar_angle: Array,
     steer_angle: Array,
-    sharp: SharpParameters,
+    sharp: SharpParameters | None,
     speed: float,
     *,
     band: tuple[float, float] = (0.1, 5.0),
@@ -278,8 +296,9 @@ def rendered_feel(
         Uniform time [s].
     rider_torque, handlebar_angle, steer_angle : ndarray, shape (n,)
         tau_r [N*m], theta_h [rad], delta [rad] of a run with a broadband rider torque.
-    sharp : SharpParameters
-        The virtual motorcycle, for its linear response at ``speed`` [m/s].
+    sharp : SharpParameters or None
+        The virtual motorcycle, for its linear response at ``speed`` [m/s]; None: the
+        reference is the run's own delta / tau_r (the multibody motorcycle).
     band : tuple of two floats
         Frequencies kept [Hz].
     resolution : float
@@ -299,11 +318,11 @@ def rendered_feel(
     _, s_hh = welch(handlebar_angle, fs=1.0 / dt, nperseg=per)
     keep = _within(f, band[0], band[1]) & (s_tt > 0)
     f = f[keep]
-    model = _model_response(sharp, speed, f)
+    steer = np.asarray(s_td[keep] / s_tt[keep], dtype=np.complex128)
     return FeelResponse(
         frequency=f,
         rendered=np.asarray(s_th[keep] / s_tt[keep], dtype=np.complex128),
-        steer=np.asarray(s_td[keep] / s_tt[keep], dtype=np.complex128),
-        model=model,
+        steer=steer,
+        model=steer if sharp is None else _model_response(sharp, speed, f),
         coherence=np.asarray(np.abs(s_th[keep]) ** 2 / (s_tt[keep] * s_hh[keep]), dtype=float),
     )

@@ -67,7 +67,7 @@ DASHBOARD_SIGNALS: Final = (
 steer and handlebar, roll, speed, the real-time loop's timing and safety codes
 (:data:`motosim.view.live.LOOP_VIEW_SIGNALS`), the platform commands of :mod:`motosim.cueing`."""
 
-_POSE: Final = ("t", "x", "y", "psi", "phi", "delta", "v_x", "theta_h")
+_POSE: Final = ("t", "x", "y", "psi", "phi", "delta", "v_x", "theta_h", "theta")
 _DASHBOARD_RATE: Final = 200.0  # Hz, rows per second kept for the plots
 _REPLAY_POINTS: Final = 4000  # rows of a whole replayed run sent to the dashboard
 _PEAKS: Final = ("period", "compute", "wake")  # decimated by their maximum, not a sample

@@ -5,7 +5,7 @@
 // goes into shared memory under a sequence lock, and the page reads it at the start of each
 // frame. Without isolation the page runs the same code itself. Times are absolute
 // (performance.timeOrigin + performance.now() [ms]), the same in the page and the worker.
-export const POSE = ['t', 'x', 'y', 'psi', 'phi', 'delta', 'v_x', 'theta_h', 'clock', 'deadline'];
+export const POSE = ['t', 'x', 'y', 'psi', 'phi', 'delta', 'v_x', 'theta_h', 'theta', 'clock', 'deadline'];
 export const SLOTS = POSE.length;
 const now = () => performance.timeOrigin + performance.now();
 

@@ -246,7 +246,7 @@ const bars = new THREE.Group();      // turns by theta_h about steering's Y axis
 // thread was busy when it came (motosimStats.worker).
 const absolute = () => performance.timeOrigin + performance.now();
 let pose = { t: 0, x: road.x[Math.min(25, n - 1)], y: road.y[Math.min(25, n - 1)], psi: 0,
-  phi: 0, delta: 0, v_x: 0, theta_h: 0, clock: null, deadline: null };
+  phi: 0, delta: 0, v_x: 0, theta_h: 0, theta: 0, clock: null, deadline: null };
 let status = info.status, pending = [], report, readPose = () => {};
 const url = `ws://${location.host}/ws/pose`;
 function got(e) {  // what the socket reports, in the page or from the worker
@@ -295,7 +295,8 @@ function aim() {
   // the eye leans with the motorcycle about the contact line
   const right = EYE * Math.sin(phi), up = EYE * Math.cos(phi);
   camera.position.set(pose.x - right * Math.sin(psi), up, pose.y + right * Math.cos(psi));
-  camera.rotation.set(-0.04, -psi - Math.PI / 2, -roll);
+  // the motorcycle's pitch (theta nose up, recorded by the multibody model) tilts the eye
+  camera.rotation.set(-0.04 + (pose.theta || 0), -psi - Math.PI / 2, -roll);
   cockpit.rotation.z = -(phi - roll);  // the motorcycle's lean that the view does not show
   bars.rotation.y = -(pose.theta_h || 0);
 }
