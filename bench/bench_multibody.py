@@ -7,11 +7,18 @@ integrated by ``scipy.integrate.solve_ivp`` (RK45, max_step 1 ms) in the same ru
 rigid-contact benchmark bicycle's RK4 step is timed too. Times are CPU times of this
 process (``time.process_time``), best of three, with the load average beside them (the
 machine is shared): the target is at most 20 us per 1 ms step on one core.
+
+Beside it, the whole closed-loop period (the stack step with the motorcycle in it, the rig,
+the rider, the recorded row; ``motosim.sim.simulate`` with its stack and rig built before)
+of the training scenario ``lean_45`` on the multibody motorcycle against ``lane_change_20``
+on Sharp's, in the same run.
 """
 
 import os
 import time
+import warnings
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -46,6 +53,29 @@ def _ride(
         inputs = tyred.Inputs(steer[k], 0.0, front[k], rear[k], 1.0)
         state = tyred.step(model, state, inputs, h)
     return state
+
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+
+
+def _loop_period(name: str) -> float:
+    """CPU time of one closed-loop period of the scenario ``name``, design and rig aside [s]."""
+    from motosim.io.runs import load_run
+    from motosim.sim import build_stack, simulate
+    from motosim.sim.closed_loop import build_rig
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        inputs = load_run(SCENARIOS / f"{name}.toml")
+    stack = build_stack(inputs)
+    rig = build_rig(inputs, rng=np.random.default_rng(0))  # the rider's schedule designed
+
+    def once() -> None:
+        simulate(inputs, rng=np.random.default_rng(0), stack=stack, rig=rig, keep=False)
+
+    once()  # compile (or load the cache)
+    sc = inputs.scenario
+    return _cpu_best(once) / round(sc.duration * sc.rates.control)
 
 
 def run() -> dict[str, float | str]:
@@ -98,6 +128,7 @@ def run() -> dict[str, float | str]:
 
     whipple._rk4(p, q0, u0, torques, H)
     rigid_step = _cpu_best(rigid) / t.size
+    multibody_period, sharp_period = _loop_period("lean_45"), _loop_period("lane_change_20")
     return {
         "tyred RK4 step, compiled loop [us]": compiled * 1e6,
         "tyred RK4 step, called from Python [us]": from_python * 1e6,
@@ -106,6 +137,9 @@ def run() -> dict[str, float | str]:
         "final speed, RK4 / solve_ivp [m/s]": f"{end.forward:.6f} / {ivp.y[9, -1]:.6f}",
         "final roll, RK4 / solve_ivp [rad]": f"{end.roll:.6f} / {ivp.y[4, -1]:.6f}",
         "rigid (Whipple) RK4 step, from Python [us]": rigid_step * 1e6,
+        "closed-loop period, lean_45 on the multibody [us]": multibody_period * 1e6,
+        "closed-loop period, lane_change_20 on Sharp 1971 [us]": sharp_period * 1e6,
+        "multibody / Sharp closed-loop period": multibody_period / sharp_period,
         "load average before / after": f"{load_before:.2f} / {os.getloadavg()[0]:.2f}",
     }
 
