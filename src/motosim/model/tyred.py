@@ -284,6 +284,11 @@ class Index(IntEnum):
 
 assert tuple(Index.__members__) == State._fields
 
+_COORDINATES = slice(Index.x, Index.front_angle + 1)
+"""The coordinates among the compiled state (the generated code's q)."""
+_SPEEDS = slice(Index.forward, Index.front_spin + 1)
+"""The generalised speeds (its u)."""
+
 
 class ContactLoads(NamedTuple):
     """The tyre forces and slips at both contacts, and where the rear contact is (SI)."""
@@ -520,16 +525,19 @@ def _add_contact(f: Array, J: Array, fx: float, fy: float, fz: float, mx: float,
 
 @njit(cache=True)
 def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
-    q = x[:9]
-    u = x[9:18]
-    steer = inputs.steer_torque - model.steer_damping * u[7]
-    rear = -inputs.drive_torque + _brake(inputs.rear_brake_torque, u[6], model.spin_inertia[0])
-    front = _brake(inputs.front_brake_torque, u[8], model.spin_inertia[1])
+    q = x[_COORDINATES]
+    u = x[_SPEEDS]
+    steer = inputs.steer_torque - model.steer_damping * x[Index.steer_rate]
+    rear = -inputs.drive_torque + _brake(
+        inputs.rear_brake_torque, x[Index.rear_spin], model.spin_inertia[0]
+    )
+    front = _brake(inputs.front_brake_torque, x[Index.front_spin], model.spin_inertia[1])
     r = np.array([steer, rear, front])
     M, f = _mass_forcing(model.p, q, u, r)
     kr, kf, Jr, Jf = _contacts(model.p, q, u)
-    fxr, fyr, fzr, ssr, _, _, mzr, mxr, sigma_r = _tyre(model, False, kr, x[18], inputs.friction)
-    fxf, fyf, fzf, ssf, _, _, mzf, mxf, sigma_f = _tyre(model, True, kf, x[19], inputs.friction)
+    side_r, side_f = x[Index.Fy_r], x[Index.Fy_f]
+    fxr, fyr, fzr, ssr, _, _, mzr, mxr, sigma_r = _tyre(model, False, kr, side_r, inputs.friction)
+    fxf, fyf, fzf, ssf, _, _, mzf, mxf, sigma_f = _tyre(model, True, kf, side_f, inputs.friction)
     _add_contact(f, Jr, fxr, fyr, fzr, mxr, mzr)
     _add_contact(f, Jf, fxf, fyf, fzf, mxf, mzf)
     if model.drag > 0.0:
@@ -542,16 +550,16 @@ def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
             f[i] += Ja[0, i] * drag
     out = np.empty(N_STATE)
     out[:9] = _kinematics(model.p, q, u)
-    out[9:18] = np.linalg.solve(M, f)
-    out[18] = max(abs(kr[6]), _MIN_SPEED) / sigma_r * (ssr - x[18])
-    out[19] = max(abs(kf[6]), _MIN_SPEED) / sigma_f * (ssf - x[19])
+    out[_SPEEDS] = np.linalg.solve(M, f)
+    out[Index.Fy_r] = max(abs(kr[6]), _MIN_SPEED) / sigma_r * (ssr - side_r)
+    out[Index.Fy_f] = max(abs(kf[6]), _MIN_SPEED) / sigma_f * (ssf - side_f)
     return out
 
 
 @njit(cache=True)
 def observe(model: TyredModel, x: Array, friction: float) -> ContactLoads:
     """The tyre forces and slips of the compiled state ``x`` on a road of ``friction`` mu."""
-    kr, kf, _, _ = _contacts(model.p, x[:9], x[9:18])
+    kr, kf, _, _ = _contacts(model.p, x[_COORDINATES], x[_SPEEDS])
     fxr, fyr, fzr, _, kappa_r, alpha_r, _, _, _ = _tyre(model, False, kr, x[Index.Fy_r], friction)
     fxf, fyf, fzf, _, kappa_f, alpha_f, _, _, _ = _tyre(model, True, kf, x[Index.Fy_f], friction)
     return ContactLoads(
@@ -570,7 +578,7 @@ def outside(model: TyredModel, x: Array) -> int:
         return Domain.FALLEN
     if abs(x[Index.steer]) > model.steer_limit:
         return Domain.STEER_STOP
-    kr, kf, _, _ = _contacts(model.p, x[:9], x[9:18])
+    kr, kf, _, _ = _contacts(model.p, x[_COORDINATES], x[_SPEEDS])
     if kr[2] <= 0.0:
         return Domain.REAR_LIFTED
     if kf[2] <= 0.0:
@@ -662,9 +670,12 @@ def contact_loads(model: TyredModel, state: State, inputs: Inputs) -> dict[str, 
         same for the front (``_f``) [N, 1, rad, N*m], ``camber_r``, ``camber_f`` [rad].
     """
     x = np.array(state, dtype=float)
-    kr, kf, _, _ = gen.contacts(model.p, x[:9], x[9:18])
+    kr, kf, _, _ = gen.contacts(model.p, x[_COORDINATES], x[_SPEEDS])
     out: dict[str, float] = {}
-    for suffix, front, kin, side in (("r", False, kr, x[18]), ("f", True, kf, x[19])):
+    for suffix, front, kin, side in (
+        ("r", False, kr, x[Index.Fy_r]),
+        ("f", True, kf, x[Index.Fy_f]),
+    ):
         fx, fy, fz, _, kappa, alpha, mz, mx, _ = _tyre(model, front, kin, side, inputs.friction)
         out |= {
             f"M_z{suffix}": mz,
@@ -715,22 +726,24 @@ def upright_state(model: TyredModel, speed: float) -> State:
     check_number(speed, where="tyred model: speed", lower=-150.0, upper=150.0)
     r_R, r_F = float(model.radii[0]), float(model.radii[1])
     x = np.zeros(N_STATE)
-    x[2], x[5] = -r_R, model.lam
-    x[9], x[15], x[17] = speed, -speed / r_R, -speed / r_F
+    x[Index.z], x[Index.pitch] = -r_R, model.lam
+    x[Index.forward] = speed
+    x[Index.rear_spin], x[Index.front_spin] = -speed / r_R, -speed / r_F
     inputs = Inputs()
+    balance = [Index.vertical, Index.pitch_rate]  # their rates vanish at the equilibrium
     for _ in range(50):
-        residual = _derivatives(model, x, inputs)[[11, 14]]
+        residual = _derivatives(model, x, inputs)[balance]
         jac = np.empty((2, 2))
-        for j, index in enumerate((2, 5)):
+        for j, index in enumerate((Index.z, Index.pitch)):
             dx = np.zeros(N_STATE)
             dx[index] = 1e-7
             jac[:, j] = (
-                _derivatives(model, x + dx, inputs)[[11, 14]]
-                - _derivatives(model, x - dx, inputs)[[11, 14]]
+                _derivatives(model, x + dx, inputs)[balance]
+                - _derivatives(model, x - dx, inputs)[balance]
             ) / 2e-7
         change = np.linalg.solve(jac, residual)
-        x[2] -= change[0]
-        x[5] -= change[1]
+        x[Index.z] -= change[0]
+        x[Index.pitch] -= change[1]
         if np.max(np.abs(change)) < 1e-13:
             break
     else:
