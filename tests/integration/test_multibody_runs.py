@@ -267,3 +267,24 @@ def test_real_time_refuses_what_it_does_not_read_of_the_multibody(
     err = capsys.readouterr().err
     assert code == 2 and "front_brake_torque on the multibody motorcycle is read offline" in err
     assert err.count("\n") == 1
+
+
+def test_a_campaign_on_the_multibody_motorcycle_names_its_falls(tmp_path: Path) -> None:
+    """The front brake grabbed in a wet bend (front_wheel_lock) with and without the rider's
+    brake controller: with it the wheel holds and the rider rides on, without it the wheel
+    locks and the front tucks under; the campaign records that run as a failure with the
+    reason `motosim simulate` gives."""
+    from motosim.campaign import load_campaign, load_results, run_campaign
+
+    (tmp_path / "lock.toml").write_text((SCENARIOS / "front_wheel_lock.toml").read_text())
+    (tmp_path / "c.toml").write_text(
+        '[campaign]\nname = "lock"\nscenario = "lock.toml"\nsampling = "grid"\nruns = 2\n'
+        'metrics = ["max_abs_phi"]\n[factors]\n"rider.brake_control" = [true, false]\n'
+    )
+    summary = run_campaign(load_campaign(tmp_path / "c.toml"), tmp_path / "out", jobs=1)
+    results = load_results(tmp_path / "out")
+    grabbed = ~results["rider.brake_control"].astype(bool)
+    assert summary.failed == 1 and set(results["status"][grabbed]) == {"failed"}
+    (reason,) = results["reason"][grabbed]
+    assert reason.startswith("the front wheel locked at t = 3.358 s") and "tucked under" in reason
+    assert set(results["status"][~grabbed]) == {"ok"}

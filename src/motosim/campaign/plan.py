@@ -18,6 +18,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -27,7 +28,7 @@ from motosim import __version__
 from motosim.campaign.spec import TRUE_HANDLEBAR, Campaign, Factor, FactorValue
 from motosim.errors import MotosimError
 from motosim.io.runs import load_scenario, parameter_source
-from motosim.params import load_parameters
+from motosim.params import load_parameter_set, load_parameters
 from motosim.params.handlebar import HandlebarParameters
 from motosim.sim.scenario import Scenario, scenario_dict, scenario_from_dict
 
@@ -301,6 +302,15 @@ def _kind(factor: Factor, base: Mapping[str, Any]) -> type:
     return type(_lookup(base, factor.path))
 
 
+def _motorcycle(source: str | Path) -> dict[str, Any]:
+    """The motorcycle's parameter set as plain values, with its tyre sets' (a multibody set
+    names them): what a campaign's runs depend on of the motorcycle."""
+    pset = load_parameter_set(source)
+    tyres = {key: dataclasses.asdict(load_parameters(name, "tyre"))
+             for key, name in sorted(pset.tyres.items())}  # fmt: skip
+    return {"set": dataclasses.asdict(pset.values), "tyres": tyres}
+
+
 def plan_campaign(campaign: Campaign) -> Plan:
     """Check a campaign against its base scenario and list its runs.
 
@@ -332,7 +342,7 @@ def plan_campaign(campaign: Campaign) -> Plan:
         for name in sorted(true_names)
     }
     nominal = load_parameters(parameter_source(scenario.handlebar.nominal, folder), "handlebar")
-    sharp = load_parameters(parameter_source(scenario.motorcycle.params, folder), "sharp")
+    motorcycle = _motorcycle(parameter_source(scenario.motorcycle.params, folder))
     for factor in campaign.factors:
         _check_factor(factor, base, true_sets[scenario.handlebar.true])
     kinds = [_kind(f, base) for f in campaign.factors]
@@ -346,7 +356,7 @@ def plan_campaign(campaign: Campaign) -> Plan:
             "base": base,
             "true": {k: dataclasses.asdict(v) for k, v in true_sets.items()},
             "nominal": dataclasses.asdict(nominal),
-            "sharp": dataclasses.asdict(sharp),
+            "motorcycle": motorcycle,
         },
         length=16,
     )
@@ -356,7 +366,7 @@ def plan_campaign(campaign: Campaign) -> Plan:
             base,
             {k: dataclasses.asdict(v) for k, v in true_sets.items()},
             dataclasses.asdict(nominal),
-            dataclasses.asdict(sharp),
+            motorcycle,
         ]
     )
     design_cols = [j for j, f in enumerate(campaign.factors) if is_design_factor(f.path)]
