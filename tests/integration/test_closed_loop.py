@@ -39,13 +39,22 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]
     return int(info.value.code or 0), out, err
 
 
+FALLS = {"front_wheel_lock"}
+"""The training scenarios that end in a fall (exit 3), by design."""
+
+
 @pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
 def test_every_scenario_simulates(
     capsys: pytest.CaptureFixture[str], tmp_path: Path, path: Path
 ) -> None:
-    code, out, _ = _run(
+    code, out, err = _run(
         capsys, "simulate", str(path), "--out", str(tmp_path / "run"), "--json", "--no-report"
     )
+    if path.stem in FALLS:  # its result kept up to the fall, flagged
+        assert code == 3 and "fell at t = " in err
+        summary = load_result(tmp_path / "run").summary
+        assert summary["complete"] == 0.0 and "fell at t = " in summary["failure"]
+        return
     assert code == 0
     metrics = json.loads(out)["metrics"]
     assert metrics["complete"] == 1.0
@@ -53,8 +62,8 @@ def test_every_scenario_simulates(
     assert result.complete and result.names == SIGNALS[1:]
     assert np.all(np.diff(result.t) > 0)
     scenario = load_scenario(path)
-    if scenario.rider.kind == "virtual":
-        # upright and on the path
+    if scenario.rider.kind == "virtual" and scenario.motorcycle.model == "sharp1971":
+        # upright and on the path (the multibody's training at the limits: test_multibody_runs)
         assert metrics["max_abs_phi"] < math.radians(35.0)
         assert metrics["max_abs_e_y"] < 0.5
     if scenario.controller.kind == "ours":

@@ -103,3 +103,20 @@ def test_a_real_time_run_is_judged_while_running_not_over_its_stop() -> None:
     # no running rows (a run stopped during its fade-in): nothing judged
     none = run_metrics(t, buzzing.get, complete=False, running=np.zeros(t.shape, dtype=bool))
     assert "buzz_current_p2p" not in none
+
+
+def test_the_highpass_is_scipys_sosfiltfilt() -> None:
+    """The buzz's high-pass, computed without scipy.signal, equals scipy.signal.sosfiltfilt
+    of the 4th-order Butterworth it describes (the independent implementation)."""
+    from scipy.signal import butter, sosfiltfilt
+
+    from motosim.sim.metrics import highpass
+
+    rng = np.random.default_rng(1)
+    t = np.arange(3000) * 1e-3
+    for x in (rng.normal(size=3000) + 2.0 + np.sin(t), rng.normal(size=3000).cumsum()):
+        for cutoff in (3.0, 20.0):
+            sos = butter(4, cutoff, "highpass", fs=1000.0, output="sos")
+            pad = min(x.size - 1, math.ceil(3.0 / (cutoff * 1e-3)))
+            expected = sosfiltfilt(sos, x - x.mean(), padlen=pad)
+            np.testing.assert_allclose(highpass(t, x, cutoff), expected, rtol=0, atol=1e-10)

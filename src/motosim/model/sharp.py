@@ -20,7 +20,6 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linear_sum_assignment
 
 from motosim.errors import MotosimError
 from motosim.model._inputs import input_series, sample_times
@@ -360,6 +359,8 @@ def _classify(ev: NDArray[np.complex128], speed: float) -> dict[str, list[int]]:
 
 def _follow(path: NDArray[np.complex128]) -> NDArray[np.complex128]:
     """Reorder each row of eigenvalues so that column c is one continuous branch."""
+    from scipy.optimize import linear_sum_assignment  # only here: a run does not need it
+
     out = path.copy()
     for i in range(1, len(out)):
         cost = np.abs(out[i - 1][:, None] - out[i][None, :])

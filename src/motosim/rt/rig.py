@@ -558,7 +558,7 @@ class VirtualRider:
             raise MotosimError("the scenario's rider is a torque profile, not a virtual rider")
         if world.motorcycle_inputs.shape[0] > 0:
             raise MotosimError(
-                'the virtual rig\'s rider steers Sharp 1971 only; expected [motorcycle] model = '
+                "the virtual rig's rider steers Sharp 1971 only; expected [motorcycle] model = "
                 '"sharp1971" or [rider] kind = "torque" with model = "multibody"'
             )
         if not (math.isfinite(rate) and rate > 0.0):

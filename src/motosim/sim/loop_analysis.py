@@ -27,11 +27,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError
 from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
 from motosim.model.handlebar import matrices
-from motosim.model.linear import zoh
+from motosim.model.linear import StateSpace, zoh
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
 from motosim.sim.stack import (

@@ -10,6 +10,7 @@ motorcycle is, and whether the motor buzzes once the rider holds the handlebar s
 
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -88,11 +89,13 @@ def validity_limits(start_speed: float) -> tuple[float, float, float]:
 def highpass(t: Array, values: Array, cutoff: float) -> Array:
     """``values`` without their content below ``cutoff`` [Hz], with no phase shift.
 
-    A 4th-order Butterworth high-pass run forward and backward (``scipy.signal.sosfiltfilt``,
-    the ends extended by odd reflection over up to three periods of the cutoff). Unlike a
-    high-pass by FFT, which takes the window as one period of a periodic signal, a slow swing
-    that is not a whole number of periods in the window (a slalom's steering current) does not
-    leak above the cutoff.
+    A 4th-order Butterworth high-pass run forward and backward, the ends extended by odd
+    reflection over up to three periods of the cutoff, each pass started in the steady state
+    of its first sample (``scipy.signal.sosfiltfilt`` of ``butter(4, cutoff, "highpass",
+    output="sos")``, computed here without SciPy's signal module, whose import takes longer
+    than a run). Unlike a high-pass by FFT, which takes the window as one period of a
+    periodic signal, a slow swing that is not a whole number of periods in the window (a
+    slalom's steering current) does not leak above the cutoff.
 
     Parameters
     ----------
@@ -119,12 +122,63 @@ def highpass(t: Array, values: Array, cutoff: float) -> Array:
     """
     if values.size < 16:
         return values - np.mean(values) if values.size else values
-    from scipy.signal import butter, sosfiltfilt
-
     dt = float(t[1] - t[0])
-    sos = butter(4, cutoff, "highpass", fs=1.0 / dt, output="sos")
-    pad = min(values.size - 1, math.ceil(3.0 / (cutoff * dt)))
-    return np.asarray(sosfiltfilt(sos, values - np.mean(values), padlen=pad), dtype=np.float64)
+    sections = _butterworth_highpass(cutoff, dt)
+    x = np.asarray(values, dtype=np.float64) - np.mean(values)
+    pad = min(x.size - 1, math.ceil(3.0 / (cutoff * dt)))
+    extended = np.concatenate(
+        [2.0 * x[0] - x[pad:0:-1], x, 2.0 * x[-1] - x[-2 : -pad - 2 : -1]]
+    )  # odd reflection at both ends
+    forward = _filter(sections, extended)
+    backward = _filter(sections, forward[::-1])[::-1]
+    return np.asarray(backward[pad : pad + x.size], dtype=np.float64)
+
+
+class _Section(NamedTuple):
+    """A second-order section b0 + b1 / z + b2 / z^2 over 1 + a1 / z + a2 / z^2."""
+
+    b0: float
+    b1: float
+    b2: float
+    a1: float
+    a2: float
+
+
+def _butterworth_highpass(cutoff: float, dt: float) -> list[_Section]:
+    """The 4th-order Butterworth high-pass at ``cutoff`` [Hz] sampled at ``dt`` [s], as two
+    second-order sections (b0, b1, b2, a1, a2), a0 = 1: each analog pair s^2 / (s^2 + 2 zeta
+    w s + w^2), zeta = cos(pi/8) and cos(3 pi/8), by the bilinear transform prewarped at the
+    cutoff (Oppenheim & Schafer, *Discrete-Time Signal Processing*, 3rd ed., sec. 7.2)."""
+    k = 2.0 / dt
+    w = k * math.tan(math.pi * cutoff * dt)
+    out: list[_Section] = []
+    for zeta in (math.cos(3.0 * math.pi / 8.0), math.cos(math.pi / 8.0)):
+        a0 = k * k + 2.0 * zeta * w * k + w * w
+        out.append(
+            _Section(k * k / a0, -2.0 * k * k / a0, k * k / a0, 2.0 * (w * w - k * k) / a0,
+                     (k * k - 2.0 * zeta * w * k + w * w) / a0)
+        )  # fmt: skip
+    return out
+
+
+def _filter(sections: list[_Section], x: Array) -> Array:
+    """``x`` through the cascade of ``sections`` (transposed direct form II), each section
+    started in its steady state for a constant input of ``x[0]`` (``scipy.signal.sosfilt``
+    with ``sosfilt_zi(sos) * x[0]``)."""
+    y = [float(v) for v in x]
+    level = y[0]
+    for b0, b1, b2, a1, a2 in sections:
+        # the state a constant input `level` holds: the output gain * level, as it stays
+        gain = (b0 + b1 + b2) / (1.0 + a1 + a2)
+        z0 = (gain - b0) * level
+        z1 = b2 * level - a2 * gain * level
+        for i, v in enumerate(y):
+            out = b0 * v + z0
+            z0 = b1 * v - a1 * out + z1
+            z1 = b2 * v - a2 * out
+            y[i] = out
+        level = gain * level
+    return np.asarray(y, dtype=np.float64)
 
 
 def run_metrics(

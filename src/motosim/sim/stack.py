@@ -26,8 +26,6 @@ from numba import njit
 from numba.extending import overload
 from numpy.typing import NDArray
 
-from motosim.control.statespace import StateSpace
-from motosim.control.torque_feedback import discretize
 from motosim.errors import MotosimError
 from motosim.estimation.differentiator import LAMBDA_0, LAMBDA_1, std_step
 from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
@@ -35,7 +33,7 @@ from motosim.estimation.registry import start_kernel, step_kernel
 from motosim.model import sharp as sharp_model
 from motosim.model import tyred
 from motosim.model.handlebar import matrices as handlebar_matrices
-from motosim.model.linear import zoh
+from motosim.model.linear import StateSpace, zoh
 from motosim.model.sharp import bike_rk4
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
@@ -494,7 +492,12 @@ def design_stack(
                 f"the controller is discrete at {controller.dt:g} s; expected the measurement "
                 f"step {h_meas:g} s (design it for {measurement_rate:g} Hz)"
             )
-        K = controller if controller.is_discrete else discretize(controller, h_meas, discretization)
+        if controller.is_discrete:
+            K = controller
+        else:  # SciPy's signal module only when a continuous controller is discretised here
+            from motosim.control.torque_feedback import discretize
+
+            K = discretize(controller, h_meas, discretization)
         Ad, Bd, Cd, Dd = K.A, K.B, K.C, K.D
     if (rider_feedforward or reference_feedforward) and handlebar is None:
         raise MotosimError("feedforward needs the nominal handlebar; give handlebar=")
