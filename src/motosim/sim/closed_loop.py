@@ -20,6 +20,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
 from numpy.typing import NDArray
 
 from motosim import __version__
@@ -56,6 +57,7 @@ from motosim.sim.stack import (
     contact_loads,
     default_prediction,
     design_stack,
+    is_multibody,
     new_data,
     outside,
     pitch,
@@ -620,6 +622,59 @@ def _placeholder_gains(rider: MultibodyRider) -> RiderGains:
     )  # fmt: skip
 
 
+def _multibody_period_sharp(
+    mc: Any, stack: StackModel, data: StackData, rig: RigModel, world: RigData, k: int
+) -> tuple[bool, float, float]:
+    return False, 0.0, 0.0
+
+
+def _multibody_period_multibody(
+    mc: Any, stack: StackModel, data: StackData, rig: RigModel, world: RigData, k: int
+) -> tuple[bool, float, float]:
+    u = data.inputs
+    for j in range(u.size):
+        u[j] = rig.motorcycle_inputs[k, j]
+    if not rig.virtual_rider:
+        return False, 0.0, 0.0
+    demand_f = u[MotorcycleInput.front_brake_torque]
+    demand_r = u[MotorcycleInput.rear_brake_torque]
+    braking = demand_f + demand_r > 0.0
+    if braking:  # the throttle then holds the speed the brakes leave
+        world.target_speed[0] = data.motorcycle[MotorcycleState.v_x]
+    loads = contact_loads(stack, data, 0.0)
+    tau, drive, idx, e_y = multibody_rider_torque(
+        rig.multibody_rider, data.multibody, loads, int(world.path_index[0]), rig.path,
+        rig.path_ds, world.target_speed[0], braking,
+    )  # fmt: skip
+    world.path_index[0] = idx
+    u[MotorcycleInput.drive_torque] += drive
+    front, rear = brake_torques(
+        rig.brakes, world.brakes, data.multibody, demand_f, demand_r, loads, stack.dt
+    )
+    u[MotorcycleInput.front_brake_torque] = front
+    u[MotorcycleInput.rear_brake_torque] = rear
+    return True, tau, e_y
+
+
+def _multibody_period(
+    mc: Any, stack: StackModel, data: StackData, rig: RigModel, world: RigData, k: int
+) -> tuple[bool, float, float]:
+    """The multibody motorcycle's part of period ``k``: its inputs from the rig's table, and
+    with the virtual rider its steering, throttle and modulated brakes; (whether the rider
+    steered, its torque [N*m], its lateral error [m]). Nothing on Sharp 1971's motorcycle,
+    whose stack never compiles this part (numba picks by the motorcycle's type)."""
+    if is_multibody(mc):
+        return _multibody_period_multibody(mc, stack, data, rig, world, k)
+    return _multibody_period_sharp(mc, stack, data, rig, world, k)
+
+
+@overload(_multibody_period)
+def _multibody_period_typed(
+    mc: Any, stack: StackModel, data: StackData, rig: RigModel, world: RigData, k: int
+) -> Any:
+    return _multibody_period_multibody if is_multibody(mc) else _multibody_period_sharp
+
+
 @njit(cache=True)
 def _run_chunk(
     k0: int,
@@ -648,30 +703,9 @@ def _run_chunk(
         q = rig.quantum
         theta_meas = math.floor(hb[0] / q + 0.5) * q if q > 0.0 else hb[0]
         held = rig.hands_off.shape[0] == 0 or is_held(k * h, rig.hands_off)
-        # the road and the rider's demands on the multibody motorcycle
-        multibody = rig.motorcycle_inputs.shape[0] > 0
-        if multibody:
-            data.inputs[:] = rig.motorcycle_inputs[k]
-        # the rider: a profile, or the virtual rider looking at the motorcycle
-        e_y = 0.0
-        if rig.virtual_rider and multibody:
-            u = data.inputs
-            demand_f = u[MotorcycleInput.front_brake_torque]
-            demand_r = u[MotorcycleInput.rear_brake_torque]
-            braking = demand_f + demand_r > 0.0
-            if braking:
-                world.target_speed[0] = z[MotorcycleState.v_x]
-            loads = contact_loads(stack, data, 0.0)
-            tau_rider, drive, idx, e_y = multibody_rider_torque(
-                rig.multibody_rider, data.multibody, loads, int(world.path_index[0]), rig.path,
-                rig.path_ds, world.target_speed[0], braking,
-            )  # fmt: skip
-            world.path_index[0] = idx
-            u[MotorcycleInput.drive_torque] += drive
-            u[MotorcycleInput.front_brake_torque], u[MotorcycleInput.rear_brake_torque] = (
-                brake_torques(rig.brakes, world.brakes, data.multibody, demand_f, demand_r,
-                              loads, h)
-            )  # fmt: skip
+        # the multibody motorcycle's road and the rider's demands (nothing on Sharp 1971's)
+        steered, tau_rider, e_y = _multibody_period(stack.motorcycle, stack, data, rig, world, k)
+        if steered:
             tau_rider += rig.rider_probe[k]
         elif rig.virtual_rider:
             tau_rider, idx, e_y = rider_torque(

@@ -62,6 +62,7 @@ __all__ = [
     "contact_loads",
     "default_prediction",
     "design_stack",
+    "is_multibody",
     "new_data",
     "outside",
     "pitch",
@@ -890,7 +891,8 @@ def _start_sharp(mc: Any, data: StackData, speed: float) -> None:
 
 
 def _start_multibody(mc: Any, data: StackData, speed: float) -> None:
-    data.multibody[:] = mc.start
+    for i in range(data.multibody.size):
+        data.multibody[i] = mc.start[i]
     data.inputs[:] = 0.0
     data.inputs[MotorcycleInput.friction] = 1.0
     _multibody_view(mc, data)
@@ -921,8 +923,11 @@ def _advance_multibody(
 ) -> None:  # fmt: skip
     h = model.dt / mc.substeps
     inputs = _multibody_inputs(data, steer)
+    x = data.multibody
     for _ in range(mc.substeps):
-        data.multibody[:] = tyred.advance(mc.model, data.multibody, inputs, h)
+        after = tyred.advance(mc.model, x, inputs, h)
+        for i in range(x.size):
+            x[i] = after[i]
     _multibody_view(mc, data)
 
 
@@ -981,8 +986,9 @@ def _contact_loads_multibody(
     return tyred.observe(mc.model, data.multibody, data.inputs[MotorcycleInput.friction])
 
 
-def _is_multibody(mc: Any) -> bool:
-    """Whether ``mc``, a motorcycle or its numba type, is a :class:`MultibodyMotorcycle`."""
+def is_multibody(mc: Any) -> bool:
+    """Whether ``mc``, a motorcycle or its numba type, is a :class:`MultibodyMotorcycle` (for
+    the parts of compiled code that differ by motorcycle, through ``numba.extending.overload``)."""
     return isinstance(mc, MultibodyMotorcycle) or (
         getattr(mc, "instance_class", None) is MultibodyMotorcycle
     )
@@ -990,7 +996,7 @@ def _is_multibody(mc: Any) -> bool:
 
 def _start(mc: Any, data: StackData, speed: float) -> None:
     """Start the motorcycle upright and straight at ``speed`` [m/s]."""
-    if _is_multibody(mc):
+    if is_multibody(mc):
         return _start_multibody(mc, data, speed)
     return _start_sharp(mc, data, speed)
 
@@ -999,21 +1005,21 @@ def _advance(
     mc: Any, model: StackModel, data: StackData, steer: float, force: float, side_force: float
 ) -> None:
     """Advance the motorcycle one stack period under the steer torque ``steer`` [N*m]."""
-    if _is_multibody(mc):
+    if is_multibody(mc):
         return _advance_multibody(mc, model, data, steer, force, side_force)
     return _advance_sharp(mc, model, data, steer, force, side_force)
 
 
 def _steer_acceleration(mc: Any, model: StackModel, data: StackData, torque: float) -> float:
     """The motorcycle's steer acceleration now under the steer torque ``torque`` [rad/s^2]."""
-    if _is_multibody(mc):
+    if is_multibody(mc):
         return _steer_acceleration_multibody(mc, model, data, torque)
     return _steer_acceleration_sharp(mc, model, data, torque)
 
 
 def _contact_loads(mc: Any, model: StackModel, data: StackData, force: float) -> tyred.ContactLoads:
     """:func:`contact_loads` of the motorcycle ``mc``."""
-    if _is_multibody(mc):
+    if is_multibody(mc):
         return _contact_loads_multibody(mc, model, data, force)
     return _contact_loads_sharp(mc, model, data, force)
 
@@ -1030,14 +1036,14 @@ def _outside(mc: Any, data: StackData) -> int:
     """Why the motorcycle is outside its model's domain, as a
     :class:`~motosim.model.tyred.Domain` code (always inside for Sharp 1971, whose range
     the loop's roll and speed limits bound)."""
-    if _is_multibody(mc):
+    if is_multibody(mc):
         return _outside_multibody(mc, data)
     return _outside_sharp(mc, data)
 
 
 @overload(_outside)
 def _outside_typed(mc: Any, data: StackData) -> Any:
-    return _outside_multibody if _is_multibody(mc) else _outside_sharp
+    return _outside_multibody if is_multibody(mc) else _outside_sharp
 
 
 def _pitch_sharp(mc: Any, data: StackData) -> float:
@@ -1050,55 +1056,59 @@ def _pitch_multibody(mc: Any, data: StackData) -> float:
 
 def _pitch(mc: Any, data: StackData) -> float:
     """The motorcycle's pitch from its start, nose up positive [rad] (0 for Sharp 1971)."""
-    if _is_multibody(mc):
+    if is_multibody(mc):
         return _pitch_multibody(mc, data)
     return _pitch_sharp(mc, data)
 
 
 @overload(_pitch)
 def _pitch_typed(mc: Any, data: StackData) -> Any:
-    return _pitch_multibody if _is_multibody(mc) else _pitch_sharp
+    return _pitch_multibody if is_multibody(mc) else _pitch_sharp
 
 
 @overload(_start)
 def _start_typed(mc: Any, data: StackData, speed: float) -> Any:
-    return _start_multibody if _is_multibody(mc) else _start_sharp
+    return _start_multibody if is_multibody(mc) else _start_sharp
 
 
 @overload(_advance)
 def _advance_typed(
     mc: Any, model: StackModel, data: StackData, steer: float, force: float, side_force: float
 ) -> Any:
-    return _advance_multibody if _is_multibody(mc) else _advance_sharp
+    return _advance_multibody if is_multibody(mc) else _advance_sharp
 
 
 @overload(_steer_acceleration)
 def _steer_acceleration_typed(mc: Any, model: StackModel, data: StackData, torque: float) -> Any:
-    return _steer_acceleration_multibody if _is_multibody(mc) else _steer_acceleration_sharp
+    return _steer_acceleration_multibody if is_multibody(mc) else _steer_acceleration_sharp
 
 
 @overload(_contact_loads)
 def _contact_loads_typed(mc: Any, model: StackModel, data: StackData, force: float) -> Any:
-    return _contact_loads_multibody if _is_multibody(mc) else _contact_loads_sharp
+    return _contact_loads_multibody if is_multibody(mc) else _contact_loads_sharp
 
 
-@njit(cache=True)
+# The motorcycle's observations for compiled and Python callers alike: each is compiled into
+# its caller (an overload whose implementation is the function itself), not as a function of
+# its own.
+
+
 def outside(model: StackModel, data: StackData) -> int:
     """Why the virtual motorcycle is outside its model's domain now, as a
     :class:`~motosim.model.tyred.Domain` code (``INSIDE`` when it is not, and always with
     Sharp 1971)."""
-    return _outside(model.motorcycle, data)
+    code: int = _outside(model.motorcycle, data)
+    return code
 
 
-@njit(cache=True)
 def pitch(model: StackModel, data: StackData) -> float:
     """The virtual motorcycle's pitch from upright running on level ground, nose up positive
     [rad]: the multibody model's (load transfer on the tyres' radial stiffness); 0 for Sharp
     1971, which has none."""
-    return _pitch(model.motorcycle, data)
+    angle: float = _pitch(model.motorcycle, data)
+    return angle
 
 
-@njit(cache=True)
 def contact_loads(model: StackModel, data: StackData, force: float) -> tyred.ContactLoads:
     """The virtual motorcycle's tyre forces and slips now (:class:`~motosim.model.tyred.
     ContactLoads`): the multibody model's; Sharp 1971's side forces with its constant normal
@@ -1106,3 +1116,18 @@ def contact_loads(model: StackModel, data: StackData, force: float) -> tyred.Con
     slips (its tyres have none)."""
     loads: tyred.ContactLoads = _contact_loads(model.motorcycle, model, data, force)
     return loads
+
+
+@overload(outside)
+def _outside_in(model: StackModel, data: StackData) -> Any:
+    return outside
+
+
+@overload(pitch)
+def _pitch_in(model: StackModel, data: StackData) -> Any:
+    return pitch
+
+
+@overload(contact_loads)
+def _contact_loads_in(model: StackModel, data: StackData, force: float) -> Any:
+    return contact_loads
