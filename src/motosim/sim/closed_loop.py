@@ -744,6 +744,7 @@ def _run_chunk(
         o[_COL.kappa_r], o[_COL.kappa_f] = loads.kappa_r, loads.kappa_f
         o[_COL.alpha_r], o[_COL.alpha_f] = loads.alpha_r, loads.alpha_f
         o[_COL.theta] = pitch(stack, data)
+        stop = left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]
         # the stack: command, estimate, virtual motorcycle
         told = tau_rider + rig.torque_error[k] if rig.sensed else tau_rider
         i_cmd = step(
@@ -765,12 +766,12 @@ def _run_chunk(
                 hb[0], hb[1] = step_exact(
                     hb[0], hb[1], tr + spring + nkt * i_cmd, Jt, bt, beta_s, h / n_sub
                 )
-            if left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+            if stop:
                 return row + 1
             continue
         if not held:  # nobody holds the handlebar: the motor alone
             hb[0], hb[1] = step_exact(hb[0], hb[1], nkt * i_cmd, J, beta, beta_s, h)
-            if left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+            if stop:
                 return row + 1
             continue
         steady = rig.virtual_rider
@@ -788,7 +789,7 @@ def _run_chunk(
                 hb[0], hb[1] = step_exact(
                     hb[0], hb[1], tr + nkt * i_cmd, J, beta, beta_s, h / n_sub
                 )
-        if left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]:
+        if stop:
             return row + 1
     return len(out)
 
@@ -903,4 +904,14 @@ def run_metadata(inputs: RunInputs) -> dict[str, object]:
             "dt": inputs.controller.dt,
         },
         "observer": None if inputs.observer is None else dataclasses.asdict(inputs.observer),
+        "multibody": None if inputs.multibody is None else _plain(inputs.multibody),
     }
+
+
+def _plain(value: Any) -> Any:
+    """A record of numbers and arrays (named tuples nested) as JSON-able values."""
+    if isinstance(value, tuple) and hasattr(value, "_fields"):
+        return {name: _plain(getattr(value, name)) for name in value._fields}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value.item() if isinstance(value, np.generic) else value

@@ -252,8 +252,6 @@ class MultibodyMotorcycle(NamedTuple):
     start: Array
     """The compiled state at :func:`reset`: upright straight running at the start speed on
     the tyres' static compression."""
-    contact_height: float
-    """The rear wheel centre's height above its contact point when upright, r_R - t_R [m]."""
     substeps: int
     """RK4 steps per stack period."""
 
@@ -531,9 +529,7 @@ def design_stack(
         A0, Bv = _multibody_lateral(multibody, speed)
         A1 = np.zeros_like(A0)
         start = np.array(tyred.upright_state(multibody, speed), dtype=np.float64)
-        motorcycle = MultibodyMotorcycle(
-            multibody, start, float(multibody.p[0] - multibody.p[2]), substeps
-        )
+        motorcycle = MultibodyMotorcycle(multibody, start, substeps)
     return StackModel(
         dt=h,
         measure_every=round(ratio),
