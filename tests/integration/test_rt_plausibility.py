@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 
 from motosim.cli.run import load_realtime, rig_settings
+from motosim.errors import MotosimError
+from motosim.io.runs import load_scenario
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
 from motosim.rt.rig import RigFaults, VirtualRig
@@ -104,6 +106,17 @@ def _lockstep(
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: str(p.relative_to(SCENARIOS)))
 def test_no_false_trip_on_the_scenarios(path: Path) -> None:
+    from motosim.rt.rig import VirtualRider
+
+    if load_scenario(path).motorcycle.model == "multibody":  # training at the limits: offline
+
+        def refused() -> None:
+            inputs, _ = load_realtime(str(path))
+            VirtualRider.check(build_rig(inputs, rng=np.random.default_rng(0)))
+
+        with pytest.raises(MotosimError, match=r"read offline only|rider steers Sharp 1971 only"):
+            refused()
+        return
     inputs, realtime = load_realtime(str(path))
     if inputs.scenario.motorcycle.input == "true":
         pytest.skip('motorcycle input = "true" is simulation-only; motosim run refuses it')

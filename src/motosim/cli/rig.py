@@ -137,9 +137,10 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
         from motosim.rt.telemetry import StateReceiver, parse_address
         from motosim.sim import build_rig
 
+        world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
+        VirtualRider.check(world)  # before its socket is opened
         # --telemetry off: refused by parse_address, as the virtual rider needs the stream
         receiver = StateReceiver(options.telemetry or parse_address(args.telemetry))
-        world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
         rider = VirtualRider(world, receiver, rate=sc.rates.control)
     clock = clock_from_args(args)
     codecs = handlebar_codecs()

@@ -185,6 +185,8 @@ class Lockstep:
         self._periods = round(sc.duration * self._rate)
         model = account_for_delay(build_stack(inputs), delay, inputs.nominal_handlebar)
         world = build_rig(inputs, rng=np.random.default_rng(seed))
+        if world.virtual_rider:
+            VirtualRider.check(world)  # before the sockets are opened
         codecs = handlebar_codecs()
         self.clock = SimulatedClock(-1.0 / self._rate)  # the first deadline at t = 0
         self.rider_torques: list[tuple[float, float]] = []

@@ -554,13 +554,7 @@ class VirtualRider:
         *,
         rate: float,
     ) -> None:
-        if not world.virtual_rider:
-            raise MotosimError("the scenario's rider is a torque profile, not a virtual rider")
-        if world.motorcycle_inputs.shape[0] > 0:
-            raise MotosimError(
-                "the virtual rig's rider steers Sharp 1971 only; expected [motorcycle] model = "
-                '"sharp1971" or [rider] kind = "torque" with model = "multibody"'
-            )
+        self.check(world)
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive control rate")
         self.world = world
@@ -573,6 +567,24 @@ class VirtualRider:
         self.lateral_error = 0.0
         self._steer(world.path[0, 0], world.path[1, 0], world.path[2, 0])  # compiled now,
         # not on the run's first state row (a stall of the rig's frames at the run's start)
+
+    @staticmethod
+    def check(world: RigModel) -> None:
+        """Refuse a world whose rider this class cannot be (before a socket is opened for it).
+
+        Raises
+        ------
+        MotosimError
+            If the scenario's rider is a torque profile, or its motorcycle the multibody one
+            (this rider steers Sharp 1971's).
+        """
+        if not world.virtual_rider:
+            raise MotosimError("the scenario's rider is a torque profile, not a virtual rider")
+        if world.motorcycle_inputs.shape[0] > 0:
+            raise MotosimError(
+                "the virtual rig's rider steers Sharp 1971 only; expected [motorcycle] model = "
+                '"sharp1971" or [rider] kind = "torque" with model = "multibody"'
+            )
 
     def __call__(self, t: float) -> float:
         """The rider's torque at a time of the rig.
