@@ -1106,10 +1106,10 @@ def pitch(model: StackModel, data: StackData) -> float:
 
 
 def contact_loads(model: StackModel, data: StackData, force: float) -> tyred.ContactLoads:
-    """The virtual motorcycle's tyre forces and slips now (:class:`~motosim.model.tyred.
-    ContactLoads`): the multibody model's; Sharp 1971's side forces with its constant normal
-    loads on level ground, eq. (2)'s longitudinal ``force`` [N] at the rear contact and no
-    slips (its tyres have none)."""
+    """The virtual motorcycle's tyre forces and slips now, as
+    :class:`~motosim.model.tyred.ContactLoads`: the multibody model's; Sharp 1971's side
+    forces with its constant normal loads on level ground, eq. (2)'s longitudinal ``force``
+    [N] at the rear contact and no slips (its tyres have none)."""
     loads: tyred.ContactLoads = _contact_loads(model.motorcycle, model, data, force)
     return loads
 
