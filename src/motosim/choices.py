@@ -16,10 +16,17 @@ __all__ = [
     "INTEGRAL_CORNER",
     "LOWEST_BANDWIDTH",
     "MAX_ORDER",
+    "MOTORCYCLE_PROFILES",
     "RIDER_SPEEDS",
     "SENSOR_ESTIMATOR",
 ]
 
+MOTORCYCLE_PROFILES: Final = (
+    "drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque", "wind_force",
+    "side_wind",
+)  # fmt: skip
+"""The profiles of a scenario's ``[motorcycle]`` table
+(:class:`motosim.sim.scenario.Motorcycle`)."""
 ESTIMATOR_NAMES: Final = ("walcott_zak", "inverse_dynamics", "kalman")
 """The names of :data:`motosim.estimation.registry.ESTIMATORS`, in its order (the default,
 the paper's observer, first)."""

@@ -410,3 +410,21 @@ def test_a_tiny_friction_or_caster_is_warned_about_with_why(
     assert main(["params", "show", str(path)]) == 0
     warnings = [x for x in capsys.readouterr().err.splitlines() if "warning" in x]
     assert len(warnings) == 1 and f"{key} = {value}" in warnings[0] and why in warnings[0]
+
+
+@pytest.mark.parametrize(
+    ("table", "key"),
+    [("motorcycle", "front_brake_torque"), ("motorcycle", "rear_brake_torque"),
+     ("road", "friction")],
+)  # fmt: skip
+def test_the_multibody_profiles_csv_is_checked_first(tmp_path: Path, table: str, key: str) -> None:
+    """A CSV profile of the multibody motorcycle's brakes or the road's friction that names a
+    missing file is refused before the numerical stack is imported, as the others are."""
+    model = '[motorcycle]\nmodel = "multibody"\n' if table == "road" else ""
+    (tmp_path / "mb.toml").write_text(
+        f'[scenario]\nname = "mb"\n{model}[{table}]\n'
+        + ('model = "multibody"\n' if table == "motorcycle" else "")
+        + f'{key} = {{ kind = "csv", file = "nope.csv", column = "x" }}\n'
+        '[rider]\nkind = "virtual"\n'
+    )
+    _refused_early(["simulate", "mb.toml", "--out", "r"], tmp_path, "nope.csv")

@@ -6,6 +6,7 @@ and limits its check needs are in light modules (:mod:`motosim.choices`,
 check is on ``sys.modules`` in a fresh interpreter, as in ``test_cli_light``.
 """
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -102,11 +103,15 @@ def test_the_light_names_equal_their_sources() -> None:
     from motosim import choices
     from motosim.control import torque_feedback
     from motosim.estimation import registry
-    from motosim.sim import grips, hands, rider
+    from motosim.sim import grips, hands, rider, scenario
 
     assert choices.ESTIMATOR_NAMES == tuple(registry.ESTIMATORS)
     assert choices.SENSOR_ESTIMATOR == registry.SENSOR_ESTIMATOR
     assert choices.MAX_ORDER == torque_feedback.MAX_ORDER
     assert choices.INTEGRAL_CORNER == torque_feedback.INTEGRAL_CORNER
     assert choices.RIDER_SPEEDS == rider.SPEED_RANGE
+    profiles = [
+        f.name for f in dataclasses.fields(scenario.Motorcycle) if f.type == scenario.Profile
+    ]  # every profile of [motorcycle], in the table's order
+    assert choices.MOTORCYCLE_PROFILES == tuple(profiles)
     assert hands.GRIPS is grips.GRIPS and hands.Hands is grips.Hands

@@ -421,8 +421,11 @@ def check_scenario_inputs(path: str | Path) -> Path:
         section = data.get(table)
         if isinstance(section, dict) and isinstance(section.get(key), str):
             named_file(section[key], "parameter file")
+    from motosim.choices import MOTORCYCLE_PROFILES
+
     for table, keys in (
-        ("motorcycle", ("drive_torque", "brake_torque", "wind_force", "side_wind")),
+        ("motorcycle", MOTORCYCLE_PROFILES),
+        ("road", ("friction",)),
         ("rider", ("profile", "probe", "path")),
     ):
         section = data.get(table)

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from motosim.choices import MOTORCYCLE_PROFILES
 from motosim.errors import MotosimError, RunFailedError, warn
 from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
 from motosim.io.cache import DesignCache, cached_controller, cached_rider
@@ -91,13 +92,6 @@ def read_road(scenario: Scenario, base: str | Path) -> Scenario:
     return dataclasses.replace(scenario, rider=rider)
 
 
-_MOTORCYCLE_PROFILES = (
-    "drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque", "wind_force",
-    "side_wind",
-)  # fmt: skip
-"""The profiles of a scenario's ``[motorcycle]``."""
-
-
 def parameter_source(name: str, base: str | Path) -> str | Path:
     """Where a scenario's parameter set or design file ``name`` is read from.
 
@@ -133,7 +127,7 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
     nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
-    profiles = {f"[motorcycle] {key}": getattr(mc, key) for key in _MOTORCYCLE_PROFILES} | {
+    profiles = {f"[motorcycle] {key}": getattr(mc, key) for key in MOTORCYCLE_PROFILES} | {
         "[road] friction": scenario.road.friction,
         "[rider] profile": scenario.rider.profile,
         "[rider] probe": scenario.rider.probe,

@@ -79,6 +79,7 @@ from motosim.choices import (
     INTEGRAL_CORNER,
     LOWEST_BANDWIDTH,
     MAX_ORDER,
+    MOTORCYCLE_PROFILES,
     RIDER_SPEEDS,
     SENSOR_ESTIMATOR,
 )
@@ -681,8 +682,7 @@ class Motorcycle:
     def __post_init__(self) -> None:
         _check("speed", self.speed, low=1.0, high=100.0, unit="m/s")
         _check("side_wind_height", self.side_wind_height, low=0.0, high=3.0, unit="m")
-        for key in ("drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque",
-                    "wind_force", "side_wind"):  # fmt: skip
+        for key in MOTORCYCLE_PROFILES:
             bounds = _profile_bounds(getattr(self, key))
             if bounds is not None:
                 check_profile_values(f"[motorcycle] {key}", *bounds, key=key)
@@ -1070,8 +1070,7 @@ def implausible(scenario: "Scenario") -> list[str]:
             "legal but more than a full circle; the angle is in radians (90 deg = 1.571)"
         )
     mc = scenario.motorcycle
-    for key in ("drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque",
-                "wind_force", "side_wind"):  # fmt: skip
+    for key in MOTORCYCLE_PROFILES:
         bound = PROFILE_LIMITS[f"[motorcycle] {key}"]
         peak = _profile_peak(getattr(mc, key))
         if peak > bound.typical:
