@@ -33,7 +33,7 @@ from motosim.estimation.walcott_zak import (
     design_with,
 )
 from motosim.model.handlebar import perturbed, step_exact
-from motosim.model.tyred import TyredModel
+from motosim.model.tyred import ContactLoads, TyredModel
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
@@ -624,24 +624,24 @@ def _placeholder_gains(rider: MultibodyRider) -> RiderGains:
 
 def _multibody_period_sharp(
     mc: Any, stack: StackModel, data: StackData, rig: RigModel, world: RigData, k: int
-) -> tuple[bool, float, float]:
-    return False, 0.0, 0.0
+) -> tuple[bool, float, float, ContactLoads]:
+    return False, 0.0, 0.0, contact_loads(stack, data, rig.force[k])
 
 
 def _multibody_period_multibody(
     mc: Any, stack: StackModel, data: StackData, rig: RigModel, world: RigData, k: int
-) -> tuple[bool, float, float]:
+) -> tuple[bool, float, float, ContactLoads]:
     u = data.inputs
     for j in range(u.size):
         u[j] = rig.motorcycle_inputs[k, j]
+    loads = contact_loads(stack, data, 0.0)  # on this period's road (its friction)
     if not rig.virtual_rider:
-        return False, 0.0, 0.0
+        return False, 0.0, 0.0, loads
     demand_f = u[MotorcycleInput.front_brake_torque]
     demand_r = u[MotorcycleInput.rear_brake_torque]
     braking = demand_f + demand_r > 0.0
     if braking:  # the throttle then holds the speed the brakes leave
         world.target_speed[0] = data.motorcycle[MotorcycleState.v_x]
-    loads = contact_loads(stack, data, 0.0)
     tau, drive, idx, e_y = multibody_rider_torque(
         rig.multibody_rider, data.multibody, loads, int(world.path_index[0]), rig.path,
         rig.path_ds, world.target_speed[0], braking,
@@ -653,16 +653,17 @@ def _multibody_period_multibody(
     )
     u[MotorcycleInput.front_brake_torque] = front
     u[MotorcycleInput.rear_brake_torque] = rear
-    return True, tau, e_y
+    return True, tau, e_y, loads
 
 
 def _multibody_period(
     mc: Any, stack: StackModel, data: StackData, rig: RigModel, world: RigData, k: int
-) -> tuple[bool, float, float]:
+) -> tuple[bool, float, float, ContactLoads]:
     """The multibody motorcycle's part of period ``k``: its inputs from the rig's table, and
     with the virtual rider its steering, throttle and modulated brakes; (whether the rider
-    steered, its torque [N*m], its lateral error [m]). Nothing on Sharp 1971's motorcycle,
-    whose stack never compiles this part (numba picks by the motorcycle's type)."""
+    steered, its torque [N*m], its lateral error [m], the contact loads of the period, which
+    the row records). On Sharp 1971's motorcycle only its loads, and its stack never compiles
+    the rest (numba picks by the motorcycle's type)."""
     if is_multibody(mc):
         return _multibody_period_multibody(mc, stack, data, rig, world, k)
     return _multibody_period_sharp(mc, stack, data, rig, world, k)
@@ -704,7 +705,9 @@ def _run_chunk(
         theta_meas = math.floor(hb[0] / q + 0.5) * q if q > 0.0 else hb[0]
         held = rig.hands_off.shape[0] == 0 or is_held(k * h, rig.hands_off)
         # the multibody motorcycle's road and the rider's demands (nothing on Sharp 1971's)
-        steered, tau_rider, e_y = _multibody_period(stack.motorcycle, stack, data, rig, world, k)
+        steered, tau_rider, e_y, loads = _multibody_period(
+            stack.motorcycle, stack, data, rig, world, k
+        )
         if steered:
             tau_rider += rig.rider_probe[k]
         elif rig.virtual_rider:
@@ -738,7 +741,6 @@ def _run_chunk(
             o[column] = z[at]
         o[_COL.e_y] = e_y
         left = outside(stack, data) != 0
-        loads = contact_loads(stack, data, rig.force[k])
         o[_COL.F_xr], o[_COL.F_xf] = loads.F_xr, loads.F_xf
         o[_COL.F_zr], o[_COL.F_zf] = loads.F_zr, loads.F_zf
         o[_COL.kappa_r], o[_COL.kappa_f] = loads.kappa_r, loads.kappa_f
