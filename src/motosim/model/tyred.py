@@ -52,6 +52,7 @@ from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.params.tyre import TyreParameters
 
 __all__ = [
+    "LATERAL",
     "ContactLoads",
     "Domain",
     "Index",
@@ -751,7 +752,10 @@ def upright_state(model: TyredModel, speed: float) -> State:
     return State(*x)
 
 
-_LATERAL = (4, 7, 10, 12, 13, 16, 18, 19)
+LATERAL = tuple(int(i) for i in (
+    Index.roll, Index.steer, Index.lateral, Index.yaw_rate, Index.roll_rate, Index.steer_rate,
+    Index.Fy_r, Index.Fy_f,
+))  # fmt: skip
 """Roll, steer, lateral velocity, yaw rate, roll rate, steer rate, F_y rear, F_y front."""
 
 
@@ -767,12 +771,12 @@ def lateral_matrix(model: TyredModel, speed: float) -> Array:
     x0 = np.array(upright_state(model, speed), dtype=float)
     inputs = Inputs()
     A = np.empty((8, 8))
-    for j, index in enumerate(_LATERAL):
+    for j, index in enumerate(LATERAL):
         delta = 1e-6 * max(1.0, abs(x0[index]))
         dx = np.zeros(N_STATE)
         dx[index] = delta
         diff = _derivatives(model, x0 + dx, inputs) - _derivatives(model, x0 - dx, inputs)
-        A[:, j] = diff[list(_LATERAL)] / (2 * delta)
+        A[:, j] = diff[list(LATERAL)] / (2 * delta)
     return A
 
 
@@ -791,7 +795,7 @@ def lateral_system(model: TyredModel, speed: float) -> tuple[Array, Array]:
     diff = _derivatives(model, x0, Inputs(steer_torque=torque)) - _derivatives(
         model, x0, Inputs(steer_torque=-torque)
     )
-    return lateral_matrix(model, speed), diff[list(_LATERAL)] / (2 * torque)
+    return lateral_matrix(model, speed), diff[list(LATERAL)] / (2 * torque)
 
 
 def sharp_machine(

@@ -556,7 +556,19 @@ def design_stack(
     )
 
 
-_FROM_TYRED_LATERAL = (2, 3, 4, 5, 0, 1, 6, 7)
+_AS_SHARP = {
+    MotorcycleState.v_y: tyred.Index.lateral,
+    MotorcycleState.psi_dot: tyred.Index.yaw_rate,
+    MotorcycleState.phi_dot: tyred.Index.roll_rate,
+    MotorcycleState.delta_dot: tyred.Index.steer_rate,
+    MotorcycleState.phi: tyred.Index.roll,
+    MotorcycleState.delta: tyred.Index.steer,
+    MotorcycleState.F_yr: tyred.Index.Fy_r,
+    MotorcycleState.F_yf: tyred.Index.Fy_f,
+}
+"""The multibody state that reads as each of Sharp 1971's lateral states (the
+:func:`_multibody_view` of the side forces: those the tyres apply)."""
+_FROM_TYRED_LATERAL = tuple(tyred.LATERAL.index(_AS_SHARP[s]) for s in sorted(_AS_SHARP))
 """Sharp 1971's lateral states (:class:`MotorcycleState` up to ``v_x``) among those of
 :func:`motosim.model.tyred.lateral_system`."""
 
