@@ -128,3 +128,35 @@ def test_design_explains_the_paper_controller_beside_ours(
     crossover = float(text.split("its loop crosses over at ")[1].split()[0])
     assert crossover == pytest.approx(0.09 / (2 * 3.141592653589793), rel=0.05)
     assert "evaluated as published, not broken" in text
+
+
+def test_design_for_a_grip_analyses_the_stack_held_and_let_go(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--grip relaxed``: the stack designed for the rider's hands keeps at 20 m/s, 1 kHz,
+    the classical margins (6 dB, 45 deg) held by the relaxed grip and let go; the report
+    says which grip, and prints both."""
+    code, out, _ = _run(
+        capsys, "design", "--json", "--starts", "2", "--speeds", "20", "--grip", "relaxed"
+    )
+    assert code == 0
+    report = json.loads(out)
+    assert report["grip"] == "relaxed"
+    (stack,) = report["stack"]
+    for a in (stack, stack["hands_off"]):
+        assert a["stable"]
+        assert a["gain_margin_db"] >= 6.0 and a["phase_margin_deg"] >= 45.0
+    code, out, _ = _run(capsys, "design", "--starts", "2", "--speeds", "20", "--grip", "firm")
+    assert code == 0
+    assert "designed for and held by the firm grip" in out and "hands off: stable True" in out
+
+
+def test_a_design_file_for_a_grip_is_refused_at_once(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """A design file holds the design for the handlebar alone: ``--out`` with a grip is
+    refused in one line (exit 2) before any design."""
+    code, _, err = _run(capsys, "design", "--grip", "relaxed", "--out", str(tmp_path / "d.toml"))
+    assert code == 2
+    assert "--out with --grip relaxed" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "d.toml").exists()

@@ -20,6 +20,7 @@ from motosim.errors import MotosimError, RunFailedError
 from motosim.params import load_parameters
 from motosim.params.checks import check_number, short_repr
 from motosim.params.handlebar import HandlebarParameters
+from motosim.sim.grips import GRIPS, Hands, design_hands, held_handlebar
 
 if TYPE_CHECKING:
     from motosim.control.statespace import StateSpace
@@ -113,6 +114,17 @@ def register(sub: Any) -> None:
         default="10,20,30",
         help="speeds of the whole-stack analysis [m/s], comma-separated (10,20,30)",
     )
+    parser.add_argument(
+        "--grip",
+        choices=tuple(GRIPS),
+        default="off",
+        help=(
+            "the rider's grip to design for (off: the handlebar alone, what a design file "
+            "holds); with a grip the observer, the controller and the stack model 0.4 of its "
+            "inertia and damping, between holding and letting go, and the stack is analysed "
+            "held and let go"
+        ),
+    )
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument(
         "--out", metavar="DESIGN.toml", help="write the design file (default: none)"
@@ -165,21 +177,25 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
 def _stack_analysis(
     hb: HandlebarParameters, settings: "ObserverSettings", controller: "StateSpace", rate: float,
     speeds: list[float], prediction: bool | None, latency: float = 0.0,
+    hands: Hands | None = None,
 ) -> list[dict[str, Any]]:  # fmt: skip
     """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid;
     with a ``latency`` [s], accounting for it, and (``unaccounted``) the stack designed for
-    a fresh sample read as old."""
+    a fresh sample read as old; with ``hands``, the stack designed for them and held by
+    them, and (``hands_off``) let go."""
     from motosim.estimation.walcott_zak import WalcottZakObserver, design_with
     from motosim.sim.loop_analysis import analyse_design
 
-    kernel = WalcottZakObserver(design_with(hb, settings), 1.0 / rate).kernel
+    designed = design_hands(hands)
+    kernel = WalcottZakObserver(design_with(held_handlebar(hb, designed), settings), 1.0 / rate)
     sharp = load_parameters("sharp1971", "sharp")
 
-    def analysed(account: bool) -> list[dict[str, Any]]:
+    def analysed(account: bool, true_hands: Hands | None = hands) -> list[dict[str, Any]]:
         entries = []
         for nominal, grid in analyse_design(
-            sharp, kernel, controller, hb, rate=rate, speeds=speeds, prediction=prediction,
-            delay=latency, account=account,
+            sharp, kernel.kernel, controller, hb, rate=rate, speeds=speeds,
+            prediction=prediction, delay=latency, account=account, hands=designed,
+            true_hands=true_hands,
         ):  # fmt: skip
             entry = _stack(nominal)
             entry["grid"] = {
@@ -197,6 +213,9 @@ def _stack_analysis(
     if latency > 0.0:
         for entry, fresh in zip(out, analysed(False), strict=True):
             entry["unaccounted"] = fresh
+    if hands is not None:
+        for entry, off in zip(out, analysed(True, GRIPS["off"]), strict=True):
+            entry["hands_off"] = off
     return out
 
 
@@ -236,11 +255,19 @@ def run(args: argparse.Namespace) -> int:
         check_number(
             speed, where="--speeds", lower=SPEED_RANGE[0], upper=SPEED_RANGE[1], unit="m/s"
         )
+    if args.out is not None and args.grip != "off":
+        raise MotosimError(
+            f"--out with --grip {args.grip}: a design file holds the design for the handlebar "
+            "alone; expected --grip off with --out (a scenario designs for its rider's grip "
+            "itself: [controller] grip)"
+        )
     if args.out is not None:
         check_output(
             args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
         )
-    hb = load_parameters(args.handlebar, "handlebar")
+    bare = load_parameters(args.handlebar, "handlebar")
+    hands = None if GRIPS[args.grip].is_off else GRIPS[args.grip]
+    hb = held_handlebar(bare, design_hands(hands))  # what the observer and controller model
     import numpy as np
 
     from motosim.control.torque_feedback import (
@@ -314,14 +341,16 @@ def run(args: argparse.Namespace) -> int:
             "gamma": paper.four_block_gamma,
             "analysis": _analysis(paper),
         },
+        "grip": args.grip,
         "stack": _stack_analysis(
-            hb,
+            bare,
             settings,
             ctrl.controller_zoh,
             args.rate,
             speeds,
             False if args.no_prediction else None,
             args.latency,
+            hands,
         ),
         "observer": {
             "poles": list(settings.poles),
@@ -432,9 +461,14 @@ def _print(report: dict[str, Any]) -> None:
     print(f"  paper controller four-block gamma (W = 1): {report['paper_controller']['gamma']:.4f}")
     latency = report["stack"][0]["measurement_delay_s"] if report["stack"] else 0.0
     read = f", the measurement read {1e3 * latency:.3g} ms old and accounted for" if latency else ""
+    held = (
+        f", designed for and held by the {report['grip']} grip (hands off: let go)"
+        if report["grip"] != "off"
+        else ""
+    )
     print(
         f"whole stack at {report['rate']:g} Hz (observer, feedforward, motorcycle; sampled, "
-        f"linearised without dry friction{read}):"
+        f"linearised without dry friction{read}{held}):"
     )
     print(
         f"  {'speed':>6} {'stable':>7} {'GM [dB]':>8} {'PM [deg]':>9} {'|1+L| min':>10} "
@@ -457,6 +491,15 @@ def _print(report: dict[str, Any]) -> None:
             f"GM {a['cancellation_gain_margin_db']:.3g} dB, "
             f"PM {a['cancellation_phase_margin_deg']:.3g} deg"
         )
+        off = a.get("hands_off")
+        if off is not None:
+            g = off["grid"]
+            print(
+                f"         hands off: stable {off['stable']}, GM {off['gain_margin_db']:.3g} dB, "
+                f"PM {off['phase_margin_deg']:.3g} deg; grid "
+                f"{g['points'] - g['unstable']}/{g['points']} stable "
+                f"({g['with_margins']} with 6 dB, 45 deg)"
+            )
         fresh = a.get("unaccounted")
         if fresh is not None:
             g = fresh["grid"]

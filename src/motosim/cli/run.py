@@ -674,7 +674,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
             )
         with cache.designing(sc.name):
             model = cached_stack(cache, inputs)
-        model = account_for_delay(model, age, inputs.nominal_handlebar)  # the frames' age
+        model = account_for_delay(model, age, inputs.design_handlebar)  # the frames' age
         world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
         codecs = handlebar_codecs()
         stack = CompiledStack(model, force=world.force, side_force=world.side_force)

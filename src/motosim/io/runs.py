@@ -40,6 +40,7 @@ from motosim.sim import (
     simulate,
 )
 from motosim.sim.closed_loop import run_limits
+from motosim.sim.grips import held_handlebar
 from motosim.sim.metrics import (
     failure,
     multibody_reason,
@@ -125,6 +126,7 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
     scenario = read_road(scenario, folder)
     hb = scenario.handlebar
     nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
+    designed_for = held_handlebar(nominal, scenario.stack_hands)  # the controller's plant
     tables: dict[str, TimeSeries] = {}
     mc = scenario.motorcycle
     profiles = {f"[motorcycle] {key}": getattr(mc, key) for key in MOTORCYCLE_PROFILES} | {
@@ -185,10 +187,10 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
 
             bandwidth = c.bandwidth
             if bandwidth is None:
-                bandwidth, controller = handlebar_bandwidth(nominal, rate=rate, n_starts=4)
+                bandwidth, controller = handlebar_bandwidth(designed_for, rate=rate, n_starts=4)
             if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
                 controller = synthesize_controller(
-                    nominal,
+                    designed_for,
                     rng=np.random.default_rng(0),
                     bandwidth=bandwidth,
                     order=c.order,
@@ -213,7 +215,7 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
                         "seed": 0,
                     }
                     controller = cached_controller(
-                        cache, synthesis, handlebar=nominal, settings=settings
+                        cache, synthesis, handlebar=designed_for, settings=settings
                     )
         except MotosimError as err:
             raise RunFailedError(

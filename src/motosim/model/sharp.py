@@ -37,6 +37,7 @@ __all__ = [
     "bike_rk4",
     "check_speed",
     "eigenvalues",
+    "held_steering",
     "input_matrix",
     "linearize",
     "longitudinal_acceleration",
@@ -217,6 +218,40 @@ def lpv_matrices(p: SharpParameters) -> tuple[Array, Array, Array]:
     E0, E1 = stiffness_matrices(p)
     Minv = np.linalg.inv(M)
     return -Minv @ E0, -Minv @ E1, Minv @ input_matrix(p)
+
+
+def held_steering(
+    A: Array, B: Array, inertia: float, damping: float, stiffness: float, G: Array | None = None
+) -> tuple[Array, Array, Array | None]:
+    """The lateral model with a rider's arms on the handlebar: (A_h, B_h, G_h).
+
+    The arms add -J_a delta'' - c_a delta' - k_a delta to the rider's steer torque tau.
+    The steer acceleration delta'' = A[delta'] x + B[delta'] tau + G[delta'] w depends on
+    that torque itself, so the torque is eliminated: with s = 1 / (1 + J_a B[delta']),
+    A_h = A + s B (-J_a A[delta'] - c_a e_delta' - k_a e_delta), B_h = s B and, for other
+    inputs w (e.g. a side force) of matrix G, G_h = G - s J_a B G[delta']. This is adding
+    J_a, c_a and k_a to the steer equation's inertia, damping and stiffness (by the
+    Sherman-Morrison formula on M^-1), as a rider's hands on a real front frame do
+    (Cossalter, Doria, Lot & Massaro, Meccanica 46, 2011, 279-292).
+
+    Parameters
+    ----------
+    A : ndarray, shape (8, 8)
+        A_v [1/s].
+    B : ndarray, shape (8,)
+        B_v, the steer-torque input.
+    inertia, damping, stiffness : float
+        J_a [kg*m^2], c_a [N*m*s/rad], k_a [N*m/rad] about the steering axis.
+    G : ndarray, shape (8,) or (8, m), optional
+        Other inputs' matrix.
+    """
+    rate, angle = STATE_NAMES.index("delta_dot"), STATE_NAMES.index("delta")
+    s = 1.0 / (1.0 + inertia * B[rate])
+    row = -inertia * A[rate]
+    row[rate] -= damping
+    row[angle] -= stiffness
+    held_G = None if G is None else G - s * inertia * np.multiply.outer(B, G[rate])
+    return A + s * np.outer(B, row), s * B, held_G
 
 
 def linearize(p: SharpParameters, speed: float) -> StateSpace:

@@ -183,7 +183,7 @@ class Lockstep:
             )
         self._rate = sc.rates.control
         self._periods = round(sc.duration * self._rate)
-        model = account_for_delay(build_stack(inputs), delay, inputs.nominal_handlebar)
+        model = account_for_delay(build_stack(inputs), delay, inputs.design_handlebar)
         world = build_rig(inputs, rng=np.random.default_rng(seed))
         if world.virtual_rider:
             VirtualRider.check(world)  # before the sockets are opened

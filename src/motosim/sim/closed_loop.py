@@ -38,6 +38,7 @@ from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
 from motosim.sim.brakes import BrakeSettings, brake_torques, design_brakes, new_brake_state
+from motosim.sim.grips import held_handlebar
 from motosim.sim.hands import hands_array, hands_torque, is_held, resolve_hands
 from motosim.sim.loop_analysis import prediction_lead
 from motosim.sim.metrics import validity_limits
@@ -131,7 +132,9 @@ class RunInputs:
     true_handlebar : HandlebarParameters
         The simulated handlebar, the scenario's perturbations applied.
     nominal_handlebar : HandlebarParameters
-        What the observer and the controller were designed for.
+        The handlebar the observer and the controller were designed for, held by the
+        scenario's :attr:`~motosim.sim.scenario.Scenario.stack_hands`
+        (:attr:`design_handlebar`).
     controller : StateSpace or None
         Controller K [A/rad] (continuous, or discrete at the measurement step); None without
         torque feedback.
@@ -156,6 +159,13 @@ class RunInputs:
     observer: ObserverSettings | None = None
     rider: RiderGains | MultibodyRider | None = None
     multibody: TyredModel | None = None
+
+    @property
+    def design_handlebar(self) -> HandlebarParameters:
+        """The nominal handlebar with the hands the stack is designed for
+        (:func:`~motosim.sim.grips.held_handlebar`): what the observer, the controller and
+        the feedforward model."""
+        return held_handlebar(self.nominal_handlebar, self.scenario.stack_hands)
 
 
 def prepare(
@@ -270,12 +280,13 @@ def _feedback(scenario: Scenario) -> bool:
 def build_stack(inputs: RunInputs) -> StackModel:
     """Design the stack of a run: estimator, differentiator, controller, motorcycle.
 
-    The estimator is the scenario's, designed for the nominal handlebar at the measurement
-    step; a Walcott-Zak observer takes the design file's settings when the run has them. With
+    The estimator is the scenario's, designed for the nominal handlebar (held by the hands
+    the stack is designed for: :attr:`RunInputs.design_handlebar`) at the measurement step;
+    a Walcott-Zak observer takes the design file's settings when the run has them. With
     the predicted cancellation (``[controller] prediction``, by default
     :func:`~motosim.sim.stack.default_prediction` with the Walcott-Zak observer), the stack is
     designed twice: its lead T_d is the first one's estimate filter's delay
-    (:func:`~motosim.sim.loop_analysis.prediction_lead`) on the nominal handlebar.
+    (:func:`~motosim.sim.loop_analysis.prediction_lead`) on that handlebar.
     """
     sc = inputs.scenario
     h_meas = 1.0 / sc.rates.measurement
@@ -289,14 +300,14 @@ def build_stack(inputs: RunInputs) -> StackModel:
             ),
             friction_compensation=est.friction_compensation,
         )
-        gains = design_with(inputs.nominal_handlebar, settings)
+        gains = design_with(inputs.design_handlebar, settings)
         kernel = WalcottZakObserver(gains, h_meas, stick_projection=est.stick_projection).kernel
     elif est.name == SENSOR_ESTIMATOR:
         sensor = sc.sensor.torque
         kernel = torque_sensor_kernel(h_meas, low_pass=sensor.low_pass if sensor else 0.0)
     else:
         stepper = ESTIMATORS[est.name](
-            inputs.nominal_handlebar, h_meas, friction_compensation=est.friction_compensation
+            inputs.design_handlebar, h_meas, friction_compensation=est.friction_compensation
         )
         kernel = stepper.kernel
 
@@ -312,12 +323,13 @@ def build_stack(inputs: RunInputs) -> StackModel:
             max_current=sc.controller.max_current,
             speed=sc.motorcycle.speed,
             true_torque=sc.motorcycle.input == "true",
-            handlebar=inputs.nominal_handlebar,
+            handlebar=inputs.design_handlebar,
             rider_feedforward="rider" in (sc.controller.feedforward or ()),
             reference_feedforward="reference" in (sc.controller.feedforward or ()),
             prediction_lead=lead,
             side_force_height=sc.motorcycle.side_wind_height,
             multibody=inputs.multibody,
+            hands=sc.stack_hands,
         )
 
     model = build()
@@ -325,7 +337,7 @@ def build_stack(inputs: RunInputs) -> StackModel:
     if predict is None:
         predict = est.name == "walcott_zak" and default_prediction(sc.rates.measurement)
     if predict and model.feedforward.cancellation > 0.0:
-        model = build(prediction_lead(model, inputs.nominal_handlebar))
+        model = build(prediction_lead(model, inputs.design_handlebar))
     return model
 
 
@@ -899,6 +911,9 @@ def run_metadata(inputs: RunInputs) -> dict[str, object]:
         "sharp": dataclasses.asdict(inputs.sharp),
         "true_handlebar": dataclasses.asdict(inputs.true_handlebar),
         "nominal_handlebar": dataclasses.asdict(inputs.nominal_handlebar),
+        "stack_hands": (
+            None if (hands := inputs.scenario.stack_hands) is None else dataclasses.asdict(hands)
+        ),
         "controller": None
         if inputs.controller is None
         else {

@@ -6,11 +6,12 @@ numba, so that a scenario is checked without them.
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from motosim.params.checks import check_number
+from motosim.params.handlebar import HandlebarParameters
 
-__all__ = ["GRIPS", "Hands"]
+__all__ = ["DESIGN_SHARE", "GRIPS", "Hands", "design_hands", "held_handlebar"]
 
 _LIMITS = (("inertia", 1.0, "kg*m^2"), ("damping", 100.0, "N*m*s/rad"),
            ("stiffness", 1000.0, "N*m/rad"))  # fmt: skip
@@ -79,3 +80,53 @@ GRIPS: dict[str, Hands] = {
 """The named grips. ``off``: no passive impedance, the rider a pure torque source as without
 ``hands``; a phase where nobody holds the handlebar, active torque included, is the rider's
 ``hands_off``."""
+
+
+def held_handlebar(handlebar: HandlebarParameters, hands: Hands | None) -> HandlebarParameters:
+    """The handlebar as the stack designed for ``hands`` models it: the arms' inertia added to
+    J_eq [kg*m^2] and their damping to beta_eq [N*m*s/rad].
+
+    The observer, the controller and the feedforward designed for this handlebar, and the
+    virtual motorcycle given the same inertia and damping on its front frame, leave to the
+    estimate only the rider's active torque and the arms' stiffness, slow torques, while the
+    arms' fast inertial and viscous torques are rendered by the model, without the estimate's
+    lag (the design is written out in the design guide). Without hands, ``handlebar``.
+
+    Examples
+    --------
+    >>> from motosim.params import load_parameters
+    >>> hb = load_parameters("simacom_handlebar", "handlebar")
+    >>> round(held_handlebar(hb, Hands(inertia=0.1, damping=1.0)).J_eq - hb.J_eq, 6)
+    0.1
+    """
+    if hands is None or hands.is_off:
+        return handlebar
+    return replace(
+        handlebar,
+        J_eq=handlebar.J_eq + hands.inertia,
+        beta_eq=handlebar.beta_eq + hands.damping,
+    )
+
+
+DESIGN_SHARE = 0.4
+"""Share of a rider's grip (inertia and damping) the stack is designed for: between holding
+and letting go, so that both keep their margins (the design guide compares the shares)."""
+
+
+def design_hands(hands: Hands | None) -> Hands | None:
+    """The hands a stack designed for a rider gripping with ``hands`` models:
+    :data:`DESIGN_SHARE` of their inertia and damping (their stiffness reaches the virtual
+    motorcycle through the estimate); None without hands.
+
+    Examples
+    --------
+    >>> design_hands(GRIPS["relaxed"]).inertia == DESIGN_SHARE * GRIPS["relaxed"].inertia
+    True
+    """
+    if hands is None or hands.is_off:
+        return None
+    return Hands(
+        inertia=DESIGN_SHARE * hands.inertia,
+        damping=DESIGN_SHARE * hands.damping,
+        source=f"{DESIGN_SHARE:g} of the inertia and damping of {hands.source}",
+    )

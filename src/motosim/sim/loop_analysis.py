@@ -23,6 +23,7 @@ cycle; :func:`robustness_grid` repeats it over perturbed handlebars.
 
 import math
 from dataclasses import dataclass, replace
+from enum import IntEnum
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,11 +32,14 @@ from motosim.errors import MotosimError
 from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
 from motosim.model.handlebar import matrices
 from motosim.model.linear import StateSpace, zoh
+from motosim.model.sharp import held_steering
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters
+from motosim.sim.grips import Hands, held_handlebar
 from motosim.sim.stack import (
     NO_DELAY,
     NO_PREDICTION,
+    MotorcycleState,
     StackModel,
     default_prediction,
     design_stack,
@@ -47,6 +51,7 @@ __all__ = [
     "CancellationBound",
     "GridSummary",
     "LimitCycle",
+    "LoopInput",
     "StackLoop",
     "StackLoopAnalysis",
     "analyse_design",
@@ -54,6 +59,7 @@ __all__ = [
     "cancellation_bound",
     "cancellation_loop_gain",
     "estimate_filter",
+    "held_motorcycle",
     "negative_real_crossings",
     "prediction_lead",
     "robustness_grid",
@@ -69,6 +75,49 @@ Skogestad & Postlethwaite, Multivariable Feedback Control, section 2.4)."""
 FEEL_BAND = (0.1, 3.0)
 """Band where the rendered steering feel is compared with the motorcycle's [Hz]."""
 _GRID_POINTS = 600  # frequencies of the margin and limit-cycle search
+_LATERAL = 8  # Sharp 1971's lateral states, the first of MotorcycleState
+
+
+class LoopInput(IntEnum):
+    """The inputs of :class:`StackLoop` (the columns of its B), by name."""
+
+    rider_torque = 0
+    """tau_r [N*m], the rider's active torque on the handlebar."""
+    current = 1
+    """u [A] added to the command at the motor: the loop broken at the motor current."""
+    estimate = 2
+    """w [N*m] added to the estimate the rider-torque cancellation reads."""
+    angle = 3
+    """n [rad] added to the measured angle: an encoder's rounding error."""
+
+
+def _held_plant(handlebar: HandlebarParameters, hands: Hands | None) -> tuple[Array, Array]:
+    """Eq. (10) with the arms' passive impedance on the handlebar: (A, [B, D]).
+
+    For the state (theta_h', theta_h) and the inputs (i_m, tau_r),
+    (J_eq + J_a) theta_h'' = -(beta_eq + c_a) theta_h' - k_a theta_h + N k_t i_m + tau_r:
+    the held handlebar (:func:`~motosim.sim.grips.held_handlebar`) and the arms' stiffness
+    about the held angle (a constant, left out of the linear loop).
+    """
+    held = held_handlebar(handlebar, hands)
+    hb = matrices(held)
+    A = hb.A.copy()
+    if hands is not None:
+        A[0, 1] = -hands.stiffness / held.J_eq
+    return A, np.column_stack([hb.B, hb.D])
+
+
+def held_motorcycle(A_v: Array, B_v: Array, hands: Hands | None) -> tuple[Array, Array]:
+    """Sharp 1971's lateral model with the rider's hands on its front frame: (A, B) from the
+    rider's active torque (:func:`motosim.model.sharp.held_steering`).
+
+    This is the motorcycle the rendered feel is compared with: what a rider holding a real
+    front frame feels.
+    """
+    if hands is None or hands.is_off:
+        return A_v, B_v
+    A, B, _ = held_steering(A_v, B_v, hands.inertia, hands.damping, hands.stiffness)
+    return A, B
 
 
 @dataclass(frozen=True, slots=True)
@@ -140,7 +189,8 @@ class StackLoop:
         output row c, A_open = A - b c and L = -c (zI - A_open)^-1 b. (The closed-loop
         response from the same input, c (zI - A)^-1 b = -L / (1 + L), is not the loop gain.)
         """
-        row = {1: self.current, 2: self.estimate, 3: self.measured}[column]
+        row = {LoopInput.current: self.current, LoopInput.estimate: self.estimate,
+               LoopInput.angle: self.measured}[LoopInput(column)]  # fmt: skip
         n = self.A.shape[0]
         b = self.B[:, column]
         A_open = self.A - np.outer(b, row)
@@ -148,8 +198,22 @@ class StackLoop:
         return np.array([-(row @ np.linalg.solve(zk * np.eye(n) - A_open, b)) for zk in z])
 
 
+def _inputs(B: Array, row: int, torque: float, current: float, cancel: float) -> None:
+    """Row ``row`` of the loop's B: the gain of the rider's torque, of a current u added at
+    the motor, and of the torque w added to the estimate (through the current the
+    cancellation commands, ``cancel`` A per N*m)."""
+    B[row, LoopInput.rider_torque] = torque
+    B[row, LoopInput.current] = current
+    B[row, LoopInput.estimate] = current * cancel
+
+
 def stack_loop(
-    model: StackModel, handlebar: HandlebarParameters, speed: float, *, delay: float | None = None
+    model: StackModel,
+    handlebar: HandlebarParameters,
+    speed: float,
+    *,
+    delay: float | None = None,
+    hands: Hands | None = None,
 ) -> StackLoop:
     """Write the stack of ``model`` around the true ``handlebar`` as one linear sampled loop.
 
@@ -164,6 +228,11 @@ def stack_loop(
     delay : float, optional
         The measurement's true age d [s], 0 to the measurement step; by default the one the
         stack accounts for (``model.delay.age``).
+    hands : Hands, optional
+        The rider's hands on the true handlebar (their inertia, damping and stiffness); by
+        default none, a pure torque source. The loop's :attr:`StackLoop.motorcycle` is then
+        the motorcycle held the same way (:func:`held_motorcycle`), what the rendered feel
+        should match.
 
     Returns
     -------
@@ -204,8 +273,8 @@ def stack_loop(
     injection = p[2] * p[0] / p[1]
     alpha, w = p[6], p[7]
     ff = model.feedforward
-    hb = matrices(handlebar)
-    Ap, Bp = zoh(hb.A, np.column_stack([hb.B, hb.D]), h)
+    A_h, B_h = _held_plant(handlebar, hands)
+    Ap, Bp = zoh(A_h, B_h, h)
     Av = model.A0 + speed * model.A1
     Am, Bm = zoh(Av, model.Bv[:, None], h)
     nc = model.Ad.shape[0]
@@ -213,7 +282,7 @@ def stack_loop(
     predicted = ff.cancellation > 0.0 and c.lead > 0.0
     delayed = dl.age > 0.0  # the stack accounts for a delay
     sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "estimate": 1,
-             "prediction": 4 if predicted else 0, "controller": nc, "motorcycle": 8,
+             "prediction": 4 if predicted else 0, "controller": nc, "motorcycle": _LATERAL,
              "before": 2 if bus > 0.0 else 0, "carried": 1 if delayed else 0}  # fmt: skip
     start, n = {}, 0
     for name, size in sizes.items():
@@ -225,7 +294,8 @@ def stack_loop(
         return np.asarray(eye[start[name] + k], dtype=float)
 
     theta, rate = state("plant", 1), state("plant", 0)
-    delta, delta_rate = state("motorcycle", 5), state("motorcycle", 3)
+    delta = state("motorcycle", MotorcycleState.delta)
+    delta_rate = state("motorcycle", MotorcycleState.delta_dot)
     measured = (state("before", 1) if bus > 0.0 else theta) + eye[n]
     held = state("estimate")  # the command uses the previous sample's estimate
     z1 = (measured - state("theta_prev")) / h
@@ -241,7 +311,11 @@ def stack_loop(
     cancelled = held + c.lead * state("prediction") if predicted else held
     torque = -ff.cancellation * cancelled
     if ff.reference > 0.0:  # the friction term's tanh is left out with the friction itself
-        steer_acc = model.Bv[3] * held + Av[3] @ eye[start["motorcycle"] : start["motorcycle"] + 8]
+        m0 = start["motorcycle"]
+        steer_acc = (
+            model.Bv[MotorcycleState.delta_dot] * held
+            + Av[MotorcycleState.delta_dot] @ eye[m0 : m0 + _LATERAL]
+        )
         torque = torque + ff.J_eq * steer_acc + ff.beta_eq * delta_rate
     if ff.cancellation > 0.0 or ff.reference > 0.0:
         command = command + torque / ff.torque_per_amp
@@ -256,19 +330,19 @@ def stack_loop(
     B = np.zeros((n, 4))
     for r in range(2):
         A[start["plant"] + r] = Ap[r, 0] * rate + Ap[r, 1] * theta + Bp[r, 0] * command
-        B[start["plant"] + r, :3] = (Bp[r, 1], Bp[r, 0], Bp[r, 0] * cancel)
+        _inputs(B, start["plant"] + r, Bp[r, 1], Bp[r, 0], cancel)
     told, share = command, 1.0  # the current the observer is told, and the new command's share
     if bus > 0.0:
         if h - bus > 1e-12 * h:
-            Ab, Bb = zoh(hb.A, np.column_stack([hb.B, hb.D]), h - bus)
+            Ab, Bb = zoh(A_h, B_h, h - bus)
         else:
             Ab, Bb = np.eye(2), np.zeros((2, 2))
         for r in range(2):
             A[start["before"] + r] = Ab[r, 0] * rate + Ab[r, 1] * theta + Bb[r, 0] * command
-            B[start["before"] + r, :3] = (Bb[r, 1], Bb[r, 0], Bb[r, 0] * cancel)
+            _inputs(B, start["before"] + r, Bb[r, 1], Bb[r, 0], cancel)
     if delayed:
         A[start["carried"]] = command
-        B[start["carried"], 1:3] = (1.0, cancel)
+        _inputs(B, start["carried"], 0.0, 1.0, cancel)
         share = 1.0 - dl.carried
         told = share * command + dl.carried * carried
     A[start["theta_prev"]] = measured
@@ -279,8 +353,7 @@ def stack_loop(
             + Gamma[r, 2] * measured + Gamma[r, 3] * E
         )  # fmt: skip
         # the estimator is told the measured current
-        B[start["observer"] + r, 1] = Gamma[r, 0] * share
-        B[start["observer"] + r, 2] = Gamma[r, 0] * cancel * share
+        _inputs(B, start["observer"] + r, 0.0, Gamma[r, 0] * share, cancel)
     A[start["estimate"]] = estimate
     if predicted:  # the estimate's rate through the notch, the low-pass (as step does)
         x = (estimate - held) / h
@@ -296,11 +369,12 @@ def stack_loop(
             row = row + model.Ad[r, j] * state("controller", j)
         A[start["controller"] + r] = row
     m0 = start["motorcycle"]
-    A[m0 : m0 + 8] = Am @ eye[m0 : m0 + 8] + np.outer(Bm[:, 0], estimate)
-    B[:, 3] = A[:, n]
+    A[m0 : m0 + _LATERAL] = Am @ eye[m0 : m0 + _LATERAL] + np.outer(Bm[:, 0], estimate)
+    B[:, LoopInput.angle] = A[:, n]
+    own, own_input = held_motorcycle(Av, model.Bv.copy(), hands)
     return StackLoop(
-        A[:, :n].copy(), B, command[:n], rate[:n], theta[:n], cancelled[:n], h, Av,
-        model.Bv.copy(), measured[:n],
+        A[:, :n].copy(), B, command[:n], rate[:n], theta[:n], cancelled[:n], h, own,
+        own_input, measured[:n],
     )  # fmt: skip
 
 
@@ -331,7 +405,7 @@ def estimate_filter(
         F at ``frequencies`` [-].
     """
     loop = stack_loop(model, handlebar, speed)
-    return loop.response(frequencies, loop.estimate, 0)
+    return loop.response(frequencies, loop.estimate, LoopInput.rider_torque)
 
 
 PREDICTION_FREQUENCY = 1.0
@@ -384,7 +458,7 @@ def cancellation_loop_gain(loop: StackLoop, frequencies: Array) -> CArray:
     ndarray of complex
         L at ``frequencies`` (zero without cancellation) [-].
     """
-    return loop.loop_gain(frequencies, 2)
+    return loop.loop_gain(frequencies, LoopInput.estimate)
 
 
 @dataclass(frozen=True, slots=True)
@@ -576,7 +650,7 @@ class StackLoopAnalysis:
 
 def _motorcycle_response(loop: StackLoop, frequencies: Array, state: int) -> CArray:
     """The motorcycle's own response from steer torque to one of its states (continuous)."""
-    eye = np.eye(8)
+    eye = np.eye(_LATERAL)
     return np.array(
         [
             np.linalg.solve(2j * math.pi * fk * eye - loop.motorcycle, loop.motorcycle_input)[state]
@@ -612,7 +686,12 @@ def _margins(loop_gain: CArray, frequencies: Array) -> tuple[float, float, float
 
 
 def analyse_stack(
-    model: StackModel, handlebar: HandlebarParameters, speed: float, *, delay: float | None = None
+    model: StackModel,
+    handlebar: HandlebarParameters,
+    speed: float,
+    *,
+    delay: float | None = None,
+    hands: Hands | None = None,
 ) -> StackLoopAnalysis:
     """Margins, stability, rendered feel and friction limit cycles of the sampled stack.
 
@@ -627,44 +706,33 @@ def analyse_stack(
     delay : float, optional
         The measurement's true age [s] (:func:`stack_loop`); by default the one the stack
         accounts for.
+    hands : Hands, optional
+        The rider's hands on the handlebar (:func:`stack_loop`): the margins are those of
+        the loop with them, the stability and the feel are judged against the motorcycle
+        held the same way.
 
     Returns
     -------
     StackLoopAnalysis
     """
-    loop = stack_loop(model, handlebar, speed, delay=delay)
+    loop = stack_loop(model, handlebar, speed, delay=delay, hands=hands)
     nyquist = 0.5 / loop.dt
     f = np.append(np.geomspace(0.05, 0.999 * nyquist, _GRID_POINTS - 1), nyquist)
     eig = np.linalg.eigvals(loop.A)
-    own = np.linalg.eigvals(zoh(loop.motorcycle, np.zeros((8, 1)), loop.dt)[0])
+    own = np.linalg.eigvals(zoh(loop.motorcycle, np.zeros((_LATERAL, 1)), loop.dt)[0])
     stable = _unstable_count(eig) <= _unstable_count(own)
     # broken at the motor current: the motor carries u, the estimator is told u
-    gain_margin, phase_margin, modulus = _margins(loop.loop_gain(f, 1), f)
+    gain_margin, phase_margin, modulus = _margins(loop.loop_gain(f, LoopInput.current), f)
     inner_gain, inner_phase, _ = _margins(cancellation_loop_gain(loop, f), f)
 
     band = np.geomspace(FEEL_BAND[0], FEEL_BAND[1], 60)
-    rendered = loop.response(band, loop.angle, 0)
-    steer = np.array(
-        [
-            np.linalg.solve(2j * math.pi * fk * np.eye(8) - loop.motorcycle, loop.motorcycle_input)[
-                5
-            ]
-            for fk in band
-        ]
-    )
-    ratio = rendered / steer
+    rendered = loop.response(band, loop.angle, LoopInput.rider_torque)
+    ratio = rendered / _motorcycle_response(loop, band, MotorcycleState.delta)
     feel_db = float(np.max(np.abs(20.0 * np.log10(np.abs(ratio)))))
     feel_deg = float(np.max(np.abs(np.degrees(np.angle(ratio)))))
 
-    admittance = loop.response(f, loop.rate, 0)
-    own_admittance = np.array(
-        [
-            np.linalg.solve(2j * math.pi * fk * np.eye(8) - loop.motorcycle, loop.motorcycle_input)[
-                3
-            ]
-            for fk in f
-        ]
-    )
+    admittance = loop.response(f, loop.rate, LoopInput.rider_torque)
+    own_admittance = _motorcycle_response(loop, f, MotorcycleState.delta_dot)
     cycles = []
     for k, fk, x in negative_real_crossings(admittance, f):
         if own_admittance[k].real > 0.0:
@@ -698,12 +766,14 @@ def robustness_grid(
     damping: tuple[float, ...] = (0.5, 1.0, 1.5),
     torque_constant: tuple[float, ...] = (0.7, 1.0, 1.3),
     delay: float | None = None,
+    hands: Hands | None = None,
 ) -> list[tuple[tuple[float, float, float], StackLoopAnalysis]]:
     """:func:`analyse_stack` with the true handlebar's J_eq, beta_eq and N k_t scaled.
 
     The stack keeps its nominal design; each true handlebar has J_eq, beta_eq and k_t
     multiplied by one factor of each tuple; ``delay`` is the measurement's true age [s]
-    (by default the one the stack accounts for).
+    (by default the one the stack accounts for), ``hands`` the rider's hands on every
+    handlebar (by default none).
 
     Returns
     -------
@@ -721,7 +791,8 @@ def robustness_grid(
                     J_m=0.0,
                     beta_vm=0.0,
                 )
-                out.append(((fj, fb, fk), analyse_stack(model, true, speed, delay=delay)))
+                analysis = analyse_stack(model, true, speed, delay=delay, hands=hands)
+                out.append(((fj, fb, fk), analysis))
     return out
 
 
@@ -758,6 +829,8 @@ def analyse_design(
     prediction: bool | None = None,
     delay: float = 0.0,
     account: bool = True,
+    hands: Hands | None = None,
+    true_hands: Hands | None = None,
 ) -> list[tuple[StackLoopAnalysis, GridSummary]]:
     """A designed observer and controller as the rider would hold them, at each speed.
 
@@ -772,14 +845,23 @@ def analyse_design(
     designed for a fresh sample, as :func:`motosim.sim.build_stack` gives it to ``motosim
     run`` before the stack accounts for the age (read on the stack accounting for 5.5 ms at
     100 Hz it would be 33.7 ms instead of 28.2).
+
+    ``hands`` are the rider's hands the stack is designed for (by default none): give then
+    ``estimator`` and ``controller`` designed for :func:`~motosim.sim.grips.held_handlebar`
+    of ``handlebar`` and these hands, and the stack models them
+    (:func:`~motosim.sim.stack.design_stack`). ``true_hands`` are those on the handlebar
+    in every loop analysed (:func:`analyse_stack`), by default ``hands`` (``GRIPS["off"]``:
+    the rider has let go).
     """
+    holding = hands if true_hands is None else true_hands
+    designed_for = held_handlebar(handlebar, hands)
 
     def build(speed: float, lead: float = 0.0) -> StackModel:
         return design_stack(
             sharp, estimator, controller, control_rate=rate, measurement_rate=rate,
-            lipschitz=300.0, max_current=30.0, speed=speed, handlebar=handlebar,
+            lipschitz=300.0, max_current=30.0, speed=speed, handlebar=designed_for,
             rider_feedforward=True, reference_feedforward=True, prediction_lead=lead,
-            measurement_delay=delay if account else 0.0,
+            measurement_delay=delay if account else 0.0, hands=hands,
         )  # fmt: skip
 
     out = []
@@ -788,8 +870,8 @@ def analyse_design(
         model = build(speed)
         if predict:  # the lead of the stack designed for a fresh sample, as build_stack's
             fresh = model._replace(delay=NO_DELAY)
-            model = build(speed, prediction_lead(fresh, handlebar))
-        grid = [a for _, a in robustness_grid(model, handlebar, speed, delay=delay)]
+            model = build(speed, prediction_lead(fresh, designed_for))
+        grid = [a for _, a in robustness_grid(model, handlebar, speed, delay=delay, hands=holding)]
         summary = GridSummary(
             points=len(grid),
             unstable=sum(not a.stable for a in grid),
@@ -801,5 +883,6 @@ def analyse_design(
             phase_margin_deg=min(a.phase_margin_deg for a in grid),
             modulus_margin=min(a.modulus_margin for a in grid),
         )
-        out.append((analyse_stack(model, handlebar, speed, delay=delay), summary))
+        nominal = analyse_stack(model, handlebar, speed, delay=delay, hands=holding)
+        out.append((nominal, summary))
     return out

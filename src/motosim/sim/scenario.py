@@ -37,7 +37,9 @@ so that an error is one line naming the key, the value and what was expected. Th
                    [] for the paper's (the terms of :func:`motosim.sim.stack.step`),
                    prediction = true | false (cancel the rider torque predicted over the
                    estimate's lag; default: on with "rider" and the Walcott-Zak observer
-                   from a 1 kHz measurement rate and at 100 Hz)
+                   from a 1 kHz measurement rate and at 100 Hz), grip = "relaxed" |
+                   "firm" | "off" (the rider's hands the stack is designed for; default:
+                   the rider's hands, none with a design file or the multibody motorcycle)
     [sensor]       torque = {noise [N*m], offset [N*m], low_pass [Hz]} (a rider-torque
                    sensor, read by the estimator "torque_sensor"; without the table, ideal)
 
@@ -86,7 +88,7 @@ from motosim.choices import (
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
 from motosim.sim import paths
-from motosim.sim.grips import GRIPS, Hands
+from motosim.sim.grips import GRIPS, Hands, design_hands
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -868,7 +870,8 @@ class Controller:
     rider-torque cancellation reads tau_r_hat + T_d times its filtered rate, T_d the estimate
     filter's delay (:func:`motosim.sim.stack.design_stack`); None: on where
     :func:`motosim.sim.stack.default_prediction` says, with the cancellation and the
-    Walcott-Zak observer.
+    Walcott-Zak observer. ``grip``: the rider's hands the stack is designed for
+    (:attr:`Scenario.stack_hands`).
     """
 
     kind: Literal["ours", "paper", "none"] = "ours"
@@ -880,8 +883,14 @@ class Controller:
     max_current: float = 30.0
     feedforward: tuple[str, ...] | None = None
     prediction: bool | None = None
+    grip: str | None = None
 
     def __post_init__(self) -> None:
+        if self.grip is not None and self.grip not in GRIPS:
+            raise MotosimError(
+                f"grip = {short_repr(self.grip)}; expected one of {', '.join(GRIPS)} (the "
+                "rider's hands the stack is designed for)"
+            )
         if self.design is not None and self.kind != "ours":
             raise MotosimError(
                 f"design = {short_repr(self.design)} with kind = {self.kind!r}: a design file "
@@ -988,12 +997,42 @@ class Scenario:
                 f"[sensor] torque is read by [estimator] name = {SENSOR_ESTIMATOR!r}; got "
                 f"{self.estimator.name!r}"
             )
+        grip = self.controller.grip
+        if grip not in (None, "off") and self.controller.design is not None:
+            raise MotosimError(
+                f"[controller] grip = {grip!r} with a design file: its controller was "
+                'designed for the handlebar without hands; expected no grip or "off"'
+            )
+        if grip not in (None, "off") and self.motorcycle.model == "multibody":
+            raise MotosimError(
+                f"[controller] grip = {grip!r}: the stack carries the hands' inertia on "
+                'Sharp 1971\'s front frame only; expected no grip or "off" on the multibody '
+                "motorcycle"
+            )
         if self.controller.prediction and self.estimator.name != "walcott_zak":
             raise MotosimError(
                 f"[controller] prediction = true with [estimator] name = "
                 f'{self.estimator.name!r}; expected "walcott_zak" (the lead is its estimate '
                 "filter's delay)"
             )
+
+    @property
+    def stack_hands(self) -> Hands | None:
+        """The hands the stack is designed for (None: a pure torque source).
+
+        :func:`~motosim.sim.grips.design_hands` of ``[controller] grip``, by default of the
+        rider's own ``hands``, except with a design file (designed for the handlebar alone)
+        and on the multibody motorcycle.
+        """
+        grip = self.controller.grip
+        if grip is None:
+            if self.controller.design is not None or self.motorcycle.model == "multibody":
+                return None
+            hands = self.rider.hands
+            held = GRIPS[hands] if isinstance(hands, str) else hands
+        else:
+            held = GRIPS[grip]
+        return design_hands(held)
 
 
 # --- plausibility: legal values that no real ride has ---------------------------------------

@@ -37,6 +37,7 @@ from motosim.model.linear import StateSpace, zoh
 from motosim.model.sharp import bike_rk4
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
+from motosim.sim.grips import Hands
 
 __all__ = [
     "DELAY_FRICTION_WIDTH",
@@ -413,6 +414,7 @@ def design_stack(
     side_force_height: float = 1.0,
     measurement_delay: float = 0.0,
     multibody: tyred.TyredModel | None = None,
+    hands: Hands | None = None,
 ) -> StackModel:
     """Build the stack's model from its designed parts (a pure function).
 
@@ -459,6 +461,13 @@ def design_stack(
     multibody : TyredModel, optional
         The virtual motorcycle as the multibody model on tyres (:mod:`motosim.model.tyred`)
         instead of Sharp's ``sharp``, which then only sets the side force's input.
+    hands : Hands, optional
+        The rider's hands the stack is designed for (Sharp's motorcycle only): give with
+        them ``handlebar`` and an estimator and controller designed for
+        :func:`~motosim.sim.grips.held_handlebar`; the virtual motorcycle carries the arms'
+        inertia and damping on its front frame
+        (:func:`~motosim.model.sharp.held_steering`), their stiffness reaching it through
+        the estimate.
 
     Returns
     -------
@@ -518,9 +527,22 @@ def design_stack(
     h = 1.0 / control_rate
     substeps = max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9))
     motorcycle: SharpMotorcycle | MultibodyMotorcycle
+    Bw = sharp_model.side_force_input(sharp, height=side_force_height)
+    if hands is not None and multibody is not None:
+        raise MotosimError(
+            "hands: the stack is designed for a rider's hands on Sharp 1971's motorcycle only; "
+            "expected none on the multibody model"
+        )
     if multibody is None:
         d = derived_geometry(sharp)
         A0, A1, Bv = sharp_model.lpv_matrices(sharp)
+        if hands is not None and not hands.is_off:  # the arms' stiffness is in the estimate
+            A1 = sharp_model.held_steering(A1, Bv, hands.inertia, 0.0, 0.0)[0]
+            A0, Bv, held_Bw = sharp_model.held_steering(
+                A0, Bv, hands.inertia, hands.damping, 0.0, Bw
+            )
+            assert held_Bw is not None
+            Bw = held_Bw
         motorcycle = SharpMotorcycle(
             float(d["m"]), float(d["m_eq"]), float(sharp_model.MIN_SPEED), substeps,
             float(d["m"] * sharp.g + sharp.Z_f), float(-sharp.Z_f),
@@ -548,7 +570,7 @@ def design_stack(
         A0=A0,
         A1=A1,
         Bv=Bv,
-        Bw=sharp_model.side_force_input(sharp, height=side_force_height),
+        Bw=Bw,
         motorcycle=motorcycle,
         speed=float(speed),
         true_torque=bool(true_torque),
