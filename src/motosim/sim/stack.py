@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.estimation.differentiator import LAMBDA_0, LAMBDA_1, cell_step, std_step
-from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
+from motosim.estimation.kernel import TORQUE_SENSOR, WALCOTT_ZAK, EstimatorKernel
 from motosim.estimation.registry import start_kernel, step_kernel
 from motosim.model import sharp as sharp_model
 from motosim.model import tyred
@@ -242,8 +242,8 @@ class Quiet(NamedTuple):
     still needs no friction torque, and one pushed at the friction's edge creeps."""
     stick_samples: int
     """Measurements in a row on the same count after which the handlebar is taken to stick:
-    the controller's state and the estimator are then held until the count changes (0:
-    never)."""
+    the controller's state and the estimator (not a torque sensor, which measures) are then
+    held until the count changes (0: never)."""
 
 
 class Delay(NamedTuple):
@@ -982,7 +982,7 @@ def step_scaled(
         data.differentiator[0] = z0
         data.differentiator[1] = z1
         held[Held.theta_h_dot_hat] = z1
-        if stuck:  # the rider's torque within the friction is unobservable: hold the estimate
+        if stuck and model.estimator.kind != TORQUE_SENSOR:  # unobservable: hold the estimate
             estimate = held[Held.tau_r_hat]
         else:
             estimate = step_kernel(
