@@ -508,7 +508,8 @@ def design_stack(
         instead of Sharp's ``sharp``, which then only sets the side force's input.
     quiet : Quiet
         How the stack keeps the encoder's counts and the handlebar's sticking out of its
-        command (:func:`quiet_settings`); none by default.
+        command; none by default (measured in the simulate guide, "The buzz, loop by
+        loop").
 
     Returns
     -------
@@ -918,7 +919,10 @@ def step_scaled(
     virtual motorcycle advances one period under the estimated rider torque. With a
     measurement delay (``model.delay``, :func:`account_for_delay`) the controller reads the
     angle predicted over the measurement's age, and the estimator is told the previous
-    command for the share of its step that it was carried.
+    command for the share of its step that it was carried. With ``model.quiet`` the
+    differentiator knows the encoder's count and the controller and the estimator read its
+    in-cell angle, and while the handlebar sticks the controller's state and the estimate
+    are held (:class:`Quiet`).
 
     Parameters
     ----------
