@@ -1,7 +1,7 @@
 """Regenerate the hands table of the simulate guide: the loop with a rider's hands on it.
 
     .venv/bin/python scripts/hands_table.py [SCENARIO.toml ...] [--rates HZ ...]
-        [--off-from SECONDS]
+        [--off-from SECONDS] [--quiet cell,friction,stick]
 
 Each scenario (by default the lane change at 20 m/s, the crosswind at 30 m/s and the
 obstacle avoidance at 15 m/s) is simulated at each rate (control and measurement; 1 kHz and
@@ -15,6 +15,12 @@ estimate RMS / peak rider torque (the rider's torque is the hands' whole torque,
 passive), the motor current's content above 3 Hz over the last 2 s (peak to peak, after the
 manoeuvre) and its strongest frequency, and the current's plain peak to peak over the last
 2 s.
+
+``--quiet`` runs every row with the stack's settings against the buzz
+(:class:`motosim.sim.stack.Quiet`, the values of :func:`quiet`): ``cell`` the differentiator
+that knows the encoder's count, ``friction`` the Dahl friction term, ``stick`` the
+controller and the estimate held while the handlebar sticks; ``--presliding`` sets the Dahl
+term's x_0.
 """
 
 import argparse
@@ -28,7 +34,9 @@ import numpy as np
 from motosim.estimation.registry import SENSOR_ESTIMATOR
 from motosim.io.runs import load_scenario, resolve
 from motosim.sim import RunInputs, simulate
+from motosim.sim.closed_loop import build_stack
 from motosim.sim.metrics import run_metrics
+from motosim.sim.stack import Quiet
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ("lane_change_20.toml", "crosswind_30.toml", "obstacle_avoidance_15.toml")
@@ -52,6 +60,24 @@ def _inputs(path: Path, rate: float, grip: str, off_from: float) -> RunInputs:
     return resolve(sc, path.parent)
 
 
+def quiet(parts: set[str], rate: float, bits: int, presliding: float = 1e-3) -> Quiet:
+    """The settings against the buzz that ``parts`` names, as measured in the simulate guide
+    for a ``bits``-bit encoder read at ``rate`` [Hz]: the cell's gains a = 0.8, b = 0.4
+    from 1 kHz (an alpha-beta pair near 1000 rad/s), 1 and 1 at lower rates (the same
+    bandwidth is then beyond the sample: the step's plain difference, kept to the cell);
+    the Dahl term's x_0 ``presliding`` [rad]; stuck after 20 ms on one count."""
+    q = 2.0 * math.pi / 2**bits if bits else 0.0
+    fast = rate >= 1000.0
+    return Quiet(
+        quantum=q if "cell" in parts else 0.0,
+        position_gain=0.8 if fast else 1.0,
+        rate_gain=0.4 if fast else 1.0,
+        presliding=presliding if "friction" in parts else 0.0,
+        release=0.0,
+        stick_samples=max(1, round(0.02 * rate)) if "stick" in parts else 0,
+    )
+
+
 def _percent(value: float | None) -> str:
     return "-" if value is None or not math.isfinite(value) else f"{100 * value:.1f} %"
 
@@ -62,7 +88,12 @@ def main() -> int:
     parser.add_argument("scenarios", nargs="*", help="scenario files (default: three)")
     parser.add_argument("--rates", type=float, nargs="+", default=[1000.0, 100.0])
     parser.add_argument("--off-from", type=float, default=6.0, help="hands off from [s]")
+    parser.add_argument("--quiet", default="", help="cell,friction,stick (default: none)")
+    parser.add_argument("--presliding", type=float, default=1e-3, help="Dahl x_0 [rad]")
     args = parser.parse_args()
+    parts = {p for p in args.quiet.split(",") if p}
+    if parts - {"cell", "friction", "stick"}:
+        parser.error(f"--quiet {args.quiet!r}; expected names among cell, friction, stick")
     paths = [Path(p) for p in args.scenarios] or [ROOT / "scenarios" / s for s in SCENARIOS]
     print(
         "| scenario | rate | hands | tracking RMS / peak steer | estimate RMS / peak rider "
@@ -74,7 +105,9 @@ def main() -> int:
             for grip in GRIPS:
                 inputs = _inputs(path, rate, grip, args.off_from)
                 sc = inputs.scenario
-                run = simulate(inputs, rng=np.random.default_rng(sc.seed))
+                settings = quiet(parts, rate, sc.measurement.encoder_bits, args.presliding)
+                stack = build_stack(inputs)._replace(quiet=settings) if parts else None
+                run = simulate(inputs, rng=np.random.default_rng(sc.seed), stack=stack)
                 complete = bool(run.t.size == round(sc.duration * sc.rates.control))
                 m = run_metrics(
                     run.t,

@@ -24,6 +24,7 @@ SLOW_MODULES = frozenset(
         "tests/integration/test_cli_stops.py",
         "tests/integration/test_closed_loop.py",
         "tests/integration/test_hands_loop.py",
+        "tests/integration/test_quiet_loop.py",
         "tests/integration/test_cueing_mpc_beats_washout.py",
         "tests/integration/test_cueing_road_preview.py",
         "tests/integration/test_handlebar_bandwidth.py",

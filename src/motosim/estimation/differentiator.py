@@ -38,6 +38,7 @@ __all__ = [
     "LAMBDA_0",
     "LAMBDA_1",
     "SuperTwistingDifferentiator",
+    "cell_step",
     "differentiate",
     "std_step",
 ]
@@ -94,6 +95,53 @@ def std_step(
     e = z0 - f
     sgn = 1.0 if e > 0.0 else (-1.0 if e < 0.0 else 0.0)
     return z0 + h * (z1 - l1 * math.sqrt(abs(e)) * sgn), z1 - h * l2 * sgn
+
+
+@njit(cache=True)
+def cell_step(
+    z0: float, z1: float, count: float, h: float, quantum: float, a: float, b: float
+) -> tuple[float, float]:
+    """Advance a differentiator that knows the encoder's count by one sample.
+
+    A quantised angle says only that the angle lies in the count's cell
+    [count - q/2, count + q/2]. The step predicts the angle, p = z0 + h z1, and corrects
+    by how far p left that cell, r = clip(p, cell) - p (0 inside it: a count that stays
+    consistent with the prediction adds nothing):
+
+        z0 <- p + a r,    z1 <- z1 + b r / h
+
+    a set-membership (dead-zone) alpha-beta filter. A count edge is then no rate spike:
+    when the angle crosses an edge the new cell holds the prediction, or misses it by the
+    prediction's error only, and the rate moves by b times that error over h (a plain
+    difference moves by q / h, the whole count over one step).
+
+    Parameters
+    ----------
+    z0, z1 : float
+        The angle [rad] (inside the last cell) and rate [rad/s] at the previous sample.
+    count : float
+        The measured, quantised angle, the centre of its cell [rad].
+    h : float
+        Sampling step [s], > 0.
+    quantum : float
+        q, the encoder's count [rad], > 0.
+    a, b : float
+        The angle's and the rate's share of the distance outside the cell [-], in (0, 1].
+
+    Returns
+    -------
+    z0, z1 : float
+        The angle and the rate at this sample.
+
+    Examples
+    --------
+    >>> cell_step(0.0, 0.01, 0.0, 1e-3, 1e-3, 0.5, 0.1)  # the prediction stays in its cell
+    (1e-05, 0.01)
+    """
+    p = z0 + h * z1
+    half = 0.5 * quantum
+    r = min(max(p, count - half), count + half) - p
+    return p + a * r, z1 + b * r / h
 
 
 @njit(cache=True)

@@ -27,8 +27,8 @@ from numba.extending import overload
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.estimation.differentiator import LAMBDA_0, LAMBDA_1, std_step
-from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
+from motosim.estimation.differentiator import LAMBDA_0, LAMBDA_1, cell_step, std_step
+from motosim.estimation.kernel import TORQUE_SENSOR, WALCOTT_ZAK, EstimatorKernel
 from motosim.estimation.registry import start_kernel, step_kernel
 from motosim.model import sharp as sharp_model
 from motosim.model import tyred
@@ -44,6 +44,7 @@ __all__ = [
     "NO_DELAY",
     "NO_FEEDFORWARD",
     "NO_PREDICTION",
+    "NO_QUIET",
     "PREDICTION_CORNER",
     "PREDICTION_NOTCH",
     "PREDICTION_PAPER_RATE",
@@ -56,11 +57,13 @@ __all__ = [
     "MotorcycleState",
     "MultibodyMotorcycle",
     "Prediction",
+    "Quiet",
     "SharpMotorcycle",
     "StackData",
     "StackModel",
     "account_for_delay",
     "contact_loads",
+    "dahl_friction",
     "default_prediction",
     "design_stack",
     "is_multibody",
@@ -141,6 +144,10 @@ class Held(IntEnum):
     """Its second state [N*m/s]."""
     low_pass = 7
     """The state of its low-pass [N*m/s]."""
+    friction_feedforward = 8
+    """The reference feedforward's dry-friction torque, with presliding memory [N*m]."""
+    still = 9
+    """Measurements in a row with the same encoder count [-]."""
 
 
 class MotorcycleInput(IntEnum):
@@ -207,6 +214,39 @@ class Feedforward(NamedTuple):
     """The tanh width of the friction term [rad/s]."""
 
 
+class Quiet(NamedTuple):
+    """How the stack keeps the encoder's counts and the handlebar's sticking out of its
+    command (see :func:`step_scaled` and :func:`_command`); all zero for none.
+
+    Three loops make a current buzz on a handlebar held steady: a count edge read as a rate
+    spike, the reference feedforward's friction sign flipped by the virtual motorcycle's
+    wobble, and the parts that integrate while the handlebar sticks, where the rider's
+    torque is unobservable. Each setting breaks one.
+    """
+
+    quantum: float
+    """q, the encoder's count [rad] that the differentiator knows (0: it reads the count as
+    the angle). It predicts the angle and corrects only by how far the prediction left the
+    measured count's cell [theta_meas - q/2, theta_meas + q/2], with the gains below; the
+    controller and the estimator read its in-cell angle."""
+    position_gain: float
+    """a, the share of the distance outside the cell taken into the angle [-]."""
+    rate_gain: float
+    """b, the share of that distance over one step taken into the rate [-]."""
+    presliding: float
+    """x_0, the steer displacement over which the reference feedforward's friction term
+    reverses (a Dahl friction, dF/dx = (beta_s sign(dx) - F) / x_0) [rad]; 0: the tanh of
+    the steer rate."""
+    release: float
+    """With ``presliding``, the time constant over which the friction term relaxes to 0
+    while the steer rests [s] (0: it keeps its value, the Dahl model's): a handlebar held
+    still needs no friction torque, and one pushed at the friction's edge creeps."""
+    stick_samples: int
+    """Measurements in a row on the same count after which the handlebar is taken to stick:
+    the controller's state and the estimator (not a torque sensor, which measures) are then
+    held until the count changes (0: never)."""
+
+
 class Delay(NamedTuple):
     """How the stack accounts for a measurement's age d (see :func:`step_scaled` and
     :func:`account_for_delay`); all zero for a fresh measurement."""
@@ -263,6 +303,9 @@ NO_FEEDFORWARD = Feedforward(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 """No feedforward term."""
 NO_DELAY = Delay(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 """A fresh measurement."""
+NO_QUIET = Quiet(0.0, 0.0, 0.0, 0.0, 0.0, 0)
+"""None of :class:`Quiet`'s settings: the count read as the angle, the tanh friction term,
+nothing held while the handlebar sticks."""
 
 _LATERAL = int(MotorcycleState.v_x)
 """The motorcycle's lateral states, Sharp 1971's eight, come before v_x."""
@@ -310,6 +353,8 @@ class StackModel(NamedTuple):
     delay : Delay
         How the stack accounts for the measurement's age d when it reads it (a status
         frame's latency on the bus).
+    quiet : Quiet
+        How it keeps the encoder's counts and the handlebar's sticking out of its command.
     """
 
     dt: float
@@ -332,6 +377,7 @@ class StackModel(NamedTuple):
     speed: float
     true_torque: bool
     delay: Delay
+    quiet: Quiet = NO_QUIET
 
 
 class StackData(NamedTuple):
@@ -415,6 +461,7 @@ def design_stack(
     measurement_delay: float = 0.0,
     multibody: tyred.TyredModel | None = None,
     hands: Hands | None = None,
+    quiet: Quiet = NO_QUIET,
 ) -> StackModel:
     """Build the stack's model from its designed parts (a pure function).
 
@@ -468,6 +515,10 @@ def design_stack(
         inertia and damping on its front frame
         (:func:`~motosim.model.sharp.held_steering`), their stiffness reaching it through
         the estimate.
+    quiet : Quiet
+        How the stack keeps the encoder's counts and the handlebar's sticking out of its
+        command; none by default (measured in the simulate guide, "The buzz, loop by
+        loop").
 
     Returns
     -------
@@ -575,7 +626,26 @@ def design_stack(
         speed=float(speed),
         true_torque=bool(true_torque),
         delay=_delay(measurement_delay, h_meas, handlebar, estimator),
+        quiet=_checked_quiet(quiet),
     )
+
+
+def _checked_quiet(quiet: Quiet) -> Quiet:
+    """``quiet`` with its fields as floats and int; MotosimError naming one out of range."""
+    bounds = (("quantum", quiet.quantum, 0.1), ("presliding", quiet.presliding, 0.1),
+              ("release", quiet.release, 100.0))  # fmt: skip
+    for name, value, high in bounds:
+        if not (math.isfinite(value) and 0.0 <= value <= high):
+            raise MotosimError(f"quiet {name} = {value!r}; expected 0 to {high:g}")
+    for name, value in (("position_gain", quiet.position_gain), ("rate_gain", quiet.rate_gain)):
+        if quiet.quantum > 0.0 and not (math.isfinite(value) and 0.0 < value <= 1.0):
+            raise MotosimError(f"quiet {name} = {value!r}; expected a share in (0, 1]")
+    if not (0 <= quiet.stick_samples <= 100_000):
+        raise MotosimError(f"quiet stick_samples = {quiet.stick_samples!r}; expected 0 to 100000")
+    return Quiet(
+        float(quiet.quantum), float(quiet.position_gain), float(quiet.rate_gain),
+        float(quiet.presliding), float(quiet.release), int(quiet.stick_samples),
+    )  # fmt: skip
 
 
 _AS_SHARP = {
@@ -731,7 +801,7 @@ def new_data(model: StackModel) -> StackData:
             tyred.N_STATE if isinstance(model.motorcycle, MultibodyMotorcycle) else 0
         ),
         inputs=np.zeros(len(MotorcycleInput)),
-        held=np.zeros(8),
+        held=np.zeros(len(Held)),
         periods=np.zeros(1, dtype=np.int64),
         work=np.zeros((13, 12)),
         controller_work=np.zeros(max(1, n)),
@@ -756,13 +826,41 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
     data.periods[0] = 0
 
 
+@njit(cache=True)
+def dahl_friction(
+    friction: float, dx: float, beta_s: float, presliding: float, h: float, release: float
+) -> float:
+    """A Dahl friction torque after a displacement ``dx`` [rad] over a step ``h`` [s].
+
+    dF/dx = (beta_s sign(dx) - F) / x_0, integrated exactly over ``dx``: the torque
+    approaches +-beta_s [N*m] over a few x_0 = ``presliding`` [rad] of displacement in
+    one direction, so a wobble of amplitude A << x_0 moves it by about 2 beta_s A / x_0
+    (the tanh of the rate would flip it by 2 beta_s at each reversal). With ``release``
+    T > 0 [s] it then relaxes by exp(-h / T) towards 0, the value a handlebar held still
+    needs.
+
+    Examples
+    --------
+    >>> round(dahl_friction(0.0, 1e-3, 2.0, 1e-3, 1e-3, 0.0), 6)  # one x_0: 1 - 1/e
+    1.264241
+    """
+    target = beta_s if dx > 0.0 else -beta_s
+    friction = target - (target - friction) * math.exp(-abs(dx) / presliding)
+    if release > 0.0:
+        friction *= math.exp(-h / release)
+    return friction
+
+
 @njit(cache=True, inline="always")
-def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
-    """The motor current for this sample, saturated; advances the controller's state.
+def _command(model: StackModel, data: StackData, theta_meas: float, stuck: bool) -> float:
+    """The motor current for this sample, saturated; advances the controller's state
+    unless the handlebar is ``stuck`` (its state is then held).
 
     Feedback i = K (theta_h - delta), positive feedback (eq. (24)), plus the feedforward
     terms switched on in ``model.feedforward``: the estimated rider torque cancelled, and the
-    nominal handlebar's inverse dynamics along the steer angle delta of the motorcycle.
+    nominal handlebar's inverse dynamics along the steer angle delta of the motorcycle, its
+    dry friction the tanh of the steer rate or, with ``model.quiet.presliding``, a Dahl
+    friction of the steer displacement.
     """
     if not model.feedback:
         return 0.0
@@ -778,8 +876,9 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
         for j in range(n):
             acc += model.Ad[r, j] * x[j]
         tmp[r] = acc
-    for r in range(n):
-        x[r] = tmp[r]
+    if not stuck:
+        for r in range(n):
+            x[r] = tmp[r]
     ff = model.feedforward
     torque = 0.0
     if ff.cancellation > 0.0:  # cancel what the rider is estimated to apply
@@ -790,7 +889,15 @@ def _command(model: StackModel, data: StackData, theta_meas: float) -> float:
     if ff.reference > 0.0:  # J delta'' + beta delta' + beta_s sign(delta'), delta'' from the model
         dd = _steer_acceleration(model.motorcycle, model, data, data.held[Held.tau_r_hat])
         rate = z[MotorcycleState.delta_dot]
-        torque += ff.J_eq * dd + ff.beta_eq * rate + ff.beta_s * math.tanh(rate / ff.friction_width)
+        qt = model.quiet
+        if qt.presliding > 0.0:  # a Dahl friction of the steer displacement
+            h = model.differentiator.h
+            friction = dahl_friction(data.held[Held.friction_feedforward], rate * h, ff.beta_s,
+                                     qt.presliding, h, qt.release)  # fmt: skip
+            data.held[Held.friction_feedforward] = friction
+        else:
+            friction = ff.beta_s * math.tanh(rate / ff.friction_width)
+        torque += ff.J_eq * dd + ff.beta_eq * rate + friction
     if ff.cancellation > 0.0 or ff.reference > 0.0:
         u += torque / ff.torque_per_amp
     return float(min(max(u, -model.max_current), model.max_current))
@@ -834,7 +941,10 @@ def step_scaled(
     virtual motorcycle advances one period under the estimated rider torque. With a
     measurement delay (``model.delay``, :func:`account_for_delay`) the controller reads the
     angle predicted over the measurement's age, and the estimator is told the previous
-    command for the share of its step that it was carried.
+    command for the share of its step that it was carried. With ``model.quiet`` the
+    differentiator knows the encoder's count and the controller and the estimator read its
+    in-cell angle, and while the handlebar sticks the controller's state and the estimate
+    are held (:class:`Quiet`).
 
     Parameters
     ----------
@@ -868,10 +978,19 @@ def step_scaled(
     """
     held = data.held
     if data.periods[0] % model.measure_every == 0:
+        qt = model.quiet
+        held[Held.still] = held[Held.still] + 1.0 if theta_meas == held[Held.theta_h_meas] else 0.0
+        stuck = qt.stick_samples > 0 and held[Held.still] >= qt.stick_samples
         held[Held.theta_h_meas] = theta_meas
         g = model.differentiator
         z1_before = data.differentiator[1]
-        z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, g.h, g.k1, g.k0, True)
+        if qt.quantum > 0.0:  # the count's cell, not its centre: the angle read is z0
+            z0, z1 = cell_step(data.differentiator[0], z1_before, theta_meas, g.h, qt.quantum,
+                               qt.position_gain, qt.rate_gain)  # fmt: skip
+            angle = z0
+        else:
+            z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, g.h, g.k1, g.k0, True)
+            angle = theta_meas
         dl = model.delay
         if dl.age > 0.0:  # a measurement d old: the angle now, predicted over d
             previous = held[Held.i_m]  # the command carried since the last measurement
@@ -880,19 +999,22 @@ def step_scaled(
             slide = math.tanh(rate / dl.friction_width)
             stick = min(max(torque, -dl.beta_s), dl.beta_s)
             torque -= dl.beta_s * slide + (1.0 - abs(slide)) * stick
-            predicted = theta_meas + dl.per_rate * rate + dl.per_torque * torque
-            held[Held.i_m] = _command(model, data, predicted)
+            predicted = angle + dl.per_rate * rate + dl.per_torque * torque
+            held[Held.i_m] = _command(model, data, predicted, stuck)
             told = (1.0 - dl.carried) * held[Held.i_m] + dl.carried * previous
         else:
-            held[Held.i_m] = _command(model, data, theta_meas)
+            held[Held.i_m] = _command(model, data, angle, stuck)
             told = held[Held.i_m]
         data.differentiator[0] = z0
         data.differentiator[1] = z1
         held[Held.theta_h_dot_hat] = z1
-        estimate = step_kernel(
-            model.estimator, data.estimator, theta_meas, z1, current_scale * told + current_error,
-            rider_torque,
-        )  # fmt: skip
+        if stuck and model.estimator.kind != TORQUE_SENSOR:  # unobservable: hold the estimate
+            estimate = held[Held.tau_r_hat]
+        else:
+            estimate = step_kernel(
+                model.estimator, data.estimator, angle, z1, current_scale * told + current_error,
+                rider_torque,
+            )  # fmt: skip
         c = model.prediction
         if c.lead > 0.0:
             # the estimate's rate through the notch and the low-pass (transposed form II)
