@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from motosim.cli.main import main
-from motosim.io.results import folder_lock, lock_file
+from motosim.io.files import FolderLock, lock_file
 
 
 def _motosim(*argv: str) -> subprocess.Popen[str]:
@@ -180,7 +180,7 @@ def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
     campaign = _small_campaign(tmp_path)
     out = tmp_path / "out"
     argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
-    with folder_lock(out):  # another instance, running or resuming the campaign
+    with FolderLock(out):  # another instance, running or resuming the campaign
         code = main(argv)
     err = capsys.readouterr().err
     # was: both ran every run into the same parts and manifest (same temporary names)

@@ -579,7 +579,7 @@ def write_log(path: str | Path, series: TimeSeries) -> Path:
     MotosimError
         If the file cannot be written.
     """
-    from motosim.io.results import write_whole
+    from motosim.io.files import write_whole
 
     target = Path(path)
     try:

@@ -20,10 +20,11 @@ from typing import Any
 import numpy as np
 
 from motosim.choices import MOTORCYCLE_PROFILES
-from motosim.errors import MotosimError, RunFailedError, warn
+from motosim.errors import MotosimError, RunFailedError, StopFlag, warn
 from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
 from motosim.io.cache import DesignCache, cached_controller, cached_rider
 from motosim.io.design_file import read_design
+from motosim.io.files import FolderLock
 from motosim.io.logs import read_log
 from motosim.io.opendrive import read_opendrive
 from motosim.io.results import ResultWriter
@@ -304,6 +305,8 @@ def run_to_folder(
     overwrite: bool = False,
     on_rows: Callable[[int], None] | None = None,
     stack: StackModel | None = None,
+    lock: FolderLock | None = None,
+    stop: StopFlag | None = None,
 ) -> dict[str, Any]:
     """Simulate ``inputs`` into ``folder`` (``result.h5``, ``result.csv``), block by block.
 
@@ -320,6 +323,9 @@ def run_to_folder(
     stack : StackModel, optional
         The run's designed stack (:func:`motosim.io.cache.cached_stack`); by default
         :func:`motosim.sim.build_stack` of ``inputs``.
+    lock, stop : FolderLock, StopFlag, optional
+        The caller's held lock of ``folder`` and the stop its signal handlers request
+        (:class:`~motosim.io.results.ResultWriter`).
 
     Returns
     -------
@@ -340,7 +346,15 @@ def run_to_folder(
     metadata = run_metadata(inputs)
     rows = round(sc.duration * sc.rates.control)
     limits = run_limits(inputs)
-    writer = ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows)
+    writer = ResultWriter(
+        Path(folder),
+        SIGNALS,
+        metadata,
+        overwrite=overwrite,
+        expected_rows=rows,
+        lock=lock,
+        stop=stop,
+    )
     try:
         with writer:
 

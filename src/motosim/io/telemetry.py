@@ -488,7 +488,7 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
                     count += 1
             writer.finish()  # type: ignore[no-untyped-call]
 
-    from motosim.io.results import write_whole
+    from motosim.io.files import write_whole
 
     write_whole(path, write)
     return count
