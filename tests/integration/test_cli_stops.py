@@ -53,7 +53,7 @@ def test_sigterm_while_excite_replaces_a_log_keeps_the_previous_one(tmp_path: Pa
         "excite", "--duration", "300", "--rate", "1000", "--out", str(out), "--overwrite"
     )
     deadline = time.monotonic() + 60.0
-    while not any(p.name.endswith(".partial") for p in tmp_path.iterdir()):  # writing
+    while not any(p.name.endswith(".tmp") for p in tmp_path.iterdir()):  # writing
         assert child.poll() is None and time.monotonic() < deadline, child.communicate()
         time.sleep(0.01)
     child.send_signal(signal.SIGTERM)

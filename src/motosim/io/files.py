@@ -20,7 +20,6 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
-from types import TracebackType
 from typing import Self
 
 from motosim.errors import MotosimError
@@ -276,12 +275,7 @@ class FolderLock:
             os.close(fd)
         raise MotosimError(f"{self.folder}: could not lock {self.path}; try again")
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         """Delete the lock file, then release the lock (in that order, so no one races in)."""
         if self._fd is None:
             return

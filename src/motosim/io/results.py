@@ -29,10 +29,11 @@ How a result is never lost or corrupted (the choices are in ``docs/organisation.
   the result, complete or not, stays in ``NAME.partial``, and the run says so.
 - **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
   them; an exception leaving the ``with`` block (Ctrl-C, or SIGTERM turned into it by the
-  command, :class:`StopFlag`) closes both files, readable, marked partial. The HDF5 file is
-  written without SWMR, so after SIGKILL or a power cut ``NAME.partial/result.h5`` opens with
-  plain h5py, pandas or HDFView and holds every row flushed before the kill, as
-  ``result.partial.csv`` does (each block is one ``write`` call, so no row is cut short).
+  command, :class:`~motosim.errors.StopFlag`) closes both files, readable, marked partial.
+  The HDF5 file is written without SWMR, so after SIGKILL or a power cut
+  ``NAME.partial/result.h5`` opens with plain h5py, pandas or HDFView and holds every row
+  flushed before the kill, as ``result.partial.csv`` does (each block is one ``write`` call,
+  so no row is cut short).
 - **Full disk.** ``expected_rows`` lets the writer refuse a run the free space cannot hold
   before it starts; a write that fails anyway is one :class:`MotosimError` line saying how
   many rows were kept, and where.
@@ -291,26 +292,6 @@ class ResultWriter:
             self._h5.close()
             raise
 
-    @property
-    def folder(self) -> Path:
-        """The result folder, where a completed run is published."""
-        return self._folder
-
-    @property
-    def location(self) -> Path:
-        """Where the rows are now: the staging folder while running, then where they were kept."""
-        return self._location
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Column names, ``"t"`` first."""
-        return self._names
-
-    @property
-    def rows(self) -> int:
-        """Rows written so far."""
-        return self._rows
-
     def append(self, block: ArrayLike) -> None:
         """Write rows to both files and flush them.
 
@@ -512,6 +493,26 @@ class ResultWriter:
         if exc is None:
             self._stop.check()
 
+    @property
+    def folder(self) -> Path:
+        """The result folder, where a completed run is published."""
+        return self._folder
+
+    @property
+    def location(self) -> Path:
+        """Where the rows are now: the staging folder while running, then where they were kept."""
+        return self._location
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Column names, ``"t"`` first."""
+        return self._names
+
+    @property
+    def rows(self) -> int:
+        """Rows written so far."""
+        return self._rows
+
 
 class _OccupiedError(OSError):
     """The result folder holds files that are not a motosim result: it is not replaced."""
@@ -624,32 +625,8 @@ def load_result(folder: str | Path) -> SimResult:
         One line naming the path: missing folder or file, a file that is not HDF5 or not a
         motosim result, unreadable metadata.
     """
-    path = Path(folder)
-    if not path.exists():
-        stopped = partial_folder(path)
-        hint = (
-            f"; a run writing it, or one that was stopped, has its rows in {stopped}"
-            if stopped.is_dir()
-            else ""
-        )
-        raise MotosimError(f"{folder}: no such result folder{hint}")
-    file = path / _H5_NAME if path.is_dir() else path
-    if not file.is_file():
-        raise MotosimError(f"{folder}: no {_H5_NAME}; expected a folder written by motosim")
-    h5 = None
-    failure: OSError | None = None
-    # plain; then without HDF5's file lock (a run in progress in another process); then
-    # SWMR, in which motosim <= 0.1 wrote its results
-    for options in ({}, {"locking": False}, {"swmr": True, "locking": False}):
-        try:
-            h5 = h5py.File(file, "r", **options)
-            break
-        except OSError as err:
-            failure = err
-    if h5 is None:
-        why = reason(failure) if failure else "unknown"
-        raise MotosimError(f"{file}: not a readable HDF5 file ({why})")
-    with h5:
+    file = _result_file(Path(folder))
+    with _open_h5(file) as h5:
         if h5.attrs.get("format") != _FORMAT or not isinstance(h5.get("signals"), h5py.Dataset):
             raise MotosimError(f"{file}: not a motosim result (no {_FORMAT!r} format marker)")
         dataset = h5["signals"]
@@ -667,13 +644,37 @@ def load_result(folder: str | Path) -> SimResult:
     written = np.flatnonzero(np.isfinite(table[:, 0]))
     table = table[: written[-1] + 1] if written.size else table[:0]
     return SimResult(
-        table[:, 0].copy(),
-        table[:, 1:].copy(),
-        names[1:],
-        metadata,
-        summary,
-        complete,
+        table[:, 0].copy(), table[:, 1:].copy(), names[1:], metadata, summary, complete
     )
+
+
+def _result_file(path: Path) -> Path:
+    """The ``result.h5`` of the result folder ``path`` (or ``path``, a file), which exists."""
+    if not path.exists():
+        stopped = partial_folder(path)
+        hint = (
+            f"; a run writing it, or one that was stopped, has its rows in {stopped}"
+            if stopped.is_dir()
+            else ""
+        )
+        raise MotosimError(f"{path}: no such result folder{hint}")
+    file = path / _H5_NAME if path.is_dir() else path
+    if not file.is_file():
+        raise MotosimError(f"{path}: no {_H5_NAME}; expected a folder written by motosim")
+    return file
+
+
+def _open_h5(file: Path) -> h5py.File:
+    """``file`` opened for reading: plainly; else without HDF5's file lock (a run in progress
+    in another process); else as SWMR, in which motosim <= 0.1 wrote its results."""
+    failure: OSError | None = None
+    for options in ({}, {"locking": False}, {"swmr": True, "locking": False}):
+        try:
+            return h5py.File(file, "r", **options)
+        except OSError as err:
+            failure = err
+    why = reason(failure) if failure else "unknown"
+    raise MotosimError(f"{file}: not a readable HDF5 file ({why})")
 
 
 def _read_json(h5: h5py.File, key: str, file: Path) -> dict[str, Any]:
