@@ -60,15 +60,15 @@ def _remove_stale_temporaries(real: Path) -> None:
     Only ``.NAME.*.tmp`` files not written to for :data:`STALE_AFTER` are deleted, so a write
     going on, in any process on any machine sharing the folder, is never touched.
     """
-    prefix = f".{real.name}."
+    mine = re.compile(rf"\.{re.escape(real.name)}\.\w{{8}}\.tmp")
     stale = time.time() - STALE_AFTER
     try:
-        entries = [e for e in os.scandir(real.parent) if e.name.startswith(prefix)]
+        entries = [e for e in os.scandir(real.parent) if mine.fullmatch(e.name)]
     except OSError:
         return
     for entry in entries:
         try:
-            if entry.name.endswith(".tmp") and entry.stat().st_mtime < stale:
+            if entry.stat(follow_symlinks=False).st_mtime < stale:
                 os.unlink(entry.path)
         except OSError:
             continue
