@@ -17,6 +17,8 @@ Two kinds of failure, kept apart because a user acts differently on each:
 
 import signal
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 __all__ = [
     "EXIT_BAD_INPUT",
@@ -24,6 +26,7 @@ __all__ = [
     "MotosimError",
     "MotosimWarning",
     "RunFailedError",
+    "StopFlag",
     "stop_signals",
     "warn",
 ]
@@ -46,6 +49,42 @@ def stop_signals() -> list[signal.Signals]:
     """
     stops = [signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])]
     return [sig for sig in stops if signal.getsignal(sig) is not signal.SIG_IGN]
+
+
+class StopFlag:
+    """A stop asked for by a signal, handed by the command to what writes its files.
+
+    The command installs the signal handlers (SIGTERM, SIGHUP, Ctrl-C) and they call
+    :meth:`request`; the writer (:class:`motosim.io.results.ResultWriter`) holds the stop
+    while a block of rows goes to both files (:meth:`held`) and raises it at the next block
+    (:meth:`check`), so a raise that landed where Python ignores exceptions (a finaliser, a
+    weak-reference callback) still stops the run.
+    """
+
+    def __init__(self) -> None:
+        self.name: str | None = None
+        self.holding = False
+
+    def request(self, name: str) -> None:
+        """Remember the stop ``name`` (``"SIGTERM"``...); raise it at once unless held."""
+        self.name = name
+        if not self.holding:
+            raise KeyboardInterrupt(name)
+
+    def check(self) -> None:
+        """Raise :class:`KeyboardInterrupt` if a stop was asked for."""
+        if self.name is not None:
+            raise KeyboardInterrupt(self.name)
+
+    @contextmanager
+    def held(self) -> Iterator[None]:
+        """Within the block a stop is kept, not raised: a block of rows goes to both files or
+        to neither (:meth:`check` raises it after)."""
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
 
 
 class MotosimError(ValueError):

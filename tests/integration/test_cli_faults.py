@@ -22,7 +22,8 @@ import pytest
 
 from motosim.cli.main import main
 from motosim.errors import RunFailedError
-from motosim.io.results import folder_lock, load_result, lock_file, partial_folder
+from motosim.io.files import FolderLock, lock_file
+from motosim.io.results import load_result, partial_folder
 from motosim.sim import SIGNALS
 
 ROOT = Path(__file__).parents[2]
@@ -404,7 +405,7 @@ def test_run_holds_the_folder_until_its_timing_and_report_are_written(tmp_path: 
     assert (out / "timing.json").is_file() and (out / "report.html").is_file()
     assert load_result(out).metadata["realtime"]["bus"] == "virtual"  # the run's, not replaced
     assert not lock_file(out).exists()
-    with folder_lock(out):  # released once the report is written
+    with FolderLock(out):  # released once the report is written
         pass
 
 

@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from motosim.cli.main import main
-from motosim.io.results import folder_lock, lock_file
+from motosim.io.files import FolderLock, lock_file
 
 
 def _motosim(*argv: str) -> subprocess.Popen[str]:
@@ -53,7 +53,7 @@ def test_sigterm_while_excite_replaces_a_log_keeps_the_previous_one(tmp_path: Pa
         "excite", "--duration", "300", "--rate", "1000", "--out", str(out), "--overwrite"
     )
     deadline = time.monotonic() + 60.0
-    while not any(p.name.endswith(".partial") for p in tmp_path.iterdir()):  # writing
+    while not any(p.name.endswith(".tmp") for p in tmp_path.iterdir()):  # writing
         assert child.poll() is None and time.monotonic() < deadline, child.communicate()
         time.sleep(0.01)
     child.send_signal(signal.SIGTERM)
@@ -180,7 +180,7 @@ def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
     campaign = _small_campaign(tmp_path)
     out = tmp_path / "out"
     argv = ["campaign", str(campaign), "--out", str(out), "--no-report", "--jobs", "1"]
-    with folder_lock(out):  # another instance, running or resuming the campaign
+    with FolderLock(out):  # another instance, running or resuming the campaign
         code = main(argv)
     err = capsys.readouterr().err
     # was: both ran every run into the same parts and manifest (same temporary names)

@@ -17,28 +17,26 @@ import h5py
 import numpy as np
 import pytest
 
+from motosim.cli._common import finish_files_on_stop
 from motosim.errors import MotosimError
-from motosim.io.results import (
-    ResultWriter,
-    folder_lock,
-    load_result,
-    lock_file,
-    partial_folder,
-    write_whole,
-)
+from motosim.io.files import FolderLock, is_locked, lock_file, write_whole
+from motosim.io.results import ResultWriter, load_result, partial_folder
 
 NAMES = ("t", "phi")
 
-# A child process writing 10-row blocks forever; it prints "ready" after the first block.
+# A child process writing 10-row blocks forever, SIGTERM handled as a command does; it
+# prints "ready" after the fifth block.
 _WRITER = """
 import sys, time, numpy as np
+from motosim.cli._common import finish_files_on_stop
 from motosim.io.results import ResultWriter
-with ResultWriter(sys.argv[1], ("t", "phi"), {"seed": 3}) as w:
-    for k in range(10**6):
-        w.append(np.column_stack([np.arange(10 * k, 10 * k + 10) * 1e-3, np.ones(10)]))
-        if k == 4:
-            print("ready", flush=True)
-        time.sleep(0.01)
+with finish_files_on_stop() as stop:
+    with ResultWriter(sys.argv[1], ("t", "phi"), {"seed": 3}, stop=stop) as w:
+        for k in range(10**6):
+            w.append(np.column_stack([np.arange(10 * k, 10 * k + 10) * 1e-3, np.ones(10)]))
+            if k == 4:
+                print("ready", flush=True)
+            time.sleep(0.01)
 """
 
 
@@ -203,7 +201,7 @@ def _swallowed_sigterm() -> None:
 
 def _write_through_a_swallowed_sigterm(folder: Path, blocks_after: int) -> None:
     """Five rows, a swallowed SIGTERM, then ``blocks_after`` blocks of five rows."""
-    with ResultWriter(folder, NAMES, {}) as w:
+    with finish_files_on_stop() as stop, ResultWriter(folder, NAMES, {}, stop=stop) as w:
         w.append(_block(0, 5))
         _swallowed_sigterm()
         for k in range(blocks_after):
@@ -260,7 +258,7 @@ def test_a_stop_signal_between_the_two_files_waits_for_the_block(
     folder = tmp_path / "run"
 
     def run() -> None:
-        with ResultWriter(folder, NAMES, {}) as w:
+        with finish_files_on_stop() as stop, ResultWriter(folder, NAMES, {}, stop=stop) as w:
             w.append(_block(0, 5))
             w.append(_block(5, 5))  # not reached
 
@@ -296,7 +294,7 @@ def test_write_whole_keeps_the_previous_file_when_the_disk_fills(tmp_path: Path)
     with pytest.raises(MotosimError, match="No space left on device; the previous file"):
         write_whole(target, _filling_after(3, written))  # type: ignore[arg-type]
     # the pieces went to a hidden sibling, which is gone; the old file is as it was
-    assert written and re.fullmatch(r"\.log\.csv\.[0-9a-f]{12}\.partial", written[0]), written
+    assert written and re.fullmatch(r"\.log\.csv\.\w{8}\.tmp", written[0]), written
     assert target.read_text(encoding="utf-8") == "t,theta_h\n0.0,1.0\n"
     assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
 
@@ -304,7 +302,7 @@ def test_write_whole_keeps_the_previous_file_when_the_disk_fills(tmp_path: Path)
 _KILLED_WRITER = """
 import sys, time
 from pathlib import Path
-from motosim.io.results import write_whole
+from motosim.io.files import write_whole
 
 def write(temporary: Path) -> None:
     temporary.write_text("half a log", encoding="utf-8")
@@ -327,23 +325,8 @@ def _writer_stopped_in_its_write(target: Path) -> tuple[subprocess.Popen[str], s
     return child, name
 
 
-def _nfs_flock(real: Callable[[int, int], None]) -> Callable[[int, int], None]:
-    """``fcntl.flock`` as on NFS, which emulates it by a whole-file lock of the server's:
-    "in order to place an exclusive lock, the file must be opened for writing" (man 2 flock,
-    NOTES); else EBADF."""
-
-    def flock(fd: int, operation: int) -> None:
-        writable = fcntl.fcntl(fd, fcntl.F_GETFL) & os.O_ACCMODE != os.O_RDONLY
-        if operation & fcntl.LOCK_EX and not writable:
-            raise OSError(9, "Bad file descriptor")
-        real(fd, operation)
-
-    return flock
-
-
 def _try_lock(path: Path) -> bool:
-    """Whether an exclusive lock on ``path`` is free, tried as another process's cleaner
-    does (opened for writing, as NFS needs)."""
+    """Whether an exclusive lock on ``path`` is free (opened for writing, as NFS needs)."""
     fd = os.open(path, os.O_RDWR)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -354,89 +337,57 @@ def _try_lock(path: Path) -> bool:
         os.close(fd)
 
 
-def test_write_whole_holds_a_lock_on_a_sidecar_not_on_the_file_it_writes(
-    tmp_path: Path,
-) -> None:
-    # a0a7497 told a running writer from a killed one by the PID and the host name in the
-    # temporary's name: two hosts whose names sanitise alike, or containers sharing a host
-    # name and a folder, saw a running writer as gone and deleted its file. 68754e1 locked the
-    # temporary file itself: on SMB/CIFS (Linux >= 5.5) that lock is mandatory, "any IO on a
-    # locked file will always fail with EACCES when done from a separate file descriptor"
-    # (man 2 flock), and every write callback opens the file anew
-    seen: list[tuple[bool, bool, int]] = []
+def test_write_whole_writes_a_lone_unlocked_temporary_beside_the_file(tmp_path: Path) -> None:
+    # the file written holds no lock (on SMB/CIFS a lock is mandatory, and the writes, made
+    # through descriptors of their own, would fail, man 2 flock) and nothing else is created
+    seen: list[tuple[list[str], bool]] = []
 
     def write(temporary: Path) -> None:
-        sidecar = temporary.with_name(temporary.name + ".lock")
         with temporary.open("w", encoding="utf-8") as handle:  # a descriptor of its own
             handle.write("new")
-        seen.append((_try_lock(sidecar), _try_lock(temporary), sidecar.stat().st_size))
+        seen.append((sorted(p.name for p in tmp_path.iterdir()), _try_lock(temporary)))
 
-    write_whole(tmp_path / "log.csv", write)
-    # the sidecar is locked and empty, the file written is free of any lock
-    assert seen == [(False, True, 0)]
+    write_whole(tmp_path / "log.csv", write, durable=True)
+    assert len(seen) == 1 and len(seen[0][0]) == 1 and seen[0][1]
+    assert re.fullmatch(r"\.log\.csv\.\w{8}\.tmp", seen[0][0][0])
     assert (tmp_path / "log.csv").read_text(encoding="utf-8") == "new"
-    assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]  # both removed after the rename
+    assert [p.name for p in tmp_path.iterdir()] == ["log.csv"]
 
 
-_HOLDER = """
-import fcntl, os, sys
-fd = os.open(sys.argv[1] + ".lock", os.O_RDWR | os.O_CREAT, 0o644)
-fcntl.flock(fd, fcntl.LOCK_EX)
-with open(sys.argv[1], "w") as handle:
-    handle.write("half a log")
-print("held", flush=True)
-sys.stdin.read()
-"""
+def _left_long_ago(path: Path) -> None:
+    """Date ``path`` past the age of a write going on, as a write killed earlier left it."""
+    from motosim.io.files import STALE_AFTER
+
+    old = time.time() - STALE_AFTER - 60.0
+    os.utime(path, (old, old))
 
 
-@pytest.mark.parametrize("nfs", [False, True], ids=["local", "nfs-rules"])
 def test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, nfs: bool
+    tmp_path: Path,
 ) -> None:
-    # SIGKILL during a write left .NAME.XXXX.partial beside the file for good; under NFS's
-    # rule 68754e1's cleaner, which opened leftovers read-only, got EBADF and removed none
-    if nfs:
-        from motosim.io import results
-
-        monkeypatch.setattr(results.fcntl, "flock", _nfs_flock(fcntl.flock))
+    # SIGKILL during a write leaves .NAME.XXXXXXXX.tmp beside the file; a later write of the
+    # same file deletes it, and never the file of a write going on (the second writer here
+    # started while the first one was writing)
     target = tmp_path / "log.csv"
     target.write_text("old", encoding="utf-8")
     running, live_name = _writer_stopped_in_its_write(target)
-    killed, dead_name = _writer_stopped_in_its_write(target)  # keeps the running one's
+    killed, dead_name = _writer_stopped_in_its_write(target)
     killed.kill()
     killed.communicate()
-    # a write going on elsewhere (another machine, a container with its own PIDs): only its
-    # lock says so, held here by another process
-    elsewhere = tmp_path / ".log.csv.0123456789ab.partial"
-    # a sidecar alone (killed before it created its file), a file without a sidecar
-    lone_sidecar = tmp_path / ".log.csv.00000000000a.partial.lock"
-    lone_sidecar.touch()
-    lone_file = tmp_path / ".log.csv.00000000000b.partial"
-    lone_file.write_text("half a log", encoding="utf-8")
-    with subprocess.Popen(
-        [sys.executable, "-c", _HOLDER, str(elsewhere)],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-    ) as holder:  # fmt: skip
-        try:
-            assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
-            unrelated = tmp_path / ".other.csv.0123456789ab.partial"  # another file's
-            unrelated.write_text("another file's", encoding="utf-8")
-            assert (tmp_path / dead_name).is_file() and (tmp_path / live_name).is_file()
-            assert (tmp_path / (dead_name + ".lock")).is_file()
-            write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
-            assert target.read_text(encoding="utf-8") == "new"
-            # its lock went with it: removed, with its sidecar
-            assert not (tmp_path / dead_name).exists()
-            assert not (tmp_path / (dead_name + ".lock")).exists()
-            assert not lone_sidecar.exists() and not lone_file.exists()
-            assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
-            assert (tmp_path / (live_name + ".lock")).is_file()
-            assert elsewhere.read_text(encoding="utf-8") == "half a log"  # kept
-            assert unrelated.is_file()
-        finally:
-            holder.kill()
-            running.kill()
-            running.communicate()
+    _left_long_ago(tmp_path / dead_name)
+    unrelated = tmp_path / ".other.csv.abcdefgh.tmp"  # another file's
+    unrelated.write_text("another file's", encoding="utf-8")
+    _left_long_ago(unrelated)
+    try:
+        write_whole(target, lambda temporary: temporary.write_text("new", encoding="utf-8"))
+        assert target.read_text(encoding="utf-8") == "new"
+        assert not (tmp_path / dead_name).exists()
+        assert (tmp_path / live_name).read_text(encoding="utf-8") == "half a log"  # kept
+        assert unrelated.is_file()
+    finally:
+        running.kill()
+        running.communicate()
+    _left_long_ago(tmp_path / live_name)  # killed too: the next run removes it
     write_whole(target, lambda temporary: temporary.write_text("newer", encoding="utf-8"))
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["log.csv", unrelated.name])
 
@@ -493,16 +444,16 @@ def test_write_log_on_a_full_disk_keeps_the_previous_log(
 
 def test_folder_lock_refuses_a_second_writer_and_is_released(tmp_path: Path) -> None:
     out = tmp_path / "campaign"
-    with folder_lock(out) as lock:
-        assert lock == lock_file(out.absolute())
+    with FolderLock(out) as lock:
+        assert lock.path == lock_file(out.absolute())
         with pytest.raises(MotosimError, match=rf"another run \(pid {os.getpid()}\) is writing"):
-            with folder_lock(out):
+            with FolderLock(out):
                 pass
         with pytest.raises(MotosimError, match="another run"):  # a result writer too
             ResultWriter(out, NAMES, {})
-    with folder_lock(out):  # released on leaving
+    with FolderLock(out):  # released on leaving
         pass
-    assert not lock.exists()
+    assert not lock.path.exists()
 
 
 _READER = """
@@ -523,7 +474,7 @@ def _dead_pid() -> int:
 
 def test_folder_lock_names_no_dead_pid_when_a_reader_holds_a_stale_lock(tmp_path: Path) -> None:
     # the finding: a killed campaign's stale lock file says "pid 99999"; a status reader
-    # (is_locked) holding its shared lock made folder_lock say that a dead pid was writing
+    # (is_locked) holding its shared lock made the folder lock say that a dead pid was writing
     out = tmp_path / "campaign"
     stale = lock_file(out.absolute())
     stale.write_text(f"pid {_dead_pid()}\n", encoding="ascii")
@@ -534,14 +485,14 @@ def test_folder_lock_names_no_dead_pid_when_a_reader_holds_a_stale_lock(tmp_path
         try:
             assert reader.stdout is not None and reader.stdout.readline().strip() == "reading"
             with pytest.raises(MotosimError) as info:
-                with folder_lock(out):
+                with FolderLock(out):
                     pass
         finally:
             reader.kill()
     message = str(info.value)
     assert "another process is writing this result or reading its status" in message
     assert "pid" not in message and "\n" not in message
-    with folder_lock(out):  # the reader gone, the stale file is taken over
+    with FolderLock(out):  # the reader gone, the stale file is taken over
         assert stale.read_text(encoding="ascii") == f"pid {os.getpid()}\n"
 
 
@@ -550,7 +501,7 @@ def test_folder_lock_waits_out_a_readers_instant(
 ) -> None:
     # is_locked holds a shared lock for microseconds; a writer trying in that instant was
     # refused at once. Here the lock is busy for the first three tries, as if a reader held it
-    from motosim.io import results
+    from motosim.io import files
 
     real = fcntl.flock
     tries: list[int] = []
@@ -561,16 +512,14 @@ def test_folder_lock_waits_out_a_readers_instant(
             raise BlockingIOError(11, "Resource temporarily unavailable")
         real(fd, operation)
 
-    monkeypatch.setattr(results.fcntl, "flock", busy_at_first)
+    monkeypatch.setattr(files.fcntl, "flock", busy_at_first)
     out = tmp_path / "campaign"
-    with folder_lock(out) as lock:
-        assert lock.read_text(encoding="ascii") == f"pid {os.getpid()}\n"
+    with FolderLock(out) as lock:
+        assert lock.path.read_text(encoding="ascii") == f"pid {os.getpid()}\n"
     assert len(tries) == 3
 
 
-def test_a_shared_folder_lock_is_joined_by_its_threads_writer_and_held_to_the_end(
-    tmp_path: Path,
-) -> None:
+def test_a_folder_lock_handed_to_its_writer_is_held_to_the_end(tmp_path: Path) -> None:
     # what simulate and cueing hold while they write the result, then its report or figures
     import threading
 
@@ -583,23 +532,25 @@ def test_a_shared_folder_lock_is_joined_by_its_threads_writer_and_held_to_the_en
         except MotosimError as err:
             refused.append(str(err))
 
-    with folder_lock(out, shared=True) as lock:
-        with ResultWriter(out, NAMES, {}) as writer:  # joins: not refused
+    with FolderLock(out) as lock:
+        with ResultWriter(out, NAMES, {}, lock=lock) as writer:  # handed: not refused
             writer.append(np.array([[0.0, 1.0]]))
-        assert lock.exists()  # the writer closed; the folder is still locked
+        assert lock.path.exists() and is_locked(out)  # the writer closed; still locked
         thread = threading.Thread(target=other_thread)
         thread.start()
         thread.join()
         assert len(refused) == 1 and "another run" in refused[0]
-        fd = os.open(lock, os.O_RDWR)  # as another process sees it: locked
+        fd = os.open(lock.path, os.O_RDWR)  # as another process sees it: locked
         try:
             with pytest.raises(BlockingIOError):
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         finally:
             os.close(fd)
-    assert not lock.exists()
-    with folder_lock(out):  # released at the end of the block
+    assert not lock.path.exists() and not is_locked(out)
+    with FolderLock(out):  # released at the end of the block
         pass
+    with pytest.raises(MotosimError, match="not the held lock of this folder"):
+        ResultWriter(out, NAMES, {}, overwrite=True, lock=lock)  # no longer held
 
 
 def test_write_whole_writes_through_a_link_and_keeps_the_files_permissions(tmp_path: Path) -> None:

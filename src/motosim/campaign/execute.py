@@ -27,6 +27,7 @@ import os
 import time
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -41,7 +42,7 @@ from motosim.control.statespace import StateSpace
 from motosim.errors import MotosimError, RunFailedError
 from motosim.estimation.walcott_zak import ObserverSettings
 from motosim.io.cache import DesignCache, cached_stack
-from motosim.io.results import folder_lock
+from motosim.io.files import FolderLock
 from motosim.io.runs import parameter_source, resolve
 from motosim.model.tyred import TyredModel
 from motosim.params import load_parameters
@@ -501,6 +502,7 @@ def run_campaign(
     on_progress: Callable[[int, int, int], None] | None = None,
     runs: int | None = None,
     cache: DesignCache | None = None,
+    lock: FolderLock | None = None,
 ) -> CampaignSummary:
     """Run a campaign into the folder ``out``, skipping the runs it already holds.
 
@@ -528,6 +530,9 @@ def run_campaign(
     cache : DesignCache, optional
         Where the designs are read from and stored (:mod:`motosim.io.cache`); by default
         designed in this call.
+    lock : FolderLock, optional
+        The caller's held lock of ``out``, kept after the call (for the report it writes
+        there); by default the lock is taken for the call.
 
     Returns
     -------
@@ -554,7 +559,7 @@ def run_campaign(
     # a second instance on the folder, or another command writing it (motosim simulate, whose
     # result would replace the folder whole), is refused, not mixed in: the lock is beside the
     # folder (.NAME.lock), the one every command takes
-    with folder_lock(out):
+    with nullcontext() if lock is not None else FolderLock(out):
         store = ResultStore(
             out,
             fingerprint=plan.fingerprint,

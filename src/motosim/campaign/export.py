@@ -13,7 +13,7 @@ from typing import Any
 
 from motosim.campaign.plan import Plan, scenario_of
 from motosim.errors import MotosimError
-from motosim.io.results import write_whole
+from motosim.io.files import write_whole
 from motosim.params import ParameterSet, dump_parameter_set
 from motosim.sim.scenario import scenario_dict
 

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from motosim import __version__
 from motosim.campaign.series import SERIES
 from motosim.errors import MotosimError
-from motosim.io.results import is_locked, write_whole
+from motosim.io.files import is_locked, write_whole
 
 __all__ = [
     "FOREIGN",
@@ -54,7 +54,7 @@ def read_manifest(folder: str | Path) -> dict[str, Any]:
     """The manifest of a result folder, its ``status`` as it is now.
 
     A manifest's ``"running"`` is true only while a process holds the folder's lock (the
-    campaign running it: :func:`motosim.io.results.folder_lock`). A campaign stopped without
+    campaign running it: :class:`motosim.io.files.FolderLock`). A campaign stopped without
     its last manifest write (SIGKILL, an OOM kill, a power cut, a full disk) left
     ``"running"`` in the file: when no process holds the lock (this call takes it without
     waiting, and lets it go at once), the status read is ``"stopped"``. Running the campaign

@@ -21,15 +21,18 @@ import codecs
 import json
 import math
 import os
+import signal
 import sys
 import tempfile
+import threading
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from types import FrameType
 from typing import Any, NamedTuple
 
-from motosim.errors import MotosimError, MotosimWarning, warn
+from motosim.errors import MotosimError, MotosimWarning, StopFlag, stop_signals, warn
 from motosim.params.checks import path_problem, short_repr
 
 __all__ = [
@@ -45,6 +48,7 @@ __all__ = [
     "check_scenario_inputs",
     "check_scenario_values",
     "deferred_warnings",
+    "finish_files_on_stop",
     "parse_float_list",
     "parse_range",
     "print_json",
@@ -739,7 +743,7 @@ def check_output_folder(
 
 def _atomic_write(target: Path, write: Callable[[Path], object]) -> Path:
     """Write through ``write`` into a temporary sibling, then rename it over ``target``."""
-    from motosim.io.results import write_whole
+    from motosim.io.files import write_whole
 
     _refuse_missing_parent(target, "output")
     return write_whole(target, write)
@@ -771,3 +775,39 @@ def save_figure(fig: Any, path: str) -> Path:
         )
     fmt = target.suffix.lower().removeprefix(".")
     return _atomic_write(target, lambda tmp: fig.savefig(tmp, dpi=120, format=fmt))
+
+
+@contextmanager
+def finish_files_on_stop() -> Iterator[StopFlag]:
+    """Within the block, SIGTERM, SIGHUP and Ctrl-C request a stop on the flag yielded.
+
+    For a command that writes a result: it hands the flag to the writer
+    (:class:`motosim.io.results.ResultWriter`, ``stop``), which holds the stop while a block
+    of rows goes to both files and raises :class:`KeyboardInterrupt` after it, so the files
+    are closed, readable, marked partial. Ctrl-C is taken only where Python's own handler is
+    installed (a loop that handles it itself keeps it); outside the main thread, where
+    Python cannot install handlers, the block runs unchanged. The previous handlers are
+    restored on leaving.
+
+    Examples
+    --------
+    >>> with finish_files_on_stop() as stop:
+    ...     stop.check()
+    """
+    stop = StopFlag()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def request(signum: int, frame: FrameType | None) -> None:
+        stop.request(signal.Signals(signum).name)
+
+    stops = stop_signals()
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        stops.append(signal.SIGINT)
+    previous = {sig: signal.signal(sig, request) for sig in stops}
+    try:
+        yield stop
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)

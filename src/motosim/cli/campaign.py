@@ -225,10 +225,10 @@ def run(args: argparse.Namespace) -> int:
             bar.set_postfix_str(f"{failed} failed", refresh=False)
             bar.refresh()
 
-    from motosim.io.results import folder_lock
+    from motosim.io.files import FolderLock
 
-    # the folder stays locked until its report is written (run_campaign's lock joins this one)
-    with folder_lock(args.out, shared=True):
+    # the folder stays locked until its report is written (run_campaign is handed the lock)
+    with FolderLock(args.out) as lock:
         try:
             summary = run_campaign(
                 campaign,
@@ -239,6 +239,7 @@ def run(args: argparse.Namespace) -> int:
                 on_progress=progress,
                 runs=args.runs,
                 cache=design_cache(args, quiet=args.json),
+                lock=lock,
             )
         except KeyboardInterrupt:
             print(

@@ -10,6 +10,7 @@ from motosim.cli._common import (
     check_named_input,
     check_output_folder,
     check_result_input,
+    finish_files_on_stop,
     print_json,
     save_figure,
     warn_atypical,
@@ -18,6 +19,7 @@ from motosim.errors import MotosimError
 
 if TYPE_CHECKING:
     from motosim.cueing import CueingRun, CueingScore
+    from motosim.io.files import FolderLock
 
 __all__ = ["ALGORITHMS", "register", "score_summary"]
 
@@ -80,7 +82,7 @@ def score_summary(score: "CueingScore") -> dict[str, Any]:
     return out
 
 
-def _write(run: "CueingRun", folder: Path, metadata: dict[str, Any], overwrite: bool) -> None:
+def _write(run: "CueingRun", lock: "FolderLock", metadata: dict[str, Any], overwrite: bool) -> None:
     import numpy as np
 
     from motosim.cueing import COMMAND_SIGNALS
@@ -88,7 +90,18 @@ def _write(run: "CueingRun", folder: Path, metadata: dict[str, Any], overwrite: 
 
     names = ("t", *COMMAND_SIGNALS)
     rows = run.commands.t.size
-    with ResultWriter(folder, names, metadata, overwrite=overwrite, expected_rows=rows) as writer:
+    with (
+        finish_files_on_stop() as stop,
+        ResultWriter(
+            lock.folder,
+            names,
+            metadata,
+            overwrite=overwrite,
+            expected_rows=rows,
+            lock=lock,
+            stop=stop,
+        ) as writer,
+    ):
         writer.append(np.column_stack([run.commands.t, run.commands.data]))
         writer.close(score_summary(run.score))
 
@@ -134,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         "platform": config,
         "vestibular": model,
     }
-    from motosim.io.results import folder_lock
+    from motosim.io.files import FolderLock
     from motosim.plotting.cueing import plot_commands, plot_perception
 
     scenario = result.metadata.get("scenario")
@@ -143,8 +156,8 @@ def run(args: argparse.Namespace) -> int:
     limits = tuple(axis.angle for axis in config.platform.axes)
     # locked until the figures are written: a concurrent --overwrite of the folder is
     # refused until then, not let in between the commands and their figures
-    with folder_lock(folder, shared=True):
-        _write(outcome, folder, metadata, args.overwrite)
+    with FolderLock(folder) as lock:
+        _write(outcome, lock, metadata, args.overwrite)
         save_figure(
             plot_perception(outcome, thresholds=model.thresholds, title=title),
             str(folder / "perception.png"),

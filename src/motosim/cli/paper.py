@@ -135,7 +135,7 @@ def _figures(runs: dict[str, "SimResult"], out: Path) -> list[tuple[str, str]]:
             lambda: plot_motorcycle(riding, title="Riding run: path, roll, speed"),
         ),
     ]
-    from motosim.io.results import write_whole
+    from motosim.io.files import write_whole
 
     written = []
     for name, caption, make in specs:
@@ -184,7 +184,8 @@ def run(args: argparse.Namespace) -> int:
         out.mkdir(exist_ok=True)
     except OSError as err:
         raise MotosimError(f"cannot create {args.out}: {err.strerror}") from None
-    from motosim.io.results import folder_lock, load_result
+    from motosim.io.files import FolderLock
+    from motosim.io.results import load_result
     from motosim.report import build_report  # matplotlib: seconds, only once the output is fine
 
     cache = design_cache(args, quiet=args.json)
@@ -195,10 +196,15 @@ def run(args: argparse.Namespace) -> int:
         folder = out / scenario.name
         if not args.json:
             print(f"[{k}/{len(scenarios)}] {scenario.name}: {scenario.description}")
-        with folder_lock(folder, shared=True):  # until its report is written (as simulate)
+        with FolderLock(folder) as lock:  # until its report is written (as simulate)
             inputs, stack = resolve_cached(scenario, Path("."), cache)
             summaries[scenario.name] = run_scenario(
-                inputs, folder, progress=show_progress(args.json), overwrite=True, stack=stack
+                inputs,
+                folder,
+                progress=show_progress(args.json),
+                overwrite=True,
+                stack=stack,
+                lock=lock,
             )
             build_report(folder)
             runs[scenario.name] = load_result(folder)

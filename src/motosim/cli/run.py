@@ -368,8 +368,8 @@ def _writer_main(
     :class:`~motosim.io.telemetry.TelemetryRing` it fills every 5 ms, with the loop's timing
     and safety columns (:class:`~motosim.view.live.LoopRows`).
 
-    The folder's lock (:func:`~motosim.io.results.folder_lock`) is taken before the result
-    is opened, which joins it, and held after the result is closed, until ("release",) or
+    The folder's lock (:class:`~motosim.io.files.FolderLock`) is taken before the result
+    is opened, which is handed it, and held after the result is closed, until ("release",) or
     the end of ``conn``: ``motosim run`` writes ``timing.json`` and the report beside the
     rows meanwhile, and a concurrent ``--overwrite`` of the folder is refused until then.
     """
@@ -378,15 +378,15 @@ def _writer_main(
     # asks this process to close the result, as on Ctrl-C
     for sig in (signal.SIGINT, *stop_signals()):
         signal.signal(sig, signal.SIG_IGN)
-    from motosim.io.results import folder_lock
+    from motosim.io.files import FolderLock
 
     with ExitStack() as held:
         try:
-            held.enter_context(folder_lock(Path(folder), shared=True))
+            lock = held.enter_context(FolderLock(folder))
         except MotosimError as err:
             conn.send(("error", str(err)))
             return
-        if _write_result(conn, handle, names, folder, metadata, overwrite, torque_per_amp,
+        if _write_result(conn, handle, names, lock, metadata, overwrite, torque_per_amp,
                          view, telemetry, rate):  # fmt: skip
             try:
                 conn.recv()  # ("release",): motosim run has written its files
@@ -398,7 +398,7 @@ def _write_result(
     conn: Any,
     handle: Any,
     names: tuple[str, ...],
-    folder: str,
+    lock: Any,
     metadata: dict[str, Any],
     overwrite: bool,
     torque_per_amp: float,
@@ -431,7 +431,7 @@ def _write_result(
             loop_rows = LoopRows(names, RESULT_SIGNALS)
             live = TelemetryRing(loop_rows.names, capacity=1 << 15)  # 32 s at 1 kHz
             server, control, url = _start_view(view, live)
-        writer = ResultWriter(Path(folder), RESULT_SIGNALS, metadata, overwrite=overwrite)
+        writer = ResultWriter(lock.folder, RESULT_SIGNALS, metadata, overwrite=overwrite, lock=lock)
     except MotosimError as err:
         conn.send(("error", str(err)))
         ring.close()

@@ -11,6 +11,7 @@ from motosim.cli._common import (
     check_scenario_inputs,
     check_scenario_values,
     deferred_warnings,
+    finish_files_on_stop,
     print_json,
     show_progress,
 )
@@ -19,6 +20,7 @@ from motosim.errors import RunFailedError
 
 if TYPE_CHECKING:
     from motosim.io.cache import DesignCache
+    from motosim.io.files import FolderLock
     from motosim.sim import RunInputs, Scenario
     from motosim.sim.stack import StackModel
 
@@ -71,24 +73,37 @@ def run_scenario(
     progress: bool,
     overwrite: bool = False,
     stack: "StackModel | None" = None,
+    lock: "FolderLock | None" = None,
 ) -> dict[str, Any]:
     """Simulate into ``folder``, with a progress bar on a terminal; returns the metrics.
 
     ``stack`` is the run's designed stack (:func:`resolve_cached`); by default it is
-    designed here.
+    designed here. ``lock`` is the caller's held lock of ``folder``. SIGTERM, SIGHUP and
+    Ctrl-C stop the run after the block being written, the result closed and marked partial.
     """
     from motosim.io.runs import run_to_folder
 
     sc = inputs.scenario
-    if not progress:
-        return run_to_folder(inputs, folder, overwrite=overwrite, stack=stack)
-    from tqdm import tqdm
+    with finish_files_on_stop() as stop:
+        if not progress:
+            return run_to_folder(
+                inputs, folder, overwrite=overwrite, stack=stack, lock=lock, stop=stop
+            )
+        from tqdm import tqdm
 
-    n = round(sc.duration * sc.rates.control)
-    with tqdm(
-        total=n, unit=" steps", desc=sc.name, file=sys.stderr, leave=False, unit_scale=True
-    ) as bar:
-        return run_to_folder(inputs, folder, overwrite=overwrite, on_rows=bar.update, stack=stack)
+        n = round(sc.duration * sc.rates.control)
+        with tqdm(
+            total=n, unit=" steps", desc=sc.name, file=sys.stderr, leave=False, unit_scale=True
+        ) as bar:
+            return run_to_folder(
+                inputs,
+                folder,
+                overwrite=overwrite,
+                on_rows=bar.update,
+                stack=stack,
+                lock=lock,
+                stop=stop,
+            )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -96,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
     check_scenario_inputs(args.scenario)
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     check_scenario_values(args.scenario)  # before the numerical stack is imported
-    from motosim.io.results import folder_lock, is_complete_result, partial_folder
+    from motosim.io.files import FolderLock
+    from motosim.io.results import is_complete_result, partial_folder
     from motosim.io.runs import load_scenario
     from motosim.sim.metrics import warnings
 
@@ -106,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
         inputs, stack = resolve_cached(scenario, Path(args.scenario).parent, cache)
     # the folder stays locked until its report is written: a concurrent --overwrite of the
     # same folder is refused until then, not let in between the result and its report
-    with folder_lock(folder, shared=True):
+    with FolderLock(folder) as lock:
         try:
             summary = run_scenario(
                 inputs,
@@ -114,6 +130,7 @@ def run(args: argparse.Namespace) -> int:
                 progress=show_progress(args.json),
                 overwrite=args.overwrite,
                 stack=stack,
+                lock=lock,
             )
         except KeyboardInterrupt:
             staged = partial_folder(folder)

@@ -1,25 +1,8 @@
-"""Files in and out: logs as CSV, results, and (later) the CAN link."""
+"""Files in and out: logs as CSV, results, atomic files and folder locks, the CAN link.
 
-from motosim.io.logs import (
-    ColumnSpec,
-    LogTiming,
-    RigLog,
-    log_timing,
-    parse_columns,
-    read_log,
-    read_rig_log,
-    resample,
-    write_log,
-)
+The package's own names are those of :mod:`motosim.io.logs` (the logs every command reads);
+the other modules are imported by name (:mod:`motosim.io.results`, :mod:`motosim.io.files`...).
+"""
 
-__all__ = [
-    "ColumnSpec",
-    "LogTiming",
-    "RigLog",
-    "log_timing",
-    "parse_columns",
-    "read_log",
-    "read_rig_log",
-    "resample",
-    "write_log",
-]
+from motosim.io.logs import *  # noqa: F403
+from motosim.io.logs import __all__ as __all__

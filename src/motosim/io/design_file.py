@@ -288,30 +288,11 @@ def read_design(path: str | Path) -> DesignFile:
         upper=RATE_RANGE[1],
         unit="Hz",
     )
-    hb_table = check_table(_get(data, "handlebar", str(path)), where=f"{path}: handlebar")
-    check_keys(hb_table, HandlebarParameters.SPECS, where=f"{path} [handlebar]", what="parameter")
-    try:
-        handlebar = HandlebarParameters(
-            **{k: _get(hb_table, k, f"{path} [handlebar]") for k in HandlebarParameters.SPECS}
-        )
-    except MotosimError as err:
-        raise MotosimError(f"{path}: {err}") from None
+    handlebar = _handlebar(data, str(path))
     obs = check_table(_get(data, "observer", str(path)), where=f"{path}: observer")
     observer = _observer(obs, handlebar, rate, f"{path} [observer]")
     ctrl = check_table(_get(data, "controller", str(path)), where=f"{path}: controller")
-    check_keys(ctrl, _CONTROLLER_KEYS, where=f"{path} [controller]", what="key")
-    for key in ("bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner"):
-        if key in ctrl:  # what the design achieved, for people: numbers all the same
-            check_number(ctrl[key], where=f"{path} [controller] {key}")
-    for key in ("num", "den"):
-        if key in ctrl:
-            _matrix([ctrl[key]], f"{path} [controller] {key}")
-    controller = _state_space(ctrl, f"{path} [controller]")
-    if controller.n_states > MAX_CONTROLLER_STATES:
-        raise MotosimError(
-            f"{path} [controller]: {controller.n_states} states; expected at most "
-            f"{MAX_CONTROLLER_STATES}"
-        )
+    controller = _controller(ctrl, str(path))
     if "paper_controller" in data:  # the paper's eq. (26), for comparison
         paper = check_table(data["paper_controller"], where=f"{path}: paper_controller")
         check_keys(paper, ("num", "den", "gamma"), where=f"{path} [paper_controller]", what="key")
@@ -334,3 +315,33 @@ def read_design(path: str | Path) -> DesignFile:
         controller=controller,
         controller_discrete=discrete,
     )
+
+
+def _handlebar(data: Mapping[str, Any], label: str) -> HandlebarParameters:
+    """The design's ``[handlebar]`` table, checked as a parameter set."""
+    table = check_table(_get(data, "handlebar", label), where=f"{label}: handlebar")
+    check_keys(table, HandlebarParameters.SPECS, where=f"{label} [handlebar]", what="parameter")
+    try:
+        return HandlebarParameters(
+            **{k: _get(table, k, f"{label} [handlebar]") for k in HandlebarParameters.SPECS}
+        )
+    except MotosimError as err:
+        raise MotosimError(f"{label}: {err}") from None
+
+
+def _controller(ctrl: Mapping[str, Any], label: str) -> StateSpace:
+    """The continuous controller of the ``[controller]`` table; its other keys checked."""
+    check_keys(ctrl, _CONTROLLER_KEYS, where=f"{label} [controller]", what="key")
+    for key in ("bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner"):
+        if key in ctrl:  # what the design achieved, for people: numbers all the same
+            check_number(ctrl[key], where=f"{label} [controller] {key}")
+    for key in ("num", "den"):
+        if key in ctrl:
+            _matrix([ctrl[key]], f"{label} [controller] {key}")
+    controller = _state_space(ctrl, f"{label} [controller]")
+    if controller.n_states > MAX_CONTROLLER_STATES:
+        raise MotosimError(
+            f"{label} [controller]: {controller.n_states} states; expected at most "
+            f"{MAX_CONTROLLER_STATES}"
+        )
+    return controller

@@ -273,43 +273,13 @@ def read_log(
         not UTF-8, a value that is not a number, NaN, a unit that does not fit the signal,
         a time that does not strictly increase, too few samples.
     """
-    source = Path(path)
-    problem = path_problem(source, "log file (CSV)")
-    if problem is not None:
-        raise MotosimError(problem)
-    lines = _decode(source, str(path))
-    if not lines:
-        raise MotosimError(f"{path}: empty log; expected a header row and data rows")
-    header_text = lines[0][1]
-    delimiter = _delimiter(header_text)
-    decimal_comma = delimiter != ","
-    if max(len(text) for _, text in lines) > MAX_LINE:
-        number, _ = max(lines, key=lambda item: len(item[1]))
-        raise MotosimError(
-            f"{path}: line {number} is longer than {MAX_LINE} characters; expected a CSV "
-            "row of numbers"
-        )
-    cells = next(csv.reader([header_text], delimiter=delimiter))
+    lines, delimiter = _lines(Path(path), str(path))
+    cells = next(csv.reader([lines[0][1]], delimiter=delimiter))
     parsed = [_split_header(cell) for cell in cells]
     names = [name for name, _ in parsed]
-    header_units = {name: unit for name, unit in parsed}
     if len(set(names)) != len(names):
         raise MotosimError(f"{path}: duplicated column names in the header {names}")
-    mapping = dict(columns or {})
-    # signal -> (file column index, unit)
-    chosen: dict[str, tuple[int, str | None]] = {}
-    for signal, spec in mapping.items():
-        if spec.source not in names:
-            raise MotosimError(
-                f"{path}: --columns maps {signal} to {spec.source!r}, which is not a column; "
-                f"expected one of {', '.join(names)}"
-            )
-        index = names.index(spec.source)
-        chosen[signal] = (index, spec.unit or header_units[spec.source])
-    mapped_sources = {spec.source for spec in mapping.values()}
-    for index, name in enumerate(names):
-        if name not in chosen and name not in mapped_sources:
-            chosen[name] = (index, header_units[name])
+    chosen = _chosen_columns(str(path), dict(parsed), names, columns or {})
     missing = [name for name in ("t", *required) if name not in chosen]
     if missing:
         raise MotosimError(
@@ -318,35 +288,22 @@ def read_log(
             + (remedy or f"map yours with --columns {missing[0]}=NAME[:UNIT]")
             + ")"
         )
-    rows = list(csv.reader([text for _, text in lines[1:]], delimiter=delimiter))
-    data = np.empty((len(rows), len(names)))
-    for i, row in enumerate(rows):
-        number = lines[i + 1][0]
-        if len(row) != len(names):
-            raise MotosimError(
-                f"{path}: line {number} has {len(row)} fields; expected {len(names)}"
-            )
-        for j, cell in enumerate(row):
-            text = cell.strip()
-            if decimal_comma:
-                text = text.replace(",", ".")
-            try:
-                value = float(text)
-            except ValueError:
-                raise MotosimError(
-                    f"{path}: line {number}, column {names[j]}: {cell!r} is not a number"
-                ) from None
-            if not math.isfinite(value):
-                raise MotosimError(
-                    f"{path}: line {number}, column {names[j]}: {cell.strip()}; "
-                    "expected a finite number"
-                )
-            data[i, j] = value
-    if len(rows) < min_samples:
-        raise MotosimError(f"{path}: {len(rows)} samples; expected at least {min_samples}")
+    data = _numbers(str(path), lines, names, delimiter)
+    if data.shape[0] < min_samples:
+        raise MotosimError(f"{path}: {data.shape[0]} samples; expected at least {min_samples}")
+    return _series(str(path), data, chosen, lines)
+
+
+def _series(
+    label: str,
+    data: Array,
+    chosen: Mapping[str, tuple[int, str | None]],
+    lines: list[tuple[int, str]],
+) -> TimeSeries:
+    """The chosen columns of ``data`` in SI units, in file order, ``t`` strictly increasing."""
     converted: dict[str, Array] = {}
     for signal, (index, unit) in chosen.items():
-        converted[signal] = data[:, index] * _factor(str(path), signal, unit)
+        converted[signal] = data[:, index] * _factor(label, signal, unit)
     t = converted.pop("t")
     steps = np.diff(t)
     if np.any(steps <= 0):
@@ -354,12 +311,81 @@ def read_log(
         kind = "repeats" if steps[k] == 0 else "goes back"
         number = lines[k + 2][0]
         raise MotosimError(
-            f"{path}: time {kind} at line {number} (t = {t[k + 1]:g} s after {t[k]:g} s); "
+            f"{label}: time {kind} at line {number} (t = {t[k + 1]:g} s after {t[k]:g} s); "
             "expected strictly increasing t"
         )
     order = sorted(converted, key=lambda s: chosen[s][0])
     values = np.column_stack([converted[s] for s in order]) if order else np.empty((t.size, 0))
     return TimeSeries(t.copy(), values, tuple(order))
+
+
+def _lines(source: Path, label: str) -> tuple[list[tuple[int, str]], str]:
+    """The numbered non-blank lines of a log, header first, and its field delimiter."""
+    problem = path_problem(source, "log file (CSV)")
+    if problem is not None:
+        raise MotosimError(problem)
+    lines = _decode(source, label)
+    if not lines:
+        raise MotosimError(f"{label}: empty log; expected a header row and data rows")
+    if max(len(text) for _, text in lines) > MAX_LINE:
+        number, _ = max(lines, key=lambda item: len(item[1]))
+        raise MotosimError(
+            f"{label}: line {number} is longer than {MAX_LINE} characters; expected a CSV "
+            "row of numbers"
+        )
+    return lines, _delimiter(lines[0][1])
+
+
+def _chosen_columns(
+    label: str,
+    header_units: Mapping[str, str | None],
+    names: list[str],
+    mapping: Mapping[str, ColumnSpec],
+) -> dict[str, tuple[int, str | None]]:
+    """Signal -> (index of its column in the file, unit): the mapped ones, then every other
+    column under its own name."""
+    chosen: dict[str, tuple[int, str | None]] = {}
+    for signal, spec in mapping.items():
+        if spec.source not in names:
+            raise MotosimError(
+                f"{label}: --columns maps {signal} to {spec.source!r}, which is not a column; "
+                f"expected one of {', '.join(names)}"
+            )
+        chosen[signal] = (names.index(spec.source), spec.unit or header_units[spec.source])
+    mapped_sources = {spec.source for spec in mapping.values()}
+    for index, name in enumerate(names):
+        if name not in chosen and name not in mapped_sources:
+            chosen[name] = (index, header_units[name])
+    return chosen
+
+
+def _numbers(label: str, lines: list[tuple[int, str]], names: list[str], delimiter: str) -> Array:
+    """The data rows (every line after the header) as finite numbers, one column a name."""
+    rows = list(csv.reader([text for _, text in lines[1:]], delimiter=delimiter))
+    data = np.empty((len(rows), len(names)))
+    for i, row in enumerate(rows):
+        number = lines[i + 1][0]
+        if len(row) != len(names):
+            raise MotosimError(
+                f"{label}: line {number} has {len(row)} fields; expected {len(names)}"
+            )
+        for j, cell in enumerate(row):
+            text = cell.strip()
+            if delimiter != ",":  # a decimal comma
+                text = text.replace(",", ".")
+            try:
+                value = float(text)
+            except ValueError:
+                raise MotosimError(
+                    f"{label}: line {number}, column {names[j]}: {cell!r} is not a number"
+                ) from None
+            if not math.isfinite(value):
+                raise MotosimError(
+                    f"{label}: line {number}, column {names[j]}: {cell.strip()}; "
+                    "expected a finite number"
+                )
+            data[i, j] = value
+    return data
 
 
 def _factor(label: str, signal: str, unit: str | None) -> float:
@@ -515,36 +541,8 @@ def read_rig_log(
     """
     series = read_log(path, required=required, min_samples=min_samples, columns=columns)
     timing = log_timing(series.t)
-    if timing.period >= 0.1:
-        raise MotosimError(
-            f"{path}: median sample period {timing.period:g} s ({1 / timing.period:.3g} Hz); "
-            "this looks like a time in milliseconds or microseconds: give its unit in the "
-            "header (t [ms]) or with --columns t=NAME:ms"
-        )
-    if timing.period < MIN_PERIOD:
-        raise MotosimError(
-            f"{path}: median sample period {timing.period:.3g} s ({1 / timing.period:.3g} Hz); "
-            f"expected at least {MIN_PERIOD:g} s (a handlebar log is sampled at 1 MHz at most): "
-            "check the time column and its unit"
-        )
-    for name in ("theta_h", "delta"):
-        if name in series.names:
-            span = float(np.ptp(series[name]))
-            if span > math.pi:
-                raise MotosimError(
-                    f"{path}: {name} spans {span:.4g} rad ({math.degrees(span):.0f} deg), more "
-                    f"than a handlebar turns; this looks like degrees: give {name} [deg] in the "
-                    f"header or --columns {name}=NAME:deg"
-                )
-    for name in ("i_m", "i_cmd"):
-        if name in series.names:
-            peak = float(np.max(np.abs(series[name])))
-            if peak > 200.0:
-                raise MotosimError(
-                    f"{path}: {name} reaches {peak:.4g} A, more than a handlebar motor draws; "
-                    f"this looks like milliamperes: give {name} [mA] in the header or "
-                    f"--columns {name}=NAME:mA"
-                )
+    _check_period(str(path), timing)
+    _check_units(str(path), series)
     if timing.longest_gap > MAX_GAP_PERIODS * timing.period:
         k = int(np.argmax(np.diff(series.t)))
         raise MotosimError(
@@ -568,6 +566,45 @@ def read_rig_log(
     return RigLog(series, timing)
 
 
+def _check_period(label: str, timing: LogTiming) -> None:
+    """Refuse a sample period a handlebar log cannot have: a time in other units."""
+    if timing.period >= 0.1:
+        raise MotosimError(
+            f"{label}: median sample period {timing.period:g} s ({1 / timing.period:.3g} Hz); "
+            "this looks like a time in milliseconds or microseconds: give its unit in the "
+            "header (t [ms]) or with --columns t=NAME:ms"
+        )
+    if timing.period < MIN_PERIOD:
+        raise MotosimError(
+            f"{label}: median sample period {timing.period:.3g} s ({1 / timing.period:.3g} Hz); "
+            f"expected at least {MIN_PERIOD:g} s (a handlebar log is sampled at 1 MHz at most): "
+            "check the time column and its unit"
+        )
+
+
+def _check_units(label: str, series: TimeSeries) -> None:
+    """Refuse angles that span more than a handlebar turns and currents more than its motor
+    draws: degrees and milliamperes read as radians and amperes."""
+    for name in ("theta_h", "delta"):
+        if name in series.names:
+            span = float(np.ptp(series[name]))
+            if span > math.pi:
+                raise MotosimError(
+                    f"{label}: {name} spans {span:.4g} rad ({math.degrees(span):.0f} deg), more "
+                    f"than a handlebar turns; this looks like degrees: give {name} [deg] in the "
+                    f"header or --columns {name}=NAME:deg"
+                )
+    for name in ("i_m", "i_cmd"):
+        if name in series.names:
+            peak = float(np.max(np.abs(series[name])))
+            if peak > 200.0:
+                raise MotosimError(
+                    f"{label}: {name} reaches {peak:.4g} A, more than a handlebar motor draws; "
+                    f"this looks like milliamperes: give {name} [mA] in the header or "
+                    f"--columns {name}=NAME:mA"
+                )
+
+
 def write_log(path: str | Path, series: TimeSeries) -> Path:
     """Write a series as CSV with ``t`` first, full float precision, whole or not at all.
 
@@ -579,7 +616,7 @@ def write_log(path: str | Path, series: TimeSeries) -> Path:
     MotosimError
         If the file cannot be written.
     """
-    from motosim.io.results import write_whole
+    from motosim.io.files import write_whole
 
     target = Path(path)
     try:

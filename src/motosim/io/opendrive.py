@@ -44,8 +44,10 @@ def _parse_xml(raw: bytes, origin: str) -> Any:
             f"{origin}: byte {err.start} is not UTF-8; expected an OpenDRIVE file in UTF-8"
         ) from None
     if "<!doctype" in text.lower():
-        raise MotosimError(f"{origin}: a document type declaration; expected an OpenDRIVE file "
-                           "without one (<!DOCTYPE> and entities are refused)")  # fmt: skip
+        raise MotosimError(
+            f"{origin}: a document type declaration; expected an OpenDRIVE file without one "
+            "(<!DOCTYPE> and entities are refused)"
+        )
     try:
         fromstring = importlib.import_module("defusedxml.ElementTree").fromstring
     except ImportError:  # no declaration (refused above), so no entity can expand
@@ -53,8 +55,9 @@ def _parse_xml(raw: bytes, origin: str) -> Any:
     try:
         root = fromstring(raw)
     except ET.ParseError as err:
-        raise MotosimError(f"{origin}: not well-formed XML ({err}); expected an OpenDRIVE "
-                           "file") from None  # fmt: skip
+        raise MotosimError(
+            f"{origin}: not well-formed XML ({err}); expected an OpenDRIVE file"
+        ) from None
     except ValueError as err:  # defusedxml's refusals
         raise MotosimError(f"{origin}: {err}; expected a plain OpenDRIVE file") from None
     for element in root.iter():  # OpenDRIVE 1.8 files may carry a namespace: drop it
@@ -155,22 +158,7 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
     root = _parse_xml(raw, origin)
     if root.tag != "OpenDRIVE":
         raise MotosimError(f"{origin}: root element <{root.tag[:40]}>; expected <OpenDRIVE>")
-    roads = root.findall("road")
-    ids = [str(r.get("id", "")) for r in roads]
-    if not roads:
-        raise MotosimError(f"{origin}: no <road>; expected at least one")
-    if road:
-        if road not in ids:
-            listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
-            raise MotosimError(f"{origin}: no road with id {road[:40]!r}; have {listed}")
-        chosen = roads[ids.index(road)]
-    elif len(roads) > 1:
-        listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
-        raise MotosimError(
-            f'{origin}: {len(roads)} roads ({listed}); choose one with road = "ID" in the path'
-        )
-    else:
-        chosen = roads[0]
+    chosen = _chosen_road(root, road, origin)
     label = f"{origin}: road {chosen.get('id', '')!r}"
     elements = chosen.findall("planView/geometry")
     if not elements:
@@ -182,41 +170,9 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
     out = []
     total = 0.0
     for k, element in enumerate(elements, start=1):
-        where = f"{label} geometry {k}"
-        shapes = [child for child in element if child.tag != "userData"]
-        if len(shapes) != 1:
-            names = ", ".join(f"<{c.tag}>" for c in shapes) or "none"
-            raise MotosimError(f"{where}: {names}; expected one of {_SHAPES}")
-        shape = shapes[0]
-        poly: tuple[float, ...] | None = None
-        p_end = 0.0
-        kind: Any = shape.tag
-        if shape.tag == "line":
-            curv = (0.0, 0.0)
-        elif shape.tag == "arc":
-            c = _number(shape, "curvature", where)
-            curv = (c, c)
-        elif shape.tag == "spiral":
-            curv = (_number(shape, "curvStart", where), _number(shape, "curvEnd", where))
-        elif shape.tag not in ("paramPoly3", "poly3"):
-            raise MotosimError(f"{where}: <{shape.tag[:40]}>; expected one of {_SHAPES}")
-        start = [_number(element, name, where) for name in ("s", "x", "y", "hdg", "length")]
-        if start[4] == 0.0:
-            continue  # a zero-length geometry (exporters write them) draws nothing
-        total += abs(start[4])
-        if total > MAX_ROAD_LENGTH:  # before a cubic's arc length is integrated
-            raise MotosimError(
-                f"{where}: the geometries reach {total:.6g} m; expected a reference line of at "
-                f"most {MAX_ROAD_LENGTH:g} m"
-            )
-        if shape.tag in ("paramPoly3", "poly3"):
-            curv = (0.0, 0.0)
-            kind, poly, p_end = "paramPoly3", *_polynomial(shape, start[4], where)
-        try:
-            s, x, y, hdg, length = start
-            out.append(RoadGeometry(kind, s, x, y, hdg, length, *curv, poly, p_end))
-        except MotosimError as err:
-            raise MotosimError(f"{where}: {err}") from None
+        piece, total = _geometry(element, f"{label} geometry {k}", total)
+        if piece is not None:
+            out.append(piece)
     out.sort(key=lambda g: g.s)
     geometry = tuple(out)
     if not geometry:
@@ -226,6 +182,65 @@ def parse_opendrive(raw: bytes, *, origin: str, road: str = "") -> tuple[RoadGeo
     except MotosimError as err:
         raise MotosimError(f"{label}: {err}") from None
     return geometry
+
+
+def _chosen_road(root: ET.Element, road: str, origin: str) -> ET.Element:
+    """The ``<road>`` element of id ``road``, or the document's only one for ``""``."""
+    roads = root.findall("road")
+    ids = [str(r.get("id", "")) for r in roads]
+    if not roads:
+        raise MotosimError(f"{origin}: no <road>; expected at least one")
+    if road:
+        if road not in ids:
+            listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
+            raise MotosimError(f"{origin}: no road with id {road[:40]!r}; have {listed}")
+        return roads[ids.index(road)]
+    if len(roads) > 1:
+        listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
+        raise MotosimError(
+            f'{origin}: {len(roads)} roads ({listed}); choose one with road = "ID" in the path'
+        )
+    return roads[0]
+
+
+def _geometry(element: ET.Element, where: str, total: float) -> tuple[RoadGeometry | None, float]:
+    """One ``<geometry>`` (None for a zero-length one) and the length of the road up to its
+    end [m], ``total`` being that up to its start."""
+    shapes = [child for child in element if child.tag != "userData"]
+    if len(shapes) != 1:
+        names = ", ".join(f"<{c.tag}>" for c in shapes) or "none"
+        raise MotosimError(f"{where}: {names}; expected one of {_SHAPES}")
+    shape = shapes[0]
+    poly: tuple[float, ...] | None = None
+    p_end = 0.0
+    kind: Any = shape.tag
+    if shape.tag == "line":
+        curv = (0.0, 0.0)
+    elif shape.tag == "arc":
+        c = _number(shape, "curvature", where)
+        curv = (c, c)
+    elif shape.tag == "spiral":
+        curv = (_number(shape, "curvStart", where), _number(shape, "curvEnd", where))
+    elif shape.tag not in ("paramPoly3", "poly3"):
+        raise MotosimError(f"{where}: <{shape.tag[:40]}>; expected one of {_SHAPES}")
+    start = [_number(element, name, where) for name in ("s", "x", "y", "hdg", "length")]
+    if start[4] == 0.0:
+        return None, total  # a zero-length geometry (exporters write them) draws nothing
+    total += abs(start[4])
+    if total > MAX_ROAD_LENGTH:  # before a cubic's arc length is integrated
+        raise MotosimError(
+            f"{where}: the geometries reach {total:.6g} m; expected a reference line of at "
+            f"most {MAX_ROAD_LENGTH:g} m"
+        )
+    if shape.tag in ("paramPoly3", "poly3"):
+        curv = (0.0, 0.0)
+        kind, poly, p_end = "paramPoly3", *_polynomial(shape, start[4], where)
+    try:
+        s, x, y, hdg, length = start
+        geometry = RoadGeometry(kind, s, x, y, hdg, length, *curv, poly, p_end)
+    except MotosimError as err:
+        raise MotosimError(f"{where}: {err}") from None
+    return geometry, total
 
 
 def read_opendrive(path: str | Path, *, road: str = "") -> tuple[RoadGeometry, ...]:

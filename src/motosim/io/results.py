@@ -12,30 +12,28 @@ A result is a folder holding:
   increasing ``t``; pandas and PlotJuggler read it as is. While a run goes, and in a run that
   did not complete, this file is called ``result.partial.csv``: its name says it is partial.
 
-How a result is never lost or corrupted:
+How a result is never lost or corrupted (the choices are in ``docs/organisation.md``):
 
-- **Lock.** While a run writes ``NAME``, it holds an exclusive lock (``flock``) on the file
-  ``.NAME.lock`` beside it; a second writer of the same folder, with or without
-  ``overwrite``, is refused. The operating system releases the lock when the process ends,
-  however it ends, so a killed run never blocks the next one. A command that writes more
-  into the folder after the result (``simulate``'s report, ``cueing``'s figures, ``run``'s
-  ``timing.json`` and report, its writer process holding the lock) holds the lock until
-  that is written too (:func:`folder_lock` with ``shared``).
+- **Lock.** While a run writes ``NAME`` it holds its :class:`~motosim.io.files.FolderLock`
+  (``.NAME.lock`` beside it); a second writer of the same folder, with or without
+  ``overwrite``, is refused. A command that writes more into the folder after the result
+  (a report, figures) takes the lock itself and hands it to the writer (``lock``), so the
+  folder stays locked until the last file.
 - **Staging.** The run writes into the sibling folder ``NAME.partial``; only
-  :meth:`ResultWriter.close` moves it to ``NAME``, replacing a previous result in two renames
-  (old aside, new in, old deleted). A run that fails or is interrupted leaves a previous
-  complete result untouched; with no previous result, or an earlier stopped run's, its rows
-  are moved to ``NAME`` marked partial (``complete`` False, ``result.partial.csv``), and a
-  rerun replaces them without ``overwrite``. A ``NAME`` that is neither empty nor a motosim
-  result (files another program put there while the run went) is never moved aside: the
-  result, complete or not, stays in ``NAME.partial``, and the run says so.
+  :meth:`ResultWriter.close` renames it to ``NAME``, a previous result replaced
+  (:func:`~motosim.io.files.replace_folder`). A run that fails or is interrupted leaves a
+  previous complete result untouched; with no previous result, or an earlier stopped run's,
+  its rows are moved to ``NAME`` marked partial (``complete`` False, ``result.partial.csv``),
+  and a rerun replaces them without ``overwrite``. A ``NAME`` that is neither empty nor a
+  motosim result (files another program put there while the run went) is never moved aside:
+  the result, complete or not, stays in ``NAME.partial``, and the run says so.
 - **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
-  them. Ctrl-C (SIGINT) and, inside ``with ResultWriter(...)``, SIGTERM close both files,
-  readable, marked partial. The HDF5 file is written without SWMR, so it carries no "open
-  for writing" flag: after SIGKILL or a power cut, ``NAME.partial/result.h5`` opens with plain
-  h5py, pandas or HDFView and holds every row flushed before the kill (``complete`` False),
-  as ``result.partial.csv`` does (each block is one ``write`` call, so no row is cut
-  short). :func:`load_result` reads it; the next run of the same folder replaces it.
+  them; an exception leaving the ``with`` block (Ctrl-C, or SIGTERM turned into it by the
+  command, :class:`~motosim.errors.StopFlag`) closes both files, readable, marked partial.
+  The HDF5 file is written without SWMR, so after SIGKILL or a power cut
+  ``NAME.partial/result.h5`` opens with plain h5py, pandas or HDFView and holds every row
+  flushed before the kill, as ``result.partial.csv`` does (each block is one ``write`` call,
+  so no row is cut short).
 - **Full disk.** ``expected_rows`` lets the writer refuse a run the free space cannot hold
   before it starts; a write that fails anyway is one :class:`MotosimError` line saying how
   many rows were kept, and where.
@@ -43,22 +41,15 @@ How a result is never lost or corrupted:
 Units are those of :mod:`motosim.signals`: SI, angles in radians.
 """
 
-import fcntl
 import json
 import logging
 import math
 import os
-import re
-import secrets
 import shutil
-import signal
-import threading
-import time
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
-from types import FrameType, TracebackType
+from types import TracebackType
 from typing import Any, NoReturn, Self
 
 import h5py
@@ -66,22 +57,17 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from motosim import __version__
-from motosim.errors import MotosimError, RunFailedError, stop_signals
+from motosim.errors import MotosimError, RunFailedError, StopFlag
+from motosim.io.files import FolderLock, reason, replace_folder
 from motosim.timeseries import TimeSeries
 
 __all__ = [
     "RESERVE_BYTES",
     "ResultWriter",
     "SimResult",
-    "StopRequest",
-    "folder_lock",
     "is_complete_result",
-    "is_locked",
     "load_result",
-    "lock_file",
     "partial_folder",
-    "terminate_as_interrupt",
-    "write_whole",
 ]
 
 _log = logging.getLogger(__name__)
@@ -157,12 +143,6 @@ def partial_folder(folder: str | Path) -> Path:
     return target.with_name(target.name + _PARTIAL)
 
 
-def lock_file(folder: str | Path) -> Path:
-    """The lock held while a run writes ``folder``: ``.NAME.lock`` beside it."""
-    target = Path(folder)
-    return target.with_name(f".{target.name}.lock")
-
-
 def is_complete_result(folder: str | Path) -> bool:
     """Whether ``folder`` holds a completed result (its ``result.csv`` is renamed at the end).
 
@@ -180,428 +160,6 @@ def is_complete_result(folder: str | Path) -> bool:
             return bool(h5.attrs.get("complete", False))
     except (OSError, ValueError):  # not HDF5, truncated: no result to keep
         return False
-
-
-_SHARED: dict[str, tuple[int, int, int]] = {}
-"""The locks held by ``folder_lock(..., shared=True)``: lock file -> (descriptor, holding
-thread, holders)."""
-_HELD_GUARD = threading.Lock()
-
-
-_LOCK_PATIENCE = 0.05
-"""How long, in s, a writer tries a folder's lock before it is refused: a reader
-(:func:`is_locked`) holds it for microseconds."""
-
-
-def _lock_within(fd: int, patience: float) -> bool:
-    """Take an exclusive ``flock`` on ``fd``, trying for ``patience`` seconds; whether it was
-    taken."""
-    deadline = time.monotonic() + patience
-    while True:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            return True
-        except BlockingIOError:
-            if time.monotonic() >= deadline:
-                return False
-            time.sleep(0.005)
-
-
-def _live_holder(text: str) -> int | None:
-    """The pid written in a lock file (``pid N``) if a process of that number is alive here;
-    None if there is none, or it has ended (a killed run's file, whose lock a reader holds)."""
-    found = re.fullmatch(r"\s*pid (\d+)\s*", text)
-    if found is None:
-        return None
-    pid = int(found.group(1))
-    if pid <= 0:
-        return None
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return None
-    except PermissionError:  # another user's process
-        return pid
-    except (OverflowError, OSError):
-        return None
-    return pid
-
-
-class _FolderLock:
-    """An exclusive ``flock`` on ``.NAME.lock``, released by the OS however the process ends.
-
-    Taken with ``shared``, the thread that holds it may take it again (a
-    :class:`ResultWriter` within ``folder_lock(folder, shared=True)``, which keeps the folder
-    locked until the command's report is written): the holders share it, and the last one
-    releases it. Otherwise, and from another thread or process, a second holder is refused.
-    """
-
-    def __init__(self, folder: Path, *, shared: bool = False) -> None:
-        self.path = lock_file(folder)
-        self._fd: int | None = None
-        self._key = os.path.join(os.path.realpath(self.path.parent), self.path.name)
-        with _HELD_GUARD:
-            held = _SHARED.get(self._key)
-            if held is not None and held[1] == threading.get_ident():
-                _SHARED[self._key] = (held[0], held[1], held[2] + 1)
-                self._fd = held[0]
-                return
-        try:
-            self._acquire(folder, shared)
-        except OSError as err:
-            raise MotosimError(
-                f"{folder}: cannot create the lock {self.path}: {err.strerror or err}; nothing "
-                "was written"
-            ) from None
-
-    def _acquire(self, folder: Path, shared: bool) -> None:
-        for _ in range(10):  # retry if a finishing run unlinked the file we opened
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-            if not _lock_within(fd, _LOCK_PATIENCE):
-                holder = _live_holder(os.read(fd, 64).decode("ascii", "replace"))
-                os.close(fd)
-                if holder is None:  # a reader's lock, or a writer elsewhere, on a stale file
-                    raise MotosimError(
-                        f"{folder}: another process is writing this result or reading its "
-                        "status; wait for it to end or choose another folder"
-                    )
-                raise MotosimError(
-                    f"{folder}: another run (pid {holder}) is writing this result; wait for it "
-                    "to end or choose another folder"
-                )
-            try:
-                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
-            except FileNotFoundError:
-                same = False
-            if same:
-                try:
-                    os.ftruncate(fd, 0)
-                    os.write(fd, f"pid {os.getpid()}\n".encode())
-                except OSError:
-                    self.path.unlink(missing_ok=True)
-                    os.close(fd)
-                    raise
-                self._fd = fd
-                if shared:
-                    with _HELD_GUARD:
-                        _SHARED[self._key] = (fd, threading.get_ident(), 1)
-                return
-            os.close(fd)
-        raise MotosimError(f"{folder}: could not lock {self.path}; try again")
-
-    def release(self) -> None:
-        """Delete the lock file, then release the lock (in that order, so no one races in);
-        a lock taken again is released by the last of its holders."""
-        if self._fd is None:
-            return
-        with _HELD_GUARD:
-            held = _SHARED.pop(self._key, None)
-            if held is not None and held[2] > 1:
-                _SHARED[self._key] = (held[0], held[1], held[2] - 1)
-                self._fd = None
-                return
-        self.path.unlink(missing_ok=True)
-        os.close(self._fd)
-        self._fd = None
-
-
-def is_locked(folder: str | Path) -> bool:
-    """Whether a process holds the lock of a run writing ``folder`` (:func:`folder_lock`).
-
-    Tries the lock without waiting and, if it gets it, lets it go at once; writes nothing
-    (a missing lock file is no holder). A writer that tries the lock in that instant tries
-    again for 50 ms before it is refused.
-
-    Parameters
-    ----------
-    folder : str or Path
-        The folder (its lock is ``.NAME.lock`` beside it).
-
-    Returns
-    -------
-    bool
-        True while a process, this one included, holds it.
-    """
-    path = lock_file(Path(folder).absolute())
-    for _ in range(10):  # again if the file taken was a finished run's, replaced meanwhile
-        try:
-            fd = os.open(path, os.O_RDONLY)
-        except FileNotFoundError:
-            return False
-        except OSError:  # unreadable: say held rather than stopped
-            return True
-        try:
-            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-            same = os.fstat(fd).st_ino == os.stat(path).st_ino
-        except BlockingIOError:
-            return True
-        except FileNotFoundError:  # its run ended meanwhile
-            return False
-        finally:
-            os.close(fd)
-        if same:
-            return False
-    return True
-
-
-@contextmanager
-def folder_lock(folder: str | Path, *, shared: bool = False) -> Iterator[Path]:
-    """Hold the lock of a run writing ``folder`` (``.NAME.lock`` beside it) within the block.
-
-    The lock :class:`ResultWriter` holds, for writers of other kinds of folder (a campaign's):
-    a second writer of the same folder is refused in one line, and the operating system
-    releases the lock however the process ends.
-
-    Parameters
-    ----------
-    folder : str or Path
-        The folder written; its parent must exist and be writable (the lock is beside it).
-    shared : bool
-        Let a :class:`ResultWriter` of ``folder`` opened within the block, in this thread,
-        share the lock instead of being refused: the folder then stays locked after the
-        writer has closed, until the block ends, so that what a command writes beside the
-        result (its report, its figures) is written under the lock too.
-
-    Yields
-    ------
-    Path
-        The lock file.
-
-    Raises
-    ------
-    MotosimError
-        If another process still holds it after 50 ms (naming the run's pid if the lock file
-        names a live one), or it cannot be created (naming the folder).
-    """
-    target = Path(folder).absolute()
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise MotosimError(f"cannot create folder {target.parent}: {_reason(err)}") from None
-    lock = _FolderLock(target, shared=shared)
-    try:
-        yield lock.path
-    finally:
-        lock.release()
-
-
-_LEFTOVER = r"[0-9a-f]{12}"
-"""The random part of a temporary file's name, ``.NAME.<12 hex digits>.partial``."""
-
-
-def _sidecar(temporary: Path) -> Path:
-    """The empty file whose lock says a write of ``temporary`` is going on:
-    ``.NAME.XXXXXXXXXXXX.partial.lock``."""
-    return temporary.with_name(temporary.name + ".lock")
-
-
-def _remove_leftovers(real: Path) -> None:
-    """Delete the temporary files of earlier writes of ``real`` that no process writes.
-
-    A writer holds an exclusive ``flock`` on an empty sidecar, ``.NAME.XXXX.partial.lock``,
-    which it creates (and locks) before its temporary file ``.NAME.XXXX.partial`` and deletes
-    after it; the operating system releases the lock when the process ends, however it ends.
-    The lock is on the sidecar, never read or written, not on the file written: on SMB/CIFS a
-    lock is mandatory, and the writes, made through descriptors of their own, would fail.
-    Both are opened for writing, as an exclusive lock needs on NFS.
-
-    A leftover of the same file whose sidecar's lock this call can take without waiting is a
-    killed write's (SIGKILL, a power cut): the temporary file, then the sidecar, are deleted;
-    a sidecar alone (a writer killed before it created its temporary file) too. One whose lock
-    is held (a write going on, in this process or another), or that cannot be opened or
-    deleted, is left. A temporary file without a sidecar is no write of this version going on
-    (the sidecar is created first and deleted last): it is deleted if a lock on the file
-    itself can be taken (an earlier version's writer held that one).
-    """
-    pattern = re.compile(rf"\.{re.escape(real.name)}\.({_LEFTOVER})\.partial(\.lock)?")
-    try:
-        tokens = {
-            found.group(1)
-            for entry in os.scandir(real.parent)
-            if (found := pattern.fullmatch(entry.name)) is not None
-        }
-    except OSError:
-        return
-    for token in sorted(tokens):
-        temporary = real.with_name(f".{real.name}.{token}.partial")
-        sidecar = _sidecar(temporary)
-        try:
-            fd = os.open(sidecar, os.O_RDWR | os.O_NOFOLLOW)
-        except FileNotFoundError:  # none, or its write has just ended (and its file is gone)
-            sidecar = temporary
-            try:
-                fd = os.open(temporary, os.O_RDWR | os.O_NOFOLLOW)
-            except OSError:
-                continue
-        except OSError:
-            continue
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            if os.fstat(fd).st_ino == os.stat(sidecar).st_ino:
-                # under its lock: no writer can take it up meanwhile
-                temporary.unlink(missing_ok=True)
-                sidecar.unlink(missing_ok=True)
-                _log.info("removed %s, left by a write that was killed", temporary.name)
-        except OSError as err:  # BlockingIOError: a write going on
-            _log.debug("leaving %s: %s", temporary.name, err)
-        finally:
-            os.close(fd)
-
-
-def _open_temporary(real: Path) -> tuple[Path, int]:
-    """Create a new temporary file beside ``real``, after its sidecar, locked (see
-    :func:`_remove_leftovers`); its name and the descriptor of the sidecar, which holds the
-    lock."""
-    while True:
-        temporary = real.with_name(f".{real.name}.{secrets.token_hex(6)}.partial")
-        sidecar = _sidecar(temporary)
-        fd = os.open(sidecar, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)  # umask applies
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX)  # at once, unless a cleaner is trying it
-            if os.fstat(fd).st_ino == os.stat(sidecar).st_ino:
-                os.close(os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666))
-                return temporary, fd
-        except FileNotFoundError:  # a cleaner took it between its creation and the lock
-            pass
-        except BaseException:
-            os.close(fd)
-            sidecar.unlink(missing_ok=True)
-            raise
-        os.close(fd)
-
-
-def write_whole(path: str | Path, write: Callable[[Path], object]) -> Path:
-    """Write a file whole or not at all: through ``write`` into a hidden sibling, then renamed.
-
-    Parameters
-    ----------
-    path : str or Path
-        The file. Until ``write`` has returned, a previous file there is left as it was; a
-        symbolic link is followed (the file it names is replaced, the link kept), and a
-        previous file's permissions are kept.
-    write : callable
-        Called with the temporary path to write (``.NAME.XXXXXXXXXXXX.partial`` beside the
-        file, 12 random hexadecimal digits; it exists, empty, and may be written over).
-
-    Returns
-    -------
-    Path
-        ``path``.
-
-    Raises
-    ------
-    MotosimError
-        One line naming the file and the system's reason (a full disk, a read-only folder);
-        the temporary file is deleted, as it is when ``write`` is interrupted.
-
-    Notes
-    -----
-    The writer holds an exclusive ``flock`` on an empty sidecar, ``.NAME.XXXX.partial.lock``,
-    until the rename; both are then deleted. A process killed while it writes (SIGKILL, a
-    power cut) leaves both files, and its lock goes with the process: the next write of the
-    same file deletes such leftovers, those whose lock it can take (before writing: their
-    space is free for it); a write going on keeps its files (see :func:`_remove_leftovers`).
-    """
-    target = Path(path)
-    real = Path(os.path.realpath(target))  # through a link, as writing in place did
-    _remove_leftovers(real)
-    temporary: Path | None = None
-    fd = -1
-    try:
-        temporary, fd = _open_temporary(real)
-        write(temporary)
-        if real.exists():
-            shutil.copymode(real, temporary)  # a private log stays private
-        os.replace(temporary, real)
-    except BaseException as err:
-        if temporary is not None:
-            try:
-                temporary.unlink(missing_ok=True)
-            except OSError:
-                pass
-        if isinstance(err, OSError):
-            raise MotosimError(
-                f"cannot write {target}: {_reason(err)}; the previous file, if any, is kept"
-            ) from None
-        raise
-    finally:
-        if fd >= 0:
-            os.close(fd)  # the lock goes with it; the temporary file is gone already
-        if temporary is not None:
-            try:
-                _sidecar(temporary).unlink(missing_ok=True)
-            except OSError:  # a lone unlocked sidecar: the next write's cleaner takes it
-                pass
-    return target
-
-
-class StopRequest:
-    """The stop signal received within :func:`terminate_as_interrupt`, kept until acted on.
-
-    The handler raises :class:`KeyboardInterrupt` where Python happens to be; when that is a
-    finaliser or a weak-reference callback, Python prints "Exception ignored" and goes on, and
-    the stop would be lost. :meth:`check`, called where the run can stop (each block of rows),
-    raises it again.
-    """
-
-    def __init__(self) -> None:
-        self.name: str | None = None
-        self.holding = False
-
-    def check(self) -> None:
-        """Raise :class:`KeyboardInterrupt` if a stop signal has arrived."""
-        if self.name is not None:
-            raise KeyboardInterrupt(self.name)
-
-    @contextmanager
-    def held(self) -> Iterator[None]:
-        """Within the block a stop signal is kept, not raised: a block of rows goes to both
-        files or to neither (:meth:`check` raises it after)."""
-        self.holding = True
-        try:
-            yield
-        finally:
-            self.holding = False
-
-
-@contextmanager
-def terminate_as_interrupt() -> Iterator[StopRequest]:
-    """Within the block, SIGTERM and SIGHUP raise :class:`KeyboardInterrupt`, as Ctrl-C does
-    (Ctrl-C too, through the same handler, where its default one is installed).
-
-    A service manager, ``timeout`` or a closed terminal stops a run with SIGTERM or SIGHUP,
-    whose default action ends the process at once, leaving files open. Turned into
-    ``KeyboardInterrupt``, they unwind the ``with`` blocks like Ctrl-C: the result is closed
-    and marked partial. The block gets a :class:`StopRequest` that remembers the signal, for a
-    raise that landed where Python ignores exceptions, and holds it while a block of rows is
-    being written (:meth:`StopRequest.held`). Outside the main thread (where Python
-    cannot install handlers) the block runs unchanged. The previous handlers are restored on
-    leaving.
-
-    Examples
-    --------
-    >>> with terminate_as_interrupt() as stop:
-    ...     stop.check()
-    """
-    stop = StopRequest()
-    if threading.current_thread() is not threading.main_thread():
-        yield stop
-        return
-
-    def _raise(signum: int, frame: FrameType | None) -> None:
-        stop.name = signal.Signals(signum).name
-        if not stop.holding:
-            raise KeyboardInterrupt(stop.name)
-
-    stops = stop_signals()
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # Ctrl-C, held alike
-        stops.append(signal.SIGINT)
-    previous = {sig: signal.signal(sig, _raise) for sig in stops}
-    try:
-        yield stop
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
 
 
 class ResultWriter:
@@ -623,6 +181,13 @@ class ResultWriter:
     expected_rows : int, optional
         Rows the run will write; when given, a run the free disk space cannot hold is refused
         before it starts.
+    lock : FolderLock, optional
+        The caller's lock of ``folder``, held (the caller keeps it after :meth:`close`, for
+        what it writes beside the result); by default the writer takes the lock itself and
+        releases it once the files are closed.
+    stop : StopFlag, optional
+        The stop the command's signal handlers request: held while a block goes to both
+        files, raised at the next block.
 
     Raises
     ------
@@ -633,11 +198,10 @@ class ResultWriter:
 
     Notes
     -----
-    Use it in a ``with`` block: SIGTERM and SIGHUP then stop the run as Ctrl-C does
-    (:func:`terminate_as_interrupt`), and leaving the block on an exception closes the files
-    without marking them complete (see the module notes for where the rows go). After an
-    interruption :attr:`location` says where the rows are. Leaving the block normally
-    completes the result (without summary if :meth:`close` was not called).
+    Use it in a ``with`` block: leaving the block on an exception (Ctrl-C, a stop from
+    ``stop``) closes the files without marking them complete (see the module notes for where
+    the rows go). After an interruption :attr:`location` says where the rows are. Leaving the
+    block normally completes the result (without summary if :meth:`close` was not called).
 
     Examples
     --------
@@ -659,6 +223,8 @@ class ResultWriter:
         *,
         overwrite: bool = False,
         expected_rows: int | None = None,
+        lock: FolderLock | None = None,
+        stop: StopFlag | None = None,
     ) -> None:
         self._names = _check_names(names)
         metadata_json = _to_json(metadata, "metadata")
@@ -668,13 +234,15 @@ class ResultWriter:
         self._rows = 0
         self._last_t = -math.inf
         self._closed = False
-        self._signals: Any = None
-        self._stop = StopRequest()
-        try:
-            self._folder.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise MotosimError(f"cannot create result folder {folder}: {err.strerror}") from None
-        self._lock = _FolderLock(self._folder)
+        self._stop = stop if stop is not None else StopFlag()
+        if lock is not None and (not lock.held or lock.folder != self._folder):
+            raise MotosimError(
+                f"{folder}: the lock given is not the held lock of this folder ({lock.folder}); "
+                "expected the lock of the result folder, entered"
+            )
+        self._own_lock = FolderLock(self._folder) if lock is None else None
+        if self._own_lock is not None:
+            self._own_lock.__enter__()
         try:
             # checked again under the lock: another run may have completed meanwhile
             _check_folder(self._folder, overwrite=overwrite)
@@ -687,11 +255,16 @@ class ResultWriter:
             self._csv_path = self._staging / _CSV_PARTIAL
             self._open(metadata_json)
         except OSError as err:
-            self._lock.release()
-            raise MotosimError(f"cannot create a result in {folder}: {_first_line(err)}") from None
+            self._release()
+            raise MotosimError(f"cannot create a result in {folder}: {reason(err)}") from None
         except BaseException:
-            self._lock.release()
+            self._release()
             raise
+
+    def _release(self) -> None:
+        """Release the lock if the writer took it itself."""
+        if self._own_lock is not None:
+            self._own_lock.__exit__(None, None, None)
 
     def _open(self, metadata_json: str) -> None:
         k = len(self._names)
@@ -718,26 +291,6 @@ class ResultWriter:
         except BaseException:
             self._h5.close()
             raise
-
-    @property
-    def folder(self) -> Path:
-        """The result folder, where a completed run is published."""
-        return self._folder
-
-    @property
-    def location(self) -> Path:
-        """Where the rows are now: the staging folder while running, then where they were kept."""
-        return self._location
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Column names, ``"t"`` first."""
-        return self._names
-
-    @property
-    def rows(self) -> int:
-        """Rows written so far."""
-        return self._rows
 
     def append(self, block: ArrayLike) -> None:
         """Write rows to both files and flush them.
@@ -817,11 +370,11 @@ class ResultWriter:
 
     def _fail(self, path: Path, err: OSError | RuntimeError) -> NoReturn:
         """A write failed (full disk...): close what can be closed, say what was kept."""
-        reason = _reason(err)
+        why = reason(err)
         self._abort()
         upto = f" (t <= {self._last_t:g} s)" if self._rows else ""
         raise MotosimError(
-            f"cannot write {path.name}: {reason}; the result is partial, {self._rows} rows"
+            f"cannot write {path.name}: {why}; the result is partial, {self._rows} rows"
             f"{upto} kept in {self._location}"
         ) from None
 
@@ -857,7 +410,7 @@ class ResultWriter:
             self._publish()
         except _OccupiedError:
             self._closed = True
-            self._lock.release()
+            self._release()
             raise MotosimError(
                 f"{self._folder}: holds files that are not a motosim result, written there while "
                 f"the run went; they are left as they are, and the complete result is in "
@@ -867,10 +420,10 @@ class ResultWriter:
             self._fail(self._h5_path, err)
         self._closed = True
         self._location = self._folder
-        self._lock.release()
+        self._release()
 
     def _publish(self) -> None:
-        """Move the staging folder to the result folder, the previous one aside then deleted.
+        """Move the staging folder to the result folder (:func:`replace_folder`).
 
         Raises
         ------
@@ -881,13 +434,7 @@ class ResultWriter:
         """
         if not _replaceable(self._folder):
             raise _OccupiedError(self._folder)
-        old = self._folder.with_name(f".{self._folder.name}.old")
-        if old.exists():
-            shutil.rmtree(old)
-        if self._folder.exists():
-            os.replace(self._folder, old)
-        os.replace(self._staging, self._folder)
-        shutil.rmtree(old, ignore_errors=True)
+        replace_folder(self._staging, self._folder)
 
     def _abort(self) -> None:
         """Close both files without marking the result complete; keep the rows where they help."""
@@ -902,7 +449,7 @@ class ResultWriter:
         try:
             self._h5.close()
         except (OSError, RuntimeError) as err:
-            _log.warning("closing %s: %s", self._h5_path, _first_line(err))
+            _log.warning("closing %s: %s", self._h5_path, reason(err))
         try:
             if not is_complete_result(self._folder):
                 # no previous result, or an earlier stopped run's: the partial one goes where
@@ -917,11 +464,9 @@ class ResultWriter:
             )
         except OSError as err:
             _log.warning("keeping %s: %s", self._staging, err)
-        self._lock.release()
+        self._release()
 
     def __enter__(self) -> Self:
-        self._signals = terminate_as_interrupt()
-        self._stop = self._signals.__enter__()
         return self
 
     def __exit__(
@@ -932,26 +477,41 @@ class ResultWriter:
     ) -> None:
         if exc_type is None and self._stop.name is not None and not self._closed:
             exc_type = KeyboardInterrupt  # a stop signal whose raise was swallowed
-        try:
-            if exc_type is None:
-                self.close()
-            elif not self._closed:
-                # a run that failed or was interrupted says where its rows are itself
-                expected = issubclass(exc_type, RunFailedError | KeyboardInterrupt)
-                self._abort()
-                _log.log(
-                    logging.INFO if expected else logging.WARNING,
-                    "run interrupted by %s: %d rows kept in %s, marked partial",
-                    exc_type.__name__,
-                    self._rows,
-                    self._location,
-                )
-        finally:
-            if self._signals is not None:
-                self._signals.__exit__(None, None, None)
-                self._signals = None
+        if exc_type is None:
+            self.close()
+        elif not self._closed:
+            # a run that failed or was interrupted says where its rows are itself
+            expected = issubclass(exc_type, RunFailedError | KeyboardInterrupt)
+            self._abort()
+            _log.log(
+                logging.INFO if expected else logging.WARNING,
+                "run interrupted by %s: %d rows kept in %s, marked partial",
+                exc_type.__name__,
+                self._rows,
+                self._location,
+            )
         if exc is None:
             self._stop.check()
+
+    @property
+    def folder(self) -> Path:
+        """The result folder, where a completed run is published."""
+        return self._folder
+
+    @property
+    def location(self) -> Path:
+        """Where the rows are now: the staging folder while running, then where they were kept."""
+        return self._location
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Column names, ``"t"`` first."""
+        return self._names
+
+    @property
+    def rows(self) -> int:
+        """Rows written so far."""
+        return self._rows
 
 
 class _OccupiedError(OSError):
@@ -965,14 +525,6 @@ def _replaceable(folder: Path) -> bool:
         return not folder.exists() or (folder / _H5_NAME).is_file() or not any(folder.iterdir())
     except NotADirectoryError:
         return False
-
-
-def _reason(err: BaseException) -> str:
-    """The system's reason for a failed write, e.g. ``No space left on device``."""
-    if isinstance(err, OSError) and err.strerror:
-        return err.strerror
-    found = re.search(r"error message = '([^']+)'", str(err))
-    return found.group(1) if found else _first_line(err)
 
 
 def _write_all(fd: int, data: bytes) -> None:
@@ -1014,11 +566,6 @@ def _check_space(parent: Path, rows: int, columns: int) -> None:
             f"{need / 1e6:.0f} MB with the {RESERVE_BYTES / 1e6:.0f} MB reserve; only "
             f"{free / 1e6:.0f} MB are free"
         )
-
-
-def _first_line(err: BaseException) -> str:
-    lines = str(err).strip().splitlines()
-    return lines[0] if lines else type(err).__name__
 
 
 @dataclass(frozen=True, slots=True)
@@ -1078,32 +625,8 @@ def load_result(folder: str | Path) -> SimResult:
         One line naming the path: missing folder or file, a file that is not HDF5 or not a
         motosim result, unreadable metadata.
     """
-    path = Path(folder)
-    if not path.exists():
-        stopped = partial_folder(path)
-        hint = (
-            f"; a run writing it, or one that was stopped, has its rows in {stopped}"
-            if stopped.is_dir()
-            else ""
-        )
-        raise MotosimError(f"{folder}: no such result folder{hint}")
-    file = path / _H5_NAME if path.is_dir() else path
-    if not file.is_file():
-        raise MotosimError(f"{folder}: no {_H5_NAME}; expected a folder written by motosim")
-    h5 = None
-    failure: OSError | None = None
-    # plain; then without HDF5's file lock (a run in progress in another process); then
-    # SWMR, in which motosim <= 0.1 wrote its results
-    for options in ({}, {"locking": False}, {"swmr": True, "locking": False}):
-        try:
-            h5 = h5py.File(file, "r", **options)
-            break
-        except OSError as err:
-            failure = err
-    if h5 is None:
-        reason = _first_line(failure) if failure else "unknown"
-        raise MotosimError(f"{file}: not a readable HDF5 file ({reason})")
-    with h5:
+    file = _result_file(Path(folder))
+    with _open_h5(file) as h5:
         if h5.attrs.get("format") != _FORMAT or not isinstance(h5.get("signals"), h5py.Dataset):
             raise MotosimError(f"{file}: not a motosim result (no {_FORMAT!r} format marker)")
         dataset = h5["signals"]
@@ -1121,13 +644,37 @@ def load_result(folder: str | Path) -> SimResult:
     written = np.flatnonzero(np.isfinite(table[:, 0]))
     table = table[: written[-1] + 1] if written.size else table[:0]
     return SimResult(
-        table[:, 0].copy(),
-        table[:, 1:].copy(),
-        names[1:],
-        metadata,
-        summary,
-        complete,
+        table[:, 0].copy(), table[:, 1:].copy(), names[1:], metadata, summary, complete
     )
+
+
+def _result_file(path: Path) -> Path:
+    """The ``result.h5`` of the result folder ``path`` (or ``path``, a file), which exists."""
+    if not path.exists():
+        stopped = partial_folder(path)
+        hint = (
+            f"; a run writing it, or one that was stopped, has its rows in {stopped}"
+            if stopped.is_dir()
+            else ""
+        )
+        raise MotosimError(f"{path}: no such result folder{hint}")
+    file = path / _H5_NAME if path.is_dir() else path
+    if not file.is_file():
+        raise MotosimError(f"{path}: no {_H5_NAME}; expected a folder written by motosim")
+    return file
+
+
+def _open_h5(file: Path) -> h5py.File:
+    """``file`` opened for reading: plainly; else without HDF5's file lock (a run in progress
+    in another process); else as SWMR, in which motosim <= 0.1 wrote its results."""
+    failure: OSError | None = None
+    for options in ({}, {"locking": False}, {"swmr": True, "locking": False}):
+        try:
+            return h5py.File(file, "r", **options)
+        except OSError as err:
+            failure = err
+    why = reason(failure) if failure else "unknown"
+    raise MotosimError(f"{file}: not a readable HDF5 file ({why})")
 
 
 def _read_json(h5: h5py.File, key: str, file: Path) -> dict[str, Any]:

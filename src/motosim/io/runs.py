@@ -20,10 +20,11 @@ from typing import Any
 import numpy as np
 
 from motosim.choices import MOTORCYCLE_PROFILES
-from motosim.errors import MotosimError, RunFailedError, warn
+from motosim.errors import MotosimError, RunFailedError, StopFlag, warn
 from motosim.estimation.walcott_zak import ObserverSettings, WalcottZakObserver, design_with
 from motosim.io.cache import DesignCache, cached_controller, cached_rider
 from motosim.io.design_file import read_design
+from motosim.io.files import FolderLock
 from motosim.io.logs import read_log
 from motosim.io.opendrive import read_opendrive
 from motosim.io.results import ResultWriter
@@ -124,104 +125,10 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
     """
     folder = Path(base)
     scenario = read_road(scenario, folder)
-    hb = scenario.handlebar
+    hb, mc = scenario.handlebar, scenario.motorcycle
     nominal = load_parameters(parameter_source(hb.nominal, folder), "handlebar")
-    designed_for = held_handlebar(nominal, scenario.stack_hands)  # the controller's plant
-    tables: dict[str, TimeSeries] = {}
-    mc = scenario.motorcycle
-    profiles = {f"[motorcycle] {key}": getattr(mc, key) for key in MOTORCYCLE_PROFILES} | {
-        "[road] friction": scenario.road.friction,
-        "[rider] profile": scenario.rider.profile,
-        "[rider] probe": scenario.rider.probe,
-    }
-    for where, profile in profiles.items():
-        if isinstance(profile, CsvProfile):
-            tables[profile.file] = read_log(
-                folder / profile.file,
-                required=(profile.column,),
-                min_samples=2,
-                remedy=f"the file's header must name t and the column = {profile.column!r}",
-            )
-            # its values in their legal range, as a profile written in the scenario: a huge
-            # one would overflow in the run's metrics before the run failed
-            values = tables[profile.file][profile.column]
-            check_profile_values(
-                where,
-                float(np.min(values)),
-                float(np.max(values)),
-                key=f"{profile.file}: column {profile.column!r} ({where})",
-            )
-    c = scenario.controller
-    controller, observer = None, None
-    if c.kind == "paper":
-        from motosim.control.torque_feedback import PAPER_CONTROLLER
-
-        controller = PAPER_CONTROLLER
-    elif c.kind == "ours" and c.design is not None:
-        design = read_design(parameter_source(c.design, folder))
-        observer = design.observer
-        method = c.discretization
-        rate = scenario.rates.measurement
-        # the design's own discrete matrices when it was made for this rate
-        matches = abs(design.rate - rate) <= 1e-9 * rate
-        controller = design.controller_discrete[method] if matches else design.controller
-        if not matches and scenario.estimator.name == "walcott_zak":
-            _check_observer_rate(c.design, design.rate, observer, nominal, rate)
-        _warn_other_handlebar(c.design, design.handlebar, nominal)
-    elif c.kind == "ours":
-        rate = scenario.rates.measurement
-        if c.bandwidth is not None:  # bad input, before the synthesis
-            from motosim.control.torque_feedback import check_options
-
-            try:
-                check_options(bandwidth=c.bandwidth, rate=rate, integral_corner=c.integral_corner)
-            except MotosimError as err:
-                raise MotosimError(f"[controller] {err}") from None
-
-        def synthesis() -> StateSpace:  # SciPy: only when the design is not cached
-            from motosim.control.torque_feedback import (
-                INTEGRAL_CORNER,
-                handlebar_bandwidth,
-                synthesize_controller,
-            )
-
-            bandwidth = c.bandwidth
-            if bandwidth is None:
-                bandwidth, controller = handlebar_bandwidth(designed_for, rate=rate, n_starts=4)
-            if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
-                controller = synthesize_controller(
-                    designed_for,
-                    rng=np.random.default_rng(0),
-                    bandwidth=bandwidth,
-                    order=c.order,
-                    rate=rate,
-                    n_starts=4,
-                    integral_corner=c.integral_corner,
-                )
-            return controller
-
-        # the scenario is checked by now: a synthesis failing on it is a failed run (exit 3)
-        try:
-            if cache is None:
-                controller = synthesis()
-            else:
-                with cache.designing(scenario.name):
-                    settings = {
-                        "rate": rate,
-                        "bandwidth": c.bandwidth,
-                        "order": c.order,
-                        "integral_corner": c.integral_corner,
-                        "n_starts": 4,
-                        "seed": 0,
-                    }
-                    controller = cached_controller(
-                        cache, synthesis, handlebar=designed_for, settings=settings
-                    )
-        except MotosimError as err:
-            raise RunFailedError(
-                f"{scenario.name}: the controller's design failed ([controller] order "
-                f"{c.order}): {err}"
-            ) from None
+    tables = _read_tables(scenario, folder)
+    controller, observer = _controller(scenario, folder, nominal, cache)
     source = sharp_source = parameter_source(mc.params, folder)
     multibody = None
     if mc.model == "multibody":
@@ -246,6 +153,142 @@ def resolve(scenario: Scenario, base: str | Path, *, cache: DesignCache | None =
         return dataclasses.replace(inputs, rider=cached_rider(cache, inputs))
 
 
+def _read_tables(scenario: Scenario, folder: Path) -> dict[str, TimeSeries]:
+    """The CSV profiles the scenario names (file name -> table), each checked in its range."""
+    mc = scenario.motorcycle
+    profiles = {f"[motorcycle] {key}": getattr(mc, key) for key in MOTORCYCLE_PROFILES} | {
+        "[road] friction": scenario.road.friction,
+        "[rider] profile": scenario.rider.profile,
+        "[rider] probe": scenario.rider.probe,
+    }
+    tables: dict[str, TimeSeries] = {}
+    for where, profile in profiles.items():
+        if isinstance(profile, CsvProfile):
+            tables[profile.file] = read_log(
+                folder / profile.file,
+                required=(profile.column,),
+                min_samples=2,
+                remedy=f"the file's header must name t and the column = {profile.column!r}",
+            )
+            # its values in their legal range, as a profile written in the scenario: a huge
+            # one would overflow in the run's metrics before the run failed
+            values = tables[profile.file][profile.column]
+            check_profile_values(
+                where,
+                float(np.min(values)),
+                float(np.max(values)),
+                key=f"{profile.file}: column {profile.column!r} ({where})",
+            )
+    return tables
+
+
+def _controller(
+    scenario: Scenario, folder: Path, nominal: HandlebarParameters, cache: DesignCache | None
+) -> tuple[StateSpace | None, ObserverSettings | None]:
+    """The scenario's controller and, from a design file, its observer settings."""
+    c = scenario.controller
+    if c.kind == "paper":
+        from motosim.control.torque_feedback import PAPER_CONTROLLER
+
+        return PAPER_CONTROLLER, None
+    if c.kind != "ours":
+        return None, None
+    rate = scenario.rates.measurement
+    if c.design is None:
+        # designed for the handlebar held by the hands the stack models
+        return _synthesised(scenario, held_handlebar(nominal, scenario.stack_hands), cache), None
+    design = read_design(parameter_source(c.design, folder))
+    # the design's own discrete matrices when it was made for this rate
+    matches = abs(design.rate - rate) <= 1e-9 * rate
+    controller = design.controller_discrete[c.discretization] if matches else design.controller
+    if not matches and scenario.estimator.name == "walcott_zak":
+        _check_observer_rate(c.design, design.rate, design.observer, nominal, rate)
+    _warn_other_handlebar(c.design, design.handlebar, nominal)
+    return controller, design.observer
+
+
+def _synthesised(
+    scenario: Scenario, nominal: HandlebarParameters, cache: DesignCache | None
+) -> StateSpace:
+    """Our controller synthesised for the nominal handlebar, or read from the cache."""
+    c = scenario.controller
+    rate = scenario.rates.measurement
+    if c.bandwidth is not None:  # bad input, before the synthesis
+        from motosim.control.torque_feedback import check_options
+
+        try:
+            check_options(bandwidth=c.bandwidth, rate=rate, integral_corner=c.integral_corner)
+        except MotosimError as err:
+            raise MotosimError(f"[controller] {err}") from None
+
+    def synthesis() -> StateSpace:  # SciPy: only when the design is not cached
+        from motosim.control.torque_feedback import (
+            INTEGRAL_CORNER,
+            handlebar_bandwidth,
+            synthesize_controller,
+        )
+
+        bandwidth = c.bandwidth
+        if bandwidth is None:
+            bandwidth, controller = handlebar_bandwidth(nominal, rate=rate, n_starts=4)
+        if c.bandwidth is not None or c.order != 1 or c.integral_corner != INTEGRAL_CORNER:
+            controller = synthesize_controller(
+                nominal,
+                rng=np.random.default_rng(0),
+                bandwidth=bandwidth,
+                order=c.order,
+                rate=rate,
+                n_starts=4,
+                integral_corner=c.integral_corner,
+            )
+        return controller
+
+    settings = {
+        "rate": rate,
+        "bandwidth": c.bandwidth,
+        "order": c.order,
+        "integral_corner": c.integral_corner,
+        "n_starts": 4,
+        "seed": 0,
+    }
+    # the scenario is checked by now: a synthesis failing on it is a failed run (exit 3)
+    try:
+        if cache is None:
+            return synthesis()
+        with cache.designing(scenario.name):
+            return cached_controller(cache, synthesis, handlebar=nominal, settings=settings)
+    except MotosimError as err:
+        raise RunFailedError(
+            f"{scenario.name}: the controller's design failed ([controller] order {c.order}): {err}"
+        ) from None
+
+
+def _summary(
+    run: TimeSeries, inputs: RunInputs, *, complete: bool, limits: tuple[float, float, float]
+) -> dict[str, Any]:
+    """The run's metrics and, under ``failure``, why a run that produced rows failed: it
+    stopped outside the model's range, or completed saturated, or with a wheel locked to the
+    end (multibody)."""
+    sc = inputs.scenario
+    summary: dict[str, Any] = run_metrics(
+        run.t, run.get, complete=complete, max_current=sc.controller.max_current, limits=limits
+    )
+    if not complete and inputs.multibody is not None:
+        reason: str | None = multibody_reason(run.t, run.__getitem__, inputs.multibody, limits)
+    elif not complete:
+        reason = range_reason(
+            float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1]), limits
+        )
+    else:
+        reason = failure(summary)
+        if reason is None and inputs.multibody is not None:
+            locks = wheel_locks(run.t, run.__getitem__)
+            reason = ", and ".join(locks) + " to the end of the run" if locks else None
+    if reason is not None:
+        summary["failure"] = reason
+    return summary
+
+
 def _check_observer_rate(
     name: str,
     made_for: float,
@@ -255,8 +298,8 @@ def _check_observer_rate(
 ) -> None:
     """Refuse a design file's observer that is unstable sampled at the scenario's ``rate``.
 
-    Found only inside the run, it stopped it in two lines that named neither the file nor
-    the rates, and left an empty partial result.
+    Checked before the run, so that the message names the file and both rates and no empty
+    partial result is left.
     """
     try:
         WalcottZakObserver(design_with(nominal, settings), dt=1.0 / rate)
@@ -306,6 +349,8 @@ def run_to_folder(
     overwrite: bool = False,
     on_rows: Callable[[int], None] | None = None,
     stack: StackModel | None = None,
+    lock: FolderLock | None = None,
+    stop: StopFlag | None = None,
 ) -> dict[str, Any]:
     """Simulate ``inputs`` into ``folder`` (``result.h5``, ``result.csv``), block by block.
 
@@ -322,6 +367,8 @@ def run_to_folder(
     stack : StackModel, optional
         The run's designed stack (:func:`motosim.io.cache.cached_stack`); by default
         :func:`motosim.sim.build_stack` of ``inputs``.
+    lock, stop : FolderLock, StopFlag, optional
+        The caller's held lock of ``folder``, its stop flag (see :class:`ResultWriter`).
 
     Returns
     -------
@@ -331,50 +378,54 @@ def run_to_folder(
     Raises
     ------
     RunFailedError
-        If the run diverged (the rows computed until then stay in the folder, marked
-        partial); if it left the model's range of validity (it fell, or its speed left
-        :func:`motosim.sim.metrics.validity_limits`), which stops it at that instant; or if
-        it completed but saturated the motor most of the time. A run that left the range or
-        saturated is written and closed with its flags and the reason (summary ``failure``);
-        its one-line reason names the time and the value.
+        If the run diverged (its rows kept, marked partial), left the model's range of
+        validity (:func:`motosim.sim.metrics.validity_limits`: it fell, or its speed left
+        it; stopped at that instant) or completed saturating the motor most of the time; the
+        last two are written whole, flagged (summary ``failure``), the one-line reason
+        naming the time and the value.
     """
     sc = inputs.scenario
-    metadata = run_metadata(inputs)
     rows = round(sc.duration * sc.rates.control)
+    writer = ResultWriter(
+        Path(folder),
+        SIGNALS,
+        run_metadata(inputs),
+        overwrite=overwrite,
+        expected_rows=rows,
+        lock=lock,
+        stop=stop,
+    )
+    summary, run = _record(writer, inputs, stack, on_rows)
+    if "failure" in summary:
+        raise RunFailedError(
+            f"{sc.name}: {summary['failure']}; the result is in {folder}, flagged",
+            time=float(run.t[-1]) if run.t.size < rows else None,
+        )
+    return summary
+
+
+def _record(
+    writer: ResultWriter,
+    inputs: RunInputs,
+    stack: StackModel | None,
+    on_rows: Callable[[int], None] | None,
+) -> tuple[dict[str, Any], TimeSeries]:
+    """Simulate into ``writer`` block by block and close it with the summary; the summary
+    and the run."""
+    sc = inputs.scenario
     limits = run_limits(inputs)
-    writer = ResultWriter(Path(folder), SIGNALS, metadata, overwrite=overwrite, expected_rows=rows)
+
+    def on_block(block: np.ndarray) -> None:
+        writer.append(block)
+        if on_rows is not None:
+            on_rows(block.shape[0])
+
     try:
         with writer:
-
-            def on_block(block: np.ndarray) -> None:
-                writer.append(block)
-                if on_rows is not None:
-                    on_rows(block.shape[0])
-
-            run = simulate(
-                inputs, rng=np.random.default_rng(sc.seed), stack=stack, on_block=on_block,
-                stop_outside=limits,
-            )  # fmt: skip
-            stopped = run.t.size < rows
-            summary: dict[str, Any] = run_metrics(
-                run.t, run.get, complete=not stopped, max_current=sc.controller.max_current,
-                limits=limits,
-            )  # fmt: skip
-            if stopped and inputs.multibody is not None:
-                reason: str | None = multibody_reason(
-                    run.t, run.__getitem__, inputs.multibody, limits
-                )
-            elif stopped:
-                reason = range_reason(
-                    float(run.t[-1]), float(run["phi"][-1]), float(run["v_x"][-1]), limits
-                )
-            else:
-                reason = failure(summary)
-                if reason is None and inputs.multibody is not None:
-                    locks = wheel_locks(run.t, run.__getitem__)
-                    reason = ", and ".join(locks) + " to the end of the run" if locks else None
-            if reason is not None:
-                summary["failure"] = reason
+            rng = np.random.default_rng(sc.seed)
+            run = simulate(inputs, rng=rng, stack=stack, on_block=on_block, stop_outside=limits)
+            complete = run.t.size == round(sc.duration * sc.rates.control)
+            summary = _summary(run, inputs, complete=complete, limits=limits)
             writer.close(summary)
     except RunFailedError as err:
         raise RunFailedError(
@@ -382,9 +433,4 @@ def run_to_folder(
             f"{writer.location}, marked partial",
             time=err.time,
         ) from None
-    if reason is not None:
-        raise RunFailedError(
-            f"{sc.name}: {reason}; the result is in {folder}, flagged",
-            time=float(run.t[-1]) if stopped else None,
-        )
-    return summary
+    return summary, run

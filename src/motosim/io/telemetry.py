@@ -25,7 +25,7 @@ import socket
 import struct
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, Final, Protocol
 
@@ -292,27 +292,35 @@ class PlotJugglerUdp:
         if every < 1:
             raise MotosimError(f"PlotJugglerUdp every = {every}; expected >= 1")
         self._socket, self._address = _udp(host, port, "PlotJuggler")
-        self._every = every
-        self._seen = 0
+        self._kept = _OneIn(every)
 
     def send(self, names: tuple[str, ...], rows: Array) -> None:
         """Send one datagram per kept row."""
-        for row in rows:
-            if self._seen % self._every == 0:
-                message = {"timestamp": float(row[0])}
-                message.update(
-                    {
-                        n: float(v)
-                        for n, v in zip(names[1:], row[1:], strict=True)
-                        if math.isfinite(v)
-                    }
-                )
-                self._socket.sendto(json.dumps(message).encode(), self._address)
-            self._seen += 1
+        for row in self._kept.rows(rows):
+            message = {"timestamp": float(row[0])}
+            message.update(
+                {n: float(v) for n, v in zip(names[1:], row[1:], strict=True) if math.isfinite(v)}
+            )
+            self._socket.sendto(json.dumps(message).encode(), self._address)
 
     def close(self) -> None:
         """Close the socket."""
         self._socket.close()
+
+
+class _OneIn:
+    """Keeps one row in ``every`` of the rows a sink is sent, counted across its calls."""
+
+    def __init__(self, every: int) -> None:
+        self._every = every
+        self._seen = 0
+
+    def rows(self, rows: Array) -> Iterator[Array]:
+        """The rows of ``rows`` kept."""
+        for row in rows:
+            if self._seen % self._every == 0:
+                yield row
+            self._seen += 1
 
 
 class EsminiUdp:
@@ -441,57 +449,54 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
         raise MotosimError("MCAP needs the mcap package: pip install 'motosim[view]'") from None
     names = ("t", *result.names)
     table = np.column_stack([result.t, result.data])[::every]
-    has_pose = all(n in names for n in POSE_SIGNALS)
-    count = 0
+    counted: list[int] = []
 
     def write(temporary: Path) -> None:
-        nonlocal count
         with temporary.open("wb") as stream:
             writer = Writer(stream)
             writer.start(profile="", library="motosim")
-            signals = writer.register_channel(
-                topic=_SIGNALS_TOPIC,
-                message_encoding="json",
-                schema_id=writer.register_schema(
-                    name="motosim.Signals",
-                    encoding="jsonschema",
-                    data=json.dumps(_signals_schema(names)).encode(),
-                ),
-            )
-            pose_channel = writer.register_channel(
-                topic=_POSE_TOPIC,
-                message_encoding="json",
-                schema_id=writer.register_schema(
-                    name="foxglove.PoseInFrame",
-                    encoding="jsonschema",
-                    data=json.dumps(_POSE_SCHEMA).encode(),
-                ),
-            )
-            for sequence, row in enumerate(table):
-                stamp = max(0, round(float(row[0]) * 1e9))
-                writer.add_message(
-                    channel_id=signals,
-                    log_time=stamp,
-                    publish_time=stamp,
-                    sequence=sequence,
-                    data=json.dumps(_row_message(names, row)).encode(),
-                )
-                count += 1
-                if has_pose:
-                    writer.add_message(
-                        channel_id=pose_channel,
-                        log_time=stamp,
-                        publish_time=stamp,
-                        sequence=sequence,
-                        data=json.dumps(_pose_message(pose_of(names, row))).encode(),
-                    )
-                    count += 1
+            counted.append(_write_messages(writer, names, table))
             writer.finish()  # type: ignore[no-untyped-call]
 
-    from motosim.io.results import write_whole
+    from motosim.io.files import write_whole
 
     write_whole(path, write)
+    return counted[0]
+
+
+def _write_messages(writer: Any, names: tuple[str, ...], table: Array) -> int:
+    """Write each row of ``table`` to the signals channel and, if it has a pose, to the pose
+    channel; the messages written."""
+    signals = _json_channel(writer, _SIGNALS_TOPIC, "motosim.Signals", _signals_schema(names))
+    pose = _json_channel(writer, _POSE_TOPIC, "foxglove.PoseInFrame", _POSE_SCHEMA)
+    has_pose = all(n in names for n in POSE_SIGNALS)
+    count = 0
+    for sequence, row in enumerate(table):
+        stamp = max(0, round(float(row[0]) * 1e9))
+        messages = [(signals, _row_message(names, row))]
+        if has_pose:
+            messages.append((pose, _pose_message(pose_of(names, row))))
+        for channel, message in messages:
+            writer.add_message(
+                channel_id=channel,
+                log_time=stamp,
+                publish_time=stamp,
+                sequence=sequence,
+                data=json.dumps(message).encode(),
+            )
+            count += 1
     return count
+
+
+def _json_channel(writer: Any, topic: str, schema: str, definition: dict[str, Any]) -> int:
+    """Register a JSON channel and its JSON schema with an MCAP writer; the channel's id."""
+    schema_id = writer.register_schema(
+        name=schema, encoding="jsonschema", data=json.dumps(definition).encode()
+    )
+    channel: int = writer.register_channel(
+        topic=topic, message_encoding="json", schema_id=schema_id
+    )
+    return channel
 
 
 class FoxgloveLive:
@@ -528,8 +533,7 @@ class FoxgloveLive:
             self._server = foxglove.start_server(name="motosim", host=host, port=port)
         except Exception as err:  # the SDK raises its own error types
             raise MotosimError(f"Foxglove server on {host}:{port}: {err}") from None
-        self._every = every
-        self._seen = 0
+        self._kept = _OneIn(every)
         self._channels: dict[str, Any] = {}
         self._foxglove = foxglove
 
@@ -547,15 +551,13 @@ class FoxgloveLive:
         """Log one row in ``every`` on the signal and pose channels."""
         signals = self._channel(_SIGNALS_TOPIC, _signals_schema(names))
         has_pose = all(n in names for n in POSE_SIGNALS)
-        for row in rows:
-            if self._seen % self._every == 0:
-                stamp = max(0, round(float(row[0]) * 1e9))
-                signals.log(_row_message(names, row), log_time=stamp)
-                if has_pose:
-                    self._channel(_POSE_TOPIC, _POSE_SCHEMA).log(
-                        _pose_message(pose_of(names, row)), log_time=stamp
-                    )
-            self._seen += 1
+        for row in self._kept.rows(rows):
+            stamp = max(0, round(float(row[0]) * 1e9))
+            signals.log(_row_message(names, row), log_time=stamp)
+            if has_pose:
+                self._channel(_POSE_TOPIC, _POSE_SCHEMA).log(
+                    _pose_message(pose_of(names, row)), log_time=stamp
+                )
 
     def close(self) -> None:
         """Stop the server."""

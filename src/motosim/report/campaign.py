@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from motosim.campaign import METRICS, load_results, read_manifest
-from motosim.io.results import write_whole
+from motosim.io.files import write_whole
 from motosim.plotting.campaign import plot_failures, plot_heatmap, plot_metric_vs_factors
 from motosim.report.html import _CSS, _png, _table
 

@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 
 from motosim.errors import MotosimError
-from motosim.io.results import SimResult, load_result, write_whole
+from motosim.io.files import write_whole
+from motosim.io.results import SimResult, load_result
 from motosim.plotting.closed_loop import (
     plot_motor_torque,
     plot_motorcycle,

@@ -56,8 +56,8 @@ def test_running_is_read_as_stopped_once_no_process_holds_the_lock(tmp_path: Pat
     store.write_manifest({"fingerprint": "f", "status": "running"})
     with subprocess.Popen(  # the campaign's process, holding the folder's lock
         [sys.executable, "-c",
-         "import sys\nfrom motosim.io.results import folder_lock\n"
-         "with folder_lock(sys.argv[1]):\n    print('held', flush=True)\n    sys.stdin.read()\n",
+         "import sys\nfrom motosim.io.files import FolderLock\n"
+         "with FolderLock(sys.argv[1]):\n    print('held', flush=True)\n    sys.stdin.read()\n",
          str(folder)],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
     ) as holder:  # fmt: skip
