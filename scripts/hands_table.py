@@ -1,7 +1,7 @@
 """Regenerate the hands table of the simulate guide: the loop with a rider's hands on it.
 
     .venv/bin/python scripts/hands_table.py [SCENARIO.toml ...] [--rates HZ ...]
-        [--off-from SECONDS] [--quiet cell,friction,stick]
+        [--off-from SECONDS] [--quiet cell,friction,stick] [--stack-grip off]
 
 Each scenario (by default the lane change at 20 m/s, the crosswind at 30 m/s and the
 obstacle avoidance at 15 m/s) is simulated at each rate (control and measurement; 1 kHz and
@@ -43,11 +43,16 @@ SCENARIOS = ("lane_change_20.toml", "crosswind_30.toml", "obstacle_avoidance_15.
 GRIPS = ("none", "relaxed", "firm", "relaxed, off", "relaxed, sensor")
 
 
-def _inputs(path: Path, rate: float, grip: str, off_from: float) -> RunInputs:
-    """The scenario at ``rate`` [Hz] with the hands of ``grip``."""
+def _inputs(
+    path: Path, rate: float, grip: str, off_from: float, stack_grip: str | None = None
+) -> RunInputs:
+    """The scenario at ``rate`` [Hz] with the hands of ``grip``, its stack designed for
+    ``stack_grip`` (``[controller] grip``; None: the scenario's default, the rider's)."""
     sc = load_scenario(path)
     sc = dataclasses.replace(
-        sc, rates=dataclasses.replace(sc.rates, control=rate, measurement=rate)
+        sc,
+        rates=dataclasses.replace(sc.rates, control=rate, measurement=rate),
+        controller=dataclasses.replace(sc.controller, grip=stack_grip),
     )
     if grip != "none":
         rider = dataclasses.replace(sc.rider, hands=grip.split(",")[0])
@@ -90,6 +95,12 @@ def main() -> int:
     parser.add_argument("--off-from", type=float, default=6.0, help="hands off from [s]")
     parser.add_argument("--quiet", default="", help="cell,friction,stick (default: none)")
     parser.add_argument("--presliding", type=float, default=1e-3, help="Dahl x_0 [rad]")
+    parser.add_argument(
+        "--stack-grip",
+        choices=("relaxed", "firm", "off"),
+        default=None,
+        help="the grip the stack is designed for (default: the rider's, as a scenario's)",
+    )
     args = parser.parse_args()
     parts = {p for p in args.quiet.split(",") if p}
     if parts - {"cell", "friction", "stick"}:
@@ -103,7 +114,7 @@ def main() -> int:
     for path in paths:
         for rate in args.rates:
             for grip in GRIPS:
-                inputs = _inputs(path, rate, grip, args.off_from)
+                inputs = _inputs(path, rate, grip, args.off_from, args.stack_grip)
                 sc = inputs.scenario
                 settings = quiet(parts, rate, sc.measurement.encoder_bits, args.presliding)
                 stack = build_stack(inputs)._replace(quiet=settings) if parts else None
