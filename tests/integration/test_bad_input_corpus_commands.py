@@ -538,6 +538,7 @@ STOP_RT = (
     "motosim.cli.rtcheck.apply_privileges",
     "motosim.rt.check.check_timing",
     "motosim.cli.run.load_realtime",
+    "motosim.cli._realtime.load_realtime",
 )
 STOP_VIEW = (
     "motosim.view.app.ServerThread",
