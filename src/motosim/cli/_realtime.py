@@ -19,7 +19,8 @@ if TYPE_CHECKING:
     from motosim.sim import RunInputs, Scenario
 
 __all__ = [
-    "RtOptions", "check_rt_options", "check_wait", "load_realtime", "rig_settings",
+    "RtOptions", "check_rt_options", "check_wait", "load_realtime", "read_realtime",
+    "resolve_realtime", "rig_settings",
 ]  # fmt: skip
 
 
@@ -81,11 +82,20 @@ def check_rt_options(args: argparse.Namespace) -> RtOptions:
 def load_realtime(
     path: str, *, safety: bool = False, pace: str | None = None, cache: "DesignCache | None" = None
 ) -> tuple["RunInputs", dict[str, Any]]:
-    """Read a scenario file: its resolved run and its ``[realtime]`` table.
+    """Read a scenario file: its resolved run and its ``[realtime]`` table
+    (:func:`read_realtime`, then :func:`resolve_realtime`)."""
+    scenario, realtime = read_realtime(path, safety=safety, pace=pace)
+    return resolve_realtime(path, scenario, cache), realtime
 
-    With ``safety``, a missing ``[realtime.safety]`` table is refused before the run is
+
+def read_realtime(
+    path: str, *, safety: bool = False, pace: str | None = None
+) -> tuple["Scenario", dict[str, Any]]:
+    """Read and check a scenario file: its scenario and its ``[realtime]`` table.
+
+    With ``safety``, a missing ``[realtime.safety]`` table is refused here, before the run is
     resolved (which designs its controller: seconds). A ``status_latency`` that makes the
-    status frame older than the stack accounts for is refused then too, in the line
+    status frame older than the stack accounts for is refused here too, in the line
     ``motosim run`` gives (:func:`motosim.rt.config.frame_age`): for ``motosim run`` at its
     ``pace``; without a ``pace`` (``motosim rig``, which serves whichever run comes) at the
     pace of ``run`` that reads the frame youngest at the scenario's rates
@@ -93,16 +103,13 @@ def load_realtime(
     The rig thus keeps a latency that ``run --pace clock`` refuses and ``run --pace bus``
     takes (equal control and measurement rates: up to a frame period against half a control
     period less). The rig's own ``[realtime.rig]`` latency, the bus it emulates, is not
-    bounded by the frame period: a slow bus is what it is there to show ``run``. The designs
-    come from ``cache`` when one is given.
+    bounded by the frame period: a slow bus is what it is there to show ``run``.
     """
-    from motosim.io.runs import resolve
     from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, split_realtime
     from motosim.sim import parse_scenario
     from motosim.sim.scenario import implausible
 
-    source = Path(path)
-    data = read_toml(source, what="scenario file")
+    data = read_toml(Path(path), what="scenario file")
     rest, realtime = split_realtime(data, origin=str(path))
     scenario = parse_scenario(rest, origin=str(path))
     for line in implausible(scenario):
@@ -119,10 +126,21 @@ def load_realtime(
     )  # fmt: skip
     rig_settings(scenario, realtime, origin=str(path))
     _check_realtime_motorcycle(scenario, origin=str(path))
+    return scenario, realtime
+
+
+def resolve_realtime(
+    path: str, scenario: "Scenario", cache: "DesignCache | None" = None
+) -> "RunInputs":
+    """The run of a scenario read by :func:`read_realtime` (its files resolved beside
+    ``path``, its controller designed, from ``cache`` when one is given)."""
+    from motosim.io.runs import resolve
+
+    source = Path(path)
     if cache is None:
-        return resolve(scenario, source.parent), realtime
+        return resolve(scenario, source.parent)
     with cache.designing(scenario.name):
-        return resolve(scenario, source.parent, cache=cache), realtime
+        return resolve(scenario, source.parent, cache=cache)
 
 
 def _check_realtime_motorcycle(scenario: "Scenario", *, origin: str) -> None:

@@ -117,16 +117,19 @@ class _TickStop:
 
 def _run(args: argparse.Namespace, stops: StopHandler) -> int:
     """:func:`run`, with Ctrl-C counted by ``stops`` until the loop takes it over."""
-    from motosim.cli._realtime import check_rt_options, load_realtime, rig_settings
+    from motosim.cli._realtime import (
+        check_rt_options,
+        read_realtime,
+        resolve_realtime,
+        rig_settings,
+    )
 
     options = check_rt_options(args)  # before the rig and the simulator are imported
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
-    print("motosim rig: loading the virtual rig ...", file=sys.stderr, flush=True)
-    start = time.monotonic()
     with deferred_warnings():  # the scenario's, once its checks have passed
-        inputs, realtime = load_realtime(args.scenario)
-        settings = rig_settings(inputs.scenario, realtime, origin=args.scenario)
+        scenario, realtime = read_realtime(args.scenario)
+        settings = rig_settings(scenario, realtime, origin=args.scenario)
         if not args.rate <= settings.plant_rate:  # before the bus is opened
             raise MotosimError(
                 f"--rate {args.rate!r}; expected a rate from 1 to {settings.plant_rate:g} Hz (the "
@@ -134,6 +137,9 @@ def _run(args: argparse.Namespace, stops: StopHandler) -> int:
             )
         if args.duration is not None and not (args.duration > 0.0):
             raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
+        print("motosim rig: loading the virtual rig ...", file=sys.stderr, flush=True)
+        start = time.monotonic()
+        inputs = resolve_realtime(args.scenario, scenario)
     with ExitStack() as held:
         rider = _rider(args, inputs, settings, options, held)
         twin = _twin(args, options, held)

@@ -10,7 +10,7 @@ import json
 import sys
 import threading
 import time
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from motosim.cli._common import (
     StopHandler,
@@ -24,7 +24,14 @@ from motosim.cli._common import (
     warn_atypical,
     write_text,
 )
-from motosim.cli._realtime import RtOptions, check_rt_options, check_wait, load_realtime
+from motosim.cli._realtime import (
+    RtOptions,
+    check_rt_options,
+    check_wait,
+    load_realtime,
+    read_realtime,
+    resolve_realtime,
+)
 from motosim.cli.cache import add_cache_option, design_cache
 from motosim.cli.rtcheck import (
     add_link_option,
@@ -155,9 +162,12 @@ def run(args: argparse.Namespace) -> int:
     options = check_rt_options(args)  # before the stack and the simulator are imported
     stops = StopHandler()
     with stops.installed():
-        print("motosim run: loading the compiled stack ...", file=sys.stderr, flush=True)
-        start = time.monotonic()
-        config = _config(args, options)
+        with deferred_warnings():  # the scenario's, once every check has passed
+            checked = _check(args)  # every refusal before the loading line
+            print("motosim run: loading the compiled stack ...", file=sys.stderr, flush=True)
+            start = time.monotonic()
+            config = _config(args, options, checked)
+        warn_atypical("run", "--duration", args.duration)  # once every check has passed
         from motosim.rt.session import RealtimeSession
 
         with RealtimeSession(config, clock_from_args(args)) as session:
@@ -177,46 +187,68 @@ def run(args: argparse.Namespace) -> int:
     return _print(args, config, outcome, html)
 
 
-def _config(args: argparse.Namespace, options: RtOptions) -> "SessionConfig":
-    """The checked options and the scenario's realtime settings, the stack designed."""
+class _Checked(NamedTuple):
+    """The scenario and the options, checked: what :func:`_config` builds the run from."""
+
+    scenario: Any
+    realtime: dict[str, Any]
+    limits: Any
+    latency: float
+    age: float
+    cache: Any
+
+
+def _check(args: argparse.Namespace) -> _Checked:
+    """Read the scenario and refuse what a real-time run cannot take (one line each)."""
+    from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces
+
+    cache = design_cache(args, quiet=args.json)
+    sc, realtime = read_realtime(args.scenario, safety=True, pace=args.pace)
+    _refuse_offline_only(args.scenario, sc)
+    limits = parse_safety(realtime.get("safety"), origin=args.scenario)
+    rate, measurement = sc.rates.control, sc.rates.measurement
+    latency = parse_latency(realtime, origin=args.scenario)
+    age = frame_age(latency, pace=args.pace, control_rate=rate, measurement_rate=measurement,
+                    origin=args.scenario)  # fmt: skip
+    if args.pace not in run_paces(rate, measurement):
+        raise MotosimError(
+            f"--pace bus with control = {rate:g} Hz and measurement = {measurement:g} Hz; "
+            "expected equal rates (one period per status frame)"
+        )
+    if args.view:
+        from motosim.view.app import _need_starlette
+
+        _need_starlette()
+    return _Checked(sc, realtime, limits, latency, age, cache)
+
+
+def _config(args: argparse.Namespace, options: RtOptions, checked: _Checked) -> "SessionConfig":
+    """The run resolved, its stack designed: the session's configuration."""
     from motosim.io.cache import cached_stack
-    from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, within_safety
+    from motosim.rt.config import within_safety
     from motosim.rt.session import SessionConfig
     from motosim.sim import run_metadata
     from motosim.sim.stack import account_for_delay
 
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
-    with deferred_warnings():  # the scenario's, once every check has passed
-        cache = design_cache(args, quiet=args.json)
-        inputs, realtime = load_realtime(args.scenario, safety=True, pace=args.pace, cache=cache)
-        _refuse_offline_only(args.scenario, inputs)
-        limits = parse_safety(realtime.get("safety"), origin=args.scenario)
-        inputs = within_safety(inputs, limits)  # the stack saturates where the clamp cuts
-        sc = inputs.scenario
-        duration = sc.duration if args.duration is None else args.duration
-        live = None
-        if args.view:
-            from motosim.cli._liveview import view_sink
+    cache, limits = checked.cache, checked.limits
+    inputs = resolve_realtime(args.scenario, checked.scenario, cache)
+    inputs = within_safety(inputs, limits)  # the stack saturates where the clamp cuts
+    sc = inputs.scenario
+    duration = sc.duration if args.duration is None else args.duration
+    live = None
+    if args.view:
+        from motosim.cli._liveview import view_sink
 
-            live = view_sink(args, inputs, duration, limits)
-        rate, measurement = sc.rates.control, sc.rates.measurement
-        latency = parse_latency(realtime, origin=args.scenario)
-        age = frame_age(latency, pace=args.pace, control_rate=rate,
-                        measurement_rate=measurement, origin=args.scenario)  # fmt: skip
-        if args.pace not in run_paces(rate, measurement):
-            raise MotosimError(
-                f"--pace bus with control = {rate:g} Hz and measurement = {measurement:g} Hz; "
-                "expected equal rates (one period per status frame)"
-            )
-        with cache.designing(sc.name):
-            model = cached_stack(cache, inputs)
-        model = account_for_delay(model, age, inputs.nominal_handlebar)  # the frames' age
-    warn_atypical("run", "--duration", args.duration)  # once every check has passed
+        live = view_sink(args, inputs, duration, limits)
+    with cache.designing(sc.name):
+        model = cached_stack(cache, inputs)
+    model = account_for_delay(model, checked.age, inputs.nominal_handlebar)  # the frames' age
     udp = args.bus.partition(":")[0] == "udp_multicast"
     link = "fast" if args.link != "python-can" and udp else "python-can"
     metadata = run_metadata(inputs) | {"realtime": {
-        "bus": args.bus, "link": link, "pace": args.pace, "status_latency": latency,
-        "measurement_delay": age, "safety": limits, "duration": duration,
+        "bus": args.bus, "link": link, "pace": args.pace, "status_latency": checked.latency,
+        "measurement_delay": checked.age, "safety": limits, "duration": duration,
     }}  # fmt: skip
     return SessionConfig(
         inputs, model, limits, args.bus, folder, metadata, duration, pace=args.pace,
@@ -227,9 +259,8 @@ def _config(args: argparse.Namespace, options: RtOptions) -> "SessionConfig":
     )  # fmt: skip
 
 
-def _refuse_offline_only(path: str, inputs: Any) -> None:
+def _refuse_offline_only(path: str, sc: Any) -> None:
     """Refuse what a scenario asks of the simulator only (one line each)."""
-    sc = inputs.scenario
     if sc.motorcycle.input == "true":
         raise MotosimError(
             f'{path}: motorcycle input = "true" is a simulation-only reference; expected '
