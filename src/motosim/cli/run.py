@@ -99,6 +99,14 @@ def register(sub: Any) -> None:
         "before each deadline, so that its step finds its code and data in the CPU's caches: "
         "'on' (default) or 'off' (the wait only spins; the rows are the same)",
     )
+    _add_output_options(parser)
+    add_privilege_options(parser)
+    add_cache_option(parser)
+    parser.set_defaults(func=run)
+
+
+def _add_output_options(parser: argparse.ArgumentParser) -> None:
+    """What ``run`` sends beside the drive's frames and what it writes and prints."""
     parser.add_argument(
         "--telemetry",
         default="127.0.0.1:47474",
@@ -143,9 +151,6 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--no-report", dest="report", action="store_false", help="skip the HTML report"
     )
-    add_privilege_options(parser)
-    add_cache_option(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
