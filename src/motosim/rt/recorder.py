@@ -206,8 +206,9 @@ class Recorder:
         return answer
 
     def release(self) -> None:
-        """Let the recorder release the folder's lock (after :meth:`close`), then join it;
-        before :meth:`close`, or if it has not ended within 10 s, it is killed."""
+        """Let the recorder release the folder's lock (after :meth:`close`; before it, the
+        end of the pipe closes the result partial), then join it; killed if it has not ended
+        within 10 s."""
         if self._closed:
             try:
                 self._conn.send(Release())
@@ -216,7 +217,7 @@ class Recorder:
         self._conn.close()
         if self._process.pid is None:  # never started
             return
-        self._process.join(timeout=10.0 if self._closed else 0.0)
+        self._process.join(timeout=10.0)
         if self._process.is_alive():
             self._process.kill()
             self._process.join()
@@ -359,7 +360,10 @@ def _record(conn: Any, settings: RecorderSettings) -> bool:
         if live is not None:
             live.stop()
     summary["ring_dropped"] = float(ring.dropped)
-    conn.send(Done(summary, str(writer.location), drain.profile(), stream))
+    try:
+        conn.send(Done(summary, str(writer.location), drain.profile(), stream))
+    except OSError:  # the loop has ended without waiting for it
+        return False
     return True
 
 
@@ -385,7 +389,10 @@ def _write(conn: Any, writer: Any, drain: _Drain, live: LiveSink | None) -> dict
                 drain.drain(live)
                 if k % every == 0:
                     drain.write(writer)
-            close = conn.recv()
+            try:
+                close = conn.recv()
+            except (EOFError, OSError):  # the loop ended without a word: closed partial
+                close = Close(False, {})
             if not isinstance(close, Close):
                 raise MotosimError(f"the result writer was sent {close!r}; expected Close")
             drain.drain(live)
