@@ -537,7 +537,8 @@ STOP_RT = (
     "motosim.io.can.open_link",
     "motosim.cli.rtcheck.apply_privileges",
     "motosim.rt.check.check_timing",
-    "motosim.cli.run.load_realtime",
+    "motosim.cli.run.resolve_realtime",
+    "motosim.cli._realtime.resolve_realtime",
 )
 STOP_VIEW = (
     "motosim.view.app.ServerThread",

@@ -64,7 +64,9 @@ def test_every_speed_duration_rate_noise_option_has_a_typical_range(command: str
 def test_an_atypical_option_warns_once_and_the_command_goes_on(
     argv: list[str], warned: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert main(argv) == 0
+    # rt-check's exit code is its verdict against the targets (1: not met); the warning is
+    # what is tested
+    assert main(argv) in ((0, 1) if argv[0] == "rt-check" else (0,))
     lines = capsys.readouterr().err.splitlines()
     assert any(line.startswith(f"motosim: warning: {warned}") for line in lines), lines
     assert len(lines) == len(set(lines))  # each once

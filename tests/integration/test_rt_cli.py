@@ -58,7 +58,10 @@ def _main(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str
 def test_rt_check_json(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = _main(capsys, "rt-check", "--rate", "1000", "--duration", "0.05", "--json")
     payload = json.loads(out)
-    assert code == 0 and payload["units"] == "s" and payload["privileges"] == []
+    # the verdict against the targets sets the exit code (0 pass, 1 fail): a busy machine
+    # may fail them in 50 periods
+    assert code == (0 if payload["verdict"]["pass"] else 1)
+    assert payload["units"] == "s" and payload["privileges"] == []
     timing = payload["timing"]
     assert timing["periods"] == 50 and timing["served"] + timing["missed"] == 50
     assert {"wake_p50", "wake_p99", "wake_p999", "wake_max"} <= set(timing)

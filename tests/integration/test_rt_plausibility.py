@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motosim.cli.run import load_realtime, rig_settings
+from motosim.cli._realtime import load_realtime, rig_settings
 from motosim.errors import MotosimError
 from motosim.io.runs import load_scenario
 from motosim.rt.clock import SimulatedClock

@@ -811,3 +811,59 @@ def finish_files_on_stop() -> Iterator[StopFlag]:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+class StopHandler:
+    """The SIGINT handler of a long real-time command: Ctrl-C becomes a stop request.
+
+    Until a target is given (:meth:`aim`) the presses are counted, never raised: while the
+    compiled code loads, numba and llvmlite call back into Python from C, and a
+    KeyboardInterrupt raised in such a callback is printed ("Exception ignored") and lost.
+    :meth:`check` acts on them outside any callback. Once aimed, the first press calls the
+    target's ``request_stop`` and the next ones its ``emergency_stop``. After :meth:`release`
+    a press raises KeyboardInterrupt (the run is over; what is left can be interrupted).
+    Installed with :meth:`installed`, which gives the previous handler back.
+    """
+
+    def __init__(self) -> None:
+        self.count = 0
+        self._target: Any = None
+        self._released = False
+
+    def __call__(self, signum: int, frame: object) -> None:
+        self.count += 1
+        if self._released:
+            raise KeyboardInterrupt
+        if self._target is not None:
+            if self.count == 1:
+                self._target.request_stop()
+            else:
+                self._target.emergency_stop()
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if Ctrl-C was pressed before a target was given."""
+        if self.count and self._target is None:
+            raise KeyboardInterrupt
+
+    def aim(self, target: Any) -> None:
+        """From now on Ctrl-C asks ``target`` to stop (``request_stop``, then
+        ``emergency_stop``); presses counted so far are passed on at once."""
+        self._target = target
+        for press in range(self.count):
+            (target.request_stop if press == 0 else target.emergency_stop)()
+
+    def release(self) -> None:
+        """From now on Ctrl-C raises KeyboardInterrupt."""
+        self._target = None
+        self._released = True
+
+    @contextmanager
+    def installed(self) -> Iterator["StopHandler"]:
+        """Install this handler for SIGINT within the block."""
+        import signal
+
+        previous = signal.signal(signal.SIGINT, self)
+        try:
+            yield self
+        finally:
+            signal.signal(signal.SIGINT, previous)

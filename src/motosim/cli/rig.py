@@ -2,10 +2,13 @@
 
 import argparse
 import math
-import signal
+import sys
+import time
+from contextlib import ExitStack
 from typing import Any
 
 from motosim.cli._common import (
+    StopHandler,
     check_named_input,
     check_scenario_inputs,
     check_scenario_values,
@@ -85,126 +88,225 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the rig until Ctrl-C or the duration; print what it did."""
+    """Run the rig until Ctrl-C or the duration; print what it did; exit 0, or 130 after
+    Ctrl-C."""
     check_udp_only_options(args)  # before the numerical stack is imported
     check_privilege_options(args)  # the options first, then the files
     check_scenario_inputs(args.scenario)
     check_named_input(args.platform, "platform file")
     check_scenario_values(args.scenario)  # before the numerical stack is imported
-    from motosim.cli.run import _Presses
-
-    presses = _Presses()  # Ctrl-C while the rig starts: counted, not lost in a C callback
-    previous = signal.signal(signal.SIGINT, presses)
-    try:
-        return _run(args, presses)
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    stops = StopHandler()  # Ctrl-C while the rig starts: counted, not lost in a C callback
+    with stops.installed():
+        return _run(args, stops)
 
 
-def _run(args: argparse.Namespace, presses: Any) -> int:
-    """:func:`run`, with Ctrl-C counted by ``presses`` until the loop takes it over."""
-    from motosim.cli.run import check_rt_options, load_realtime, rig_settings
+class _TickStop:
+    """Ctrl-C on the rig: its loop ends after the current tick (a first or a second press)."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def request_stop(self) -> None:
+        """End the rig's loop after the current tick (safe from a signal handler)."""
+        self.requested = True
+
+    def emergency_stop(self) -> None:
+        """The same: the rig has no torque of its own to fade."""
+        self.requested = True
+
+
+def _run(args: argparse.Namespace, stops: StopHandler) -> int:
+    """:func:`run`, with Ctrl-C counted by ``stops`` until the loop takes it over."""
+    from motosim.cli._realtime import (
+        check_rt_options,
+        read_realtime,
+        resolve_realtime,
+        rig_settings,
+    )
 
     options = check_rt_options(args)  # before the rig and the simulator are imported
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
-    import numpy as np
-
-    from motosim.io.can import handlebar_codecs, open_link
-    from motosim.rt.loop import RateLoop
-    from motosim.rt.privileges import freeze_gc, thaw_gc
-    from motosim.rt.rig import VirtualRig
-
     with deferred_warnings():  # the scenario's, once its checks have passed
-        inputs, realtime = load_realtime(args.scenario)
-        sc = inputs.scenario
-        settings = rig_settings(sc, realtime, origin=args.scenario)
+        scenario, realtime = read_realtime(args.scenario)
+        settings = rig_settings(scenario, realtime, origin=args.scenario)
         if not args.rate <= settings.plant_rate:  # before the bus is opened
             raise MotosimError(
                 f"--rate {args.rate!r}; expected a rate from 1 to {settings.plant_rate:g} Hz (the "
                 "rig's plant_rate)"
             )
-        duration = math.inf if args.duration is None else args.duration
-        if not (duration > 0.0):
+        if args.duration is not None and not (args.duration > 0.0):
             raise MotosimError(f"--duration {args.duration!r}; expected seconds > 0")
-    receiver = None
-    rider: Any
-    if sc.rider.profile is not None:
-        t_fine = np.arange(round(sc.duration * settings.plant_rate) + 1) / settings.plant_rate
-        rider = sc.rider.profile.sample(t_fine, inputs.tables)
-    else:  # the virtual rider, steering by the run's state stream
-        from motosim.rt.rig import VirtualRider
-        from motosim.rt.telemetry import StateReceiver, parse_address
-        from motosim.sim import build_rig
-
-        world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
-        VirtualRider.check(world)  # before its socket is opened
-        # --telemetry off: refused by parse_address, as the virtual rider needs the stream
-        receiver = StateReceiver(options.telemetry or parse_address(args.telemetry))
-        rider = VirtualRider(world, receiver, rate=sc.rates.control)
-    clock = clock_from_args(args)
-    codecs = handlebar_codecs()
-    twin = None
-    if options.platform is not None:  # --platform-udp or --platform-can
-        from motosim.io.can import platform_codecs
-        from motosim.rt.platform import PlatformTwin
-
-        twin = PlatformTwin(
-            options.platform.platform,
-            0.001,
-            options.platform_udp,
-            codecs=platform_codecs() if args.platform_can else None,
-        )
-    link = open_link(args.bus, fast=args.link != "python-can")
-    try:
-        from motosim.sim.hands import hands_array, resolve_hands
-
-        rig = VirtualRig(
-            inputs.true_handlebar, settings, codecs, link, rider, np.random.default_rng(sc.seed),
-            hands=hands_array(resolve_hands(sc.rider.hands)),
-            hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
-        )  # fmt: skip
+        print("motosim rig: loading the virtual rig ...", file=sys.stderr, flush=True)
+        start = time.monotonic()
+        inputs = resolve_realtime(args.scenario, scenario)
+    with ExitStack() as held:
+        rider = _rider(args, inputs, settings, options, held)
+        twin = _twin(args, options, held)
+        link = _open_link(held, args)
+        rig = _virtual_rig(inputs, settings, link, rider)
         if twin is not None and args.platform_can:
             rig.on_frame = twin.receive_frame
-        status_due = [0.0]
-        rate = args.rate
-        warn_atypical("rig", "--rate", args.rate)
-        warn_atypical("rig", "--duration", args.duration)
-        periods = 2**62 if math.isinf(duration) else round(duration * rate)
-        loop = RateLoop(rate, clock, capacity=min(periods, 1 << 20))
-        privileges = privileges_from_args(args)
-        t0 = [math.nan]
-        last = [-1]
+        stops.check()  # Ctrl-C while the rig was built: no run
+        print(f"motosim rig: ready on {args.bus} ({time.monotonic() - start:.1f} s): "
+              f"{args.rate:g} Hz ticks, status frames at {settings.status_rate:g} Hz; "
+              "Ctrl-C stops", file=sys.stderr, flush=True)  # fmt: skip
+        stats, privileges, stopped = _serve(args, rig, twin, link, settings, stops)
+    summary = _summary(args, rig, twin, link, stats, privileges)
+    _print(args, summary, rig, stats)
+    return 130 if stopped else 0
 
-        def tick(k: int, t: float) -> bool:
-            if t0[0] != t0[0]:
-                t0[0] = t
-            # a late tick (deadlines skipped) sends the newest status frame, not a backlog
-            rig.advance_to(t - t0[0], catch_up=k <= last[0] + 1 or rate < settings.status_rate)
-            last[0] = k
-            if twin is not None:
-                twin.advance_to(t - t0[0])
-                if args.platform_can and twin.t >= status_due[0]:
-                    status_due[0] += 0.01  # PF_STATUS at 100 Hz
-                    link.send(*twin.status_frame())
-            return True
 
-        previous = signal.signal(signal.SIGINT, lambda signum, frame: loop.stop())
-        freeze_gc()
-        try:
-            presses.check()  # Ctrl-C while the rig was built: no run
-            loop.run(tick, periods=periods)
-        finally:
-            thaw_gc()
-            signal.signal(signal.SIGINT, previous)
-    finally:
-        link.close()
-        if receiver is not None:
-            receiver.close()
+def _open_link(held: ExitStack, args: argparse.Namespace) -> Any:
+    """The rig's bus link, closed when ``held`` ends."""
+    from motosim.io.can import open_link
+
+    link = open_link(args.bus, fast=args.link != "python-can")
+    held.callback(link.close)
+    return link
+
+
+def _rider(
+    args: argparse.Namespace, inputs: Any, settings: Any, options: Any, held: ExitStack
+) -> Any:
+    """The rider's torque: the scenario's profile, or a virtual rider steering by the run's
+    state stream (its receiver closed when ``held`` ends)."""
+    import numpy as np
+
+    sc = inputs.scenario
+    if sc.rider.profile is not None:
+        t_fine = np.arange(round(sc.duration * settings.plant_rate) + 1) / settings.plant_rate
+        return sc.rider.profile.sample(t_fine, inputs.tables)
+    from motosim.rt.rig import VirtualRider
+    from motosim.rt.telemetry import StateReceiver, parse_address
+    from motosim.sim import build_rig
+
+    world = build_rig(inputs, rng=np.random.default_rng(sc.seed))
+    VirtualRider.check(world)  # before its socket is opened
+    # --telemetry off: refused by parse_address, as the virtual rider needs the stream
+    receiver = StateReceiver(options.telemetry or parse_address(args.telemetry))
+    held.callback(receiver.close)
+    return VirtualRider(world, receiver, rate=sc.rates.control)
+
+
+def _twin(args: argparse.Namespace, options: Any, held: ExitStack) -> Any:
+    """The motion platform's twin (--platform-udp or --platform-can), or None."""
+    if options.platform is None:
+        return None
+    from motosim.io.can import platform_codecs
+    from motosim.rt.platform import PlatformTwin
+
+    twin = PlatformTwin(
+        options.platform.platform,
+        0.001,
+        options.platform_udp,
+        codecs=platform_codecs() if args.platform_can else None,
+    )
+    held.callback(twin.close)
+    return twin
+
+
+def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
+    """The scenario's true handlebar and its drive on ``link``."""
+    import numpy as np
+
+    from motosim.io.can import handlebar_codecs
+    from motosim.rt.rig import VirtualRig
+    from motosim.sim.hands import hands_array, resolve_hands
+
+    sc = inputs.scenario
+    return VirtualRig(
+        inputs.true_handlebar, settings, handlebar_codecs(), link, rider,
+        np.random.default_rng(sc.seed), hands=hands_array(resolve_hands(sc.rider.hands)),
+        hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
+    )  # fmt: skip
+
+
+class _Received:
+    """What the rig tells while it runs: its first command frame, then every few seconds
+    the commands received and the status frames sent (stderr, once per tick: a count)."""
+
+    EVERY = 5.0
+    """Seconds of the rig's time between two lines."""
+
+    def __init__(self, rig: Any) -> None:
+        self.rig = rig
+        self.seen = 0
+        self.next = self.EVERY
+
+    def tick(self) -> None:
+        """Print a line when it is due."""
+        rig = self.rig
+        if not self.seen and rig.commands:
+            self.seen = rig.commands
+            print(f"motosim rig: first command frame at t = {rig.t:.3f} s", file=sys.stderr,
+                  flush=True)  # fmt: skip
+        elif self.seen and rig.t >= self.next:
+            self.next += self.EVERY
+            print(f"motosim rig: t = {rig.t:.0f} s, {rig.commands} commands received, "
+                  f"{rig.frames_sent} status frames sent", file=sys.stderr, flush=True)  # fmt: skip
+
+
+def _serve(
+    args: argparse.Namespace, rig: Any, twin: Any, link: Any, settings: Any, stops: StopHandler
+) -> tuple[Any, tuple[Any, ...], bool]:
+    """Tick the rig until the duration or Ctrl-C: its loop's timing, the privileges, and
+    whether Ctrl-C ended it."""
+    from motosim.rt.loop import RateLoop
+    from motosim.rt.privileges import freeze_gc, thaw_gc
+
+    rate = args.rate
+    warn_atypical("rig", "--rate", args.rate)
+    warn_atypical("rig", "--duration", args.duration)
+    periods = 2**62 if args.duration is None else round(args.duration * rate)
+    loop = RateLoop(rate, clock_from_args(args), capacity=min(periods, 1 << 20))
+    privileges = privileges_from_args(args)
+    received = _Received(rig)
+    stop = _TickStop()
+    status_due, t0, last = [0.0], [math.nan], [-1]
+
+    def tick(k: int, t: float) -> bool:
+        if t0[0] != t0[0]:
+            t0[0] = t
+        # a late tick (deadlines skipped) sends the newest status frame, not a backlog
+        rig.advance_to(t - t0[0], catch_up=k <= last[0] + 1 or rate < settings.status_rate)
+        last[0] = k
+        received.tick()
         if twin is not None:
-            twin.close()
-    stats = loop.stats()
-    summary = {
+            twin.advance_to(t - t0[0])
+            if args.platform_can and twin.t >= status_due[0]:
+                status_due[0] += 0.01  # PF_STATUS at 100 Hz
+                link.send(*twin.status_frame())
+        return not stop.requested
+
+    stops.aim(stop)
+    freeze_gc()
+    try:
+        loop.run(tick, periods=periods)
+    finally:
+        thaw_gc()
+        stops.release()
+    return loop.stats(), privileges, stop.requested
+
+
+def _summary(
+    args: argparse.Namespace, rig: Any, twin: Any, link: Any, stats: Any, privileges: Any
+) -> dict[str, Any]:
+    """The rig's summary (its JSON)."""
+    import numpy as np
+
+    platform = None
+    if twin is not None:
+        platform = {
+            "datagrams": twin.frames,
+            "can": bool(args.platform_can),
+            "lost": twin.lost,
+            "late": twin.late,
+            "bad": twin.bad,
+            "watchdog_timeouts": twin.timeouts,
+            "achieved_deg": [float(np.degrees(a)) for a in twin.achieved],
+        }
+    return {
         "time": rig.t,
         "frames_sent": rig.frames_sent,
         "frames_dropped": rig.frames_dropped,
@@ -213,35 +315,28 @@ def _run(args: argparse.Namespace, presses: Any) -> int:
         "bad_commands": rig.bad_commands,
         "bus_errors": link.errors,
         "timing": stats.as_dict(),
-        "platform": None
-        if twin is None
-        else {
-            "datagrams": twin.frames,
-            "can": bool(args.platform_can),
-            "lost": twin.lost,
-            "late": twin.late,
-            "bad": twin.bad,
-            "watchdog_timeouts": twin.timeouts,
-            "achieved_deg": [float(np.degrees(a)) for a in twin.achieved],
-        },
+        "platform": platform,
         "privileges": [
             {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
         ],
     }
+
+
+def _print(args: argparse.Namespace, summary: dict[str, Any], rig: Any, stats: Any) -> None:
+    """The summary, or its JSON."""
     if args.json:
         print_json(summary)
-    else:
-        print(
-            f"rig: {rig.t:.3f} s simulated, {rig.frames_sent} status frames sent "
-            f"({rig.frames_dropped} dropped, {rig.frames_late} not sent because the rig was "
-            f"late), {rig.commands} commands received "
-            f"({rig.bad_commands} bad); wake-up p99 {stats.wake_p99 * 1e6:.0f} us, "
-            f"missed {stats.missed}"
-        )
-        platform = summary["platform"]
-        if isinstance(platform, dict):
-            print(platform_line(platform))
-    return 0
+        return
+    print(
+        f"rig: {rig.t:.3f} s simulated, {rig.frames_sent} status frames sent "
+        f"({rig.frames_dropped} dropped, {rig.frames_late} not sent because the rig was "
+        f"late), {rig.commands} commands received "
+        f"({rig.bad_commands} bad); wake-up p99 {stats.wake_p99 * 1e6:.0f} us, "
+        f"missed {stats.missed}"
+    )
+    platform = summary["platform"]
+    if isinstance(platform, dict):
+        print(platform_line(platform))
 
 
 def platform_line(platform: dict[str, Any]) -> str:

@@ -12,13 +12,16 @@ from motosim.rt.clock import MonotonicClock
 from motosim.rt.privileges import Privilege, apply_privileges
 
 if TYPE_CHECKING:
+    from motosim.rt.check import Verdict
     from motosim.rt.loop import TimingStats
+    from motosim.rt.session import PrivilegeRequest
 
 __all__ = [
     "add_link_option",
     "add_privilege_options",
     "check_privilege_options",
     "check_udp_only_options",
+    "privilege_request",
     "privileges_from_args",
     "register",
 ]
@@ -112,6 +115,15 @@ def privileges_from_args(args: argparse.Namespace) -> tuple[Privilege, ...]:
     return apply_privileges(priority=args.fifo, cpus=_cpus(args), mlock=args.mlock)
 
 
+def privilege_request(args: argparse.Namespace) -> "PrivilegeRequest":
+    """The privileges asked for on the command line, checked, to be applied by the loop."""
+    from motosim.rt.session import PrivilegeRequest
+
+    check_privilege_options(args)
+    cpus = _cpus(args)
+    return PrivilegeRequest(args.fifo, None if cpus is None else tuple(cpus), bool(args.mlock))
+
+
 def clock_from_args(args: argparse.Namespace) -> MonotonicClock:
     """The monotonic clock with the ``--spin`` margin [us] converted to seconds."""
     if not (math.isfinite(args.spin) and 0.0 <= args.spin < 1e6):
@@ -126,18 +138,22 @@ def register(sub: Any) -> None:
         help="measure this machine's wake-up latency and missed deadlines at a rate",
         description=(
             "Run an empty fixed-rate loop and print the wake-up latency after each deadline "
-            "(p50, p99, p99.9, max) and the missed deadlines. Run it first on a new lab PC, "
-            "with and without --fifo/--cpu/--mlock."
+            "(p50, p99, p99.9, max) and the missed deadlines, then a verdict against the "
+            "targets: wake-up p99 <= 100 us, at most 0.1 %% of the deadlines missed, compute "
+            "p99 <= a fifth of the period (PASS/FAIL lines; exit 0 if every target is met, "
+            "1 if not). Run it first on a new lab PC, with and without --fifo/--cpu/--mlock."
         ),
     )
     parser.add_argument("--rate", type=float, default=1000.0, help="loop rate [Hz] (1000)")
     parser.add_argument("--duration", type=float, default=5.0, help="how long [s] (5)")
-    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument(
+        "--json", action="store_true", help="print the figures and the verdict as JSON"
+    )
     add_privilege_options(parser)
     parser.set_defaults(func=run)
 
 
-def _table(stats: "TimingStats", privileges: tuple[Privilege, ...]) -> str:
+def _table(stats: "TimingStats", privileges: tuple[Privilege, ...], verdict: "Verdict") -> str:
     us = 1e6
     lines = [
         f"rate {stats.rate:g} Hz, {stats.periods} deadlines, {stats.served} served",
@@ -150,12 +166,17 @@ def _table(stats: "TimingStats", privileges: tuple[Privilege, ...]) -> str:
         lines.append(str(p))
     if not privileges:
         lines.append("no real-time privilege asked for (see --fifo, --cpu, --mlock)")
+    lines += [check.line() for check in verdict.checks]
+    lines.append(
+        "verdict: PASS, this PC keeps the targets at this rate" if verdict.passed else
+        "verdict: FAIL (see the real-time guide: Setting up the lab PC)"
+    )  # fmt: skip
     return "\n".join(lines)
 
 
 def run(args: argparse.Namespace) -> int:
-    """Measure and print; exit 0."""
-    from motosim.rt.check import check_timing
+    """Measure, print the figures and the verdict; exit 0 if every target is met, else 1."""
+    from motosim.rt.check import check_timing, verdict
 
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
@@ -167,6 +188,7 @@ def run(args: argparse.Namespace) -> int:
     clock = clock_from_args(args)
     privileges = privileges_from_args(args)
     stats = check_timing(args.rate, args.duration, clock=clock)
+    judged = verdict(stats)
     if args.json:
         print_json(
             {
@@ -175,8 +197,9 @@ def run(args: argparse.Namespace) -> int:
                 "privileges": [
                     {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
                 ],
+                "verdict": judged.as_dict(),
             }
         )
     else:
-        print(_table(stats, privileges))
-    return 0
+        print(_table(stats, privileges, judged))
+    return 0 if judged.passed else 1

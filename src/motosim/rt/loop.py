@@ -113,6 +113,12 @@ def timing_stats(
     )
 
 
+def _check_periods(periods: int) -> None:
+    """Refuse a negative count of periods."""
+    if periods < 0:
+        raise MotosimError(f"periods = {periods!r}: expected a non-negative count")
+
+
 WARM_LEAD = 50e-6
 """How long before a deadline the loop's ``warm`` is called [s]."""
 
@@ -206,8 +212,7 @@ class RateLoop:
         int
             The number of steps run.
         """
-        if periods < 0:
-            raise MotosimError(f"periods = {periods!r}: expected a non-negative count")
+        _check_periods(periods)
         clock = self._clock
         now = clock.now
         sleep_until = clock.sleep_until
@@ -362,8 +367,7 @@ class FramePacedLoop(RateLoop):
         int
             The number of steps run.
         """
-        if periods < 0:
-            raise MotosimError(f"periods = {periods!r}: expected a non-negative count")
+        _check_periods(periods)
         now = self._clock.now
         wait = self._wait
         received = self._received
@@ -371,11 +375,8 @@ class FramePacedLoop(RateLoop):
         cap = wake.size
         period = self._period
         served = self._served
-        missed = 0
-        gaps = 0
-        timeouts = 0
-        frames = received() if received is not None else 0
-        start = frames
+        missed = gaps = timeouts = 0
+        start = frames = received() if received is not None else 0
         self._stop = False
         k = 0
         last = now()
@@ -416,8 +417,16 @@ class FramePacedLoop(RateLoop):
             limit = self._timeout
             if not carry_on:
                 break
-        if received is not None:
-            gaps = max(0, k - (frames - start))
+        return self._end(k, periods, missed, served, gaps, timeouts, frames - start)
+
+    def _end(
+        self, k: int, periods: int, missed: int, served: int, gaps: int, timeouts: int,
+        frames: int,
+    ) -> int:  # fmt: skip
+        """Add a run's timeouts and gaps (the periods that passed less the ``frames``
+        received, when they are counted) to the totals; close it (:meth:`_close`)."""
+        if self._received is not None:
+            gaps = max(0, k - frames)
         self._timeouts += timeouts
         self._gaps += gaps
         return self._close(k, periods, missed, served)

@@ -459,12 +459,11 @@ class RealtimeRunner:
     def finish(self) -> int:
         """End a run that reached its duration: fade the torque out like a stop request
         (without counting as one); the most periods the fade-out needs (the fade, then the
-        slew-rate limit's way down from the clamp; 0 when the torque is already off);
-        :meth:`period` returns False once the torque is off (in a new run of the loop: its
-        ``k`` from 0 again)."""
+        slew-rate limit's way down from the clamp; 0 when the torque is already off).
+        :meth:`period` returns False once the torque is off, in the same run of the loop
+        (its ``k`` going on; a new run of the loop, its ``k`` from 0 again, is carried on
+        by the period itself)."""
         r = self._r
-        r[fused.R_K_BASE] += r[fused.R_K_LAST] + 1.0  # the loop's deadlines so far
-        r[fused.R_K_LAST] = -1.0
         if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
             r[fused.R_FINISHING] = 1.0
             self.safety.request_stop()
