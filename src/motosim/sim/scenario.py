@@ -1003,6 +1003,11 @@ class Scenario:
                 f"[controller] grip = {grip!r} with a design file: its controller was "
                 'designed for the handlebar without hands; expected no grip or "off"'
             )
+        if grip not in (None, "off") and self.estimator.name == SENSOR_ESTIMATOR:
+            raise MotosimError(
+                f"[controller] grip = {grip!r} with the torque sensor: it measures the arms' "
+                'whole torque, which the stack would then count twice; expected no grip or "off"'
+            )
         if grip not in (None, "off") and self.motorcycle.model == "multibody":
             raise MotosimError(
                 f"[controller] grip = {grip!r}: the stack carries the hands' inertia on "
@@ -1021,12 +1026,17 @@ class Scenario:
         """The hands the stack is designed for (None: a pure torque source).
 
         :func:`~motosim.sim.grips.design_hands` of ``[controller] grip``, by default of the
-        rider's own ``hands``, except with a design file (designed for the handlebar alone)
-        and on the multibody motorcycle.
+        rider's own ``hands``, except with a design file (designed for the handlebar alone),
+        on the multibody motorcycle and with a torque sensor (which measures the arms'
+        whole torque: modelled too, they would be counted twice).
         """
         grip = self.controller.grip
         if grip is None:
-            if self.controller.design is not None or self.motorcycle.model == "multibody":
+            if (
+                self.controller.design is not None
+                or self.motorcycle.model == "multibody"
+                or self.estimator.name == SENSOR_ESTIMATOR
+            ):
                 return None
             hands = self.rider.hands
             held = GRIPS[hands] if isinstance(hands, str) else hands
