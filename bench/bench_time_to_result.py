@@ -2,18 +2,22 @@
 
 The whole command, timed from outside (a fresh process each time: imports, loading the
 compiled code, designing, the 10 s run at 1 kHz, writing the result, the report), wall clock
-and the CPU time of the process (``resource.getrusage(RUSAGE_CHILDREN)``), beside the load
-average, in three states:
+and the CPU time of the command's processes (``resource.getrusage(RUSAGE_CHILDREN)``: the
+command and the processes it waited for), beside the load average, in three states:
 
 - the first run after install: numba's cache empty (``NUMBA_CACHE_DIR`` a new folder) and
   the design cache empty (``MOTOSIM_CACHE_DIR`` a new folder);
 - the compiled code warm, the design cache empty (a new scenario's first run);
 - both warm (every later run), with and without the HTML report.
 
-Each warm figure is the best of ``REPEAT`` runs. ``python bench/bench_time_to_result.py``;
-``make bench`` runs it with the rest.
+Each warm figure is the best of ``REPEAT`` runs. With a baseline (``--baseline SRC``: the
+``src`` folder of another checkout, e.g. the previous release's), each state is measured for
+it too, interleaved with ours (ours, baseline, ours, ...) in the same run, so that both see
+the same load. ``python bench/bench_time_to_result.py [--baseline SRC]``; ``make bench``
+runs it with the rest, without a baseline.
 """
 
+import argparse
 import os
 import resource
 import subprocess
@@ -40,36 +44,48 @@ def _command(out: Path, env: dict[str, str], *, report: bool) -> tuple[float, fl
     return wall, cpu
 
 
-def _best(out: Path, env: dict[str, str], *, report: bool) -> tuple[float, float]:
-    runs = [_command(out, env, report=report) for _ in range(REPEAT)]
-    return min(runs)
-
-
-def run() -> dict[str, float]:
-    """The figures of the module docstring."""
+def run(baseline: str | None = None) -> dict[str, float]:
+    """The figures of the module docstring; ``baseline`` the other checkout's ``src``."""
     figures: dict[str, float] = {"load average (1 min) before": os.getloadavg()[0]}
+    trees = {"": str(ROOT / "src")}
+    if baseline:
+        trees["baseline "] = str(Path(baseline).resolve())
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        env = {
-            **os.environ,
-            "NUMBA_CACHE_DIR": str(folder / "numba"),
-            "MOTOSIM_CACHE_DIR": str(folder / "designs"),
+        envs = {
+            who: {
+                **os.environ,
+                "PYTHONPATH": src,
+                "NUMBA_CACHE_DIR": str(folder / f"numba{i}"),
+                "MOTOSIM_CACHE_DIR": str(folder / f"designs{i}"),
+            }
+            for i, (who, src) in enumerate(trees.items())
         }
-        out = folder / "run"
 
-        def record(what: str, measured: tuple[float, float]) -> None:
-            figures[f"{what}: wall [s]"], figures[f"{what}: CPU [s]"] = measured
+        def record(what: str, *, report: bool, repeat: int) -> None:
+            best: dict[str, tuple[float, float]] = {}
+            for _ in range(repeat):
+                for who, env in envs.items():
+                    measured = _command(folder / f"run-{len(who)}", env, report=report)
+                    best[who] = min(best.get(who, measured), measured)
+            for who, (wall, cpu) in best.items():
+                figures[f"{who}{what}: wall [s]"] = wall
+                figures[f"{who}{what}: CPU [s]"] = cpu
 
         record("first run after install (nothing compiled, nothing designed)",
-               _command(out, env, report=True))  # fmt: skip
-        env["MOTOSIM_CACHE_DIR"] = str(folder / "designs-new")
-        record("compiled code warm, design cache empty", _command(out, env, report=True))
-        record("both warm, with the report (target 1.5 s wall)", _best(out, env, report=True))
-        record("both warm, --no-report", _best(out, env, report=False))
+               report=True, repeat=1)  # fmt: skip
+        for i, env in enumerate(envs.values()):
+            env["MOTOSIM_CACHE_DIR"] = str(folder / f"designs-new{i}")
+        record("compiled code warm, design cache empty", report=True, repeat=1)
+        record("both warm, with the report (target 1.5 s wall)", report=True, repeat=REPEAT)
+        record("both warm, --no-report", report=False, repeat=REPEAT)
     figures["load average (1 min) after"] = os.getloadavg()[0]
     return figures
 
 
 if __name__ == "__main__":
-    for key, value in run().items():
-        print(f"  {key:<66} {value:.3g}")
+    parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
+    parser.add_argument("--baseline", help="the src folder of the checkout to compare with")
+    options = parser.parse_args()
+    for key, value in run(options.baseline).items():
+        print(f"  {key:<75} {value:.3g}")

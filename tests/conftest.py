@@ -124,6 +124,7 @@ SLOW_TESTS = frozenset(
         "tests/unit/test_report.py::test_report",
         "tests/unit/test_report.py::test_report_of_a_realtime_run_stopped_by_a_safety_fault",
         "tests/unit/test_report.py::test_report_of_an_interrupted_run",
+        "tests/unit/test_report_figures.py::test_the_workers_draw_the_report_the_calling_process_draws",
         "tests/unit/test_results_faults.py::test_a_second_run_of_the_same_folder_is_refused",
         "tests/unit/test_results_faults.py::test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones",
         "tests/unit/test_stack.py::test_recorded_layout_recompiles_when_the_signal_table_changes",

@@ -263,9 +263,9 @@ def test_simulate_holds_the_folder_until_its_report_is_written(tmp_path: Path) -
     seen: list[tuple[int, str]] = []
     real = motosim.report.build_report
 
-    def build_report(folder: Path) -> Path:
+    def build_report(folder: Path, **options: Any) -> Path:
         seen.append(_second_run(second))  # while the first writes its report
-        return real(folder)
+        return real(folder, **options)
 
     with unittest.mock.patch.object(motosim.report, "build_report", build_report):
         assert main(["simulate", str(scenario), "--out", str(out)]) == 0

@@ -232,8 +232,16 @@ def design_for(plan: Plan, key: str, *, cache: DesignCache | None = None) -> Des
         tables=inputs.tables,
         true_handlebars=plan.true_handlebars,
         rider=inputs.rider,
-        rider_settings=repr(sorted(rider_design(inputs.scenario).items())),
+        rider_settings=_settings_key(rider_design(inputs.scenario)),
         multibody=inputs.multibody,
+    )
+
+
+def _settings_key(settings: Mapping[str, Any]) -> str:
+    """The virtual rider's design settings as a key: arrays as lists, which ``repr`` writes
+    without NumPy's array printing, run after run."""
+    return repr(
+        sorted((k, v.tolist() if isinstance(v, np.ndarray) else v) for k, v in settings.items())
     )
 
 
@@ -251,7 +259,7 @@ class _Worker:
     def rider(self, design: Design, scenario: Scenario) -> RiderGains | MultibodyRider:
         """The schedule of ``scenario``'s rider: the design's, or one designed here once."""
         settings = rider_design(scenario)
-        key = (design.key, repr(sorted(settings.items())))
+        key = (design.key, _settings_key(settings))
         if key not in self.riders:
             shared = design.rider if key[1] == design.rider_settings else None
             self.riders[key] = shared or design_virtual_rider(

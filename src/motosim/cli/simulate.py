@@ -21,6 +21,7 @@ from motosim.errors import RunFailedError
 if TYPE_CHECKING:
     from motosim.io.cache import DesignCache
     from motosim.io.files import FolderLock
+    from motosim.report.figures import FigureWorkers
     from motosim.sim import RunInputs, Scenario
     from motosim.sim.stack import StackModel
 
@@ -111,6 +112,19 @@ def run(args: argparse.Namespace) -> int:
     check_scenario_inputs(args.scenario)
     folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
     check_scenario_values(args.scenario)  # before the numerical stack is imported
+    from motosim.report.figures import FigureWorkers
+
+    # the report's figures are drawn by processes that load matplotlib while the run goes on
+    workers = FigureWorkers() if args.report else None
+    try:
+        return _simulate(args, folder, workers)
+    finally:
+        if workers is not None:
+            workers.close()
+
+
+def _simulate(args: argparse.Namespace, folder: Path, workers: "FigureWorkers | None") -> int:
+    """:func:`run` once its inputs are checked: ``workers`` draw the report's figures."""
     from motosim.io.files import FolderLock
     from motosim.io.results import is_complete_result, partial_folder
     from motosim.io.runs import load_scenario
@@ -143,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
                 if args.report:
                     from motosim.report import build_report
 
-                    report = build_report(folder)
+                    report = build_report(folder, workers=workers)
                 if args.json:  # what a script reads, failure included; the reason on stderr
                     from motosim.io.results import load_result
 
@@ -159,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
         if args.report:
             from motosim.report import build_report
 
-            report = build_report(folder)
+            report = build_report(folder, workers=workers)
     if args.json:
         print_json(
             {

@@ -2,33 +2,28 @@
 
 :func:`build_report` reads ``folder/result.h5`` with :func:`motosim.io.results.load_result`,
 computes the metrics (:func:`metrics`) unless the run stored them, draws the figures of
-:mod:`motosim.plotting.closed_loop` and writes ``folder/report.html`` with the figures
+:mod:`motosim.plotting.closed_loop` (:mod:`motosim.report.figures`: here, or in worker
+processes started before the run) and writes ``folder/report.html`` with the figures
 embedded as PNG: one file, no external resources, no JavaScript.
 """
 
 import base64
 import html
-import io
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from motosim.errors import MotosimError
 from motosim.io.files import write_whole
 from motosim.io.results import SimResult, load_result
-from motosim.plotting.closed_loop import (
-    plot_motor_torque,
-    plot_motorcycle,
-    plot_rate,
-    plot_spectrum,
-    plot_torque,
-    plot_tracking,
-)
+from motosim.report.figures import FIGURES, draw_figure
 from motosim.report.units import METRICS, shown
 from motosim.sim.metrics import run_metrics
+
+if TYPE_CHECKING:
+    from motosim.report.figures import FigureWorkers
 
 __all__ = ["build_report", "metrics"]
 
@@ -70,22 +65,6 @@ figcaption { font-size: 0.9em; color: #555; }
 pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
 .note { color: #666; font-size: 0.9em; }
 """
-
-_FIGURES: tuple[tuple[str, Callable[[SimResult], Any]], ...] = (
-    ("Rider torque tau_r and its estimate tau_r_hat (paper Figs. 11 and 14)", plot_torque),
-    (
-        "Handlebar angle theta_h against the virtual steer angle delta (Fig. 13, left)",
-        plot_tracking,
-    ),
-    ("Handlebar rate and the differentiator's estimate (Fig. 13 right, Fig. 17)", plot_rate),
-    ("Estimated rider torque and motor torque N k_t i_m (Fig. 18)", plot_motor_torque),
-    ("Virtual motorcycle: path, roll, speed, path error", plot_motorcycle),
-    (
-        "Spectra of the motor current and of theta_h - delta: a peak above the dotted line is a "
-        "buzz the rider feels",
-        plot_spectrum,
-    ),
-)
 
 
 def _esc(value: object) -> str:
@@ -200,12 +179,6 @@ def _metric_rows(result: SimResult) -> tuple[list[tuple[str, str, str]], str]:
     return rows, note
 
 
-def _png(figure: Any) -> str:
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=100)
-    return base64.b64encode(buffer.getvalue()).decode("ascii")
-
-
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]], numeric: int = -1) -> str:
     head = "".join(f"<th>{_esc(h)}</th>" for h in header)
     body = []
@@ -234,13 +207,30 @@ def _safety_fault(folder: Path) -> str | None:
     return f"safety fault: {recorded.get('fault_reason') or recorded['fault']}"
 
 
-def build_report(folder: str | Path) -> Path:
+def _figures(
+    result: SimResult, source: Path, workers: "FigureWorkers | None"
+) -> Sequence[str | None]:
+    """The base64 PNG of each of :data:`FIGURES` (None where the signals lack), drawn by
+    ``workers`` when given and able, else here."""
+    if not result.t.size:
+        return [None] * len(FIGURES)
+    names = [name for _, name in FIGURES]
+    drawn = workers.draw(source, names) if workers is not None else None
+    if drawn is not None:
+        return drawn
+    return [draw_figure(result, name) for name in names]
+
+
+def build_report(folder: str | Path, *, workers: "FigureWorkers | None" = None) -> Path:
     """Write ``folder/report.html`` from the result saved in ``folder``.
 
     Parameters
     ----------
     folder : str or Path
         A result folder written by :class:`motosim.io.results.ResultWriter`.
+    workers : FigureWorkers, optional
+        Processes that draw the figures (:class:`motosim.report.figures.FigureWorkers`,
+        started before the run); by default, or when they cannot, the figures are drawn here.
 
     Returns
     -------
@@ -297,15 +287,11 @@ def build_report(folder: str | Path) -> Path:
         "<h2>Figures</h2>",
     ]
     drawn = 0
-    if result.t.size:
-        for caption, plot in _FIGURES:
-            try:
-                figure = plot(result)
-            except MotosimError:
-                continue  # the run lacks this figure's signals
+    for (caption, _), image in zip(FIGURES, _figures(result, source, workers), strict=True):
+        if image is not None:
             parts.append(
                 f'<figure><img alt="{_esc(caption)}" src="data:image/png;base64,'
-                f'{_png(figure)}"><figcaption>{_esc(caption)}</figcaption></figure>'
+                f'{image}"><figcaption>{_esc(caption)}</figcaption></figure>'
             )
             drawn += 1
     for name, caption in _SAVED_FIGURES:  # written beside the result by its command

@@ -1,0 +1,53 @@
+"""The report's figures drawn in worker processes: the same report as drawn in-process."""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motosim.io.results import ResultWriter
+from motosim.report import build_report
+from motosim.report.figures import FigureWorkers, draw_saved_figure
+
+NAMES = ("t", "tau_r", "tau_r_hat", "theta_h", "delta", "i_m", "theta_h_dot", "theta_h_dot_hat")
+
+
+def _write(folder: Path, names: tuple[str, ...] = NAMES) -> None:
+    t = np.arange(400) * 1e-3
+    columns = [t] + [0.1 * (j + 1) * np.sin(7.0 * t + j) for j in range(1, len(names))]
+    with ResultWriter(folder, names, {"scenario": {"name": "workers"}, "seed": 1}) as writer:
+        writer.append(np.column_stack(columns))
+        writer.close({})
+
+
+def test_the_workers_draw_the_report_the_calling_process_draws(tmp_path: Path) -> None:
+    _write(tmp_path)
+    here = build_report(tmp_path).read_bytes()
+    with FigureWorkers() as workers:
+        assert build_report(tmp_path, workers=workers).read_bytes() == here  # byte for byte
+        # the figure this result lacks the signals of (the motorcycle's) is None, in order
+        drawn = workers.draw(tmp_path, ["plot_motorcycle", "plot_torque"])
+    if drawn is None:  # no fork server or one core here: the figures were drawn in-process
+        pytest.skip("no worker processes on this machine")
+    assert drawn[0] is None
+    assert drawn[1] == draw_saved_figure(str(tmp_path), "plot_torque")
+
+
+def test_without_workers_the_figures_are_drawn_here(tmp_path: Path) -> None:
+    _write(tmp_path)
+    workers = FigureWorkers(processes=1)  # one process: nothing to gain, nothing started
+    assert workers.draw(tmp_path, ["plot_torque"]) is None
+    text = build_report(tmp_path, workers=workers).read_text(encoding="utf-8")
+    assert text.count('src="data:image/png;base64,') == 5
+    workers.close()
+
+
+def test_a_report_after_a_rewritten_result_is_drawn_from_the_new_one(tmp_path: Path) -> None:
+    # a worker keeps the last result it read while its file is unchanged, not after
+    folder = tmp_path / "run"
+    _write(folder)
+    assert draw_saved_figure(str(folder), "plot_tracking") is not None
+    shutil.rmtree(folder)
+    _write(folder, NAMES[:3])  # no handlebar angle any more
+    assert draw_saved_figure(str(folder), "plot_tracking") is None
