@@ -308,7 +308,8 @@ def _run_both_ways(
         def until_due(deadline: float) -> None:
             # the loop's spin phase on a lab's clock: warm-ups until 50 us from now (real
             # time: how many fit varies from run to run, and must not matter)
-            warmups.append(runner.warm(time.monotonic() + 50e-6))
+            runner.warm(time.monotonic() + 50e-6)
+            warmups.append(runner.warm_ups)
 
         warm_up = {"": None, "once": runner.warm, "until": until_due}[warm]
         loop = RateLoop(rate, clock, warm=warm_up)

@@ -726,6 +726,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
                 handlebar=inputs.nominal_handlebar,
                 validity=validity_limits(sc.motorcycle.speed),
                 warm=args.warm == "on",
+                duration=periods / rate,
             )
             metadata = run_metadata(inputs) | {
                 "realtime": {
@@ -973,16 +974,12 @@ def _loop(
         freeze_gc()
         runner.discard_pending()  # frames queued while the writer started are stale
         try:
-            loop.run(step, periods=periods)
-            complete = runner.safety.fault.name == "NONE" and loop.stats().periods >= periods
-            fade = runner.finish() if complete else 0
-            if fade:  # the duration is over: the torque fades out, never a step to zero;
-                # the run ends when it is out (missed deadlines do not shorten the fade)
-                loop.run(step, periods=10 * fade)
+            # after the duration the torque fades out, never a step to zero, in the same run
+            loop.run(step, periods=runner.max_periods)
         finally:
             thaw_gc()
         stats = loop.stats()
-        complete = complete and runner.safety.fault.name == "NONE"
+        complete = runner.reached_end and runner.safety.fault.name == "NONE"
         extra: dict[str, Any] = {f"rt_{k}": float(v) for k, v in stats.as_dict().items()}
         if runner.left_range is not None and runner.safety.fault.name == "NONE":
             extra["failure"] = runner.left_range  # the motorcycle fell: flagged, as offline

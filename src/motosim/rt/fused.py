@@ -37,8 +37,9 @@ A runner whose stack is not a :class:`~motosim.rt.stack.CompiledStack` (a test d
 Python) calls :func:`take_frames`, :func:`begin` and :func:`finish` one by one around its
 stack's ``step``: the same compiled functions, so both ways behave the same.
 
-All the runner's state is in the arrays of :class:`PeriodArrays`; ``R_*`` are the positions
-in its ``runner`` array, ``Q_*`` those in ``positions``.
+The runner's state is a :class:`RunnerState` (a numba ``structref``, fields by name), the
+frames' layout a :class:`SignalPositions`; both travel in :class:`PeriodArrays` with every
+array of the period.
 """
 
 import errno
@@ -57,6 +58,7 @@ from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from motosim.io.can import decode_frame, encode_frame, unpack_frame
+from motosim.rt.ring import RingCounter
 from motosim.rt.safety import (
     Fault,
     SafetyParams,
@@ -73,11 +75,15 @@ from motosim.rt.stack import stack_period, stack_reset
 
 __all__ = [
     "RECV_AVAILABLE",
-    "RUNNER_STATE_SIZE",
     "WARM_MARGIN_NS",
     "LoopColumn",
     "PeriodArrays",
     "PeriodContext",
+    "PeriodEnd",
+    "RunnerCounts",
+    "RunnerSettings",
+    "RunnerState",
+    "SignalPositions",
     "begin",
     "context_cycle",
     "context_period",
@@ -87,6 +93,9 @@ __all__ = [
     "fused_period",
     "monotonic_ns",
     "receive_datagrams",
+    "runner_counts",
+    "runner_request",
+    "stack_inputs",
     "stack_warm",
     "take_frames",
 ]
@@ -95,48 +104,182 @@ Array = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Ints = NDArray[np.int64]
 
-(
-    R_T0, R_THETA, R_CURRENT, R_PREV_THETA, R_STARTED, R_FRESH, R_STOP, R_FINISHING, R_ARMED,
-    R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
-    R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
-    R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS, R_K_BASE,
-    R_K_LAST, R_HEARTBEAT_DUE, R_SLOT,
-) = range(42)  # fmt: skip
-RUNNER_STATE_SIZE = 42
-"""The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
-the angle of the last fresh status frame, flags (started, a fresh status frame, stop requested,
-finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
-status frames received, datagrams that were no frames; then its settings: periods to linger
-after a fault, the ``NO_DRIVE`` timeout [periods], periods between heartbeats, the period
-[s], where the stack's row holds the torque estimate and the handlebar rate (-1: nowhere),
-whether the received frames are python-can datagrams (1) or id, length and bytes (0); the
-virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]), where the
-stack's row holds its roll and speed (-1: nowhere); and whether, when (since the first
-deadline [s]), at which roll [rad] and speed [m/s] the motorcycle left that range; the
-stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did not step);
-the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
-errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`);
-whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0);
-for a stack without a rate in its row, the deadline of the period that read the last fresh
-status frame [s] and the handlebar's rate between the last two [rad/s]; and the heartbeat
-due next (its index: the period's index on the loop's time since the first deadline, over
-``heartbeat_every``); the loop's deadlines before its current run (its ``k`` of the runs
-before, each run's last ``k`` plus one) and its ``k`` of the last period (-1 before the
-first: :func:`begin` takes a ``k`` not above it for a new run of the loop); what the last
-:func:`finish` left to the runner: whether the heartbeat frame is to be sent this period (1)
-and the ring's slot the row went to."""
 
-(
-    Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
-    Q_COMMAND_COUNTER, Q_STATE, Q_FAULT, Q_HEARTBEAT_COUNTER, Q_COMMAND_AT, Q_HEARTBEAT_AT,
-    Q_LOOP_COLUMNS,
-) = range(14)  # fmt: skip
-POSITIONS_SIZE = 14
-"""Where the loop's signals sit in the frames' values (status: angle, current, counter,
-drive fault; E-stop: its signal; command: current, enable, counter; heartbeat: state, fault,
-counter), where the command and heartbeat frames' data bytes start in the bytes to send,
-and the number of the loop's own columns in a row."""
+@structref.register
+class RunnerStateType(types.StructRef):
+    """numba's type of :class:`RunnerState`."""
+
+    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
+        """The fields' types without literal values."""
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
+
+
+class RunnerSettings(NamedTuple):
+    """What a runner is given before its first deadline (:class:`RunnerState`'s first fields)."""
+
+    linger: int
+    """Periods the zero command is still sent after a fault."""
+    start_timeout: int
+    """The ``NO_DRIVE`` timeout [periods]."""
+    heartbeat_every: int
+    """Periods between heartbeats."""
+    dt: float
+    """The period [s]."""
+    duration: int
+    """The run's duration [periods]: the torque fades out from there (-1: no end)."""
+    tau_at: int
+    """Where the stack's row holds its estimate of the rider's torque (-1: nowhere)."""
+    rate_at: int
+    """Where it holds the handlebar's rate (-1: nowhere)."""
+    phi_at: int
+    """Where it holds the motorcycle's roll (-1: nowhere)."""
+    speed_at: int
+    """Where it holds its speed (-1: nowhere)."""
+    roll: float
+    """The virtual motorcycle's largest roll [rad]."""
+    speed_low: float
+    """Its lowest speed [m/s]."""
+    speed_high: float
+    """Its highest speed [m/s]."""
+    datagrams: bool
+    """Whether the frames read are python-can ``udp_multicast`` datagrams (else id, length
+    and bytes)."""
+    armed: bool
+    """Whether the torque starts with the drive's first status frame (else on an arm
+    request)."""
+    warm: bool
+    """Whether the stack is warmed before each deadline (:func:`context_warm_until`)."""
+
+
+_STATE_FIELDS = (
+    "t0", "theta", "current", "prev_theta", "fresh_at", "omega", "started", "fresh", "stop",
+    "finishing", "arm_request", "after_fault", "sent", "calls", "status_frames", "bad",
+    "recv_errors", "left", "left_t", "left_phi", "left_speed", "stack_time", "woke",
+    "warm_ups", "beats", "k_last", "ended",
+)  # fmt: skip
+
+
+class RunnerState(structref.StructRefProxy):
+    """The runner's state, shared by :class:`~motosim.rt.run.RealtimeRunner` and the compiled
+    period: the fields of :class:`RunnerSettings`, then
+
+    ``t0`` the first deadline [s]; ``theta`` [rad] and ``current`` [A] the last valid
+    measurement; ``prev_theta`` [rad] and ``fresh_at`` [s] the angle and deadline of the
+    last fresh status frame, ``omega`` the handlebar's rate between the last two [rad/s]
+    (for a stack without a rate in its row); flags ``started``, ``fresh`` (a fresh status
+    frame this period), ``stop`` (requested), ``finishing`` (the torque fades out: the
+    duration is over or the motorcycle left its range), ``arm_request``; ``after_fault``
+    periods since a fault; counts of command frames ``sent``, periods run (``calls``),
+    ``status_frames`` received, datagrams that were no frames (``bad``) and socket reads
+    failed otherwise than "nothing waiting" (``recv_errors``); whether (``left``), when
+    (``left_t``, since the first deadline [s]), at which roll [rad] and speed [m/s] the
+    motorcycle left its range; ``stack_time`` the stack's time this period [s] (NaN where
+    it did not step); ``woke`` the wake-up of the last :func:`context_cycle` [s];
+    ``warm_ups`` those of the last :func:`context_warm_until`; ``beats`` the heartbeat due
+    next (its index); ``k_last`` the loop's ``k`` of the last period (-1 before the first);
+    ``ended`` whether the run reached its duration. Python reads them through
+    :func:`runner_counts` and writes them through :func:`runner_request`; the loop's own
+    path has what it needs returned by the period (:class:`PeriodEnd`).
+    """
+
+    def __new__(cls, settings: RunnerSettings) -> "RunnerState":
+        nan = math.nan
+        made: RunnerState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
+            cls, *settings, nan, nan, nan, nan, 0.0, 0.0, False, False, False, False, False,
+            0, 0, 0, 0, 0, 0, False, nan, nan, nan, nan, nan, 0, 0, -1, False,
+        )  # fmt: skip
+        return made
+
+
+structref.define_proxy(  # type: ignore[no-untyped-call]
+    RunnerState, RunnerStateType, [*RunnerSettings._fields, *_STATE_FIELDS]
+)
+
+
+class RunnerCounts(NamedTuple):
+    """What Python reads of a :class:`RunnerState` (:func:`runner_counts`)."""
+
+    stop: bool
+    status_frames: int
+    bad: int
+    recv_errors: int
+    left: bool
+    left_t: float
+    left_phi: float
+    left_speed: float
+    warm_ups: int
+    ended: bool
+
+
+@njit(cache=True)
+def runner_counts(r: Any) -> RunnerCounts:
+    """The fields of the runner's state Python reads, in one compiled call."""
+    return RunnerCounts(
+        r.stop, r.status_frames, r.bad, r.recv_errors, r.left, r.left_t, r.left_phi,
+        r.left_speed, r.warm_ups, r.ended,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def runner_request(r: Any, stop: bool, arm: bool) -> None:
+    """An operator's request, from any thread or a signal handler: a stop (the torque fades
+    out and the run ends) and an arm (the torque fades in in the next period, the loop's
+    own thread enabling the safety stage)."""
+    if stop:
+        r.stop = True
+    if arm:
+        r.arm_request = True
+
+
+class SignalPositions(NamedTuple):
+    """Where the loop's signals sit in the frames' values, and the frames' data in the bytes
+    to send."""
+
+    angle: int
+    """The status frame's angle."""
+    current: int
+    """Its current."""
+    counter: int
+    """Its alive counter."""
+    drive_fault: int
+    """Its drive fault flag."""
+    estop: int
+    """The E-stop frame's signal."""
+    command_current: int
+    """The command frame's current."""
+    enable: int
+    """Its enable flag."""
+    command_counter: int
+    """Its alive counter."""
+    state: int
+    """The heartbeat frame's state code."""
+    fault: int
+    """Its fault code."""
+    heartbeat_counter: int
+    """Its counter."""
+    command_at: int
+    """Where the command frame's data bytes start in the bytes to send."""
+    heartbeat_at: int
+    """Where the heartbeat frame's start."""
+    loop_columns: int
+    """The number of the loop's own columns in a row."""
+
+
+class PeriodEnd(NamedTuple):
+    """What a period leaves to the runner (:func:`finish`)."""
+
+    goes_on: bool
+    """Whether the run goes on."""
+    heartbeat: bool
+    """Whether the heartbeat frame is to be sent this period."""
+    slot: int
+    """The ring's slot the row went to (the runner writes the send's time stamps there,
+    then advances the ring's head)."""
+    started: bool
+    """Whether the stack has started."""
+    woke: float
+    """The period's wake-up [s] (NaN without a clock)."""
+
 
 RX_FRAMES = 64
 """The most frames read in one period (a flooded bus cannot hold the loop)."""
@@ -265,10 +408,10 @@ _read: Any = _recv
 class PeriodArrays(NamedTuple):
     """Every array one period reads or writes, allocated before the first deadline."""
 
-    runner: Array
-    """The runner's state (``R_*``)."""
-    positions: Ints
-    """Signal and byte positions (``Q_*``)."""
+    runner: Any
+    """The runner's state, a :class:`RunnerState`."""
+    positions: SignalPositions
+    """Signal and byte positions."""
     safety: Any
     """The safety stage's state, a :class:`~motosim.rt.safety.SafetyState`
     (:func:`motosim.rt.safety.new_safety_state`)."""
@@ -297,7 +440,7 @@ class PeriodArrays(NamedTuple):
     rx_id: Ints
     """Their ids (frames given as id, length and bytes)."""
     command_frame: Bytes
-    """The command frame's bytes to send (its data from ``positions[Q_COMMAND_AT]``)."""
+    """The command frame's bytes to send (its data from ``positions.command_at``)."""
     heartbeat_frame: Bytes
     """The heartbeat frame's bytes to send."""
     stack_row: Array
@@ -317,37 +460,37 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
     A status frame is decoded and checked by the safety stage (checksum, alive counter, the
     drive's fault flag); if valid and fresh, its angle and current are kept. An E-stop frame
     pressed, or unreadable, trips the emergency stop. Other frames are ignored; datagrams
-    that are no python-can frames are counted (``R_BAD``).
+    that are no python-can frames are counted (the runner's ``bad``).
     """
     r, q, s = a.runner, a.positions, a.safety
     status_id = int(a.status[0, 0])
     estop_id = int(a.estop[0, 0])
     count = 0
     for j in range(first, end):
-        if r[R_DATAGRAMS] != 0.0:
+        if r.datagrams:
             kind, frame_id, start, length = unpack_frame(a.rx[j], 0, a.rx_length[j])
             if kind < 0:
-                r[R_BAD] += 1.0
+                r.bad += 1
                 continue
             if kind == 0:  # an error or remote frame
                 continue
         else:
             frame_id, start, length = a.rx_id[j], 0, a.rx_length[j]
         if frame_id == status_id:
-            r[R_STATUS_FRAMES] += 1.0
+            r.status_frames += 1
             values = a.status_values
             ok = decode_frame(a.status, a.rx[j], start, length, values)
-            fault = values[q[Q_DRIVE_FAULT]] > 0.5
+            fault = values[q.drive_fault] > 0.5
             # the safety stage's time: the loop's since the first deadline (NaN before it)
-            if safety_status_frame(s, a.limits, ok, values[q[Q_COUNTER]], fault, t - r[R_T0]):
-                r[R_THETA] = values[q[Q_ANGLE]]
-                r[R_CURRENT] = values[q[Q_CURRENT]]
-                r[R_FRESH] = 1.0
+            if safety_status_frame(s, a.limits, ok, values[q.counter], fault, t - r.t0):
+                r.theta = values[q.angle]
+                r.current = values[q.current]
+                r.fresh = True
             count += 1
         elif frame_id == estop_id:
             values = a.estop_values
             ok = decode_frame(a.estop, a.rx[j], start, length, values)
-            safety_estop_frame(s, ok, values[q[Q_ESTOP]] > 0.5)
+            safety_estop_frame(s, ok, values[q.estop] > 0.5)
     return count
 
 
@@ -356,11 +499,11 @@ def receive_datagrams(fd: int, a: PeriodArrays) -> int:
     """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``a.rx``'s rows and
     their sizes into ``a.rx_length``, at most ``RX_FRAMES``; the number read.
 
-    The compiled twin of :meth:`motosim.io.can.UdpMulticastLink.receive_datagrams` (what
+    The compiled twin of :meth:`motosim.io.can.UdpMulticastLink.receive_into` (what
     :class:`~motosim.rt.run.RealtimeRunner` calls otherwise): a datagram longer than a row
     is cut to it, as ``recv_into`` cuts it; an interrupted read is tried again (as Python
     does, PEP 475); "nothing waiting" (``EAGAIN``) ends the read, any other error too, and
-    counts in the runner's ``R_RECV_ERRORS`` (the link's ``errors`` in the Python path).
+    counts in the runner's ``recv_errors`` (the link's ``errors`` in the Python path).
     Linux only (:data:`RECV_AVAILABLE`).
     """
     rx, lengths = a.rx, a.rx_length
@@ -375,7 +518,7 @@ def receive_datagrams(fd: int, a: PeriodArrays) -> int:
             continue
         else:
             if got != -_EAGAIN and got != -_EWOULDBLOCK:
-                a.runner[R_RECV_ERRORS] += 1.0
+                a.runner.recv_errors += 1
             break
     return n
 
@@ -383,141 +526,191 @@ def receive_datagrams(fd: int, a: PeriodArrays) -> int:
 @njit(cache=True)
 def begin(a: PeriodArrays, k: int, t: float) -> bool:
     """After the frames of period ``k`` (deadline ``t`` [s]): True if the stack must be
-    reset now (the first valid status frame came), at ``R_THETA`` and ``R_CURRENT``."""
+    reset now (the first valid status frame came), at the runner's ``theta`` and
+    ``current``."""
     r, s = a.runner, a.safety
-    if r[R_T0] != r[R_T0]:
-        r[R_T0] = t
-    if k <= r[R_K_LAST]:  # a new run of the loop (motosim run's fade-out): k from 0 again
-        r[R_K_BASE] += r[R_K_LAST] + 1.0
-    r[R_K_LAST] = k
-    fresh = r[R_FRESH] != 0.0  # cleared by finish: the stack reads it in between
-    started = r[R_STARTED] != 0.0
-    if not started and k >= r[R_START_TIMEOUT]:
+    if r.t0 != r.t0:
+        r.t0 = t
+    r.k_last = k
+    fresh = r.fresh  # cleared by finish: the stack reads it in between
+    started = r.started
+    if not started and k >= r.start_timeout:
         safety_trip(s, Fault.NO_DRIVE)
     reset = False
     if fresh and not started:
-        r[R_STARTED] = 1.0
+        r.started = True
         started = True
         reset = True
-        r[R_PREV_THETA] = r[R_THETA]
-        r[R_FRESH_AT] = t
-        r[R_OMEGA] = 0.0
-        if r[R_STOP] == 0.0 and r[R_ARMED] != 0.0:
+        r.prev_theta = r.theta
+        r.fresh_at = t
+        r.omega = 0.0
+        if not r.stop and r.armed:
             safety_enable(s)
-    if r[R_ARM_REQUEST] != 0.0 and started:
-        r[R_ARM_REQUEST] = 0.0
-        if r[R_ARMED] == 0.0 and r[R_STOP] == 0.0:
-            r[R_ARMED] = 1.0
+    if r.arm_request and started:
+        r.arm_request = False
+        if not r.armed and not r.stop:
+            r.armed = True
             safety_enable(s)
     return reset
 
 
 @njit(cache=True)
-def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: float) -> bool:
+def stack_inputs(a: PeriodArrays) -> tuple[bool, float, float, bool, float]:
+    """What a stack in Python is stepped with after :func:`begin`, in one compiled call:
+    whether it has started, the last valid angle [rad] and current [A], whether they came
+    fresh this period, and the share of the command the safety stage will pass."""
+    r = a.runner
+    return r.started, r.theta, r.current, r.fresh, safety_scale(a.safety, a.limits)
+
+
+@njit(cache=True)
+def _handlebar_rate(a: PeriodArrays, t: float, fresh: bool) -> float:
+    """The handlebar's rate [rad/s] for the safety stage: the stack's own, or for a stack
+    without one, the angle's change between the last two fresh frames over their interval
+    on the loop's time (with frames slower than the loop, not one period's, which reads a
+    rate ten times too high; the deadlines a late loop skipped count)."""
+    r = a.runner
+    if not r.started:
+        return 0.0
+    if r.rate_at >= 0:
+        return float(a.stack_row[r.rate_at])
+    if fresh and t > r.fresh_at:
+        r.omega = (r.theta - r.prev_theta) / (t - r.fresh_at)
+        r.prev_theta = r.theta
+        r.fresh_at = t
+    return float(r.omega)
+
+
+@njit(cache=True)
+def _check_range(a: PeriodArrays, t: float) -> None:
+    """The virtual motorcycle's range: past its roll or speeds (a fall, a speed outside the
+    model's) the run ends as offline, the torque faded out as at the end of the duration."""
+    r = a.runner
+    if not r.started or r.phi_at < 0 or r.speed_at < 0 or r.left:
+        return
+    phi, speed = a.stack_row[r.phi_at], a.stack_row[r.speed_at]
+    if abs(phi) > r.roll or speed < r.speed_low or speed > r.speed_high:
+        r.left = True
+        r.left_t = t - r.t0
+        r.left_phi = phi
+        r.left_speed = speed
+        r.finishing = True
+        safety_request_stop(a.safety)
+
+
+@njit(cache=True)
+def _encode(a: PeriodArrays, out: float, t: float) -> bool:
+    """The command frame of the current ``out`` [A] and, in the first period served of
+    every ``heartbeat_every``, the heartbeat frame, encoded in place in the bytes to send;
+    whether the heartbeat is due.
+
+    The heartbeat's period index is taken on the loop's time since the first deadline
+    (``n % every == 0`` would miss the heartbeat whose period's first deadline was
+    skipped)."""
+    r, q, s = a.runner, a.positions, a.safety
+    state = s.state
+    values = a.command_values
+    values[q.command_current] = out
+    live = state == State.FADE_IN or state == State.RUNNING or state == State.STOPPING
+    values[q.enable] = 1.0 if live else 0.0
+    values[q.command_counter] = r.sent & 0xF
+    r.sent += 1
+    encode_frame(a.command, values, a.command_frame, q.command_at)
+    n = math.floor((t - r.t0) / r.dt + 0.5)  # the period's index on the loop's time
+    every = r.heartbeat_every
+    beat = n // every >= r.beats
+    if beat:
+        r.beats = n // every + 1
+        values = a.heartbeat_values
+        values[q.state] = state
+        values[q.fault] = s.fault
+        values[q.heartbeat_counter] = (n // every) & 0xF
+        encode_frame(a.heartbeat, values, a.heartbeat_frame, q.heartbeat_at)
+    return bool(beat)
+
+
+@njit(cache=True)
+def _write_row(
+    a: PeriodArrays, command: float, out: float, t: float, woke: float, done_read: float
+) -> int:
+    """The period's row into the ring's next slot, its index returned: the loop's columns
+    (:class:`LoopColumn`; ``compute``, ``done_control`` and ``done_send`` NaN, stamped by
+    the runner after the send), then the stack's row (its initial one before it starts).
+
+    The deadlines skipped before this one are the loop's own count (its ``k`` less the
+    periods run)."""
+    r, s = a.runner, a.safety
+    slot = int(a.ring_head[RingCounter.written] % a.ring.shape[0])
+    row = a.ring[slot]
+    row[LoopColumn.t] = t - r.t0
+    row[LoopColumn.theta_h_meas] = r.theta
+    row[LoopColumn.i_m_meas] = r.current
+    row[LoopColumn.i_cmd] = command
+    row[LoopColumn.i_safe] = out
+    row[LoopColumn.state] = s.state
+    row[LoopColumn.fault] = s.fault
+    row[LoopColumn.t_clock] = t
+    row[LoopColumn.wake] = woke - t
+    row[LoopColumn.compute] = math.nan
+    row[LoopColumn.missed] = r.k_last - r.calls
+    row[LoopColumn.done_read] = done_read - woke
+    row[LoopColumn.done_control] = math.nan
+    row[LoopColumn.done_send] = math.nan
+    row[LoopColumn.stack] = r.stack_time
+    n_loop = a.positions.loop_columns
+    for j in range(a.stack_row.size):
+        row[n_loop + j] = a.stack_row[j]
+    return slot
+
+
+@njit(cache=True)
+def _goes_on(a: PeriodArrays) -> bool:
+    """Whether the run goes on after this period: at its duration's last period the torque
+    fades out (a stop request, not counted as the operator's); the run ends once the stage
+    is IDLE after a stop request or the fade-out, or ``linger`` periods after a fault."""
+    r, s = a.runner, a.safety
+    if r.duration >= 0 and r.k_last + 1 >= r.duration and not r.ended:
+        r.ended = True
+        r.finishing = True
+        safety_request_stop(s)
+    if s.state == State.FAULT:
+        r.after_fault += 1
+        return bool(r.after_fault < r.linger)
+    return not ((r.stop or r.finishing) and s.state == State.IDLE)
+
+
+@njit(cache=True)
+def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: float) -> PeriodEnd:
     """The safety stage on the stack's ``command`` [A], the frames to send, the row.
 
     The stack's estimate of the rider's torque (its row's ``tau_r_hat``) NaN trips
     ``NON_FINITE`` as an inf does (the stage takes NaN for "no estimate": a stack without
-    one).
-
-    ``t`` is the period's deadline [s]: the heartbeat's period index is taken on the loop's
-    time since the first deadline, not from the loop's ``k``, which a second run of the loop
-    (motosim run's fade-out after the duration) counts from 0 again; the row's count of
-    deadlines skipped is the loop's own (its ``k`` as :func:`begin` carries it across the
-    runs), which the time between two runs does not add to. ``woke`` and
-    ``done_read`` are the period's wake-up and the end of the bus read on the loop's clock
-    [s] (NaN without one). Returns whether the run goes on; leaves in the runner's state
-    whether the heartbeat frame is to be sent this period (``R_HEARTBEAT_DUE``) and the
-    ring's slot the row went to (``R_SLOT``: the runner writes the send's time stamps there,
-    then advances the ring's head).
+    one). ``t`` is the period's deadline [s]; ``woke`` and ``done_read`` are the period's
+    wake-up and the end of the bus read on the loop's clock [s] (NaN without one).
     """
-    r, q, s = a.runner, a.positions, a.safety
-    fresh = r[R_FRESH] != 0.0
-    r[R_FRESH] = 0.0
-    started = r[R_STARTED] != 0.0
-    theta_now = r[R_THETA]
-    rate_at, tau_at = int(r[R_S_RATE]), int(r[R_S_TAU])
-    if started and rate_at >= 0:
-        omega = a.stack_row[rate_at]
-    elif started:  # the angle's change between the last two fresh frames over their interval
-        # (with frames slower than the loop, not one period's: a rate ten times too high),
-        # on the loop's time: the deadlines a late loop skipped count (not the periods
-        # served: the rate read too high), and a second run (the fade-out) goes on from it
-        if fresh and t > r[R_FRESH_AT]:
-            r[R_OMEGA] = (theta_now - r[R_PREV_THETA]) / (t - r[R_FRESH_AT])
-            r[R_PREV_THETA] = theta_now
-            r[R_FRESH_AT] = t
-        omega = r[R_OMEGA]
-    else:
-        omega = 0.0
+    r, s = a.runner, a.safety
+    fresh = r.fresh
+    r.fresh = False
+    started = r.started
+    omega = _handlebar_rate(a, t, fresh)
+    tau_at = r.tau_at
     tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
     if started and tau_at >= 0 and tau_hat != tau_hat:  # NaN: no estimate only without one
         safety_trip(s, Fault.NON_FINITE)
-    phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
-    if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
-        phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
-        if abs(phi) > r[R_ROLL] or speed < r[R_SPEED_LOW] or speed > r[R_SPEED_HIGH]:
-            # the motorcycle fell or left the model's speeds: the run ends as offline, the
-            # torque faded out as at the end of its duration
-            r[R_LEFT] = 1.0
-            r[R_LEFT_T] = t - r[R_T0]
-            r[R_LEFT_PHI] = phi
-            r[R_LEFT_SPEED] = speed
-            r[R_FINISHING] = 1.0
-            safety_request_stop(s)
-    theta = theta_now if started else 0.0
-    out = safety_step(s, a.limits, command, theta, omega, tau_hat, t - r[R_T0])
-    state = s.state
-    values = a.command_values
-    values[q[Q_COMMAND_CURRENT]] = out
-    live = state == State.FADE_IN or state == State.RUNNING or state == State.STOPPING
-    values[q[Q_ENABLE]] = 1.0 if live else 0.0
-    sent = int(r[R_SENT])
-    values[q[Q_COMMAND_COUNTER]] = sent & 0xF
-    r[R_SENT] = sent + 1
-    encode_frame(a.command, values, a.command_frame, q[Q_COMMAND_AT])
-    n = math.floor((t - r[R_T0]) / r[R_DT] + 0.5)  # the period's index on the loop's time
-    every = int(r[R_HEARTBEAT_EVERY])
-    beat = n // every >= r[R_BEATS]  # the first period of its heartbeat period served
-    if beat:  # (n % every == 0 missed the heartbeat whose period's first deadline was skipped)
-        r[R_BEATS] = n // every + 1
-        values = a.heartbeat_values
-        values[q[Q_STATE]] = state
-        values[q[Q_FAULT]] = s.fault
-        values[q[Q_HEARTBEAT_COUNTER]] = (n // every) & 0xF
-        encode_frame(a.heartbeat, values, a.heartbeat_frame, q[Q_HEARTBEAT_AT])
-    slot = int(a.ring_head[0] % a.ring.shape[0])
-    row = a.ring[slot]
-    row[LoopColumn.t] = t - r[R_T0]
-    row[LoopColumn.theta_h_meas] = theta_now
-    row[LoopColumn.i_m_meas] = r[R_CURRENT]
-    row[LoopColumn.i_cmd] = command
-    row[LoopColumn.i_safe] = out
-    row[LoopColumn.state] = state
-    row[LoopColumn.fault] = s.fault
-    row[LoopColumn.t_clock] = t
-    row[LoopColumn.wake] = woke - t
-    # compute, done_control, done_send: by the runner after the send
-    row[LoopColumn.compute] = math.nan
-    # deadlines the loop skipped before this one, by its own count (its k, the runs before
-    # included), not on its time: the time between two runs skipped none
-    row[LoopColumn.missed] = r[R_K_BASE] + r[R_K_LAST] - r[R_CALLS]
-    row[LoopColumn.done_read] = done_read - woke
-    row[LoopColumn.done_control] = math.nan
-    row[LoopColumn.done_send] = math.nan
-    row[LoopColumn.stack] = r[R_STACK_TIME]
-    r[R_CALLS] += 1.0
-    n_loop = q[Q_LOOP_COLUMNS]
-    for j in range(a.stack_row.size):  # before the stack starts: its initial row
-        row[n_loop + j] = a.stack_row[j]
-    if state == State.FAULT:
-        r[R_AFTER_FAULT] += 1.0
-        carry_on = r[R_AFTER_FAULT] < r[R_LINGER]
-    else:
-        carry_on = not ((r[R_STOP] != 0.0 or r[R_FINISHING] != 0.0) and state == State.IDLE)
-    r[R_HEARTBEAT_DUE] = 1.0 if beat else 0.0
-    r[R_SLOT] = slot
-    return bool(carry_on)
+    _check_range(a, t)
+    theta = r.theta if started else 0.0
+    out = safety_step(s, a.limits, command, theta, omega, tau_hat, t - r.t0)
+    beat = _encode(a, out, t)
+    slot = _write_row(a, command, out, t, woke, done_read)
+    r.calls += 1
+    return PeriodEnd(_goes_on(a), beat, slot, started, woke)
+
+
+@njit(cache=True)
+def _plain(end: PeriodEnd) -> tuple[bool, bool, int, bool, float]:
+    """``end``'s fields as a plain tuple: what a compiled call returns to Python (a tuple
+    is boxed without calling its class)."""
+    return end.goes_on, end.heartbeat, end.slot, end.started, end.woke
 
 
 @njit(cache=True)
@@ -533,27 +726,27 @@ def fused_period(
     t: float,
     woke: float,
     done_read: float,
-) -> int:
+) -> tuple[bool, bool, int, bool, float]:
     """One whole period of a runner whose stack is compiled: :func:`take_frames` of the
     ``frames`` read, :func:`begin`, the stack (:func:`~motosim.rt.stack.stack_reset`,
     :func:`~motosim.rt.stack.stack_period`, with ``model``, ``data``, the forces and the
     stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`;
-    1 if the run goes on, else 0."""
+    its :class:`PeriodEnd`'s fields."""
     r = a.runner
     take_frames(a, 0, frames, t)
     if begin(a, k, t):
-        stack_reset(model, data, force, side_force, stack_state, r[R_THETA], r[R_CURRENT])
+        stack_reset(model, data, force, side_force, stack_state, r.theta, r.current)
     command = 0.0
-    r[R_STACK_TIME] = math.nan
-    if r[R_STARTED] != 0.0:
+    r.stack_time = math.nan
+    if r.started:
         start = monotonic_ns()
         command = stack_period(
-            model, data, force, side_force, stack_state, a.stack_row, r[R_THETA], r[R_CURRENT],
-            r[R_FRESH] != 0.0, safety_scale(a.safety, a.limits),
+            model, data, force, side_force, stack_state, a.stack_row, r.theta, r.current,
+            r.fresh, safety_scale(a.safety, a.limits),
         )  # fmt: skip
         if start >= 0:
-            r[R_STACK_TIME] = (monotonic_ns() - start) * 1e-9
-    return 1 if finish(a, command, t, woke, done_read) else 0
+            r.stack_time = (monotonic_ns() - start) * 1e-9
+    return _plain(finish(a, command, t, woke, done_read))
 
 
 @njit(cache=True)
@@ -639,10 +832,10 @@ structref.define_proxy(  # type: ignore[no-untyped-call]
 def context_warm(c: Any) -> None:
     """:func:`stack_warm` at the last valid measurement, once the stack has started."""
     r = c.arrays.runner
-    if r[R_STARTED] != 0.0:
+    if r.started:
         stack_warm(
             c.model, c.data, c.shadow, c.force, c.side_force, c.stack_state, c.shadow_state,
-            c.shadow_row, r[R_THETA], r[R_CURRENT], r[R_FRESH] != 0.0,
+            c.shadow_row, r.theta, r.current, r.fresh,
             safety_scale(c.arrays.safety, c.arrays.limits),
         )  # fmt: skip
 
@@ -650,7 +843,8 @@ def context_warm(c: Any) -> None:
 @njit(cache=True)
 def context_warm_until(c: Any, due_ns: int) -> int:
     """:func:`context_warm` again and again until ``due_ns`` on :func:`monotonic_ns`'s clock
-    [ns]; the number of warm-ups run (0 before the stack has started).
+    [ns]; the number of warm-ups run (0 before the stack has started), also kept in the
+    runner's ``warm_ups``.
 
     The spin phase of the loop's wait, spent keeping the stack hot: one warm-up always, then
     another as long as it should end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's
@@ -662,27 +856,28 @@ def context_warm_until(c: Any, due_ns: int) -> int:
     warm-ups run the very machine code of the step that follows.
     """
     r = c.arrays.runner
-    if r[R_STARTED] == 0.0 or r[R_WARM] == 0.0:
-        return 0
     n = 0
-    start = monotonic_ns()
-    while True:
-        context_warm(c)
-        n += 1
-        end = monotonic_ns()
-        if start < 0 or end + (end - start) + WARM_MARGIN_NS >= due_ns:
-            return n
-        start = end
+    if r.started and r.warm:
+        start = monotonic_ns()
+        while True:
+            context_warm(c)
+            n += 1
+            end = monotonic_ns()
+            if start < 0 or end + (end - start) + WARM_MARGIN_NS >= due_ns:
+                break
+            start = end
+    r.warm_ups = n
+    return n
 
 
 @njit(cache=True)
 def context_period(
     c: Any, frames: int, k: int, t: float, woke: float, done_read: float, warm_until: int
-) -> int:
+) -> tuple[bool, bool, int, bool, float]:
     """:func:`fused_period` with the arguments held by ``c``, a :class:`PeriodContext`; or,
     with ``warm_until`` >= 0, no period but the stack's warm-ups until then
     (:func:`context_warm_until`, ``warm_until`` [ns] on :func:`monotonic_ns`'s clock; their
-    number is returned).
+    number in the runner's ``warm_ups``; a :class:`PeriodEnd` that does not go on).
 
     Why both in one function: numba compiles, into each function called from Python, its own
     copy of every compiled function it calls (the stack's step included); warm-ups called
@@ -691,7 +886,8 @@ def context_period(
     shares. Through this one, the warm-ups and the period run the same copy.
     """
     if warm_until >= 0:
-        return context_warm_until(c, warm_until)
+        context_warm_until(c, warm_until)
+        return _plain(PeriodEnd(False, False, -1, c.arrays.runner.started, math.nan))
     return fused_period(
         c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
         done_read,
@@ -699,7 +895,7 @@ def context_period(
 
 
 @njit(cache=True)
-def context_cycle(c: Any, fd: int, k: int, t: float) -> int:
+def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, bool, float]:
     """The wait's end, the bus read and the period, in one compiled call: :func:`fused_period`
     of the datagrams waiting on socket ``fd`` at the deadline ``t`` [s] of period ``k`` (on
     the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
@@ -709,17 +905,15 @@ def context_cycle(c: Any, fd: int, k: int, t: float) -> int:
     warm-ups off), a spin on
     the clock until ``t`` has passed (the test of
     :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float`` seconds), the
-    wake-up kept in the runner's ``R_WOKE`` [s], the datagrams read
+    wake-up (the :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read
     (:func:`receive_datagrams`), the period. The caller sleeps until shortly before ``t``
     (:class:`~motosim.rt.loop.RateLoop` with ``woke``) and sends the frames after. A ``t``
     already past (a simulated clock's) neither waits nor warms more than once.
     """
-    r = c.arrays.runner
     context_warm_until(c, max(0, int(t * 1e9)))
     woke = monotonic_ns() / 1e9
     while woke < t:
         woke = monotonic_ns() / 1e9
-    r[R_WOKE] = woke
     frames = receive_datagrams(fd, c.arrays)
     done_read = monotonic_ns() / 1e9
     return fused_period(
