@@ -44,6 +44,7 @@ class SpringStack:
     """A stand-in stack: a virtual spring i = -K theta [A], recording its input."""
 
     names = ("theta_in", "i_out")
+    compiled_parts = None  # a stack in Python
 
     def __init__(self, gain: float) -> None:
         self.gain = gain

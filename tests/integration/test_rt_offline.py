@@ -254,6 +254,8 @@ class _StackInPython:
     then takes its frames, starts and finishes each period in three compiled calls around
     the stack's ``step`` instead of its one fused call."""
 
+    compiled_parts = None  # the runner steps it between its compiled pieces
+
     def __init__(self, stack: CompiledStack) -> None:
         self.stack = stack
         self.names = stack.names

@@ -626,7 +626,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     import numpy as np
 
     from motosim.io.cache import cached_stack
-    from motosim.io.can import UdpMulticastLink, handlebar_codecs, open_link
+    from motosim.io.can import handlebar_codecs, open_link
     from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces, within_safety
     from motosim.rt.run import RealtimeRunner
     from motosim.rt.stack import CompiledStack
@@ -700,7 +700,7 @@ def _run(args: argparse.Namespace, presses: _Presses, sigint: Any) -> int:
     warn_atypical("run", "--duration", args.duration)  # once every check has passed
     link = open_link(args.bus, fast=args.link != "python-can")
     # the link in use: --link fast is python-can's own on a bus other than udp_multicast
-    link_kind = "fast" if isinstance(link, UdpMulticastLink) else "python-can"
+    link_kind = "fast" if link.datagrams else "python-can"  # python-can's datagrams, read whole
     if platform is not None and args.platform_can:
         from motosim.io.can import platform_codecs
         from motosim.rt.platform import PlatformCanSender, PlatformTee

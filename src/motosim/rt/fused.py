@@ -71,7 +71,7 @@ from motosim.rt.safety import (
     safety_step,
     safety_trip,
 )
-from motosim.rt.stack import stack_period, stack_reset
+from motosim.rt.stack import StackParts, stack_period, stack_reset
 
 __all__ = [
     "RECV_AVAILABLE",
@@ -209,6 +209,8 @@ class RunnerCounts(NamedTuple):
     left_speed: float
     warm_ups: int
     ended: bool
+    stack_time: float
+    woke: float
 
 
 @njit(cache=True)
@@ -216,7 +218,7 @@ def runner_counts(r: Any) -> RunnerCounts:
     """The fields of the runner's state Python reads, in one compiled call."""
     return RunnerCounts(
         r.stop, r.status_frames, r.bad, r.recv_errors, r.left, r.left_t, r.left_phi,
-        r.left_speed, r.warm_ups, r.ended,
+        r.left_speed, r.warm_ups, r.ended, r.stack_time, r.woke,
     )  # fmt: skip
 
 
@@ -715,35 +717,24 @@ def _plain(end: PeriodEnd) -> tuple[bool, bool, int, bool, float]:
 
 @njit(cache=True)
 def fused_period(
-    model: Any,
-    data: Any,
-    force: Array,
-    side_force: Array,
-    stack_state: Array,
-    a: PeriodArrays,
-    frames: int,
-    k: int,
-    t: float,
-    woke: float,
+    stack: StackParts, a: PeriodArrays, frames: int, k: int, t: float, woke: float,
     done_read: float,
-) -> tuple[bool, bool, int, bool, float]:
+) -> tuple[bool, bool, int, bool, float]:  # fmt: skip
     """One whole period of a runner whose stack is compiled: :func:`take_frames` of the
     ``frames`` read, :func:`begin`, the stack (:func:`~motosim.rt.stack.stack_reset`,
-    :func:`~motosim.rt.stack.stack_period`, with ``model``, ``data``, the forces and the
-    stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`;
-    its :class:`PeriodEnd`'s fields."""
+    :func:`~motosim.rt.stack.stack_period` of ``stack``, a
+    :class:`~motosim.rt.stack.CompiledStack`'s parts), :func:`finish`; its
+    :class:`PeriodEnd`'s fields."""
     r = a.runner
     take_frames(a, 0, frames, t)
     if begin(a, k, t):
-        stack_reset(model, data, force, side_force, stack_state, r.theta, r.current)
+        stack_reset(stack, r.theta, r.current)
     command = 0.0
     r.stack_time = math.nan
     if r.started:
         start = monotonic_ns()
-        command = stack_period(
-            model, data, force, side_force, stack_state, a.stack_row, r.theta, r.current,
-            r.fresh, safety_scale(a.safety, a.limits),
-        )  # fmt: skip
+        scale = safety_scale(a.safety, a.limits)
+        command = stack_period(stack, a.stack_row, r.theta, r.current, r.fresh, scale)
         if start >= 0:
             r.stack_time = (monotonic_ns() - start) * 1e-9
     return _plain(finish(a, command, t, woke, done_read))
@@ -751,27 +742,24 @@ def fused_period(
 
 @njit(cache=True)
 def stack_warm(
-    model: Any, data: Any, shadow: Any, force: Array, side_force: Array, stack_state: Array,
-    shadow_state: Array, shadow_row: Array, theta: float, current: float, fresh: bool,
-    scale: float,
+    stack: StackParts, shadow: StackParts, shadow_row: Array, theta: float, current: float,
+    fresh: bool, scale: float,
 ) -> None:  # fmt: skip
-    """One stack period on ``shadow``, a copy of the stack's ``data`` and ``stack_state``
-    made now, whose result is thrown away: the stack's code and data are then in the CPU's
-    caches for the next period's real step. ``fresh`` and ``scale`` are computed as the
-    period computes them (constants would be typed apart and compile another copy of the
-    step)."""
-    shadow.estimator[:] = data.estimator
-    shadow.differentiator[:] = data.differentiator
-    shadow.controller[:] = data.controller
-    shadow.motorcycle[:] = data.motorcycle
-    shadow.multibody[:] = data.multibody
-    shadow.inputs[:] = data.inputs
-    shadow.held[:] = data.held
-    shadow.periods[:] = data.periods
-    shadow_state[:] = stack_state
-    stack_period(
-        model, shadow, force, side_force, shadow_state, shadow_row, theta, current, fresh, scale
-    )
+    """One stack period on ``shadow``, a copy of ``stack``'s data and state made now, whose
+    result is thrown away: the stack's code and data are then in the CPU's caches for the
+    next period's real step. ``fresh`` and ``scale`` are computed as the period computes
+    them (constants would be typed apart and compile another copy of the step)."""
+    data, copy = stack.data, shadow.data
+    copy.estimator[:] = data.estimator
+    copy.differentiator[:] = data.differentiator
+    copy.controller[:] = data.controller
+    copy.motorcycle[:] = data.motorcycle
+    copy.multibody[:] = data.multibody
+    copy.inputs[:] = data.inputs
+    copy.held[:] = data.held
+    copy.periods[:] = data.periods
+    shadow.state[:] = stack.state
+    stack_period(shadow, shadow_row, theta, current, fresh, scale)
 
 
 @structref.register
@@ -791,41 +779,27 @@ class PeriodContext(structref.StructRefProxy):
 
     Parameters
     ----------
-    model, data, force, side_force, stack_state
-        Those of :class:`~motosim.rt.stack.CompiledStack` (its ``model``, ``data``,
-        ``force``, ``side_force``, ``state``).
+    stack : StackParts
+        The stack's (:attr:`~motosim.rt.stack.CompiledStack.compiled_parts`).
     arrays : PeriodArrays
         The period's arrays.
-    shadow, shadow_state, shadow_row
-        A second :class:`~motosim.sim.stack.StackData` of the same model, state and row:
-        where :func:`context_warm` steps a copy of the stack (:func:`stack_warm`).
+    shadow, shadow_row
+        Parts of the same model with their own data and state, and a row: where
+        :func:`context_warm` steps a copy of the stack (:func:`stack_warm`).
     """
 
     def __new__(
-        cls,
-        model: Any,
-        data: Any,
-        force: Array,
-        side_force: Array,
-        stack_state: Array,
-        arrays: PeriodArrays,
-        shadow: Any,
-        shadow_state: Array,
-        shadow_row: Array,
+        cls, stack: StackParts, arrays: PeriodArrays, shadow: StackParts, shadow_row: Array
     ) -> "PeriodContext":
         made: PeriodContext = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, model, data, force, side_force, stack_state, arrays, shadow, shadow_state,
-            shadow_row,
-        )  # fmt: skip
+            cls, stack, arrays, shadow, shadow_row
+        )
         return made
 
 
 structref.define_proxy(  # type: ignore[no-untyped-call]
-    PeriodContext,
-    PeriodContextType,
-    ["model", "data", "force", "side_force", "stack_state", "arrays", "shadow", "shadow_state",
-     "shadow_row"],
-)  # fmt: skip
+    PeriodContext, PeriodContextType, ["stack", "arrays", "shadow", "shadow_row"]
+)
 
 
 @njit(cache=True)
@@ -833,11 +807,8 @@ def context_warm(c: Any) -> None:
     """:func:`stack_warm` at the last valid measurement, once the stack has started."""
     r = c.arrays.runner
     if r.started:
-        stack_warm(
-            c.model, c.data, c.shadow, c.force, c.side_force, c.stack_state, c.shadow_state,
-            c.shadow_row, r.theta, r.current, r.fresh,
-            safety_scale(c.arrays.safety, c.arrays.limits),
-        )  # fmt: skip
+        scale = safety_scale(c.arrays.safety, c.arrays.limits)
+        stack_warm(c.stack, c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale)
 
 
 @njit(cache=True)
@@ -888,10 +859,7 @@ def context_period(
     if warm_until >= 0:
         context_warm_until(c, warm_until)
         return _plain(PeriodEnd(False, False, -1, c.arrays.runner.started, math.nan))
-    return fused_period(
-        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
-        done_read,
-    )  # fmt: skip
+    return fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)
 
 
 @njit(cache=True)
@@ -914,9 +882,7 @@ def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, b
     woke = monotonic_ns() / 1e9
     while woke < t:
         woke = monotonic_ns() / 1e9
+    c.arrays.runner.woke = woke
     frames = receive_datagrams(fd, c.arrays)
     done_read = monotonic_ns() / 1e9
-    return fused_period(
-        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
-        done_read,
-    )  # fmt: skip
+    return fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)

@@ -36,12 +36,11 @@ from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.io.can import HandlebarCodecs
+from motosim.io.can import HandlebarCodecs, Link, LinkBase
 from motosim.model.handlebar import step_exact
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import SimulatedClock
-from motosim.rt.run import FrameLink
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
@@ -251,7 +250,7 @@ class VirtualRig:
         The drive, sensors, bus and faults.
     codecs : HandlebarCodecs
         The frames.
-    link : FrameLink
+    link : Link
         The rig's end of the bus.
     rider_torque : ndarray or callable
         The rider's torque [N*m] at each plant sub-step from the rider's start (held after
@@ -280,7 +279,7 @@ class VirtualRig:
         handlebar: HandlebarParameters,
         settings: RigSettings,
         codecs: HandlebarCodecs,
-        link: FrameLink,
+        link: Link,
         rider_torque: Array | Callable[[float], float],
         rng: np.random.Generator,
         *,
@@ -626,7 +625,7 @@ class VirtualRider:
         return float(tau)
 
 
-class LockstepLink:
+class LockstepLink(LinkBase):
     """A link whose blocking receive lets simulated time pass (bus pacing in lock-step).
 
     ``receive(timeout)`` with a positive ``timeout`` polls ``link`` and, while nothing has
@@ -637,7 +636,7 @@ class LockstepLink:
 
     Parameters
     ----------
-    link : FrameLink
+    link : Link
         The host's end of the bus.
     clock : SimulatedClock
         The clock the rig listens on.
@@ -645,7 +644,7 @@ class LockstepLink:
         The time step of the wait [s], > 0 (the rig's plant step: frames are due on it).
     """
 
-    def __init__(self, link: FrameLink, clock: SimulatedClock, tick: float) -> None:
+    def __init__(self, link: Link, clock: SimulatedClock, tick: float) -> None:
         if not (math.isfinite(tick) and tick > 0.0):
             raise MotosimError(f"tick = {tick!r} s: expected a positive time")
         self.link = link

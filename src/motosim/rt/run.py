@@ -32,14 +32,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.io.can import HandlebarCodecs, UdpMulticastLink, codec_table
+from motosim.io.can import HandlebarCodecs, Link, codec_table
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt import fused
 from motosim.rt.clock import Clock
 from motosim.rt.fused import PeriodArrays, PeriodEnd
 from motosim.rt.ring import RingCounter, SampleRing
 from motosim.rt.safety import Fault, SafetyLimits, SafetyStage
-from motosim.rt.stack import CompiledStack, compiled
+from motosim.rt.stack import StackParts, compiled
 from motosim.sim.metrics import range_reason
 from motosim.sim.stack import new_data
 
@@ -48,7 +48,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "LOOP_SIGNALS",
-    "FrameLink",
     "RealtimeRunner",
     "RunCounters",
     "StackStepper",
@@ -108,16 +107,11 @@ class StackStepper(Protocol):
         """The values of :attr:`names` after the last step (read, not kept, by the loop)."""
         ...
 
-
-class FrameLink(Protocol):
-    """A CAN link: :class:`~motosim.io.can.CanLink` or a test double."""
-
-    def send(self, frame_id: int, data: bytes) -> bool:
-        """Send one frame; False if the bus refused it."""
-        ...
-
-    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
-        """The next frame ``(frame_id, data)`` or None."""
+    @property
+    def compiled_parts(self) -> StackParts | None:
+        """What the runner's compiled period steps itself (the stack's row then written
+        where :meth:`row` reads it), or None: a stack in Python, whose :meth:`step` the
+        runner calls between the compiled pieces."""
         ...
 
 
@@ -142,8 +136,8 @@ class RealtimeRunner:
     ----------
     stepper : StackStepper
         The stack.
-    link : FrameLink
-        The CAN link to the drive.
+    link : Link
+        The CAN link to the drive (:func:`~motosim.io.can.open_link`).
     codecs : HandlebarCodecs
         The frames (from the DBC).
     limits : SafetyLimits
@@ -198,7 +192,7 @@ class RealtimeRunner:
     def __init__(
         self,
         stepper: StackStepper,
-        link: FrameLink,
+        link: Link,
         codecs: HandlebarCodecs,
         limits: SafetyLimits,
         *,
@@ -242,7 +236,7 @@ class RealtimeRunner:
             linger=max(1, round(linger * rate)), start_timeout=max(1, round(start_timeout * rate)),
             heartbeat_every=max(1, round(0.1 * rate)), dt=self.dt, duration=self._duration,
             **_row_positions(tuple(stepper.names)), roll=roll, speed_low=speed_low,
-            speed_high=speed_high, datagrams=isinstance(link, UdpMulticastLink),
+            speed_high=speed_high, datagrams=link.datagrams,
             armed=not wait_for_arm, warm=warm,
         )  # fmt: skip
         self._settings = settings
@@ -251,23 +245,17 @@ class RealtimeRunner:
         self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(settings))
         self._r = self._arrays.runner
         self._views = [memoryview(row) for row in self._arrays.rx]
-        self._datagrams = isinstance(link, UdpMulticastLink)
-        self._fused = isinstance(stepper, CompiledStack)
         self._bad_reported = 0
         self.send_errors = 0
         self._compile()
 
     def _allocate(
-        self, stepper: StackStepper, link: FrameLink, codecs: HandlebarCodecs, r: object
+        self, stepper: StackStepper, link: Link, codecs: HandlebarCodecs, r: object
     ) -> PeriodArrays:
         """Every array of the period (:class:`~motosim.rt.fused.PeriodArrays`)."""
         st, cmd, es, hb = codecs.status, codecs.command, codecs.estop, codecs.heartbeat
-        if isinstance(link, UdpMulticastLink):
-            command_frame, command_at = link.datagram(cmd.frame_id, cmd.length)
-            heartbeat_frame, heartbeat_at = link.datagram(hb.frame_id, hb.length)
-        else:
-            command_frame, command_at = np.zeros(cmd.length, dtype=np.uint8), 0
-            heartbeat_frame, heartbeat_at = np.zeros(hb.length, dtype=np.uint8), 0
+        command_frame, command_at = link.frame_buffer(cmd.frame_id, cmd.length)
+        heartbeat_frame, heartbeat_at = link.frame_buffer(hb.frame_id, hb.length)
         position = codecs.position
         positions = fused.SignalPositions(
             position(st, "angle"), position(st, "current"), position(st, "counter"),
@@ -278,7 +266,7 @@ class RealtimeRunner:
         )  # fmt: skip
         safety, limits = self.safety.compiled_parts
         ring, head = self.ring.arrays
-        if isinstance(stepper, CompiledStack):
+        if stepper.compiled_parts is not None:
             stack_row = stepper.row()  # the stack writes its row where the period reads it
         else:
             stack_row = np.zeros(len(stepper.names))
@@ -309,24 +297,24 @@ class RealtimeRunner:
         self._context: object = None
         self._warms = False  # whether the kernel warms (compiled, its stack compiled)
         self._shadow: tuple[object, Array, Array] | None = None  # what the warm-ups step
-        if isinstance(self.stepper, CompiledStack):
-            st = self.stepper
-            stack_args = (st.model, st.data, st.force, st.side_force, st.state)
+        stack = self.stepper.compiled_parts
+        if stack is not None:
             if hasattr(fused.context_period, "compile"):  # one argument unboxed per call
-                shadow = (new_data(st.model), st.state.copy(), a.stack_row.copy())
-                self._shadow = shadow
-                self._context = fused.PeriodContext(*stack_args, a, *shadow)
+                data, state, row = new_data(stack.model), stack.state.copy(), a.stack_row.copy()
+                self._shadow = (data, state, row)
+                shadow = stack._replace(data=data, state=state)
+                self._context = fused.PeriodContext(stack, a, shadow, row)
                 self._kernel = compiled(
                     fused.context_period, self._context, 0, 0, 0.0, 0.0, 0.0, -1
                 )
                 self._warms = True
             else:  # without numba's JIT: the plain function on the arrays
-                self._context = (*stack_args, a)
+                self._context = (stack, a)
                 self._kernel = lambda c, *rest: fused.fused_period(*c, *rest[:-1])
         self._cycle: Callable[..., tuple[bool, bool, int, bool, float]] | None = None
         self._fd = -1
-        self._send_command = self._sender(a.command_frame, self.codecs.command.frame_id)
-        self._send_heartbeat = self._sender(a.heartbeat_frame, self.codecs.heartbeat.frame_id)
+        self._send_command = self.link.sender(self.codecs.command.frame_id, a.command_frame)
+        self._send_heartbeat = self.link.sender(self.codecs.heartbeat.frame_id, a.heartbeat_frame)
 
     def warm(self, until: float | None = None) -> None:
         """Bring the stack's code and data into the CPU's caches for the next period: stack
@@ -365,8 +353,8 @@ class RealtimeRunner:
         in one compiled call (:func:`~motosim.rt.fused.context_cycle`, compiled, or loaded
         from numba's cache, now: before the first deadline).
 
-        Only a runner whose stack is compiled, on a
-        :class:`~motosim.io.can.UdpMulticastLink` (its socket read by
+        Only a runner whose stack is compiled, on a link that gives compiled code its socket
+        (:meth:`~motosim.io.can.Link.compiled_fd`, read by
         :func:`~motosim.rt.fused.receive_datagrams`), with numba's JIT on, on Linux; the
         others keep :meth:`period`, which does the same in Python.
 
@@ -377,10 +365,10 @@ class RealtimeRunner:
         """
         if self._cycle is not None:
             return True
-        link = self.link
-        if not (self._warms and fused.RECV_AVAILABLE and isinstance(link, UdpMulticastLink)):
+        fd = self.link.compiled_fd() if self._warms and fused.RECV_AVAILABLE else -1
+        if fd < 0:
             return False
-        self._fd = link.fileno()
+        self._fd = fd
         self._cycle = compiled(fused.context_cycle, self._context, self._fd, 0, 0.0)
         return True
 
@@ -395,21 +383,11 @@ class RealtimeRunner:
         """Whether :meth:`compile_wait` made :meth:`wait_period` available."""
         return self._cycle is not None
 
-    def _sender(self, frame: NDArray[np.uint8], frame_id: int) -> Callable[[], bool]:
-        """A function sending ``frame``'s bytes as they are when it is called."""
-        link = self.link
-        if isinstance(link, UdpMulticastLink):
-            view = memoryview(frame)  # type: ignore[arg-type]
-            send_datagram = link.send_datagram
-            return lambda: send_datagram(view)
-        send = link.send
-        return lambda: send(frame_id, frame.tobytes())
-
     @property
     def fused(self) -> bool:
         """Whether each period is one compiled call, stack included (a
         :class:`~motosim.rt.stack.CompiledStack`), or three around the stack's ``step``."""
-        return self._fused
+        return self._kernel is not None
 
     @property
     def status_frames(self) -> int:
@@ -495,28 +473,7 @@ class RealtimeRunner:
         """Read the frames waiting (one, waiting up to ``timeout`` [s], if ``timeout`` > 0)
         into the period's arrays from ``start``; the index after the last one."""
         a = self._arrays
-        if self._datagrams:
-            link: UdpMulticastLink = self.link  # type: ignore[assignment]
-            if timeout > 0.0:
-                if not link.readable(timeout):
-                    return start
-                one = self._views[start : start + 1]
-                return start + link.receive_datagrams(one, a.rx_length[start:], 0)
-            return link.receive_datagrams(self._views, a.rx_length, start)
-        receive = self.link.receive
-        n = start
-        while n < fused.RX_FRAMES:  # bounded: a flooded bus cannot hold the loop
-            frame = receive(timeout)
-            if frame is None:
-                break
-            data = frame[1][: fused.RX_BYTES]
-            a.rx_id[n] = frame[0]
-            a.rx_length[n] = len(data)
-            a.rx[n, : len(data)] = np.frombuffer(data, dtype=np.uint8)
-            n += 1
-            if timeout > 0.0:
-                break
-        return n
+        return self.link.receive_into(self._views, a.rx_length, a.rx_id, start, timeout)
 
     def wait_status(self, until: float) -> bool:
         """Block on the bus until a status frame arrives or ``clock`` reaches ``until`` [s].
@@ -630,7 +587,7 @@ class RealtimeRunner:
         # datagrams that were no frames, and the compiled reads' socket errors: the link's
         counts = self._counts(self._r)
         bad = int(counts.bad + counts.recv_errors)
-        if bad > self._bad_reported and hasattr(self.link, "errors"):
+        if bad > self._bad_reported:
             self.link.errors += bad - self._bad_reported
             self._bad_reported = bad
         s = self.safety
