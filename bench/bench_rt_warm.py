@@ -19,7 +19,7 @@ CPU 1, mlockall; refused and reported without root), each variant in three round
   work), warm-ups until the deadline (after); each also with the bus read of
   ``motosim run`` between the wake-up and the period (a datagram sent over loopback at the
   start of the period, read by ``poll``/``recv_into``/``poll`` as
-  :meth:`~motosim.io.can.UdpMulticastLink.receive_datagrams` does);
+  :meth:`~motosim.io.can.UdpMulticastLink.receive_into` does);
 - ``compiled cycle``: the loop as ``motosim run`` waits since the compiled wait
   (``--wait compiled``, :meth:`RealtimeRunner.wait_period`): the sleep and Python's spin
   until ``WARM_LEAD`` before the deadline, then one compiled call
@@ -50,6 +50,7 @@ import numpy as np
 from numba import njit
 
 from bench_rt import _steps, _us, bench_setup, replay_period
+from motosim.io.can import recv_datagrams
 from motosim.rt import fused
 from motosim.rt.clock import MonotonicClock
 from motosim.rt.fused import context_period, context_warm, context_warm_until, monotonic_ns
@@ -148,7 +149,7 @@ def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> Any:
     woke = monotonic_ns() / 1e9
     while woke < t:
         woke = monotonic_ns() / 1e9
-    frames = fused.receive_datagrams(fd, c.arrays) if fd >= 0 else 1
+    frames = recv_datagrams(fd, c.arrays.rx, c.arrays.rx_length)[0] if fd >= 0 else 1
     done_read = monotonic_ns() / 1e9
     return fused.fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)
 

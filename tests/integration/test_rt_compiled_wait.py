@@ -4,7 +4,7 @@
 each wait, reads the socket and runs the period in one compiled call
 (:func:`motosim.rt.fused.context_cycle`, the socket read by ``recv`` from compiled code);
 every other loop keeps :meth:`RealtimeRunner.period`, which reads the socket from Python
-(:meth:`UdpMulticastLink.receive_datagrams`). Both must give the same rows to the last bit
+(:meth:`UdpMulticastLink.receive_into`). Both must give the same rows to the last bit
 (the time stamps aside) for the same datagrams, count the same socket errors, and trip the
 same faults. The datagrams come through a ``socketpair`` (delivered within the send: the
 runs are deterministic); one test reads a real multicast socket.

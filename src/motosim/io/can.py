@@ -27,21 +27,28 @@ frames go through it in python-can's own wire format (a msgpack map per frame) w
 microseconds here; processes using python-can on the same group see the same frames.
 """
 
+import errno
 import importlib.resources
 import math
+import socket
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+from llvmlite import ir
 from numba import njit
+from numba.core import types
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.bus_spec import check_bus
 
 __all__ = [
+    "RECV_AVAILABLE",
     "CanLink",
     "FrameCodec",
     "HandlebarCodecs",
@@ -61,6 +68,7 @@ __all__ = [
     "open_link",
     "packaged_dbc",
     "platform_codecs",
+    "recv_datagrams",
     "unpack_frame",
 ]
 
@@ -692,7 +700,7 @@ class Link(Protocol):
 
     def compiled_fd(self) -> int:
         """A non-blocking socket whose datagrams compiled code may read with ``recv``
-        (:func:`motosim.rt.fused.receive_datagrams`), or -1."""
+        (:func:`recv_datagrams`), or -1."""
         ...
 
     def close(self) -> None:
@@ -811,6 +819,81 @@ class CanLink(LinkBase):
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+RECV_AVAILABLE = sys.platform == "linux"
+"""Whether :func:`recv_datagrams` can read a socket from compiled code here (Linux: the C
+library's ``recv`` with ``MSG_DONTWAIT`` and its ``errno`` through ``__errno_location``)."""
+
+_MSG_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
+_EAGAIN, _EWOULDBLOCK, _EINTR = errno.EAGAIN, errno.EWOULDBLOCK, errno.EINTR
+
+
+@intrinsic
+def _recv(typingctx: Any, fd: Any, buffer: Any, size: Any) -> Any:
+    """``recv(fd, buffer, size, MSG_DONTWAIT)`` called from compiled code: the bytes read,
+    or minus ``errno`` where it failed (``-EAGAIN``: nothing waiting). ``buffer`` is a
+    C-contiguous ``uint8`` array of at least ``size`` bytes (Linux only)."""
+    if not (
+        isinstance(fd, types.Integer)
+        and isinstance(size, types.Integer)
+        and isinstance(buffer, types.Array)
+        and buffer.dtype == types.uint8
+        and buffer.layout == "C"
+    ):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        i32, i64 = ir.IntType(32), ir.IntType(64)
+        i8p = ir.IntType(8).as_pointer()
+        fd_type, buffer_type, size_type = signature.args
+        handle = context.cast(builder, args[0], fd_type, types.int64)
+        count = context.cast(builder, args[2], size_type, types.int64)
+        data = builder.bitcast(context.make_array(buffer_type)(context, builder, args[1]).data, i8p)
+        module = builder.module
+        recv = module.globals.get("recv") or ir.Function(
+            module, ir.FunctionType(i64, [i32, i8p, i64, i32]), "recv"
+        )
+        where = module.globals.get("__errno_location") or ir.Function(
+            module, ir.FunctionType(i32.as_pointer(), []), "__errno_location"
+        )
+        got = builder.call(
+            recv, [builder.trunc(handle, i32), data, count, ir.Constant(i32, _MSG_DONTWAIT)]
+        )
+        failed = builder.icmp_signed("<", got, ir.Constant(i64, 0))
+        code = builder.sext(builder.load(builder.call(where, [])), i64)
+        return builder.select(failed, builder.neg(code), got)
+
+    return types.int64(fd, buffer, size), codegen
+
+
+_read: Any = _recv
+""":func:`_recv` as compiled code calls it (numba's typing context fills ``typingctx``)."""
+
+
+@njit(cache=True)
+def recv_datagrams(
+    fd: int, rx: NDArray[np.uint8], lengths: NDArray[np.int64]
+) -> tuple[int, int]:  # fmt: skip
+    """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``rx``'s rows and
+    their sizes into ``lengths``, at most a row each; the number read and the number of
+    reads that failed otherwise than "nothing waiting".
+
+    The compiled twin of :meth:`UdpMulticastLink.receive_into`: a datagram longer than a
+    row is cut to it, as ``recv_into`` cuts it; an interrupted read is tried again (as
+    Python does, PEP 475); "nothing waiting" (``EAGAIN``) ends the read, any other error
+    too. Linux only (:data:`RECV_AVAILABLE`).
+    """
+    size = rx.shape[1]
+    n = 0
+    while n < rx.shape[0]:
+        got = _read(fd, rx[n], size)
+        if got >= 0:
+            lengths[n] = got
+            n += 1
+        elif got != -_EINTR:
+            return n, 0 if got == -_EAGAIN or got == -_EWOULDBLOCK else 1
+    return n, 0
 
 
 class UdpMulticastLink:
@@ -962,9 +1045,10 @@ class UdpMulticastLink:
 
     def compiled_fd(self) -> int:
         """The receiving socket's file descriptor (non-blocking), for a read from compiled
-        code (:func:`motosim.rt.fused.receive_datagrams`)."""
+        code (:func:`recv_datagrams`); -1 where compiled code cannot read it
+        (:data:`RECV_AVAILABLE`)."""
         fd: int = self._sock.fileno()
-        return fd
+        return fd if RECV_AVAILABLE else -1
 
     def readable(self, timeout: float) -> bool:
         """Wait up to ``timeout`` [s] for a datagram; whether one is waiting."""

@@ -15,7 +15,8 @@ does (see :mod:`motosim.rt.run`):
 3. the stack (:func:`~motosim.rt.stack.stack_reset` on the start,
    :func:`~motosim.rt.stack.stack_period`);
 4. :func:`finish`: the virtual motorcycle's range (a fall, a speed outside the model's: the
-   torque fades out and the run ends, as offline), the safety stage
+   torque fades out and the run ends, as offline, as it does after the run's duration),
+   the safety stage
    (:func:`~motosim.rt.safety.safety_step`), the command frame and, in the first period
    served of every ``heartbeat_every``, the heartbeat frame encoded
    (:func:`~motosim.io.can.encode_frame`) in place in the bytes to send; the row written into
@@ -27,24 +28,16 @@ numba ``structref`` built before the first deadline) and calls :func:`context_pe
 numba unboxes one pointer per call instead of the stack's model and data records and every
 array of :class:`PeriodArrays` (about 20 arrays; the cost of both in ``docs/performance.md``).
 
-On the clock with the fast ``udp_multicast`` link (Linux), the runner's
-:meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead,
-which also ends the loop's wait and reads the socket (:func:`receive_datagrams`: the C
-library's ``recv`` called from compiled code) before the period: no interpreter between the
-stack's last warm-up and its step.
+On the clock, with a link whose socket compiled code can read, the runner's
+:meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead, which
+also ends the loop's wait and reads the socket before the period: no interpreter between the
+stack's last warm-up and its step. A stack in Python (a test double) is stepped between
+:func:`take_frames` and :func:`begin`, and :func:`finish`: the same compiled functions.
 
-A runner whose stack is not a :class:`~motosim.rt.stack.CompiledStack` (a test double in
-Python) calls :func:`take_frames`, :func:`begin` and :func:`finish` one by one around its
-stack's ``step``: the same compiled functions, so both ways behave the same.
-
-The runner's state is a :class:`RunnerState` (a numba ``structref``, fields by name), the
-frames' layout a :class:`SignalPositions`; both travel in :class:`PeriodArrays` with every
-array of the period.
+The runner's state is a :class:`RunnerState` (a numba ``structref``, fields by name).
 """
 
-import errno
 import math
-import socket
 import sys
 from enum import IntEnum
 from typing import Any, NamedTuple
@@ -57,7 +50,7 @@ from numba.experimental import structref
 from numba.extending import intrinsic
 from numpy.typing import NDArray
 
-from motosim.io.can import decode_frame, encode_frame, unpack_frame
+from motosim.io.can import RECV_AVAILABLE, decode_frame, encode_frame, recv_datagrams, unpack_frame
 from motosim.rt.ring import RingCounter
 from motosim.rt.safety import (
     Fault,
@@ -92,7 +85,6 @@ __all__ = [
     "finish",
     "fused_period",
     "monotonic_ns",
-    "receive_datagrams",
     "runner_counts",
     "runner_request",
     "stack_inputs",
@@ -105,50 +97,46 @@ Bytes = NDArray[np.uint8]
 Ints = NDArray[np.int64]
 
 
-@structref.register
-class RunnerStateType(types.StructRef):
-    """numba's type of :class:`RunnerState`."""
+class _Struct(types.StructRef):
+    """A numba ``structref`` type whose fields' types are taken without literal values."""
 
     def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
         """The fields' types without literal values."""
         return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
 
 
+@structref.register
+class RunnerStateType(_Struct):
+    """numba's type of :class:`RunnerState`."""
+
+
 class RunnerSettings(NamedTuple):
-    """What a runner is given before its first deadline (:class:`RunnerState`'s first fields)."""
+    """What a runner is given before its first deadline (:class:`RunnerState`'s first
+    fields): periods the zero command is still sent after a fault (``linger``), the
+    ``NO_DRIVE`` timeout and the periods between heartbeats [periods], the period ``dt``
+    [s], the run's ``duration`` [periods] (the torque fades out from there; -1: no end);
+    where the stack's row holds its estimate of the rider's torque, the handlebar's rate,
+    the motorcycle's roll and speed (-1: nowhere); the motorcycle's range (largest
+    ``roll`` [rad], lowest and highest speed [m/s]); whether the frames read are python-can
+    ``udp_multicast`` datagrams (else id, length and bytes); whether the torque starts with
+    the drive's first status frame (``armed``, else on an arm request); whether the stack is
+    warmed before each deadline (:func:`context_warm_until`)."""
 
     linger: int
-    """Periods the zero command is still sent after a fault."""
     start_timeout: int
-    """The ``NO_DRIVE`` timeout [periods]."""
     heartbeat_every: int
-    """Periods between heartbeats."""
     dt: float
-    """The period [s]."""
     duration: int
-    """The run's duration [periods]: the torque fades out from there (-1: no end)."""
     tau_at: int
-    """Where the stack's row holds its estimate of the rider's torque (-1: nowhere)."""
     rate_at: int
-    """Where it holds the handlebar's rate (-1: nowhere)."""
     phi_at: int
-    """Where it holds the motorcycle's roll (-1: nowhere)."""
     speed_at: int
-    """Where it holds its speed (-1: nowhere)."""
     roll: float
-    """The virtual motorcycle's largest roll [rad]."""
     speed_low: float
-    """Its lowest speed [m/s]."""
     speed_high: float
-    """Its highest speed [m/s]."""
     datagrams: bool
-    """Whether the frames read are python-can ``udp_multicast`` datagrams (else id, length
-    and bytes)."""
     armed: bool
-    """Whether the torque starts with the drive's first status frame (else on an arm
-    request)."""
     warm: bool
-    """Whether the stack is warmed before each deadline (:func:`context_warm_until`)."""
 
 
 _STATE_FIELDS = (
@@ -234,53 +222,38 @@ def runner_request(r: Any, stop: bool, arm: bool) -> None:
 
 
 class SignalPositions(NamedTuple):
-    """Where the loop's signals sit in the frames' values, and the frames' data in the bytes
-    to send."""
+    """Where the loop's signals sit in the frames' values (status: angle, current, alive
+    counter, drive fault; E-stop: its signal; command: current, enable, counter; heartbeat:
+    state, fault, counter), where the command and heartbeat frames' data bytes start in the
+    bytes to send, and the number of the loop's own columns in a row."""
 
     angle: int
-    """The status frame's angle."""
     current: int
-    """Its current."""
     counter: int
-    """Its alive counter."""
     drive_fault: int
-    """Its drive fault flag."""
     estop: int
-    """The E-stop frame's signal."""
     command_current: int
-    """The command frame's current."""
     enable: int
-    """Its enable flag."""
     command_counter: int
-    """Its alive counter."""
     state: int
-    """The heartbeat frame's state code."""
     fault: int
-    """Its fault code."""
     heartbeat_counter: int
-    """Its counter."""
     command_at: int
-    """Where the command frame's data bytes start in the bytes to send."""
     heartbeat_at: int
-    """Where the heartbeat frame's start."""
     loop_columns: int
-    """The number of the loop's own columns in a row."""
 
 
 class PeriodEnd(NamedTuple):
-    """What a period leaves to the runner (:func:`finish`)."""
+    """What a period leaves to the runner (:func:`finish`): whether the run goes on, whether
+    the heartbeat frame is to be sent, the ring's slot the row went to (the runner writes
+    the send's time stamps there, then advances the ring's head), whether the stack has
+    started, and the period's wake-up [s] (NaN without a clock)."""
 
     goes_on: bool
-    """Whether the run goes on."""
     heartbeat: bool
-    """Whether the heartbeat frame is to be sent this period."""
     slot: int
-    """The ring's slot the row went to (the runner writes the send's time stamps there,
-    then advances the ring's head)."""
     started: bool
-    """Whether the stack has started."""
     woke: float
-    """The period's wake-up [s] (NaN without a clock)."""
 
 
 RX_FRAMES = 64
@@ -357,100 +330,37 @@ def monotonic_ns() -> int:
     return _clock_gettime_ns()  # type: ignore[call-arg]  # numba's typing context
 
 
-RECV_AVAILABLE = sys.platform == "linux"
-"""Whether :func:`receive_datagrams` can read a socket from compiled code here (Linux: the C
-library's ``recv`` with ``MSG_DONTWAIT`` and its ``errno`` through ``__errno_location``)."""
-
-_MSG_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
-_EAGAIN, _EWOULDBLOCK, _EINTR = errno.EAGAIN, errno.EWOULDBLOCK, errno.EINTR
-
-
-@intrinsic
-def _recv(typingctx: Any, fd: Any, buffer: Any, size: Any) -> Any:
-    """``recv(fd, buffer, size, MSG_DONTWAIT)`` called from compiled code: the bytes read,
-    or minus ``errno`` where it failed (``-EAGAIN``: nothing waiting). ``buffer`` is a
-    C-contiguous ``uint8`` array of at least ``size`` bytes (Linux only)."""
-    if not (
-        isinstance(fd, types.Integer)
-        and isinstance(size, types.Integer)
-        and isinstance(buffer, types.Array)
-        and buffer.dtype == types.uint8
-        and buffer.layout == "C"
-    ):
-        return None
-
-    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        i32, i64 = ir.IntType(32), ir.IntType(64)
-        i8p = ir.IntType(8).as_pointer()
-        fd_type, buffer_type, size_type = signature.args
-        handle = context.cast(builder, args[0], fd_type, types.int64)
-        count = context.cast(builder, args[2], size_type, types.int64)
-        data = builder.bitcast(context.make_array(buffer_type)(context, builder, args[1]).data, i8p)
-        module = builder.module
-        recv = module.globals.get("recv") or ir.Function(
-            module, ir.FunctionType(i64, [i32, i8p, i64, i32]), "recv"
-        )
-        where = module.globals.get("__errno_location") or ir.Function(
-            module, ir.FunctionType(i32.as_pointer(), []), "__errno_location"
-        )
-        got = builder.call(
-            recv, [builder.trunc(handle, i32), data, count, ir.Constant(i32, _MSG_DONTWAIT)]
-        )
-        failed = builder.icmp_signed("<", got, ir.Constant(i64, 0))
-        code = builder.sext(builder.load(builder.call(where, [])), i64)
-        return builder.select(failed, builder.neg(code), got)
-
-    return types.int64(fd, buffer, size), codegen
-
-
-_read: Any = _recv
-""":func:`_recv` as compiled code calls it (numba's typing context fills ``typingctx``)."""
-
-
 class PeriodArrays(NamedTuple):
-    """Every array one period reads or writes, allocated before the first deadline."""
+    """Everything one period reads or writes, allocated before the first deadline: the
+    runner's state (a :class:`RunnerState`), the frames' layout, the safety stage's state
+    and limits (:meth:`motosim.rt.safety.SafetyStage.compiled_parts`); the status, E-stop,
+    command and heartbeat frames' codecs (:func:`motosim.io.can.codec_table`) and values;
+    the frames read this period, one per row (``RX_FRAMES`` x ``RX_BYTES``), their lengths
+    [bytes] and ids (frames given as id, length and bytes); the command and heartbeat
+    frames' bytes to send (:meth:`motosim.io.can.Link.frame_buffer`); the stack's row after
+    its last step; the ring's rows and counters (:attr:`motosim.rt.ring.SampleRing.arrays`).
+    """
 
     runner: Any
-    """The runner's state, a :class:`RunnerState`."""
     positions: SignalPositions
-    """Signal and byte positions."""
     safety: Any
-    """The safety stage's state, a :class:`~motosim.rt.safety.SafetyState`
-    (:func:`motosim.rt.safety.new_safety_state`)."""
     limits: SafetyParams
-    """Its limits (:func:`motosim.rt.safety.safety_params`)."""
     status: Array
-    """The status frame's codec (:func:`motosim.io.can.codec_table`)."""
     estop: Array
-    """The E-stop frame's codec."""
     command: Array
-    """The command frame's codec."""
     heartbeat: Array
-    """The heartbeat frame's codec."""
     status_values: Array
-    """The last status frame's values."""
     estop_values: Array
-    """The last E-stop frame's values."""
     command_values: Array
-    """The command frame's values."""
     heartbeat_values: Array
-    """The heartbeat frame's values."""
     rx: Bytes
-    """The frames read this period, one per row (``RX_FRAMES`` x ``RX_BYTES``)."""
     rx_length: Ints
-    """Their lengths [bytes]."""
     rx_id: Ints
-    """Their ids (frames given as id, length and bytes)."""
     command_frame: Bytes
-    """The command frame's bytes to send (its data from ``positions.command_at``)."""
     heartbeat_frame: Bytes
-    """The heartbeat frame's bytes to send."""
     stack_row: Array
-    """The stack's row after its last step."""
     ring: Array
-    """The ring's rows (:attr:`motosim.rt.ring.SampleRing.arrays`)."""
     ring_head: Ints
-    """The ring's counters: rows written, rows read."""
 
 
 @njit(cache=True)
@@ -494,35 +404,6 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
             ok = decode_frame(a.estop, a.rx[j], start, length, values)
             safety_estop_frame(s, ok, values[q.estop] > 0.5)
     return count
-
-
-@njit(cache=True)
-def receive_datagrams(fd: int, a: PeriodArrays) -> int:
-    """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``a.rx``'s rows and
-    their sizes into ``a.rx_length``, at most ``RX_FRAMES``; the number read.
-
-    The compiled twin of :meth:`motosim.io.can.UdpMulticastLink.receive_into` (what
-    :class:`~motosim.rt.run.RealtimeRunner` calls otherwise): a datagram longer than a row
-    is cut to it, as ``recv_into`` cuts it; an interrupted read is tried again (as Python
-    does, PEP 475); "nothing waiting" (``EAGAIN``) ends the read, any other error too, and
-    counts in the runner's ``recv_errors`` (the link's ``errors`` in the Python path).
-    Linux only (:data:`RECV_AVAILABLE`).
-    """
-    rx, lengths = a.rx, a.rx_length
-    size = rx.shape[1]
-    n = 0
-    while n < rx.shape[0]:
-        got = _read(fd, rx[n], size)
-        if got >= 0:
-            lengths[n] = got
-            n += 1
-        elif got == -_EINTR:
-            continue
-        else:
-            if got != -_EAGAIN and got != -_EWOULDBLOCK:
-                a.runner.recv_errors += 1
-            break
-    return n
 
 
 @njit(cache=True)
@@ -763,12 +644,8 @@ def stack_warm(
 
 
 @structref.register
-class PeriodContextType(types.StructRef):
+class PeriodContextType(_Struct):
     """numba's type of :class:`PeriodContext` (one per set of field types)."""
-
-    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
-        """The fields' types without literal values."""
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
 
 
 class PeriodContext(structref.StructRefProxy):
@@ -869,20 +746,19 @@ def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, b
     the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
 
     In order, without returning to the interpreter: the stack's warm-ups until about 2 us
-    before ``t`` (:func:`context_warm_until`, none before the stack has started or with the
-    warm-ups off), a spin on
-    the clock until ``t`` has passed (the test of
-    :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float`` seconds), the
-    wake-up (the :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read
-    (:func:`receive_datagrams`), the period. The caller sleeps until shortly before ``t``
-    (:class:`~motosim.rt.loop.RateLoop` with ``woke``) and sends the frames after. A ``t``
-    already past (a simulated clock's) neither waits nor warms more than once.
+    before ``t`` (:func:`context_warm_until`), a spin on the clock until ``t`` has passed
+    (the test of :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float``
+    seconds), the wake-up (the :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read
+    (:func:`~motosim.io.can.recv_datagrams`), the period. The caller sleeps until shortly
+    before ``t`` and sends the frames after. A ``t`` already past (a simulated clock's)
+    neither waits nor warms more than once.
     """
     context_warm_until(c, max(0, int(t * 1e9)))
     woke = monotonic_ns() / 1e9
     while woke < t:
         woke = monotonic_ns() / 1e9
     c.arrays.runner.woke = woke
-    frames = receive_datagrams(fd, c.arrays)
+    frames, errors = recv_datagrams(fd, c.arrays.rx, c.arrays.rx_length)
+    c.arrays.runner.recv_errors += errors
     done_read = monotonic_ns() / 1e9
     return fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)

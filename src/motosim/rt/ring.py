@@ -26,12 +26,11 @@ __all__ = ["RingCounter", "RingHandle", "SampleRing"]
 
 
 class RingCounter(IntEnum):
-    """The ring's two counters, in :attr:`SampleRing.arrays`'s ``counters``."""
+    """The ring's two counters (:attr:`SampleRing.arrays`): rows written (the producer's
+    head) and rows read (the consumer's tail)."""
 
     written = 0
-    """Rows written (the producer's head)."""
     read = 1
-    """Rows read (the consumer's tail)."""
 
 
 class RingHandle(NamedTuple):

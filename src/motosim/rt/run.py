@@ -323,20 +323,18 @@ class RealtimeRunner:
         The loop calls it in the spin phase of its wait, ``WARM_LEAD`` before each deadline
         (:meth:`~motosim.rt.loop.RateLoop.run`'s ``warm``), with the deadline: between two
         periods the interpreter's wait and the system calls evict the stack from the caches,
-        and its step would run several times slower than in a compiled loop.
+        and its step would run several times slower than in a compiled loop. The warm-ups
+        run are counted in :attr:`warm_ups` (none before the stack has started, for a stack
+        in Python, or with the warm-ups off: :attr:`warms`).
 
         Parameters
         ----------
         until : float, optional
             Keep warming, one copy of the stack's step after the other in one compiled call
             (:func:`~motosim.rt.fused.context_period`'s ``warm_until``: the period's own
-            machine code), until this time on the machine's
-            monotonic clock [s] (:class:`~motosim.rt.clock.MonotonicClock`'s, i.e.
-            ``time.monotonic``): the last warm-up then ends within about one step's time of
-            it. None, or a time already past (a simulated clock's): one warm-up.
-
-        The warm-ups run are counted in :attr:`warm_ups` (0 before the stack has started, for
-        a stack in Python, or with the warm-ups off: :attr:`warms`).
+            machine code), until this time on ``time.monotonic``'s clock [s]: the last
+            warm-up then ends within about one step's time of it. None, or a time already
+            past (a simulated clock's): one warm-up.
         """
         if self.warms:
             assert self._kernel is not None
@@ -355,7 +353,7 @@ class RealtimeRunner:
 
         Only a runner whose stack is compiled, on a link that gives compiled code its socket
         (:meth:`~motosim.io.can.Link.compiled_fd`, read by
-        :func:`~motosim.rt.fused.receive_datagrams`), with numba's JIT on, on Linux; the
+        :func:`~motosim.io.can.recv_datagrams`, on Linux), with numba's JIT on; the
         others keep :meth:`period`, which does the same in Python.
 
         Returns
@@ -365,7 +363,7 @@ class RealtimeRunner:
         """
         if self._cycle is not None:
             return True
-        fd = self.link.compiled_fd() if self._warms and fused.RECV_AVAILABLE else -1
+        fd = self.link.compiled_fd() if self._warms else -1
         if fd < 0:
             return False
         self._fd = fd
