@@ -11,6 +11,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
+from motosim.errors import MotosimError
 from motosim.params import load_parameters
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.fused import LoopColumn as C
@@ -626,3 +627,28 @@ def test_the_rows_count_of_skipped_deadlines_is_the_loops_through_the_fade_out()
     assert runner.safety.fault == Fault.NONE
     assert np.all(np.diff(rows[:, C.missed]) >= 0.0)
     assert np.all(rows[-served:, C.missed] == skipped)
+
+
+def test_a_run_never_armed_ends_at_its_duration(links: tuple[CanLink, CanLink]) -> None:
+    # The torque never on (no arm): the duration's end needs no fade-out, the run ends with
+    # its last period, as many rows as the duration's periods.
+    host, drive = links
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(100_000, 3.0),
+                      np.random.default_rng(1))  # fmt: skip
+    runner = RealtimeRunner(
+        SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, wait_for_arm=True, duration=1.0
+    )
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    served = RateLoop(100.0, clock).run(runner.period, periods=runner.max_periods)
+    rows = runner.ring.drain()
+    assert served == 100 and rows.shape[0] == 100 and runner.reached_end
+    assert np.all(rows[:, C.state] == State.IDLE) and np.all(rows[:, C.i_safe] == 0.0)
+
+
+@pytest.mark.parametrize("duration", [-1.0, math.nan, math.inf])
+def test_a_duration_that_is_no_time_is_refused_in_one_line(
+    links: tuple[CanLink, CanLink], duration: float
+) -> None:
+    with pytest.raises(MotosimError, match=r"^duration = .* s: expected a time >= 0$"):
+        RealtimeRunner(SpringStack(1.0), links[0], CODECS, LIMITS, rate=100.0, duration=duration)
