@@ -71,6 +71,7 @@ _COMPUTE = int(fused.LoopColumn.compute)
 _DONE_CONTROL = int(fused.LoopColumn.done_control)
 _DONE_SEND = int(fused.LoopColumn.done_send)
 _T = int(fused.LoopColumn.t)
+_WRITTEN = int(RingCounter.written)
 _ANY_RANGE = (math.inf, -math.inf, math.inf)
 """No range for the virtual motorcycle: any roll, any speed."""
 
@@ -509,7 +510,7 @@ class RealtimeRunner:
             end = self._kernel(self._context, frames, k, t, woke, done_read, -1)
         else:
             end = self._stack_period(self._arrays, frames, k, t, woke, done_read)
-        return self._send(*end[:4], k, t, woke)
+        return self._send(end, k, t)
 
     def wait_period(self, k: int, t: float) -> bool:
         """:meth:`period` that waits for its deadline ``t`` [s] on the machine's monotonic
@@ -523,20 +524,19 @@ class RealtimeRunner:
         """
         if self._cycle is None:
             raise MotosimError("wait_period needs compile_wait() first (and its True)")
-        goes_on, beat, slot, started, woke = self._cycle(self._context, self._fd, k, t)
-        self._woke = woke
-        return self._send(goes_on, beat, slot, started, k, t, woke)
+        end = self._cycle(self._context, self._fd, k, t)
+        self._woke = end[4]
+        return self._send(end, k, t)
 
     def woke(self) -> float:
         """When the last :meth:`wait_period` woke up [s on the monotonic clock]."""
         return self._woke
 
-    def _send(
-        self, goes_on: bool, beat: bool, slot: int, started: bool, k: int, t: float, woke: float
-    ) -> bool:
-        """The end of a period, given the compiled period's
+    def _send(self, end: tuple[bool, bool, int, bool, float], k: int, t: float) -> bool:
+        """The end of period ``k`` (deadline ``t`` [s]), given the compiled period's
         :class:`~motosim.rt.fused.PeriodEnd` (its fields): the frames sent, the telemetry,
         the row's stamps; whether the run goes on."""
+        goes_on, beat, slot, started, woke = end
         now = self._now
         a = self._arrays
         done_control = now() if now is not None else math.nan
@@ -551,7 +551,7 @@ class RealtimeRunner:
         ring[slot, _DONE_CONTROL] = done_control - woke
         ring[slot, _DONE_SEND] = done_send - woke
         ring[slot, _COMPUTE] = (now() - woke) if now is not None else math.nan
-        a.ring_head[RingCounter.written] += 1
+        a.ring_head[_WRITTEN] += 1
         return bool(goes_on)
 
     def _stack_period(
