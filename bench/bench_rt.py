@@ -57,7 +57,7 @@ import numpy as np
 from numba import njit
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER
-from motosim.io.can import HandlebarCodecs, handlebar_codecs
+from motosim.io.can import HandlebarCodecs, LinkBase, handlebar_codecs
 from motosim.params import load_parameters
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
@@ -107,7 +107,7 @@ def _us(seconds: float) -> float:
     return round(seconds * 1e6, 1)
 
 
-class _Quiet:
+class _Quiet(LinkBase):
     """A link that sends nowhere and receives nothing (the frames are given to the period)."""
 
     errors = 0
@@ -144,10 +144,7 @@ def _replay(
 
 
 @njit(cache=False)
-def _steps(
-    model: Any, data: Any, force: Any, side: Any, state: Any, row: Any, theta: Any,
-    times: Any, gap_ns: int, sweep: Any,
-) -> None:  # fmt: skip
+def _steps(parts: Any, row: Any, theta: Any, times: Any, gap_ns: int, sweep: Any) -> None:
     """The stack's period over recorded angles, in a compiled loop, each timed as the fused
     period times it in ``motosim run`` (:func:`monotonic_ns` around it) [s]; with ``gap_ns``
     > 0, a busy wait on the clock between two steps: the offline code at the loop's pace (no
@@ -162,7 +159,7 @@ def _steps(
         for j in range(0, sweep.size, 8):
             total += sweep[j]
         start = monotonic_ns()
-        stack_period(model, data, force, side, state, row, theta[k], 0.0, True, 1.0)
+        stack_period(parts, row, theta[k], 0.0, True, 1.0)
         times[k] = (monotonic_ns() - start) * 1e-9
     if total < 0.0:  # the sweep's reads are used
         times[0] = total
@@ -252,7 +249,7 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
         chunks[j] = (clock() - t0) / CHUNK
     assert np.array_equal(sent, replayed), "the two ways sent different commands"
     other = CompiledStack(model)
-    args2 = (other.model, other.data, other.force, other.side_force, other.state, other.row())
+    args2 = (other.compiled_parts, other.row())
     step_times = np.empty(n)
     nothing = np.zeros(0)
     _steps(*args2, theta[:10], step_times[:10], 0, nothing)  # compile
@@ -381,7 +378,7 @@ def _offline_steps(b: BenchSetup) -> dict[str, float]:
     the stack's period in a compiled loop step after step, and paced at 1 kHz by a compiled
     busy wait (p50 and p99 [us])."""
     other = CompiledStack(b.model)
-    args = (other.model, other.data, other.force, other.side_force, other.state, other.row())
+    args = (other.compiled_parts, other.row())
     nothing = np.zeros(0)
     out: dict[str, float] = {}
     for name, n, gap in (("step after step", 20_000, 0), ("paced at 1 kHz", 3000, 1_000_000)):

@@ -19,7 +19,7 @@ CPU 1, mlockall; refused and reported without root), each variant in three round
   work), warm-ups until the deadline (after); each also with the bus read of
   ``motosim run`` between the wake-up and the period (a datagram sent over loopback at the
   start of the period, read by ``poll``/``recv_into``/``poll`` as
-  :meth:`~motosim.io.can.UdpMulticastLink.receive_datagrams` does);
+  :meth:`~motosim.io.can.UdpMulticastLink.receive_into` does);
 - ``compiled cycle``: the loop as ``motosim run`` waits since the compiled wait
   (``--wait compiled``, :meth:`RealtimeRunner.wait_period`): the sleep and Python's spin
   until ``WARM_LEAD`` before the deadline, then one compiled call
@@ -50,6 +50,7 @@ import numpy as np
 from numba import njit
 
 from bench_rt import _steps, _us, bench_setup, replay_period
+from motosim.io.can import recv_datagrams
 from motosim.rt import fused
 from motosim.rt.clock import MonotonicClock
 from motosim.rt.fused import context_period, context_warm, context_warm_until, monotonic_ns
@@ -76,7 +77,7 @@ def _compiled_loop(
         while monotonic_ns() < due:
             pass
         replay_period(c, frames, status_id, k)
-        out[k] = a.runner[fused.R_STACK_TIME]
+        out[k] = a.runner.stack_time
         due += gap_ns
 
 
@@ -95,21 +96,21 @@ def _decay(c: Any, frames: Any, status_id: int, out: Any, gap_ns: int, warm: int
         if warm == 2:
             context_period(c, 0, 0, 0.0, 0.0, 0.0, monotonic_ns() + 50_000)
         replay_period(c, frames, status_id, k)
-        out[k] = a.runner[fused.R_STACK_TIME]
+        out[k] = a.runner.stack_time
 
 
 @njit(cache=False)
 def _copy_only(c: Any) -> None:
     """What a warm-up reads and writes of the stack's data without its step: the copies of
     :func:`~motosim.rt.fused.stack_warm` (the real data read, the copy's written)."""
-    d, shadow = c.data, c.shadow
+    d, shadow = c.stack.data, c.shadow.data
     shadow.estimator[:] = d.estimator
     shadow.differentiator[:] = d.differentiator
     shadow.controller[:] = d.controller
     shadow.motorcycle[:] = d.motorcycle
     shadow.held[:] = d.held
     shadow.periods[:] = d.periods
-    c.shadow_state[:] = c.stack_state
+    c.shadow.state[:] = c.stack.state
 
 
 @njit(cache=False)
@@ -117,16 +118,14 @@ def _step_only(c: Any) -> None:
     """A warm-up's step without its copies: the copy of the stack stepped on its own state
     (the stack's code, its model and the copy's data warmed; the stack's own data not)."""
     r = c.arrays.runner
-    if c.shadow_state[0] == 0.0:  # the copy starts from the stack once
+    if c.shadow.state[0] == 0.0:  # the copy starts from the stack once
         _copy_only(c)
-    stack_period(
-        c.model, c.shadow, c.force, c.side_force, c.shadow_state, c.shadow_row, r[fused.R_THETA],
-        r[fused.R_CURRENT], r[fused.R_FRESH] != 0.0, safety_scale(c.arrays.safety, c.arrays.limits),
-    )  # fmt: skip
+    scale = safety_scale(c.arrays.safety, c.arrays.limits)
+    stack_period(c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale)
 
 
 @njit(cache=False)
-def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> int:
+def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> Any:
     """:func:`~motosim.rt.fused.context_cycle` with its warm-ups replaced by ``mode``'s:
     0 none (a spin only), 1 the warm-ups (the loop's), 2 the warm-ups' copies of the stack's
     data only (no step: its code cold), 3 their step only (the copy stepped on its own
@@ -136,7 +135,7 @@ def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> int:
     due = max(0, int(t * 1e9))
     if mode == 1:
         fused.context_warm_until(c, due)
-    elif mode > 1 and r[fused.R_STARTED] != 0.0:
+    elif mode > 1 and r.started:
         start = monotonic_ns()
         while True:
             if mode == 2:
@@ -150,13 +149,9 @@ def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> int:
     woke = monotonic_ns() / 1e9
     while woke < t:
         woke = monotonic_ns() / 1e9
-    r[fused.R_WOKE] = woke
-    frames = fused.receive_datagrams(fd, c.arrays) if fd >= 0 else 1
+    frames = recv_datagrams(fd, c.arrays.rx, c.arrays.rx_length)[0] if fd >= 0 else 1
     done_read = monotonic_ns() / 1e9
-    return fused.fused_period(
-        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
-        done_read,
-    )  # fmt: skip
+    return fused.fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)
 
 
 def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
@@ -223,7 +218,7 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
             a.rx_id[0] = st.frame_id
             kernel(context, 1, k, deadline, float("nan"), float("nan"), -1)
             a.ring_head[0] += 1
-            out[k] = a.runner[fused.R_STACK_TIME]
+            out[k] = fused.runner_counts(a.runner).stack_time
         return out
 
     def cycle_loop() -> np.ndarray:
@@ -240,7 +235,7 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
             a.rx_id[0] = st.frame_id  # a raw frame (this runner's link is no udp_multicast)
             cycle(context, fd, k, deadline)
             a.ring_head[0] += 1
-            out[k] = a.runner[fused.R_STACK_TIME]
+            out[k] = fused.runner_counts(a.runner).stack_time
         return out
 
     wakes: dict[tuple[int, bool], list[np.ndarray]] = {}  # the cycle variants' wake-ups
@@ -262,10 +257,10 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
                 a.rx_length[0] = st.length
             a.rx_id[0] = st.frame_id
             clock.sleep_until(deadline - lead)
-            _cycle_variant(context, fd, k, deadline, mode)
+            end = _cycle_variant(context, fd, k, deadline, mode)
             a.ring_head[0] += 1
-            out[k] = a.runner[fused.R_STACK_TIME]
-            late[k] = a.runner[fused.R_WOKE] - deadline
+            out[k] = fused.runner_counts(a.runner).stack_time
+            late[k] = end[4] - deadline  # its PeriodEnd's wake-up
         wakes.setdefault((mode, read), []).append(late[20:].copy())
         return out
 

@@ -329,7 +329,7 @@ def _stack_periods(model: Any, theta: np.ndarray) -> dict[str, float]:
     after step and paced at 1 kHz by a compiled busy wait (``bench/bench_rt.py``'s
     references): p50 and p99 [us]."""
     stack = CompiledStack(model)
-    args = (stack.model, stack.data, stack.force, stack.side_force, stack.state, stack.row())
+    args = (stack.compiled_parts, stack.row())
     out: dict[str, float] = {}
     for name, n, gap in (("period after", theta.size, 0), ("period paced", 3000, 1_000_000)):
         times = np.empty(n)

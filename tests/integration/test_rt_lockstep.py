@@ -11,8 +11,10 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
+from motosim.errors import MotosimError
 from motosim.params import load_parameters
 from motosim.rt.clock import SimulatedClock
+from motosim.rt.fused import LoopColumn as C
 from motosim.rt.loop import FramePacedLoop, RateLoop
 from motosim.rt.rig import LockstepLink, RigFaults, RigSettings, VirtualRig
 from motosim.rt.run import RealtimeRunner
@@ -43,6 +45,7 @@ class SpringStack:
     """A stand-in stack: a virtual spring i = -K theta [A], recording its input."""
 
     names = ("theta_in", "i_out")
+    compiled_parts = None  # a stack in Python
 
     def __init__(self, gain: float) -> None:
         self.gain = gain
@@ -112,24 +115,24 @@ def test_closed_loop_over_the_bus_settles_where_the_spring_balances_the_rider(
     # Eq. (5) at rest: tau_r + N k_t i_m = 0 within dry friction, with i_m = -K theta, so
     # theta = (tau_r +- beta_s) / (K N k_t); the encoder adds 2 pi / 2^14.
     stiffness = 20.0 * HB.torque_per_amp
-    theta = rows[-1, 1]
+    theta = rows[-1, C.theta_h_meas]
     assert abs(theta - 3.0 / stiffness) <= HB.beta_s / stiffness + 2 * math.pi / 2**14
     # every command but the last (sent after the rig's final advance) arrived
     assert vrig.commands == rows.shape[0] - 1 and runner.counters().fault == "NONE"
-    assert rows[-1, 5] == State.RUNNING
+    assert rows[-1, C.state] == State.RUNNING
     # the command sent went through the DBC: the rig holds it to 1 mA
-    assert vrig.i_cmd == pytest.approx(rows[-2, 4], abs=5e-4)
+    assert vrig.i_cmd == pytest.approx(rows[-2, C.i_safe], abs=5e-4)
 
 
 def test_the_first_status_resets_the_stack_and_the_torque_fades_in(
     links: tuple[CanLink, CanLink],
 ) -> None:
     runner, _, rows = _run(links, 100.0, 1.0, rider=3.0)
-    sent = rows[:, 4]
-    assert runner.stepper.resets == [(rows[0, 1], rows[0, 2])]  # type: ignore[attr-defined]
-    fade = rows[:50, 5]
-    assert fade[0] == State.FADE_IN and rows[55, 5] == State.RUNNING
-    assert np.all(np.abs(sent[:50]) <= np.abs(rows[:50, 3]) + 1e-12)
+    sent = rows[:, C.i_safe]
+    assert runner.stepper.resets == [(rows[0, C.theta_h_meas], rows[0, C.i_m_meas])]  # type: ignore[attr-defined]
+    fade = rows[:50, C.state]
+    assert fade[0] == State.FADE_IN and rows[55, C.state] == State.RUNNING
+    assert np.all(np.abs(sent[:50]) <= np.abs(rows[:50, C.i_cmd]) + 1e-12)
 
 
 @pytest.mark.parametrize("rate", [100.0, 1000.0])
@@ -145,10 +148,10 @@ def test_faults_at_the_rig_zero_the_command_in_the_period_they_arrive(
     links: tuple[CanLink, CanLink], rate: float, fault: Fault, rig: dict[str, object]
 ) -> None:
     runner, _, rows = _run(links, rate, 1.2, rider=3.0, **rig)
-    k = int(np.argmax(rows[:, 6] > 0))  # the period the fault was detected
+    k = int(np.argmax(rows[:, C.fault] > 0))  # the period the fault was detected
     assert runner.counters().fault == fault.name
-    assert rows[k, 0] == pytest.approx(0.8, abs=1.5 / rate)
-    assert rows[k - 1, 4] != 0.0 and np.all(rows[k:, 4] == 0.0)
+    assert rows[k, C.t] == pytest.approx(0.8, abs=1.5 / rate)
+    assert rows[k - 1, C.i_safe] != 0.0 and np.all(rows[k:, C.i_safe] == 0.0)
 
 
 @pytest.mark.parametrize("rate", [100.0, 1000.0])
@@ -156,11 +159,11 @@ def test_bus_off_trips_the_watchdog_within_three_periods(
     links: tuple[CanLink, CanLink], rate: float
 ) -> None:
     runner, _, rows = _run(links, rate, 1.2, rider=3.0, bus_off_at=0.8, bus_off_duration=1.0)
-    k = int(np.argmax(rows[:, 6] > 0))
+    k = int(np.argmax(rows[:, C.fault] > 0))
     last_valid = 0.8 - 1.0 / rate  # the last status frame before the bus went off
     assert runner.counters().fault == "WATCHDOG"
-    assert rows[k, 0] - last_valid <= 3.0 / rate + 1e-9
-    assert np.all(rows[k:, 4] == 0.0) and rows[k - 1, 4] != 0.0
+    assert rows[k, C.t] - last_valid <= 3.0 / rate + 1e-9
+    assert np.all(rows[k:, C.i_safe] == 0.0) and rows[k - 1, C.i_safe] != 0.0
 
 
 def test_random_loss_and_latency_are_tolerated_and_counted(
@@ -189,9 +192,9 @@ def test_a_stop_request_fades_out_and_ends_the_run(links: tuple[CanLink, CanLink
 
     served = RateLoop(100.0, clock).run(period, periods=1000)
     rows = runner.ring.drain()
-    assert served == 100 + 50 and rows[-1, 4] == 0.0 and rows[-1, 5] == State.IDLE
+    assert served == 100 + 50 and rows[-1, C.i_safe] == 0.0 and rows[-1, C.state] == State.IDLE
     envelope = 1.0 - np.arange(1, 51) / 50.0  # 0.5 s fade-out at 100 Hz
-    assert np.allclose(rows[100:, 4], envelope * rows[100:, 3], atol=1e-12)
+    assert np.allclose(rows[100:, C.i_safe], envelope * rows[100:, C.i_cmd], atol=1e-12)
 
 
 def test_waiting_for_arm_keeps_the_torque_off_until_arm_then_fades_in(
@@ -212,13 +215,15 @@ def test_waiting_for_arm_keeps_the_torque_off_until_arm_then_fades_in(
     RateLoop(100.0, clock).run(period, periods=100)
     rows = runner.ring.drain()
     # the stack runs from the first status frame, the command sent stays 0 while IDLE
-    assert np.all(rows[:30, 5] == State.IDLE) and np.all(rows[:30, 4] == 0.0)
+    assert np.all(rows[:30, C.state] == State.IDLE) and np.all(rows[:30, C.i_safe] == 0.0)
     assert len(runner.stepper.resets) == 1  # type: ignore[attr-defined]
     # from Arm on, the safety stage's 0.5 s fade-in (50 periods at 100 Hz), then RUNNING
-    assert np.all(rows[30:79, 5] == State.FADE_IN) and np.all(rows[79:, 5] == State.RUNNING)
+    assert np.all(rows[30:79, C.state] == State.FADE_IN) and np.all(
+        rows[79:, C.state] == State.RUNNING
+    )
     envelope = np.arange(1, 51) / 50.0
-    assert np.allclose(rows[30:80, 4], envelope * rows[30:80, 3], atol=1e-12)
-    assert np.any(rows[30:, 4] != 0.0)
+    assert np.allclose(rows[30:80, C.i_safe], envelope * rows[30:80, C.i_cmd], atol=1e-12)
+    assert np.any(rows[30:, C.i_safe] != 0.0)
 
 
 def _paced(
@@ -269,15 +274,18 @@ def test_paced_by_the_bus_each_period_starts_on_a_status_frame(
     # latency and jitter on the frames: a clock-paced loop sees 0 or 2 frames in some
     # periods, a bus-paced loop exactly one, whenever it comes
     runner, loop, rows, per_period = _paced(links, rate, 1.0, latency=3e-4, jitter=1e-4)
-    assert runner.counters().fault == "NONE" and rows[-1, 5] == State.RUNNING
+    assert runner.counters().fault == "NONE" and rows[-1, C.state] == State.RUNNING
     assert per_period[1:] == [1] * (len(per_period) - 1)  # the first wait reads power-on's too
     assert loop.stats().missed == 0 and loop.timeouts == 0
-    interval = np.diff(rows[:, 0])
+    interval = np.diff(rows[:, C.t])
     assert np.mean(interval) == pytest.approx(1.0 / rate, rel=1e-2)
     assert np.ptp(interval) > 0.0  # the loop follows the frames' jitter, not a clock
     # and the same spring holds the rider's 3 N*m where eq. (5) balances them (see above)
     stiffness = 20.0 * HB.torque_per_amp
-    assert abs(rows[-1, 1] - 3.0 / stiffness) <= HB.beta_s / stiffness + 2 * math.pi / 2**14
+    assert (
+        abs(rows[-1, C.theta_h_meas] - 3.0 / stiffness)
+        <= HB.beta_s / stiffness + 2 * math.pi / 2**14
+    )
 
 
 @pytest.mark.parametrize("rate", [100.0, 1000.0])
@@ -285,12 +293,12 @@ def test_paced_by_the_bus_a_stopped_rig_trips_the_watchdog_within_its_periods(
     links: tuple[CanLink, CanLink], rate: float
 ) -> None:
     runner, loop, rows, _ = _paced(links, rate, 1.2, rig_until=0.8)
-    k = int(np.argmax(rows[:, 6] > 0))
+    k = int(np.argmax(rows[:, C.fault] > 0))
     assert runner.counters().fault == "WATCHDOG" and loop.timeouts >= 1
     # the wait for the next frame times out watchdog_periods (3) periods after the last
     # frame, and that period sends zero
-    assert rows[k, 0] - rows[k - 1, 0] <= 3.0 / rate + 1e-9
-    assert rows[k - 1, 4] != 0.0 and np.all(rows[k:, 4] == 0.0)
+    assert rows[k, C.t] - rows[k - 1, C.t] <= 3.0 / rate + 1e-9
+    assert rows[k - 1, C.i_safe] != 0.0 and np.all(rows[k:, C.i_safe] == 0.0)
     # the run goes on sending zero at the watchdog's pace until its linger ends
     assert rows.shape[0] - k < 0.2 * rate
 
@@ -299,9 +307,9 @@ def test_paced_by_the_bus_without_a_drive_trips_no_drive_after_the_start_timeout
     links: tuple[CanLink, CanLink],
 ) -> None:
     runner, loop, rows, _ = _paced(links, 100.0, 3.0, rig_until=0.0)
-    assert runner.counters().fault == "NO_DRIVE" and np.all(rows[:, 4] == 0.0)
+    assert runner.counters().fault == "NO_DRIVE" and np.all(rows[:, C.i_safe] == 0.0)
     stats = loop.stats()  # 1 s of frame periods without a frame: the drive's, not missed
-    assert rows[0, 0] == 0.0 and stats.gaps >= 100 and stats.missed == 0
+    assert rows[0, C.t] == 0.0 and stats.gaps >= 100 and stats.missed == 0
 
 
 @pytest.mark.parametrize("rate", [100.0, 1000.0])
@@ -330,16 +338,16 @@ def test_a_loop_late_while_the_bus_is_off_sends_zero_on_its_first_period_back(
     loop.run(period, periods=round(1.2 * rate))
     rows = runner.ring.drain()
     back = stall + 1  # the row of the first period served after the stall
-    assert loop.stats().missed == 5 and rows[back, 0] == pytest.approx(0.8 + 5.0 / rate)
-    assert rows[stall, 4] != 0.0 and np.all(rows[back:, 4] == 0.0)
+    assert loop.stats().missed == 5 and rows[back, C.t] == pytest.approx(0.8 + 5.0 / rate)
+    assert rows[stall, C.i_safe] != 0.0 and np.all(rows[back:, C.i_safe] == 0.0)
     assert runner.counters().fault == "WATCHDOG"
 
 
 def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
     links: tuple[CanLink, CanLink],
 ) -> None:
-    # At the end of the duration motosim run calls finish() and runs the periods it
-    # returns (ten times over at most): with a slew-rate limit slower than the fade (5 A/s:
+    # After the runner's duration the torque fades out in the same run of the loop, which
+    # motosim run gives max_periods: with a slew-rate limit slower than the fade (5 A/s:
     # 10 A need 2 s, the fade 0.5 s) the run must still end on a zero command with the
     # stage IDLE, never on a current left on (the drive would hold it). The rider's torque
     # rises to 30 N*m over 3 s against the spring (i = -30 theta: 9.4 A at 0.31 rad with
@@ -352,19 +360,18 @@ def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
     limits = SafetyLimits(**{
         name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
     } | {"max_slew": 5.0})  # fmt: skip
-    runner = RealtimeRunner(SpringStack(30.0), host, CODECS, limits, rate=100.0)
+    runner = RealtimeRunner(SpringStack(30.0), host, CODECS, limits, rate=100.0, duration=4.0)
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
     loop = RateLoop(100.0, clock)
-    loop.run(runner.period, periods=400)
+    total = loop.run(runner.period, periods=runner.max_periods)
     rows = runner.ring.drain()
-    assert rows[-1, 5] == State.RUNNING and rows[-1, 4] < -9.0
-    fade = runner.finish()
-    served = loop.run(runner.period, periods=10 * fade)
-    rows = np.vstack([rows, runner.ring.drain()])
-    assert served < 10 * fade and rows[-1, 4] == 0.0 and rows[-1, 5] == State.IDLE
-    assert np.all(rows[-served:-1, 5] == State.STOPPING)
-    assert np.all(np.abs(np.diff(rows[:, 4])) <= 0.05 + 1e-9)  # 5 A/s at 100 Hz, no step
+    assert rows[399, C.state] == State.RUNNING and rows[399, C.i_safe] < -9.0
+    served = total - 400  # the fade-out's periods
+    assert runner.reached_end and total < runner.max_periods
+    assert rows[-1, C.i_safe] == 0.0 and rows[-1, C.state] == State.IDLE
+    assert np.all(rows[-served:-1, C.state] == State.STOPPING)
+    assert np.all(np.abs(np.diff(rows[:, C.i_safe])) <= 0.05 + 1e-9)  # 5 A/s at 100 Hz, no step
 
 
 class EstimateStack(SpringStack):
@@ -403,7 +410,11 @@ def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
     RateLoop(100.0, clock).run(runner.period, periods=100)
     rows = runner.ring.drain()
     assert runner.counters().fault == "NON_FINITE"
-    assert rows[69, 4] != 0.0 and np.all(rows[70:, 4] == 0.0) and rows[70, 6] == Fault.NON_FINITE
+    assert (
+        rows[69, C.i_safe] != 0.0
+        and np.all(rows[70:, C.i_safe] == 0.0)
+        and rows[70, C.fault] == Fault.NON_FINITE
+    )
 
 
 @pytest.mark.parametrize("stall", [0.0, 8.5])
@@ -442,12 +453,14 @@ def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
     rows = runner.ring.drain()
     assert (loop.stats().missed > 2000) == bool(stall)
     # the handlebar's speed: the measured angle's changes over the loop's time between them
-    changes = np.flatnonzero(np.diff(rows[:, 1]) != 0.0) + 1
-    speed = np.max(np.abs(np.diff(rows[changes, 1]) / np.diff(rows[changes, 0])))
+    changes = np.flatnonzero(np.diff(rows[:, C.theta_h_meas]) != 0.0) + 1
+    speed = np.max(np.abs(np.diff(rows[changes, C.theta_h_meas]) / np.diff(rows[changes, C.t])))
     assert 1.0 < speed < limits.max_speed and runner.counters().fault == "NONE"
-    running = rows[:, 5] == State.RUNNING
+    running = rows[:, C.state] == State.RUNNING
     assert np.sum(running) > 100
-    assert np.array_equal(rows[running, 4], rows[running, 3])  # the command passed whole
+    assert np.array_equal(
+        rows[running, C.i_safe], rows[running, C.i_cmd]
+    )  # the command passed whole
 
 
 def test_nothing_enables_the_torque_again_after_a_fault(links: tuple[CanLink, CanLink]) -> None:
@@ -473,9 +486,9 @@ def test_nothing_enables_the_torque_again_after_a_fault(links: tuple[CanLink, Ca
 
     served = RateLoop(100.0, clock).run(period, periods=300)
     rows = runner.ring.drain()
-    k = int(np.argmax(rows[:, 6] > 0))
-    assert rows[k - 1, 4] != 0.0 and np.all(rows[k:, 4] == 0.0)
-    assert np.all(rows[k:, 5] == State.FAULT) and served == 300
+    k = int(np.argmax(rows[:, C.fault] > 0))
+    assert rows[k - 1, C.i_safe] != 0.0 and np.all(rows[k:, C.i_safe] == 0.0)
+    assert np.all(rows[k:, C.state] == State.FAULT) and served == 300
     c = runner.counters()
     assert c.fault == "ESTOP_CAN" and c.status_frames >= 290 and c.frames_stale == 0
 
@@ -499,15 +512,15 @@ def test_a_stop_during_the_fade_in(links: tuple[CanLink, CanLink], stop: str) ->
 
     served = RateLoop(100.0, clock).run(period, periods=300)
     rows = runner.ring.drain()
-    assert np.all(rows[:20, 5] == State.FADE_IN)
-    share = rows[:, 4] / np.where(rows[:, 3] == 0.0, 1.0, rows[:, 3])
+    assert np.all(rows[:20, C.state] == State.FADE_IN)
+    share = rows[:, C.i_safe] / np.where(rows[:, C.i_cmd] == 0.0, 1.0, rows[:, C.i_cmd])
     assert share[19] == pytest.approx(0.4)
     if stop == "ctrl-c":
-        assert served == 40 and rows[-1, 5] == State.IDLE and rows[-1, 4] == 0.0
+        assert served == 40 and rows[-1, C.state] == State.IDLE and rows[-1, C.i_safe] == 0.0
         assert share[20:] == pytest.approx(0.4 - 0.02 * np.arange(1, 21))
         assert runner.counters().fault == "NONE"
     else:
-        assert np.all(rows[20:, 4] == 0.0) and runner.counters().fault == "ESTOP_KEY"
+        assert np.all(rows[20:, C.i_safe] == 0.0) and runner.counters().fault == "ESTOP_KEY"
 
 
 def test_a_heartbeat_whose_first_deadline_was_skipped_is_sent_late_not_dropped() -> None:
@@ -542,21 +555,19 @@ def test_a_heartbeat_whose_first_deadline_was_skipped_is_sent_late_not_dropped()
     assert counters == [0, 1, 2, 3, 4]  # k = 0, 10, 21, 30, 40
 
 
-def test_the_heartbeat_goes_on_through_the_fade_out_of_a_second_run() -> None:
-    # motosim run runs the duration, calls finish() and runs the fade-out as a second
-    # loop.run, whose k starts at 0 again. The 10 Hz heartbeat must go on every 0.1 s
-    # through the fade-out (a drive supervising it faults otherwise), its counter one on
-    # from the last. Before, the heartbeat was indexed by k against the first run's count:
-    # none in the whole fade-out (0.5 s).
+def test_the_heartbeat_goes_on_through_the_fade_out_after_the_duration() -> None:
+    # After the runner's duration the torque fades out in the same run of the loop. The
+    # 10 Hz heartbeat must go on every 0.1 s through the fade-out (a drive supervising it
+    # faults otherwise), its counter one on from the last.
     channel = f"virtual:heartbeat{next(_channels)}"
     host, drive, listener = open_link(channel), open_link(channel), open_link(channel)
     try:
         vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(200_001, 3.0),
                           np.random.default_rng(7))  # fmt: skip
-        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, duration=3.0)
         clock = SimulatedClock()
         clock.listen(vrig.advance_to)
-        counters, stamps = [], []
+        counters, stamps, ends = [], [], []
         values = np.zeros(len(CODECS.heartbeat.names))
         at = CODECS.position(CODECS.heartbeat, "counter")
 
@@ -567,63 +578,77 @@ def test_the_heartbeat_goes_on_through_the_fade_out_of_a_second_run() -> None:
                     assert CODECS.heartbeat.decode(frame[1], values)
                     counters.append(int(values[at]))
                     stamps.append(t)
+            if k == 299:  # the duration's last period
+                ends.append(t)
             return carry_on
 
         loop = RateLoop(100.0, clock)
-        loop.run(period, periods=300)  # the duration: 3 s
-        end = clock.now()
-        fade = runner.finish()
-        served = loop.run(period, periods=10 * fade)
+        served = loop.run(period, periods=runner.max_periods)
     finally:
         for link in (host, drive, listener):
             link.close()
-    assert served == 50 and runner.safety.state == State.IDLE  # the 0.5 s fade-out
-    # no deadline missed: the rows' count of them (column 10) stays 0; it was -300 in the
-    # fade-out (the second run's k against the first run's periods)
+    assert served == 300 + 50 and runner.safety.state == State.IDLE  # the 0.5 s fade-out
+    # no deadline missed: the rows' count of them stays 0
     rows = runner.ring.drain()
-    assert rows.shape[0] == 350 and np.all(rows[:, 10] == 0.0)
-    assert sum(stamp > end for stamp in stamps) == 5
+    assert rows.shape[0] == 350 and np.all(rows[:, C.missed] == 0.0)
+    assert sum(stamp > ends[0] for stamp in stamps) == 5
     assert counters == [n & 0xF for n in range(35)]  # one on from the last, none skipped
     assert np.allclose(np.diff(stamps), 0.1)
 
 
-@pytest.mark.parametrize("between", [0.0, 0.006, 0.2])
-def test_the_rows_count_of_skipped_deadlines_is_the_loops_across_a_second_run(
-    between: float,
-) -> None:
-    # motosim run calls loop.stats() and finish() between the duration's loop.run and the
-    # fade-out's (6 to 24 ms): that time skipped no deadline of the loop. The rows' count
-    # of skipped deadlines (column 10) is the loop's own count (its k), carried across the
-    # runs; before, it was taken on the loop's time and counted the time between the runs
-    # as skipped (the review's /tmp/rv2/missed.py: 50 and 69 at the fade-out's start for 6
-    # and 200 ms, the loop's count 49). The loop is 0.5 s late once in the first run.
+def test_the_rows_count_of_skipped_deadlines_is_the_loops_through_the_fade_out() -> None:
+    # The rows' count of skipped deadlines is the loop's own count (its k less the periods
+    # run), the fade-out after the duration included: the loop is 0.5 s late once before
+    # the duration's end and the fade-out's rows keep that count.
     channel = f"virtual:missed{next(_channels)}"
     host, drive = open_link(channel), open_link(channel)
     try:
         vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(200_001, 3.0),
                           np.random.default_rng(7))  # fmt: skip
-        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, duration=3.0)
         clock = SimulatedClock()
         clock.listen(vrig.advance_to)
 
         def period(k: int, t: float) -> bool:
             carry_on = runner.period(k, t)
-            if k == 100 and t < 1.05:  # once, in the first run
+            if k == 100 and t < 1.05:  # once
                 clock.advance(0.5)
             return carry_on
 
-        first = RateLoop(100.0, clock)
-        first.run(period, periods=300)
-        clock.advance(between)  # the stats, finish()
-        fade = runner.finish()
-        second = RateLoop(100.0, clock)
-        served = second.run(period, periods=10 * fade)
+        loop = RateLoop(100.0, clock)
+        loop.run(period, periods=runner.max_periods)
     finally:
         host.close()
         drive.close()
     rows = runner.ring.drain()
-    skipped = first.stats().missed
-    assert skipped > 40 and second.stats().missed == 0 and served == 50
+    skipped = loop.stats().missed
+    served = int(np.sum(rows[:, C.t] > 2.995))  # the fade-out's rows
+    assert skipped > 40 and served == 50 and runner.reached_end
     assert runner.safety.fault == Fault.NONE
-    assert np.all(np.diff(rows[:, 10]) >= 0.0)
-    assert np.all(rows[-served:, 10] == skipped)  # the fade-out's rows: the first run's count
+    assert np.all(np.diff(rows[:, C.missed]) >= 0.0)
+    assert np.all(rows[-served:, C.missed] == skipped)
+
+
+def test_a_run_never_armed_ends_at_its_duration(links: tuple[CanLink, CanLink]) -> None:
+    # The torque never on (no arm): the duration's end needs no fade-out, the run ends with
+    # its last period, as many rows as the duration's periods.
+    host, drive = links
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(100_000, 3.0),
+                      np.random.default_rng(1))  # fmt: skip
+    runner = RealtimeRunner(
+        SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, wait_for_arm=True, duration=1.0
+    )
+    clock = SimulatedClock()
+    clock.listen(vrig.advance_to)
+    served = RateLoop(100.0, clock).run(runner.period, periods=runner.max_periods)
+    rows = runner.ring.drain()
+    assert served == 100 and rows.shape[0] == 100 and runner.reached_end
+    assert np.all(rows[:, C.state] == State.IDLE) and np.all(rows[:, C.i_safe] == 0.0)
+
+
+@pytest.mark.parametrize("duration", [-1.0, math.nan, math.inf])
+def test_a_duration_that_is_no_time_is_refused_in_one_line(
+    links: tuple[CanLink, CanLink], duration: float
+) -> None:
+    with pytest.raises(MotosimError, match=r"^duration = .* s: expected a time >= 0$"):
+        RealtimeRunner(SpringStack(1.0), links[0], CODECS, LIMITS, rate=100.0, duration=duration)

@@ -19,6 +19,7 @@ import pytest
 from motosim.control.torque_feedback import PAPER_CONTROLLER
 from motosim.params import load_parameters
 from motosim.rt.clock import SimulatedClock
+from motosim.rt.fused import LoopColumn
 from motosim.rt.loop import RateLoop
 from motosim.rt.rig import VirtualRig
 from motosim.rt.run import RealtimeRunner
@@ -219,7 +220,7 @@ def test_the_lane_change_over_a_5_ms_bus_holds_when_the_stack_accounts_for_the_f
     rows = lock.run()
     runner = lock.runner
     col = runner.names.index
-    t, current = rows[:, 0], rows[:, col("i_safe")]
+    t, current = rows[:, LoopColumn.t], rows[:, col("i_safe")]
     theta = np.nan_to_num(rows[:, col("theta_h_meas")])  # NaN before the first frame
     error = np.sqrt(np.mean((theta - rows[:, col("delta")]) ** 2))
     hold = np.ptp(current[(t > 6.0) & (t < 9.0)])
@@ -243,7 +244,7 @@ def test_the_lane_change_over_100_hz_frames_holds_within_the_safety_clamp() -> N
     lock = Lockstep(inputs, limits, settings=settings, channel="rt_clamp")
     rows = lock.run()
     runner = lock.runner
-    t, current = rows[:, 0], rows[:, runner.names.index("i_safe")]
+    t, current = rows[:, LoopColumn.t], rows[:, runner.names.index("i_safe")]
     assert runner.counters().fault == "NONE"
     assert rows[-1, runner.names.index("y")] == pytest.approx(3.5, abs=0.3)
     assert np.ptp(current[(t > 6.0) & (t < 9.0)]) < 4.0
@@ -253,6 +254,8 @@ class _StackInPython:
     """A :class:`CompiledStack` behind the stepper protocol without being one: the runner
     then takes its frames, starts and finishes each period in three compiled calls around
     the stack's ``step`` instead of its one fused call."""
+
+    compiled_parts = None  # the runner steps it between its compiled pieces
 
     def __init__(self, stack: CompiledStack) -> None:
         self.stack = stack
@@ -308,7 +311,8 @@ def _run_both_ways(
         def until_due(deadline: float) -> None:
             # the loop's spin phase on a lab's clock: warm-ups until 50 us from now (real
             # time: how many fit varies from run to run, and must not matter)
-            warmups.append(runner.warm(time.monotonic() + 50e-6))
+            runner.warm(time.monotonic() + 50e-6)
+            warmups.append(runner.warm_ups)
 
         warm_up = {"": None, "once": runner.warm, "until": until_due}[warm]
         loop = RateLoop(rate, clock, warm=warm_up)

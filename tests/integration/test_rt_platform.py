@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
+from motosim.rt.fused import LoopColumn
 from motosim.rt.platform import PlatformCanSender, PlatformOutput, PlatformSender, PlatformTwin
 from motosim.rt.stack import CompiledStack
 
@@ -69,7 +70,9 @@ def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None
 
     names = ("v_x", "v_y", "psi_dot", "phi_dot", "phi")
     ride = TimeSeries(
-        rows[:, 0], np.column_stack([rows[:, runner.names.index(n)] for n in names]), names
+        rows[:, LoopColumn.t],
+        np.column_stack([rows[:, runner.names.index(n)] for n in names]),
+        names,
     )
     offline = cue(config, ride, TELBAN_CARDULLO_2005, algorithm="washout")
     last = round(sc.duration * rate) - 1

@@ -27,25 +27,34 @@ frames go through it in python-can's own wire format (a msgpack map per frame) w
 microseconds here; processes using python-can on the same group see the same frames.
 """
 
+import errno
 import importlib.resources
 import math
-from collections.abc import Sequence
+import socket
+import sys
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
+from llvmlite import ir
 from numba import njit
+from numba.core import types
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.bus_spec import check_bus
 
 __all__ = [
+    "RECV_AVAILABLE",
     "CanLink",
     "FrameCodec",
     "HandlebarCodecs",
     "HandlebarMapping",
+    "Link",
+    "LinkBase",
     "PlatformCodecs",
     "SignalLayout",
     "UdpMulticastLink",
@@ -59,6 +68,7 @@ __all__ = [
     "open_link",
     "packaged_dbc",
     "platform_codecs",
+    "recv_datagrams",
     "unpack_frame",
 ]
 
@@ -642,7 +652,116 @@ def platform_codecs(path: str | Path | None = None) -> PlatformCodecs:
     )  # fmt: skip
 
 
-class CanLink:
+Rows = Sequence[Any]
+"""Writable buffers of one frame each (memoryviews of a ``uint8`` array's rows)."""
+
+
+class Link(Protocol):
+    """A CAN link to the drive, whatever its transport: what the real-time runner and the
+    virtual rig use of it. Each transport keeps its own speed-ups behind these methods
+    (:class:`UdpMulticastLink`: python-can's datagrams sent and read whole, a compiled read
+    of its socket; :class:`LinkBase`: frame by frame on ``send`` and ``receive``)."""
+
+    errors: int
+    """Frames that could not be sent or read."""
+
+    @property
+    def datagrams(self) -> bool:
+        """Whether :meth:`receive_into` writes python-can ``udp_multicast`` datagrams (read
+        by :func:`unpack_frame`) rather than each frame's data bytes and id."""
+        ...
+
+    def send(self, frame_id: int, data: bytes) -> bool:
+        """Send one standard frame; False if the bus refused it."""
+        ...
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        """The next frame ``(frame_id, data)``, or None if none came within ``timeout`` [s]."""
+        ...
+
+    def frame_buffer(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
+        """The bytes to send for a frame of ``length`` data bytes, data zero, and where its
+        data starts in them (the period encodes the frame in place)."""
+        ...
+
+    def sender(self, frame_id: int, buffer: NDArray[np.uint8]) -> Callable[[], bool]:
+        """A function sending ``buffer`` (made by :meth:`frame_buffer`) as it is when it is
+        called; False if refused."""
+        ...
+
+    def receive_into(
+        self, rows: Rows, lengths: NDArray[np.int64], ids: NDArray[np.int64], start: int,
+        timeout: float = 0.0,
+    ) -> int:  # fmt: skip
+        """Read the frames waiting into ``rows[start:]`` (their sizes into ``lengths``,
+        their ids into ``ids`` unless :attr:`datagrams`); the index after the last one. With
+        ``timeout`` > 0, at most one, waiting up to ``timeout`` [s] for it."""
+        ...
+
+    def compiled_fd(self) -> int:
+        """A non-blocking socket whose datagrams compiled code may read with ``recv``
+        (:func:`recv_datagrams`), or -1."""
+        ...
+
+    def close(self) -> None:
+        """Close the link."""
+        ...
+
+
+class LinkBase:
+    """:class:`Link` frame by frame on a link's own ``send`` and ``receive``: the way of a
+    python-can bus (:class:`CanLink`) and of the test doubles."""
+
+    __slots__ = ()
+    errors = 0
+    datagrams = False
+
+    def send(self, frame_id: int, data: bytes) -> bool:
+        """Send one standard frame; False if the bus refused it."""
+        raise NotImplementedError
+
+    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
+        """The next frame ``(frame_id, data)``, or None."""
+        raise NotImplementedError
+
+    def frame_buffer(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
+        """The frame's data bytes (zeros), from 0."""
+        return np.zeros(length, dtype=np.uint8), 0
+
+    def sender(self, frame_id: int, buffer: NDArray[np.uint8]) -> Callable[[], bool]:
+        """A function sending ``buffer``'s bytes as frame ``frame_id``."""
+        send = self.send
+        return lambda: send(frame_id, buffer.tobytes())
+
+    def receive_into(
+        self, rows: Rows, lengths: NDArray[np.int64], ids: NDArray[np.int64], start: int,
+        timeout: float = 0.0,
+    ) -> int:  # fmt: skip
+        """:meth:`Link.receive_into` by :meth:`receive`, a frame's data cut to its row."""
+        receive = self.receive
+        n = start
+        while n < len(rows):  # bounded: a flooded bus cannot hold the loop
+            frame = receive(timeout)
+            if frame is None:
+                break
+            data = frame[1][: len(rows[n])]
+            ids[n] = frame[0]
+            lengths[n] = len(data)
+            rows[n][: len(data)] = data
+            n += 1
+            if timeout > 0.0:
+                break
+        return n
+
+    def compiled_fd(self) -> int:
+        """None: no socket for compiled code."""
+        return -1
+
+    def close(self) -> None:
+        """Nothing to close."""
+
+
+class CanLink(LinkBase):
     """A python-can bus carrying raw frames: non-blocking receive, send that reports failure.
 
     Made by :func:`open_link`; ``bus`` is any ``can.BusABC``.
@@ -702,6 +821,81 @@ class CanLink:
         self.close()
 
 
+RECV_AVAILABLE = sys.platform == "linux"
+"""Whether :func:`recv_datagrams` can read a socket from compiled code here (Linux: the C
+library's ``recv`` with ``MSG_DONTWAIT`` and its ``errno`` through ``__errno_location``)."""
+
+_MSG_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
+_EAGAIN, _EWOULDBLOCK, _EINTR = errno.EAGAIN, errno.EWOULDBLOCK, errno.EINTR
+
+
+@intrinsic
+def _recv(typingctx: Any, fd: Any, buffer: Any, size: Any) -> Any:
+    """``recv(fd, buffer, size, MSG_DONTWAIT)`` called from compiled code: the bytes read,
+    or minus ``errno`` where it failed (``-EAGAIN``: nothing waiting). ``buffer`` is a
+    C-contiguous ``uint8`` array of at least ``size`` bytes (Linux only)."""
+    if not (
+        isinstance(fd, types.Integer)
+        and isinstance(size, types.Integer)
+        and isinstance(buffer, types.Array)
+        and buffer.dtype == types.uint8
+        and buffer.layout == "C"
+    ):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        i32, i64 = ir.IntType(32), ir.IntType(64)
+        i8p = ir.IntType(8).as_pointer()
+        fd_type, buffer_type, size_type = signature.args
+        handle = context.cast(builder, args[0], fd_type, types.int64)
+        count = context.cast(builder, args[2], size_type, types.int64)
+        data = builder.bitcast(context.make_array(buffer_type)(context, builder, args[1]).data, i8p)
+        module = builder.module
+        recv = module.globals.get("recv") or ir.Function(
+            module, ir.FunctionType(i64, [i32, i8p, i64, i32]), "recv"
+        )
+        where = module.globals.get("__errno_location") or ir.Function(
+            module, ir.FunctionType(i32.as_pointer(), []), "__errno_location"
+        )
+        got = builder.call(
+            recv, [builder.trunc(handle, i32), data, count, ir.Constant(i32, _MSG_DONTWAIT)]
+        )
+        failed = builder.icmp_signed("<", got, ir.Constant(i64, 0))
+        code = builder.sext(builder.load(builder.call(where, [])), i64)
+        return builder.select(failed, builder.neg(code), got)
+
+    return types.int64(fd, buffer, size), codegen
+
+
+_read: Any = _recv
+""":func:`_recv` as compiled code calls it (numba's typing context fills ``typingctx``)."""
+
+
+@njit(cache=True)
+def recv_datagrams(
+    fd: int, rx: NDArray[np.uint8], lengths: NDArray[np.int64]
+) -> tuple[int, int]:  # fmt: skip
+    """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``rx``'s rows and
+    their sizes into ``lengths``, at most a row each; the number read and the number of
+    reads that failed otherwise than "nothing waiting".
+
+    The compiled twin of :meth:`UdpMulticastLink.receive_into`: a datagram longer than a
+    row is cut to it, as ``recv_into`` cuts it; an interrupted read is tried again (as
+    Python does, PEP 475); "nothing waiting" (``EAGAIN``) ends the read, any other error
+    too. Linux only (:data:`RECV_AVAILABLE`).
+    """
+    size = rx.shape[1]
+    n = 0
+    while n < rx.shape[0]:
+        got = _read(fd, rx[n], size)
+        if got >= 0:
+            lengths[n] = got
+            n += 1
+        elif got != -_EINTR:
+            return n, 0 if got == -_EAGAIN or got == -_EWOULDBLOCK else 1
+    return n, 0
+
+
 class UdpMulticastLink:
     """python-can's ``udp_multicast`` frames on its own socket, without a message per frame.
 
@@ -742,6 +936,7 @@ class UdpMulticastLink:
         "_bus", "_dest", "_out", "_poll", "_select", "_sock", "_templates", "_unpack", "errors",
         "own_filtered", "spec",
     )  # fmt: skip
+    datagrams = True
 
     def __init__(self, bus: Any, group: str, port: int, spec: str) -> None:
         import os
@@ -798,16 +993,22 @@ class UdpMulticastLink:
             return False
         return True
 
-    def datagram(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
+    def frame_buffer(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
         """python-can's packed bytes of a frame, data zero, and where its data bytes start:
-        write the data there and send the array with :meth:`send_datagram` (the fused
+        write the data there and send the array with :meth:`sender`'s function (the fused
         period of :mod:`motosim.rt.fused` encodes its command frame in place)."""
         before, after = self._template(frame_id, length)
         packed = np.frombuffer(before + bytes(length) + after, dtype=np.uint8).copy()
         return packed, len(before)
 
+    def sender(self, frame_id: int, buffer: NDArray[np.uint8]) -> Callable[[], bool]:
+        """A function sending ``buffer`` (made by :meth:`frame_buffer`) as one datagram;
+        False (``errors`` + 1) if refused."""
+        view = memoryview(buffer)  # type: ignore[arg-type]
+        return lambda: self.send_datagram(view)
+
     def send_datagram(self, datagram: Any) -> bool:
-        """Send a datagram made by :meth:`datagram`; False (``errors`` + 1) if refused."""
+        """Send a datagram made by :meth:`frame_buffer`; False (``errors`` + 1) if refused."""
         try:
             self._out.sendto(datagram, self._dest)
         except OSError:
@@ -815,19 +1016,25 @@ class UdpMulticastLink:
             return False
         return True
 
-    def receive_datagrams(
-        self, views: Sequence[Any], lengths: NDArray[np.int64], start: int
-    ) -> int:
-        """Read the datagrams waiting (non-blocking) into ``views[start:]`` (writable buffers,
-        e.g. memoryviews of an array's rows), their sizes into ``lengths``; the index after
-        the last one read. :func:`unpack_frame` reads them."""
+    def receive_into(
+        self, rows: Rows, lengths: NDArray[np.int64], ids: NDArray[np.int64], start: int,
+        timeout: float = 0.0,
+    ) -> int:  # fmt: skip
+        """Read the datagrams waiting (non-blocking) into ``rows[start:]``, their sizes into
+        ``lengths`` (``ids`` unused: the id is in the datagram); the index after the last
+        one read; :func:`unpack_frame` reads them. With ``timeout`` > 0, at most one,
+        waited for up to ``timeout`` [s]."""
+        limit = len(rows)
+        if timeout > 0.0:
+            if not self.readable(timeout):
+                return start
+            limit = min(limit, start + 1)
         poll = self._poll.poll
         recv_into = self._sock.recv_into
         n = start
-        limit = len(views)
         while n < limit and poll(0):
             try:
-                lengths[n] = recv_into(views[n])
+                lengths[n] = recv_into(rows[n])
             except BlockingIOError:
                 break
             except OSError:
@@ -836,11 +1043,12 @@ class UdpMulticastLink:
             n += 1
         return n
 
-    def fileno(self) -> int:
+    def compiled_fd(self) -> int:
         """The receiving socket's file descriptor (non-blocking), for a read from compiled
-        code (:func:`motosim.rt.fused.receive_datagrams`)."""
+        code (:func:`recv_datagrams`); -1 where compiled code cannot read it
+        (:data:`RECV_AVAILABLE`)."""
         fd: int = self._sock.fileno()
-        return fd
+        return fd if RECV_AVAILABLE else -1
 
     def readable(self, timeout: float) -> bool:
         """Wait up to ``timeout`` [s] for a datagram; whether one is waiting."""
@@ -944,7 +1152,7 @@ def _drop_source_port(sock: Any, port: int) -> bool:
 _DEFAULT_CHANNELS = {"virtual": "motosim", "udp_multicast": None}
 
 
-def open_link(spec: str, *, fast: bool = True) -> CanLink | UdpMulticastLink:
+def open_link(spec: str, *, fast: bool = True) -> Link:
     """Open a python-can bus from ``INTERFACE[:CHANNEL]``.
 
     Examples: ``socketcan:can0`` (a lab; set the bitrate with ``ip link``), ``virtual``

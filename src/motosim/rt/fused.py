@@ -15,7 +15,8 @@ does (see :mod:`motosim.rt.run`):
 3. the stack (:func:`~motosim.rt.stack.stack_reset` on the start,
    :func:`~motosim.rt.stack.stack_period`);
 4. :func:`finish`: the virtual motorcycle's range (a fall, a speed outside the model's: the
-   torque fades out and the run ends, as offline), the safety stage
+   torque fades out and the run ends, as offline, as it does after the run's duration),
+   the safety stage
    (:func:`~motosim.rt.safety.safety_step`), the command frame and, in the first period
    served of every ``heartbeat_every``, the heartbeat frame encoded
    (:func:`~motosim.io.can.encode_frame`) in place in the bytes to send; the row written into
@@ -27,23 +28,16 @@ numba ``structref`` built before the first deadline) and calls :func:`context_pe
 numba unboxes one pointer per call instead of the stack's model and data records and every
 array of :class:`PeriodArrays` (about 20 arrays; the cost of both in ``docs/performance.md``).
 
-On the clock with the fast ``udp_multicast`` link (Linux), the runner's
-:meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead,
-which also ends the loop's wait and reads the socket (:func:`receive_datagrams`: the C
-library's ``recv`` called from compiled code) before the period: no interpreter between the
-stack's last warm-up and its step.
+On the clock, with a link whose socket compiled code can read, the runner's
+:meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead, which
+also ends the loop's wait and reads the socket before the period: no interpreter between the
+stack's last warm-up and its step. A stack in Python (a test double) is stepped between
+:func:`take_frames` and :func:`begin`, and :func:`finish`: the same compiled functions.
 
-A runner whose stack is not a :class:`~motosim.rt.stack.CompiledStack` (a test double in
-Python) calls :func:`take_frames`, :func:`begin` and :func:`finish` one by one around its
-stack's ``step``: the same compiled functions, so both ways behave the same.
-
-All the runner's state is in the arrays of :class:`PeriodArrays`; ``R_*`` are the positions
-in its ``runner`` array, ``Q_*`` those in ``positions``.
+The runner's state is a :class:`RunnerState` (a numba ``structref``, fields by name).
 """
 
-import errno
 import math
-import socket
 import sys
 from enum import IntEnum
 from typing import Any, NamedTuple
@@ -56,7 +50,8 @@ from numba.experimental import structref
 from numba.extending import intrinsic
 from numpy.typing import NDArray
 
-from motosim.io.can import decode_frame, encode_frame, unpack_frame
+from motosim.io.can import RECV_AVAILABLE, decode_frame, encode_frame, recv_datagrams, unpack_frame
+from motosim.rt.ring import RingCounter
 from motosim.rt.safety import (
     Fault,
     SafetyParams,
@@ -69,15 +64,19 @@ from motosim.rt.safety import (
     safety_step,
     safety_trip,
 )
-from motosim.rt.stack import stack_period, stack_reset
+from motosim.rt.stack import StackParts, stack_period, stack_reset
 
 __all__ = [
     "RECV_AVAILABLE",
-    "RUNNER_STATE_SIZE",
     "WARM_MARGIN_NS",
     "LoopColumn",
     "PeriodArrays",
     "PeriodContext",
+    "PeriodEnd",
+    "RunnerCounts",
+    "RunnerSettings",
+    "RunnerState",
+    "SignalPositions",
     "begin",
     "context_cycle",
     "context_period",
@@ -86,7 +85,9 @@ __all__ = [
     "finish",
     "fused_period",
     "monotonic_ns",
-    "receive_datagrams",
+    "runner_counts",
+    "runner_request",
+    "stack_inputs",
     "stack_warm",
     "take_frames",
 ]
@@ -95,48 +96,165 @@ Array = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Ints = NDArray[np.int64]
 
-(
-    R_T0, R_THETA, R_CURRENT, R_PREV_THETA, R_STARTED, R_FRESH, R_STOP, R_FINISHING, R_ARMED,
-    R_ARM_REQUEST, R_AFTER_FAULT, R_SENT, R_CALLS, R_STATUS_FRAMES, R_BAD, R_LINGER,
-    R_START_TIMEOUT, R_HEARTBEAT_EVERY, R_DT, R_S_TAU, R_S_RATE, R_DATAGRAMS, R_ROLL,
-    R_SPEED_LOW, R_SPEED_HIGH, R_S_PHI, R_S_SPEED, R_LEFT, R_LEFT_T, R_LEFT_PHI, R_LEFT_SPEED,
-    R_STACK_TIME, R_WOKE, R_RECV_ERRORS, R_WARM, R_FRESH_AT, R_OMEGA, R_BEATS, R_K_BASE,
-    R_K_LAST, R_HEARTBEAT_DUE, R_SLOT,
-) = range(42)  # fmt: skip
-RUNNER_STATE_SIZE = 42
-"""The runner's state: the first deadline [s], the last valid angle [rad] and current [A],
-the angle of the last fresh status frame, flags (started, a fresh status frame, stop requested,
-finishing, armed, arm requested), periods since a fault, command frames sent, periods run,
-status frames received, datagrams that were no frames; then its settings: periods to linger
-after a fault, the ``NO_DRIVE`` timeout [periods], periods between heartbeats, the period
-[s], where the stack's row holds the torque estimate and the handlebar rate (-1: nowhere),
-whether the received frames are python-can datagrams (1) or id, length and bytes (0); the
-virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]), where the
-stack's row holds its roll and speed (-1: nowhere); and whether, when (since the first
-deadline [s]), at which roll [rad] and speed [m/s] the motorcycle left that range; the
-stack's time this period [s] (:func:`monotonic_ns` around it; NaN where it did not step);
-the wake-up of the last :func:`context_cycle` on :func:`monotonic_ns`'s clock [s] and the
-errors of its socket reads other than "nothing waiting" (:func:`receive_datagrams`);
-whether the stack is warmed before each deadline (1, :func:`context_warm_until`) or not (0);
-for a stack without a rate in its row, the deadline of the period that read the last fresh
-status frame [s] and the handlebar's rate between the last two [rad/s]; and the heartbeat
-due next (its index: the period's index on the loop's time since the first deadline, over
-``heartbeat_every``); the loop's deadlines before its current run (its ``k`` of the runs
-before, each run's last ``k`` plus one) and its ``k`` of the last period (-1 before the
-first: :func:`begin` takes a ``k`` not above it for a new run of the loop); what the last
-:func:`finish` left to the runner: whether the heartbeat frame is to be sent this period (1)
-and the ring's slot the row went to."""
 
-(
-    Q_ANGLE, Q_CURRENT, Q_COUNTER, Q_DRIVE_FAULT, Q_ESTOP, Q_COMMAND_CURRENT, Q_ENABLE,
-    Q_COMMAND_COUNTER, Q_STATE, Q_FAULT, Q_HEARTBEAT_COUNTER, Q_COMMAND_AT, Q_HEARTBEAT_AT,
-    Q_LOOP_COLUMNS,
-) = range(14)  # fmt: skip
-POSITIONS_SIZE = 14
-"""Where the loop's signals sit in the frames' values (status: angle, current, counter,
-drive fault; E-stop: its signal; command: current, enable, counter; heartbeat: state, fault,
-counter), where the command and heartbeat frames' data bytes start in the bytes to send,
-and the number of the loop's own columns in a row."""
+class _Struct(types.StructRef):
+    """A numba ``structref`` type whose fields' types are taken without literal values."""
+
+    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
+        """The fields' types without literal values."""
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
+
+
+@structref.register
+class RunnerStateType(_Struct):
+    """numba's type of :class:`RunnerState`."""
+
+
+class RunnerSettings(NamedTuple):
+    """What a runner is given before its first deadline (:class:`RunnerState`'s first
+    fields): periods the zero command is still sent after a fault (``linger``), the
+    ``NO_DRIVE`` timeout and the periods between heartbeats [periods], the period ``dt``
+    [s], the run's ``duration`` [periods] (the torque fades out from there; -1: no end);
+    where the stack's row holds its estimate of the rider's torque, the handlebar's rate,
+    the motorcycle's roll and speed (-1: nowhere); the motorcycle's range (largest
+    ``roll`` [rad], lowest and highest speed [m/s]); whether the frames read are python-can
+    ``udp_multicast`` datagrams (else id, length and bytes); whether the torque starts with
+    the drive's first status frame (``armed``, else on an arm request); whether the stack is
+    warmed before each deadline (:func:`context_warm_until`)."""
+
+    linger: int
+    start_timeout: int
+    heartbeat_every: int
+    dt: float
+    duration: int
+    tau_at: int
+    rate_at: int
+    phi_at: int
+    speed_at: int
+    roll: float
+    speed_low: float
+    speed_high: float
+    datagrams: bool
+    armed: bool
+    warm: bool
+
+
+_STATE_FIELDS = (
+    "t0", "theta", "current", "prev_theta", "fresh_at", "omega", "started", "fresh", "stop",
+    "finishing", "arm_request", "after_fault", "sent", "calls", "status_frames", "bad",
+    "recv_errors", "left", "left_t", "left_phi", "left_speed", "stack_time", "woke",
+    "warm_ups", "beats", "k_last", "ended",
+)  # fmt: skip
+
+
+class RunnerState(structref.StructRefProxy):
+    """The runner's state, shared by :class:`~motosim.rt.run.RealtimeRunner` and the compiled
+    period: the fields of :class:`RunnerSettings`, then
+
+    ``t0`` the first deadline [s]; ``theta`` [rad] and ``current`` [A] the last valid
+    measurement; ``prev_theta`` [rad] and ``fresh_at`` [s] the angle and deadline of the
+    last fresh status frame, ``omega`` the handlebar's rate between the last two [rad/s]
+    (for a stack without a rate in its row); flags ``started``, ``fresh`` (a fresh status
+    frame this period), ``stop`` (requested), ``finishing`` (the torque fades out: the
+    duration is over or the motorcycle left its range), ``arm_request``; ``after_fault``
+    periods since a fault; counts of command frames ``sent``, periods run (``calls``),
+    ``status_frames`` received, datagrams that were no frames (``bad``) and socket reads
+    failed otherwise than "nothing waiting" (``recv_errors``); whether (``left``), when
+    (``left_t``, since the first deadline [s]), at which roll [rad] and speed [m/s] the
+    motorcycle left its range; ``stack_time`` the stack's time this period [s] (NaN where
+    it did not step); ``woke`` the wake-up of the last :func:`context_cycle` [s];
+    ``warm_ups`` those of the last :func:`context_warm_until`; ``beats`` the heartbeat due
+    next (its index); ``k_last`` the loop's ``k`` of the last period (-1 before the first);
+    ``ended`` whether the run reached its duration. Python reads them through
+    :func:`runner_counts` and writes them through :func:`runner_request`; the loop's own
+    path has what it needs returned by the period (:class:`PeriodEnd`).
+    """
+
+    def __new__(cls, settings: RunnerSettings) -> "RunnerState":
+        nan = math.nan
+        made: RunnerState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
+            cls, *settings, nan, nan, nan, nan, 0.0, 0.0, False, False, False, False, False,
+            0, 0, 0, 0, 0, 0, False, nan, nan, nan, nan, nan, 0, 0, -1, False,
+        )  # fmt: skip
+        return made
+
+
+structref.define_proxy(  # type: ignore[no-untyped-call]
+    RunnerState, RunnerStateType, [*RunnerSettings._fields, *_STATE_FIELDS]
+)
+
+
+class RunnerCounts(NamedTuple):
+    """What Python reads of a :class:`RunnerState` (:func:`runner_counts`)."""
+
+    stop: bool
+    status_frames: int
+    bad: int
+    recv_errors: int
+    left: bool
+    left_t: float
+    left_phi: float
+    left_speed: float
+    warm_ups: int
+    ended: bool
+    stack_time: float
+    woke: float
+
+
+@njit(cache=True)
+def runner_counts(r: Any) -> RunnerCounts:
+    """The fields of the runner's state Python reads, in one compiled call."""
+    return RunnerCounts(
+        r.stop, r.status_frames, r.bad, r.recv_errors, r.left, r.left_t, r.left_phi,
+        r.left_speed, r.warm_ups, r.ended, r.stack_time, r.woke,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def runner_request(r: Any, stop: bool, arm: bool) -> None:
+    """An operator's request, from any thread or a signal handler: a stop (the torque fades
+    out and the run ends) and an arm (the torque fades in in the next period, the loop's
+    own thread enabling the safety stage)."""
+    if stop:
+        r.stop = True
+    if arm:
+        r.arm_request = True
+
+
+class SignalPositions(NamedTuple):
+    """Where the loop's signals sit in the frames' values (status: angle, current, alive
+    counter, drive fault; E-stop: its signal; command: current, enable, counter; heartbeat:
+    state, fault, counter), where the command and heartbeat frames' data bytes start in the
+    bytes to send, and the number of the loop's own columns in a row."""
+
+    angle: int
+    current: int
+    counter: int
+    drive_fault: int
+    estop: int
+    command_current: int
+    enable: int
+    command_counter: int
+    state: int
+    fault: int
+    heartbeat_counter: int
+    command_at: int
+    heartbeat_at: int
+    loop_columns: int
+
+
+class PeriodEnd(NamedTuple):
+    """What a period leaves to the runner (:func:`finish`): whether the run goes on, whether
+    the heartbeat frame is to be sent, the ring's slot the row went to (the runner writes
+    the send's time stamps there, then advances the ring's head), whether the stack has
+    started, and the period's wake-up [s] (NaN without a clock)."""
+
+    goes_on: bool
+    heartbeat: bool
+    slot: int
+    started: bool
+    woke: float
+
 
 RX_FRAMES = 64
 """The most frames read in one period (a flooded bus cannot hold the loop)."""
@@ -212,100 +330,37 @@ def monotonic_ns() -> int:
     return _clock_gettime_ns()  # type: ignore[call-arg]  # numba's typing context
 
 
-RECV_AVAILABLE = sys.platform == "linux"
-"""Whether :func:`receive_datagrams` can read a socket from compiled code here (Linux: the C
-library's ``recv`` with ``MSG_DONTWAIT`` and its ``errno`` through ``__errno_location``)."""
-
-_MSG_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
-_EAGAIN, _EWOULDBLOCK, _EINTR = errno.EAGAIN, errno.EWOULDBLOCK, errno.EINTR
-
-
-@intrinsic
-def _recv(typingctx: Any, fd: Any, buffer: Any, size: Any) -> Any:
-    """``recv(fd, buffer, size, MSG_DONTWAIT)`` called from compiled code: the bytes read,
-    or minus ``errno`` where it failed (``-EAGAIN``: nothing waiting). ``buffer`` is a
-    C-contiguous ``uint8`` array of at least ``size`` bytes (Linux only)."""
-    if not (
-        isinstance(fd, types.Integer)
-        and isinstance(size, types.Integer)
-        and isinstance(buffer, types.Array)
-        and buffer.dtype == types.uint8
-        and buffer.layout == "C"
-    ):
-        return None
-
-    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        i32, i64 = ir.IntType(32), ir.IntType(64)
-        i8p = ir.IntType(8).as_pointer()
-        fd_type, buffer_type, size_type = signature.args
-        handle = context.cast(builder, args[0], fd_type, types.int64)
-        count = context.cast(builder, args[2], size_type, types.int64)
-        data = builder.bitcast(context.make_array(buffer_type)(context, builder, args[1]).data, i8p)
-        module = builder.module
-        recv = module.globals.get("recv") or ir.Function(
-            module, ir.FunctionType(i64, [i32, i8p, i64, i32]), "recv"
-        )
-        where = module.globals.get("__errno_location") or ir.Function(
-            module, ir.FunctionType(i32.as_pointer(), []), "__errno_location"
-        )
-        got = builder.call(
-            recv, [builder.trunc(handle, i32), data, count, ir.Constant(i32, _MSG_DONTWAIT)]
-        )
-        failed = builder.icmp_signed("<", got, ir.Constant(i64, 0))
-        code = builder.sext(builder.load(builder.call(where, [])), i64)
-        return builder.select(failed, builder.neg(code), got)
-
-    return types.int64(fd, buffer, size), codegen
-
-
-_read: Any = _recv
-""":func:`_recv` as compiled code calls it (numba's typing context fills ``typingctx``)."""
-
-
 class PeriodArrays(NamedTuple):
-    """Every array one period reads or writes, allocated before the first deadline."""
+    """Everything one period reads or writes, allocated before the first deadline: the
+    runner's state (a :class:`RunnerState`), the frames' layout, the safety stage's state
+    and limits (:meth:`motosim.rt.safety.SafetyStage.compiled_parts`); the status, E-stop,
+    command and heartbeat frames' codecs (:func:`motosim.io.can.codec_table`) and values;
+    the frames read this period, one per row (``RX_FRAMES`` x ``RX_BYTES``), their lengths
+    [bytes] and ids (frames given as id, length and bytes); the command and heartbeat
+    frames' bytes to send (:meth:`motosim.io.can.Link.frame_buffer`); the stack's row after
+    its last step; the ring's rows and counters (:attr:`motosim.rt.ring.SampleRing.arrays`).
+    """
 
-    runner: Array
-    """The runner's state (``R_*``)."""
-    positions: Ints
-    """Signal and byte positions (``Q_*``)."""
+    runner: Any
+    positions: SignalPositions
     safety: Any
-    """The safety stage's state, a :class:`~motosim.rt.safety.SafetyState`
-    (:func:`motosim.rt.safety.new_safety_state`)."""
     limits: SafetyParams
-    """Its limits (:func:`motosim.rt.safety.safety_params`)."""
     status: Array
-    """The status frame's codec (:func:`motosim.io.can.codec_table`)."""
     estop: Array
-    """The E-stop frame's codec."""
     command: Array
-    """The command frame's codec."""
     heartbeat: Array
-    """The heartbeat frame's codec."""
     status_values: Array
-    """The last status frame's values."""
     estop_values: Array
-    """The last E-stop frame's values."""
     command_values: Array
-    """The command frame's values."""
     heartbeat_values: Array
-    """The heartbeat frame's values."""
     rx: Bytes
-    """The frames read this period, one per row (``RX_FRAMES`` x ``RX_BYTES``)."""
     rx_length: Ints
-    """Their lengths [bytes]."""
     rx_id: Ints
-    """Their ids (frames given as id, length and bytes)."""
     command_frame: Bytes
-    """The command frame's bytes to send (its data from ``positions[Q_COMMAND_AT]``)."""
     heartbeat_frame: Bytes
-    """The heartbeat frame's bytes to send."""
     stack_row: Array
-    """The stack's row after its last step."""
     ring: Array
-    """The ring's rows (:attr:`motosim.rt.ring.SampleRing.arrays`)."""
     ring_head: Ints
-    """The ring's counters: rows written, rows read."""
 
 
 @njit(cache=True)
@@ -317,277 +372,280 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
     A status frame is decoded and checked by the safety stage (checksum, alive counter, the
     drive's fault flag); if valid and fresh, its angle and current are kept. An E-stop frame
     pressed, or unreadable, trips the emergency stop. Other frames are ignored; datagrams
-    that are no python-can frames are counted (``R_BAD``).
+    that are no python-can frames are counted (the runner's ``bad``).
     """
     r, q, s = a.runner, a.positions, a.safety
     status_id = int(a.status[0, 0])
     estop_id = int(a.estop[0, 0])
     count = 0
     for j in range(first, end):
-        if r[R_DATAGRAMS] != 0.0:
+        if r.datagrams:
             kind, frame_id, start, length = unpack_frame(a.rx[j], 0, a.rx_length[j])
             if kind < 0:
-                r[R_BAD] += 1.0
+                r.bad += 1
                 continue
             if kind == 0:  # an error or remote frame
                 continue
         else:
             frame_id, start, length = a.rx_id[j], 0, a.rx_length[j]
         if frame_id == status_id:
-            r[R_STATUS_FRAMES] += 1.0
+            r.status_frames += 1
             values = a.status_values
             ok = decode_frame(a.status, a.rx[j], start, length, values)
-            fault = values[q[Q_DRIVE_FAULT]] > 0.5
+            fault = values[q.drive_fault] > 0.5
             # the safety stage's time: the loop's since the first deadline (NaN before it)
-            if safety_status_frame(s, a.limits, ok, values[q[Q_COUNTER]], fault, t - r[R_T0]):
-                r[R_THETA] = values[q[Q_ANGLE]]
-                r[R_CURRENT] = values[q[Q_CURRENT]]
-                r[R_FRESH] = 1.0
+            if safety_status_frame(s, a.limits, ok, values[q.counter], fault, t - r.t0):
+                r.theta = values[q.angle]
+                r.current = values[q.current]
+                r.fresh = True
             count += 1
         elif frame_id == estop_id:
             values = a.estop_values
             ok = decode_frame(a.estop, a.rx[j], start, length, values)
-            safety_estop_frame(s, ok, values[q[Q_ESTOP]] > 0.5)
+            safety_estop_frame(s, ok, values[q.estop] > 0.5)
     return count
-
-
-@njit(cache=True)
-def receive_datagrams(fd: int, a: PeriodArrays) -> int:
-    """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``a.rx``'s rows and
-    their sizes into ``a.rx_length``, at most ``RX_FRAMES``; the number read.
-
-    The compiled twin of :meth:`motosim.io.can.UdpMulticastLink.receive_datagrams` (what
-    :class:`~motosim.rt.run.RealtimeRunner` calls otherwise): a datagram longer than a row
-    is cut to it, as ``recv_into`` cuts it; an interrupted read is tried again (as Python
-    does, PEP 475); "nothing waiting" (``EAGAIN``) ends the read, any other error too, and
-    counts in the runner's ``R_RECV_ERRORS`` (the link's ``errors`` in the Python path).
-    Linux only (:data:`RECV_AVAILABLE`).
-    """
-    rx, lengths = a.rx, a.rx_length
-    size = rx.shape[1]
-    n = 0
-    while n < rx.shape[0]:
-        got = _read(fd, rx[n], size)
-        if got >= 0:
-            lengths[n] = got
-            n += 1
-        elif got == -_EINTR:
-            continue
-        else:
-            if got != -_EAGAIN and got != -_EWOULDBLOCK:
-                a.runner[R_RECV_ERRORS] += 1.0
-            break
-    return n
 
 
 @njit(cache=True)
 def begin(a: PeriodArrays, k: int, t: float) -> bool:
     """After the frames of period ``k`` (deadline ``t`` [s]): True if the stack must be
-    reset now (the first valid status frame came), at ``R_THETA`` and ``R_CURRENT``."""
+    reset now (the first valid status frame came), at the runner's ``theta`` and
+    ``current``."""
     r, s = a.runner, a.safety
-    if r[R_T0] != r[R_T0]:
-        r[R_T0] = t
-    if k <= r[R_K_LAST]:  # a new run of the loop (motosim run's fade-out): k from 0 again
-        r[R_K_BASE] += r[R_K_LAST] + 1.0
-    r[R_K_LAST] = k
-    fresh = r[R_FRESH] != 0.0  # cleared by finish: the stack reads it in between
-    started = r[R_STARTED] != 0.0
-    if not started and k >= r[R_START_TIMEOUT]:
+    if r.t0 != r.t0:
+        r.t0 = t
+    r.k_last = k
+    fresh = r.fresh  # cleared by finish: the stack reads it in between
+    started = r.started
+    if not started and k >= r.start_timeout:
         safety_trip(s, Fault.NO_DRIVE)
     reset = False
     if fresh and not started:
-        r[R_STARTED] = 1.0
+        r.started = True
         started = True
         reset = True
-        r[R_PREV_THETA] = r[R_THETA]
-        r[R_FRESH_AT] = t
-        r[R_OMEGA] = 0.0
-        if r[R_STOP] == 0.0 and r[R_ARMED] != 0.0:
+        r.prev_theta = r.theta
+        r.fresh_at = t
+        r.omega = 0.0
+        if not r.stop and r.armed:
             safety_enable(s)
-    if r[R_ARM_REQUEST] != 0.0 and started:
-        r[R_ARM_REQUEST] = 0.0
-        if r[R_ARMED] == 0.0 and r[R_STOP] == 0.0:
-            r[R_ARMED] = 1.0
+    if r.arm_request and started:
+        r.arm_request = False
+        if not r.armed and not r.stop:
+            r.armed = True
             safety_enable(s)
     return reset
 
 
 @njit(cache=True)
-def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: float) -> bool:
+def stack_inputs(a: PeriodArrays) -> tuple[bool, float, float, bool, float]:
+    """What a stack in Python is stepped with after :func:`begin`, in one compiled call:
+    whether it has started, the last valid angle [rad] and current [A], whether they came
+    fresh this period, and the share of the command the safety stage will pass."""
+    r = a.runner
+    return r.started, r.theta, r.current, r.fresh, safety_scale(a.safety, a.limits)
+
+
+@njit(cache=True)
+def _handlebar_rate(a: PeriodArrays, t: float, fresh: bool) -> float:
+    """The handlebar's rate [rad/s] for the safety stage: the stack's own, or for a stack
+    without one, the angle's change between the last two fresh frames over their interval
+    on the loop's time (with frames slower than the loop, not one period's, which reads a
+    rate ten times too high; the deadlines a late loop skipped count)."""
+    r = a.runner
+    if not r.started:
+        return 0.0
+    if r.rate_at >= 0:
+        return float(a.stack_row[r.rate_at])
+    if fresh and t > r.fresh_at:
+        r.omega = (r.theta - r.prev_theta) / (t - r.fresh_at)
+        r.prev_theta = r.theta
+        r.fresh_at = t
+    return float(r.omega)
+
+
+@njit(cache=True)
+def _check_range(a: PeriodArrays, t: float) -> None:
+    """The virtual motorcycle's range: past its roll or speeds (a fall, a speed outside the
+    model's) the run ends as offline, the torque faded out as at the end of the duration."""
+    r = a.runner
+    if not r.started or r.phi_at < 0 or r.speed_at < 0 or r.left:
+        return
+    phi, speed = a.stack_row[r.phi_at], a.stack_row[r.speed_at]
+    if abs(phi) > r.roll or speed < r.speed_low or speed > r.speed_high:
+        r.left = True
+        r.left_t = t - r.t0
+        r.left_phi = phi
+        r.left_speed = speed
+        r.finishing = True
+        safety_request_stop(a.safety)
+
+
+@njit(cache=True)
+def _encode(a: PeriodArrays, out: float, t: float) -> bool:
+    """The command frame of the current ``out`` [A] and, in the first period served of
+    every ``heartbeat_every``, the heartbeat frame, encoded in place in the bytes to send;
+    whether the heartbeat is due.
+
+    The heartbeat's period index is taken on the loop's time since the first deadline
+    (``n % every == 0`` would miss the heartbeat whose period's first deadline was
+    skipped)."""
+    r, q, s = a.runner, a.positions, a.safety
+    state = s.state
+    values = a.command_values
+    values[q.command_current] = out
+    live = state == State.FADE_IN or state == State.RUNNING or state == State.STOPPING
+    values[q.enable] = 1.0 if live else 0.0
+    values[q.command_counter] = r.sent & 0xF
+    r.sent += 1
+    encode_frame(a.command, values, a.command_frame, q.command_at)
+    n = math.floor((t - r.t0) / r.dt + 0.5)  # the period's index on the loop's time
+    every = r.heartbeat_every
+    beat = n // every >= r.beats
+    if beat:
+        r.beats = n // every + 1
+        values = a.heartbeat_values
+        values[q.state] = state
+        values[q.fault] = s.fault
+        values[q.heartbeat_counter] = (n // every) & 0xF
+        encode_frame(a.heartbeat, values, a.heartbeat_frame, q.heartbeat_at)
+    return bool(beat)
+
+
+@njit(cache=True)
+def _write_row(
+    a: PeriodArrays, command: float, out: float, t: float, woke: float, done_read: float
+) -> int:
+    """The period's row into the ring's next slot, its index returned: the loop's columns
+    (:class:`LoopColumn`; ``compute``, ``done_control`` and ``done_send`` NaN, stamped by
+    the runner after the send), then the stack's row (its initial one before it starts).
+
+    The deadlines skipped before this one are the loop's own count (its ``k`` less the
+    periods run)."""
+    r, s = a.runner, a.safety
+    slot = int(a.ring_head[RingCounter.written] % a.ring.shape[0])
+    row = a.ring[slot]
+    row[LoopColumn.t] = t - r.t0
+    row[LoopColumn.theta_h_meas] = r.theta
+    row[LoopColumn.i_m_meas] = r.current
+    row[LoopColumn.i_cmd] = command
+    row[LoopColumn.i_safe] = out
+    row[LoopColumn.state] = s.state
+    row[LoopColumn.fault] = s.fault
+    row[LoopColumn.t_clock] = t
+    row[LoopColumn.wake] = woke - t
+    row[LoopColumn.compute] = math.nan
+    row[LoopColumn.missed] = r.k_last - r.calls
+    row[LoopColumn.done_read] = done_read - woke
+    row[LoopColumn.done_control] = math.nan
+    row[LoopColumn.done_send] = math.nan
+    row[LoopColumn.stack] = r.stack_time
+    n_loop = a.positions.loop_columns
+    for j in range(a.stack_row.size):
+        row[n_loop + j] = a.stack_row[j]
+    return slot
+
+
+@njit(cache=True)
+def _goes_on(a: PeriodArrays) -> bool:
+    """Whether the run goes on after this period: at its duration's last period the torque
+    fades out (a stop request, not counted as the operator's); the run ends once the stage
+    is IDLE after a stop request or the fade-out, or ``linger`` periods after a fault."""
+    r, s = a.runner, a.safety
+    if r.duration >= 0 and r.k_last + 1 >= r.duration and not r.ended:
+        r.ended = True
+        r.finishing = True
+        safety_request_stop(s)
+    if s.state == State.FAULT:
+        r.after_fault += 1
+        return bool(r.after_fault < r.linger)
+    return not ((r.stop or r.finishing) and s.state == State.IDLE)
+
+
+@njit(cache=True)
+def finish(a: PeriodArrays, command: float, t: float, woke: float, done_read: float) -> PeriodEnd:
     """The safety stage on the stack's ``command`` [A], the frames to send, the row.
 
     The stack's estimate of the rider's torque (its row's ``tau_r_hat``) NaN trips
     ``NON_FINITE`` as an inf does (the stage takes NaN for "no estimate": a stack without
-    one).
-
-    ``t`` is the period's deadline [s]: the heartbeat's period index is taken on the loop's
-    time since the first deadline, not from the loop's ``k``, which a second run of the loop
-    (motosim run's fade-out after the duration) counts from 0 again; the row's count of
-    deadlines skipped is the loop's own (its ``k`` as :func:`begin` carries it across the
-    runs), which the time between two runs does not add to. ``woke`` and
-    ``done_read`` are the period's wake-up and the end of the bus read on the loop's clock
-    [s] (NaN without one). Returns whether the run goes on; leaves in the runner's state
-    whether the heartbeat frame is to be sent this period (``R_HEARTBEAT_DUE``) and the
-    ring's slot the row went to (``R_SLOT``: the runner writes the send's time stamps there,
-    then advances the ring's head).
+    one). ``t`` is the period's deadline [s]; ``woke`` and ``done_read`` are the period's
+    wake-up and the end of the bus read on the loop's clock [s] (NaN without one).
     """
-    r, q, s = a.runner, a.positions, a.safety
-    fresh = r[R_FRESH] != 0.0
-    r[R_FRESH] = 0.0
-    started = r[R_STARTED] != 0.0
-    theta_now = r[R_THETA]
-    rate_at, tau_at = int(r[R_S_RATE]), int(r[R_S_TAU])
-    if started and rate_at >= 0:
-        omega = a.stack_row[rate_at]
-    elif started:  # the angle's change between the last two fresh frames over their interval
-        # (with frames slower than the loop, not one period's: a rate ten times too high),
-        # on the loop's time: the deadlines a late loop skipped count (not the periods
-        # served: the rate read too high), and a second run (the fade-out) goes on from it
-        if fresh and t > r[R_FRESH_AT]:
-            r[R_OMEGA] = (theta_now - r[R_PREV_THETA]) / (t - r[R_FRESH_AT])
-            r[R_PREV_THETA] = theta_now
-            r[R_FRESH_AT] = t
-        omega = r[R_OMEGA]
-    else:
-        omega = 0.0
+    r, s = a.runner, a.safety
+    fresh = r.fresh
+    r.fresh = False
+    started = r.started
+    omega = _handlebar_rate(a, t, fresh)
+    tau_at = r.tau_at
     tau_hat = a.stack_row[tau_at] if started and tau_at >= 0 else math.nan
     if started and tau_at >= 0 and tau_hat != tau_hat:  # NaN: no estimate only without one
         safety_trip(s, Fault.NON_FINITE)
-    phi_at, speed_at = int(r[R_S_PHI]), int(r[R_S_SPEED])
-    if started and phi_at >= 0 and speed_at >= 0 and r[R_LEFT] == 0.0:
-        phi, speed = a.stack_row[phi_at], a.stack_row[speed_at]
-        if abs(phi) > r[R_ROLL] or speed < r[R_SPEED_LOW] or speed > r[R_SPEED_HIGH]:
-            # the motorcycle fell or left the model's speeds: the run ends as offline, the
-            # torque faded out as at the end of its duration
-            r[R_LEFT] = 1.0
-            r[R_LEFT_T] = t - r[R_T0]
-            r[R_LEFT_PHI] = phi
-            r[R_LEFT_SPEED] = speed
-            r[R_FINISHING] = 1.0
-            safety_request_stop(s)
-    theta = theta_now if started else 0.0
-    out = safety_step(s, a.limits, command, theta, omega, tau_hat, t - r[R_T0])
-    state = s.state
-    values = a.command_values
-    values[q[Q_COMMAND_CURRENT]] = out
-    live = state == State.FADE_IN or state == State.RUNNING or state == State.STOPPING
-    values[q[Q_ENABLE]] = 1.0 if live else 0.0
-    sent = int(r[R_SENT])
-    values[q[Q_COMMAND_COUNTER]] = sent & 0xF
-    r[R_SENT] = sent + 1
-    encode_frame(a.command, values, a.command_frame, q[Q_COMMAND_AT])
-    n = math.floor((t - r[R_T0]) / r[R_DT] + 0.5)  # the period's index on the loop's time
-    every = int(r[R_HEARTBEAT_EVERY])
-    beat = n // every >= r[R_BEATS]  # the first period of its heartbeat period served
-    if beat:  # (n % every == 0 missed the heartbeat whose period's first deadline was skipped)
-        r[R_BEATS] = n // every + 1
-        values = a.heartbeat_values
-        values[q[Q_STATE]] = state
-        values[q[Q_FAULT]] = s.fault
-        values[q[Q_HEARTBEAT_COUNTER]] = (n // every) & 0xF
-        encode_frame(a.heartbeat, values, a.heartbeat_frame, q[Q_HEARTBEAT_AT])
-    slot = int(a.ring_head[0] % a.ring.shape[0])
-    row = a.ring[slot]
-    row[LoopColumn.t] = t - r[R_T0]
-    row[LoopColumn.theta_h_meas] = theta_now
-    row[LoopColumn.i_m_meas] = r[R_CURRENT]
-    row[LoopColumn.i_cmd] = command
-    row[LoopColumn.i_safe] = out
-    row[LoopColumn.state] = state
-    row[LoopColumn.fault] = s.fault
-    row[LoopColumn.t_clock] = t
-    row[LoopColumn.wake] = woke - t
-    # compute, done_control, done_send: by the runner after the send
-    row[LoopColumn.compute] = math.nan
-    # deadlines the loop skipped before this one, by its own count (its k, the runs before
-    # included), not on its time: the time between two runs skipped none
-    row[LoopColumn.missed] = r[R_K_BASE] + r[R_K_LAST] - r[R_CALLS]
-    row[LoopColumn.done_read] = done_read - woke
-    row[LoopColumn.done_control] = math.nan
-    row[LoopColumn.done_send] = math.nan
-    row[LoopColumn.stack] = r[R_STACK_TIME]
-    r[R_CALLS] += 1.0
-    n_loop = q[Q_LOOP_COLUMNS]
-    for j in range(a.stack_row.size):  # before the stack starts: its initial row
-        row[n_loop + j] = a.stack_row[j]
-    if state == State.FAULT:
-        r[R_AFTER_FAULT] += 1.0
-        carry_on = r[R_AFTER_FAULT] < r[R_LINGER]
-    else:
-        carry_on = not ((r[R_STOP] != 0.0 or r[R_FINISHING] != 0.0) and state == State.IDLE)
-    r[R_HEARTBEAT_DUE] = 1.0 if beat else 0.0
-    r[R_SLOT] = slot
-    return bool(carry_on)
+    _check_range(a, t)
+    theta = r.theta if started else 0.0
+    out = safety_step(s, a.limits, command, theta, omega, tau_hat, t - r.t0)
+    beat = _encode(a, out, t)
+    slot = _write_row(a, command, out, t, woke, done_read)
+    r.calls += 1
+    return PeriodEnd(_goes_on(a), beat, slot, started, woke)
+
+
+@njit(cache=True)
+def _plain(end: PeriodEnd) -> tuple[bool, bool, int, bool, float]:
+    """``end``'s fields as a plain tuple: what a compiled call returns to Python (a tuple
+    is boxed without calling its class)."""
+    return end.goes_on, end.heartbeat, end.slot, end.started, end.woke
 
 
 @njit(cache=True)
 def fused_period(
-    model: Any,
-    data: Any,
-    force: Array,
-    side_force: Array,
-    stack_state: Array,
-    a: PeriodArrays,
-    frames: int,
-    k: int,
-    t: float,
-    woke: float,
+    stack: StackParts, a: PeriodArrays, frames: int, k: int, t: float, woke: float,
     done_read: float,
-) -> int:
+) -> tuple[bool, bool, int, bool, float]:  # fmt: skip
     """One whole period of a runner whose stack is compiled: :func:`take_frames` of the
     ``frames`` read, :func:`begin`, the stack (:func:`~motosim.rt.stack.stack_reset`,
-    :func:`~motosim.rt.stack.stack_period`, with ``model``, ``data``, the forces and the
-    stack's ``stack_state`` of :class:`~motosim.rt.stack.CompiledStack`), :func:`finish`;
-    1 if the run goes on, else 0."""
+    :func:`~motosim.rt.stack.stack_period` of ``stack``, a
+    :class:`~motosim.rt.stack.CompiledStack`'s parts), :func:`finish`; its
+    :class:`PeriodEnd`'s fields."""
     r = a.runner
     take_frames(a, 0, frames, t)
     if begin(a, k, t):
-        stack_reset(model, data, force, side_force, stack_state, r[R_THETA], r[R_CURRENT])
+        stack_reset(stack, r.theta, r.current)
     command = 0.0
-    r[R_STACK_TIME] = math.nan
-    if r[R_STARTED] != 0.0:
+    r.stack_time = math.nan
+    if r.started:
         start = monotonic_ns()
-        command = stack_period(
-            model, data, force, side_force, stack_state, a.stack_row, r[R_THETA], r[R_CURRENT],
-            r[R_FRESH] != 0.0, safety_scale(a.safety, a.limits),
-        )  # fmt: skip
+        scale = safety_scale(a.safety, a.limits)
+        command = stack_period(stack, a.stack_row, r.theta, r.current, r.fresh, scale)
         if start >= 0:
-            r[R_STACK_TIME] = (monotonic_ns() - start) * 1e-9
-    return 1 if finish(a, command, t, woke, done_read) else 0
+            r.stack_time = (monotonic_ns() - start) * 1e-9
+    return _plain(finish(a, command, t, woke, done_read))
 
 
 @njit(cache=True)
 def stack_warm(
-    model: Any, data: Any, shadow: Any, force: Array, side_force: Array, stack_state: Array,
-    shadow_state: Array, shadow_row: Array, theta: float, current: float, fresh: bool,
-    scale: float,
+    stack: StackParts, shadow: StackParts, shadow_row: Array, theta: float, current: float,
+    fresh: bool, scale: float,
 ) -> None:  # fmt: skip
-    """One stack period on ``shadow``, a copy of the stack's ``data`` and ``stack_state``
-    made now, whose result is thrown away: the stack's code and data are then in the CPU's
-    caches for the next period's real step. ``fresh`` and ``scale`` are computed as the
-    period computes them (constants would be typed apart and compile another copy of the
-    step)."""
-    shadow.estimator[:] = data.estimator
-    shadow.differentiator[:] = data.differentiator
-    shadow.controller[:] = data.controller
-    shadow.motorcycle[:] = data.motorcycle
-    shadow.multibody[:] = data.multibody
-    shadow.inputs[:] = data.inputs
-    shadow.held[:] = data.held
-    shadow.periods[:] = data.periods
-    shadow_state[:] = stack_state
-    stack_period(
-        model, shadow, force, side_force, shadow_state, shadow_row, theta, current, fresh, scale
-    )
+    """One stack period on ``shadow``, a copy of ``stack``'s data and state made now, whose
+    result is thrown away: the stack's code and data are then in the CPU's caches for the
+    next period's real step. ``fresh`` and ``scale`` are computed as the period computes
+    them (constants would be typed apart and compile another copy of the step)."""
+    data, copy = stack.data, shadow.data
+    copy.estimator[:] = data.estimator
+    copy.differentiator[:] = data.differentiator
+    copy.controller[:] = data.controller
+    copy.motorcycle[:] = data.motorcycle
+    copy.multibody[:] = data.multibody
+    copy.inputs[:] = data.inputs
+    copy.held[:] = data.held
+    copy.periods[:] = data.periods
+    shadow.state[:] = stack.state
+    stack_period(shadow, shadow_row, theta, current, fresh, scale)
 
 
 @structref.register
-class PeriodContextType(types.StructRef):
+class PeriodContextType(_Struct):
     """numba's type of :class:`PeriodContext` (one per set of field types)."""
-
-    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
-        """The fields' types without literal values."""
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
 
 
 class PeriodContext(structref.StructRefProxy):
@@ -598,59 +656,43 @@ class PeriodContext(structref.StructRefProxy):
 
     Parameters
     ----------
-    model, data, force, side_force, stack_state
-        Those of :class:`~motosim.rt.stack.CompiledStack` (its ``model``, ``data``,
-        ``force``, ``side_force``, ``state``).
+    stack : StackParts
+        The stack's (:attr:`~motosim.rt.stack.CompiledStack.compiled_parts`).
     arrays : PeriodArrays
         The period's arrays.
-    shadow, shadow_state, shadow_row
-        A second :class:`~motosim.sim.stack.StackData` of the same model, state and row:
-        where :func:`context_warm` steps a copy of the stack (:func:`stack_warm`).
+    shadow, shadow_row
+        Parts of the same model with their own data and state, and a row: where
+        :func:`context_warm` steps a copy of the stack (:func:`stack_warm`).
     """
 
     def __new__(
-        cls,
-        model: Any,
-        data: Any,
-        force: Array,
-        side_force: Array,
-        stack_state: Array,
-        arrays: PeriodArrays,
-        shadow: Any,
-        shadow_state: Array,
-        shadow_row: Array,
+        cls, stack: StackParts, arrays: PeriodArrays, shadow: StackParts, shadow_row: Array
     ) -> "PeriodContext":
         made: PeriodContext = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, model, data, force, side_force, stack_state, arrays, shadow, shadow_state,
-            shadow_row,
-        )  # fmt: skip
+            cls, stack, arrays, shadow, shadow_row
+        )
         return made
 
 
 structref.define_proxy(  # type: ignore[no-untyped-call]
-    PeriodContext,
-    PeriodContextType,
-    ["model", "data", "force", "side_force", "stack_state", "arrays", "shadow", "shadow_state",
-     "shadow_row"],
-)  # fmt: skip
+    PeriodContext, PeriodContextType, ["stack", "arrays", "shadow", "shadow_row"]
+)
 
 
 @njit(cache=True)
 def context_warm(c: Any) -> None:
     """:func:`stack_warm` at the last valid measurement, once the stack has started."""
     r = c.arrays.runner
-    if r[R_STARTED] != 0.0:
-        stack_warm(
-            c.model, c.data, c.shadow, c.force, c.side_force, c.stack_state, c.shadow_state,
-            c.shadow_row, r[R_THETA], r[R_CURRENT], r[R_FRESH] != 0.0,
-            safety_scale(c.arrays.safety, c.arrays.limits),
-        )  # fmt: skip
+    if r.started:
+        scale = safety_scale(c.arrays.safety, c.arrays.limits)
+        stack_warm(c.stack, c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale)
 
 
 @njit(cache=True)
 def context_warm_until(c: Any, due_ns: int) -> int:
     """:func:`context_warm` again and again until ``due_ns`` on :func:`monotonic_ns`'s clock
-    [ns]; the number of warm-ups run (0 before the stack has started).
+    [ns]; the number of warm-ups run (0 before the stack has started), also kept in the
+    runner's ``warm_ups``.
 
     The spin phase of the loop's wait, spent keeping the stack hot: one warm-up always, then
     another as long as it should end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's
@@ -662,27 +704,28 @@ def context_warm_until(c: Any, due_ns: int) -> int:
     warm-ups run the very machine code of the step that follows.
     """
     r = c.arrays.runner
-    if r[R_STARTED] == 0.0 or r[R_WARM] == 0.0:
-        return 0
     n = 0
-    start = monotonic_ns()
-    while True:
-        context_warm(c)
-        n += 1
-        end = monotonic_ns()
-        if start < 0 or end + (end - start) + WARM_MARGIN_NS >= due_ns:
-            return n
-        start = end
+    if r.started and r.warm:
+        start = monotonic_ns()
+        while True:
+            context_warm(c)
+            n += 1
+            end = monotonic_ns()
+            if start < 0 or end + (end - start) + WARM_MARGIN_NS >= due_ns:
+                break
+            start = end
+    r.warm_ups = n
+    return n
 
 
 @njit(cache=True)
 def context_period(
     c: Any, frames: int, k: int, t: float, woke: float, done_read: float, warm_until: int
-) -> int:
+) -> tuple[bool, bool, int, bool, float]:
     """:func:`fused_period` with the arguments held by ``c``, a :class:`PeriodContext`; or,
     with ``warm_until`` >= 0, no period but the stack's warm-ups until then
     (:func:`context_warm_until`, ``warm_until`` [ns] on :func:`monotonic_ns`'s clock; their
-    number is returned).
+    number in the runner's ``warm_ups``; a :class:`PeriodEnd` that does not go on).
 
     Why both in one function: numba compiles, into each function called from Python, its own
     copy of every compiled function it calls (the stack's step included); warm-ups called
@@ -691,38 +734,31 @@ def context_period(
     shares. Through this one, the warm-ups and the period run the same copy.
     """
     if warm_until >= 0:
-        return context_warm_until(c, warm_until)
-    return fused_period(
-        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
-        done_read,
-    )  # fmt: skip
+        context_warm_until(c, warm_until)
+        return _plain(PeriodEnd(False, False, -1, c.arrays.runner.started, math.nan))
+    return fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)
 
 
 @njit(cache=True)
-def context_cycle(c: Any, fd: int, k: int, t: float) -> int:
+def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, bool, float]:
     """The wait's end, the bus read and the period, in one compiled call: :func:`fused_period`
     of the datagrams waiting on socket ``fd`` at the deadline ``t`` [s] of period ``k`` (on
     the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
 
     In order, without returning to the interpreter: the stack's warm-ups until about 2 us
-    before ``t`` (:func:`context_warm_until`, none before the stack has started or with the
-    warm-ups off), a spin on
-    the clock until ``t`` has passed (the test of
-    :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float`` seconds), the
-    wake-up kept in the runner's ``R_WOKE`` [s], the datagrams read
-    (:func:`receive_datagrams`), the period. The caller sleeps until shortly before ``t``
-    (:class:`~motosim.rt.loop.RateLoop` with ``woke``) and sends the frames after. A ``t``
-    already past (a simulated clock's) neither waits nor warms more than once.
+    before ``t`` (:func:`context_warm_until`), a spin on the clock until ``t`` has passed
+    (the test of :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float``
+    seconds), the wake-up (the :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read
+    (:func:`~motosim.io.can.recv_datagrams`), the period. The caller sleeps until shortly
+    before ``t`` and sends the frames after. A ``t`` already past (a simulated clock's)
+    neither waits nor warms more than once.
     """
-    r = c.arrays.runner
     context_warm_until(c, max(0, int(t * 1e9)))
     woke = monotonic_ns() / 1e9
     while woke < t:
         woke = monotonic_ns() / 1e9
-    r[R_WOKE] = woke
-    frames = receive_datagrams(fd, c.arrays)
+    c.arrays.runner.woke = woke
+    frames, errors = recv_datagrams(fd, c.arrays.rx, c.arrays.rx_length)
+    c.arrays.runner.recv_errors += errors
     done_read = monotonic_ns() / 1e9
-    return fused_period(
-        c.model, c.data, c.force, c.side_force, c.stack_state, c.arrays, frames, k, t, woke,
-        done_read,
-    )  # fmt: skip
+    return fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)

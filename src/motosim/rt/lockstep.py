@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
-from motosim.io.can import CanLink, UdpMulticastLink, handlebar_codecs, open_link
+from motosim.io.can import Link, handlebar_codecs, open_link
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
 from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
@@ -127,7 +127,7 @@ class Lockstep:
     ----------
     clock : SimulatedClock
         The clock; more listeners (a platform twin, a recorder) run after the rig's.
-    host : CanLink
+    host : Link
         The runner's end of the bus.
     rig : VirtualRig
         The virtual rig.
@@ -192,7 +192,7 @@ class Lockstep:
         self.rider_torques: list[tuple[float, float]] = []
         self._receiver: StateReceiver | None = None
         self._sender: StateSender | None = None
-        self._links: list[CanLink | UdpMulticastLink] = []
+        self._links: list[Link] = []
         try:
             rider: NDArray[np.float64] | Callable[[float], float] = world.rider_profile
             if world.virtual_rider:

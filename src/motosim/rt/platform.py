@@ -55,6 +55,7 @@ import math
 import socket
 import struct
 from dataclasses import dataclass
+from operator import itemgetter
 from typing import Protocol
 
 import numpy as np
@@ -363,7 +364,7 @@ class PlatformOutput:
         send_every: int = 1,
     ) -> None:
         try:
-            self._cols = tuple(names.index(n) for n in ("v_x", "v_y", "psi_dot", "phi"))
+            self._motion = itemgetter(*(names.index(n) for n in ("v_x", "v_y", "psi_dot", "phi")))
         except ValueError:
             raise MotosimError(
                 f"platform output: stack row {names}; expected v_x, v_y, psi_dot and phi"
@@ -407,8 +408,7 @@ class PlatformOutput:
             v_x = v_y = psi_dot = phi = 0.0
             envelope = 0.0
         else:
-            c = self._cols
-            v_x, v_y, psi_dot, phi = row[c[0]], row[c[1]], row[c[2]], row[c[3]]
+            v_x, v_y, psi_dot, phi = self._motion(row)
         values = self.values
         platform_step(self._pitch, self._washout, self._limits, self._state,
                       v_x, v_y, psi_dot, phi, envelope, values)  # fmt: skip

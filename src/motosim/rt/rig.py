@@ -29,26 +29,29 @@ import heapq
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
-from typing import Any
+from enum import IntEnum
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.io.can import HandlebarCodecs
+from motosim.io.can import HandlebarCodecs, Link, LinkBase
 from motosim.model.handlebar import step_exact
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import SimulatedClock
-from motosim.rt.run import FrameLink
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
 from motosim.sim.hands import is_held
 from motosim.sim.rider import rider_torque
 
-__all__ = ["LockstepLink", "RigFaults", "RigSettings", "VirtualRider", "VirtualRig", "parse_rig"]
+__all__ = [
+    "Bar", "BarPlant", "LockstepLink", "RigFaults", "RigSettings", "VirtualRider",
+    "VirtualRig", "parse_rig",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 _NEVER = math.inf
@@ -194,50 +197,64 @@ def _parse_faults(table: Any, where: str) -> RigFaults:
     return RigFaults(**{key: _number(value, f"{where} {key}") for key, value in table.items()})
 
 
+class Bar(IntEnum):
+    """The true handlebar's state in :attr:`VirtualRig.x`: angle [rad], rate [rad/s] and
+    the motor's current [A]."""
+
+    theta = 0
+    omega = 1
+    i_m = 2
+
+
+class BarPlant(NamedTuple):
+    """What :func:`_plant_steps` steps: the true handlebar's inertia [kg*m^2], damping
+    [N*m*s/rad], Coulomb friction [N*m] and torque constant [N*m/A]; the current's lag
+    ``a_i`` (``1 - exp(-h/T)``) and limit [A]; the sub-step ``h`` [s]; the rider's hands
+    (:func:`motosim.sim.hands.hands_array`) and hands-off phases (rows [t0, t1] [s])."""
+
+    J: float
+    beta: float
+    beta_s: float
+    torque_per_amp: float
+    a_i: float
+    max_i: float
+    h: float
+    hands: Array
+    hands_off: Array
+
+
 @njit(cache=True)
 def _plant_steps(
-    x: Array,
-    i_cmd: float,
-    tau_r: Array,
-    k0: int,
-    n: int,
-    J: float,
-    beta: float,
-    beta_s: float,
-    torque_per_amp: float,
-    a_i: float,
-    max_i: float,
-    h: float,
-    hands: Array,
-    hands_off: Array,
-    t_rider: float,
+    x: Array, i_cmd: float, p: BarPlant, tau_r: Array, k0: int, n: int, t_rider: float
 ) -> None:
-    """Advance [theta, omega, i_m] by ``n`` sub-steps of ``h`` [s] in place.
+    """Advance ``x`` (:class:`Bar`) by ``n`` sub-steps of ``p.h`` [s] in place.
 
-    The current follows its command with ``i += (i_cmd - i) a_i`` (``a_i = 1 - exp(-h/T)``),
-    limited to ``max_i``; the rider's torque is ``tau_r[k0 + k]`` (held at its last value).
-    ``hands`` [J_a, c_a, k_a, theta_hold] (:mod:`motosim.sim.hands`; zeros: none) while the
-    rider holds the handlebar (``t_rider`` >= 0, the rider's time at the first sub-step
-    [s], outside the phases ``hands_off``, where no rider torque acts): the arms' inertia
-    and damping add to the handlebar's, their spring is a torque.
+    The current follows its command with ``i += (i_cmd - i) a_i``, limited to ``max_i``;
+    the rider's torque is ``tau_r[k0 + k]`` (held at its last value). The hands
+    (:mod:`motosim.sim.hands`; zeros: none) act while the rider holds the handlebar
+    (``t_rider`` >= 0, the rider's time at the first sub-step [s], outside the hands-off
+    phases, where no rider torque acts): the arms' inertia and damping add to the
+    handlebar's, their spring is a torque.
     """
-    theta, omega, i = x[0], x[1], x[2]
+    theta, omega, i = x[Bar.theta], x[Bar.omega], x[Bar.i_m]
     last = tau_r.size - 1
-    J_a, c_a, k_a, hold = hands[0], hands[1], hands[2], hands[3]
+    h, kt = p.h, p.torque_per_amp
+    J_a, c_a, k_a, hold = p.hands  # the arms' inertia, damping, stiffness and held angle
     arms = J_a > 0.0 or c_a > 0.0 or k_a > 0.0
     for k in range(n):
-        i += (i_cmd - i) * a_i
-        i = min(max(i, -max_i), max_i)
-        held = t_rider >= 0.0 and (hands_off.shape[0] == 0 or is_held(t_rider + k * h, hands_off))
+        i += (i_cmd - i) * p.a_i
+        i = min(max(i, -p.max_i), p.max_i)
+        off = p.hands_off
+        held = t_rider >= 0.0 and (off.shape[0] == 0 or is_held(t_rider + k * h, off))
         if not held:
-            theta, omega = step_exact(theta, omega, torque_per_amp * i, J, beta, beta_s, h)
+            theta, omega = step_exact(theta, omega, kt * i, p.J, p.beta, p.beta_s, h)
         elif arms:
-            torque = tau_r[min(k0 + k, last)] + torque_per_amp * i - k_a * (theta - hold)
-            theta, omega = step_exact(theta, omega, torque, J + J_a, beta + c_a, beta_s, h)
+            torque = tau_r[min(k0 + k, last)] + kt * i - k_a * (theta - hold)
+            theta, omega = step_exact(theta, omega, torque, p.J + J_a, p.beta + c_a, p.beta_s, h)
         else:
-            torque = tau_r[min(k0 + k, last)] + torque_per_amp * i
-            theta, omega = step_exact(theta, omega, torque, J, beta, beta_s, h)
-    x[0], x[1], x[2] = theta, omega, i
+            torque = tau_r[min(k0 + k, last)] + kt * i
+            theta, omega = step_exact(theta, omega, torque, p.J, p.beta, p.beta_s, h)
+    x[Bar.theta], x[Bar.omega], x[Bar.i_m] = theta, omega, i
 
 
 class VirtualRig:
@@ -251,7 +268,7 @@ class VirtualRig:
         The drive, sensors, bus and faults.
     codecs : HandlebarCodecs
         The frames.
-    link : FrameLink
+    link : Link
         The rig's end of the bus.
     rider_torque : ndarray or callable
         The rider's torque [N*m] at each plant sub-step from the rider's start (held after
@@ -280,7 +297,7 @@ class VirtualRig:
         handlebar: HandlebarParameters,
         settings: RigSettings,
         codecs: HandlebarCodecs,
-        link: FrameLink,
+        link: Link,
         rider_torque: Array | Callable[[float], float],
         rng: np.random.Generator,
         *,
@@ -340,12 +357,16 @@ class VirtualRig:
         self._idle = np.zeros(1)
         self._held = np.zeros(1)
         self._started = False
+        hb = self.hb
+        self._plant = BarPlant(
+            hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp, self._a_i, settings.max_current,
+            self.h, self.hands, self.hands_off,
+        )  # fmt: skip
         for tau_r in (self._idle, tau):  # each type the run's start will pass (a read-only
             # profile is another one): compiled, or loaded from numba's cache, now rather
             # than on the run's first enabled command, a stall of the status frames that
             # tripped the run's watchdog at its start
-            _plant_steps(self.x.copy(), 0.0, tau_r, 0, 1, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1e-4,
-                         self.hands, self.hands_off, 0.0)  # fmt: skip
+            _plant_steps(self.x.copy(), 0.0, self._plant, tau_r, 0, 1, 0.0)
         self.frames_sent = 0
         self.frames_dropped = 0
         self.frames_late = 0
@@ -401,7 +422,6 @@ class VirtualRig:
         """
         self._receive()
         s = self.settings
-        hb = self.hb
         if not self._started:  # the drive reports its state from power-on
             self._started = True
             self._sample()
@@ -422,11 +442,8 @@ class VirtualRig:
                 if self.k % self._sub == 0:
                     self._held[0] = self._policy(k0 * self.h)  # once per status period
                 rider, k0 = self._held, 0
-            _plant_steps(
-                self.x, self.i_cmd if live else 0.0, rider, k0, n, hb.J_eq, hb.beta_eq,
-                hb.beta_s, hb.torque_per_amp, self._a_i, s.max_current, self.h, self.hands,
-                self.hands_off, t_rider,
-            )  # fmt: skip
+            i_cmd = self.i_cmd if live else 0.0
+            _plant_steps(self.x, i_cmd, self._plant, rider, k0, n, t_rider)
             self.k += n
             if self.k % self._sub == 0:
                 self._sample()
@@ -437,7 +454,7 @@ class VirtualRig:
     def _sample(self) -> None:
         s, f = self.settings, self.settings.faults
         t = self.t - self._t_run  # the faults' time: since the run's first enable
-        theta, i = float(self.x[0]), float(self.x[2])
+        theta, i = float(self.x[Bar.theta]), float(self.x[Bar.i_m])
         if s.encoder_bits > 0:
             q = 2.0 * math.pi / (1 << s.encoder_bits)
             theta = math.floor(theta / q + 0.5) * q
@@ -560,7 +577,8 @@ class VirtualRider:
         self.world = world
         self.rate = float(rate)
         self.receiver = receiver
-        self._cols = [names.index(n) for n in (*self._STATES, "v_x", "psi", "x", "y")]
+        self._states_at = [names.index(n) for n in self._STATES]
+        self._at = {n: names.index(n) for n in ("v_x", "psi", "x", "y")}
         self._x_v = np.zeros(8)
         self._k_path = 0
         self.torque = 0.0
@@ -601,11 +619,12 @@ class VirtualRider:
             at ``t``.
         """
         if self.receiver.poll():
-            row, c, w = self.receiver.row, self._cols, self.world
-            for i in range(8):
-                self._x_v[i] = row[c[i]]
+            row, at, w = self.receiver.row, self._at, self.world
+            for i, state_at in enumerate(self._states_at):
+                self._x_v[i] = row[state_at]
             tau, self._k_path, self.lateral_error = rider_torque(
-                self._x_v, row[c[8]], row[c[9]], row[c[10]], row[c[11]], self._k_path, w.path,
+                self._x_v, row[at["v_x"]], row[at["psi"]], row[at["x"]], row[at["y"]],
+                self._k_path, w.path,
                 w.path_ds, w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss,
                 w.rider_limits[0], w.rider_limits[1],
             )  # fmt: skip
@@ -626,7 +645,7 @@ class VirtualRider:
         return float(tau)
 
 
-class LockstepLink:
+class LockstepLink(LinkBase):
     """A link whose blocking receive lets simulated time pass (bus pacing in lock-step).
 
     ``receive(timeout)`` with a positive ``timeout`` polls ``link`` and, while nothing has
@@ -637,7 +656,7 @@ class LockstepLink:
 
     Parameters
     ----------
-    link : FrameLink
+    link : Link
         The host's end of the bus.
     clock : SimulatedClock
         The clock the rig listens on.
@@ -645,7 +664,7 @@ class LockstepLink:
         The time step of the wait [s], > 0 (the rig's plant step: frames are due on it).
     """
 
-    def __init__(self, link: FrameLink, clock: SimulatedClock, tick: float) -> None:
+    def __init__(self, link: Link, clock: SimulatedClock, tick: float) -> None:
         if not (math.isfinite(tick) and tick > 0.0):
             raise MotosimError(f"tick = {tick!r} s: expected a positive time")
         self.link = link

@@ -13,6 +13,7 @@ more than ``capacity`` rows behind loses the oldest rows; they are counted in
 :attr:`SampleRing.dropped`, never silently.
 """
 
+from enum import IntEnum
 from multiprocessing import shared_memory
 from typing import Any, NamedTuple
 
@@ -21,7 +22,15 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 
-__all__ = ["RingHandle", "SampleRing"]
+__all__ = ["RingCounter", "RingHandle", "SampleRing"]
+
+
+class RingCounter(IntEnum):
+    """The ring's two counters (:attr:`SampleRing.arrays`): rows written (the producer's
+    head) and rows read (the consumer's tail)."""
+
+    written = 0
+    read = 1
 
 
 class RingHandle(NamedTuple):
@@ -99,35 +108,35 @@ class SampleRing:
     @property
     def written(self) -> int:
         """Rows pushed so far."""
-        return int(self._counters[0])
+        return int(self._counters[RingCounter.written])
 
     @property
     def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """The rows and the counters (rows written, rows read), for a producer that writes a
         row in place (the fused period of :mod:`motosim.rt.fused`): it writes the slot
-        ``written % capacity``, then adds 1 to ``counters[0]``."""
+        ``written % capacity``, then adds 1 to ``counters[RingCounter.written]``."""
         return self._buf, self._counters
 
     def push(self, row: NDArray[np.float64]) -> None:
         """Copy ``row`` (``width`` values) into the next slot (the loop's side)."""
         counters = self._counters
-        head = counters[0]
+        head = counters[RingCounter.written]
         buf = self._buf
         buf[head % buf.shape[0]] = row
-        counters[0] = head + 1
+        counters[RingCounter.written] = head + 1
 
     def drain(self) -> NDArray[np.float64]:
         """The rows written since the last drain, oldest first, as a new array (reader's side)."""
         counters = self._counters
-        head = int(counters[0])
-        tail = int(counters[1])
+        head = int(counters[RingCounter.written])
+        tail = int(counters[RingCounter.read])
         cap = self._buf.shape[0]
         if head - tail > cap:
             self._dropped += head - tail - cap
             tail = head - cap
         idx = np.arange(tail, head) % cap
         out: NDArray[np.float64] = self._buf[idx]  # a copy (fancy indexing)
-        counters[1] = head
+        counters[RingCounter.read] = head
         return out
 
     def close(self) -> None:

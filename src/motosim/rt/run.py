@@ -18,8 +18,8 @@ status frame, which :meth:`RealtimeRunner.wait_status` waits for). Each period i
 The stack starts on the first valid status frame (reset at its angle and current) and the
 safety stage is enabled then (or, with ``wait_for_arm``, when :meth:`RealtimeRunner.arm` is
 called: the view's Arm button), so the torque fades in over 0.5 s. A stop request (Ctrl-C)
-fades the torque out and ends the run once it is zero (so does :meth:`RealtimeRunner.finish`
-at the end of the run's duration); a fault zeroes the command at once and ends the run
+fades the torque out and ends the run once it is zero (so does the end of the run's
+``duration``, inside the same run of the loop); a fault zeroes the command at once and ends the run
 ``linger`` seconds later, the zero command still sent meanwhile.
 """
 
@@ -32,14 +32,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.io.can import HandlebarCodecs, UdpMulticastLink, codec_table
+from motosim.io.can import HandlebarCodecs, Link, codec_table
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt import fused
 from motosim.rt.clock import Clock
-from motosim.rt.fused import PeriodArrays
-from motosim.rt.ring import SampleRing
-from motosim.rt.safety import Fault, SafetyLimits, SafetyStage, State, safety_scale
-from motosim.rt.stack import CompiledStack, compiled
+from motosim.rt.fused import PeriodArrays, PeriodEnd
+from motosim.rt.ring import RingCounter, SampleRing
+from motosim.rt.safety import Fault, SafetyLimits, SafetyStage
+from motosim.rt.stack import StackParts, compiled
 from motosim.sim.metrics import range_reason
 from motosim.sim.stack import new_data
 
@@ -48,7 +48,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "LOOP_SIGNALS",
-    "FrameLink",
     "RealtimeRunner",
     "RunCounters",
     "StackStepper",
@@ -71,6 +70,18 @@ compiled period (NaN for a stack in Python)."""
 _COMPUTE = int(fused.LoopColumn.compute)
 _DONE_CONTROL = int(fused.LoopColumn.done_control)
 _DONE_SEND = int(fused.LoopColumn.done_send)
+_T = int(fused.LoopColumn.t)
+_WRITTEN = int(RingCounter.written)
+_ANY_RANGE = (math.inf, -math.inf, math.inf)
+"""No range for the virtual motorcycle: any roll, any speed."""
+
+
+def _row_positions(names: tuple[str, ...]) -> dict[str, int]:
+    """Where the stack's row ``names`` holds what the period reads of it (-1: nowhere): the
+    estimate of the rider's torque, the handlebar's rate, the roll and the speed."""
+    signals = {"tau_at": "tau_r_hat", "rate_at": "theta_h_dot_hat", "phi_at": "phi",
+               "speed_at": "v_x"}  # fmt: skip
+    return {at: names.index(name) if name in names else -1 for at, name in signals.items()}
 
 
 class StackStepper(Protocol):
@@ -97,16 +108,11 @@ class StackStepper(Protocol):
         """The values of :attr:`names` after the last step (read, not kept, by the loop)."""
         ...
 
-
-class FrameLink(Protocol):
-    """A CAN link: :class:`~motosim.io.can.CanLink` or a test double."""
-
-    def send(self, frame_id: int, data: bytes) -> bool:
-        """Send one frame; False if the bus refused it."""
-        ...
-
-    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
-        """The next frame ``(frame_id, data)`` or None."""
+    @property
+    def compiled_parts(self) -> StackParts | None:
+        """What the runner's compiled period steps itself (the stack's row then written
+        where :meth:`row` reads it), or None: a stack in Python, whose :meth:`step` the
+        runner calls between the compiled pieces."""
         ...
 
 
@@ -131,8 +137,8 @@ class RealtimeRunner:
     ----------
     stepper : StackStepper
         The stack.
-    link : FrameLink
-        The CAN link to the drive.
+    link : Link
+        The CAN link to the drive (:func:`~motosim.io.can.open_link`).
     codecs : HandlebarCodecs
         The frames (from the DBC).
     limits : SafetyLimits
@@ -177,12 +183,17 @@ class RealtimeRunner:
         Warm the stack before each deadline (:meth:`warm`, and the compiled wait of
         :meth:`wait_period`): True by default; False, the wait only spins (``motosim run
         --warm off``). The rows are the same either way.
+    duration : float, optional
+        The run's duration [s]: after its last period the torque fades out (as on a stop
+        request) and :meth:`period` returns False once it is off, all in one run of the loop
+        (give it :attr:`max_periods`); :attr:`reached_end` says whether it got there.
+        Without it the run goes on until a stop request, a fault or the loop's end.
     """
 
     def __init__(
         self,
         stepper: StackStepper,
-        link: FrameLink,
+        link: Link,
         codecs: HandlebarCodecs,
         limits: SafetyLimits,
         *,
@@ -200,9 +211,12 @@ class RealtimeRunner:
         handlebar: HandlebarParameters | None = None,
         validity: tuple[float, float, float] | None = None,
         warm: bool = True,
+        duration: float | None = None,
     ) -> None:
         if not (math.isfinite(rate) and rate > 0.0):
             raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
+        if duration is not None and not (math.isfinite(duration) and duration >= 0.0):
+            raise MotosimError(f"duration = {duration!r} s: expected a time >= 0")
         self.stepper = stepper
         self._now = now
         self.clock = clock
@@ -216,67 +230,47 @@ class RealtimeRunner:
         )
         self.names = LOOP_SIGNALS + tuple(stepper.names)
         self.ring = SampleRing(capacity, len(self.names), shared=shared_ring)
-        self._arrays = self._allocate(stepper, link, codecs, rate, linger, start_timeout)
-        self._r = self._arrays.runner
-        self._r[fused.R_ARMED] = 0.0 if wait_for_arm else 1.0
-        self._r[fused.R_WARM] = 1.0 if warm else 0.0
         self._validity = validity
-        if validity is not None:
-            self._r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = validity
+        self._duration = -1 if duration is None else round(duration * rate)
+        roll, speed_low, speed_high = validity or _ANY_RANGE
+        settings = fused.RunnerSettings(
+            linger=max(1, round(linger * rate)), start_timeout=max(1, round(start_timeout * rate)),
+            heartbeat_every=max(1, round(0.1 * rate)), dt=self.dt, duration=self._duration,
+            **_row_positions(tuple(stepper.names)), roll=roll, speed_low=speed_low,
+            speed_high=speed_high, datagrams=link.datagrams,
+            armed=not wait_for_arm, warm=warm,
+        )  # fmt: skip
+        self._settings = settings
+        self._warm_on = warm
+        self._woke = math.nan
+        self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(settings))
+        self._r = self._arrays.runner
         self._views = [memoryview(row) for row in self._arrays.rx]
-        self._datagrams = isinstance(link, UdpMulticastLink)
-        self._fused = isinstance(stepper, CompiledStack)
         self._bad_reported = 0
         self.send_errors = 0
         self._compile()
 
     def _allocate(
-        self,
-        stepper: StackStepper,
-        link: FrameLink,
-        codecs: HandlebarCodecs,
-        rate: float,
-        linger: float,
-        start_timeout: float,
+        self, stepper: StackStepper, link: Link, codecs: HandlebarCodecs, r: object
     ) -> PeriodArrays:
         """Every array of the period (:class:`~motosim.rt.fused.PeriodArrays`)."""
         st, cmd, es, hb = codecs.status, codecs.command, codecs.estop, codecs.heartbeat
-        if isinstance(link, UdpMulticastLink):
-            command_frame, command_at = link.datagram(cmd.frame_id, cmd.length)
-            heartbeat_frame, heartbeat_at = link.datagram(hb.frame_id, hb.length)
-        else:
-            command_frame, command_at = np.zeros(cmd.length, dtype=np.uint8), 0
-            heartbeat_frame, heartbeat_at = np.zeros(hb.length, dtype=np.uint8), 0
-        positions = np.zeros(fused.POSITIONS_SIZE, dtype=np.int64)
+        command_frame, command_at = link.frame_buffer(cmd.frame_id, cmd.length)
+        heartbeat_frame, heartbeat_at = link.frame_buffer(hb.frame_id, hb.length)
         position = codecs.position
-        positions[:] = (
+        positions = fused.SignalPositions(
             position(st, "angle"), position(st, "current"), position(st, "counter"),
             position(st, "drive_fault"), position(es, "estop_signal"),
             position(cmd, "current_command"), position(cmd, "enable"), position(cmd, "counter"),
             position(hb, "state"), position(hb, "fault"), position(hb, "counter"),
             command_at, heartbeat_at, len(LOOP_SIGNALS),
         )  # fmt: skip
-        names = tuple(stepper.names)
-        r = np.zeros(fused.RUNNER_STATE_SIZE)
-        r[[fused.R_T0, fused.R_THETA, fused.R_CURRENT, fused.R_PREV_THETA]] = math.nan
-        r[fused.R_STACK_TIME] = math.nan  # measured by the fused period only
-        r[fused.R_K_LAST] = -1.0  # no period yet
-        r[fused.R_LINGER] = max(1, round(linger * rate))
-        r[fused.R_START_TIMEOUT] = max(1, round(start_timeout * rate))
-        r[fused.R_HEARTBEAT_EVERY] = max(1, round(0.1 * rate))
-        r[fused.R_DT] = self.dt
-        r[fused.R_S_TAU] = names.index("tau_r_hat") if "tau_r_hat" in names else -1
-        r[fused.R_S_RATE] = names.index("theta_h_dot_hat") if "theta_h_dot_hat" in names else -1
-        r[fused.R_DATAGRAMS] = 1.0 if isinstance(link, UdpMulticastLink) else 0.0
-        r[[fused.R_ROLL, fused.R_SPEED_LOW, fused.R_SPEED_HIGH]] = (math.inf, -math.inf, math.inf)
-        r[fused.R_S_PHI] = names.index("phi") if "phi" in names else -1
-        r[fused.R_S_SPEED] = names.index("v_x") if "v_x" in names else -1
         safety, limits = self.safety.compiled_parts
         ring, head = self.ring.arrays
-        if isinstance(stepper, CompiledStack):
+        if stepper.compiled_parts is not None:
             stack_row = stepper.row()  # the stack writes its row where the period reads it
         else:
-            stack_row = np.zeros(len(names))
+            stack_row = np.zeros(len(stepper.names))
         return PeriodArrays(
             runner=r, positions=positions, safety=safety, limits=limits,
             status=codec_table(st), estop=codec_table(es), command=codec_table(cmd),
@@ -297,69 +291,70 @@ class RealtimeRunner:
         self._take = compiled(fused.take_frames, a, 0, 0, 0.0)
         self._begin = compiled(fused.begin, a, 0, 0.0)
         self._finish = compiled(fused.finish, a, 0.0, 0.0, 0.0, 0.0)
-        self._kernel: Callable[..., int] | None = None
+        self._inputs = compiled(fused.stack_inputs, a)
+        self._counts = compiled(fused.runner_counts, a.runner)
+        self._request = compiled(fused.runner_request, a.runner, False, False)
+        self._kernel: Callable[..., tuple[bool, bool, int, bool, float]] | None = None
         self._context: object = None
         self._warms = False  # whether the kernel warms (compiled, its stack compiled)
         self._shadow: tuple[object, Array, Array] | None = None  # what the warm-ups step
-        if isinstance(self.stepper, CompiledStack):
-            st = self.stepper
-            stack_args = (st.model, st.data, st.force, st.side_force, st.state)
+        stack = self.stepper.compiled_parts
+        if stack is not None:
             if hasattr(fused.context_period, "compile"):  # one argument unboxed per call
-                shadow = (new_data(st.model), st.state.copy(), a.stack_row.copy())
-                self._shadow = shadow
-                self._context = fused.PeriodContext(*stack_args, a, *shadow)
+                data, state, row = new_data(stack.model), stack.state.copy(), a.stack_row.copy()
+                self._shadow = (data, state, row)
+                shadow = stack._replace(data=data, state=state)
+                self._context = fused.PeriodContext(stack, a, shadow, row)
                 self._kernel = compiled(
                     fused.context_period, self._context, 0, 0, 0.0, 0.0, 0.0, -1
                 )
                 self._warms = True
             else:  # without numba's JIT: the plain function on the arrays
-                self._context = (*stack_args, a)
+                self._context = (stack, a)
                 self._kernel = lambda c, *rest: fused.fused_period(*c, *rest[:-1])
-        self._cycle: Callable[..., int] | None = None
+        self._cycle: Callable[..., tuple[bool, bool, int, bool, float]] | None = None
         self._fd = -1
-        self._send_command = self._sender(a.command_frame, self.codecs.command.frame_id)
-        self._send_heartbeat = self._sender(a.heartbeat_frame, self.codecs.heartbeat.frame_id)
+        self._send_command = self.link.sender(self.codecs.command.frame_id, a.command_frame)
+        self._send_heartbeat = self.link.sender(self.codecs.heartbeat.frame_id, a.heartbeat_frame)
 
-    def warm(self, until: float | None = None) -> int:
+    def warm(self, until: float | None = None) -> None:
         """Bring the stack's code and data into the CPU's caches for the next period: stack
         steps on a copy of its state, thrown away (a fused runner only; nothing changes).
 
         The loop calls it in the spin phase of its wait, ``WARM_LEAD`` before each deadline
         (:meth:`~motosim.rt.loop.RateLoop.run`'s ``warm``), with the deadline: between two
         periods the interpreter's wait and the system calls evict the stack from the caches,
-        and its step would run several times slower than in a compiled loop.
+        and its step would run several times slower than in a compiled loop. The warm-ups
+        run are counted in :attr:`warm_ups` (none before the stack has started, for a stack
+        in Python, or with the warm-ups off: :attr:`warms`).
 
         Parameters
         ----------
         until : float, optional
             Keep warming, one copy of the stack's step after the other in one compiled call
             (:func:`~motosim.rt.fused.context_period`'s ``warm_until``: the period's own
-            machine code), until this time on the machine's
-            monotonic clock [s] (:class:`~motosim.rt.clock.MonotonicClock`'s, i.e.
-            ``time.monotonic``): the last warm-up then ends within about one step's time of
-            it. None, or a time already past (a simulated clock's): one warm-up.
-
-        Returns
-        -------
-        int
-            The warm-ups run (0 before the stack has started, for a stack in Python, or with
-            the warm-ups off: :attr:`warms`).
+            machine code), until this time on ``time.monotonic``'s clock [s]: the last
+            warm-up then ends within about one step's time of it. None, or a time already
+            past (a simulated clock's): one warm-up.
         """
-        if not self.warms:
-            return 0
-        assert self._kernel is not None
-        due = 0 if until is None else max(0, int(until * 1e9))  # 0: in the past, one warm-up
-        n: int = self._kernel(self._context, 0, 0, 0.0, 0.0, 0.0, due)
-        return n
+        if self.warms:
+            assert self._kernel is not None
+            due = 0 if until is None else max(0, int(until * 1e9))  # 0: past, one warm-up
+            self._kernel(self._context, 0, 0, 0.0, 0.0, 0.0, due)
+
+    @property
+    def warm_ups(self) -> int:
+        """The warm-ups run by the last :meth:`warm` or :meth:`wait_period`."""
+        return int(self._counts(self._r).warm_ups)
 
     def compile_wait(self) -> bool:
         """Make :meth:`wait_period` available: the wait's end, the bus read and the period
         in one compiled call (:func:`~motosim.rt.fused.context_cycle`, compiled, or loaded
         from numba's cache, now: before the first deadline).
 
-        Only a runner whose stack is compiled, on a
-        :class:`~motosim.io.can.UdpMulticastLink` (its socket read by
-        :func:`~motosim.rt.fused.receive_datagrams`), with numba's JIT on, on Linux; the
+        Only a runner whose stack is compiled, on a link that gives compiled code its socket
+        (:meth:`~motosim.io.can.Link.compiled_fd`, read by
+        :func:`~motosim.io.can.recv_datagrams`, on Linux), with numba's JIT on; the
         others keep :meth:`period`, which does the same in Python.
 
         Returns
@@ -369,10 +364,10 @@ class RealtimeRunner:
         """
         if self._cycle is not None:
             return True
-        link = self.link
-        if not (self._warms and fused.RECV_AVAILABLE and isinstance(link, UdpMulticastLink)):
+        fd = self.link.compiled_fd() if self._warms else -1
+        if fd < 0:
             return False
-        self._fd = link.fileno()
+        self._fd = fd
         self._cycle = compiled(fused.context_cycle, self._context, self._fd, 0, 0.0)
         return True
 
@@ -380,39 +375,29 @@ class RealtimeRunner:
     def warms(self) -> bool:
         """Whether :meth:`warm` (and :meth:`wait_period`) warm the stack: a compiled stack
         with its warm-ups on."""
-        return self._warms and bool(self._r[fused.R_WARM])
+        return self._warms and self._warm_on
 
     @property
     def waits_compiled(self) -> bool:
         """Whether :meth:`compile_wait` made :meth:`wait_period` available."""
         return self._cycle is not None
 
-    def _sender(self, frame: NDArray[np.uint8], frame_id: int) -> Callable[[], bool]:
-        """A function sending ``frame``'s bytes as they are when it is called."""
-        link = self.link
-        if isinstance(link, UdpMulticastLink):
-            view = memoryview(frame)  # type: ignore[arg-type]
-            send_datagram = link.send_datagram
-            return lambda: send_datagram(view)
-        send = link.send
-        return lambda: send(frame_id, frame.tobytes())
-
     @property
     def fused(self) -> bool:
         """Whether each period is one compiled call, stack included (a
         :class:`~motosim.rt.stack.CompiledStack`), or three around the stack's ``step``."""
-        return self._fused
+        return self._kernel is not None
 
     @property
     def status_frames(self) -> int:
         """Status frames received (valid or not)."""
-        return int(self._r[fused.R_STATUS_FRAMES])
+        return int(self._counts(self._r).status_frames)
 
     @property
     def first_timeout(self) -> float:
         """How long a bus-paced loop waits for the drive's first frame [s]: one period past
         ``start_timeout``, so that the ``NO_DRIVE`` fault trips on that wait's timeout."""
-        return float(self._r[fused.R_START_TIMEOUT] + 1) * self.dt
+        return float(self._settings.start_timeout + 1) * self.dt
 
     @property
     def watchdog_time(self) -> float:
@@ -422,7 +407,7 @@ class RealtimeRunner:
     # --- operator ----------------------------------------------------------------------
     def request_stop(self) -> None:
         """Fade the torque out and end the run (safe from a signal handler)."""
-        self._r[fused.R_STOP] = 1.0
+        self._request(self._r, True, False)
         self.safety.request_stop()
 
     def arm(self) -> None:
@@ -431,47 +416,45 @@ class RealtimeRunner:
         Only a request: the loop's own thread enables the safety stage, so this is safe from
         another thread. Ignored after a stop request or a fault.
         """
-        self._r[fused.R_ARM_REQUEST] = 1.0
+        self._request(self._r, False, True)
 
     @property
     def left_range(self) -> str | None:
         """Why the run stopped early because the virtual motorcycle fell or its speed left the
         model's (one line, with the time), or None."""
-        r = self._r
-        if not r[fused.R_LEFT] or self._validity is None:
+        r = self._counts(self._r)
+        if not r.left or self._validity is None:
             return None
-        return range_reason(
-            float(r[fused.R_LEFT_T]), float(r[fused.R_LEFT_PHI]), float(r[fused.R_LEFT_SPEED]),
-            self._validity,
-        )  # fmt: skip
+        return range_reason(float(r.left_t), float(r.left_phi), float(r.left_speed), self._validity)
 
     @property
     def left_range_time(self) -> float:
         """When the motorcycle left its range [s since the first deadline] (NaN if not)."""
-        r = self._r
-        return float(r[fused.R_LEFT_T]) if r[fused.R_LEFT] else math.nan
+        r = self._counts(self._r)
+        return float(r.left_t) if r.left else math.nan
 
     @property
     def stop_requested(self) -> bool:
         """Whether :meth:`request_stop` was called."""
-        return bool(self._r[fused.R_STOP])
+        return bool(self._counts(self._r).stop)
 
-    def finish(self) -> int:
-        """End a run that reached its duration: fade the torque out like a stop request
-        (without counting as one); the most periods the fade-out needs (the fade, then the
-        slew-rate limit's way down from the clamp; 0 when the torque is already off).
-        :meth:`period` returns False once the torque is off, in the same run of the loop
-        (its ``k`` going on; a new run of the loop, its ``k`` from 0 again, is carried on
-        by the period itself)."""
-        r = self._r
-        if self.safety.state in (State.FADE_IN, State.RUNNING, State.STOPPING):
-            r[fused.R_FINISHING] = 1.0
-            self.safety.request_stop()
-            limits = self.safety.limits
-            fade = math.ceil(self.safety.envelope * limits.fade_in / self.dt)
-            slew = math.ceil(limits.max_current / (limits.max_slew * self.dt))
-            return fade + slew + 2
-        return 0
+    @property
+    def reached_end(self) -> bool:
+        """Whether the run reached its ``duration`` (the torque then fades out)."""
+        return bool(self._counts(self._r).ended)
+
+    @property
+    def max_periods(self) -> int:
+        """The loop's periods to give a run with a ``duration``: the duration, then ten times
+        the most the fade-out needs (the fade, then the slew-rate limit's way down from the
+        clamp: missed deadlines do not shorten it) and the linger after a fault; the run ends
+        before, once the torque is off. 0 without a ``duration``."""
+        if self._duration < 0:
+            return 0
+        limits = self.safety.limits
+        fade = math.ceil(limits.fade_in / self.dt)
+        slew = math.ceil(limits.max_current / (limits.max_slew * self.dt))
+        return self._duration + 10 * (fade + slew + 2) + self._settings.linger
 
     def emergency_stop(self) -> None:
         """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
@@ -489,28 +472,7 @@ class RealtimeRunner:
         """Read the frames waiting (one, waiting up to ``timeout`` [s], if ``timeout`` > 0)
         into the period's arrays from ``start``; the index after the last one."""
         a = self._arrays
-        if self._datagrams:
-            link: UdpMulticastLink = self.link  # type: ignore[assignment]
-            if timeout > 0.0:
-                if not link.readable(timeout):
-                    return start
-                one = self._views[start : start + 1]
-                return start + link.receive_datagrams(one, a.rx_length[start:], 0)
-            return link.receive_datagrams(self._views, a.rx_length, start)
-        receive = self.link.receive
-        n = start
-        while n < fused.RX_FRAMES:  # bounded: a flooded bus cannot hold the loop
-            frame = receive(timeout)
-            if frame is None:
-                break
-            data = frame[1][: fused.RX_BYTES]
-            a.rx_id[n] = frame[0]
-            a.rx_length[n] = len(data)
-            a.rx[n, : len(data)] = np.frombuffer(data, dtype=np.uint8)
-            n += 1
-            if timeout > 0.0:
-                break
-        return n
+        return self.link.receive_into(self._views, a.rx_length, a.rx_id, start, timeout)
 
     def wait_status(self, until: float) -> bool:
         """Block on the bus until a status frame arrives or ``clock`` reaches ``until`` [s].
@@ -529,7 +491,7 @@ class RealtimeRunner:
         while True:
             remaining = until - now()
             if remaining <= 0.0:
-                if self._r[fused.R_STARTED]:
+                if self._inputs(a)[0]:  # the stack has started
                     self.safety.silent()
                 return False
             if self._read_bus(0, remaining) and self._take(a, 0, 1, now()):
@@ -545,10 +507,10 @@ class RealtimeRunner:
         frames = self._read_bus()
         done_read = now() if now is not None else math.nan
         if self._kernel is not None:
-            goes_on: int = self._kernel(self._context, frames, k, t, woke, done_read, -1)
+            end = self._kernel(self._context, frames, k, t, woke, done_read, -1)
         else:
-            goes_on = self._stack_period(self._arrays, frames, k, t, woke, done_read)
-        return self._send(goes_on, k, t, woke)
+            end = self._stack_period(self._arrays, frames, k, t, woke, done_read)
+        return self._send(end, k, t)
 
     def wait_period(self, k: int, t: float) -> bool:
         """:meth:`period` that waits for its deadline ``t`` [s] on the machine's monotonic
@@ -562,57 +524,56 @@ class RealtimeRunner:
         """
         if self._cycle is None:
             raise MotosimError("wait_period needs compile_wait() first (and its True)")
-        goes_on: int = self._cycle(self._context, self._fd, k, t)
-        return self._send(goes_on, k, t, self._r[fused.R_WOKE])
+        end = self._cycle(self._context, self._fd, k, t)
+        self._woke = end[4]
+        return self._send(end, k, t)
 
     def woke(self) -> float:
         """When the last :meth:`wait_period` woke up [s on the monotonic clock]."""
-        return float(self._r[fused.R_WOKE])
+        return self._woke
 
-    def _send(self, goes_on: int, k: int, t: float, woke: float) -> bool:
-        """The end of a period: the frames sent, the telemetry, the row's stamps; whether
-        the run goes on (``goes_on``: the compiled period's value)."""
+    def _send(self, end: tuple[bool, bool, int, bool, float], k: int, t: float) -> bool:
+        """The end of period ``k`` (deadline ``t`` [s]), given the compiled period's
+        :class:`~motosim.rt.fused.PeriodEnd` (its fields): the frames sent, the telemetry,
+        the row's stamps; whether the run goes on."""
+        goes_on, beat, slot, started, woke = end
         now = self._now
         a = self._arrays
-        r = self._r
         done_control = now() if now is not None else math.nan
         if not self._send_command():
             self.send_errors += 1
-        if r[fused.R_HEARTBEAT_DUE] != 0.0 and not self._send_heartbeat():
+        if beat and not self._send_heartbeat():
             self.send_errors += 1
         done_send = now() if now is not None else math.nan
+        ring = a.ring
         if self.telemetry is not None or self.platform is not None:
-            self._publish(k, t)
-        slot, ring = int(r[fused.R_SLOT]), a.ring
+            self._publish(k, float(ring[slot, _T]), started)
         ring[slot, _DONE_CONTROL] = done_control - woke
         ring[slot, _DONE_SEND] = done_send - woke
         ring[slot, _COMPUTE] = (now() - woke) if now is not None else math.nan
-        a.ring_head[0] += 1
+        a.ring_head[_WRITTEN] += 1
         return bool(goes_on)
 
     def _stack_period(
         self, a: PeriodArrays, frames: int, k: int, t: float, woke: float, done_read: float
-    ) -> int:
+    ) -> PeriodEnd:
         """A period around a stack in Python: the compiled steps one by one."""
         self._take(a, 0, frames, t)
-        r = self._r
-        if self._begin(a, k, t):
-            self.stepper.reset(float(r[fused.R_THETA]), float(r[fused.R_CURRENT]))
+        reset = self._begin(a, k, t)
+        started, theta, current, fresh, scale = self._inputs(a)
+        if reset:
+            self.stepper.reset(float(theta), float(current))
         command = 0.0
-        if r[fused.R_STARTED]:
-            command = self.stepper.step(
-                float(r[fused.R_THETA]), float(r[fused.R_CURRENT]), bool(r[fused.R_FRESH]),
-                float(safety_scale(a.safety, a.limits)),
-            )  # fmt: skip
+        if started:
+            command = self.stepper.step(float(theta), float(current), bool(fresh), float(scale))
             a.stack_row[:] = self.stepper.row()
-        goes_on: bool = self._finish(a, float(command), t, woke, done_read)
-        return int(goes_on)
+        end: PeriodEnd = self._finish(a, float(command), t, woke, done_read)
+        return end
 
-    def _publish(self, k: int, t: float) -> None:
+    def _publish(self, k: int, elapsed: float, started: bool) -> None:
         """The stack's row to the telemetry (after the command, which thus leaves a datagram
-        sooner) and the platform's stage."""
-        started = bool(self._r[fused.R_STARTED])
-        elapsed = t - self._r[fused.R_T0]
+        sooner) and the platform's stage; ``elapsed``: the time since the first deadline
+        [s]."""
         row = self._arrays.stack_row if started else None
         if row is not None and self.telemetry is not None:
             self.telemetry(k, elapsed, row)
@@ -622,8 +583,9 @@ class RealtimeRunner:
     def counters(self) -> RunCounters:
         """What happened on the bus and in the safety stage so far."""
         # datagrams that were no frames, and the compiled reads' socket errors: the link's
-        bad = int(self._r[fused.R_BAD] + self._r[fused.R_RECV_ERRORS])
-        if bad > self._bad_reported and hasattr(self.link, "errors"):
+        counts = self._counts(self._r)
+        bad = int(counts.bad + counts.recv_errors)
+        if bad > self._bad_reported:
             self.link.errors += bad - self._bad_reported
             self._bad_reported = bad
         s = self.safety

@@ -11,7 +11,7 @@ checked options and the scenario's ``[realtime]`` settings) and runs:
    files;
 3. :meth:`~RealtimeSession.run` applies the privileges, runs the rate loop once and returns
    the :class:`Outcome`. The run's end is a stop request inside that one loop run: at the
-   duration the runner fades the torque out (:meth:`~motosim.rt.run.RealtimeRunner.finish`),
+   duration the runner fades the torque out (``RealtimeRunner(duration=...)``),
    as on :meth:`~RealtimeSession.request_stop`, and its period returns False once the torque
    is zero; a fault zeroes it at once and ends the run shortly after;
 4. :meth:`~RealtimeSession.close` lets the recorder release the result folder (after the
@@ -253,7 +253,7 @@ class RealtimeSession:
         compiled code is loaded, or compiled the first time)."""
         import numpy as np
 
-        from motosim.io.can import UdpMulticastLink, handlebar_codecs, open_link
+        from motosim.io.can import handlebar_codecs, open_link
         from motosim.rt import run
         from motosim.rt.stack import CompiledStack
         from motosim.sim import build_rig
@@ -270,7 +270,7 @@ class RealtimeSession:
         platform = self._platform_output(tuple(stack.names))
         self._link = open_link(c.bus, fast=c.fast_link)
         self._closers.append(self._link.close)
-        self._fast = isinstance(self._link, UdpMulticastLink)  # the fast link on this bus
+        self._fast = self._link.datagrams  # the fast link on this bus
         if platform is not None and c.platform_can:
             self._platform_can(platform)
         rate = c.rate
@@ -281,6 +281,7 @@ class RealtimeSession:
             shared_ring=True, wait_for_arm=c.live is not None, platform=platform,
             now=self.clock.now, clock=self.clock, handlebar=c.inputs.nominal_handlebar,
             validity=validity_limits(sc.motorcycle.speed), warm=c.warm,
+            duration=c.periods / rate,
         )  # fmt: skip
         if self._stop:  # asked for while the runner was built
             self.emergency_stop() if self._stop == 2 else self.request_stop()
@@ -350,16 +351,16 @@ class RealtimeSession:
             raise MotosimError("the session's recorder is not started: call open() first")
         asked = self.config.privileges
         privileges = apply_privileges(priority=asked.priority, cpus=asked.cpus, mlock=asked.mlock)
-        loop, step, reached = self._loop()
+        loop, step = self._loop()
         freeze_gc()
         runner.discard_pending()  # frames queued while the recorder started are stale
         try:
-            loop.run(step, periods=self._max_periods())
+            loop.run(step, periods=runner.max_periods)
         finally:
             thaw_gc()
         stats = loop.stats()
         fault = runner.safety.fault.name
-        complete = reached() and fault == "NONE" and runner.left_range is None
+        complete = runner.reached_end and fault == "NONE" and runner.left_range is None
         extra: dict[str, Any] = {f"rt_{k}": float(v) for k, v in stats.as_dict().items()}
         if runner.left_range is not None and fault == "NONE":
             extra["failure"] = runner.left_range  # the motorcycle fell: flagged, as offline
@@ -369,23 +370,14 @@ class RealtimeSession:
         self._close_link()
         return self._outcome(stats, counters, privileges, done, bus_errors)
 
-    def _max_periods(self) -> int:
-        """The duration's periods and room for the fade-out after it: the fade, then the
-        slew-rate limit's way down from the clamp, ten times over (the loop's missed
-        deadlines do not shorten the fade)."""
-        limits, rate = self.config.limits, self.config.rate
-        fade = math.ceil(limits.fade_in * rate)
-        slew = math.ceil(limits.max_current * rate / limits.max_slew)
-        return self.config.periods + 10 * (fade + slew + 2)
-
-    def _loop(self) -> tuple[Any, Callable[[int, float], bool], Callable[[], bool]]:
-        """The rate loop, its step (the runner's period, with the duration's end) and a
-        function saying whether the duration was reached."""
+    def _loop(self) -> tuple[Any, Callable[[int, float], bool]]:
+        """The rate loop and its step (the runner's period: it ends the run once the torque
+        has faded out after the duration or a stop request)."""
         from motosim.rt.loop import FramePacedLoop, RateLoop
 
         c, runner, clock = self.config, self.runner, self.clock
         rate = c.rate
-        capacity = max(1, min(self._max_periods(), 1 << 22))
+        capacity = max(1, min(runner.max_periods, 1 << 22))
         inner = runner.period
         loop: RateLoop
         if c.pace == "bus":
@@ -402,8 +394,7 @@ class RealtimeSession:
             loop = RateLoop(
                 rate, clock, capacity=capacity, warm=runner.warm if runner.warms else None
             )
-        step, reached = _until(inner, runner.finish, c.periods)
-        return loop, step, reached
+        return loop, inner
 
     def _outcome(
         self,
@@ -486,30 +477,6 @@ class RealtimeSession:
         tb: TracebackType | None,
     ) -> None:
         self.close()
-
-
-def _until(
-    period: Callable[[int, float], bool], finish: Callable[[], int], periods: int
-) -> tuple[Callable[[int, float], bool], Callable[[], bool]]:
-    """The loop's step: ``period``, and at the end of the duration (``periods`` deadlines)
-    the runner's ``finish`` (the torque fades out; ``period`` returns False once it is
-    zero); the run ends there when the torque is already off. Also a function saying
-    whether the duration was reached."""
-    reached = False
-
-    def step(k: int, t: float) -> bool:
-        nonlocal reached
-        if k >= periods and not reached:  # deadlines skipped past the duration's end
-            reached = True
-            fading = finish() > 0
-            return period(k, t) and fading
-        carry_on = period(k, t)
-        if carry_on and k + 1 >= periods and not reached:
-            reached = True
-            return finish() > 0
-        return carry_on
-
-    return step, lambda: reached
 
 
 def _close_sender(platform: Any) -> None:

@@ -25,7 +25,7 @@ bookkeeping of the real-time loop:
 """
 
 from enum import IntEnum
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -43,8 +43,8 @@ from motosim.sim.stack import (
 )
 
 __all__ = [
-    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "LoopState", "compiled", "result_block",
-    "stack_period", "stack_reset",
+    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "LoopState", "StackParts", "compiled",
+    "result_block", "stack_period", "stack_reset",
 ]  # fmt: skip
 
 Array = NDArray[np.float64]
@@ -85,6 +85,21 @@ class LoopState(IntEnum):
     """The periods since the last measurement."""
 
 
+class StackParts(NamedTuple):
+    """What one period of the compiled stack works on (:func:`stack_period`)."""
+
+    model: StackModel
+    """The stack's model (:func:`motosim.sim.build_stack`)."""
+    data: StackData
+    """Its states (:func:`motosim.sim.stack.new_data`)."""
+    force: Array
+    """The longitudinal force of each period [N]."""
+    side_force: Array
+    """The side force of each period [N]."""
+    state: Array
+    """What :func:`stack_period` keeps between periods, in the order of :class:`LoopState`."""
+
+
 class CompiledStack:
     """The designed stack as a :class:`~motosim.rt.run.StackStepper`.
 
@@ -122,13 +137,19 @@ class CompiledStack:
         self._row = np.zeros(len(STACK_SIGNALS))
         # before its first step: the motorcycle upright and straight at its speed, as reset
         self._row[STACK_SIGNALS.index("v_x")] = model.speed
-        args = (model, self.data, self.force, self.side_force, self.state, self._row, 0.0, 0.0)
-        self._step = compiled(stack_period, *args, True, 1.0)
-        self._reset = compiled(stack_reset, *args[:5], 0.0, 0.0)
+        self._parts = StackParts(model, self.data, self.force, self.side_force, self.state)
+        self._step = compiled(stack_period, self._parts, self._row, 0.0, 0.0, True, 1.0)
+        self._reset = compiled(stack_reset, self._parts, 0.0, 0.0)
+
+    @property
+    def compiled_parts(self) -> StackParts:
+        """What the runner's fused period steps (:mod:`motosim.rt.fused`): the stack itself,
+        its arrays shared."""
+        return self._parts
 
     def reset(self, theta: float, current: float) -> None:
         """Start the stack at the measured angle [rad] and current [A]."""
-        self._reset(self.model, self.data, self.force, self.side_force, self.state, theta, current)
+        self._reset(self._parts, theta, current)
 
     def step(
         self, theta_meas: float, i_meas: float, fresh: bool = True, scale: float = 1.0
@@ -136,10 +157,7 @@ class CompiledStack:
         """One period of the compiled stack (:func:`stack_period`): the motor current
         command [A]; ``fresh``: a new status frame came this period, ``scale``: the share of
         the command the safety stage will pass."""
-        command: float = self._step(
-            self.model, self.data, self.force, self.side_force, self.state, self._row,
-            theta_meas, i_meas, fresh, scale,
-        )  # fmt: skip
+        command: float = self._step(self._parts, self._row, theta_meas, i_meas, fresh, scale)
         return command
 
     def row(self) -> Array:
@@ -149,18 +167,11 @@ class CompiledStack:
 
 
 @njit(cache=True)
-def stack_reset(
-    model: StackModel,
-    data: StackData,
-    force: Array,
-    side_force: Array,
-    state: Array,
-    theta: float,
-    current: float,
-) -> None:
-    """:func:`~motosim.sim.stack.reset` at the measured angle [rad] and current [A]; the
-    period's index to 0 and the last command to the measured current."""
-    reset(model, data, theta, current)
+def stack_reset(stack: StackParts, theta: float, current: float) -> None:
+    """:func:`~motosim.sim.stack.reset` of ``stack`` at the measured angle [rad] and current
+    [A]; the period's index to 0 and the last command to the measured current."""
+    reset(stack.model, stack.data, theta, current)
+    state = stack.state
     state[LoopState.period] = 0.0
     state[LoopState.expected_current] = current
     state[LoopState.since_measurement] = 0.0
@@ -168,18 +179,9 @@ def stack_reset(
 
 @njit(cache=True)
 def stack_period(
-    model: StackModel,
-    data: StackData,
-    force: Array,
-    side_force: Array,
-    state: Array,
-    row: Array,
-    theta_meas: float,
-    i_meas: float,
-    fresh: bool,
-    scale: float,
+    stack: StackParts, row: Array, theta_meas: float, i_meas: float, fresh: bool, scale: float
 ) -> float:
-    """One period of the stack in the loop: the motor current command [A].
+    """One period of ``stack`` in the loop: the motor current command [A].
 
     :func:`~motosim.sim.stack.step_scaled` with this period's forces (the last ones held),
     ``scale`` the share of the command the safety stage will pass
@@ -191,6 +193,7 @@ def stack_period(
     status frame came, or 1.5 measurement periods after the last one if none came (the
     last frame again); in no other.
     """
+    model, data, force, side_force, state = stack
     every = model.measure_every
     if every > 1:
         if fresh or state[LoopState.since_measurement] >= every + every // 2:

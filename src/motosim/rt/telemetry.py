@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
+from motosim.rt.ring import RingCounter
 
 __all__ = [
     "DEFAULT_ADDRESS", "StateReceiver", "StateRelay", "StateSender", "is_host", "parse_address",
@@ -221,7 +222,7 @@ class StateRelay:
 
     def poll(self) -> bool:
         """Send the newest row if one came since the last poll; True if one was sent."""
-        head = int(self._counters[0])
+        head = int(self._counters[RingCounter.written])
         if head <= self._seen:
             return False
         self._seen = head

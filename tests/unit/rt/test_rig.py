@@ -8,7 +8,7 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.model.handlebar import step_exact
 from motosim.params import load_parameters
-from motosim.rt.rig import RigFaults, RigSettings, VirtualRig, parse_rig
+from motosim.rt.rig import Bar, RigFaults, RigSettings, VirtualRig, parse_rig
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
@@ -75,14 +75,16 @@ def test_plant_is_eq_5_with_exact_stick_slip() -> None:
     theta, omega = 0.0, 0.0
     for _ in range(1000):
         theta, omega = step_exact(theta, omega, 3.0, HB.J_eq, HB.beta_eq, HB.beta_s, 1e-4)
-    assert rig.x[0] == pytest.approx(theta, rel=1e-12) and rig.x[1] == pytest.approx(omega)
+    assert rig.x[Bar.theta] == pytest.approx(theta, rel=1e-12) and rig.x[
+        Bar.omega
+    ] == pytest.approx(omega)
 
 
 def test_current_command_acts_through_n_kt_and_the_drive_limit() -> None:
     rig, link = _rig()
     link.inbox.append(_command(100.0))  # beyond the 1 mA DBC range: saturated to 32.767 A
     rig.advance_to(0.001)
-    assert rig.i_cmd == pytest.approx(32.767) and rig.x[2] == 30.0  # the drive's limit
+    assert rig.i_cmd == pytest.approx(32.767) and rig.x[Bar.i_m] == 30.0  # the drive's limit
 
 
 def test_the_drives_current_loop_is_a_first_order_lag_of_its_time_constant() -> None:
@@ -92,16 +94,16 @@ def test_the_drives_current_loop_is_a_first_order_lag_of_its_time_constant() -> 
     link.inbox.append(_command(10.0))
     for t in (0.001, 0.01, 0.05):
         rig.advance_to(t)
-        assert rig.x[2] == pytest.approx(10.0 * -math.expm1(-t / 0.01), rel=1e-9)
+        assert rig.x[Bar.i_m] == pytest.approx(10.0 * -math.expm1(-t / 0.01), rel=1e-9)
 
 
 def test_without_commands_the_drive_stops_the_torque() -> None:
     rig, link = _rig(command_timeout=0.01)
     link.inbox.append(_command(5.0))
     rig.advance_to(0.005)
-    assert rig.x[2] == 5.0
+    assert rig.x[Bar.i_m] == 5.0
     rig.advance_to(0.03)
-    assert rig.x[2] == 0.0
+    assert rig.x[Bar.i_m] == 0.0
 
 
 def test_status_frames_quantise_like_the_encoder_and_the_dbc() -> None:
@@ -238,9 +240,9 @@ def test_nothing_is_compiled_when_the_run_starts() -> None:
     rig_module._plant_steps.disable_compile()  # a compile (or cache load) now raises
     try:
         rig.advance_to(0.01)  # the drive idle, from power-on: no rider yet
-        assert rig.x[0] == 0.0
+        assert rig.x[Bar.theta] == 0.0
         link.inbox.append(_command(0.0))  # the run's first enabled command
         rig.advance_to(0.02)
     finally:
         rig_module._plant_steps.disable_compile(False)
-    assert rig.x[0] > 0.0  # the rider's 3 N*m turned the handlebar
+    assert rig.x[Bar.theta] > 0.0  # the rider's 3 N*m turned the handlebar

@@ -5,7 +5,7 @@ import pytest
 
 from motosim.model.handlebar import step_exact
 from motosim.params import load_parameters
-from motosim.rt.rig import RigSettings, VirtualRig
+from motosim.rt.rig import Bar, RigSettings, VirtualRig
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
@@ -45,8 +45,8 @@ def test_rig_hands_are_the_simulators_plant() -> None:
         theta, omega = step_exact(
             theta, omega, torque, HB.J_eq + J_a, HB.beta_eq + c_a, HB.beta_s, 1e-4
         )
-    assert rig.x[0] == pytest.approx(theta, rel=1e-12)
-    assert rig.x[1] == pytest.approx(omega, abs=1e-12)
+    assert rig.x[Bar.theta] == pytest.approx(theta, rel=1e-12)
+    assert rig.x[Bar.omega] == pytest.approx(omega, abs=1e-12)
 
 
 def test_rig_without_hands_is_unchanged_and_hands_off_removes_the_rider() -> None:
@@ -55,7 +55,7 @@ def test_rig_without_hands_is_unchanged_and_hands_off_removes_the_rider() -> Non
     theta, omega = 0.0, 0.0
     for _ in range(2000):
         theta, omega = step_exact(theta, omega, 3.0, HB.J_eq, HB.beta_eq, HB.beta_s, 1e-4)
-    assert plain.x[0] == theta and plain.x[1] == omega
+    assert plain.x[Bar.theta] == theta and plain.x[Bar.omega] == omega
     off = _rig(3.0, np.array([0.1, 4.0, 50.0, 0.0]), np.array([[0.0, 1.0]]))
     off.advance_to(0.2)
     assert off.x[0] == 0.0 and off.x[1] == 0.0  # nobody holds it, no current: at rest
