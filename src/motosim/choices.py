@@ -13,6 +13,7 @@ from typing import Final
 
 __all__ = [
     "ESTIMATOR_NAMES",
+    "GRIP_NAMES",
     "INTEGRAL_CORNER",
     "LOWEST_BANDWIDTH",
     "MAX_ORDER",
@@ -33,6 +34,8 @@ the paper's observer, first)."""
 SENSOR_ESTIMATOR: Final = "torque_sensor"
 """The scenario name of the estimator that reads a torque sensor
 (:func:`motosim.estimation.registry.torque_sensor_kernel`)."""
+GRIP_NAMES: Final = ("relaxed", "firm", "off")
+"""The names of the rider's grips, :data:`motosim.sim.grips.GRIPS`, in its order."""
 INTEGRAL_CORNER: Final = 0.1
 """W1's integral corner by default, as a fraction of the bandwidth: a decade below it."""
 MAX_ORDER: Final = 3

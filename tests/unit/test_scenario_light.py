@@ -107,6 +107,7 @@ def test_the_light_names_equal_their_sources() -> None:
 
     assert choices.ESTIMATOR_NAMES == tuple(registry.ESTIMATORS)
     assert choices.SENSOR_ESTIMATOR == registry.SENSOR_ESTIMATOR
+    assert choices.GRIP_NAMES == tuple(grips.GRIPS)
     assert choices.MAX_ORDER == torque_feedback.MAX_ORDER
     assert choices.INTEGRAL_CORNER == torque_feedback.INTEGRAL_CORNER
     assert choices.RIDER_SPEEDS == rider.SPEED_RANGE

@@ -8,7 +8,7 @@ from datetime import date
 from typing import TYPE_CHECKING, Any
 
 from motosim import __version__
-from motosim.choices import INTEGRAL_CORNER, LOWEST_BANDWIDTH, MAX_ORDER
+from motosim.choices import GRIP_NAMES, INTEGRAL_CORNER, LOWEST_BANDWIDTH, MAX_ORDER
 from motosim.cli._common import (
     check_output,
     parse_float_list,
@@ -20,12 +20,12 @@ from motosim.errors import MotosimError, RunFailedError
 from motosim.params import load_parameters
 from motosim.params.checks import check_number, short_repr
 from motosim.params.handlebar import HandlebarParameters
-from motosim.sim.grips import GRIPS, Hands, design_hands, held_handlebar
 
 if TYPE_CHECKING:
     from motosim.control.statespace import StateSpace
     from motosim.control.torque_feedback import LoopAnalysis
     from motosim.estimation.walcott_zak import ObserverSettings
+    from motosim.sim.grips import Hands
     from motosim.sim.loop_analysis import StackLoopAnalysis
 
 MAX_SPEEDS = 20
@@ -116,7 +116,7 @@ def register(sub: Any) -> None:
     )
     parser.add_argument(
         "--grip",
-        choices=tuple(GRIPS),
+        choices=GRIP_NAMES,
         default="off",
         help=(
             "the rider's grip to design for (off: the handlebar alone, what a design file "
@@ -177,20 +177,21 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
 def _stack_analysis(
     hb: HandlebarParameters, settings: "ObserverSettings", controller: "StateSpace", rate: float,
     speeds: list[float], prediction: bool | None, latency: float = 0.0,
-    hands: Hands | None = None,
+    hands: "Hands | None" = None,
 ) -> list[dict[str, Any]]:  # fmt: skip
     """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid;
     with a ``latency`` [s], accounting for it, and (``unaccounted``) the stack designed for
     a fresh sample read as old; with ``hands``, the stack designed for them and held by
     them, and (``hands_off``) let go."""
     from motosim.estimation.walcott_zak import WalcottZakObserver, design_with
+    from motosim.sim.grips import GRIPS, design_hands, held_handlebar
     from motosim.sim.loop_analysis import analyse_design
 
     designed = design_hands(hands)
     kernel = WalcottZakObserver(design_with(held_handlebar(hb, designed), settings), 1.0 / rate)
     sharp = load_parameters("sharp1971", "sharp")
 
-    def analysed(account: bool, true_hands: Hands | None = hands) -> list[dict[str, Any]]:
+    def analysed(account: bool, true_hands: "Hands | None" = hands) -> list[dict[str, Any]]:
         entries = []
         for nominal, grid in analyse_design(
             sharp, kernel.kernel, controller, hb, rate=rate, speeds=speeds,
@@ -265,6 +266,8 @@ def run(args: argparse.Namespace) -> int:
         check_output(
             args.out, overwrite=args.overwrite, reads=(("handlebar file", args.handlebar),)
         )
+    from motosim.sim.grips import GRIPS, design_hands, held_handlebar
+
     bare = load_parameters(args.handlebar, "handlebar")
     hands = None if GRIPS[args.grip].is_off else GRIPS[args.grip]
     hb = held_handlebar(bare, design_hands(hands))  # what the observer and controller model
