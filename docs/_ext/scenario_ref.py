@@ -171,6 +171,13 @@ DESCRIPTIONS: dict[str, str] = {
         'low-pass); needs `"rider"` and the Walcott-Zak observer. Default: on with them '
         "from a 1 kHz measurement rate and at the paper's 100 Hz."
     ),
+    "controller.grip": (
+        'The rider\'s grip the stack is designed for, `"relaxed"`, `"firm"` or `"off"` (the '
+        "handlebar alone): the observer, the controller and the feedforward model the handlebar "
+        "held by 0.4 of the grip's inertia and damping, and the virtual motorcycle carries the "
+        "same on its front frame. Default: the rider's `hands`; none with a design file, a "
+        "torque sensor or the multibody motorcycle."
+    ),
     # [road]
     "road.friction": (
         "Tyre-road friction coefficient over time (a profile; steps from t = 0), 0.01 to 3: "
