@@ -494,25 +494,19 @@ def _print(report: dict[str, Any]) -> None:
             f"GM {a['cancellation_gain_margin_db']:.3g} dB, "
             f"PM {a['cancellation_phase_margin_deg']:.3g} deg"
         )
-        off = a.get("hands_off")
-        if off is not None:
-            g = off["grid"]
-            print(
-                f"         hands off: stable {off['stable']}, GM {off['gain_margin_db']:.3g} dB, "
-                f"PM {off['phase_margin_deg']:.3g} deg; grid "
-                f"{g['points'] - g['unstable']}/{g['points']} stable "
-                f"({g['with_margins']} with 6 dB, 45 deg)"
-            )
-        fresh = a.get("unaccounted")
-        if fresh is not None:
-            g = fresh["grid"]
-            print(
-                f"         designed for a fresh sample, read {1e3 * latency:.3g} ms old: "
-                f"stable {fresh['stable']}, GM {fresh['gain_margin_db']:.3g} dB, "
-                f"PM {fresh['phase_margin_deg']:.3g} deg; grid "
-                f"{g['points'] - g['unstable']}/{g['points']} stable "
-                f"({g['with_margins']} with 6 dB, 45 deg)"
-            )
+        for key, label in (
+            ("hands_off", "hands off"),
+            ("unaccounted", f"designed for a fresh sample, read {1e3 * latency:.3g} ms old"),
+        ):
+            other = a.get(key)
+            if other is not None:
+                g = other["grid"]
+                print(
+                    f"         {label}: stable {other['stable']}, GM "
+                    f"{other['gain_margin_db']:.3g} dB, PM {other['phase_margin_deg']:.3g} deg; "
+                    f"grid {g['points'] - g['unstable']}/{g['points']} stable "
+                    f"({g['with_margins']} with 6 dB, 45 deg)"
+                )
         for c in a["friction_limit_cycles"]:
             print(
                 f"         dry friction can sustain a limit cycle at {c['frequency_hz']:.3g} Hz, "
