@@ -84,7 +84,7 @@ def _controller():  # type: ignore[no-untyped-def]
 def _loop_alone(duration: float) -> tuple[float, float]:
     """(periods/s of wall time, of thread CPU time) of the loop alone, best of three."""
     from motosim.signals import RECORDED
-    from motosim.sim.closed_loop import RigData, _ensure_current_layout, _run_chunk, build_rig
+    from motosim.sim.closed_loop import _ensure_current_layout, _run_chunk, build_rig, new_world
 
     inputs = _inputs(duration)
     model = build_stack(inputs)
@@ -94,7 +94,7 @@ def _loop_alone(duration: float) -> tuple[float, float]:
         rig = build_rig(inputs, rng=np.random.default_rng(0))
         data = new_data(model)
         reset(model, data, 0.0, 0.0)
-        world = RigData(np.zeros(3), np.zeros(1, dtype=np.int64))
+        world = new_world(inputs.scenario)
         n = rig.current_noise.size
         out = np.full((n, len(RECORDED)), np.nan)
         limits = np.array([np.inf, -np.inf, np.inf])
