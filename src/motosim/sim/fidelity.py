@@ -131,7 +131,8 @@ def feel_scenario(
 
     The virtual rider holds the straight (the machine is unstable on its own above the
     capsize speed) while a probe of peak ``amplitude`` [N*m] over ``band`` [Hz] is added to
-    the rider's torque; handlebar, estimator, controller and rates stay the base's. The
+    the rider's torque; handlebar, estimator, controller, rates and the rider's hands stay
+    the base's (with hands, tau_r is their whole torque, active and passive). The
     probe is a periodic multisine of ``period`` [s]
     (:class:`~motosim.sim.scenario.MultisineProfile`, lines at multiples of 1 / ``period``),
     one period to settle and ``periods`` to average (the run lasts
@@ -177,6 +178,7 @@ def feel_scenario(
         probe=probe,
         lateral_tolerance=lateral_tolerance,
         course_tolerance=course_tolerance,
+        hands=base.rider.hands,
     )
     motorcycle = dataclasses.replace(base.motorcycle, speed=speed)
     return dataclasses.replace(
