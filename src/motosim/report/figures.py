@@ -102,14 +102,14 @@ def _ignore_interrupt() -> None:
 class FigureWorkers:
     """Processes that draw a report's figures, their imports done ahead of the first figure.
 
+    Use it as a context manager around the run and its report; :meth:`close` stops the
+    processes.
+
     Parameters
     ----------
     processes : int
         How many figures are drawn at once (default 2). With fewer than two cores, or no
         fork server on this platform, nothing is started and :meth:`draw` returns None.
-
-    Use it as a context manager around the run and its report; :meth:`close` stops the
-    processes.
     """
 
     def __init__(self, processes: int = 2) -> None:
