@@ -8,10 +8,11 @@ numba, so that a scenario is checked without them.
 import math
 from dataclasses import dataclass, replace
 
+from motosim.errors import MotosimError
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 
-__all__ = ["DESIGN_SHARE", "GRIPS", "Hands", "design_hands", "held_handlebar"]
+__all__ = ["DESIGN_SHARE", "GRIPS", "Hands", "design_hands", "held_handlebar", "resolve_hands"]
 
 _LIMITS = (("inertia", 1.0, "kg*m^2"), ("damping", 100.0, "N*m*s/rad"),
            ("stiffness", 1000.0, "N*m/rad"))  # fmt: skip
@@ -130,3 +131,18 @@ def design_hands(hands: Hands | None) -> Hands | None:
         damping=DESIGN_SHARE * hands.damping,
         source=f"{DESIGN_SHARE:g} of the inertia and damping of {hands.source}",
     )
+
+
+def resolve_hands(hands: "str | Hands | None") -> Hands | None:
+    """The :class:`Hands` of a grip name or table (None: no hands, a pure torque source).
+
+    Raises
+    ------
+    MotosimError
+        On an unknown grip name.
+    """
+    if hands is None or isinstance(hands, Hands):
+        return hands
+    if hands not in GRIPS:
+        raise MotosimError(f"hands = {hands!r}; expected one of {', '.join(GRIPS)} or a table")
+    return GRIPS[hands]

@@ -24,8 +24,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from motosim.errors import MotosimError
-from motosim.sim.grips import GRIPS, Hands
+from motosim.sim.grips import GRIPS, Hands, resolve_hands
 
 __all__ = ["GRIPS", "Hands", "hands_array", "hands_torque", "is_held", "resolve_hands"]
 
@@ -37,21 +36,6 @@ def hands_array(hands: Hands | None) -> Array:
     if hands is None:
         return np.zeros(4)
     return np.array([hands.inertia, hands.damping, hands.stiffness, hands.hold])
-
-
-def resolve_hands(hands: "str | Hands | None") -> Hands | None:
-    """The :class:`Hands` of a grip name or table (None: no hands, a pure torque source).
-
-    Raises
-    ------
-    MotosimError
-        On an unknown grip name.
-    """
-    if hands is None or isinstance(hands, Hands):
-        return hands
-    if hands not in GRIPS:
-        raise MotosimError(f"hands = {hands!r}; expected one of {', '.join(GRIPS)} or a table")
-    return GRIPS[hands]
 
 
 @njit(cache=True)

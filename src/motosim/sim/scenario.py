@@ -88,7 +88,7 @@ from motosim.choices import (
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
 from motosim.sim import paths
-from motosim.sim.grips import GRIPS, Hands, design_hands
+from motosim.sim.grips import GRIPS, Hands, design_hands, resolve_hands
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -1038,11 +1038,8 @@ class Scenario:
                 or self.estimator.name == SENSOR_ESTIMATOR
             ):
                 return None
-            hands = self.rider.hands
-            held = GRIPS[hands] if isinstance(hands, str) else hands
-        else:
-            held = GRIPS[grip]
-        return design_hands(held)
+            return design_hands(resolve_hands(self.rider.hands))
+        return design_hands(GRIPS[grip])
 
 
 # --- plausibility: legal values that no real ride has ---------------------------------------
