@@ -349,3 +349,26 @@ def run() -> dict[str, float]:
         "both feedforward terms on / off (time of a run)": feedforward,
         "load average (1 min) after": os.getloadavg()[0],
     }
+
+
+if __name__ == "__main__":
+    import argparse
+
+    parser = argparse.ArgumentParser(description="The closed loop's speed.")
+    parser.add_argument(
+        "--only", choices=["loop"], help="loop: the compiled loop alone (case 1), 60 s of 1 kHz"
+    )
+    args = parser.parse_args()
+    if args.only == "loop":
+        before = os.getloadavg()[0]
+        wall, cpu = _loop_alone(60.0)
+        figures = {
+            "load average (1 min) before": before,
+            "compiled loop alone [periods/s of CPU]": cpu,
+            "compiled loop alone [periods/s of wall time]": wall,
+            "load average (1 min) after": os.getloadavg()[0],
+        }
+    else:
+        figures = run()
+    for name, value in figures.items():
+        print(f"{name}: {value:.4g}")
