@@ -146,7 +146,7 @@ class RigSettings:
             ("current_time_constant", 1.0, "s"),
             ("latency", 1.0, "s"),
             ("jitter", 1.0, "s"),
-            ("bus_off_duration", 86_400.0, "s"),  # -1 s was accepted as no bus-off
+            ("bus_off_duration", 86_400.0, "s"),  # 0 s is no bus-off; a negative one is refused
         ):
             check_number(getattr(self, name), where=f"rig {name}", lower=0.0, upper=high, unit=unit)
         for name in ("loss", "burst_enter", "burst_leave", "stale", "duplicate"):
