@@ -581,7 +581,7 @@ def longitudinal_acceleration(
 @njit(cache=True)
 def _bike_rates(
     z: Array, out: Array, A: Array, Bv: Array, tau: float, Bw: Array, side: float, force: float,
-    m: float, m_eq: float, v_min: float,
+    m: float, m_eq: float, v_min: float, cos_psi: float, sin_psi: float,
 ) -> None:  # fmt: skip
     v_x = z[8]
     for r in range(8):
@@ -591,10 +591,28 @@ def _bike_rates(
         out[r] = acc
     dv = (force + m * z[1] * z[0]) / m_eq
     out[8] = 0.0 if (v_x <= v_min and dv < 0.0) else dv
-    cos_psi, sin_psi = math.cos(z[9]), math.sin(z[9])
     out[9] = z[1]
     out[10] = v_x * cos_psi - z[0] * sin_psi
     out[11] = v_x * sin_psi + z[0] * cos_psi
+
+
+_SERIES_TURN = 0.01
+"""Largest turn [rad] :func:`_turned` takes by its series; the first term it omits, d^8 / 8!,
+is then below 3e-21, far under the rounding of a double."""
+
+
+@njit(cache=True)
+def _turned(psi: float, cos_psi: float, sin_psi: float, d: float) -> tuple[float, float]:
+    """cos(psi + d) and sin(psi + d) for the yaw ``psi`` [rad] turned by ``d`` [rad] in one RK4
+    stage: from cos(psi) and sin(psi) by the angle-addition formulas, with cos(d) and sin(d)
+    from their Taylor series (to d^6 and d^7) when |d| <= :data:`_SERIES_TURN`; by
+    ``math.cos`` and ``math.sin`` beyond."""
+    if abs(d) > _SERIES_TURN:
+        return math.cos(psi + d), math.sin(psi + d)
+    d2 = d * d
+    cos_d = 1.0 - d2 * (1.0 / 2.0 - d2 * (1.0 / 24.0 - d2 / 720.0))
+    sin_d = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 / 5040.0)))
+    return cos_psi * cos_d - sin_psi * sin_d, sin_psi * cos_d + cos_psi * sin_d
 
 
 @njit(cache=True)
@@ -627,16 +645,20 @@ def bike_rk4(
     for r in range(8):
         for c in range(8):
             A[r, c] = A0[r, c] + v * A1[r, c]
-    _bike_rates(z, k1, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
+    cos_psi, sin_psi = math.cos(z[9]), math.sin(z[9])
+    _bike_rates(z, k1, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_psi, sin_psi)
     for i in range(12):
         tmp[i] = z[i] + 0.5 * h * k1[i]
-    _bike_rates(tmp, k2, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
+    c, s = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    _bike_rates(tmp, k2, A, Bv, tau, Bw, side, force, m, m_eq, v_min, c, s)
     for i in range(12):
         tmp[i] = z[i] + 0.5 * h * k2[i]
-    _bike_rates(tmp, k3, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
+    c, s = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    _bike_rates(tmp, k3, A, Bv, tau, Bw, side, force, m, m_eq, v_min, c, s)
     for i in range(12):
         tmp[i] = z[i] + h * k3[i]
-    _bike_rates(tmp, k4, A, Bv, tau, Bw, side, force, m, m_eq, v_min)
+    c, s = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    _bike_rates(tmp, k4, A, Bv, tau, Bw, side, force, m, m_eq, v_min, c, s)
     for i in range(12):
         z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     if z[8] < v_min:
