@@ -99,8 +99,8 @@ def _loop_alone(duration: float) -> tuple[float, float]:
         out = np.full((n, len(RECORDED)), np.nan)
         limits = np.array([np.inf, -np.inf, np.inf])
         wall, cpu = time.perf_counter(), time.thread_time()
-        _run_chunk(0, out, model, data, rig, world, limits)
-        rate = (n / (time.perf_counter() - wall), n / (time.thread_time() - cpu))
+        done = _run_chunk(0, out, model, data, rig, world, limits)  # < n: left the domain
+        rate = (done / (time.perf_counter() - wall), done / (time.thread_time() - cpu))
         best = max(best, rate)
     return best
 
