@@ -649,16 +649,16 @@ def bike_rk4(
     _bike_rates(z, k1, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_psi, sin_psi)
     for i in range(12):
         tmp[i] = z[i] + 0.5 * h * k1[i]
-    c, s = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
-    _bike_rates(tmp, k2, A, Bv, tau, Bw, side, force, m, m_eq, v_min, c, s)
+    cos_k, sin_k = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    _bike_rates(tmp, k2, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_k, sin_k)
     for i in range(12):
         tmp[i] = z[i] + 0.5 * h * k2[i]
-    c, s = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
-    _bike_rates(tmp, k3, A, Bv, tau, Bw, side, force, m, m_eq, v_min, c, s)
+    cos_k, sin_k = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    _bike_rates(tmp, k3, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_k, sin_k)
     for i in range(12):
         tmp[i] = z[i] + h * k3[i]
-    c, s = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
-    _bike_rates(tmp, k4, A, Bv, tau, Bw, side, force, m, m_eq, v_min, c, s)
+    cos_k, sin_k = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    _bike_rates(tmp, k4, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_k, sin_k)
     for i in range(12):
         z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     if z[8] < v_min:
