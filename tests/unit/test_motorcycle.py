@@ -80,9 +80,9 @@ def test_discretize_is_exact_zoh(sharp: SharpParameters) -> None:
 
 def test_stage_yaw_turn_matches_the_library_trigonometry() -> None:
     # cos(psi + d) and sin(psi + d) by angle addition and the Taylor series of the small turn
-    # d equal math.cos and math.sin of psi + d to a few ulp plus the rounding of the sum psi + d
-    # itself (half a spacing of psi), on both sides of the series' bound and beyond it, at yaws
-    # over several turns
+    # d equal math.cos and math.sin of psi + d to a few ulp plus a spacing of psi (the reference
+    # rounds the sum psi + d by up to half a spacing), on both sides of the series' bound and
+    # beyond it, at yaws over several turns
     psi = np.linspace(-20.0, 20.0, 401)
     for d in (0.0, 1e-9, -3e-4, 2e-3, -model._SERIES_TURN, model._SERIES_TURN, 0.05, -0.7):
         for p in psi:
