@@ -51,3 +51,30 @@ def test_a_report_after_a_rewritten_result_is_drawn_from_the_new_one(tmp_path: P
     shutil.rmtree(folder)
     _write(folder, NAMES[:3])  # no handlebar angle any more
     assert draw_saved_figure(str(folder), "plot_tracking") is None
+
+
+def test_closing_does_not_wait_for_the_fork_servers_imports(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # A command that ends before its report (a refused design, a failed run) closes the
+    # workers while the fork server may still import matplotlib: close() ends it then, and
+    # does not wait for its imports. Here they never end (a module that sleeps for an hour):
+    # a close() that waited would hang, and the thread below would still be alive.
+    import multiprocessing
+    import os
+    import sys
+    import threading
+
+    from motosim.report import figures
+
+    if (os.cpu_count() or 1) < 2 or "forkserver" not in multiprocessing.get_all_start_methods():
+        pytest.skip("no fork server on this machine: nothing is started")
+    (tmp_path / "slow_to_import.py").write_text("import time\ntime.sleep(3600)\n")
+    # the fork server is a new interpreter: it finds the module on its PYTHONPATH
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(tmp_path), *sys.path]))
+    monkeypatch.setattr(figures, "_PRELOAD", ["slow_to_import"])
+    workers = FigureWorkers()
+    closing = threading.Thread(target=workers.close, daemon=True)
+    closing.start()
+    closing.join(timeout=60.0)
+    assert not closing.is_alive(), "close() waited for the fork server's imports"

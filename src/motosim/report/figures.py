@@ -10,6 +10,7 @@ figures are drawn in the calling process; both ways give the same PNG images.
 """
 
 import base64
+import contextlib
 import io
 import multiprocessing
 import os
@@ -157,15 +158,25 @@ class FigureWorkers:
 
     def close(self) -> None:
         """Stop the worker processes and the fork server, and wait for them (so that their
-        CPU time counts in the command's)."""
+        CPU time counts in the command's).
+
+        The fork server is terminated rather than asked to stop: it reads the request only
+        once its imports are done, which a command that ends before its report (a refused
+        design, a failed run, Ctrl-C) would otherwise wait for.
+        """
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
         if self._context is not None:
             from multiprocessing import forkserver
 
-            stop = getattr(forkserver._forkserver, "_stop", None)  # else it ends with us
+            server = forkserver._forkserver
+            pid = getattr(server, "_forkserver_pid", None)
+            stop = getattr(server, "_stop", None)  # else it ends with us
             if stop is not None:
+                if pid is not None:
+                    with contextlib.suppress(OSError):
+                        os.kill(pid, signal.SIGTERM)
                 stop()
             self._context = None
 
