@@ -300,17 +300,40 @@ def _write_beside(file: Path, text: str, tmp: Path) -> Path:
     return written
 
 
+@pytest.fixture(scope="module")
+def beside(tmp_path_factory: pytest.TempPathFactory) -> Callable[[Path, str], Path]:
+    """``beside(file, text)``: ``text`` written as ``file`` in a folder of copies of the
+    files beside it, made once per source folder for the module's cases: each case writes
+    its text over the last one's, and the other files of the folder are the packaged ones."""
+    folders: dict[Path, Path] = {}
+    last: dict[Path, Path] = {}  # the file last written in each folder
+
+    def write(file: Path, text: str) -> Path:
+        source = file.parent
+        if source not in folders:
+            folders[source] = tmp_path_factory.mktemp("beside")
+            _write_beside(file, file.read_text(encoding="utf-8"), folders[source])
+        previous = last.get(source, file)
+        if previous != file:  # the packaged text back where another file was mutated
+            (folders[source] / previous.name).write_bytes(previous.read_bytes())
+        last[source] = file
+        written = folders[source] / file.name
+        written.write_text(text, encoding="utf-8")
+        return written
+
+    return write
+
+
 @pytest.mark.parametrize(("file", "path", "mutation", "rule"), list(_file_cases()))
 def test_every_value_of_every_file(
     file: Path, path: tuple[str, ...], mutation: str, rule: str, tmp_path: Path,
-    request: pytest.FixtureRequest,
+    request: pytest.FixtureRequest, beside: Callable[[Path, str], Path],
 ) -> None:  # fmt: skip
     document = read_toml(file, what="file")
     problems = []
     outcomes = {}
     for name in ("zero", mutation) if rule == "like_zero" else (mutation,):
-        text = dumps(_mutated(document, path, MUTATIONS[name]))
-        written = _write_beside(file, text, tmp_path)
+        written = beside(file, dumps(_mutated(document, path, MUTATIONS[name])))
         for argv, stop in _argv(file, path, written, tmp_path,
                                 lambda: request.getfixturevalue("result")):  # fmt: skip
             outcomes[name, argv[0]] = run_cli(argv, stop)

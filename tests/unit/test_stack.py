@@ -97,14 +97,30 @@ def test_recorded_layout_recompiles_when_the_signal_table_changes(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     # The loop's columns are compile-time constants from motosim.signals.RECORDED; numba's
-    # cache does not follow that module, so a changed table must trigger a recompilation.
+    # cache does not follow that module, so a changed table must trigger a recompilation of
+    # the loop. The loop stands in here by what records its recompile() (numba's own, which
+    # recompiles every signature the suite has compiled: minutes); the layout's key is
+    # recompiled for real, and back.
+    from numba.core import config
+
     from motosim.sim import closed_loop
 
+    recompiled: list[bool] = []
+
+    class Loop:
+        def recompile(self) -> None:
+            recompiled.append(True)
+
+    monkeypatch.setattr(closed_loop, "_run_chunk", Loop())
+    closed_loop._ensure_current_layout()
+    assert recompiled == []  # the compiled layout is the table's
     monkeypatch.setattr(closed_loop, "_LAYOUT_KEY", closed_loop._LAYOUT_KEY + 1)
     closed_loop._ensure_current_layout()
     assert closed_loop._compiled_layout_key() == closed_loop._LAYOUT_KEY
+    assert recompiled == ([] if config.DISABLE_JIT else [True])  # uncompiled: nothing stale
     monkeypatch.undo()
-    closed_loop._ensure_current_layout()
+    if not config.DISABLE_JIT:  # the key's cached code back to the table's
+        closed_loop._compiled_layout_key.recompile()
     assert closed_loop._compiled_layout_key() == closed_loop._LAYOUT_KEY
 
 
