@@ -338,6 +338,31 @@ def test_design_file_observer_is_what_runs(tmp_path: Path) -> None:
     assert np.sqrt(np.mean((a["tau_r_hat"] - b["tau_r_hat"]) ** 2)) > 0.05
 
 
+def test_a_design_file_scenario_runs_with_the_default_rider(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # A design file's controller was designed for the handlebar alone, so the stack models
+    # no hands: the default rider there has none (no grip is refused), and the run is the
+    # one of a rider who says hands = "off".
+    design = (ROOT / "tests/data/design_simacom.toml").read_text(encoding="utf-8")
+    (tmp_path / "d.toml").write_text(design, encoding="utf-8")
+    inputs = _inputs_with(tmp_path, '[controller]\ndesign = "d.toml"\n')
+    assert inputs.scenario.rider.hands is None and not inputs.scenario.models_hands
+    assert inputs.scenario.rider_hands is None and inputs.scenario.stack_hands is None
+    rig = build_rig(inputs, rng=np.random.default_rng(0))
+    assert not np.any(rig.hands)
+    sc = inputs.scenario
+    off = dataclasses.replace(
+        inputs, scenario=dataclasses.replace(sc, rider=dataclasses.replace(sc.rider, hands="off"))
+    )
+    a = simulate(inputs, rng=np.random.default_rng(0))
+    b = simulate(off, rng=np.random.default_rng(0))
+    np.testing.assert_array_equal(a.data, b.data)
+    code, _, err = _run(capsys, "simulate", str(tmp_path / "s.toml"), "--out",
+                        str(tmp_path / "out"), "--no-report")  # fmt: skip
+    assert code == 0, err
+
+
 def test_a_design_for_another_handlebar_warns_in_one_line(tmp_path: Path) -> None:
     # The run takes a design file's gains with the scenario's nominal handlebar; a design made
     # for another handlebar (J_eq x1.5) than that one is legal but mixes parts: one warning

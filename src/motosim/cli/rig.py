@@ -212,12 +212,12 @@ def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
 
     from motosim.io.can import handlebar_codecs
     from motosim.rt.rig import VirtualRig
-    from motosim.sim.hands import hands_array, resolve_hands
+    from motosim.sim.hands import hands_array
 
     sc = inputs.scenario
     return VirtualRig(
         inputs.true_handlebar, settings, handlebar_codecs(), link, rider,
-        np.random.default_rng(sc.seed), hands=hands_array(resolve_hands(sc.rider.hands)),
+        np.random.default_rng(sc.seed), hands=hands_array(sc.rider_hands),
         hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
     )  # fmt: skip
 
