@@ -43,9 +43,12 @@ test: lint typecheck
 	NUMBA_DISABLE_JIT=1 $(BIN)/pytest -q -p no:cacheprovider -p no:randomly tests/unit/test_stack.py \
 		tests/unit/estimation tests/integration/test_stack_golden.py::test_short_run_reproduces_the_pinned_start
 
-# the suite on the newest versions pyproject.toml's ranges allow, in a shuffled order (the seed
-# is printed: `pytest -p randomly --randomly-seed=N` repeats it), with OpenBLAS's kernels of
-# another x86 CPU, so that drift, an order dependence or a claim decided by rounding shows up
+# the tests not marked slow on the newest versions pyproject.toml's ranges allow, in a shuffled
+# order (the seed is printed: `pytest -p randomly --randomly-seed=N` repeats it), with
+# OpenBLAS's kernels of another x86 CPU, so that drift, an order dependence or a claim decided
+# by rounding shows up; `make test-latest LATEST_TESTS=` runs the whole suite so (as long
+# again as `make test`)
+LATEST_TESTS ?= -m "not slow"
 test-latest:
 	rm -rf $(LATEST)
 	$(PYTHON) -m venv $(LATEST)
@@ -53,7 +56,7 @@ test-latest:
 	$(LATEST)/bin/python -m pip install --quiet --upgrade --upgrade-strategy eager -e '.[dev]'
 	$(LATEST)/bin/python -m pip freeze --exclude-editable > $(LATEST)/versions.txt
 	@echo "newest versions: $(LATEST)/versions.txt (against $(LOCK): diff them)"
-	$(if $(filter x86_64,$(shell uname -m)),OPENBLAS_CORETYPE=Prescott) $(LATEST)/bin/pytest -p randomly -p no:cacheprovider
+	$(if $(filter x86_64,$(shell uname -m)),OPENBLAS_CORETYPE=Prescott) $(LATEST)/bin/pytest -p randomly -p no:cacheprovider $(LATEST_TESTS)
 
 # write the lock from a fresh environment of today's newest versions within the ranges; then
 # run `make test` (and `make docs`) on it before committing it

@@ -64,7 +64,7 @@ from motosim.rt.clock import MonotonicClock
 from motosim.rt.config import parse_safety
 from motosim.rt.fused import context_period, monotonic_ns
 from motosim.rt.privileges import apply_privileges
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.stack import CompiledStack, stack_period
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
 from motosim.sim.closed_loop import RunInputs
@@ -205,8 +205,12 @@ def bench_setup(n: int) -> BenchSetup:
         frames[k] = np.frombuffer(st.encode(values), dtype=np.uint8)
 
     def runner() -> RealtimeRunner:
-        return RealtimeRunner(CompiledStack(model), _Quiet(), codecs, limits, rate=1000.0,
-                              capacity=1 << 12, handlebar=hb)  # fmt: skip
+        return RealtimeRunner(
+            CompiledStack(model),
+            _Quiet(),
+            codecs,
+            RunSettings(limits=limits, rate=1000.0, capacity=1 << 12, handlebar=hb),
+        )
 
     return BenchSetup(inputs, model, codecs, theta, frames, runner)
 

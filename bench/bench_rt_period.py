@@ -27,7 +27,7 @@ from motosim.control.torque_feedback import PAPER_CONTROLLER
 from motosim.io.can import UdpMulticastLink, handlebar_codecs, open_link
 from motosim.params import load_parameters
 from motosim.rt.ring import SampleRing
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.safety import SafetyLimits, SafetyStage
 from motosim.rt.stack import CompiledStack, compiled
 from motosim.rt.telemetry import StateSender
@@ -112,7 +112,9 @@ def _measure(fast: bool, n: int, *, own_filter: bool = True) -> dict[str, np.nda
         drain()
         out["receive, nothing waiting"] = _times(host.receive, n)
         stack = _stack()
-        runner = RealtimeRunner(stack, host, codecs, LIMITS, rate=1000.0, handlebar=HB)
+        runner = RealtimeRunner(
+            stack, host, codecs, RunSettings(limits=LIMITS, rate=1000.0, handlebar=HB)
+        )
         runner.discard_pending()
         out["period (whole)"] = _times(
             lambda: runner.period(counter[0], counter[0] * 1e-3), n, between=status

@@ -25,7 +25,7 @@ from motosim.params import load_parameters
 from motosim.rt import fused
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import WARM_LEAD, RateLoop
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.safety import SafetyLimits
 from motosim.rt.stack import CompiledStack
 from motosim.sim import build_stack, parse_scenario, prepare
@@ -139,7 +139,11 @@ def _run(
     codecs = handlebar_codecs()
     link = _PairLink()
     runner = RealtimeRunner(
-        _stack(), link, codecs, LIMITS, rate=RATE, capacity=4096, now=time.monotonic, warm=warm
+        _stack(),
+        link,
+        codecs,
+        RunSettings(limits=LIMITS, rate=RATE, capacity=4096, warm=warm),
+        now=time.monotonic,
     )
     assert runner.compile_wait()  # compiled stack, the fast link, Linux, numba's JIT
     step = runner.wait_period if compiled_wait else runner.period
@@ -219,7 +223,11 @@ def test_a_socket_error_is_counted_and_the_watchdog_trips_as_in_the_python_path(
         codecs = handlebar_codecs()
         link = _PairLink()
         runner = RealtimeRunner(
-            _stack(), link, codecs, LIMITS, rate=RATE, start_timeout=0.03, now=time.monotonic
+            _stack(),
+            link,
+            codecs,
+            RunSettings(limits=LIMITS, rate=RATE, start_timeout=0.03),
+            now=time.monotonic,
         )
         assert runner.compile_wait()
         link._sock.close()
@@ -249,7 +257,9 @@ def test_wait_period_waits_for_its_deadline_and_reads_a_real_multicast_socket() 
     assert isinstance(host, UdpMulticastLink)
     try:
         codecs = handlebar_codecs()
-        runner = RealtimeRunner(_stack(), host, codecs, LIMITS, rate=RATE, now=time.monotonic)
+        runner = RealtimeRunner(
+            _stack(), host, codecs, RunSettings(limits=LIMITS, rate=RATE), now=time.monotonic
+        )
         assert runner.compile_wait()
         drive.send(codecs.status.frame_id, _datagram(codecs, "status", angle=0.1)[-8:])
         assert host.readable(5.0)
@@ -282,7 +292,7 @@ def test_the_loop_with_woke_lets_the_step_end_the_wait() -> None:
 def test_wait_period_needs_compile_wait() -> None:
     codecs = handlebar_codecs()
     link = _PairLink()
-    runner = RealtimeRunner(_stack(), link, codecs, LIMITS, rate=RATE)
+    runner = RealtimeRunner(_stack(), link, codecs, RunSettings(limits=LIMITS, rate=RATE))
     assert not runner.waits_compiled
     with pytest.raises(MotosimError, match="compile_wait"):
         runner.wait_period(0, 1.0)
@@ -294,5 +304,5 @@ def test_other_links_keep_the_python_wait() -> None:
     # python-can's link (here its virtual bus) has no socket read from compiled code
     codecs = handlebar_codecs()
     with open_link("virtual:compiled_wait") as link:
-        runner = RealtimeRunner(_stack(), link, codecs, LIMITS, rate=RATE)
+        runner = RealtimeRunner(_stack(), link, codecs, RunSettings(limits=LIMITS, rate=RATE))
         assert not runner.compile_wait() and not runner.waits_compiled

@@ -16,8 +16,8 @@ from motosim.params import load_parameters
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.fused import LoopColumn as C
 from motosim.rt.loop import FramePacedLoop, RateLoop
-from motosim.rt.rig import LockstepLink, RigFaults, RigSettings, VirtualRig
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.rig import LockstepLink, RigFaults, RigRider, RigSettings, VirtualRig
+from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.safety import Fault, SafetyLimits, State
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
@@ -87,6 +87,12 @@ def links() -> Iterator[tuple[CanLink, CanLink]]:
     drive.close()
 
 
+def _held_rig(drive: CanLink, settings: RigSettings, seed: int, samples: int) -> VirtualRig:
+    """The rig with a rider holding 3 N*m for ``samples`` plant sub-steps, then on."""
+    rider = RigRider(np.full(samples, 3.0))
+    return VirtualRig(HB, settings, CODECS, drive, rider, np.random.default_rng(seed))
+
+
 def _run(
     links: tuple[CanLink, CanLink],
     rate: float,
@@ -99,8 +105,8 @@ def _run(
     host, drive = links
     settings = _settings(rate, **rig)
     tau = np.full(round(seconds * settings.plant_rate) + 1, rider)
-    vrig = VirtualRig(HB, settings, CODECS, drive, tau, np.random.default_rng(0))
-    runner = RealtimeRunner(SpringStack(gain), host, CODECS, LIMITS, rate=rate)
+    vrig = VirtualRig(HB, settings, CODECS, drive, RigRider(tau), np.random.default_rng(0))
+    runner = RealtimeRunner(SpringStack(gain), host, CODECS, RunSettings(limits=LIMITS, rate=rate))
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
     RateLoop(rate, clock).run(runner.period, periods=round(seconds * rate))
@@ -180,8 +186,8 @@ def test_random_loss_and_latency_are_tolerated_and_counted(
 def test_a_stop_request_fades_out_and_ends_the_run(links: tuple[CanLink, CanLink]) -> None:
     host, drive = links
     settings = _settings(100.0)
-    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(100_000, 3.0), np.random.default_rng(1))
-    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+    vrig = _held_rig(drive, settings, 1, 100_000)
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=100.0))
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
 
@@ -202,8 +208,10 @@ def test_waiting_for_arm_keeps_the_torque_off_until_arm_then_fades_in(
 ) -> None:
     host, drive = links
     settings = _settings(100.0)
-    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(100_000, 3.0), np.random.default_rng(2))
-    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, wait_for_arm=True)
+    vrig = _held_rig(drive, settings, 2, 100_000)
+    runner = RealtimeRunner(
+        SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=100.0, wait_for_arm=True)
+    )
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
 
@@ -239,11 +247,13 @@ def _paced(
     host, drive = links
     settings = _settings(rate, **rig)
     tau = np.full(round(seconds * settings.plant_rate) + 1, rider)
-    vrig = VirtualRig(HB, settings, CODECS, drive, tau, np.random.default_rng(0))
+    vrig = VirtualRig(HB, settings, CODECS, drive, RigRider(tau), np.random.default_rng(0))
     clock = SimulatedClock()
     clock.listen(lambda t: vrig.advance_to(t) if t < rig_until else None)
     link = LockstepLink(host, clock, 1.0 / settings.plant_rate)
-    runner = RealtimeRunner(SpringStack(20.0), link, CODECS, LIMITS, rate=rate, clock=clock)
+    runner = RealtimeRunner(
+        SpringStack(20.0), link, CODECS, RunSettings(limits=LIMITS, rate=rate), clock=clock
+    )
     frames: list[int] = []  # status frames handled by each period (its wait included)
 
     def period(k: int, t: float) -> bool:
@@ -322,8 +332,8 @@ def test_a_loop_late_while_the_bus_is_off_sends_zero_on_its_first_period_back(
     # were not counted: the stale command went out for 2 more periods).
     host, drive = links
     settings = _settings(rate, bus_off_at=0.8, bus_off_duration=1.0)
-    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(20_001, 3.0), np.random.default_rng(0))
-    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=rate)
+    vrig = _held_rig(drive, settings, 0, 20_001)
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=rate))
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
     stall = round(0.8 * rate) - 1
@@ -356,11 +366,13 @@ def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
     tau = np.zeros(200_000)
     tau[:40_000] = 30.0
     tau[:30_000] = np.linspace(0.0, 30.0, 30_000)
-    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, tau, np.random.default_rng(3))
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, RigRider(tau), np.random.default_rng(3))
     limits = SafetyLimits(**{
         name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
     } | {"max_slew": 5.0})  # fmt: skip
-    runner = RealtimeRunner(SpringStack(30.0), host, CODECS, limits, rate=100.0, duration=4.0)
+    runner = RealtimeRunner(
+        SpringStack(30.0), host, CODECS, RunSettings(limits=limits, rate=100.0, duration=4.0)
+    )
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
     loop = RateLoop(100.0, clock)
@@ -402,9 +414,10 @@ def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
     # command stays finite trips NON_FINITE in that period (before, a NaN estimate was
     # taken for "no estimate" and the command went on).
     host, drive = links
-    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(20_001, 3.0),
-                      np.random.default_rng(4))  # fmt: skip
-    runner = RealtimeRunner(EstimateStack(20.0, column, 70), host, CODECS, LIMITS, rate=100.0)
+    vrig = _held_rig(drive, _settings(100.0), 4, 20_001)
+    runner = RealtimeRunner(
+        EstimateStack(20.0, column, 70), host, CODECS, RunSettings(limits=LIMITS, rate=100.0)
+    )
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
     RateLoop(100.0, clock).run(runner.period, periods=100)
@@ -436,9 +449,13 @@ def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
     } | {"max_speed": 6.0, "speed_band": 4.0})  # fmt: skip
     t = np.arange(40_001) / 10_000.0
     tau = 25.0 * np.sin(2.0 * np.pi * t)  # the rider swings the handlebar at 1 Hz
-    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, tau, np.random.default_rng(3))
-    runner = RealtimeRunner(SpringStack(5.0), host, CODECS, limits, rate=1000.0,
-                            periods_per_frame=10)  # fmt: skip
+    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, RigRider(tau), np.random.default_rng(3))
+    runner = RealtimeRunner(
+        SpringStack(5.0),
+        host,
+        CODECS,
+        RunSettings(limits=limits, rate=1000.0, periods_per_frame=10),
+    )
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
 
@@ -470,8 +487,10 @@ def test_nothing_enables_the_torque_again_after_a_fault(links: tuple[CanLink, Ca
     # keyboard E-stop after it does not replace the first fault's reason.
     host, drive = links
     settings = _settings(100.0, faults=RigFaults(estop=0.5))
-    vrig = VirtualRig(HB, settings, CODECS, drive, np.full(100_000, 3.0), np.random.default_rng(5))
-    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, linger=5.0)
+    vrig = _held_rig(drive, settings, 5, 100_000)
+    runner = RealtimeRunner(
+        SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=100.0, linger=5.0)
+    )
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
 
@@ -499,9 +518,8 @@ def test_a_stop_during_the_fade_in(links: tuple[CanLink, CanLink], stop: str) ->
     # brought it (0.4 of the command, down by 0.02 of it per period at 100 Hz: never a
     # step up or to zero), then the run ends IDLE; an E-stop sends zero at once.
     host, drive = links
-    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(100_000, 3.0),
-                      np.random.default_rng(6))  # fmt: skip
-    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+    vrig = _held_rig(drive, _settings(100.0), 6, 100_000)
+    runner = RealtimeRunner(SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=100.0))
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
 
@@ -530,9 +548,10 @@ def test_a_heartbeat_whose_first_deadline_was_skipped_is_sent_late_not_dropped()
     channel = f"virtual:heartbeat{next(_channels)}"
     host, drive, listener = open_link(channel), open_link(channel), open_link(channel)
     try:
-        vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(20_001, 3.0),
-                          np.random.default_rng(7))  # fmt: skip
-        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0)
+        vrig = _held_rig(drive, _settings(100.0), 7, 20_001)
+        runner = RealtimeRunner(
+            SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=100.0)
+        )
         clock = SimulatedClock()
         clock.listen(vrig.advance_to)
 
@@ -562,9 +581,10 @@ def test_the_heartbeat_goes_on_through_the_fade_out_after_the_duration() -> None
     channel = f"virtual:heartbeat{next(_channels)}"
     host, drive, listener = open_link(channel), open_link(channel), open_link(channel)
     try:
-        vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(200_001, 3.0),
-                          np.random.default_rng(7))  # fmt: skip
-        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, duration=3.0)
+        vrig = _held_rig(drive, _settings(100.0), 7, 200_001)
+        runner = RealtimeRunner(
+            SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=100.0, duration=3.0)
+        )
         clock = SimulatedClock()
         clock.listen(vrig.advance_to)
         counters, stamps, ends = [], [], []
@@ -603,9 +623,10 @@ def test_the_rows_count_of_skipped_deadlines_is_the_loops_through_the_fade_out()
     channel = f"virtual:missed{next(_channels)}"
     host, drive = open_link(channel), open_link(channel)
     try:
-        vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(200_001, 3.0),
-                          np.random.default_rng(7))  # fmt: skip
-        runner = RealtimeRunner(SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, duration=3.0)
+        vrig = _held_rig(drive, _settings(100.0), 7, 200_001)
+        runner = RealtimeRunner(
+            SpringStack(20.0), host, CODECS, RunSettings(limits=LIMITS, rate=100.0, duration=3.0)
+        )
         clock = SimulatedClock()
         clock.listen(vrig.advance_to)
 
@@ -633,10 +654,12 @@ def test_a_run_never_armed_ends_at_its_duration(links: tuple[CanLink, CanLink]) 
     # The torque never on (no arm): the duration's end needs no fade-out, the run ends with
     # its last period, as many rows as the duration's periods.
     host, drive = links
-    vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, np.full(100_000, 3.0),
-                      np.random.default_rng(1))  # fmt: skip
+    vrig = _held_rig(drive, _settings(100.0), 1, 100_000)
     runner = RealtimeRunner(
-        SpringStack(20.0), host, CODECS, LIMITS, rate=100.0, wait_for_arm=True, duration=1.0
+        SpringStack(20.0),
+        host,
+        CODECS,
+        RunSettings(limits=LIMITS, rate=100.0, wait_for_arm=True, duration=1.0),
     )
     clock = SimulatedClock()
     clock.listen(vrig.advance_to)
@@ -651,4 +674,19 @@ def test_a_duration_that_is_no_time_is_refused_in_one_line(
     links: tuple[CanLink, CanLink], duration: float
 ) -> None:
     with pytest.raises(MotosimError, match=r"^duration = .* s: expected a time >= 0$"):
-        RealtimeRunner(SpringStack(1.0), links[0], CODECS, LIMITS, rate=100.0, duration=duration)
+        RealtimeRunner(
+            SpringStack(1.0),
+            links[0],
+            CODECS,
+            RunSettings(limits=LIMITS, rate=100.0, duration=duration),
+        )
+
+
+@pytest.mark.parametrize(
+    ("name", "value"),
+    [("rate", 0.0), ("rate", math.nan), ("linger", -0.1), ("start_timeout", 0.0),
+     ("periods_per_frame", 0), ("capacity", 0)],
+)  # fmt: skip
+def test_a_run_setting_out_of_its_range_is_refused_in_one_line(name: str, value: float) -> None:
+    with pytest.raises(MotosimError, match=rf"^{name} = .*: expected [^\n]*$"):
+        RunSettings(LIMITS, **({"rate": 100.0} | {name: value}))  # type: ignore[arg-type]

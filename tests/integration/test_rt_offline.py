@@ -21,8 +21,8 @@ from motosim.params import load_parameters
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.fused import LoopColumn
 from motosim.rt.loop import RateLoop
-from motosim.rt.rig import VirtualRig
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.rig import RigRider, VirtualRig
+from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.safety import SafetyLimits, State
 from motosim.rt.stack import CompiledStack
 from motosim.sim import RunInputs, build_rig, build_stack, parse_scenario, prepare, simulate
@@ -293,15 +293,21 @@ def _run_both_ways(
     stepper = stack if fused else _StackInPython(stack)
     with open_link(channel) as host, open_link(channel) as drive:
         rig = VirtualRig(
-            inputs.true_handlebar,  # type: ignore[attr-defined]
-            settings, codecs, drive, world.rider_profile, np.random.default_rng(0),
-            rider_on_enable=False,
-        )  # fmt: skip
+            inputs.true_handlebar,
+            settings,
+            codecs,
+            drive,
+            RigRider(world.rider_profile, on_enable=False),
+            np.random.default_rng(0),
+        )
         clock = SimulatedClock(-1.0 / rate)
         runner = RealtimeRunner(
-            stepper, host, codecs, limits, rate=rate, handlebar=inputs.nominal_handlebar,  # type: ignore[attr-defined]
+            stepper,
+            host,
+            codecs,
+            RunSettings(limits=limits, rate=rate, handlebar=inputs.nominal_handlebar),
             now=clock.now,
-        )  # fmt: skip
+        )
         clock.listen(rig.advance_to)
 
         def period(k: int, t: float) -> bool:

@@ -19,8 +19,8 @@ from motosim.errors import MotosimError
 from motosim.io.runs import load_scenario
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
-from motosim.rt.rig import RigFaults, VirtualRig
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.rig import RigFaults, RigRider, VirtualRig
+from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.safety import SafetyLimits, State
 from motosim.rt.stack import CompiledStack
 from motosim.sim import build_rig, build_stack
@@ -78,15 +78,23 @@ def _lockstep(
     try:
         with open_link(channel) as host, open_link(channel) as drive:
             rig = VirtualRig(  # the scenario's hands, as `motosim rig` gives them
-                inputs.true_handlebar, settings, codecs, drive, rider,  # type: ignore[arg-type]
-                np.random.default_rng(sc.seed), hands=world.hands, hands_off=world.hands_off,
+                inputs.true_handlebar, settings, codecs, drive,
+                RigRider(rider, hands=world.hands, hands_off=world.hands_off),  # type: ignore[arg-type]
+                np.random.default_rng(sc.seed),
             )  # fmt: skip
             runner = RealtimeRunner(
                 CompiledStack(model, force=world.force, side_force=world.side_force),
-                host, codecs, limits, rate=rate, periods_per_frame=model.measure_every,
+                host,
+                codecs,
+                RunSettings(
+                    limits=limits,
+                    rate=rate,
+                    periods_per_frame=model.measure_every,
+                    handlebar=inputs.nominal_handlebar,
+                    capacity=round(sc.duration * rate) + 8,
+                ),
                 telemetry=None if sender is None else sender.send,
-                handlebar=inputs.nominal_handlebar, capacity=round(sc.duration * rate) + 8,
-            )  # fmt: skip
+            )
             clock = SimulatedClock()
             clock.listen(rig.advance_to)
             peak = [0.0]

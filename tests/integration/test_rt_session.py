@@ -24,7 +24,7 @@ from motosim.io.results import load_result
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.config import parse_safety, within_safety
 from motosim.rt.lockstep import ideal_rig
-from motosim.rt.rig import VirtualRig
+from motosim.rt.rig import RigRider, VirtualRig
 from motosim.rt.safety import State
 from motosim.rt.session import Ending, RealtimeSession, SessionConfig
 from motosim.sim import build_stack
@@ -53,8 +53,14 @@ def _session(
     drive = open_link(bus)
     rate = sc.rates.plant
     tau = sc.rider.profile.sample(np.arange(round(30.0 * rate) + 1) / rate, inputs.tables)
-    rig = VirtualRig(inputs.true_handlebar, ideal_rig(sc), handlebar_codecs(), drive, tau,
-                     np.random.default_rng(0))  # fmt: skip
+    rig = VirtualRig(
+        inputs.true_handlebar,
+        ideal_rig(sc),
+        handlebar_codecs(),
+        drive,
+        RigRider(tau),
+        np.random.default_rng(0),
+    )
     clock = SimulatedClock()
     config = SessionConfig(
         inputs, model, limits, bus, folder, {"test": True}, duration, wait="python",

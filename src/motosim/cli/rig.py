@@ -211,14 +211,17 @@ def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
     import numpy as np
 
     from motosim.io.can import handlebar_codecs
-    from motosim.rt.rig import VirtualRig
+    from motosim.rt.rig import RigRider, VirtualRig
     from motosim.sim.hands import hands_array
 
     sc = inputs.scenario
-    return VirtualRig(
-        inputs.true_handlebar, settings, handlebar_codecs(), link, rider,
-        np.random.default_rng(sc.seed), hands=hands_array(sc.rider_hands),
+    held = RigRider(
+        rider, hands=hands_array(sc.rider_hands),
         hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
+    )  # fmt: skip
+    return VirtualRig(
+        inputs.true_handlebar, settings, handlebar_codecs(), link, held,
+        np.random.default_rng(sc.seed),
     )  # fmt: skip
 
 

@@ -23,12 +23,13 @@ from motosim.errors import MotosimError
 from motosim.io.can import Link, handlebar_codecs, open_link
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.loop import RateLoop
-from motosim.rt.rig import RigSettings, VirtualRider, VirtualRig
-from motosim.rt.run import RealtimeRunner
+from motosim.rt.rig import RigRider, RigSettings, VirtualRider, VirtualRig
+from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.safety import SafetyLimits
 from motosim.rt.stack import CompiledStack
 from motosim.rt.telemetry import StateReceiver, StateSender
 from motosim.sim import RunInputs, Scenario, build_rig, build_stack
+from motosim.sim.closed_loop import RigModel
 from motosim.sim.stack import account_for_delay
 
 if TYPE_CHECKING:
@@ -81,6 +82,16 @@ def free_limits(rate: float) -> SafetyLimits:
         hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
         hands_off_gain=1.0, fade_in=1.0 / rate,
     )  # fmt: skip
+
+
+def _check_estimator(sc: Scenario) -> None:
+    """Refuse a stack that reads a torque sensor, as ``motosim run`` does."""
+    if sc.estimator.name == SENSOR_ESTIMATOR:
+        raise MotosimError(
+            f'{sc.name}: [estimator] name = "{SENSOR_ESTIMATOR}" is not read in real time '
+            "(the loop does not take the HB_TORQUE frame, the stack would be told no "
+            "torque); expected an estimator of the angle and the current"
+        )
 
 
 class Lockstep:
@@ -175,12 +186,7 @@ class Lockstep:
         if not (math.isfinite(delay) and delay >= 0.0):
             raise MotosimError(f"delay = {delay!r} s: expected a non-negative time")
         sc = inputs.scenario
-        if sc.estimator.name == SENSOR_ESTIMATOR:  # as motosim run refuses it
-            raise MotosimError(
-                f'{sc.name}: [estimator] name = "{SENSOR_ESTIMATOR}" is not read in real time '
-                "(the loop does not take the HB_TORQUE frame, the stack would be told no "
-                "torque); expected an estimator of the angle and the current"
-            )
+        _check_estimator(sc)
         self._rate = sc.rates.control
         self._periods = round(sc.duration * self._rate)
         model = account_for_delay(build_stack(inputs), delay, inputs.design_handlebar)
@@ -194,38 +200,44 @@ class Lockstep:
         self._sender: StateSender | None = None
         self._links: list[Link] = []
         try:
-            rider: NDArray[np.float64] | Callable[[float], float] = world.rider_profile
-            if world.virtual_rider:
-                self._receiver = StateReceiver(("127.0.0.1", 0))
-                self._sender = StateSender(self._receiver.address)
-                virtual = VirtualRider(world, self._receiver, rate=self._rate)
-
-                def rider_now(t: float) -> float:
-                    self.rider_torques.append((self.rig.t, virtual(t)))
-                    return self.rider_torques[-1][1]
-
-                rider = rider_now
+            rider = self._rider(world)
             self.host = open_link(f"virtual:{channel}")
             self._links.append(self.host)
             drive = open_link(f"virtual:{channel}")
             self._links.append(drive)
+            held = RigRider(rider, on_enable=False, hands=world.hands, hands_off=world.hands_off)
             self.rig = VirtualRig(
-                inputs.true_handlebar, settings or ideal_rig(sc), codecs, drive, rider,
-                np.random.default_rng(seed), rider_on_enable=False, hands=world.hands,
-                hands_off=world.hands_off,
+                inputs.true_handlebar, settings or ideal_rig(sc), codecs, drive, held,
+                np.random.default_rng(seed),
+            )  # fmt: skip
+            run_settings = RunSettings(
+                limits, self._rate, capacity=max(1 << 16, self._periods + 1),
+                periods_per_frame=model.measure_every, validity=validity,
             )  # fmt: skip
             self.runner = RealtimeRunner(
                 CompiledStack(model, force=world.force, side_force=world.side_force),
-                self.host, codecs, limits, rate=self._rate,
-                capacity=max(1 << 16, self._periods + 1),
-                periods_per_frame=model.measure_every,
+                self.host, codecs, run_settings, platform=platform, now=self.clock.now,
                 telemetry=None if self._sender is None else self._sender.send,
-                platform=platform, now=self.clock.now, validity=validity,
             )  # fmt: skip
         except BaseException:
             self.close()
             raise
         self.clock.listen(self.rig.advance_to)
+
+    def _rider(self, world: RigModel) -> NDArray[np.float64] | Callable[[float], float]:
+        """The rig's rider: the scenario's torque profile, or the virtual rider steering by
+        the state stream (its torques kept in :attr:`rider_torques`)."""
+        if not world.virtual_rider:
+            return world.rider_profile
+        self._receiver = StateReceiver(("127.0.0.1", 0))
+        self._sender = StateSender(self._receiver.address)
+        virtual = VirtualRider(world, self._receiver, rate=self._rate)
+
+        def rider_now(t: float) -> float:
+            self.rider_torques.append((self.rig.t, virtual(t)))
+            return self.rider_torques[-1][1]
+
+        return rider_now
 
     def run(self) -> NDArray[np.float64]:
         """Run the scenario's duration (until the runner ends the run), then close the bus

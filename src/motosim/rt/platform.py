@@ -56,7 +56,7 @@ import socket
 import struct
 from dataclasses import dataclass
 from operator import itemgetter
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numba import njit
@@ -75,6 +75,7 @@ __all__ = [
     "PLATFORM_MAGIC",
     "PLATFORM_VERSION",
     "PlatformCanSender",
+    "PlatformCueing",
     "PlatformFrame",
     "PlatformLink",
     "PlatformOutput",
@@ -180,12 +181,34 @@ def decode_platform(data: bytes) -> PlatformFrame:
     )
 
 
+class PlatformCueing(NamedTuple):
+    """What :func:`platform_step` steps: the cueing's coefficients, its state and scratch.
+
+    Attributes
+    ----------
+    pitch : ndarray, shape (5,)
+        Suspension pitch section (``lowpass2`` of the rider's pitch model).
+    washout : ndarray, shape (26,)
+        :meth:`motosim.cueing.washout.WashoutDesign.coefficients`.
+    limits : ndarray, shape (3, 4)
+        :meth:`motosim.cueing.limits.LimitDesign.coefficients`.
+    state : ndarray, shape (19,)
+        ``[previous v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]``,
+        updated in place; zeros at rest.
+    command : ndarray, shape (4,)
+        The washout's roll, pitch, yaw and horizon command, written each period.
+    """
+
+    pitch: Array
+    washout: Array
+    limits: Array
+    state: Array
+    command: Array
+
+
 @njit(cache=True)
 def platform_step(
-    pitch_coef: Array,
-    washout_coef: Array,
-    limits: Array,
-    state: Array,
+    cueing: PlatformCueing,
     v_x: float,
     v_y: float,
     psi_dot: float,
@@ -197,15 +220,8 @@ def platform_step(
 
     Parameters
     ----------
-    pitch_coef : ndarray, shape (5,)
-        Suspension pitch section (``lowpass2`` of the rider's pitch model).
-    washout_coef : ndarray, shape (26,)
-        :meth:`motosim.cueing.washout.WashoutDesign.coefficients`.
-    limits : ndarray, shape (3, 4)
-        :meth:`motosim.cueing.limits.LimitDesign.coefficients`.
-    state : ndarray, shape (19,)
-        ``[previous v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]``,
-        updated in place; zeros at rest.
+    cueing : PlatformCueing
+        The coefficients, and the state updated in place.
     v_x, v_y : float
         Motorcycle forward and lateral speed [m/s].
     psi_dot : float
@@ -217,13 +233,13 @@ def platform_step(
     out : ndarray, shape (7,)
         Written: roll, pitch, yaw [rad], their rates [rad/s], horizon roll [rad].
     """
+    state, limits, cmd = cueing.state, cueing.limits, cueing.command
     dt = limits[0, 3]
     a_x = (v_x - state[0]) / dt - v_y * psi_dot if state[1] > 0.0 else 0.0
     state[0] = v_x
     state[1] = 1.0
-    theta = biquad_step(pitch_coef, 0, state, 2, a_x)
-    cmd = np.empty(4)
-    washout_step(washout_coef, state[4 : 4 + WASHOUT_STATE_SIZE], phi, theta, a_x, psi_dot, cmd)
+    theta = biquad_step(cueing.pitch, 0, state, 2, a_x)
+    washout_step(cueing.washout, state[4 : 4 + WASHOUT_STATE_SIZE], phi, theta, a_x, psi_dot, cmd)
     scale = min(1.0, max(0.0, envelope))
     for j in range(3):
         s = 4 + WASHOUT_STATE_SIZE + 2 * j
@@ -372,17 +388,19 @@ class PlatformOutput:
         if not (isinstance(send_every, int) and send_every >= 1):
             raise MotosimError(f"platform send_every = {send_every!r}; expected an integer >= 1")
         rider = config.rider
-        self._pitch = lowpass2(rider.pitch_gain, rider.pitch_frequency, rider.pitch_damping, dt)
-        self._washout = design_washout(config.washout, dt).coefficients()
-        self._limits = design_limits(config.platform, dt).coefficients()
-        self._state = np.zeros(_STATE_SIZE)
+        self._cueing = PlatformCueing(
+            lowpass2(rider.pitch_gain, rider.pitch_frequency, rider.pitch_damping, dt),
+            design_washout(config.washout, dt).coefficients(),
+            design_limits(config.platform, dt).coefficients(), np.zeros(_STATE_SIZE),
+            np.zeros(4),
+        )  # fmt: skip
         self.values = np.zeros(7)
         """The last roll, pitch, yaw [rad], rates [rad/s] and horizon roll [rad]."""
         self.sender: PlatformLink | None = sender
         self.send_every = send_every
         self.sequence = 0
-        platform_step(self._pitch, self._washout, self._limits, np.zeros(_STATE_SIZE),
-                      0.0, 0.0, 0.0, 0.0, 0.0, np.zeros(7))  # fmt: skip  # compile now
+        at_rest = self._cueing._replace(state=np.zeros(_STATE_SIZE))
+        platform_step(at_rest, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros(7))  # compiled now
 
     def step(self, k: int, t: float, row: Array | None, state: State, fault: int,
              envelope: float) -> None:  # fmt: skip
@@ -410,8 +428,7 @@ class PlatformOutput:
         else:
             v_x, v_y, psi_dot, phi = self._motion(row)
         values = self.values
-        platform_step(self._pitch, self._washout, self._limits, self._state,
-                      v_x, v_y, psi_dot, phi, envelope, values)  # fmt: skip
+        platform_step(self._cueing, v_x, v_y, psi_dot, phi, envelope, values)
         if self.sender is not None and k % self.send_every == 0:
             live = state in _LIVE
             self.sender.send_command(self.sequence, t, state, fault, live, values)

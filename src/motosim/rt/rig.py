@@ -49,8 +49,8 @@ from motosim.sim.hands import is_held
 from motosim.sim.rider import rider_torque
 
 __all__ = [
-    "Bar", "BarPlant", "LockstepLink", "RigFaults", "RigSettings", "VirtualRider",
-    "VirtualRig", "parse_rig",
+    "Bar", "BarPlant", "LockstepLink", "RigFaults", "RigRider", "RigSettings",
+    "VirtualRider", "VirtualRig", "parse_rig",
 ]  # fmt: skip
 
 Array = NDArray[np.float64]
@@ -65,7 +65,7 @@ class RigFaults:
 
     The times, like ``bus_off_at``, count from the run's first enabled command (the rig
     may run long before ``motosim run`` starts; each run gets its faults again), or from
-    the rig's start when it is made with ``rider_on_enable=False``.
+    the rig's start for a rider who is not started by the run (``RigRider(on_enable=False)``).
     """
 
     frozen_encoder: float = _NEVER
@@ -257,6 +257,56 @@ def _plant_steps(
     x[Bar.theta], x[Bar.omega], x[Bar.i_m] = theta, omega, i
 
 
+@dataclass(frozen=True, eq=False)
+class RigRider:
+    """Who holds the virtual rig's handlebar: the rider's torque, arms and presence.
+
+    Parameters
+    ----------
+    torque : ndarray or callable
+        The rider's active torque [N*m] at each plant sub-step from the rider's start (held
+        after the end), or a function of the time since the rider's start [s] giving it then
+        (a :class:`VirtualRider`), asked once per status period.
+    hands : ndarray, shape (4,), optional
+        The rider's arms while the rider holds the handlebar, [J_a [kg*m^2], c_a
+        [N*m*s/rad], k_a [N*m/rad], theta_hold [rad]] (``RigModel.hands`` of
+        :func:`motosim.sim.build_rig`); by default none, a pure torque source.
+    hands_off : ndarray, shape (m, 2), optional
+        Phases [t0, t1] of the rider's time [s] in which nobody holds the handlebar.
+    on_enable : bool
+        Start the rider's profile when the first command with ENABLE arrives (a person takes
+        the handlebar when the simulator starts) and let go when the run ends (ENABLE 0, or
+        no command for 1 s: its process has gone), the profile starting again with the next
+        enable; else the profile runs from the rig's t = 0 whatever the drive does.
+
+    Raises
+    ------
+    MotosimError
+        On a profile that is empty or not finite, or arms of the wrong shape (one line).
+    """
+
+    torque: Array | Callable[[float], float]
+    hands: Array | None = None
+    hands_off: Array | None = None
+    on_enable: bool = True
+
+    def __post_init__(self) -> None:
+        if not callable(self.torque):
+            tau = np.asarray(self.torque, dtype=float)
+            if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)):
+                raise MotosimError("rider torque: expected a non-empty 1-D array of finite N*m")
+            object.__setattr__(self, "torque", tau)
+        hands = np.zeros(4) if self.hands is None else np.asarray(self.hands, dtype=np.float64)
+        if hands.shape != (4,) or not np.all(np.isfinite(hands)):
+            raise MotosimError("hands: expected [J_a, c_a, k_a, theta_hold], finite")
+        off = self.hands_off
+        off = np.zeros((0, 2)) if off is None else np.asarray(off, dtype=np.float64)
+        if off.ndim != 2 or off.shape[1] != 2:
+            raise MotosimError("hands_off: expected rows [t0, t1] [s]")
+        object.__setattr__(self, "hands", hands)
+        object.__setattr__(self, "hands_off", off)
+
+
 class VirtualRig:
     """The true handlebar and its drive, answering the DBC's frames (see the module docstring).
 
@@ -270,26 +320,12 @@ class VirtualRig:
         The frames.
     link : Link
         The rig's end of the bus.
-    rider_torque : ndarray or callable
-        The rider's torque [N*m] at each plant sub-step from the rider's start (held after
-        the end), or a function of the time since the rider's start [s] giving it then (a
-        :class:`VirtualRider`), asked once per status period.
+    rider : RigRider
+        The rider's torque, arms and presence.
     rng : numpy.random.Generator
         Noise, jitter and frame loss.
     theta0 : float
         Initial angle [rad].
-    rider_on_enable : bool
-        Start the rider's profile when the first command with ENABLE arrives (a person takes
-        the handlebar when the simulator starts) and let go when the run ends (ENABLE 0, or
-        no command for 1 s: its process has gone), the profile starting again with the next
-        enable; else the profile runs from the rig's t = 0 whatever the
-        drive does.
-    hands : ndarray, shape (4,), optional
-        The rider's arms while the rider holds the handlebar, [J_a [kg*m^2], c_a
-        [N*m*s/rad], k_a [N*m/rad], theta_hold [rad]] (``RigModel.hands`` of
-        :func:`motosim.sim.build_rig`); by default none, a pure torque source.
-    hands_off : ndarray, shape (m, 2), optional
-        Phases [t0, t1] of the rider's time [s] in which nobody holds the handlebar.
     """
 
     def __init__(
@@ -298,32 +334,21 @@ class VirtualRig:
         settings: RigSettings,
         codecs: HandlebarCodecs,
         link: Link,
-        rider_torque: Array | Callable[[float], float],
+        rider: RigRider,
         rng: np.random.Generator,
         *,
         theta0: float = 0.0,
-        rider_on_enable: bool = True,
-        hands: Array | None = None,
-        hands_off: Array | None = None,
     ) -> None:
-        self._policy = rider_torque if callable(rider_torque) else None
-        tau = np.zeros(1) if callable(rider_torque) else np.asarray(rider_torque, dtype=float)
-        if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)):
-            raise MotosimError("rider_torque: expected a non-empty 1-D array of finite N*m")
+        torque = rider.torque
+        self._policy = torque if callable(torque) else None
+        self.rider_torque = np.zeros(1) if callable(torque) else torque
         self.hb = handlebar
         self.settings = settings
         self.codecs = codecs
         self.link = link
         self.rng = rng
-        self.rider_torque = tau
-        self.hands = np.zeros(4) if hands is None else np.asarray(hands, dtype=np.float64)
-        self.hands_off = (
-            np.zeros((0, 2)) if hands_off is None else np.asarray(hands_off, dtype=np.float64)
-        )
-        if self.hands.shape != (4,) or not np.all(np.isfinite(self.hands)):
-            raise MotosimError("hands: expected [J_a, c_a, k_a, theta_hold], finite")
-        if self.hands_off.ndim != 2 or self.hands_off.shape[1] != 2:
-            raise MotosimError("hands_off: expected rows [t0, t1] [s]")
+        self.hands: Array = rider.hands  # type: ignore[assignment]
+        self.hands_off: Array = rider.hands_off  # type: ignore[assignment]
         self.x = np.array([float(theta0), 0.0, 0.0])
         self.h = 1.0 / settings.plant_rate
         self._sub = round(settings.plant_rate / settings.status_rate)
@@ -343,30 +368,14 @@ class VirtualRig:
         self._frozen = math.nan
         self._estop_sent = False
         self._bad_sent = False
-        st = codecs.status
-        self._values = np.zeros(len(st.names))
-        self._p = {part: codecs.position(st, part) for part in ("angle", "current", "enabled")}
-        self._p["counter"] = codecs.position(st, "counter")
-        self._p["drive_fault"] = codecs.position(st, "drive_fault")
-        self._command = np.zeros(len(codecs.command.names))
-        self._c_current = codecs.position(codecs.command, "current_command")
-        self._c_enable = codecs.position(codecs.command, "enable")
-        self._k_rider = -1 if rider_on_enable else 0
-        self._let_go = rider_on_enable
-        self._t_run = math.inf if rider_on_enable else 0.0  # where fault times count from
+        self._frame_positions(codecs)
+        self._k_rider = -1 if rider.on_enable else 0
+        self._let_go = rider.on_enable
+        self._t_run = math.inf if rider.on_enable else 0.0  # where fault times count from
         self._idle = np.zeros(1)
         self._held = np.zeros(1)
         self._started = False
-        hb = self.hb
-        self._plant = BarPlant(
-            hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp, self._a_i, settings.max_current,
-            self.h, self.hands, self.hands_off,
-        )  # fmt: skip
-        for tau_r in (self._idle, tau):  # each type the run's start will pass (a read-only
-            # profile is another one): compiled, or loaded from numba's cache, now rather
-            # than on the run's first enabled command, a stall of the status frames that
-            # tripped the run's watchdog at its start
-            _plant_steps(self.x.copy(), 0.0, self._plant, tau_r, 0, 1, 0.0)
+        self._plant = self._compiled_plant()
         self.frames_sent = 0
         self.frames_dropped = 0
         self.frames_late = 0
@@ -376,6 +385,31 @@ class VirtualRig:
         self.bad_commands = 0
         self.on_frame: Callable[[int, bytes], object] | None = None
         """Called with every other frame the rig reads (the platform twin's CAN frames)."""
+
+    def _frame_positions(self, codecs: HandlebarCodecs) -> None:
+        """Where the status and command frames' signals sit in their decoded values."""
+        st = codecs.status
+        self._values = np.zeros(len(st.names))
+        self._p = {part: codecs.position(st, part) for part in ("angle", "current", "enabled")}
+        self._p["counter"] = codecs.position(st, "counter")
+        self._p["drive_fault"] = codecs.position(st, "drive_fault")
+        self._command = np.zeros(len(codecs.command.names))
+        self._c_current = codecs.position(codecs.command, "current_command")
+        self._c_enable = codecs.position(codecs.command, "enable")
+
+    def _compiled_plant(self) -> BarPlant:
+        """The handlebar's plant, its sub-steps compiled (or loaded from numba's cache) now
+        for each type of profile a run's start passes (the idle one and the rider's; a
+        read-only profile is another type): not on the run's first enabled command, where
+        the compile would stall the status frames and trip the run's watchdog."""
+        hb = self.hb
+        plant = BarPlant(
+            hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp, self._a_i,
+            self.settings.max_current, self.h, self.hands, self.hands_off,
+        )  # fmt: skip
+        for tau_r in (self._idle, self.rider_torque):
+            _plant_steps(self.x.copy(), 0.0, plant, tau_r, 0, 1, 0.0)
+        return plant
 
     @property
     def t(self) -> float:

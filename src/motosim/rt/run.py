@@ -50,6 +50,7 @@ __all__ = [
     "LOOP_SIGNALS",
     "RealtimeRunner",
     "RunCounters",
+    "RunSettings",
     "StackStepper",
     "profile_stats",
 ]
@@ -130,6 +131,85 @@ class RunCounters:
     fault_time: float
 
 
+@dataclass(frozen=True, slots=True)
+class RunSettings:
+    """What a real-time run is set to, checked once: :class:`RealtimeRunner`'s settings.
+
+    Parameters
+    ----------
+    limits : SafetyLimits
+        The safety stage's limits.
+    rate : float
+        The control rate [Hz], > 0.
+    duration : float, optional
+        The run's duration [s], >= 0: after its last period the torque fades out (as on a
+        stop request) and :meth:`RealtimeRunner.period` returns False once it is off, all in
+        one run of the loop (give it :attr:`RealtimeRunner.max_periods`);
+        :attr:`RealtimeRunner.reached_end` says whether it got there. Without it the run
+        goes on until a stop request, a fault or the loop's end.
+    linger : float
+        How long the zero command is still sent after a fault before the run ends [s], >= 0.
+    periods_per_frame : int
+        Control periods per status frame of the drive (the watchdog counts frame periods),
+        >= 1.
+    start_timeout : float
+        How long to wait for the drive's first valid status frame [s] before the
+        ``NO_DRIVE`` fault, > 0.
+    capacity : int
+        Rows the ring holds before the oldest are lost (the reader drains it meanwhile), >= 1.
+    shared_ring : bool
+        Put the ring in shared memory, for a writer process (:meth:`SampleRing.attach`).
+    wait_for_arm : bool
+        Keep the torque off (safety stage IDLE) after the drive's first status frame until
+        :meth:`RealtimeRunner.arm` is called (the view's Arm button); the loop runs and
+        records meanwhile.
+    warm : bool
+        Warm the stack before each deadline (:meth:`RealtimeRunner.warm`, and the compiled
+        wait of :meth:`RealtimeRunner.wait_period`): True by default; False, the wait only
+        spins (``motosim run --warm off``). The rows are the same either way.
+    handlebar : HandlebarParameters, optional
+        The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
+    validity : tuple of float, optional
+        The virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]:
+        :func:`motosim.sim.metrics.validity_limits`), read from the stack's ``phi`` and
+        ``v_x``: beyond it the torque fades out and the run ends, as offline ``simulate``
+        stops there; :attr:`RealtimeRunner.left_range` says why. Without it the run goes on.
+
+    Raises
+    ------
+    MotosimError
+        On a value out of its range (one line naming it).
+    """
+
+    limits: SafetyLimits
+    rate: float
+    duration: float | None = None
+    linger: float = 0.2
+    periods_per_frame: int = 1
+    start_timeout: float = 1.0
+    capacity: int = 1 << 16
+    shared_ring: bool = False
+    wait_for_arm: bool = False
+    warm: bool = True
+    handlebar: HandlebarParameters | None = None
+    validity: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.rate) and self.rate > 0.0):
+            raise MotosimError(f"rate = {self.rate!r} Hz: expected a positive rate")
+        if self.duration is not None and not (
+            math.isfinite(self.duration) and self.duration >= 0.0
+        ):
+            raise MotosimError(f"duration = {self.duration!r} s: expected a time >= 0")
+        if not (math.isfinite(self.linger) and self.linger >= 0.0):
+            raise MotosimError(f"linger = {self.linger!r} s: expected a time >= 0")
+        if not (math.isfinite(self.start_timeout) and self.start_timeout > 0.0):
+            raise MotosimError(f"start_timeout = {self.start_timeout!r} s: expected a time > 0")
+        for name in ("periods_per_frame", "capacity"):
+            if getattr(self, name) < 1:
+                raise MotosimError(f"{name} = {getattr(self, name)!r}: expected an integer >= 1")
+
+
 class RealtimeRunner:
     """The control period of ``motosim run`` (see the module docstring).
 
@@ -141,53 +221,21 @@ class RealtimeRunner:
         The CAN link to the drive (:func:`~motosim.io.can.open_link`).
     codecs : HandlebarCodecs
         The frames (from the DBC).
-    limits : SafetyLimits
-        The safety stage's limits.
-    rate : float
-        The control rate [Hz].
-    capacity : int
-        Rows the ring holds before the oldest are lost (the reader drains it meanwhile).
-    linger : float
-        How long the zero command is still sent after a fault before the run ends [s].
-    periods_per_frame : int
-        Control periods per status frame of the drive (the watchdog counts frame periods).
-    start_timeout : float
-        How long to wait for the drive's first valid status frame [s] before the
-        ``NO_DRIVE`` fault.
-    shared_ring : bool
-        Put the ring in shared memory, for a writer process (:meth:`SampleRing.attach`).
+    settings : RunSettings
+        The rate, the safety limits and the rest of the run's settings.
     telemetry : callable, optional
         ``telemetry(k, t, row)`` publishes each period's stack row (a
         :class:`~motosim.rt.telemetry.StateSender`'s ``send``), in the period: for a
         lock-step run; ``motosim run`` gives none and publishes the ring's newest row from
         its writer process (:class:`~motosim.rt.telemetry.StateRelay`).
-    wait_for_arm : bool
-        Keep the torque off (safety stage IDLE) after the drive's first status frame until
-        :meth:`arm` is called (the view's Arm button); the loop runs and records meanwhile.
     platform : PlatformOutput, optional
         The motion platform's stage (:mod:`motosim.rt.platform`), stepped every period after
         the safety stage with its state and envelope.
+    clock : Clock, optional
+        The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
     now : callable, optional
         The loop's clock (``Clock.now``) [s], read twice per period for the ``wake`` and
         ``compute`` columns; without it they are NaN.
-    clock : Clock, optional
-        The loop's clock, needed by :meth:`wait_status` (a bus-paced loop).
-    handlebar : HandlebarParameters, optional
-        The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
-    validity : tuple of float, optional
-        The virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]:
-        :func:`motosim.sim.metrics.validity_limits`), read from the stack's ``phi`` and
-        ``v_x``: beyond it the torque fades out and the run ends, as offline ``simulate``
-        stops there; :attr:`left_range` says why. Without it the run goes on.
-    warm : bool
-        Warm the stack before each deadline (:meth:`warm`, and the compiled wait of
-        :meth:`wait_period`): True by default; False, the wait only spins (``motosim run
-        --warm off``). The rows are the same either way.
-    duration : float, optional
-        The run's duration [s]: after its last period the torque fades out (as on a stop
-        request) and :meth:`period` returns False once it is off, all in one run of the loop
-        (give it :attr:`max_periods`); :attr:`reached_end` says whether it got there.
-        Without it the run goes on until a stop request, a fault or the loop's end.
     """
 
     def __init__(
@@ -195,28 +243,14 @@ class RealtimeRunner:
         stepper: StackStepper,
         link: Link,
         codecs: HandlebarCodecs,
-        limits: SafetyLimits,
+        settings: RunSettings,
         *,
-        rate: float,
-        capacity: int = 1 << 16,
-        linger: float = 0.2,
-        periods_per_frame: int = 1,
-        start_timeout: float = 1.0,
-        shared_ring: bool = False,
         telemetry: Callable[[int, float, Array], None] | None = None,
-        wait_for_arm: bool = False,
         platform: "PlatformOutput | None" = None,
-        now: Callable[[], float] | None = None,
         clock: Clock | None = None,
-        handlebar: HandlebarParameters | None = None,
-        validity: tuple[float, float, float] | None = None,
-        warm: bool = True,
-        duration: float | None = None,
+        now: Callable[[], float] | None = None,
     ) -> None:
-        if not (math.isfinite(rate) and rate > 0.0):
-            raise MotosimError(f"rate = {rate!r} Hz: expected a positive rate")
-        if duration is not None and not (math.isfinite(duration) and duration >= 0.0):
-            raise MotosimError(f"duration = {duration!r} s: expected a time >= 0")
+        rate = settings.rate
         self.stepper = stepper
         self._now = now
         self.clock = clock
@@ -226,24 +260,26 @@ class RealtimeRunner:
         self.codecs = codecs
         self.dt = 1.0 / rate
         self.safety = SafetyStage(
-            limits, dt=self.dt, periods_per_frame=periods_per_frame, handlebar=handlebar
-        )
+            settings.limits, dt=self.dt, periods_per_frame=settings.periods_per_frame,
+            handlebar=settings.handlebar,
+        )  # fmt: skip
         self.names = LOOP_SIGNALS + tuple(stepper.names)
-        self.ring = SampleRing(capacity, len(self.names), shared=shared_ring)
-        self._validity = validity
-        self._duration = -1 if duration is None else round(duration * rate)
-        roll, speed_low, speed_high = validity or _ANY_RANGE
-        settings = fused.RunnerSettings(
-            linger=max(1, round(linger * rate)), start_timeout=max(1, round(start_timeout * rate)),
+        self.ring = SampleRing(settings.capacity, len(self.names), shared=settings.shared_ring)
+        self._validity = settings.validity
+        self._duration = -1 if settings.duration is None else round(settings.duration * rate)
+        roll, speed_low, speed_high = settings.validity or _ANY_RANGE
+        compiled_settings = fused.RunnerSettings(
+            linger=max(1, round(settings.linger * rate)),
+            start_timeout=max(1, round(settings.start_timeout * rate)),
             heartbeat_every=max(1, round(0.1 * rate)), dt=self.dt, duration=self._duration,
             **_row_positions(tuple(stepper.names)), roll=roll, speed_low=speed_low,
             speed_high=speed_high, datagrams=link.datagrams,
-            armed=not wait_for_arm, warm=warm,
+            armed=not settings.wait_for_arm, warm=settings.warm,
         )  # fmt: skip
-        self._settings = settings
-        self._warm_on = warm
+        self._settings = compiled_settings
+        self._warm_on = settings.warm
         self._woke = math.nan
-        self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(settings))
+        self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(compiled_settings))
         self._r = self._arrays.runner
         self._views = [memoryview(row) for row in self._arrays.rx]
         self._bad_reported = 0

@@ -459,21 +459,11 @@ def _frozen_monitor(s: Any, p: Any, theta: float) -> None:
 
 
 @njit(cache=True)
-def safety_step(
-    s: Any,
-    p: Any,
-    command: float,
-    theta: float,
-    omega: float,
-    tau_hat: float,
-    now: float,
-) -> float:
-    """:meth:`SafetyStage.step` on the state (``now`` NaN: the stage counts its own
-    periods; else the periods since the last step are counted from ``now``, so that the
-    deadlines a late loop skipped count for the watchdog)."""
-    dt = p.dt
-    periods = _periods_since(s, p, now)
-    s.t = s.t + dt if now != now else now
+def _watch(
+    s: Any, p: Any, periods: float, command: float, theta: float, omega: float, tau_hat: float
+) -> None:
+    """The period's checks, tripping a fault: the watchdog (``periods`` since the last
+    step), a value that is not finite, the hard end stop and the frozen-sensor monitor."""
     if s.fresh:
         s.missing = 0.0
         s.fresh = False
@@ -481,24 +471,24 @@ def safety_step(
         s.missing += periods
         if s.missing >= p.watchdog and s.state != State.IDLE:
             safety_trip(s, Fault.WATCHDOG)
-    if not (math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)) or math.isinf(
-        tau_hat
-    ):
+    finite = math.isfinite(command) and math.isfinite(theta) and math.isfinite(omega)
+    if not finite or math.isinf(tau_hat):
         safety_trip(s, Fault.NON_FINITE)
     elif abs(theta) > p.hard_stop:
         safety_trip(s, Fault.END_STOP)
     elif p.monitor:
         _frozen_monitor(s, p, theta)
-    state = s.state
-    if state == State.FAULT or state == State.IDLE:
-        s.last = 0.0
-        s.envelope = 0.0
-        return 0.0
+
+
+@njit(cache=True)
+def _limited(s: Any, p: Any, command: float, theta: float, omega: float, tau_hat: float) -> float:
+    """The stack's command [A] after the hands-off gain, the soft end stops and the speed
+    limiter."""
     # hands-off: reduce the stack's command while nobody holds the handlebar (the flag
     # kept as it is without an estimate); not the end stops' spring, added after
     if p.hands_off_torque > 0.0 and tau_hat == tau_hat:
         if abs(tau_hat) < p.hands_off_torque:
-            s.quiet += dt
+            s.quiet += p.dt
             s.hands_off = s.quiet >= p.hands_off_time
         else:
             s.quiet = 0.0
@@ -516,11 +506,36 @@ def safety_step(
     excess = abs(omega) - p.max_speed
     if excess > 0.0 and i * omega > 0.0:
         i *= max(0.0, 1.0 - excess / p.speed_band)
+    return i
+
+
+@njit(cache=True)
+def safety_step(
+    s: Any,
+    p: Any,
+    command: float,
+    theta: float,
+    omega: float,
+    tau_hat: float,
+    now: float,
+) -> float:
+    """:meth:`SafetyStage.step` on the state (``now`` NaN: the stage counts its own
+    periods; else the periods since the last step are counted from ``now``, so that the
+    deadlines a late loop skipped count for the watchdog)."""
+    periods = _periods_since(s, p, now)
+    s.t = s.t + p.dt if now != now else now
+    _watch(s, p, periods, command, theta, omega, tau_hat)
+    state = s.state
+    if state == State.FAULT or state == State.IDLE:
+        s.last = 0.0
+        s.envelope = 0.0
+        return 0.0
+    i = _limited(s, p, command, theta, omega, tau_hat)
     # clamp, fade, slew
     i = min(max(i, -p.max_current), p.max_current)
     s.envelope = _ramped_envelope(s, p)
     i *= s.envelope
-    step = p.max_slew * dt
+    step = p.max_slew * p.dt
     last = s.last
     i = min(max(i, last - step), last + step)
     s.last = i

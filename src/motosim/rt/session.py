@@ -11,7 +11,7 @@ checked options and the scenario's ``[realtime]`` settings) and runs:
    files;
 3. :meth:`~RealtimeSession.run` applies the privileges, runs the rate loop once and returns
    the :class:`Outcome`. The run's end is a stop request inside that one loop run: at the
-   duration the runner fades the torque out (``RealtimeRunner(duration=...)``),
+   duration the runner fades the torque out (``RunSettings(duration=...)``),
    as on :meth:`~RealtimeSession.request_stop`, and its period returns False once the torque
    is zero; a fault zeroes it at once and ends the run shortly after;
 4. :meth:`~RealtimeSession.close` lets the recorder release the result folder (after the
@@ -274,14 +274,15 @@ class RealtimeSession:
         if platform is not None and c.platform_can:
             self._platform_can(platform)
         rate = c.rate
-        self._runner = run.RealtimeRunner(
-            stack, self._link, handlebar_codecs(), c.limits, rate=rate,
-            periods_per_frame=c.model.measure_every,
+        settings = run.RunSettings(
+            c.limits, rate, duration=c.periods / rate, periods_per_frame=c.model.measure_every,
             capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
-            shared_ring=True, wait_for_arm=c.live is not None, platform=platform,
-            now=self.clock.now, clock=self.clock, handlebar=c.inputs.nominal_handlebar,
-            validity=validity_limits(sc.motorcycle.speed), warm=c.warm,
-            duration=c.periods / rate,
+            shared_ring=True, wait_for_arm=c.live is not None, warm=c.warm,
+            handlebar=c.inputs.nominal_handlebar, validity=validity_limits(sc.motorcycle.speed),
+        )  # fmt: skip
+        self._runner = run.RealtimeRunner(
+            stack, self._link, handlebar_codecs(), settings, platform=platform, clock=self.clock,
+            now=self.clock.now,
         )  # fmt: skip
         if self._stop:  # asked for while the runner was built
             self.emergency_stop() if self._stop == 2 else self.request_stop()

@@ -8,7 +8,7 @@ import pytest
 from motosim.errors import MotosimError
 from motosim.model.handlebar import step_exact
 from motosim.params import load_parameters
-from motosim.rt.rig import Bar, RigFaults, RigSettings, VirtualRig, parse_rig
+from motosim.rt.rig import Bar, RigFaults, RigRider, RigSettings, VirtualRig, parse_rig
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
@@ -45,9 +45,13 @@ def _rig(rider: float = 0.0, **kw: object) -> tuple[VirtualRig, FakeLink]:
     link = FakeLink()
     settings = RigSettings(**(base | kw))  # type: ignore[arg-type]
     rig = VirtualRig(
-        HB, settings, CODECS, link, np.full(100_000, rider), np.random.default_rng(0),
-        rider_on_enable=False,
-    )  # fmt: skip
+        HB,
+        settings,
+        CODECS,
+        link,
+        RigRider(np.full(100_000, rider), on_enable=False),
+        np.random.default_rng(0),
+    )
     return rig, link
 
 
@@ -236,7 +240,7 @@ def test_nothing_is_compiled_when_the_run_starts() -> None:
         plant_rate=10_000.0, status_rate=1000.0, encoder_bits=14, current_noise=0.0,
         max_current=30.0,
     )  # fmt: skip
-    rig = VirtualRig(HB, settings, CODECS, link, profile, np.random.default_rng(0))
+    rig = VirtualRig(HB, settings, CODECS, link, RigRider(profile), np.random.default_rng(0))
     rig_module._plant_steps.disable_compile()  # a compile (or cache load) now raises
     try:
         rig.advance_to(0.01)  # the drive idle, from power-on: no rider yet

@@ -5,7 +5,7 @@ import pytest
 
 from motosim.model.handlebar import step_exact
 from motosim.params import load_parameters
-from motosim.rt.rig import Bar, RigSettings, VirtualRig
+from motosim.rt.rig import Bar, RigRider, RigSettings, VirtualRig
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
@@ -28,9 +28,13 @@ class _Link:
 
 def _rig(rider: float, hands: np.ndarray, off: np.ndarray | None = None) -> VirtualRig:
     return VirtualRig(
-        HB, SETTINGS, handlebar_codecs(), _Link(), np.full(100_000, rider),
-        np.random.default_rng(0), rider_on_enable=False, hands=hands, hands_off=off,
-    )  # fmt: skip
+        HB,
+        SETTINGS,
+        handlebar_codecs(),
+        _Link(),
+        RigRider(np.full(100_000, rider), on_enable=False, hands=hands, hands_off=off),
+        np.random.default_rng(0),
+    )
 
 
 def test_rig_hands_are_the_simulators_plant() -> None:
