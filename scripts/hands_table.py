@@ -5,11 +5,11 @@
 
 Each scenario (by default the lane change at 20 m/s, the crosswind at 30 m/s and the
 obstacle avoidance at 15 m/s) is simulated at each rate (control and measurement; 1 kHz and
-100 Hz by default) with no hands (a pure torque source, the default), with the ``relaxed``
-and the ``firm`` grips of :data:`motosim.sim.hands.GRIPS`, and with the relaxed grip let go
-from ``--off-from`` [s] (6 by default) to the end (``[rider] hands_off``), and with the
-relaxed grip read by an ideal torque sensor (``[estimator] name = "torque_sensor"``) instead
-of the observer. Printed as a
+100 Hz by default) with no hands (``hands = "off"``, a pure torque source: the row
+``none``), with the ``relaxed`` (the default) and the ``firm`` grips of
+:data:`motosim.sim.hands.GRIPS`, and with the relaxed grip let go from ``--off-from`` [s] (6
+by default) to the end (``[rider] hands_off``), and with the relaxed grip read by an ideal
+torque sensor (``[estimator] name = "torque_sensor"``) instead of the observer. Printed as a
 Markdown table from :func:`motosim.sim.metrics.run_metrics`: tracking RMS / peak steer,
 estimate RMS / peak rider torque (the rider's torque is the hands' whole torque, active and
 passive), the motor current's content above 3 Hz over the last 2 s (peak to peak, after the
@@ -54,7 +54,9 @@ def _inputs(
         rates=dataclasses.replace(sc.rates, control=rate, measurement=rate),
         controller=dataclasses.replace(sc.controller, grip=stack_grip),
     )
-    if grip != "none":
+    if grip == "none":
+        sc = dataclasses.replace(sc, rider=dataclasses.replace(sc.rider, hands="off"))
+    else:
         rider = dataclasses.replace(sc.rider, hands=grip.split(",")[0])
         if grip.endswith("off"):
             rider = dataclasses.replace(rider, hands_off=((off_from, sc.duration + 1.0),))

@@ -107,8 +107,9 @@ DESCRIPTIONS: dict[str, str] = {
     "rider.hands": (
         "The arms' passive impedance at the handlebar, added to the active torque of either "
         "kind: a grip, " + ", ".join(f'`"{g}"`' for g in GRIPS) + " (`motosim.sim.hands.GRIPS`, "
-        "`off`: nobody holds the handlebar), or a table (below). Default none: a pure torque "
-        "source."
+        "`off`: no arms' impedance, a pure torque source), or a table (below). Default: "
+        '`"relaxed"` (`motosim.sim.grips.DEFAULT_GRIP`) where the stack models hands, on '
+        'Sharp 1971 without a design file or a torque sensor; elsewhere `"off"`.'
     ),
     "rider.hands_off": (
         "Phases `[[t0, t1], ...]` [s] in which nobody holds the handlebar: no active and no "

@@ -143,6 +143,7 @@ duration = 3.0
 [rider]
 kind = "torque"
 profile = { kind = "constant", value = 1.0 }
+hands = "off"    # a pure torque push: the hands' spring would hold the steer against it
 [controller]
 kind = "paper"
 """

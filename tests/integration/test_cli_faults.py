@@ -218,6 +218,7 @@ def test_a_motor_saturated_most_of_the_run_is_exit_3(
     path.write_text(
         '[scenario]\nname = "saturated"\nduration = 4.0\n[rider]\nkind = "torque"\n'
         'profile = { kind = "square", low = -20.0, high = 20.0, period = 2.0 }\n'
+        'hands = "off"\n'  # the square alone against the limit, no arms' spring to help
         '[controller]\nkind = "paper"\nmax_current = 0.2\n',
         encoding="utf-8",
     )

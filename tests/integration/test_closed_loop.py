@@ -116,6 +116,7 @@ duration = 2.0
 [rider]
 kind = "torque"
 profile = { kind = "square", low = 0.0, high = 10.0, period = 1.0, start = 0.2 }
+hands = "off"    # Fig. 9's rider is a pure torque source
 [handlebar]
 friction = false
 """
@@ -251,6 +252,7 @@ def test_csv_rider_profile(tmp_path: Path) -> None:
     path.write_text(
         "[scenario]\nduration = 1.5\n[rider]\nkind = 'torque'\n"
         "profile = { kind = 'csv', file = 'torque.csv', column = 'tau_r' }\n"
+        "hands = 'off'\n"  # tau_r is then the profile alone, without the arms' passive torque
     )
     run = simulate(resolve(load_scenario(path), tmp_path), rng=np.random.default_rng(0))
     assert run["tau_r"][run.t.searchsorted(0.7)] == 5.0
@@ -338,6 +340,31 @@ def test_design_file_observer_is_what_runs(tmp_path: Path) -> None:
     assert np.sqrt(np.mean((a["tau_r_hat"] - b["tau_r_hat"]) ** 2)) > 0.05
 
 
+def test_a_design_file_scenario_runs_with_the_default_rider(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # A design file's controller was designed for the handlebar alone, so the stack models
+    # no hands: the default rider there has none (no grip is refused), and the run is the
+    # one of a rider who says hands = "off".
+    design = (ROOT / "tests/data/design_simacom.toml").read_text(encoding="utf-8")
+    (tmp_path / "d.toml").write_text(design, encoding="utf-8")
+    inputs = _inputs_with(tmp_path, '[controller]\ndesign = "d.toml"\n')
+    assert inputs.scenario.rider.hands is None and not inputs.scenario.models_hands
+    assert inputs.scenario.rider_hands is None and inputs.scenario.stack_hands is None
+    rig = build_rig(inputs, rng=np.random.default_rng(0))
+    assert not np.any(rig.hands)
+    sc = inputs.scenario
+    off = dataclasses.replace(
+        inputs, scenario=dataclasses.replace(sc, rider=dataclasses.replace(sc.rider, hands="off"))
+    )
+    a = simulate(inputs, rng=np.random.default_rng(0))
+    b = simulate(off, rng=np.random.default_rng(0))
+    np.testing.assert_array_equal(a.data, b.data)
+    code, _, err = _run(capsys, "simulate", str(tmp_path / "s.toml"), "--out",
+                        str(tmp_path / "out"), "--no-report")  # fmt: skip
+    assert code == 0, err
+
+
 def test_a_design_for_another_handlebar_warns_in_one_line(tmp_path: Path) -> None:
     # The run takes a design file's gains with the scenario's nominal handlebar; a design made
     # for another handlebar (J_eq x1.5) than that one is legal but mixes parts: one warning
@@ -404,8 +431,12 @@ def test_the_virtual_riders_torque_limit_and_scale_and_the_side_winds_height() -
     from motosim.model.sharp import side_force_input
 
     run = load_run(ROOT / "scenarios" / "crosswind_30.toml")
+    # without hands: tau_r is then the rider's own torque, which max_torque limits, and the
+    # stack's virtual motorcycle is Sharp's, not held by the arms
+    off = dataclasses.replace(run.scenario.rider, hands="off")
+    run = dataclasses.replace(run, scenario=dataclasses.replace(run.scenario, rider=off))
 
-    def peak(rider: dict[str, float], height: float = 1.0) -> tuple[float, float]:
+    def peak(rider: dict[str, object], height: float = 1.0) -> tuple[float, float]:
         sc = run.scenario
         variant = dataclasses.replace(
             run,
@@ -459,6 +490,7 @@ def test_a_run_that_falls_is_a_failure_with_its_result_kept(
     path.write_text(
         '[scenario]\nname = "fall"\nduration = 4.0\narchitecture = "open_loop"\n'
         '[rider]\nkind = "torque"\nprofile = { kind = "constant", value = 20.0 }\n'
+        'hands = "off"\n'  # a pure torque push: the arms' spring would hold the steer
     )
     code, out, err = _run(capsys, "simulate", str(path), "--out", str(tmp_path / "r"), "--json")
     assert code == 3 and json.loads(out)["metrics"]["flag_fall"] == 1.0  # what a script reads

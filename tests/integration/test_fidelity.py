@@ -15,9 +15,17 @@ from motosim.sim.loop_analysis import stack_loop
 from motosim.sim.scenario import MultisineProfile, Scenario
 
 
+def _torque_source(name: str) -> Scenario:
+    """The default scenario with ``[rider] hands = "off"``: the figures below are of a rider
+    who is a pure torque source, against the motorcycle's own delta / tau_r (the feel with
+    hands is the last test's)."""
+    base = Scenario(name=name)
+    return dataclasses.replace(base, rider=dataclasses.replace(base.rider, hands="off"))
+
+
 def _worst_against_the_run(feedforward: tuple[str, ...]) -> float:
     """RMS over 0.5-3 Hz of |theta_h / tau_r| / |delta / tau_r| in the run [dB]."""
-    base = Scenario(name="feel")
+    base = _torque_source("feel")
     base = dataclasses.replace(
         base, controller=dataclasses.replace(base.controller, feedforward=feedforward)
     )
@@ -47,7 +55,7 @@ def test_friction_free_stack_measured_as_the_linear_analysis_predicts() -> None:
     # Without dry friction and with an exact angle the stack is the linear sampled loop of
     # motosim.sim.loop_analysis (which gives 0.6 dB and 4.6 deg against the model over
     # 0.1-3 Hz at 20 m/s, 1 kHz): the multisine measurement must find it, line by line.
-    base = Scenario(name="feel")
+    base = _torque_source("feel")
     base = dataclasses.replace(
         base,
         handlebar=dataclasses.replace(base.handlebar, friction=False),

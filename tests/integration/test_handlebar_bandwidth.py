@@ -22,6 +22,7 @@ duration = 1.0
 [rider]
 kind = "torque"
 profile = {{ kind = "constant", value = 1.0 }}
+hands = "off"    # the stack then designed for the handlebar alone, as synthesised below
 [handlebar]
 true = "{LIGHT.as_posix()}"
 [controller]

@@ -4,8 +4,8 @@ What the physics promises: with stiff hands and no active torque, nothing else a
 it, the handlebar settles at the angle the hands hold, along the solution of the
 second-order equation (J_eq + J_a) theta'' + (beta_eq + c_a) theta' + k_a (theta - hold) = 0;
 a noise-free torque sensor makes the stack's estimate the rider's true torque (active and
-passive), and the tracking no worse than with the observer; without hands the rig is the
-pure torque source it was.
+passive), and the tracking no worse than with the observer; the default rider grips
+relaxed, and with ``hands = "off"`` the rig is a pure torque source.
 """
 
 import dataclasses
@@ -18,6 +18,7 @@ from motosim.io.runs import load_run
 from motosim.params import load_parameters
 from motosim.sim import prepare, simulate
 from motosim.sim.closed_loop import RunInputs, build_rig
+from motosim.sim.hands import GRIPS, hands_array
 from motosim.sim.scenario import parse_scenario
 
 ROOT = Path(__file__).parents[2]
@@ -96,21 +97,26 @@ def test_torque_sensor_offset_and_low_pass() -> None:
     assert np.all(np.abs(error[settled] - 0.5) < 0.05)
 
 
-def test_no_hands_by_default_and_off_is_no_hands() -> None:
-    """Without hands the rig is a pure torque source (the pinned runs of
-    ``tests/integration/test_stack_golden.py`` hold it to its figures); "off" is the same."""
+def test_relaxed_hands_by_default_and_off_is_no_hands() -> None:
+    """Without ``hands`` the rider grips relaxed (the run is the one of ``hands =
+    "relaxed"``, row for row); "off" is a pure torque source (the pinned runs of
+    ``tests/integration/test_stack_golden.py`` hold it to its figures)."""
     base = _profile_doc(controller={"kind": "none"})
     base["rider"] = {k: v for k, v in base["rider"].items() if k != "hands"}
     inputs = _inputs(base)
     assert inputs.scenario.rider.hands is None
     rig = build_rig(inputs, rng=np.random.default_rng(0))
-    assert not rig.hands.any() and rig.hands_off.shape == (0, 2) and not rig.sensed
-    plain = simulate(inputs, rng=np.random.default_rng(0))
+    assert np.array_equal(rig.hands, hands_array(GRIPS["relaxed"]))
+    default = simulate(inputs, rng=np.random.default_rng(0))
+    relaxed = simulate(
+        _inputs(_profile_doc(controller={"kind": "none"})), rng=np.random.default_rng(0)
+    )
+    np.testing.assert_array_equal(default.data, relaxed.data)
     off = dataclasses.replace(
         inputs.scenario, rider=dataclasses.replace(inputs.scenario.rider, hands="off")
     )
-    again = simulate(dataclasses.replace(inputs, scenario=off), rng=np.random.default_rng(0))
-    np.testing.assert_array_equal(plain.data, again.data)
+    rig = build_rig(dataclasses.replace(inputs, scenario=off), rng=np.random.default_rng(0))
+    assert not rig.hands.any() and rig.hands_off.shape == (0, 2) and not rig.sensed
 
 
 def test_hands_off_phase_removes_every_torque() -> None:

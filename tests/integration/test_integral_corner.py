@@ -17,6 +17,7 @@ duration = 1.0
 [rider]
 kind = "torque"
 profile = { kind = "constant", value = 1.0 }
+hands = "off"    # the stack then designed for the handlebar alone, as synthesised below
 [controller]
 integral_corner = 0.2
 """

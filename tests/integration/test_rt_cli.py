@@ -315,7 +315,8 @@ def test_ctrl_c_fades_the_torque_out_and_closes_the_files(
 
 FALLING = SCENARIO.replace(
     'profile = { kind = "square", low = -3.0, high = 3.0, period = 1.0, start = 0.2 }',
-    'profile = { kind = "constant", value = 10.0 }',
+    # a pure torque push: the arms' spring of the default grip would hold the steer against it
+    'profile = { kind = "constant", value = 10.0 }\nhands = "off"',
 ).replace("duration = 2.0", "duration = 8.0")
 
 

@@ -77,14 +77,11 @@ def _lockstep(
     channel = f"virtual:plausibility{next(_channels)}"
     try:
         with open_link(channel) as host, open_link(channel) as drive:
-            rig = VirtualRig(
-                inputs.true_handlebar,
-                settings,
-                codecs,
-                drive,
-                RigRider(rider),
+            rig = VirtualRig(  # the scenario's hands, as `motosim rig` gives them
+                inputs.true_handlebar, settings, codecs, drive,
+                RigRider(rider, hands=world.hands, hands_off=world.hands_off),  # type: ignore[arg-type]
                 np.random.default_rng(sc.seed),
-            )
+            )  # fmt: skip
             runner = RealtimeRunner(
                 CompiledStack(model, force=world.force, side_force=world.side_force),
                 host,

@@ -30,7 +30,8 @@ def _inputs(
     hands: str | None = None,
 ):
     """The default stack at ``rate`` [Hz]; ``prediction`` False: the plain cancellation;
-    ``hands`` a grip of the rider (none: a pure torque source)."""
+    ``hands`` a grip of the rider (None: ``"off"``, a pure torque source, the stack designed
+    for the handlebar alone, what the margins here are stated for)."""
     controller: dict = {} if prediction is None else {"prediction": prediction}
     if bandwidth is not None:
         controller["bandwidth"] = bandwidth
@@ -45,7 +46,7 @@ def _inputs(
                 "kind": "torque",
                 "profile": {"kind": "steps", "times": [0.1], "values": [STEP_TORQUE]},
             }
-            | ({} if hands is None else {"hands": hands}),
+            | {"hands": "off" if hands is None else hands},
             "handlebar": {"friction": False},
         },
         origin="test",

@@ -1,10 +1,12 @@
-"""The hands a scenario's stack is designed for (``[controller] grip``, Scenario.stack_hands)."""
+"""The hands a scenario's stack is designed for (``[controller] grip``, Scenario.stack_hands)
+and the rider's default grip (Scenario.rider_hands)."""
 
 import pytest
 
 from motosim.errors import MotosimError
 from motosim.sim import parse_scenario
-from motosim.sim.grips import DESIGN_SHARE, GRIPS, design_hands
+from motosim.sim.grips import DEFAULT_GRIP, DESIGN_SHARE, GRIPS, design_hands
+from motosim.sim.scenario import Scenario
 
 _RIDER = {"kind": "torque", "profile": {"kind": "constant", "value": 0.0}}
 
@@ -18,7 +20,7 @@ def _scenario(rider: dict | None = None, **tables: dict):
 def test_the_stack_is_designed_for_a_share_of_the_riders_grip() -> None:
     """By default the stack models DESIGN_SHARE of the rider's grip's inertia and damping,
     none of its stiffness; none without hands, and `grip` chooses another grip or none."""
-    assert _scenario().stack_hands is None
+    assert _scenario({"hands": "off"}).stack_hands is None
     held = _scenario({"hands": "relaxed"}).stack_hands
     relaxed = GRIPS["relaxed"]
     assert held is not None and held == design_hands(relaxed)
@@ -52,3 +54,34 @@ def test_a_torque_sensor_designs_for_no_hands() -> None:
 def test_a_grip_the_stack_cannot_model_is_refused(tables: dict, message: str) -> None:
     with pytest.raises(MotosimError, match=message):
         _scenario(**tables)
+
+
+def test_the_default_rider_holds_the_handlebar_with_the_relaxed_grip() -> None:
+    """Without ``hands`` the rider grips relaxed, and the stack is designed for that grip."""
+    assert DEFAULT_GRIP == "relaxed"
+    for sc in (Scenario(), _scenario()):
+        assert sc.rider.hands is None and sc.models_hands
+        assert sc.rider_hands == GRIPS["relaxed"]
+        assert sc.stack_hands == design_hands(GRIPS["relaxed"])
+    assert _scenario({"hands": "off"}).rider_hands == GRIPS["off"]
+    assert _scenario({"hands": "firm"}).rider_hands == GRIPS["firm"]
+    # the stack designed for the handlebar alone leaves the rider's default grip alone
+    alone = _scenario(controller={"grip": "off"})
+    assert alone.rider_hands == GRIPS["relaxed"] and alone.stack_hands is None
+
+
+@pytest.mark.parametrize(
+    "tables",
+    [
+        {"controller": {"design": "d.toml"}},
+        {"estimator": {"name": "torque_sensor"}},
+        {"motorcycle": {"model": "multibody", "params": "sel2004_motorcycle"}},
+    ],
+    ids=["design file", "torque sensor", "multibody"],
+)
+def test_where_the_stack_models_no_hands_the_default_rider_has_none(tables: dict) -> None:
+    """A design file, the torque sensor or the multibody motorcycle: the default is no hands,
+    and the scenario is accepted as it is."""
+    sc = _scenario(**tables)
+    assert not sc.models_hands
+    assert sc.rider_hands is None and sc.stack_hands is None

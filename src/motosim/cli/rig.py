@@ -212,11 +212,11 @@ def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
 
     from motosim.io.can import handlebar_codecs
     from motosim.rt.rig import RigRider, VirtualRig
-    from motosim.sim.hands import hands_array, resolve_hands
+    from motosim.sim.hands import hands_array
 
     sc = inputs.scenario
     held = RigRider(
-        rider, hands=hands_array(resolve_hands(sc.rider.hands)),
+        rider, hands=hands_array(sc.rider_hands),
         hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
     )  # fmt: skip
     return VirtualRig(

@@ -39,7 +39,7 @@ from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
 from motosim.sim.brakes import BrakeSettings, brake_torques, design_brakes, new_brake_state
 from motosim.sim.grips import held_handlebar
-from motosim.sim.hands import hands_array, hands_torque, is_held, resolve_hands
+from motosim.sim.hands import hands_array, hands_torque, is_held
 from motosim.sim.loop_analysis import prediction_lead
 from motosim.sim.metrics import validity_limits
 from motosim.sim.multibody_rider import (
@@ -585,7 +585,7 @@ def build_rig(
         force=force,
         side_force=mc.side_wind.sample(t, inputs.tables),
         current_noise=current_noise,
-        hands=hands_array(resolve_hands(rider.hands)),
+        hands=hands_array(sc.rider_hands),
         hands_off=off,
         sensed=sc.estimator.name == SENSOR_ESTIMATOR,
         torque_error=torque_error,
@@ -911,6 +911,9 @@ def run_metadata(inputs: RunInputs) -> dict[str, object]:
         "sharp": dataclasses.asdict(inputs.sharp),
         "true_handlebar": dataclasses.asdict(inputs.true_handlebar),
         "nominal_handlebar": dataclasses.asdict(inputs.nominal_handlebar),
+        "rider_hands": (
+            None if (held := inputs.scenario.rider_hands) is None else dataclasses.asdict(held)
+        ),
         "stack_hands": (
             None if (hands := inputs.scenario.stack_hands) is None else dataclasses.asdict(hands)
         ),

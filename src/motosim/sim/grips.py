@@ -12,7 +12,15 @@ from motosim.errors import MotosimError
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 
-__all__ = ["DESIGN_SHARE", "GRIPS", "Hands", "design_hands", "held_handlebar", "resolve_hands"]
+__all__ = [
+    "DEFAULT_GRIP",
+    "DESIGN_SHARE",
+    "GRIPS",
+    "Hands",
+    "design_hands",
+    "held_handlebar",
+    "resolve_hands",
+]
 
 _LIMITS = (("inertia", 1.0, "kg*m^2"), ("damping", 100.0, "N*m*s/rad"),
            ("stiffness", 1000.0, "N*m/rad"))  # fmt: skip
@@ -81,6 +89,15 @@ GRIPS: dict[str, Hands] = {
 """The named grips. ``off``: no passive impedance, the rider a pure torque source as without
 ``hands``; a phase where nobody holds the handlebar, active torque included, is the rider's
 ``hands_off``."""
+
+DEFAULT_GRIP = "relaxed"
+"""The grip of a rider whose scenario names no ``hands``, where the stack models hands
+(:attr:`motosim.sim.scenario.Scenario.models_hands`: Sharp 1971's motorcycle, no design
+file, no torque sensor): a rider holds the handlebar, and the relaxed grip is the lighter
+of the two. Where the stack cannot model them, the default rider has no hands (``off``), so
+that no scenario is refused for the default: a design file's controller was designed for the
+handlebar alone, a torque sensor measures the arms' whole torque, and the multibody
+motorcycle's front frame does not carry the arms' inertia."""
 
 
 def held_handlebar(handlebar: HandlebarParameters, hands: Hands | None) -> HandlebarParameters:

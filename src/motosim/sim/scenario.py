@@ -23,8 +23,11 @@ so that an error is one line naming the key, the value and what was expected. Th
                    probe = {...} (a torque profile added to the virtual rider's, e.g. a chirp);
                    for either, hands = "relaxed" | "firm" | "off" or a table {inertia
                    [kg*m^2], damping [N*m*s/rad], stiffness [N*m/rad], hold [rad]} (the arms'
-                   passive impedance, :mod:`motosim.sim.hands`; default none, a pure torque
-                   source) and hands_off = [[t0, t1], ...] [s] (phases with no torque at all)
+                   passive impedance, :mod:`motosim.sim.hands`; default "relaxed",
+                   :data:`~motosim.sim.grips.DEFAULT_GRIP`, where the stack models hands, and
+                   "off", a pure torque source, with a design file, the torque sensor or the
+                   multibody motorcycle: :attr:`Scenario.rider_hands`) and hands_off =
+                   [[t0, t1], ...] [s] (phases with no torque at all)
     [handlebar]    true = "simacom_handlebar", nominal = (true), inertia_factor = 1,
                    damping_factor = 1, friction = true
     [estimator]    name = "walcott_zak" | "inverse_dynamics" | "kalman" | "torque_sensor",
@@ -39,7 +42,8 @@ so that an error is one line naming the key, the value and what was expected. Th
                    estimate's lag; default: on with "rider" and the Walcott-Zak observer
                    from a 1 kHz measurement rate and at 100 Hz), grip = "relaxed" |
                    "firm" | "off" (the rider's hands the stack is designed for; default:
-                   the rider's hands, none with a design file or the multibody motorcycle)
+                   the rider's hands, none with a design file, the torque sensor or the
+                   multibody motorcycle)
     [sensor]       torque = {noise [N*m], offset [N*m], low_pass [Hz]} (a rider-torque
                    sensor, read by the estimator "torque_sensor"; without the table, ideal)
 
@@ -88,7 +92,7 @@ from motosim.choices import (
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
 from motosim.sim import paths
-from motosim.sim.grips import GRIPS, Hands, design_hands, resolve_hands
+from motosim.sim.grips import DEFAULT_GRIP, GRIPS, Hands, design_hands, resolve_hands
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -736,7 +740,9 @@ class Rider:
     On the multibody motorcycle the virtual rider also holds its speed with the throttle and,
     with ``brake_control``, modulates the brake demands so that each wheel's longitudinal
     slip stays at ``brake_slip`` and the rear wheel on the ground (:mod:`motosim.sim.brakes`);
-    without it the brakes act as demanded."""
+    without it the brakes act as demanded.
+
+    ``hands`` None: the scenario's default grip (:attr:`Scenario.rider_hands`)."""
 
     kind: Literal["torque", "virtual"] = "torque"
     profile: Profile | None = None
@@ -1022,23 +1028,48 @@ class Scenario:
             )
 
     @property
+    def models_hands(self) -> bool:
+        """Whether the stack can be designed for the rider's hands: on Sharp 1971's
+        motorcycle, without a design file (designed for the handlebar alone) and without a
+        torque sensor (which measures the arms' whole torque: modelled too, they would be
+        counted twice)."""
+        return (
+            self.controller.design is None
+            and self.motorcycle.model != "multibody"
+            and self.estimator.name != SENSOR_ESTIMATOR
+        )
+
+    @property
+    def rider_hands(self) -> Hands | None:
+        """The rider's hands on the handlebar (None, or ``off``'s: a pure torque source).
+
+        ``[rider] hands``; by default :data:`~motosim.sim.grips.DEFAULT_GRIP` where the
+        stack models hands (:attr:`models_hands`), else none: the default is never a grip
+        the stack cannot be designed for, so it never refuses a scenario nor leaves a stack
+        designed for the handlebar alone held by hands it does not model.
+
+        Examples
+        --------
+        >>> Scenario().rider_hands.stiffness  # the relaxed grip [N*m/rad]
+        10.0
+        >>> Scenario(estimator=Estimator("torque_sensor")).rider_hands is None
+        True
+        """
+        if self.rider.hands is not None:
+            return resolve_hands(self.rider.hands)
+        return GRIPS[DEFAULT_GRIP] if self.models_hands else None
+
+    @property
     def stack_hands(self) -> Hands | None:
         """The hands the stack is designed for (None: a pure torque source).
 
         :func:`~motosim.sim.grips.design_hands` of ``[controller] grip``, by default of the
-        rider's own ``hands``, except with a design file (designed for the handlebar alone),
-        on the multibody motorcycle and with a torque sensor (which measures the arms'
-        whole torque: modelled too, they would be counted twice).
+        rider's hands (:attr:`rider_hands`), except where the stack does not model hands
+        (:attr:`models_hands`).
         """
         grip = self.controller.grip
         if grip is None:
-            if (
-                self.controller.design is not None
-                or self.motorcycle.model == "multibody"
-                or self.estimator.name == SENSOR_ESTIMATOR
-            ):
-                return None
-            return design_hands(resolve_hands(self.rider.hands))
+            return design_hands(self.rider_hands) if self.models_hands else None
         return design_hands(GRIPS[grip])
 
 
