@@ -121,6 +121,10 @@ path = { kind = "turn", radius = -150.0, angle = 0.5, start = 10.0, transition =
             MINIMAL.replace('kind = "torque"\n', 'kind = "torque"\nhands_off = "0:1"\n'),
             "hands_off = '0:1'; expected a list of lists of numbers",
         ),
+        (  # an empty table of the arms' impedance names nothing: "off" says no hands
+            MINIMAL.replace('kind = "torque"\n', 'kind = "torque"\nhands = {}\n'),
+            "hands = {}; expected one of relaxed, firm, off or a table",
+        ),
         ("[rider]\nkind = 'virtual'\n", "missing table [scenario]"),
         (
             "[scenario]\n[motorcycle]\nspeed = 2.0\n[rider]\nkind = 'virtual'\n",

@@ -1209,7 +1209,7 @@ def _value(tp: Any, value: Any, key: str, where: str) -> Any:
         if Hands in options:  # a grip's name or a table of the arms' impedance
             if isinstance(value, str):
                 return value
-            if not isinstance(value, Mapping):
+            if not isinstance(value, Mapping) or not value:  # {}: no value given, say "off"
                 raise MotosimError(
                     f"{key} = {short_repr(value)}; expected one of {', '.join(GRIPS)} or a "
                     "table { inertia = ..., damping = ..., stiffness = ... }"
