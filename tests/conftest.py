@@ -1,8 +1,8 @@
 """Shared fixtures: the packaged reference parameter sets; deterministic property tests.
 
 The ``slow`` marker: the tests listed in :data:`SLOW_MODULES` and :data:`SLOW_TESTS` take
-most of the suite's time; ``make check`` runs the others (``pytest -m "not slow"``) in about
-a minute and ``make test`` runs them all.
+most of the suite's time; ``make check`` runs the others (``pytest -m "not slow"``) and
+``make test`` runs them all.
 """
 
 import hashlib
