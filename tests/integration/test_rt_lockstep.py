@@ -6,6 +6,7 @@ stack, guards the command and sends it. Everything is deterministic.
 """
 
 import math
+import re
 from collections.abc import Iterator
 
 import numpy as np
@@ -683,10 +684,16 @@ def test_a_duration_that_is_no_time_is_refused_in_one_line(
 
 
 @pytest.mark.parametrize(
-    ("name", "value"),
-    [("rate", 0.0), ("rate", math.nan), ("linger", -0.1), ("start_timeout", 0.0),
-     ("periods_per_frame", 0), ("capacity", 0)],
+    ("name", "value", "expected"),
+    [("rate", 0.0, "Hz: expected a positive rate"),
+     ("rate", math.nan, "Hz: expected a positive rate"),
+     ("linger", -0.1, "; expected a finite number >= 0 [s]"),
+     ("start_timeout", 0.0, "; expected a finite number > 0 [s]"),
+     ("periods_per_frame", 0, ": expected an integer >= 1"),
+     ("capacity", 0, ": expected an integer >= 1")],
 )  # fmt: skip
-def test_a_run_setting_out_of_its_range_is_refused_in_one_line(name: str, value: float) -> None:
-    with pytest.raises(MotosimError, match=rf"^{name} = .*: expected [^\n]*$"):
+def test_a_run_setting_out_of_its_range_is_refused_in_one_line(
+    name: str, value: float, expected: str
+) -> None:
+    with pytest.raises(MotosimError, match=rf"^{name} = [^\n]*{re.escape(expected)}$"):
         RunSettings(LIMITS, **({"rate": 100.0} | {name: value}))  # type: ignore[arg-type]

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs, Link, codec_table
+from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt import fused
 from motosim.rt.clock import Clock
@@ -201,10 +202,9 @@ class RunSettings:
             math.isfinite(self.duration) and self.duration >= 0.0
         ):
             raise MotosimError(f"duration = {self.duration!r} s: expected a time >= 0")
-        if not (math.isfinite(self.linger) and self.linger >= 0.0):
-            raise MotosimError(f"linger = {self.linger!r} s: expected a time >= 0")
-        if not (math.isfinite(self.start_timeout) and self.start_timeout > 0.0):
-            raise MotosimError(f"start_timeout = {self.start_timeout!r} s: expected a time > 0")
+        check_number(self.linger, where="linger", lower=0.0, unit="s")
+        check_number(self.start_timeout, where="start_timeout", lower=0.0, lower_closed=False,
+                     unit="s")  # fmt: skip
         for name in ("periods_per_frame", "capacity"):
             if getattr(self, name) < 1:
                 raise MotosimError(f"{name} = {getattr(self, name)!r}: expected an integer >= 1")
