@@ -20,6 +20,9 @@ SIGNALS: Final[dict[str, Signal]] = {
     "t": Signal("time", "s"),
     # handlebar
     "tau_r": Signal("rider torque on the handlebar", "N*m"),
+    "tau_r_active": Signal(
+        "rider's active torque on the handlebar: tau_r without the arms' passive torque", "N*m"
+    ),
     "tau_r_hat": Signal("estimated rider torque", "N*m"),
     "tau_r_meas": Signal("rider torque measured by a torque sensor at the grips", "N*m"),
     "tau_p": Signal("dry-friction torque on the handlebar axis", "N*m"),
@@ -81,10 +84,10 @@ SIGNALS: Final[dict[str, Signal]] = {
 
 
 RECORDED: Final[tuple[str, ...]] = (
-    "t", "tau_r", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot", "theta_h_meas",
-    "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot", "phi_dot",
-    "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y", "F_xr", "F_xf", "F_zr",
-    "F_zf", "kappa_r", "kappa_f", "alpha_r", "alpha_f", "theta",
+    "t", "tau_r", "tau_r_active", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot",
+    "theta_h_meas", "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot",
+    "phi_dot", "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y", "F_xr", "F_xf",
+    "F_zr", "F_zf", "kappa_r", "kappa_f", "alpha_r", "alpha_f", "theta",
 )  # fmt: skip
 """The signals a closed-loop run records, in column order (each one is in :data:`SIGNALS`).
 

@@ -74,6 +74,20 @@ def test_buzz_while_the_rider_holds_a_steady_turn_is_flagged() -> None:
     assert turning["flag_oscillation"] == 0.0  # the rider is steering: not judged
 
 
+def test_the_buzz_is_judged_on_the_riders_active_torque() -> None:
+    # hands on the handlebar: the arms' passive torque follows the 9 Hz buzz it damps, so
+    # tau_r swings though the rider asks for nothing; the active torque stays put
+    t = np.arange(0.0, 4.0, 1e-3)
+    buzz = 0.5 * np.sin(2 * np.pi * 9.0 * t)
+    passive = -1.5 * np.cos(2 * np.pi * 9.0 * t)
+    holding = _metrics_at(t, i_m=1.0 + buzz, tau_r=2.0 + passive, tau_r_active=np.full(1, 2.0))
+    assert holding["flag_oscillation"] == 1.0
+    unknown = _metrics_at(t, i_m=1.0 + buzz, tau_r=2.0 + passive)
+    assert unknown["flag_oscillation"] == 0.0  # without it, the swing reads as steering
+    steering = _metrics_at(t, i_m=1.0 + buzz, tau_r=2.0, tau_r_active=3.0 * np.sin(t))
+    assert steering["flag_oscillation"] == 0.0
+
+
 def _metrics_at(t: np.ndarray, **columns: np.ndarray) -> dict[str, float]:
     full = {name: np.broadcast_to(values, t.shape).copy() for name, values in columns.items()}
     return run_metrics(t, full.get, complete=True, max_current=30.0)

@@ -746,6 +746,7 @@ def _run_chunk(
         o = out[row]
         o[_COL.t] = k * h
         o[_COL.tau_r] = tau_rider
+        o[_COL.tau_r_active] = active
         o[_COL.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
         o[_COL.theta_h] = hb[0]
         o[_COL.theta_h_dot] = hb[1]

@@ -235,7 +235,8 @@ def run_metrics(
           strongest frequency;
         - ``saturated_share`` (time at the current limit, with ``max_current``);
         - flags 1.0 or 0.0: ``flag_oscillation`` (buzz above :data:`BUZZ_LIMIT` while the
-          rider's torque stays within :data:`QUIET_TORQUE` of its middle value over those two
+          rider's torque, ``tau_r_active`` where recorded (the arms' passive torque follows the
+          buzz), stays within :data:`QUIET_TORQUE` of its middle value over those two
           seconds: the handlebar held steady, upright or in a steady turn),
           ``flag_saturation`` (saturated more than half the time), ``flag_fall`` (roll beyond
           :data:`FALL_ROLL`), ``flag_out_of_range`` (the speed left 3-60 m/s, where the
@@ -311,8 +312,11 @@ def run_metrics(
         # a buzz is current the rider does not ask for: judged while the rider holds the
         # handlebar steady, upright or in a steady turn (a constant torque asks for no change)
         held = None
-        if tau is not None:
-            held = tau[span][tail]
+        # the active torque where recorded: the arms' passive torque follows the buzz it damps
+        active = signal("tau_r_active")
+        asked = active if active is not None else tau
+        if asked is not None:
+            held = asked[span][tail]
         elif tau_hat is not None and running is not None:
             slow = tau_hat[span][window]
             held = (slow - highpass(t_run[window], slow, BUZZ_CUTOFF))[tail[window]]
