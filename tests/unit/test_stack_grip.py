@@ -70,18 +70,28 @@ def test_the_default_rider_holds_the_handlebar_with_the_relaxed_grip() -> None:
     assert alone.rider_hands == GRIPS["relaxed"] and alone.stack_hands is None
 
 
+def test_the_multibody_motorcycles_rider_grips_relaxed_too() -> None:
+    """The multibody front frame carries the arms (motosim.model.tyred.held) as Sharp's does:
+    the same default grip, and a grip for the stack is accepted."""
+    multibody = {"model": "multibody", "params": "sel2004_motorcycle"}
+    sc = _scenario(motorcycle=multibody)
+    assert sc.models_hands and sc.rider_hands == GRIPS["relaxed"]
+    assert sc.stack_hands == design_hands(GRIPS["relaxed"])
+    firm = _scenario(motorcycle=multibody, controller={"grip": "firm"})
+    assert firm.stack_hands == design_hands(GRIPS["firm"])
+
+
 @pytest.mark.parametrize(
     "tables",
     [
         {"controller": {"design": "d.toml"}},
         {"estimator": {"name": "torque_sensor"}},
-        {"motorcycle": {"model": "multibody", "params": "sel2004_motorcycle"}},
     ],
-    ids=["design file", "torque sensor", "multibody"],
+    ids=["design file", "torque sensor"],
 )
 def test_where_the_stack_models_no_hands_the_default_rider_has_none(tables: dict) -> None:
-    """A design file, the torque sensor or the multibody motorcycle: the default is no hands,
-    and the scenario is accepted as it is."""
+    """A design file or the torque sensor: the default is no hands, and the scenario is
+    accepted as it is."""
     sc = _scenario(**tables)
     assert not sc.models_hands
     assert sc.rider_hands is None and sc.stack_hands is None

@@ -64,6 +64,7 @@ __all__ = [
     "contact_loads",
     "derivatives",
     "domain",
+    "held",
     "lateral_matrix",
     "lateral_system",
     "linear_tyre_forces",
@@ -172,7 +173,10 @@ class TyredModel(NamedTuple):
     drag: float
     """rho C_d A / 2 [kg/m]."""
     steer_damping: float
-    """Steering damper [N*m*s/rad]."""
+    """Steering damper [N*m*s/rad], a rider's arms' damping included (:func:`held`)."""
+    steer_inertia: float
+    """Inertia turning with the steer angle about the steering axis besides the front
+    frame's, a rider's arms (:func:`held`) [kg*m^2]."""
     spin_inertia: Array
     """The wheels' spin inertias (rear, front) [kg*m^2], for the brakes' lock zone."""
     radii: Array
@@ -289,6 +293,8 @@ _COORDINATES = slice(Index.x, Index.front_angle + 1)
 """The coordinates among the compiled state (the generated code's q)."""
 _SPEEDS = slice(Index.forward, Index.front_spin + 1)
 """The generalised speeds (its u)."""
+_STEER_SPEED = Index.steer_rate - Index.forward
+"""The steer rate's place among the generalised speeds (u = q' for the steer angle)."""
 
 
 class ContactLoads(NamedTuple):
@@ -323,6 +329,7 @@ def make_model(
     drag: float = 0.0,
     aero_centre: tuple[float, float] | None = None,
     steer_damping: float = 0.0,
+    steer_inertia: float = 0.0,
     roll_limit: float = 1.3,
     steer_limit: float = STEER_STOP,
 ) -> TyredModel:
@@ -343,6 +350,9 @@ def make_model(
         frame's mass centre.
     steer_damping : float, optional
         Steering damper [N*m*s/rad].
+    steer_inertia : float, optional
+        Inertia turning with the steer angle about the steering axis besides the front
+        frame's [kg*m^2] (a rider's arms: :func:`held`).
     roll_limit : float, optional
         |roll| beyond which :func:`domain` says the machine has fallen [rad].
     steer_limit : float, optional
@@ -351,6 +361,9 @@ def make_model(
     check_number(drag, where="tyred model: drag", lower=0.0, upper=10.0, lower_closed=True)
     check_number(
         steer_damping, where="tyred model: steer_damping", lower=0.0, upper=1e3, lower_closed=True
+    )
+    check_number(
+        steer_inertia, where="tyred model: steer_inertia", lower=0.0, upper=10.0, lower_closed=True
     )
     check_number(roll_limit, where="tyred model: roll_limit", lower=0.1, upper=math.pi / 2)
     check_number(steer_limit, where="tyred model: steer_limit", lower=0.1, upper=math.pi / 2)
@@ -380,6 +393,7 @@ def make_model(
         front=front_array,
         drag=float(drag),
         steer_damping=float(steer_damping),
+        steer_inertia=float(steer_inertia),
         spin_inertia=np.array([params.I_Ryy, params.I_Fyy]),
         radii=np.array([params.r_R, params.r_F]),
         roll_limit=float(roll_limit),
@@ -388,6 +402,29 @@ def make_model(
         magic=magic,
         mf_rear=mf_rear,
         mf_front=mf_front,
+    )
+
+
+def held(model: TyredModel, inertia: float, damping: float) -> TyredModel:
+    """The model with a rider's arms on the handlebar: their inertia J_a [kg*m^2] and
+    damping c_a [N*m*s/rad] about the steering axis carried by the front frame.
+
+    The arms add -J_a delta'' - c_a delta' to the steer torque, as on Sharp 1971's model
+    (:func:`motosim.model.sharp.held_steering`; Cossalter, Doria, Lot & Massaro, Meccanica
+    46, 2011, 279-292): J_a joins the mass matrix's steer entry, c_a the steering damper.
+    Their stiffness is a torque about a held angle, left to whoever applies the steer torque.
+
+    Examples
+    --------
+    >>> m = load_model("sel2004_motorcycle")
+    >>> h = held(m, 0.05, 1.0)
+    >>> round(h.steer_inertia, 3), round(h.steer_damping - m.steer_damping, 3)
+    (0.05, 1.0)
+    """
+    check_number(inertia, where="held: inertia", lower=0.0, upper=10.0, lower_closed=True)
+    check_number(damping, where="held: damping", lower=0.0, upper=1e3, lower_closed=True)
+    return model._replace(
+        steer_inertia=model.steer_inertia + inertia, steer_damping=model.steer_damping + damping
     )
 
 
@@ -535,6 +572,7 @@ def _derivatives(model: TyredModel, x: Array, inputs: Inputs) -> Array:
     front = _brake(inputs.front_brake_torque, x[Index.front_spin], model.spin_inertia[1])
     r = np.array([steer, rear, front])
     M, f = _mass_forcing(model.p, q, u, r)
+    M[_STEER_SPEED, _STEER_SPEED] += model.steer_inertia
     kr, kf, Jr, Jf = _contacts(model.p, q, u)
     side_r, side_f = x[Index.Fy_r], x[Index.Fy_f]
     fxr, fyr, fzr, ssr, _, _, mzr, mxr, sigma_r = _tyre(model, False, kr, side_r, inputs.friction)

@@ -92,12 +92,11 @@ GRIPS: dict[str, Hands] = {
 
 DEFAULT_GRIP = "relaxed"
 """The grip of a rider whose scenario names no ``hands``, where the stack models hands
-(:attr:`motosim.sim.scenario.Scenario.models_hands`: Sharp 1971's motorcycle, no design
-file, no torque sensor): a rider holds the handlebar, and the relaxed grip is the lighter
-of the two. Where the stack cannot model them, the default rider has no hands (``off``), so
-that no scenario is refused for the default: a design file's controller was designed for the
-handlebar alone, a torque sensor measures the arms' whole torque, and the multibody
-motorcycle's front frame does not carry the arms' inertia."""
+(:attr:`motosim.sim.scenario.Scenario.models_hands`: no design file, no torque sensor), on
+either motorcycle: a rider holds the handlebar, and the relaxed grip is the lighter of the
+two. Where the stack cannot model them, the default rider has no hands (``off``), so that no
+scenario is refused for the default: a design file's controller was designed for the
+handlebar alone, and a torque sensor measures the arms' whole torque."""
 
 
 def held_handlebar(handlebar: HandlebarParameters, hands: Hands | None) -> HandlebarParameters:

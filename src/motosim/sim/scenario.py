@@ -25,8 +25,8 @@ so that an error is one line naming the key, the value and what was expected. Th
                    [kg*m^2], damping [N*m*s/rad], stiffness [N*m/rad], hold [rad]} (the arms'
                    passive impedance, :mod:`motosim.sim.hands`; default "relaxed",
                    :data:`~motosim.sim.grips.DEFAULT_GRIP`, where the stack models hands, and
-                   "off", a pure torque source, with a design file, the torque sensor or the
-                   multibody motorcycle: :attr:`Scenario.rider_hands`) and hands_off =
+                   "off", a pure torque source, with a design file or the torque sensor:
+                   :attr:`Scenario.rider_hands`) and hands_off =
                    [[t0, t1], ...] [s] (phases with no torque at all)
     [handlebar]    true = "simacom_handlebar", nominal = (true), inertia_factor = 1,
                    damping_factor = 1, friction = true
@@ -42,8 +42,7 @@ so that an error is one line naming the key, the value and what was expected. Th
                    estimate's lag; default: on with "rider" and the Walcott-Zak observer
                    from a 1 kHz measurement rate and at 100 Hz), grip = "relaxed" |
                    "firm" | "off" (the rider's hands the stack is designed for; default:
-                   the rider's hands, none with a design file, the torque sensor or the
-                   multibody motorcycle)
+                   the rider's hands, none with a design file or the torque sensor)
     [sensor]       torque = {noise [N*m], offset [N*m], low_pass [Hz]} (a rider-torque
                    sensor, read by the estimator "torque_sensor"; without the table, ideal)
 
@@ -1014,12 +1013,6 @@ class Scenario:
                 f"[controller] grip = {grip!r} with the torque sensor: it measures the arms' "
                 'whole torque, which the stack would then count twice; expected no grip or "off"'
             )
-        if grip not in (None, "off") and self.motorcycle.model == "multibody":
-            raise MotosimError(
-                f"[controller] grip = {grip!r}: the stack carries the hands' inertia on "
-                'Sharp 1971\'s front frame only; expected no grip or "off" on the multibody '
-                "motorcycle"
-            )
         if self.controller.prediction and self.estimator.name != "walcott_zak":
             raise MotosimError(
                 f"[controller] prediction = true with [estimator] name = "
@@ -1029,15 +1022,10 @@ class Scenario:
 
     @property
     def models_hands(self) -> bool:
-        """Whether the stack can be designed for the rider's hands: on Sharp 1971's
-        motorcycle, without a design file (designed for the handlebar alone) and without a
-        torque sensor (which measures the arms' whole torque: modelled too, they would be
-        counted twice)."""
-        return (
-            self.controller.design is None
-            and self.motorcycle.model != "multibody"
-            and self.estimator.name != SENSOR_ESTIMATOR
-        )
+        """Whether the stack can be designed for the rider's hands: without a design file
+        (designed for the handlebar alone) and without a torque sensor (which measures the
+        arms' whole torque: modelled too, they would be counted twice)."""
+        return self.controller.design is None and self.estimator.name != SENSOR_ESTIMATOR
 
     @property
     def rider_hands(self) -> Hands | None:

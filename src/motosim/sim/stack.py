@@ -509,12 +509,11 @@ def design_stack(
         The virtual motorcycle as the multibody model on tyres (:mod:`motosim.model.tyred`)
         instead of Sharp's ``sharp``, which then only sets the side force's input.
     hands : Hands, optional
-        The rider's hands the stack is designed for (Sharp's motorcycle only): give with
-        them ``handlebar`` and an estimator and controller designed for
-        :func:`~motosim.sim.grips.held_handlebar`; the virtual motorcycle carries the arms'
-        inertia and damping on its front frame
-        (:func:`~motosim.model.sharp.held_steering`), their stiffness reaching it through
-        the estimate.
+        The rider's hands the stack is designed for: give with them ``handlebar`` and an
+        estimator and controller designed for :func:`~motosim.sim.grips.held_handlebar`;
+        the virtual motorcycle carries the arms' inertia and damping on its front frame
+        (:func:`~motosim.model.sharp.held_steering`, :func:`~motosim.model.tyred.held`),
+        their stiffness reaching it through the estimate.
     quiet : Quiet
         How the stack keeps the encoder's counts and the handlebar's sticking out of its
         command; none by default (measured in the simulate guide, "The buzz, loop by
@@ -579,19 +578,14 @@ def design_stack(
     substeps = max(1, math.ceil(h / MOTORCYCLE_STEP - 1e-9))
     motorcycle: SharpMotorcycle | MultibodyMotorcycle
     Bw = sharp_model.side_force_input(sharp, height=side_force_height)
-    if hands is not None and multibody is not None:
-        raise MotosimError(
-            "hands: the stack is designed for a rider's hands on Sharp 1971's motorcycle only; "
-            "expected none on the multibody model"
-        )
+    # the arms' inertia and damping on the front frame, their stiffness in the estimate
+    arms = None if hands is None or hands.is_off else hands
     if multibody is None:
         d = derived_geometry(sharp)
         A0, A1, Bv = sharp_model.lpv_matrices(sharp)
-        if hands is not None and not hands.is_off:  # the arms' stiffness is in the estimate
-            A1 = sharp_model.held_steering(A1, Bv, hands.inertia, 0.0, 0.0)[0]
-            A0, Bv, held_Bw = sharp_model.held_steering(
-                A0, Bv, hands.inertia, hands.damping, 0.0, Bw
-            )
+        if arms is not None:
+            A1 = sharp_model.held_steering(A1, Bv, arms.inertia, 0.0, 0.0)[0]
+            A0, Bv, held_Bw = sharp_model.held_steering(A0, Bv, arms.inertia, arms.damping, 0.0, Bw)
             assert held_Bw is not None
             Bw = held_Bw
         motorcycle = SharpMotorcycle(
@@ -599,6 +593,8 @@ def design_stack(
             float(d["m"] * sharp.g + sharp.Z_f), float(-sharp.Z_f),
         )  # fmt: skip
     else:
+        if arms is not None:
+            multibody = tyred.held(multibody, arms.inertia, arms.damping)
         A0, Bv = _multibody_lateral(multibody, speed)
         A1 = np.zeros_like(A0)
         start = np.array(tyred.upright_state(multibody, speed), dtype=np.float64)

@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 
+from motosim.errors import MotosimError
 from motosim.model import sharp as sharp_model
 from motosim.model import tyred
 from motosim.params import MultibodyParameters, SharpParameters, load_parameters
@@ -168,3 +169,43 @@ def test_a_bad_speed_is_refused_in_one_line(machine: tuple) -> None:
     _, _, model = machine
     with pytest.raises(MotosimError, match="speed"):
         tyred.upright_state(model, math.inf)
+
+
+# Sharp's lateral state order from the tyred model's LATERAL order (roll, steer, lateral,
+# yaw rate, roll rate, steer rate, F_y rear, F_y front)
+_TO_SHARP = [2, 3, 4, 5, 0, 1, 6, 7]
+
+
+@pytest.mark.parametrize("speed", [10.0, 30.0])
+def test_the_arms_on_the_front_frame_are_sharps_held_steering(machine: tuple, speed: float) -> None:
+    """tyred.held adds the arms' inertia to the mass matrix's steer entry and their damping
+    to the steering damper; sharp.held_steering eliminates the same torque from the steer
+    equation (Sherman-Morrison). Both linearisations agree, and the held machine's weave
+    and wobble match Sharp 1971's held model as the bare ones do (arms of 0.05 kg*m^2 and
+    2 N*m*s/rad, within the grips' range of motosim.sim.grips)."""
+    sharp, _, model = machine
+    inertia, damping = 0.05, 2.0
+    A, B = tyred.lateral_system(model, speed)
+    A, B = A[np.ix_(_TO_SHARP, _TO_SHARP)], B[_TO_SHARP]
+    A_h, B_h, _ = sharp_model.held_steering(A, B, inertia, damping, 0.0)
+    A_t, B_t = tyred.lateral_system(tyred.held(model, inertia, damping), speed)
+    A_t, B_t = A_t[np.ix_(_TO_SHARP, _TO_SHARP)], B_t[_TO_SHARP]
+    scale = np.max(np.abs(A_h))
+    np.testing.assert_allclose(A_t, A_h, rtol=0, atol=1e-6 * scale)
+    np.testing.assert_allclose(B_t, B_h, rtol=0, atol=1e-6 * np.max(np.abs(B_h)))
+    bare = _oscillatory(A)
+    held = _oscillatory(A_t)
+    lin = sharp_model.linearize(sharp, speed)
+    reference = _oscillatory(
+        sharp_model.held_steering(lin.A, lin.B[:, 0], inertia, damping, 0.0)[0]
+    )
+    wobble = max(held, key=lambda e: e.imag)
+    assert abs(wobble - max(reference, key=lambda e: e.imag)) < 0.02 * abs(wobble)
+    # the arms' inertia lowers the wobble's frequency, their damping damps it
+    assert wobble.imag < max(bare, key=lambda e: e.imag).imag
+    assert wobble.real < max(bare, key=lambda e: e.imag).real
+
+
+def test_held_refuses_negative_arms(machine: tuple) -> None:
+    with pytest.raises(MotosimError, match=r"held: inertia = -0\.1"):
+        tyred.held(machine[2], -0.1, 0.0)
