@@ -86,9 +86,7 @@ _CHUNK_BYTES = 64 * 1024
 
 def _jsonable(value: Any, where: str) -> Any:
     """Convert ``value`` to plain JSON types (dataclasses, numpy values, paths included)."""
-    if value is None or isinstance(value, bool | int | str):
-        return value
-    if isinstance(value, float):
+    if value is None or isinstance(value, bool | int | float | str):
         return value
     if isinstance(value, np.generic):
         return _jsonable(value.item(), where)
@@ -360,23 +358,21 @@ class ResultWriter:
         except OSError:
             return
         if free < RESERVE_BYTES + 2 * block_bytes:
-            self._abort()
-            upto = f" (t <= {self._last_t:g} s)" if self._rows else ""
             raise MotosimError(
                 f"{self._staging}: the disk is full ({free / 1e6:.1f} MB free, "
-                f"{RESERVE_BYTES / 1e6:.0f} MB kept in reserve); the result is partial, "
-                f"{self._rows} rows{upto} kept in {self._location}"
+                f"{RESERVE_BYTES / 1e6:.0f} MB kept in reserve); {self._kept()}"
             )
 
     def _fail(self, path: Path, err: OSError | RuntimeError) -> NoReturn:
         """A write failed (full disk...): close what can be closed, say what was kept."""
         why = reason(err)
+        raise MotosimError(f"cannot write {path.name}: {why}; {self._kept()}") from None
+
+    def _kept(self) -> str:
+        """Close the files as a partial result (:meth:`_abort`); what was kept, and where."""
         self._abort()
         upto = f" (t <= {self._last_t:g} s)" if self._rows else ""
-        raise MotosimError(
-            f"cannot write {path.name}: {why}; the result is partial, {self._rows} rows"
-            f"{upto} kept in {self._location}"
-        ) from None
+        return f"the result is partial, {self._rows} rows{upto} kept in {self._location}"
 
     def close(self, summary: Mapping[str, Any] | None = None) -> None:
         """Store the summary, mark the result complete and publish it in :attr:`folder`.
@@ -423,15 +419,9 @@ class ResultWriter:
         self._release()
 
     def _publish(self) -> None:
-        """Move the staging folder to the result folder (:func:`replace_folder`).
-
-        Raises
-        ------
-        _OccupiedError
-            If the result folder now holds files that are not a motosim result (written
-            there while the run went, by a program that does not take the lock): it is left
-            as it is, and so is the staging folder.
-        """
+        """Move the staging folder to the result folder (:func:`replace_folder`); raise
+        :class:`_OccupiedError`, moving nothing, if the result folder now holds other files
+        (written there while the run went, by a program that does not take the lock)."""
         if not _replaceable(self._folder):
             raise _OccupiedError(self._folder)
         replace_folder(self._staging, self._folder)
