@@ -29,10 +29,10 @@ import tempfile
 import time
 import types
 import typing
-import zipfile
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
+from zipfile import BadZipFile
 
 import numpy as np
 
@@ -70,6 +70,9 @@ DESIGN_PACKAGES = ("control", "estimation", "model", "params", "sim", "io/cache.
 every key."""
 
 SUFFIX = ".npz"
+
+_UNREADABLE = (OSError, ValueError, KeyError, TypeError, AttributeError, EOFError, BadZipFile)
+"""What reading an entry raises when the file is not one :func:`to_arrays` stored."""
 
 T = TypeVar("T")
 
@@ -321,15 +324,7 @@ class DesignCache:
             try:
                 with path.open("rb") as handle, np.load(handle, allow_pickle=False) as stored:
                     return from_arrays(cls, {k: stored[k] for k in stored.files})
-            except (
-                OSError,
-                ValueError,
-                KeyError,
-                TypeError,
-                AttributeError,
-                EOFError,
-                zipfile.BadZipFile,
-            ) as err:
+            except _UNREADABLE as err:
                 warn(f"design cache: {path} cannot be read ({err}); designing it again")
         self._note_design()
         design = compute()

@@ -182,28 +182,20 @@ class FrameCodec:
             raise MotosimError(f"frame id {frame_id!r}: expected a standard 11-bit id")
         if not 1 <= length <= 8:
             raise MotosimError(f"frame 0x{frame_id:x}: length {length!r}; expected 1..8 bytes")
+        fields = []  # start, mask, sign bit, wrap, scale, offset, lowest and highest raw
         for s in signals:
             if s.start + s.length > 8 * length:
                 raise MotosimError(
                     f"signal {s.name} ends at bit {s.start + s.length}; frame 0x{frame_id:x} "
                     f"has {8 * length} bits"
                 )
+            mask, sign = (1 << s.length) - 1, (1 << (s.length - 1)) if s.is_signed else 0
+            hi = sign - 1 if sign else mask
+            fields.append((s.start, mask, sign, mask + 1, s.scale, s.offset, -sign, hi))
         self.frame_id = frame_id
         self.length = length
         self.names = tuple(s.name for s in signals)
-        self._fields = tuple(
-            (
-                s.start,
-                (1 << s.length) - 1,
-                (1 << (s.length - 1)) if s.is_signed else 0,
-                1 << s.length,
-                s.scale,
-                s.offset,
-                -(1 << (s.length - 1)) if s.is_signed else 0,
-                (1 << (s.length - 1)) - 1 if s.is_signed else (1 << s.length) - 1,
-            )
-            for s in signals
-        )
+        self._fields = tuple(fields)
         self.checksum_index = self.index(checksum) if checksum is not None else -1
         self.counter_index = self.index(counter) if counter is not None else -1
         if self.checksum_index >= 0:
@@ -465,9 +457,7 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
         pos = value + size
     if frame_id < 0 or data_length < 0:
         return -1, 0, 0, 0
-    if flagged:
-        return 0, frame_id, data_start, data_length
-    return 1, frame_id, data_start, data_length
+    return 0 if flagged else 1, frame_id, data_start, data_length
 
 
 @dataclass(frozen=True, slots=True)

@@ -12,31 +12,27 @@ A result is a folder holding:
   increasing ``t``; pandas and PlotJuggler read it as is. While a run goes, and in a run that
   did not complete, this file is called ``result.partial.csv``: its name says it is partial.
 
-How a result is never lost or corrupted (the choices are in ``docs/organisation.md``):
+How a result is never lost or corrupted (the choices are in ``docs/organisation.md``, files
+that survive every stop):
 
 - **Lock.** While a run writes ``NAME`` it holds its :class:`~motosim.io.files.FolderLock`
-  (``.NAME.lock`` beside it); a second writer of the same folder, with or without
-  ``overwrite``, is refused. A command that writes more into the folder after the result
-  (a report, figures) takes the lock itself and hands it to the writer (``lock``), so the
-  folder stays locked until the last file.
-- **Staging.** The run writes into the sibling folder ``NAME.partial``; only
-  :meth:`ResultWriter.close` renames it to ``NAME``, a previous result replaced
-  (:func:`~motosim.io.files.replace_folder`). A run that fails or is interrupted leaves a
-  previous complete result untouched; with no previous result, or an earlier stopped run's,
-  its rows are moved to ``NAME`` marked partial (``complete`` False, ``result.partial.csv``),
-  and a rerun replaces them without ``overwrite``. A ``NAME`` that is neither empty nor a
-  motosim result (files another program put there while the run went) is never moved aside:
-  the result, complete or not, stays in ``NAME.partial``, and the run says so.
-- **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
-  them; an exception leaving the ``with`` block (Ctrl-C, or SIGTERM turned into it by the
-  command, :class:`~motosim.errors.StopFlag`) closes both files, readable, marked partial.
-  The HDF5 file is written without SWMR, so after SIGKILL or a power cut
-  ``NAME.partial/result.h5`` opens with plain h5py, pandas or HDFView and holds every row
-  flushed before the kill, as ``result.partial.csv`` does (each block is one ``write`` call,
-  so no row is cut short).
-- **Full disk.** ``expected_rows`` lets the writer refuse a run the free space cannot hold
-  before it starts; a write that fails anyway is one :class:`MotosimError` line saying how
-  many rows were kept, and where.
+  (``.NAME.lock`` beside it), its own or the caller's (``lock``, kept by a command that
+  writes more there after the result); a second writer of the folder is refused.
+- **Staging.** The run writes into ``NAME.partial``; only :meth:`ResultWriter.close` renames
+  it to ``NAME``, a previous result replaced (:func:`~motosim.io.files.replace_folder`). A
+  run that fails or is interrupted leaves a previous complete result untouched; with none,
+  or an earlier stopped run's, its rows move to ``NAME`` marked partial (``complete`` False,
+  ``result.partial.csv``), which a rerun replaces without ``overwrite``. A ``NAME`` holding
+  files that are not a motosim result is never moved aside: the result stays in
+  ``NAME.partial``, and the run says so.
+- **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files (one
+  ``write`` a block, so no row is cut short) and flushes them; an exception leaving the
+  ``with`` block closes both, readable, marked partial. Without SWMR, after SIGKILL or a
+  power cut ``NAME.partial/result.h5`` opens with plain h5py, pandas or HDFView and holds
+  every row flushed before the kill.
+- **Full disk.** ``expected_rows`` refuses a run the free space cannot hold before it
+  starts; a write that fails anyway is one :class:`MotosimError` line saying how many rows
+  were kept, and where.
 
 Units are those of :mod:`motosim.signals`: SI, angles in radians.
 """

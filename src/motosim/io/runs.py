@@ -3,9 +3,8 @@
 The command line and any script build and run a scenario through these functions:
 :func:`load_scenario` reads and validates a file, :func:`resolve` loads what it names
 (parameter sets, a design file, CSV profiles, an OpenDRIVE road; relative to the scenario's
-folder) and designs
-what it asks for, :func:`load_run` does both, and :func:`run_to_folder` simulates into a
-result folder as the run goes. The designs are read from a design cache
+folder) and designs what it asks for, :func:`load_run` does both, and :func:`run_to_folder`
+simulates into a result folder as the run goes. The designs are read from a design cache
 (:mod:`motosim.io.cache`) when one is passed in, never otherwise; a campaign that runs one
 design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`) and passes
 it to :func:`motosim.sim.simulate`.
@@ -57,7 +56,6 @@ __all__ = [
     "load_run",
     "load_scenario",
     "parameter_source",
-    "range_reason",
     "read_road",
     "resolve",
     "run_to_folder",
