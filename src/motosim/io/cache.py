@@ -216,12 +216,8 @@ def from_arrays(cls: type[T], arrays: Mapping[str, np.ndarray], prefix: str = ""
                 raise KeyError(f"{key}: stored as none of {hint}")
             continue
         stored = arrays[key]
-        if hint is bool:
-            values[name] = bool(stored.item())
-        elif hint is int:
-            values[name] = int(stored.item())
-        elif hint is float:
-            values[name] = float(stored.item())
+        if hint in (bool, int, float):
+            values[name] = hint(stored.item())
         elif origin is tuple:
             values[name] = tuple(str(v) for v in stored.tolist())
         else:

@@ -26,6 +26,7 @@ frame) without a ``can.Message`` per frame; processes using python-can on the sa
 the same frames.
 """
 
+import contextlib
 import ctypes
 import errno
 import importlib.resources
@@ -888,11 +889,10 @@ class UdpMulticastLink(Link):
         self._bus = bus
         self._sock = socket.socket(fileno=os.dup(bus.fileno()))
         self._sock.setblocking(False)
+        # IP_MULTICAST_ALL and IPV6_MULTICAST_ALL off (Linux): only this group's frames
         for level, option in ((socket.IPPROTO_IP, 49), (socket.IPPROTO_IPV6, 29)):
-            try:  # IP_MULTICAST_ALL, IPV6_MULTICAST_ALL (Linux): only this group's frames
+            with contextlib.suppress(OSError):
                 self._sock.setsockopt(level, option, 0)
-            except OSError:
-                pass
         self._dest = (group, port)
         self._out = _sender_like(self._sock)
         self.own_filtered = _drop_source_port(self._sock, self._out.getsockname()[1])
@@ -1022,12 +1022,10 @@ def _sender_like(sock: Any) -> Any:
     out = socket.socket(sock.family, socket.SOCK_DGRAM)
     out.bind(("::", 0) if v6 else ("0.0.0.0", 0))
     out.setsockopt(level, hops, sock.getsockopt(level, hops))
-    try:  # the interface, where the bus chose one
+    with contextlib.suppress(OSError):  # the interface, where the bus chose one
         option = socket.IPV6_MULTICAST_IF if v6 else socket.IP_MULTICAST_IF
         chosen = sock.getsockopt(level, option) if v6 else sock.getsockopt(level, option, 4)
         out.setsockopt(level, option, chosen)
-    except OSError:
-        pass
     out.setblocking(False)
     return out
 

@@ -45,7 +45,6 @@ import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
-from types import TracebackType
 from typing import Any, NoReturn, Self
 
 import h5py
@@ -371,7 +370,7 @@ class ResultWriter:
         return f"the result is partial, {self._rows} rows{upto} kept in {self._location}"
 
     def close(self, summary: Mapping[str, Any] | None = None) -> None:
-        """Store the summary, mark the result complete and publish it in :attr:`folder`.
+        """Store the summary, mark the result complete and publish it in the result folder.
 
         Parameters
         ----------
@@ -456,10 +455,7 @@ class ResultWriter:
         return self
 
     def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object
     ) -> None:
         if exc_type is None and self._stop.name is not None and not self._closed:
             exc_type = KeyboardInterrupt  # a stop signal whose raise was swallowed
@@ -480,19 +476,9 @@ class ResultWriter:
             self._stop.check()
 
     @property
-    def folder(self) -> Path:
-        """The result folder, where a completed run is published."""
-        return self._folder
-
-    @property
     def location(self) -> Path:
         """Where the rows are now: the staging folder while running, then where they were kept."""
         return self._location
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Column names, ``"t"`` first."""
-        return self._names
 
     @property
     def rows(self) -> int:

@@ -294,10 +294,9 @@ class PlotJugglerUdp:
     def send(self, names: tuple[str, ...], rows: Array) -> None:
         """Send one datagram per kept row."""
         for row in self._kept.rows(rows):
-            message = {"timestamp": float(row[0])}
-            message.update(
-                {n: float(v) for n, v in zip(names[1:], row[1:], strict=True) if math.isfinite(v)}
-            )
+            values = zip(names[1:], row[1:], strict=True)
+            finite = {n: float(v) for n, v in values if math.isfinite(v)}
+            message = {"timestamp": float(row[0]), **finite}
             self._socket.sendto(json.dumps(message).encode(), self._address)
 
     def close(self) -> None:
