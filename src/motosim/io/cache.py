@@ -292,11 +292,7 @@ class DesignCache:
                 self.on_design(self._label, None)
 
     def fetch(
-        self,
-        kind: str,
-        depends_on: Mapping[str, Any],
-        compute: Callable[[], T],
-        cls: type[T],
+        self, kind: str, depends_on: Mapping[str, Any], compute: Callable[[], T], cls: type[T]
     ) -> T:
         """The design of ``kind`` for ``depends_on``: read from the cache, else computed.
 

@@ -162,10 +162,7 @@ def _loop_matrix(plant: StateSpace, controller: StateSpace) -> NDArray[np.float6
     """State matrix of the loop i_m = K (theta_h - delta) (positive feedback, no feedthrough)."""
     Ap, Bp, Cp = plant.A, plant.B, plant.C
     return np.block(
-        [
-            [Ap + Bp @ controller.D @ Cp, Bp @ controller.C],
-            [controller.B @ Cp, controller.A],
-        ]
+        [[Ap + Bp @ controller.D @ Cp, Bp @ controller.C], [controller.B @ Cp, controller.A]]
     )
 
 

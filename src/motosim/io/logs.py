@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError, warn
+from motosim.io.files import write_whole
 from motosim.params.checks import path_problem
 from motosim.timeseries import TimeSeries
 
@@ -220,15 +221,12 @@ def _decode(source: Path, label: str) -> list[tuple[int, str]]:
 
 
 def _delimiter(header: str) -> str:
-    for candidate in ("\t", ";", ","):
-        if candidate in header:
-            return candidate
-    return ","
+    return next((candidate for candidate in ("\t", ";") if candidate in header), ",")
 
 
 def _split_header(cell: str) -> tuple[str, str | None]:
     match = _HEADER.match(cell.strip().strip('"').strip("'"))
-    if match is None:  # pragma: no cover - the pattern matches any text
+    if match is None:  # an unclosed bracket, or text after the unit: a name without unit
         return cell.strip(), None
     return match["name"], match["unit"] or None
 
@@ -606,8 +604,6 @@ def write_log(path: str | Path, series: TimeSeries) -> Path:
     MotosimError
         If the file cannot be written.
     """
-    from motosim.io.files import write_whole
-
     target = Path(path)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)

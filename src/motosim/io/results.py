@@ -139,8 +139,7 @@ def partial_folder(folder: str | Path) -> Path:
 def is_complete_result(folder: str | Path) -> bool:
     """Whether ``folder`` holds a completed result (its ``result.csv`` is renamed at the end).
 
-    A ``result.h5`` marked complete counts too: a result whose CSV was deleted (it is the
-    larger file) was replaced by the next run into the folder without ``--overwrite``.
+    A ``result.h5`` marked complete counts too, its CSV (the larger file) deleted or not.
     """
     folder = Path(folder)
     if (folder / _CSV_NAME).is_file():

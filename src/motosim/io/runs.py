@@ -30,36 +30,15 @@ from motosim.io.results import ResultWriter
 from motosim.model.linear import StateSpace
 from motosim.params import HandlebarParameters, load_parameter_set, load_parameters
 from motosim.params.toml import read_toml
-from motosim.sim import (
-    SIGNALS,
-    RunInputs,
-    Scenario,
-    parse_scenario,
-    prepare,
-    run_metadata,
-    simulate,
-)
-from motosim.sim.closed_loop import run_limits
+from motosim.sim import Scenario, parse_scenario
+from motosim.sim.closed_loop import SIGNALS, RunInputs, prepare, run_limits, run_metadata, simulate
 from motosim.sim.grips import held_handlebar
-from motosim.sim.metrics import (
-    failure,
-    multibody_reason,
-    range_reason,
-    run_metrics,
-    wheel_locks,
-)
+from motosim.sim.metrics import failure, multibody_reason, range_reason, run_metrics, wheel_locks
 from motosim.sim.scenario import CsvProfile, OpenDrivePath, check_profile_values, implausible
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
-__all__ = [
-    "load_run",
-    "load_scenario",
-    "parameter_source",
-    "read_road",
-    "resolve",
-    "run_to_folder",
-]
+__all__ = ["load_run", "load_scenario", "parameter_source", "read_road", "resolve", "run_to_folder"]
 
 
 def load_scenario(path: str | Path) -> Scenario:

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
+from motosim.io.files import write_whole
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -203,11 +204,7 @@ def pose_of(names: Sequence[str], row: Array) -> dict[str, float]:
 
 
 def esmini_packet(
-    frame: int,
-    pose: dict[str, float],
-    *,
-    object_id: int = 0,
-    dead_reckon: bool = False,
+    frame: int, pose: dict[str, float], *, object_id: int = 0, dead_reckon: bool = False
 ) -> bytes:
     """Pack a pose as esmini's ``ControllerUDPDriver`` XYZHPR message.
 
@@ -454,8 +451,6 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
             counted.append(_write_messages(writer, names, table))
             writer.finish()  # type: ignore[no-untyped-call]
 
-    from motosim.io.files import write_whole
-
     write_whole(path, write)
     return counted[0]
 
@@ -463,10 +458,8 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
 def _write_messages(writer: Any, names: tuple[str, ...], table: Array) -> int:
     """Write each row of ``table`` to the signals channel and, if it has a pose, to the pose
     channel; the messages written."""
-    channels = {
-        topic: _json_channel(writer, topic, schema["title"], schema)
-        for topic, schema in ((_SIGNALS_TOPIC, _signals_schema(names)), (_POSE_TOPIC, _POSE_SCHEMA))
-    }
+    schemas = {_SIGNALS_TOPIC: _signals_schema(names), _POSE_TOPIC: _POSE_SCHEMA}
+    channels = {topic: _json_channel(writer, topic, schema) for topic, schema in schemas.items()}
     count = 0
     for sequence, row in enumerate(table):
         stamp = _nanoseconds(row[0])
@@ -482,11 +475,11 @@ def _write_messages(writer: Any, names: tuple[str, ...], table: Array) -> int:
     return count
 
 
-def _json_channel(writer: Any, topic: str, schema: str, definition: dict[str, Any]) -> int:
-    """Register a JSON channel and its JSON schema with an MCAP writer; the channel's id."""
-    schema_id = writer.register_schema(
-        name=schema, encoding="jsonschema", data=json.dumps(definition).encode()
-    )
+def _json_channel(writer: Any, topic: str, schema: dict[str, Any]) -> int:
+    """Register a JSON channel and its JSON schema (named by its title) with an MCAP writer;
+    the channel's id."""
+    data = json.dumps(schema).encode()
+    schema_id = writer.register_schema(name=schema["title"], encoding="jsonschema", data=data)
     channel: int = writer.register_channel(
         topic=topic, message_encoding="json", schema_id=schema_id
     )
