@@ -57,7 +57,7 @@ import numpy as np
 from numba import njit
 
 from motosim.control.torque_feedback import PAPER_CONTROLLER
-from motosim.io.can import HandlebarCodecs, LinkBase, handlebar_codecs
+from motosim.io.can import HandlebarCodecs, Link, handlebar_codecs
 from motosim.params import load_parameters
 from motosim.rt.check import check_timing
 from motosim.rt.clock import MonotonicClock
@@ -107,7 +107,7 @@ def _us(seconds: float) -> float:
     return round(seconds * 1e6, 1)
 
 
-class _Quiet(LinkBase):
+class _Quiet(Link):
     """A link that sends nowhere and receives nothing (the frames are given to the period)."""
 
     errors = 0

@@ -29,10 +29,10 @@ import tempfile
 import time
 import types
 import typing
-import zipfile
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
+from zipfile import BadZipFile
 
 import numpy as np
 
@@ -70,6 +70,9 @@ DESIGN_PACKAGES = ("control", "estimation", "model", "params", "sim", "io/cache.
 every key."""
 
 SUFFIX = ".npz"
+
+_UNREADABLE = (OSError, ValueError, KeyError, TypeError, AttributeError, EOFError, BadZipFile)
+"""What reading an entry raises when the file is not one :func:`to_arrays` stored."""
 
 T = TypeVar("T")
 
@@ -213,12 +216,8 @@ def from_arrays(cls: type[T], arrays: Mapping[str, np.ndarray], prefix: str = ""
                 raise KeyError(f"{key}: stored as none of {hint}")
             continue
         stored = arrays[key]
-        if hint is bool:
-            values[name] = bool(stored.item())
-        elif hint is int:
-            values[name] = int(stored.item())
-        elif hint is float:
-            values[name] = float(stored.item())
+        if hint in (bool, int, float):
+            values[name] = hint(stored.item())
         elif origin is tuple:
             values[name] = tuple(str(v) for v in stored.tolist())
         else:
@@ -293,11 +292,7 @@ class DesignCache:
                 self.on_design(self._label, None)
 
     def fetch(
-        self,
-        kind: str,
-        depends_on: Mapping[str, Any],
-        compute: Callable[[], T],
-        cls: type[T],
+        self, kind: str, depends_on: Mapping[str, Any], compute: Callable[[], T], cls: type[T]
     ) -> T:
         """The design of ``kind`` for ``depends_on``: read from the cache, else computed.
 
@@ -321,15 +316,7 @@ class DesignCache:
             try:
                 with path.open("rb") as handle, np.load(handle, allow_pickle=False) as stored:
                     return from_arrays(cls, {k: stored[k] for k in stored.files})
-            except (
-                OSError,
-                ValueError,
-                KeyError,
-                TypeError,
-                AttributeError,
-                EOFError,
-                zipfile.BadZipFile,
-            ) as err:
+            except _UNREADABLE as err:
                 warn(f"design cache: {path} cannot be read ({err}); designing it again")
         self._note_design()
         design = compute()

@@ -13,29 +13,33 @@ by the frame with its checksum bits set to zero.
 
 cantools reads the DBC once, outside the loop (:func:`load_dbc`); from it
 :func:`handlebar_codecs` builds one :class:`FrameCodec` per frame, plain shifts and masks on
-a Python integer, which encodes or decodes a frame in a few microseconds (cantools takes
-8-22 us) and is checked against cantools in the tests. A lab whose drive uses other frames
+a Python integer, checked against cantools in the tests. A lab whose drive uses other frames
 edits the DBC and, if the names differ, a :class:`HandlebarMapping`; not the code. Signals
 must be little-endian (Intel byte order).
 
 python-can (LGPL-3.0, the ``rt`` dependency group) carries the frames: :func:`open_link`
 opens any of its interfaces (``socketcan:can0`` in a lab, ``virtual`` and ``udp_multicast``
-in tests) and is imported only there. On ``udp_multicast`` the link is by default a
-:class:`UdpMulticastLink`: python-can opens and configures the multicast socket, and the
-frames go through it in python-can's own wire format (a msgpack map per frame) without a
-``can.Message`` per frame, which costs about 60 us a frame in python-can 4.6 and a few
-microseconds here; processes using python-can on the same group see the same frames.
+in tests) and is imported only there. Every link is a :class:`Link`. On ``udp_multicast``
+it is by default a :class:`UdpMulticastLink`: python-can opens and configures the multicast
+socket, and the frames go through it in python-can's own wire format (a msgpack map per
+frame) without a ``can.Message`` per frame; processes using python-can on the same group see
+the same frames.
 """
 
+import contextlib
+import ctypes
 import errno
 import importlib.resources
 import math
+import os
+import select
 import socket
+import struct
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Self
 
 import numpy as np
 from llvmlite import ir
@@ -54,11 +58,9 @@ __all__ = [
     "HandlebarCodecs",
     "HandlebarMapping",
     "Link",
-    "LinkBase",
     "PlatformCodecs",
     "SignalLayout",
     "UdpMulticastLink",
-    "check_bus",
     "codec_table",
     "crc8_sae_j1850",
     "decode_frame",
@@ -181,28 +183,20 @@ class FrameCodec:
             raise MotosimError(f"frame id {frame_id!r}: expected a standard 11-bit id")
         if not 1 <= length <= 8:
             raise MotosimError(f"frame 0x{frame_id:x}: length {length!r}; expected 1..8 bytes")
+        fields = []  # start, mask, sign bit, wrap, scale, offset, lowest and highest raw
         for s in signals:
             if s.start + s.length > 8 * length:
                 raise MotosimError(
                     f"signal {s.name} ends at bit {s.start + s.length}; frame 0x{frame_id:x} "
                     f"has {8 * length} bits"
                 )
+            mask, sign = (1 << s.length) - 1, (1 << (s.length - 1)) if s.is_signed else 0
+            hi = sign - 1 if sign else mask
+            fields.append((s.start, mask, sign, mask + 1, s.scale, s.offset, -sign, hi))
         self.frame_id = frame_id
         self.length = length
         self.names = tuple(s.name for s in signals)
-        self._fields = tuple(
-            (
-                s.start,
-                (1 << s.length) - 1,
-                (1 << (s.length - 1)) if s.is_signed else 0,
-                1 << s.length,
-                s.scale,
-                s.offset,
-                -(1 << (s.length - 1)) if s.is_signed else 0,
-                (1 << (s.length - 1)) - 1 if s.is_signed else (1 << s.length) - 1,
-            )
-            for s in signals
-        )
+        self._fields = tuple(fields)
         self.checksum_index = self.index(checksum) if checksum is not None else -1
         self.counter_index = self.index(counter) if counter is not None else -1
         if self.checksum_index >= 0:
@@ -214,9 +208,7 @@ class FrameCodec:
         else:
             self._checksum_shift = 0
             self._checksum_mask = -1
-        self._id_crc = 0xFF
-        for byte in frame_id.to_bytes(2, "little"):
-            self._id_crc = _CRC8[self._id_crc ^ byte]
+        self._id_crc = crc8_sae_j1850(frame_id.to_bytes(2, "little")) ^ 0xFF  # running value
 
     def index(self, name: str) -> int:
         """The position of signal ``name`` in the value order."""
@@ -228,11 +220,8 @@ class FrameCodec:
             ) from None
 
     def _crc(self, raw: int) -> int:
-        crc = self._id_crc
-        table = _CRC8
-        for byte in (raw & self._checksum_mask).to_bytes(self.length, "little"):
-            crc = table[crc ^ byte]
-        return crc ^ 0xFF
+        frame = (raw & self._checksum_mask).to_bytes(self.length, "little")
+        return crc8_sae_j1850(frame, self._id_crc)
 
     def encode(self, values: Sequence[float] | NDArray[np.float64]) -> bytes:
         """The frame's bytes for physical ``values`` (saturated to each signal's range).
@@ -469,9 +458,7 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
         pos = value + size
     if frame_id < 0 or data_length < 0:
         return -1, 0, 0, 0
-    if flagged:
-        return 0, frame_id, data_start, data_length
-    return 1, frame_id, data_start, data_length
+    return 0 if flagged else 1, frame_id, data_start, data_length
 
 
 @dataclass(frozen=True, slots=True)
@@ -637,107 +624,68 @@ def platform_codecs(path: str | Path | None = None) -> PlatformCodecs:
     db = load_dbc(path)
     command = _codec(db, "PF_COMMAND", mapping)
     status = _codec(db, "PF_STATUS", mapping)
-    angles = ("ROLL", "PITCH", "YAW")
     for frame in (command, status):
         if frame.checksum_index < 0 or frame.counter_index < 0:
             raise MotosimError(
                 f"frame 0x{frame.frame_id:x}: expected the {mapping.checksum} and "
                 f"{mapping.counter} signals"
             )
-    c = tuple(command.index(a) for a in angles)
-    st = tuple(status.index(a) for a in angles)
-    return PlatformCodecs(
-        command, status, (c[0], c[1], c[2]), (st[0], st[1], st[2]),
-        command.index("LIVE"), status.index("WATCHDOG"),
-    )  # fmt: skip
+
+    def angles(frame: FrameCodec) -> tuple[int, int, int]:
+        return frame.index("ROLL"), frame.index("PITCH"), frame.index("YAW")
+
+    live, watchdog = command.index("LIVE"), status.index("WATCHDOG")
+    return PlatformCodecs(command, status, angles(command), angles(status), live, watchdog)
 
 
 Rows = Sequence[Any]
 """Writable buffers of one frame each (memoryviews of a ``uint8`` array's rows)."""
 
+Ints = NDArray[np.int64]
 
-class Link(Protocol):
+
+class Link:
     """A CAN link to the drive, whatever its transport: what the real-time runner and the
-    virtual rig use of it. Each transport keeps its own speed-ups behind these methods
-    (:class:`UdpMulticastLink`: python-can's datagrams sent and read whole, a compiled read
-    of its socket; :class:`LinkBase`: frame by frame on ``send`` and ``receive``)."""
+    virtual rig use of it.
 
-    errors: int
+    A transport gives :meth:`send` and :meth:`receive`; the other methods work frame by frame
+    from those two, and a transport with a faster path overrides them in its own class
+    (:class:`UdpMulticastLink`: python-can's datagrams sent and read whole, its socket read
+    from compiled code). A link is a context manager that closes it.
+    """
+
+    errors = 0
     """Frames that could not be sent or read."""
-
-    @property
-    def datagrams(self) -> bool:
-        """Whether :meth:`receive_into` writes python-can ``udp_multicast`` datagrams (read
-        by :func:`unpack_frame`) rather than each frame's data bytes and id."""
-        ...
+    datagrams = False
+    """Whether :meth:`receive_into` writes python-can ``udp_multicast`` datagrams (read by
+    :func:`unpack_frame`) rather than each frame's data bytes and id."""
 
     def send(self, frame_id: int, data: bytes) -> bool:
         """Send one standard frame; False if the bus refused it."""
-        ...
+        raise NotImplementedError
 
     def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
         """The next frame ``(frame_id, data)``, or None if none came within ``timeout`` [s]."""
-        ...
+        raise NotImplementedError
 
     def frame_buffer(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
         """The bytes to send for a frame of ``length`` data bytes, data zero, and where its
         data starts in them (the period encodes the frame in place)."""
-        ...
+        return np.zeros(length, dtype=np.uint8), 0
 
     def sender(self, frame_id: int, buffer: NDArray[np.uint8]) -> Callable[[], bool]:
         """A function sending ``buffer`` (made by :meth:`frame_buffer`) as it is when it is
         called; False if refused."""
-        ...
-
-    def receive_into(
-        self, rows: Rows, lengths: NDArray[np.int64], ids: NDArray[np.int64], start: int,
-        timeout: float = 0.0,
-    ) -> int:  # fmt: skip
-        """Read the frames waiting into ``rows[start:]`` (their sizes into ``lengths``,
-        their ids into ``ids`` unless :attr:`datagrams`); the index after the last one. With
-        ``timeout`` > 0, at most one, waiting up to ``timeout`` [s] for it."""
-        ...
-
-    def compiled_fd(self) -> int:
-        """A non-blocking socket whose datagrams compiled code may read with ``recv``
-        (:func:`recv_datagrams`), or -1."""
-        ...
-
-    def close(self) -> None:
-        """Close the link."""
-        ...
-
-
-class LinkBase:
-    """:class:`Link` frame by frame on a link's own ``send`` and ``receive``: the way of a
-    python-can bus (:class:`CanLink`) and of the test doubles."""
-
-    __slots__ = ()
-    errors = 0
-    datagrams = False
-
-    def send(self, frame_id: int, data: bytes) -> bool:
-        """Send one standard frame; False if the bus refused it."""
-        raise NotImplementedError
-
-    def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
-        """The next frame ``(frame_id, data)``, or None."""
-        raise NotImplementedError
-
-    def frame_buffer(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
-        """The frame's data bytes (zeros), from 0."""
-        return np.zeros(length, dtype=np.uint8), 0
-
-    def sender(self, frame_id: int, buffer: NDArray[np.uint8]) -> Callable[[], bool]:
-        """A function sending ``buffer``'s bytes as frame ``frame_id``."""
         send = self.send
         return lambda: send(frame_id, buffer.tobytes())
 
     def receive_into(
-        self, rows: Rows, lengths: NDArray[np.int64], ids: NDArray[np.int64], start: int,
-        timeout: float = 0.0,
-    ) -> int:  # fmt: skip
-        """:meth:`Link.receive_into` by :meth:`receive`, a frame's data cut to its row."""
+        self, rows: Rows, lengths: Ints, ids: Ints, start: int, timeout: float = 0.0
+    ) -> int:
+        """Read the frames waiting into ``rows[start:]`` (their sizes into ``lengths``,
+        their ids into ``ids`` unless :attr:`datagrams`); the index after the last one. With
+        ``timeout`` > 0, at most one, waiting up to ``timeout`` [s] for it. Here by
+        :meth:`receive`, a frame's data cut to its row."""
         receive = self.receive
         n = start
         while n < len(rows):  # bounded: a flooded bus cannot hold the loop
@@ -754,14 +702,21 @@ class LinkBase:
         return n
 
     def compiled_fd(self) -> int:
-        """None: no socket for compiled code."""
+        """A non-blocking socket whose datagrams compiled code may read with ``recv``
+        (:func:`recv_datagrams`), or -1 (here: none)."""
         return -1
 
     def close(self) -> None:
-        """Nothing to close."""
+        """Close the link (here: nothing to close)."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
-class CanLink(LinkBase):
+class CanLink(Link):
     """A python-can bus carrying raw frames: non-blocking receive, send that reports failure.
 
     Made by :func:`open_link`; ``bus`` is any ``can.BusABC``.
@@ -813,12 +768,6 @@ class CanLink(LinkBase):
     def close(self) -> None:
         """Shut the bus down."""
         self._bus.shutdown()
-
-    def __enter__(self) -> "CanLink":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 RECV_AVAILABLE = sys.platform == "linux"
@@ -872,9 +821,7 @@ _read: Any = _recv
 
 
 @njit(cache=True)
-def recv_datagrams(
-    fd: int, rx: NDArray[np.uint8], lengths: NDArray[np.int64]
-) -> tuple[int, int]:  # fmt: skip
+def recv_datagrams(fd: int, rx: NDArray[np.uint8], lengths: Ints) -> tuple[int, int]:
     """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``rx``'s rows and
     their sizes into ``lengths``, at most a row each; the number read and the number of
     reads that failed otherwise than "nothing waiting".
@@ -896,29 +843,27 @@ def recv_datagrams(
     return n, 0
 
 
-class UdpMulticastLink:
+class UdpMulticastLink(Link):
     """python-can's ``udp_multicast`` frames on its own socket, without a message per frame.
 
     python-can's ``UdpMulticastBus`` packs each frame as a msgpack map of the fields of
     ``can.Message`` and unpacks each received one into a new, checked ``can.Message``. This
-    link keeps the bus (for its socket's set-up and for :meth:`close`), sends through a copy
-    of its socket the bytes python-can's ``pack_message`` gives for the frame (built once per
-    frame id and length, only the data bytes changing), and reads datagrams with a
-    non-blocking ``recv`` decoded by msgpack's C unpacker. On Linux the socket takes only
-    its own group's datagrams (``IP_MULTICAST_ALL`` and ``IPV6_MULTICAST_ALL`` off; by
-    default a socket bound to the port gets every group joined on the machine), so two
-    rigs on one PC on different groups (``udp_multicast:GROUP``) do not hear each other.
-    Made by :func:`open_link`.
+    link keeps the bus (for its socket's set-up and for :meth:`close`), sends the bytes
+    python-can's ``pack_message`` gives for the frame (built once per frame id and length,
+    only the data bytes changing), and reads datagrams with a non-blocking ``recv`` decoded
+    by msgpack's C unpacker. On Linux the socket takes only its own group's datagrams
+    (``IP_MULTICAST_ALL`` and ``IPV6_MULTICAST_ALL`` off; by default a socket bound to the
+    port gets every group joined on the machine), so two rigs on one PC on different groups
+    (``udp_multicast:GROUP``) do not hear each other. Made by :func:`open_link`.
 
     Multicast on one PC loops every datagram back to every socket of the group, the
-    sender's own included, and python-can's sockets all send from the group's port: each
-    end would read back, and unpack, every frame it sends (the run its commands, the rig its
-    status frames). So this link sends from a socket of its own (an ephemeral port, the
-    bus's hop limit and interface) and, on Linux, gives its receiving socket a classic BPF
-    filter (``SO_ATTACH_FILTER``, the kernel's ``Documentation/networking/filter.rst``) that
-    drops the datagrams whose UDP source port is that one: in the kernel, before they are
-    queued. :attr:`own_filtered` says whether the filter is on (elsewhere the frames are
-    read back and ignored, as before).
+    sender's own included, and python-can's sockets all send from the group's port. So this
+    link sends from a socket of its own (an ephemeral port, the bus's hop limit and
+    interface) and, on Linux, gives its receiving socket a classic BPF filter
+    (``SO_ATTACH_FILTER``, the kernel's ``Documentation/networking/filter.rst``) that drops
+    the datagrams whose UDP source port is that one, in the kernel, before they are queued.
+    :attr:`own_filtered` says whether the filter is on (elsewhere the frames are read back
+    and ignored).
 
     Parameters
     ----------
@@ -933,32 +878,26 @@ class UdpMulticastLink:
     """
 
     __slots__ = (
-        "_bus", "_dest", "_out", "_poll", "_select", "_sock", "_templates", "_unpack", "errors",
+        "_bus", "_dest", "_out", "_poll", "_sock", "_templates", "_unpack", "errors",
         "own_filtered", "spec",
     )  # fmt: skip
     datagrams = True
 
     def __init__(self, bus: Any, group: str, port: int, spec: str) -> None:
-        import os
-        import select
-        import socket
-
         import msgpack  # type: ignore[import-untyped]  # python-can[multicast] brings it
 
         self._bus = bus
         self._sock = socket.socket(fileno=os.dup(bus.fileno()))
         self._sock.setblocking(False)
+        # IP_MULTICAST_ALL and IPV6_MULTICAST_ALL off (Linux): only this group's frames
         for level, option in ((socket.IPPROTO_IP, 49), (socket.IPPROTO_IPV6, 29)):
-            try:  # IP_MULTICAST_ALL, IPV6_MULTICAST_ALL (Linux): only this group's frames
+            with contextlib.suppress(OSError):
                 self._sock.setsockopt(level, option, 0)
-            except OSError:
-                pass
         self._dest = (group, port)
         self._out = _sender_like(self._sock)
         self.own_filtered = _drop_source_port(self._sock, self._out.getsockname()[1])
         self._poll = select.poll()
         self._poll.register(self._sock.fileno(), select.POLLIN)
-        self._select = select.select
         self._unpack = msgpack.unpackb
         self._templates: dict[tuple[int, int], tuple[bytes, bytes]] = {}
         self.spec = spec
@@ -986,29 +925,9 @@ class UdpMulticastLink:
         template = self._templates.get(key)
         if template is None:
             template = self._templates[key] = self._template(frame_id, len(data))
-        try:
-            self._out.sendto(template[0] + data + template[1], self._dest)
-        except OSError:
-            self.errors += 1
-            return False
-        return True
+        return self._send(template[0] + data + template[1])
 
-    def frame_buffer(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
-        """python-can's packed bytes of a frame, data zero, and where its data bytes start:
-        write the data there and send the array with :meth:`sender`'s function (the fused
-        period of :mod:`motosim.rt.fused` encodes its command frame in place)."""
-        before, after = self._template(frame_id, length)
-        packed = np.frombuffer(before + bytes(length) + after, dtype=np.uint8).copy()
-        return packed, len(before)
-
-    def sender(self, frame_id: int, buffer: NDArray[np.uint8]) -> Callable[[], bool]:
-        """A function sending ``buffer`` (made by :meth:`frame_buffer`) as one datagram;
-        False (``errors`` + 1) if refused."""
-        view = memoryview(buffer)  # type: ignore[arg-type]
-        return lambda: self.send_datagram(view)
-
-    def send_datagram(self, datagram: Any) -> bool:
-        """Send a datagram made by :meth:`frame_buffer`; False (``errors`` + 1) if refused."""
+    def _send(self, datagram: Any) -> bool:
         try:
             self._out.sendto(datagram, self._dest)
         except OSError:
@@ -1016,14 +935,22 @@ class UdpMulticastLink:
             return False
         return True
 
+    def frame_buffer(self, frame_id: int, length: int) -> tuple[NDArray[np.uint8], int]:
+        """python-can's packed bytes of a frame, data zero, and where its data bytes start."""
+        before, after = self._template(frame_id, length)
+        packed = np.frombuffer(before + bytes(length) + after, dtype=np.uint8).copy()
+        return packed, len(before)
+
+    def sender(self, frame_id: int, buffer: NDArray[np.uint8]) -> Callable[[], bool]:
+        """A function sending ``buffer`` as one datagram; False (``errors`` + 1) if refused."""
+        view = memoryview(buffer)  # type: ignore[arg-type]
+        return lambda: self._send(view)
+
     def receive_into(
-        self, rows: Rows, lengths: NDArray[np.int64], ids: NDArray[np.int64], start: int,
-        timeout: float = 0.0,
-    ) -> int:  # fmt: skip
-        """Read the datagrams waiting (non-blocking) into ``rows[start:]``, their sizes into
-        ``lengths`` (``ids`` unused: the id is in the datagram); the index after the last
-        one read; :func:`unpack_frame` reads them. With ``timeout`` > 0, at most one,
-        waited for up to ``timeout`` [s]."""
+        self, rows: Rows, lengths: Ints, ids: Ints, start: int, timeout: float = 0.0
+    ) -> int:
+        """:meth:`Link.receive_into` of whole datagrams (``ids`` unused: the id is in the
+        datagram), which :func:`unpack_frame` reads."""
         limit = len(rows)
         if timeout > 0.0:
             if not self.readable(timeout):
@@ -1044,15 +971,14 @@ class UdpMulticastLink:
         return n
 
     def compiled_fd(self) -> int:
-        """The receiving socket's file descriptor (non-blocking), for a read from compiled
-        code (:func:`recv_datagrams`); -1 where compiled code cannot read it
-        (:data:`RECV_AVAILABLE`)."""
+        """The receiving socket's file descriptor (non-blocking), or -1 where compiled code
+        cannot read it (:data:`RECV_AVAILABLE`)."""
         fd: int = self._sock.fileno()
         return fd if RECV_AVAILABLE else -1
 
     def readable(self, timeout: float) -> bool:
         """Wait up to ``timeout`` [s] for a datagram; whether one is waiting."""
-        return bool(self._select([self._sock], (), (), timeout)[0])
+        return bool(select.select([self._sock], (), (), timeout)[0])
 
     def receive(self, timeout: float = 0.0) -> tuple[int, bytes] | None:
         """The next received frame as ``(frame_id, data)``, or None if none came in ``timeout``.
@@ -1060,12 +986,9 @@ class UdpMulticastLink:
         Error and remote frames, and datagrams that are not python-can frames, give None
         (and the latter count in ``errors``).
         """
-        # poll first: an empty non-blocking recv raises, which costs three times a poll;
-        # a timed wait uses select, whose timeout is not rounded to milliseconds
-        if timeout <= 0.0:
-            if not self._poll.poll(0):
-                return None
-        elif not self._select([self._sock], (), (), timeout)[0]:
+        # poll first: it is cheaper than an empty non-blocking recv, which raises; a timed
+        # wait uses select, whose timeout is not rounded to milliseconds
+        if not (self._poll.poll(0) if timeout <= 0.0 else self.readable(timeout)):
             return None
         try:
             raw = self._sock.recv(4096)
@@ -1089,36 +1012,20 @@ class UdpMulticastLink:
         self._sock.close()
         self._bus.shutdown()
 
-    def __enter__(self) -> "UdpMulticastLink":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
 
 def _sender_like(sock: Any) -> Any:
     """A non-blocking UDP socket on an ephemeral port that sends to the multicast group as
     ``sock`` does (its hop limit and interface)."""
-    import socket
-
+    v6 = sock.family == socket.AF_INET6
+    level = socket.IPPROTO_IPV6 if v6 else socket.IPPROTO_IP
+    hops = socket.IPV6_MULTICAST_HOPS if v6 else socket.IP_MULTICAST_TTL
     out = socket.socket(sock.family, socket.SOCK_DGRAM)
-    if sock.family == socket.AF_INET6:
-        level, options = socket.IPPROTO_IPV6, (socket.IPV6_MULTICAST_HOPS,)
-        out.bind(("::", 0))
-    else:
-        level, options = socket.IPPROTO_IP, (socket.IP_MULTICAST_TTL,)
-        out.bind(("0.0.0.0", 0))
-    for option in options:
-        out.setsockopt(level, option, sock.getsockopt(level, option))
-    try:  # the interface, where the bus chose one
-        if sock.family == socket.AF_INET6:
-            interface = sock.getsockopt(level, socket.IPV6_MULTICAST_IF)
-            out.setsockopt(level, socket.IPV6_MULTICAST_IF, interface)
-        else:
-            interface = sock.getsockopt(level, socket.IP_MULTICAST_IF, 4)
-            out.setsockopt(level, socket.IP_MULTICAST_IF, interface)
-    except OSError:
-        pass
+    out.bind(("::", 0) if v6 else ("0.0.0.0", 0))
+    out.setsockopt(level, hops, sock.getsockopt(level, hops))
+    with contextlib.suppress(OSError):  # the interface, where the bus chose one
+        option = socket.IPV6_MULTICAST_IF if v6 else socket.IP_MULTICAST_IF
+        chosen = sock.getsockopt(level, option) if v6 else sock.getsockopt(level, option, 4)
+        out.setsockopt(level, option, chosen)
     out.setblocking(False)
     return out
 
@@ -1130,10 +1037,6 @@ def _drop_source_port(sock: Any, port: int) -> bool:
     The program (``struct sock_filter`` instructions, BPF_LD|BPF_H|BPF_ABS and so on) sees
     a UDP socket's datagram from its UDP header, whose first 16 bits are the source port.
     """
-    import ctypes
-    import socket
-    import struct
-
     program = (
         (0x28, 0, 0, 0),  # ldh [0]: the source port
         (0x15, 0, 1, port),  # jeq #port, next, skip one

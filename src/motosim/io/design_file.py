@@ -115,10 +115,8 @@ _TABLES = ("design", "handlebar", "observer", "controller", "paper_controller")
 _DESIGN_KEYS = ("version", "date", "handlebar", "rate")
 _OBSERVER_KEYS = (*(f.name for f in fields(ObserverSettings)), "L", "P", "F")
 _MATRIX_KEYS = ("A", "B", "C", "D")
-_CONTROLLER_KEYS = (
-    "bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner", "num", "den",
-    *_MATRIX_KEYS, "zoh", "tustin",
-)  # fmt: skip
+_CONTROLLER_FIGURES = ("bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner")
+_CONTROLLER_KEYS = (*_CONTROLLER_FIGURES, "num", "den", *_MATRIX_KEYS, "zoh", "tustin")
 
 
 def _get(table: Mapping[str, Any], key: str, where: str) -> Any:
@@ -164,10 +162,7 @@ def _loop_matrix(plant: StateSpace, controller: StateSpace) -> NDArray[np.float6
     """State matrix of the loop i_m = K (theta_h - delta) (positive feedback, no feedthrough)."""
     Ap, Bp, Cp = plant.A, plant.B, plant.C
     return np.block(
-        [
-            [Ap + Bp @ controller.D @ Cp, Bp @ controller.C],
-            [controller.B @ Cp, controller.A],
-        ]
+        [[Ap + Bp @ controller.D @ Cp, Bp @ controller.C], [controller.B @ Cp, controller.A]]
     )
 
 
@@ -217,18 +212,17 @@ def _observer(
     poles = _get(table, "poles", where)
     if not isinstance(poles, list) or len(poles) != 2:
         raise MotosimError(f"{where} poles = {short_repr(poles)}; expected two negative numbers")
+    keys = ("eta", "injection_bandwidth", "filter_time_constant", "dead_zone", "friction_width")
     number = {
         key: check_number(_get(table, key, where), where=f"{where} {key}", lower=0.0)
-        for key in ("eta", "injection_bandwidth", "filter_time_constant")
+        for key in keys
     }
-    for key in ("dead_zone", "friction_width"):
-        number[key] = check_number(_get(table, key, where), where=f"{where} {key}", lower=0.0)
     compensation = _get(table, "friction_compensation", where)
     if not isinstance(compensation, bool):
         raise MotosimError(
             f"{where} friction_compensation = {short_repr(compensation)}; expected true or false"
         )
-    factor = {  # absent from the design files written before they existed: 1
+    factor = {  # optional: 1 when absent
         key: check_number(
             table.get(key, 1.0), where=f"{where} {key}", lower=0.0, lower_closed=False, upper=10.0
         )
@@ -239,14 +233,9 @@ def _observer(
             check_number(poles[0], where=f"{where} poles[0]", upper=0.0, upper_closed=False),
             check_number(poles[1], where=f"{where} poles[1]", upper=0.0, upper_closed=False),
         ),
-        eta=number["eta"],
-        injection_bandwidth=number["injection_bandwidth"],
-        filter_time_constant=number["filter_time_constant"],
-        dead_zone=number["dead_zone"],
-        friction_width=number["friction_width"],
         friction_compensation=compensation,
-        damping_factor=factor["damping_factor"],
-        inertia_factor=factor["inertia_factor"],
+        **number,
+        **factor,
     )
     for key in ("L", "P"):  # informative copies of what the settings rebuild
         if key in table and _matrix(table[key], f"{where} {key}").shape != (2, 2):
@@ -332,7 +321,7 @@ def _handlebar(data: Mapping[str, Any], label: str) -> HandlebarParameters:
 def _controller(ctrl: Mapping[str, Any], label: str) -> StateSpace:
     """The continuous controller of the ``[controller]`` table; its other keys checked."""
     check_keys(ctrl, _CONTROLLER_KEYS, where=f"{label} [controller]", what="key")
-    for key in ("bandwidth", "order", "gamma", "gamma_min", "weight_gain", "weight_corner"):
+    for key in _CONTROLLER_FIGURES:
         if key in ctrl:  # what the design achieved, for people: numbers all the same
             check_number(ctrl[key], where=f"{label} [controller] {key}")
     for key in ("num", "den"):

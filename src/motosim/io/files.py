@@ -12,6 +12,7 @@
 Why this way, and the options weighed, are in ``docs/organisation.md`` (file safety).
 """
 
+import contextlib
 import fcntl
 import os
 import re
@@ -67,11 +68,9 @@ def _remove_stale_temporaries(real: Path) -> None:
     except OSError:
         return
     for entry in entries:
-        try:
+        with contextlib.suppress(OSError):
             if entry.stat(follow_symlinks=False).st_mtime < stale:
                 os.unlink(entry.path)
-        except OSError:
-            continue
 
 
 def write_whole(

@@ -24,6 +24,7 @@ filters and the output-error fit of :mod:`motosim.identification` assume a unifo
 """
 
 import csv
+import dataclasses
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -34,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError, warn
+from motosim.io.files import write_whole
 from motosim.params.checks import path_problem
 from motosim.timeseries import TimeSeries
 
@@ -74,6 +76,7 @@ _UNITS: dict[str, tuple[str, float]] = {
     "nm": ("torque", 1.0),
     "n m": ("torque", 1.0),
 }
+_UNIT_NAMES = "s, ms, us, rad, deg, A, mA, V, mV"  # the units messages list
 
 # motosim's signals with a quantity, for unit checks; others take any unit as SI
 _QUANTITY: dict[str, str] = {
@@ -99,9 +102,7 @@ JITTER_TOLERANCE = 0.01
 """Largest deviation of a sample period from the median, as a fraction, left unresampled."""
 JITTER_WARNING = 0.05
 """Deviation of a sample period from the median, as a fraction, beyond which a rig log's
-resampling is warned about: a drive's clocked log jitters by well under a percent, a log
-timestamped by a PC's scheduler by a few milliseconds, which linear interpolation turns into
-errors in the derivatives that identification and estimation take of the angle."""
+resampling is warned about (a drive's clocked log jitters by well under a percent)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -125,8 +126,7 @@ class ColumnSpec:
             raise MotosimError("column mapping with an empty source name; expected NAME[:UNIT]")
         if self.unit is not None and self.unit.lower() not in _UNITS:
             raise MotosimError(
-                f"unit {self.unit!r} of column {self.source!r}; expected one of "
-                "s, ms, us, rad, deg, A, mA, V, mV"
+                f"unit {self.unit!r} of column {self.source!r}; expected one of {_UNIT_NAMES}"
             )
 
 
@@ -180,8 +180,7 @@ MAX_LINE = 10_000
 """Longest line of a log [characters]: a row of numbers is a few dozen."""
 
 MAX_LOG_ROWS = 1_000_000
-"""Most rows in a log: 17 min at 1 kHz, 2.8 h at 100 Hz, far more than an identification or an
-estimation needs (a 60 s chirp at 1 kHz is 60 000 rows); checked before any row is parsed."""
+"""Most rows in a log (17 min at 1 kHz), checked before any row is parsed."""
 
 
 def _decode(source: Path, label: str) -> list[tuple[int, str]]:
@@ -222,15 +221,12 @@ def _decode(source: Path, label: str) -> list[tuple[int, str]]:
 
 
 def _delimiter(header: str) -> str:
-    for candidate in ("\t", ";", ","):
-        if candidate in header:
-            return candidate
-    return ","
+    return next((candidate for candidate in ("\t", ";") if candidate in header), ",")
 
 
 def _split_header(cell: str) -> tuple[str, str | None]:
     match = _HEADER.match(cell.strip().strip('"').strip("'"))
-    if match is None:  # pragma: no cover - the pattern matches any text
+    if match is None:  # an unclosed bracket, or text after the unit: a name without unit
         return cell.strip(), None
     return match["name"], match["unit"] or None
 
@@ -393,9 +389,7 @@ def _factor(label: str, signal: str, unit: str | None) -> float:
         return 1.0
     key = unit.strip().lower()
     if key not in _UNITS:
-        raise MotosimError(
-            f"{label}: unit {unit!r} of {signal}; expected one of s, ms, us, rad, deg, A, mA, V, mV"
-        )
+        raise MotosimError(f"{label}: unit {unit!r} of {signal}; expected one of {_UNIT_NAMES}")
     quantity, factor = _UNITS[key]
     expected = _QUANTITY.get(signal)
     if expected is not None and quantity != expected:
@@ -479,13 +473,9 @@ def resample(series: TimeSeries, period: float) -> TimeSeries:
         raise MotosimError(f"period = {period!r}; expected a finite value > 0 [s]")
     n = math.floor(float(series.t[-1] - series.t[0]) / period * (1.0 + 1e-9)) + 1
     t = series.t[0] + period * np.arange(n)
-    data = (
-        np.column_stack(
-            [np.interp(t, series.t, series.data[:, j]) for j in range(len(series.names))]
-        )
-        if series.names
-        else np.empty((n, 0))
-    )
+    data = np.empty((n, len(series.names)))
+    for j in range(len(series.names)):
+        data[:, j] = np.interp(t, series.t, series.data[:, j])
     return TimeSeries(t, data, series.names)
 
 
@@ -560,9 +550,7 @@ def read_rig_log(
         )
     if timing.gaps or timing.jitter > JITTER_TOLERANCE:
         series = resample(series, timing.period)
-        timing = LogTiming(
-            timing.period, timing.jitter, timing.gaps, timing.longest_gap, resampled=True
-        )
+        timing = dataclasses.replace(timing, resampled=True)
     return RigLog(series, timing)
 
 
@@ -609,15 +597,13 @@ def write_log(path: str | Path, series: TimeSeries) -> Path:
     """Write a series as CSV with ``t`` first, full float precision, whole or not at all.
 
     A write that fails (a full disk) or is interrupted leaves a previous file as it was
-    (:func:`motosim.io.results.write_whole`).
+    (:func:`motosim.io.files.write_whole`).
 
     Raises
     ------
     MotosimError
         If the file cannot be written.
     """
-    from motosim.io.files import write_whole
-
     target = Path(path)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)

@@ -188,15 +188,14 @@ def _chosen_road(root: ET.Element, road: str, origin: str) -> ET.Element:
     """The ``<road>`` element of id ``road``, or the document's only one for ``""``."""
     roads = root.findall("road")
     ids = [str(r.get("id", "")) for r in roads]
+    listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
     if not roads:
         raise MotosimError(f"{origin}: no <road>; expected at least one")
     if road:
         if road not in ids:
-            listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
             raise MotosimError(f"{origin}: no road with id {road[:40]!r}; have {listed}")
         return roads[ids.index(road)]
     if len(roads) > 1:
-        listed = ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
         raise MotosimError(
             f'{origin}: {len(roads)} roads ({listed}); choose one with road = "ID" in the path'
         )

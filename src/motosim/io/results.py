@@ -12,31 +12,27 @@ A result is a folder holding:
   increasing ``t``; pandas and PlotJuggler read it as is. While a run goes, and in a run that
   did not complete, this file is called ``result.partial.csv``: its name says it is partial.
 
-How a result is never lost or corrupted (the choices are in ``docs/organisation.md``):
+How a result is never lost or corrupted (the choices are in ``docs/organisation.md``, files
+that survive every stop):
 
 - **Lock.** While a run writes ``NAME`` it holds its :class:`~motosim.io.files.FolderLock`
-  (``.NAME.lock`` beside it); a second writer of the same folder, with or without
-  ``overwrite``, is refused. A command that writes more into the folder after the result
-  (a report, figures) takes the lock itself and hands it to the writer (``lock``), so the
-  folder stays locked until the last file.
-- **Staging.** The run writes into the sibling folder ``NAME.partial``; only
-  :meth:`ResultWriter.close` renames it to ``NAME``, a previous result replaced
-  (:func:`~motosim.io.files.replace_folder`). A run that fails or is interrupted leaves a
-  previous complete result untouched; with no previous result, or an earlier stopped run's,
-  its rows are moved to ``NAME`` marked partial (``complete`` False, ``result.partial.csv``),
-  and a rerun replaces them without ``overwrite``. A ``NAME`` that is neither empty nor a
-  motosim result (files another program put there while the run went) is never moved aside:
-  the result, complete or not, stays in ``NAME.partial``, and the run says so.
-- **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files and flushes
-  them; an exception leaving the ``with`` block (Ctrl-C, or SIGTERM turned into it by the
-  command, :class:`~motosim.errors.StopFlag`) closes both files, readable, marked partial.
-  The HDF5 file is written without SWMR, so after SIGKILL or a power cut
-  ``NAME.partial/result.h5`` opens with plain h5py, pandas or HDFView and holds every row
-  flushed before the kill, as ``result.partial.csv`` does (each block is one ``write`` call,
-  so no row is cut short).
-- **Full disk.** ``expected_rows`` lets the writer refuse a run the free space cannot hold
-  before it starts; a write that fails anyway is one :class:`MotosimError` line saying how
-  many rows were kept, and where.
+  (``.NAME.lock`` beside it), its own or the caller's (``lock``, kept by a command that
+  writes more there after the result); a second writer of the folder is refused.
+- **Staging.** The run writes into ``NAME.partial``; only :meth:`ResultWriter.close` renames
+  it to ``NAME``, a previous result replaced (:func:`~motosim.io.files.replace_folder`). A
+  run that fails or is interrupted leaves a previous complete result untouched; with none,
+  or an earlier stopped run's, its rows move to ``NAME`` marked partial (``complete`` False,
+  ``result.partial.csv``), which a rerun replaces without ``overwrite``. A ``NAME`` holding
+  files that are not a motosim result is never moved aside: the result stays in
+  ``NAME.partial``, and the run says so.
+- **Every stop.** Each :meth:`ResultWriter.append` writes its rows to both files (one
+  ``write`` a block, so no row is cut short) and flushes them; an exception leaving the
+  ``with`` block closes both, readable, marked partial. Without SWMR, after SIGKILL or a
+  power cut ``NAME.partial/result.h5`` opens with plain h5py, pandas or HDFView and holds
+  every row flushed before the kill.
+- **Full disk.** ``expected_rows`` refuses a run the free space cannot hold before it
+  starts; a write that fails anyway is one :class:`MotosimError` line saying how many rows
+  were kept, and where.
 
 Units are those of :mod:`motosim.signals`: SI, angles in radians.
 """
@@ -49,7 +45,6 @@ import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
-from types import TracebackType
 from typing import Any, NoReturn, Self
 
 import h5py
@@ -86,9 +81,7 @@ _CHUNK_BYTES = 64 * 1024
 
 def _jsonable(value: Any, where: str) -> Any:
     """Convert ``value`` to plain JSON types (dataclasses, numpy values, paths included)."""
-    if value is None or isinstance(value, bool | int | str):
-        return value
-    if isinstance(value, float):
+    if value is None or isinstance(value, bool | int | float | str):
         return value
     if isinstance(value, np.generic):
         return _jsonable(value.item(), where)
@@ -146,8 +139,7 @@ def partial_folder(folder: str | Path) -> Path:
 def is_complete_result(folder: str | Path) -> bool:
     """Whether ``folder`` holds a completed result (its ``result.csv`` is renamed at the end).
 
-    A ``result.h5`` marked complete counts too: a result whose CSV was deleted (it is the
-    larger file) was replaced by the next run into the folder without ``--overwrite``.
+    A ``result.h5`` marked complete counts too, its CSV (the larger file) deleted or not.
     """
     folder = Path(folder)
     if (folder / _CSV_NAME).is_file():
@@ -360,26 +352,24 @@ class ResultWriter:
         except OSError:
             return
         if free < RESERVE_BYTES + 2 * block_bytes:
-            self._abort()
-            upto = f" (t <= {self._last_t:g} s)" if self._rows else ""
             raise MotosimError(
                 f"{self._staging}: the disk is full ({free / 1e6:.1f} MB free, "
-                f"{RESERVE_BYTES / 1e6:.0f} MB kept in reserve); the result is partial, "
-                f"{self._rows} rows{upto} kept in {self._location}"
+                f"{RESERVE_BYTES / 1e6:.0f} MB kept in reserve); {self._kept()}"
             )
 
     def _fail(self, path: Path, err: OSError | RuntimeError) -> NoReturn:
         """A write failed (full disk...): close what can be closed, say what was kept."""
         why = reason(err)
+        raise MotosimError(f"cannot write {path.name}: {why}; {self._kept()}") from None
+
+    def _kept(self) -> str:
+        """Close the files as a partial result (:meth:`_abort`); what was kept, and where."""
         self._abort()
         upto = f" (t <= {self._last_t:g} s)" if self._rows else ""
-        raise MotosimError(
-            f"cannot write {path.name}: {why}; the result is partial, {self._rows} rows"
-            f"{upto} kept in {self._location}"
-        ) from None
+        return f"the result is partial, {self._rows} rows{upto} kept in {self._location}"
 
     def close(self, summary: Mapping[str, Any] | None = None) -> None:
-        """Store the summary, mark the result complete and publish it in :attr:`folder`.
+        """Store the summary, mark the result complete and publish it in the result folder.
 
         Parameters
         ----------
@@ -423,15 +413,9 @@ class ResultWriter:
         self._release()
 
     def _publish(self) -> None:
-        """Move the staging folder to the result folder (:func:`replace_folder`).
-
-        Raises
-        ------
-        _OccupiedError
-            If the result folder now holds files that are not a motosim result (written
-            there while the run went, by a program that does not take the lock): it is left
-            as it is, and so is the staging folder.
-        """
+        """Move the staging folder to the result folder (:func:`replace_folder`); raise
+        :class:`_OccupiedError`, moving nothing, if the result folder now holds other files
+        (written there while the run went, by a program that does not take the lock)."""
         if not _replaceable(self._folder):
             raise _OccupiedError(self._folder)
         replace_folder(self._staging, self._folder)
@@ -470,10 +454,7 @@ class ResultWriter:
         return self
 
     def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object
     ) -> None:
         if exc_type is None and self._stop.name is not None and not self._closed:
             exc_type = KeyboardInterrupt  # a stop signal whose raise was swallowed
@@ -494,19 +475,9 @@ class ResultWriter:
             self._stop.check()
 
     @property
-    def folder(self) -> Path:
-        """The result folder, where a completed run is published."""
-        return self._folder
-
-    @property
     def location(self) -> Path:
         """Where the rows are now: the staging folder while running, then where they were kept."""
         return self._location
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Column names, ``"t"`` first."""
-        return self._names
 
     @property
     def rows(self) -> int:

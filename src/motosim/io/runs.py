@@ -3,9 +3,8 @@
 The command line and any script build and run a scenario through these functions:
 :func:`load_scenario` reads and validates a file, :func:`resolve` loads what it names
 (parameter sets, a design file, CSV profiles, an OpenDRIVE road; relative to the scenario's
-folder) and designs
-what it asks for, :func:`load_run` does both, and :func:`run_to_folder` simulates into a
-result folder as the run goes. The designs are read from a design cache
+folder) and designs what it asks for, :func:`load_run` does both, and :func:`run_to_folder`
+simulates into a result folder as the run goes. The designs are read from a design cache
 (:mod:`motosim.io.cache`) when one is passed in, never otherwise; a campaign that runs one
 design on many handlebars builds the stack once (:func:`motosim.sim.build_stack`) and passes
 it to :func:`motosim.sim.simulate`.
@@ -31,37 +30,15 @@ from motosim.io.results import ResultWriter
 from motosim.model.linear import StateSpace
 from motosim.params import HandlebarParameters, load_parameter_set, load_parameters
 from motosim.params.toml import read_toml
-from motosim.sim import (
-    SIGNALS,
-    RunInputs,
-    Scenario,
-    parse_scenario,
-    prepare,
-    run_metadata,
-    simulate,
-)
-from motosim.sim.closed_loop import run_limits
+from motosim.sim import Scenario, parse_scenario
+from motosim.sim.closed_loop import SIGNALS, RunInputs, prepare, run_limits, run_metadata, simulate
 from motosim.sim.grips import held_handlebar
-from motosim.sim.metrics import (
-    failure,
-    multibody_reason,
-    range_reason,
-    run_metrics,
-    wheel_locks,
-)
+from motosim.sim.metrics import failure, multibody_reason, range_reason, run_metrics, wheel_locks
 from motosim.sim.scenario import CsvProfile, OpenDrivePath, check_profile_values, implausible
 from motosim.sim.stack import StackModel
 from motosim.timeseries import TimeSeries
 
-__all__ = [
-    "load_run",
-    "load_scenario",
-    "parameter_source",
-    "range_reason",
-    "read_road",
-    "resolve",
-    "run_to_folder",
-]
+__all__ = ["load_run", "load_scenario", "parameter_source", "read_road", "resolve", "run_to_folder"]
 
 
 def load_scenario(path: str | Path) -> Scenario:

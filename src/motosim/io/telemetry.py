@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
+from motosim.io.files import write_whole
 from motosim.timeseries import TimeSeries
 
 __all__ = [
@@ -203,11 +204,7 @@ def pose_of(names: Sequence[str], row: Array) -> dict[str, float]:
 
 
 def esmini_packet(
-    frame: int,
-    pose: dict[str, float],
-    *,
-    object_id: int = 0,
-    dead_reckon: bool = False,
+    frame: int, pose: dict[str, float], *, object_id: int = 0, dead_reckon: bool = False
 ) -> bytes:
     """Pack a pose as esmini's ``ControllerUDPDriver`` XYZHPR message.
 
@@ -240,12 +237,9 @@ def esmini_packet(
     >>> len(packet), struct.unpack(ESMINI_FORMAT, packet)[:6]
     (81, (1, 2, 0, 7, 1.0, -2.0))
     """
-    return struct.pack(
-        ESMINI_FORMAT,
-        _ESMINI_VERSION,
-        _ESMINI_XYZHPR,
-        object_id,
-        frame & 0xFFFFFFFF,
+    header = (_ESMINI_VERSION, _ESMINI_XYZHPR, object_id, frame & 0xFFFFFFFF)
+    # x, y, z, heading, pitch, roll, speed, wheel angle in esmini's frame
+    state = (
         pose["x"],
         -pose["y"],
         0.0,
@@ -254,8 +248,8 @@ def esmini_packet(
         pose["phi"],
         pose["v_x"],
         -pose["delta"],
-        1 if dead_reckon else 0,
     )
+    return struct.pack(ESMINI_FORMAT, *header, *state, 1 if dead_reckon else 0)
 
 
 class Sink(Protocol):
@@ -297,10 +291,9 @@ class PlotJugglerUdp:
     def send(self, names: tuple[str, ...], rows: Array) -> None:
         """Send one datagram per kept row."""
         for row in self._kept.rows(rows):
-            message = {"timestamp": float(row[0])}
-            message.update(
-                {n: float(v) for n, v in zip(names[1:], row[1:], strict=True) if math.isfinite(v)}
-            )
+            values = zip(names[1:], row[1:], strict=True)
+            finite = {n: float(v) for n, v in values if math.isfinite(v)}
+            message = {"timestamp": float(row[0]), **finite}
             self._socket.sendto(json.dumps(message).encode(), self._address)
 
     def close(self) -> None:
@@ -315,12 +308,11 @@ class _OneIn:
         self._every = every
         self._seen = 0
 
-    def rows(self, rows: Array) -> Iterator[Array]:
+    def rows(self, rows: Array) -> Array:
         """The rows of ``rows`` kept."""
-        for row in rows:
-            if self._seen % self._every == 0:
-                yield row
-            self._seen += 1
+        first = -self._seen % self._every
+        self._seen += len(rows)
+        return rows[first :: self._every]
 
 
 class EsminiUdp:
@@ -354,40 +346,32 @@ class EsminiUdp:
         self._socket.close()
 
 
+def _object(properties: dict[str, Any], title: str | None = None) -> dict[str, Any]:
+    """A JSON schema of an object with ``properties`` (titled when ``title`` is given)."""
+    titled = {} if title is None else {"title": title}
+    return {**titled, "type": "object", "properties": properties}
+
+
+_NUMBER: Final = {"type": "number"}
 _SIGNALS_TOPIC: Final = "/motosim/signals"
 _POSE_TOPIC: Final = "/motosim/pose"
-_POSE_SCHEMA: Final = {
-    "title": "foxglove.PoseInFrame",
-    "type": "object",
-    "properties": {
-        "timestamp": {
-            "type": "object",
-            "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}},
-        },
+_POSE_SCHEMA: Final = _object(
+    {
+        "timestamp": _object({"sec": {"type": "integer"}, "nsec": {"type": "integer"}}),
         "frame_id": {"type": "string"},
-        "pose": {
-            "type": "object",
-            "properties": {
-                "position": {
-                    "type": "object",
-                    "properties": {k: {"type": "number"} for k in "xyz"},
-                },
-                "orientation": {
-                    "type": "object",
-                    "properties": {k: {"type": "number"} for k in "xyzw"},
-                },
-            },
-        },
+        "pose": _object(
+            {
+                "position": _object(dict.fromkeys("xyz", _NUMBER)),
+                "orientation": _object(dict.fromkeys("xyzw", _NUMBER)),
+            }
+        ),
     },
-}
+    title="foxglove.PoseInFrame",
+)
 
 
 def _signals_schema(names: Iterable[str]) -> dict[str, Any]:
-    return {
-        "title": "motosim.Signals",
-        "type": "object",
-        "properties": {name: {"type": "number"} for name in names},
-    }
+    return _object(dict.fromkeys(names, _NUMBER), title="motosim.Signals")
 
 
 def _stamp(t: float) -> dict[str, int]:
@@ -410,8 +394,17 @@ def _pose_message(pose: dict[str, float]) -> dict[str, Any]:
     }
 
 
-def _row_message(names: tuple[str, ...], row: Array) -> dict[str, float | None]:
-    return {n: (float(v) if math.isfinite(v) else None) for n, v in zip(names, row, strict=True)}
+def _row_messages(names: tuple[str, ...], row: Array) -> Iterator[tuple[str, dict[str, Any]]]:
+    """A row's messages by topic: its signals and, when it has them, its pose."""
+    values = zip(names, row, strict=True)
+    yield _SIGNALS_TOPIC, {n: (float(v) if math.isfinite(v) else None) for n, v in values}
+    if all(n in names for n in POSE_SIGNALS):
+        yield _POSE_TOPIC, _pose_message(pose_of(names, row))
+
+
+def _nanoseconds(t: float) -> int:
+    """A log time [ns] from a time [s] (0 before 0)."""
+    return max(0, round(float(t) * 1e9))
 
 
 def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
@@ -458,8 +451,6 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
             counted.append(_write_messages(writer, names, table))
             writer.finish()  # type: ignore[no-untyped-call]
 
-    from motosim.io.files import write_whole
-
     write_whole(path, write)
     return counted[0]
 
@@ -467,18 +458,14 @@ def write_mcap(result: TimeSeries, path: str | Path, *, every: int = 1) -> int:
 def _write_messages(writer: Any, names: tuple[str, ...], table: Array) -> int:
     """Write each row of ``table`` to the signals channel and, if it has a pose, to the pose
     channel; the messages written."""
-    signals = _json_channel(writer, _SIGNALS_TOPIC, "motosim.Signals", _signals_schema(names))
-    pose = _json_channel(writer, _POSE_TOPIC, "foxglove.PoseInFrame", _POSE_SCHEMA)
-    has_pose = all(n in names for n in POSE_SIGNALS)
+    schemas = {_SIGNALS_TOPIC: _signals_schema(names), _POSE_TOPIC: _POSE_SCHEMA}
+    channels = {topic: _json_channel(writer, topic, schema) for topic, schema in schemas.items()}
     count = 0
     for sequence, row in enumerate(table):
-        stamp = max(0, round(float(row[0]) * 1e9))
-        messages = [(signals, _row_message(names, row))]
-        if has_pose:
-            messages.append((pose, _pose_message(pose_of(names, row))))
-        for channel, message in messages:
+        stamp = _nanoseconds(row[0])
+        for topic, message in _row_messages(names, row):
             writer.add_message(
-                channel_id=channel,
+                channel_id=channels[topic],
                 log_time=stamp,
                 publish_time=stamp,
                 sequence=sequence,
@@ -488,11 +475,11 @@ def _write_messages(writer: Any, names: tuple[str, ...], table: Array) -> int:
     return count
 
 
-def _json_channel(writer: Any, topic: str, schema: str, definition: dict[str, Any]) -> int:
-    """Register a JSON channel and its JSON schema with an MCAP writer; the channel's id."""
-    schema_id = writer.register_schema(
-        name=schema, encoding="jsonschema", data=json.dumps(definition).encode()
-    )
+def _json_channel(writer: Any, topic: str, schema: dict[str, Any]) -> int:
+    """Register a JSON channel and its JSON schema (named by its title) with an MCAP writer;
+    the channel's id."""
+    data = json.dumps(schema).encode()
+    schema_id = writer.register_schema(name=schema["title"], encoding="jsonschema", data=data)
     channel: int = writer.register_channel(
         topic=topic, message_encoding="json", schema_id=schema_id
     )
@@ -542,22 +529,19 @@ class FoxgloveLive:
         """The TCP port the server listens on."""
         return int(self._server.port)
 
-    def _channel(self, topic: str, schema: dict[str, Any]) -> Any:
+    def _channel(self, topic: str, names: tuple[str, ...]) -> Any:
         if topic not in self._channels:
+            schema = _signals_schema(names) if topic == _SIGNALS_TOPIC else _POSE_SCHEMA
             self._channels[topic] = self._foxglove.Channel(topic, schema=schema)
         return self._channels[topic]
 
     def send(self, names: tuple[str, ...], rows: Array) -> None:
         """Log one row in ``every`` on the signal and pose channels."""
-        signals = self._channel(_SIGNALS_TOPIC, _signals_schema(names))
-        has_pose = all(n in names for n in POSE_SIGNALS)
+        self._channel(_SIGNALS_TOPIC, names)  # advertised from the first call
         for row in self._kept.rows(rows):
-            stamp = max(0, round(float(row[0]) * 1e9))
-            signals.log(_row_message(names, row), log_time=stamp)
-            if has_pose:
-                self._channel(_POSE_TOPIC, _POSE_SCHEMA).log(
-                    _pose_message(pose_of(names, row)), log_time=stamp
-                )
+            stamp = _nanoseconds(row[0])
+            for topic, message in _row_messages(names, row):
+                self._channel(topic, names).log(message, log_time=stamp)
 
     def close(self) -> None:
         """Stop the server."""

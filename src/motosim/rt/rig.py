@@ -37,7 +37,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.io.can import HandlebarCodecs, Link, LinkBase
+from motosim.io.can import HandlebarCodecs, Link
 from motosim.model.handlebar import step_exact
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
@@ -679,7 +679,7 @@ class VirtualRider:
         return float(tau)
 
 
-class LockstepLink(LinkBase):
+class LockstepLink(Link):
     """A link whose blocking receive lets simulated time pass (bus pacing in lock-step).
 
     ``receive(timeout)`` with a positive ``timeout`` polls ``link`` and, while nothing has
