@@ -9,6 +9,9 @@ load average; which computation each one times:
 
 1. the compiled loop alone (``_run_chunk``: the rider, the encoder, the stack's step, the
    true handlebar's exact step, the row), the stack designed and the rig built beforehand;
+   the rider a pure torque source (``hands = "off"``, as in the baselines below), and
+   again holding the handlebar with the relaxed grip (the arms' impedance in the plant and
+   the stack designed for it);
 2. the whole ``simulate()`` call (the rig built, the loop, the blocks checked);
 3. the same loop alone, the same code with ``NUMBA_DISABLE_JIT=1`` (plain Python and NumPy),
    in a subprocess;
@@ -51,12 +54,16 @@ duration = {duration}
 [rider]
 kind = "torque"
 profile = {{ kind = "square", low = -10.0, high = 10.0, period = 2.0 }}
+hands = "{hands}"
 """
 
 
-def _inputs(duration: float, inertia: float = 1.0, damping: float = 1.0):  # type: ignore[no-untyped-def]
+def _inputs(  # type: ignore[no-untyped-def]
+    duration: float, inertia: float = 1.0, damping: float = 1.0, hands: str = "off"
+):
     hb = load_parameters("simacom_handlebar", "handlebar")
-    sc = parse_scenario(tomllib.loads(SCENARIO.format(duration=duration)), origin="bench")
+    text = SCENARIO.format(duration=duration, hands=hands)
+    sc = parse_scenario(tomllib.loads(text), origin="bench")
     ctrl = _controller()
     import dataclasses
 
@@ -81,12 +88,13 @@ def _controller():  # type: ignore[no-untyped-def]
     return _CTRL
 
 
-def _loop_alone(duration: float) -> tuple[float, float]:
-    """(periods/s of wall time, of thread CPU time) of the loop alone, best of three."""
+def _loop_alone(duration: float, hands: str = "off") -> tuple[float, float]:
+    """(periods/s of wall time, of thread CPU time) of the loop alone, best of three; the
+    rider's ``hands`` a grip of :data:`motosim.sim.grips.GRIPS`."""
     from motosim.signals import RECORDED
     from motosim.sim.closed_loop import _ensure_current_layout, _run_chunk, build_rig, new_world
 
-    inputs = _inputs(duration)
+    inputs = _inputs(duration, hands=hands)
     model = build_stack(inputs)
     _ensure_current_layout()
     best = (0.0, 0.0)
@@ -324,6 +332,7 @@ def run() -> dict[str, float]:
     projection = _ratio(20.0, _without_projection)
     feedforward = _ratio(20.0, _without_feedforward)
     loop_wall, loop_cpu = _loop_alone(60.0)
+    _, held_cpu = _loop_alone(60.0, hands="relaxed")
     whole_wall, whole_cpu = _whole_simulate(60.0)
     plain_wall, plain_cpu = _plain_python(0.5)
     ivp_wall, ivp_cpu = _solve_ivp_loop(0.5)
@@ -333,6 +342,8 @@ def run() -> dict[str, float]:
         "load average (1 min) before": load,
         "compiled loop alone [periods/s of CPU]": loop_cpu,
         "compiled loop alone [periods/s of wall time]": loop_wall,
+        "compiled loop alone, the relaxed grip [periods/s of CPU]": held_cpu,
+        "compiled loop, the relaxed grip / no hands (CPU time of a run)": loop_cpu / held_cpu,
         "whole simulate() (rig built, loop, checks) [periods/s of CPU]": whole_cpu,
         "whole simulate() [periods/s of wall time]": whole_wall,
         "same loop, plain Python and NumPy [periods/s of CPU]": plain_cpu,

@@ -234,7 +234,7 @@ def _plant_steps(
     (:mod:`motosim.sim.hands`; zeros: none) act while the rider holds the handlebar
     (``t_rider`` >= 0, the rider's time at the first sub-step [s], outside the hands-off
     phases, where no rider torque acts): the arms' inertia and damping add to the
-    handlebar's, their spring is a torque.
+    handlebar's, their spring is a torque taken at each sub-step's midpoint.
     """
     theta, omega, i = x[Bar.theta], x[Bar.omega], x[Bar.i_m]
     last = tau_r.size - 1
@@ -249,7 +249,8 @@ def _plant_steps(
         if not held:
             theta, omega = step_exact(theta, omega, kt * i, p.J, p.beta, p.beta_s, h)
         elif arms:
-            torque = tau_r[min(k0 + k, last)] + kt * i - k_a * (theta - hold)
+            spring = k_a * (theta + 0.5 * h * omega - hold)  # at the sub-step's midpoint
+            torque = tau_r[min(k0 + k, last)] + kt * i - spring
             theta, omega = step_exact(theta, omega, torque, p.J + J_a, p.beta + c_a, p.beta_s, h)
         else:
             torque = tau_r[min(k0 + k, last)] + kt * i

@@ -689,6 +689,17 @@ def _multibody_period_typed(
 
 
 @njit(cache=True)
+def _steady(profile: Array, k: int, n_sub: int) -> bool:
+    """Whether the rider's torque ``profile`` (one value a plant sub-step) is constant over
+    period ``k`` of ``n_sub`` sub-steps."""
+    first = profile[k * n_sub]
+    for j in range(1, n_sub):
+        if profile[k * n_sub + j] != first:
+            return False
+    return True
+
+
+@njit(cache=True)
 def _run_chunk(
     k0: int,
     out: Array,
@@ -772,38 +783,21 @@ def _run_chunk(
         o[_COL.i_m] = i_cmd
         o[_COL.tau_m] = nkt * i_cmd
         # the true handlebar over the period, the current held: one exact step while the
-        # rider torque is constant over it, else one per plant sub-step
-        if holding:  # the arms' inertia and damping in the plant, their spring a torque
-            Jt, bt = J + J_a, beta + c_a
-            for j in range(n_sub):
-                tr = active if rig.virtual_rider else rig.rider_profile[k * n_sub + j]
-                spring = -k_a * (hb[0] - hold)
-                hb[0], hb[1] = step_exact(
-                    hb[0], hb[1], tr + spring + nkt * i_cmd, Jt, bt, beta_s, h / n_sub
-                )
-            if stop:
-                return row + 1
-            continue
-        if not held:  # nobody holds the handlebar: the motor alone
-            hb[0], hb[1] = step_exact(hb[0], hb[1], nkt * i_cmd, J, beta, beta_s, h)
-            if stop:
-                return row + 1
-            continue
-        steady = rig.virtual_rider
-        if not steady:
-            steady = True
-            for j in range(1, n_sub):
-                if rig.rider_profile[k * n_sub + j] != tau_rider:
-                    steady = False
-                    break
-        if steady:
-            hb[0], hb[1] = step_exact(hb[0], hb[1], tau_rider + nkt * i_cmd, J, beta, beta_s, h)
+        # rider's torque is constant over it, else one per plant sub-step; held by the arms,
+        # their inertia and damping in the plant and their spring a torque taken at each
+        # step's midpoint
+        Jt, bt, spring_rate = (J + J_a, beta + c_a, k_a) if holding else (J, beta, 0.0)
+        motor = nkt * i_cmd
+        if rig.virtual_rider or not held or _steady(rig.rider_profile, k, n_sub):
+            middle = hb[0] + 0.5 * h * hb[1]
+            torque = active + motor - spring_rate * (middle - hold)
+            hb[0], hb[1] = step_exact(hb[0], hb[1], torque, Jt, bt, beta_s, h)
         else:
+            h_sub = h / n_sub
             for j in range(n_sub):
-                tr = rig.rider_profile[k * n_sub + j]
-                hb[0], hb[1] = step_exact(
-                    hb[0], hb[1], tr + nkt * i_cmd, J, beta, beta_s, h / n_sub
-                )
+                middle = hb[0] + 0.5 * h_sub * hb[1]
+                torque = rig.rider_profile[k * n_sub + j] + motor - spring_rate * (middle - hold)
+                hb[0], hb[1] = step_exact(hb[0], hb[1], torque, Jt, bt, beta_s, h_sub)
         if stop:
             return row + 1
     return len(out)
