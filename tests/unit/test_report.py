@@ -7,7 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.text import Text
 
 from motosim.errors import MotosimError
 from motosim.io.results import ResultWriter, SimResult, load_result
@@ -16,6 +18,7 @@ from motosim.plotting.closed_loop import (
     plot_motor_torque,
     plot_motorcycle,
     plot_rate,
+    plot_spectrum,
     plot_torque,
     plot_tracking,
 )
@@ -72,6 +75,37 @@ def test_plots_draw_what_there_is(plot: Callable[[SimResult], Figure]) -> None:
     with pytest.raises(MotosimError) as info:
         plot(_result(("t", "psi")))
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("plot", [*PLOTS, plot_spectrum])
+@pytest.mark.parametrize("scale", [1.0, 1e5])
+def test_the_report_figures_hold_their_texts_at_fixed_margins(
+    plot: Callable[[SimResult], Figure], scale: float
+) -> None:
+    # no layout engine places the axes: every text drawn (tick labels of up to seven
+    # characters at the larger scale, axis labels, titles, legends) lies inside the figure
+    result = _result()
+    result = SimResult(result.t, scale * result.data, result.names, {"seed": 1}, {}, True)
+    fig = plot(result)
+    assert fig.get_layout_engine() is None
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    ticks: list[Text] = []
+    drawn: set[int] = set()
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                ticks += [tick.label1, tick.label2]
+            drawn.update(id(tick.label1) for tick in axis._update_ticks())
+    hidden = {id(label) for label in ticks} - drawn  # ticks outside the view are not drawn
+    texts = [
+        t for t in fig.findobj(Text) if t.get_visible() and t.get_text() and id(t) not in hidden
+    ]
+    assert texts
+    for text in texts:
+        box = text.get_window_extent(renderer)
+        assert box.x0 >= 0 and box.y0 >= 0, text.get_text()
+        assert box.x1 <= fig.bbox.width and box.y1 <= fig.bbox.height, text.get_text()
 
 
 def test_plot_comparison() -> None:

@@ -3,6 +3,11 @@
 Each function draws the columns of its figure that the result has, and raises
 :class:`motosim.errors.MotosimError` when it has none of them. Angles are stored in radians
 and shown in degrees; every axis names its unit.
+
+The figures of a run's report (:data:`motosim.report.figures.FIGURES`) place their axes at
+fixed margins (:func:`_fixed_grid`), not by a layout engine: matplotlib's constrained layout
+measures every tick label and text of a figure before it draws it, which costs more than
+drawing it.
 """
 
 from collections.abc import Mapping, Sequence
@@ -11,6 +16,7 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.gridspec import GridSpec
 from matplotlib.ticker import ScalarFormatter
 from numpy.typing import NDArray
 
@@ -58,6 +64,67 @@ _STYLES: dict[str, dict[str, Any]] = {
 }
 
 
+# Fixed margins and gaps around the report figures' axes [in], sized for the texts they
+# hold at matplotlib's default font sizes: on the left of an axes its y tick labels (up to
+# seven characters) and its y label; below, the x tick labels and the x label; above, the
+# figure's title, and a row of legend above the axes (8 pt) where there is one.
+_LEFT = 1.0
+_RIGHT = 0.25
+_BOTTOM = 0.6
+_TITLE = 0.45
+_LEGEND_ROW = 0.2
+_TICKS_BELOW = 0.35
+
+
+def _fixed_grid(
+    fig: Figure,
+    rows: int,
+    columns: int,
+    *,
+    top: float = _TITLE,
+    bottom: float = _BOTTOM,
+    left: float = _LEFT,
+    right: float = _RIGHT,
+    wgap: float = _LEFT,
+    hgap: float = _TICKS_BELOW,
+    **ratios: Any,
+) -> GridSpec:
+    """A grid of ``rows`` x ``columns`` axes at fixed margins and gaps [in].
+
+    Parameters
+    ----------
+    fig : Figure
+        A figure without a layout engine, its size set.
+    rows, columns : int
+        The grid's shape.
+    top, bottom, left, right : float
+        The margins between the grid and the figure's edges [in].
+    wgap, hgap : float
+        The gaps between two columns and between two rows of axes [in].
+    **ratios
+        ``width_ratios`` and ``height_ratios`` of :meth:`matplotlib.figure.Figure.add_gridspec`.
+
+    Returns
+    -------
+    GridSpec
+    """
+    width, height = fig.get_size_inches()
+    # matplotlib's wspace and hspace are fractions of the mean axes width and height
+    mean_width = (width - left - right - wgap * (columns - 1)) / columns
+    mean_height = (height - top - bottom - hgap * (rows - 1)) / rows
+    return fig.add_gridspec(
+        rows,
+        columns,
+        left=left / width,
+        right=1.0 - right / width,
+        bottom=bottom / height,
+        top=1.0 - top / height,
+        wspace=wgap / mean_width,
+        hspace=hgap / mean_height,
+        **ratios,
+    )
+
+
 def _unit(name: str) -> str:
     if name in SIGNALS:
         return SIGNALS[name].unit
@@ -91,14 +158,37 @@ def _legend_above(ax: Axes, *, columns: int = 3, fontsize: float = 8) -> None:
     )  # fmt: skip
 
 
+# a y axis whose data span less than _FLAT times the magnitude of their middle (at least
+# one) shows a flat signal, or rounding; it is widened to the larger of _FLAT_SPAN [its
+# display unit] and _FLAT_RELATIVE_SPAN times that magnitude
+_FLAT = 1e-6
+_FLAT_SPAN = 1e-2
+_FLAT_RELATIVE_SPAN = 1e-4
+
+
 def _finish(fig: Figure) -> Figure:
-    """Plain tick labels on every linear axis: no offset or power notation to decode."""
+    """Plain tick labels on every linear axis: no offset or power notation to decode.
+
+    A y axis of a flat signal (or of the difference of two signals equal but for rounding)
+    is widened about its middle (:data:`_FLAT`), so that its tick labels stay short instead
+    of spelling the rounding out in fifteen digits.
+    """
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
             formatter = axis.get_major_formatter()
             if isinstance(formatter, ScalarFormatter):
                 formatter.set_useOffset(False)
                 formatter.set_scientific(False)
+        if ax.get_yscale() == "linear":
+            low, high = ax.get_ylim()
+            middle = 0.5 * (low + high)
+            if abs(high - low) < _FLAT * max(1.0, abs(middle)):
+                half = 0.5 * max(_FLAT_SPAN, _FLAT_RELATIVE_SPAN * abs(middle))
+                ax.set_ylim(
+                    (middle - half, middle + half)
+                    if high >= low
+                    else (middle + half, middle - half)
+                )
     return fig
 
 
@@ -145,16 +235,18 @@ def _pair_figure(
     _, unit = _display(have[0], result[have[0]])
     both = len(have) == 2
     if not both or result.t.size < 8:
-        fig = Figure(figsize=(9.0, 3.4), layout="constrained")
-        ax = fig.subplots()
+        fig = Figure(figsize=(9.0, 3.4))
+        ax = fig.add_subplot(_fixed_grid(fig, 1, 1, top=_TITLE + _LEGEND_ROW)[0, 0])
         _time_panel(ax, result, have, f"{quantity} [{unit}]")
         ax.set_xlabel("time [s]")
         fig.suptitle(_title(result, title))
         return _finish(fig)
     # the whole run on the left, a zoom where the error is largest on the right: chatter and
     # encoder steps that a whole run's scale hides show there
-    fig = Figure(figsize=(11.0, 5.4), layout="constrained")
-    grid = fig.add_gridspec(2, 2, width_ratios=[2.2, 1.0], height_ratios=[2, 1])
+    fig = Figure(figsize=(11.0, 5.4))
+    grid = _fixed_grid(
+        fig, 2, 2, top=_TITLE + _LEGEND_ROW, width_ratios=[2.2, 1.0], height_ratios=[2, 1]
+    )
     main = fig.add_subplot(grid[0, 0])
     error_ax = fig.add_subplot(grid[1, 0], sharex=main)
     zoom = fig.add_subplot(grid[:, 1])
@@ -288,8 +380,13 @@ def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimat
     smooth = _moving_average(raw, width)
     encoder = _encoder(result)
     step = None if encoder is None else encoder[0] * encoder[1]
-    fig = Figure(figsize=(11.0, 5.8), layout="constrained")
-    grid = fig.add_gridspec(2, 2, width_ratios=[2.2, 1.0], height_ratios=[2, 1])
+    fig = Figure(figsize=(11.0, 5.8))
+    # above, the legend's two rows; between the columns, the error's legend beside it; below,
+    # the two lines on the encoder's step
+    grid = _fixed_grid(
+        fig, 2, 2, top=_TITLE + 2 * _LEGEND_ROW, bottom=_BOTTOM + (0.35 if step else 0.0),
+        wgap=_LEFT + 0.8, width_ratios=[2.2, 1.0], height_ratios=[2, 1],
+    )  # fmt: skip
     main = fig.add_subplot(grid[0, 0])
     error_ax = fig.add_subplot(grid[1, 0], sharex=main)
     zoom = fig.add_subplot(grid[:, 1])
@@ -385,8 +482,11 @@ def plot_motor_torque(
     _present(result, ("tau_r_hat", "tau_m", "i_m"), "plot_motor_torque")
     torques = [n for n in ("tau_r_hat", "tau_m") if n in result]
     panels = int(bool(torques)) + int("i_m" in result)
-    fig = Figure(figsize=(9.0, 2.4 * panels + 0.8), layout="constrained")
-    axes = fig.subplots(panels, 1, sharex=True, squeeze=False)[:, 0]
+    fig = Figure(figsize=(9.0, 2.4 * panels + 0.8))
+    # the panels share their time axis: the upper one's tick labels are hidden
+    top = _TITLE + (_LEGEND_ROW if torques else 0.0)
+    grid = _fixed_grid(fig, panels, 1, top=top, hgap=0.15)
+    axes = grid.subplots(sharex=True, squeeze=False)[:, 0]
     if torques:
         _time_panel(axes[0], result, torques, "torque [N m]")
     if "i_m" in result:
@@ -431,10 +531,12 @@ def plot_motorcycle(result: SimResult, *, title: str = "Virtual motorcycle") -> 
         )
     ylabels = {"phi": "roll phi [deg]", "v_x": "speed v_x [m/s]", "e_y": "path error e_y [m]"}
     rows = max(len(series), 1)
-    fig = Figure(figsize=(11.0 if has_path else 8.0, 2.2 * rows + 1.0), layout="constrained")
-    grid = fig.add_gridspec(
+    fig = Figure(figsize=(11.0 if has_path else 8.0, 2.2 * rows + 1.0))
+    grid = _fixed_grid(
+        fig,
         rows,
         2 if has_path and series else 1,
+        top=_TITLE + (_LEGEND_ROW if has_path else 0.0),
         width_ratios=[1.0, 1.3] if has_path and series else None,
     )
     axes: dict[str, Axes] = {}
@@ -565,8 +667,9 @@ def plot_spectrum(
     if not {"i_m", "theta_h", "delta"} <= set(result.names) or result.t.size < 16:
         raise MotosimError("plot_spectrum: the result has no i_m, theta_h and delta to analyse")
     dt = float(np.median(np.diff(result.t)))
-    fig = Figure(figsize=(9.0, 6.0), layout="constrained")
-    axes = fig.subplots(2, 1)
+    fig = Figure(figsize=(9.0, 6.0))
+    # on the right, each panel's legend beside it
+    axes = _fixed_grid(fig, 2, 1, right=1.15).subplots(squeeze=False)[:, 0]
     series = (
         ("i_m", result["i_m"], "A"),
         ("theta_h - delta", np.degrees(result["theta_h"] - result["delta"]), "deg"),

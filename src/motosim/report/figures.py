@@ -15,7 +15,7 @@ import io
 import multiprocessing
 import os
 import signal
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from functools import lru_cache
 from pathlib import Path
@@ -59,10 +59,14 @@ _COSTLIEST_FIRST = (
 _PRELOAD = ["motosim.report.figures", "motosim.plotting.closed_loop", "motosim.sim.metrics"]
 
 
+# zlib's level for the PNG images: faster than Pillow's default (6) for slightly larger files
+_PNG_COMPRESSION = 3
+
+
 def _png(figure: Any) -> str:
     """``figure`` as PNG at 100 dpi, base64-encoded."""
     buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=100)
+    figure.savefig(buffer, format="png", dpi=100, pil_kwargs={"compress_level": _PNG_COMPRESSION})
     return base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
@@ -138,23 +142,41 @@ class FigureWorkers:
         Returns None when the workers were not started or failed (the caller draws the
         figures itself); an error of a figure's own is raised here.
         """
+        return self.start(folder, names)()
+
+    def start(self, folder: Path, names: Sequence[str]) -> Callable[[], list[str | None] | None]:
+        """:meth:`draw`, begun: the figures are handed to the workers and the function
+        returned waits for them and returns what :meth:`draw` returns, so that the caller
+        can do its own work in between."""
         if self._context is None:
-            return None
-        if self._pool is None:
-            self._pool = ProcessPoolExecutor(
-                self._processes, mp_context=self._context, initializer=_ignore_interrupt
-            )
+            return lambda: None
         rank = {name: i for i, name in enumerate(_COSTLIEST_FIRST)}
         order = sorted(range(len(names)), key=lambda i: rank.get(names[i], len(rank)))
         futures: dict[int, Future[str | None]] = {}
         try:
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(
+                    self._processes, mp_context=self._context, initializer=_ignore_interrupt
+                )
             for i in order:
                 futures[i] = self._pool.submit(draw_saved_figure, str(folder), names[i])
-            return [futures[i].result() for i in range(len(names))]
         except (OSError, RuntimeError):  # a worker lost (BrokenProcessPool is a RuntimeError)
-            self.close()
-            self._context = None
-            return None
+            self._lost()
+            return lambda: None
+
+        def wait() -> list[str | None] | None:
+            try:
+                return [futures[i].result() for i in range(len(names))]
+            except (OSError, RuntimeError):
+                self._lost()
+                return None
+
+        return wait
+
+    def _lost(self) -> None:
+        """A worker was lost: the processes are stopped and the figures drawn in-process."""
+        self.close()
+        self._context = None
 
     def close(self) -> None:
         """Stop the worker processes and the fork server, and wait for them (so that their

@@ -10,7 +10,7 @@ embedded as PNG: one file, no external resources, no JavaScript.
 import base64
 import html
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -160,9 +160,12 @@ def _run_rows(result: SimResult, folder: Path) -> list[tuple[str, str]]:
     return rows
 
 
-def _metric_rows(result: SimResult) -> tuple[list[tuple[str, str, str]], str]:
-    """Rows (metric, value, unit) and a note saying where they come from."""
-    values: dict[str, Any] = dict(metrics(result))
+def _metric_rows(
+    result: SimResult, computed: Mapping[str, float]
+) -> tuple[list[tuple[str, str, str]], str]:
+    """Rows (metric, value, unit) and a note saying where they come from; ``computed`` the
+    result's :func:`metrics`."""
+    values: dict[str, Any] = dict(computed)
     values.update(result.summary)
     rows = []
     for key, value in values.items():
@@ -207,18 +210,24 @@ def _safety_fault(folder: Path) -> str | None:
     return f"safety fault: {recorded.get('fault_reason') or recorded['fault']}"
 
 
-def _figures(
+def _start_figures(
     result: SimResult, source: Path, workers: "FigureWorkers | None"
-) -> Sequence[str | None]:
-    """The base64 PNG of each of :data:`FIGURES` (None where the signals lack), drawn by
-    ``workers`` when given and able, else here."""
+) -> Callable[[], Sequence[str | None]]:
+    """A function that returns the base64 PNG of each of :data:`FIGURES` (None where the
+    signals lack): drawn by ``workers`` when given and able, which start on them here, else
+    drawn in this process when it is called."""
     if not result.t.size:
-        return [None] * len(FIGURES)
+        return lambda: [None] * len(FIGURES)
     names = [name for _, name in FIGURES]
-    drawn = workers.draw(source, names) if workers is not None else None
-    if drawn is not None:
-        return drawn
-    return [draw_figure(result, name) for name in names]
+    waiting = workers.start(source, names) if workers is not None else None
+
+    def drawn() -> Sequence[str | None]:
+        images = waiting() if waiting is not None else None
+        if images is not None:
+            return images
+        return [draw_figure(result, name) for name in names]
+
+    return drawn
 
 
 def build_report(folder: str | Path, *, workers: "FigureWorkers | None" = None) -> Path:
@@ -247,6 +256,7 @@ def build_report(folder: str | Path, *, workers: "FigureWorkers | None" = None) 
     """
     source = Path(folder)
     result = load_result(source)
+    figures = _start_figures(result, source, workers)  # the workers draw while the tables are made
     run_rows = _run_rows(result, source)
     scenario = next((v for k, v in run_rows if k == "scenario"), source.name or str(source))
     title = f"motosim run: {scenario}"
@@ -258,8 +268,9 @@ def build_report(folder: str | Path, *, workers: "FigureWorkers | None" = None) 
     else:
         status = '<span class="status interrupted">interrupted: partial result</span>'
 
-    metric_rows, note = _metric_rows(result)
-    values = {**metrics(result), **result.summary}
+    computed = metrics(result)
+    metric_rows, note = _metric_rows(result, computed)
+    values = {**computed, **result.summary}
     raised = [text for key, text in _FLAGS.items() if values.get(key)]
     checked = [key for key in _FLAGS if key in values]
     if raised:
@@ -287,7 +298,7 @@ def build_report(folder: str | Path, *, workers: "FigureWorkers | None" = None) 
         "<h2>Figures</h2>",
     ]
     drawn = 0
-    for (caption, _), image in zip(FIGURES, _figures(result, source, workers), strict=True):
+    for (caption, _), image in zip(FIGURES, figures(), strict=True):
         if image is not None:
             parts.append(
                 f'<figure><img alt="{_esc(caption)}" src="data:image/png;base64,'
