@@ -11,6 +11,7 @@ one line ``motosim: error: ...`` with exit code 2, without a traceback.
 
 import argparse
 import copy
+import gc
 import importlib
 import logging
 import os
@@ -332,6 +333,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     code = _main(list(sys.argv[1:] if argv is None else argv))
     if argv is None:  # the process's own command line: it ends now
         _exit_on_stop_signals(code)
+        # the command's files are closed: the interpreter's exit need not walk the objects
+        # of every imported module (NumPy, SciPy, numba) for cycles to collect
+        gc.freeze()
     return code
 
 
