@@ -36,11 +36,11 @@ from enum import IntEnum
 from typing import Any, NamedTuple
 
 from numba import njit
-from numba.core import types
 from numba.experimental import structref
 
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
+from motosim.rt.safety import FieldsStruct
 
 __all__ = [
     "INPUT_ERROR",
@@ -74,14 +74,13 @@ INPUT_ERROR = -1
 """What :func:`e2e_check` returns for a counter outside 0 to :data:`MAX_COUNTER` (the
 profile's ``E2E_E_INPUTERR_WRONG``): the status and the counter state are not changed."""
 
-_OK = int(E2EStatus.OK)
-_NONEWDATA = int(E2EStatus.NONEWDATA)
-_WRONGCRC = int(E2EStatus.WRONGCRC)
-_SYNC = int(E2EStatus.SYNC)
-_INITIAL = int(E2EStatus.INITIAL)
-_REPEATED = int(E2EStatus.REPEATED)
-_OKSOMELOST = int(E2EStatus.OKSOMELOST)
-_WRONGSEQUENCE = int(E2EStatus.WRONGSEQUENCE)
+
+class _Settings(NamedTuple):
+    """:class:`E2EConfig` as compiled code reads it."""
+
+    max_delta_counter_init: int
+    max_no_new_or_repeated_data: int
+    sync_counter_init: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,9 +105,7 @@ class E2EConfig:
     sync_counter_init: int
 
     def __post_init__(self) -> None:
-        for name in (
-            "max_delta_counter_init", "max_no_new_or_repeated_data", "sync_counter_init"
-        ):  # fmt: skip
+        for name in _Settings._fields:
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, int) and 0 <= value <= 14):
                 raise MotosimError(
@@ -116,21 +113,21 @@ class E2EConfig:
                 )
 
 
-class _Settings(NamedTuple):
-    """:class:`E2EConfig` as compiled code reads it."""
+class E2ESnapshot(NamedTuple):
+    """The counter part of an :class:`E2EState`, read at one instant."""
 
-    max_delta_counter_init: int
-    max_no_new_or_repeated_data: int
-    sync_counter_init: int
+    last_valid_counter: int
+    max_delta_counter: int
+    wait_for_first_data: bool
+    lost_data: int
+    status: int
+    sync_counter: int
+    no_new_or_repeated_data_counter: int
 
 
 @structref.register
-class E2EStateType(types.StructRef):
+class E2EStateType(FieldsStruct):
     """numba's type of :class:`E2EState`."""
-
-    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
-        """The fields' types without literal values."""
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
 
 
 class E2EState(structref.StructRefProxy):
@@ -144,23 +141,16 @@ class E2EState(structref.StructRefProxy):
     """
 
     def __new__(cls, config: E2EConfig) -> "E2EState":
-        settings = _Settings(
-            config.max_delta_counter_init,
-            config.max_no_new_or_repeated_data,
-            config.sync_counter_init,
-        )
+        settings = _Settings(*(getattr(config, name) for name in _Settings._fields))
         made: E2EState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, settings, 0, 0, True, 0, _NONEWDATA, 0, 0
+            cls, settings, 0, 0, True, 0, int(E2EStatus.NONEWDATA), 0, 0
         )
         return made
 
 
 structref.define_proxy(  # type: ignore[no-untyped-call]
-    E2EState,
-    E2EStateType,
-    ["config", "last_valid_counter", "max_delta_counter", "wait_for_first_data", "lost_data",
-     "status", "sync_counter", "no_new_or_repeated_data_counter"],
-)  # fmt: skip
+    E2EState, E2EStateType, ["config", *E2ESnapshot._fields]
+)
 
 
 @njit(cache=True)
@@ -170,7 +160,7 @@ def e2e_restart(st: Any) -> None:
     st.max_delta_counter = 0
     st.wait_for_first_data = True
     st.lost_data = 0
-    st.status = _NONEWDATA
+    st.status = E2EStatus.NONEWDATA
     st.sync_counter = 0
     st.no_new_or_repeated_data_counter = 0
 
@@ -192,7 +182,7 @@ def _taken(st: Any, counter: int, delta: int, clean: int) -> int:
     else:
         st.sync_counter = cfg.sync_counter_init
     st.no_new_or_repeated_data_counter = 0
-    return _SYNC if sync else clean
+    return E2EStatus.SYNC if sync else clean
 
 
 @njit(cache=True)
@@ -216,50 +206,39 @@ def e2e_check(st: Any, new_data: bool, crc_ok: bool, counter: int) -> int:
         st.no_new_or_repeated_data_counter = min(
             st.no_new_or_repeated_data_counter + 1, MAX_COUNTER
         )
-        st.status = _NONEWDATA
-        return _NONEWDATA
+        st.status = E2EStatus.NONEWDATA
+        return E2EStatus.NONEWDATA
     if counter < 0 or counter > MAX_COUNTER:
         return INPUT_ERROR
     if not crc_ok:
-        st.status = _WRONGCRC
-        return _WRONGCRC
+        st.status = E2EStatus.WRONGCRC
+        return E2EStatus.WRONGCRC
     if st.wait_for_first_data:
         st.wait_for_first_data = False
         st.max_delta_counter = st.config.max_delta_counter_init
         st.last_valid_counter = counter
-        st.status = _INITIAL
-        return _INITIAL
+        st.status = E2EStatus.INITIAL
+        return E2EStatus.INITIAL
     delta = (counter - st.last_valid_counter) % (MAX_COUNTER + 1)
+    status: int
     if delta == 0:
         st.no_new_or_repeated_data_counter = min(
             st.no_new_or_repeated_data_counter + 1, MAX_COUNTER
         )
-        status = _REPEATED
+        status = E2EStatus.REPEATED
     elif delta == 1:
-        status = _taken(st, counter, delta, _OK)
+        status = _taken(st, counter, delta, E2EStatus.OK)
     elif delta <= st.max_delta_counter:
-        status = _taken(st, counter, delta, _OKSOMELOST)
+        status = _taken(st, counter, delta, E2EStatus.OKSOMELOST)
     else:
         st.no_new_or_repeated_data_counter = 0
         st.sync_counter = st.config.sync_counter_init
         if st.sync_counter > 0:
             st.max_delta_counter = st.config.max_delta_counter_init
             st.last_valid_counter = counter
-        status = _WRONGSEQUENCE
+        status = E2EStatus.WRONGSEQUENCE
     st.status = status
     return status
-
-
-class E2ESnapshot(NamedTuple):
-    """The counter part of an :class:`E2EState`, read at one instant."""
-
-    last_valid_counter: int
-    max_delta_counter: int
-    wait_for_first_data: bool
-    lost_data: int
-    status: int
-    sync_counter: int
-    no_new_or_repeated_data_counter: int
 
 
 @njit(cache=True)
