@@ -94,22 +94,10 @@ def timing_stats(
         nan = float("nan")
         return TimingStats(rate, periods, 0, missed, *(nan,) * 8, gaps=gaps)
     qs = (50.0, 99.0, 99.9)
-    w = np.percentile(wake, qs)
-    c = np.percentile(compute, qs)
+    w = [float(x) for x in (*np.percentile(wake, qs), wake.max())]
+    c = [float(x) for x in (*np.percentile(compute, qs), compute.max())]
     return TimingStats(
-        rate=rate,
-        periods=periods,
-        served=int(wake.size),
-        missed=missed,
-        wake_p50=float(w[0]),
-        wake_p99=float(w[1]),
-        wake_p999=float(w[2]),
-        wake_max=float(wake.max()),
-        compute_p50=float(c[0]),
-        compute_p99=float(c[1]),
-        compute_p999=float(c[2]),
-        compute_max=float(compute.max()),
-        gaps=gaps,
+        rate, periods, int(wake.size), missed, w[0], w[1], w[2], w[3], c[0], c[1], c[2], c[3], gaps
     )
 
 

@@ -42,6 +42,7 @@ from motosim.model.handlebar import step_exact
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import SimulatedClock
+from motosim.rt.config import table_number
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
@@ -172,19 +173,9 @@ def parse_rig(
             raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
         if key == "faults":
             values[key] = _parse_faults(value, f"{where[:-1]}.faults]")
-        elif key == "encoder_bits":
-            if not isinstance(value, int) or isinstance(value, bool):
-                raise MotosimError(f"{where} {key} = {value!r}: expected an integer")
-            values[key] = value
         else:
-            values[key] = _number(value, f"{where} {key}")
+            values[key] = table_number(key, value, where, key == "encoder_bits")
     return RigSettings(**values)
-
-
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise MotosimError(f"{where} = {value!r}: expected a number")
-    return float(value)
 
 
 def _parse_faults(table: Any, where: str) -> RigFaults:
@@ -194,7 +185,7 @@ def _parse_faults(table: Any, where: str) -> RigFaults:
     for key in table:
         if key not in allowed:
             raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
-    return RigFaults(**{key: _number(value, f"{where} {key}") for key, value in table.items()})
+    return RigFaults(**{key: table_number(key, value, where) for key, value in table.items()})
 
 
 class Bar(IntEnum):
@@ -362,7 +353,6 @@ class VirtualRig:
         self._seq = 0
         self._last_due: dict[int, float] = {}
         self._counter = 0
-        self._estop_counter = 0
         self._previous: bytes | None = None
         self._burst = False
         self._frozen = math.nan
@@ -465,8 +455,7 @@ class VirtualRig:
             if self._let_go and (not self.enabled or silent > _RUN_GONE):
                 self._k_rider = -1  # the run has ended: the rider lets go
             # up to the next status sample, not beyond t: a command received by then is
-            # carried from then, as a drive does (a plant run ahead to the next status sample
-            # carried it only from there: a command delay of up to a status period)
+            # carried from then, as a drive does
             n = min(self._sub - self.k % self._sub, max(1, math.ceil(t / self.h - self.k - 1e-9)))
             rider, k0 = self.rider_torque, self.k - self._k_rider
             t_rider = k0 * self.h
@@ -617,8 +606,11 @@ class VirtualRider:
         self._k_path = 0
         self.torque = 0.0
         self.lateral_error = 0.0
-        self._steer(world.path[0, 0], world.path[1, 0], world.path[2, 0])  # compiled now,
-        # not on the run's first state row (a stall of the rig's frames at the run's start)
+        path = world.path  # the compiled rider loaded now, not on the run's first state row
+        # (a stall of the rig's frames at the run's start); nothing kept
+        self._torque(
+            np.zeros(8), float(world.rider_speeds[0]), path[2, 0], path[0, 0], path[1, 0], 0
+        )
 
     @staticmethod
     def check(world: RigModel) -> None:
@@ -653,30 +645,28 @@ class VirtualRider:
             at ``t``.
         """
         if self.receiver.poll():
-            row, at, w = self.receiver.row, self._at, self.world
+            row, at = self.receiver.row, self._at
             for i, state_at in enumerate(self._states_at):
                 self._x_v[i] = row[state_at]
-            tau, self._k_path, self.lateral_error = rider_torque(
-                self._x_v, row[at["v_x"]], row[at["psi"]], row[at["x"]], row[at["y"]],
-                self._k_path, w.path,
-                w.path_ds, w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss,
-                w.rider_limits[0], w.rider_limits[1],
-            )  # fmt: skip
+            tau, self._k_path, self.lateral_error = self._torque(
+                self._x_v, row[at["v_x"]], row[at["psi"]], row[at["x"]], row[at["y"]], self._k_path
+            )
             self.torque = float(tau)
         probe = self.world.rider_probe
         k = max(math.floor(t * self.rate + 1e-9), 0)
         return self.torque + (float(probe[k]) if k < probe.size else 0.0)
 
-    def _steer(self, x: float, y: float, psi: float) -> float:
-        """The rider's torque [N*m] upright on the path at ``x``, ``y`` [m], heading ``psi``
-        [rad], at the schedule's first speed; nothing kept (the compiled rider loaded)."""
+    def _torque(
+        self, x_v: Array, v_x: float, psi: float, x: float, y: float, k_path: int
+    ) -> tuple[float, int, float]:
+        """:func:`~motosim.sim.rider.rider_torque` of the scenario's rider at the states
+        ``x_v``, speed ``v_x`` [m/s], heading ``psi`` [rad] and place ``x``, ``y`` [m], from
+        the path's point ``k_path`` on: the torque [N*m], the next point, the lateral error."""
         w = self.world
-        tau, _, _ = rider_torque(
-            np.zeros(8), float(w.rider_speeds[0]), psi, x, y, 0, w.path, w.path_ds,
-            w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss, w.rider_limits[0],
-            w.rider_limits[1],
+        return rider_torque(
+            x_v, v_x, psi, x, y, k_path, w.path, w.path_ds, w.rider_speeds, w.rider_K,
+            w.rider_x_ss, w.rider_tau_ss, w.rider_limits[0], w.rider_limits[1],
         )  # fmt: skip
-        return float(tau)
 
 
 class LockstepLink(Link):
