@@ -31,7 +31,7 @@ The CRC itself (CRC-8 SAE J1850 over the data identifier and the frame) is the c
 check is told whether it was right.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from enum import IntEnum
 from typing import Any, NamedTuple
 
@@ -43,16 +43,9 @@ from motosim.params.checks import short_repr
 from motosim.rt.safety import FieldsStruct
 
 __all__ = [
-    "INPUT_ERROR",
-    "MAX_COUNTER",
-    "E2EConfig",
-    "E2EReceiver",
-    "E2ESnapshot",
-    "E2EState",
-    "E2EStatus",
-    "e2e_check",
-    "e2e_restart",
-]
+    "INPUT_ERROR", "MAX_COUNTER", "E2EConfig", "E2EReceiver", "E2ESnapshot", "E2EState",
+    "E2EStatus", "e2e_check", "e2e_restart",
+]  # fmt: skip
 
 
 class E2EStatus(IntEnum):
@@ -73,14 +66,6 @@ MAX_COUNTER = 14
 INPUT_ERROR = -1
 """What :func:`e2e_check` returns for a counter outside 0 to :data:`MAX_COUNTER` (the
 profile's ``E2E_E_INPUTERR_WRONG``): the status and the counter state are not changed."""
-
-
-class _Settings(NamedTuple):
-    """:class:`E2EConfig` as compiled code reads it."""
-
-    max_delta_counter_init: int
-    max_no_new_or_repeated_data: int
-    sync_counter_init: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,7 +90,7 @@ class E2EConfig:
     sync_counter_init: int
 
     def __post_init__(self) -> None:
-        for name in _Settings._fields:
+        for name in _SETTINGS:
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, int) and 0 <= value <= 14):
                 raise MotosimError(
@@ -125,6 +110,9 @@ class E2ESnapshot(NamedTuple):
     no_new_or_repeated_data_counter: int
 
 
+_SETTINGS = tuple(f.name for f in fields(E2EConfig))
+
+
 @structref.register
 class E2EStateType(FieldsStruct):
     """numba's type of :class:`E2EState`."""
@@ -137,19 +125,19 @@ class E2EState(structref.StructRefProxy):
     Fields (read in compiled code; from Python through :class:`E2EReceiver`):
     ``last_valid_counter``, ``max_delta_counter``, ``wait_for_first_data``, ``lost_data``
     (frames lost before the last one taken), ``status`` (:class:`E2EStatus`),
-    ``sync_counter``, ``no_new_or_repeated_data_counter`` and the settings ``config``.
+    ``sync_counter``, ``no_new_or_repeated_data_counter``, then the fields of :class:`E2EConfig`.
     """
 
     def __new__(cls, config: E2EConfig) -> "E2EState":
-        settings = _Settings(*(getattr(config, name) for name in _Settings._fields))
+        settings = (getattr(config, name) for name in _SETTINGS)
         made: E2EState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, settings, 0, 0, True, 0, int(E2EStatus.NONEWDATA), 0, 0
+            cls, 0, 0, True, 0, int(E2EStatus.NONEWDATA), 0, 0, *settings
         )
         return made
 
 
 structref.define_proxy(  # type: ignore[no-untyped-call]
-    E2EState, E2EStateType, ["config", *E2ESnapshot._fields]
+    E2EState, E2EStateType, [*E2ESnapshot._fields, *_SETTINGS]
 )
 
 
@@ -169,18 +157,17 @@ def e2e_restart(st: Any) -> None:
 def _taken(st: Any, counter: int, delta: int, clean: int) -> int:
     """A frame taken ``delta`` counts on: ``clean`` (OK or OKSOMELOST) or SYNC while the
     receiver synchronises."""
-    cfg = st.config
-    st.max_delta_counter = cfg.max_delta_counter_init
+    st.max_delta_counter = st.max_delta_counter_init
     st.last_valid_counter = counter
     st.lost_data = delta - 1
     sync = True
-    if st.no_new_or_repeated_data_counter <= cfg.max_no_new_or_repeated_data:
+    if st.no_new_or_repeated_data_counter <= st.max_no_new_or_repeated_data:
         if st.sync_counter > 0:
             st.sync_counter -= 1
         else:
             sync = False
     else:
-        st.sync_counter = cfg.sync_counter_init
+        st.sync_counter = st.sync_counter_init
     st.no_new_or_repeated_data_counter = 0
     return E2EStatus.SYNC if sync else clean
 
@@ -215,7 +202,7 @@ def e2e_check(st: Any, new_data: bool, crc_ok: bool, counter: int) -> int:
         return E2EStatus.WRONGCRC
     if st.wait_for_first_data:
         st.wait_for_first_data = False
-        st.max_delta_counter = st.config.max_delta_counter_init
+        st.max_delta_counter = st.max_delta_counter_init
         st.last_valid_counter = counter
         st.status = E2EStatus.INITIAL
         return E2EStatus.INITIAL
@@ -232,9 +219,9 @@ def e2e_check(st: Any, new_data: bool, crc_ok: bool, counter: int) -> int:
         status = _taken(st, counter, delta, E2EStatus.OKSOMELOST)
     else:
         st.no_new_or_repeated_data_counter = 0
-        st.sync_counter = st.config.sync_counter_init
+        st.sync_counter = st.sync_counter_init
         if st.sync_counter > 0:
-            st.max_delta_counter = st.config.max_delta_counter_init
+            st.max_delta_counter = st.max_delta_counter_init
             st.last_valid_counter = counter
         status = E2EStatus.WRONGSEQUENCE
     st.status = status
