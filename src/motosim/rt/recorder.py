@@ -24,7 +24,7 @@ a later layer provides).
 import enum
 import threading
 from collections.abc import Callable
-from contextlib import ExitStack
+from contextlib import ExitStack, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple, Protocol
@@ -35,17 +35,9 @@ from numpy.typing import NDArray
 from motosim.errors import MotosimError, RunFailedError
 
 __all__ = [
-    "Close",
-    "Control",
-    "Done",
-    "Failed",
-    "LiveSink",
-    "Ready",
-    "Recorder",
-    "RecorderSettings",
-    "Release",
-    "recorder_main",
-]
+    "Close", "Control", "Done", "Failed", "LiveSink", "Ready", "Recorder", "RecorderSettings",
+    "Release", "recorder_main",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 
@@ -196,10 +188,8 @@ class Recorder:
 
     def close(self, complete: bool, extra: dict[str, Any]) -> Done:
         """Ask the recorder to close the result; its :class:`Done`."""
-        try:
+        with suppress(OSError):  # it has ended (a write failed): its answer is read below
             self._conn.send(Close(complete, extra))
-        except OSError:  # it has ended (a write failed): its answer is read below
-            pass
         answer = self._answer(Done, "finish")
         assert isinstance(answer, Done)
         self._closed = True
@@ -210,10 +200,8 @@ class Recorder:
         end of the pipe closes the result partial), then join it; killed if it has not ended
         within 10 s."""
         if self._closed:
-            try:
+            with suppress(OSError):  # it has ended
                 self._conn.send(Release())
-            except OSError:  # it has ended
-                pass
         self._conn.close()
         if self._process.pid is None:  # never started
             return
@@ -256,10 +244,8 @@ def recorder_main(conn: Any, settings: RecorderSettings) -> None:
             conn.send(Failed(str(err)))
             return
         if _record(conn, settings, lock):
-            try:
+            with suppress(EOFError, OSError):
                 conn.recv()  # Release: the loop has written its files, or has ended
-            except (EOFError, OSError):
-                pass
 
 
 class _Drain:
