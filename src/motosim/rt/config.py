@@ -137,24 +137,12 @@ def frame_age(
 
 
 def run_paces(control_rate: float, measurement_rate: float) -> tuple[str, ...]:
-    """The paces ``motosim run`` takes at these rates [Hz]: ``"clock"``, and ``"bus"``
-    when the loop has one period per status frame (equal rates).
+    """The paces ``motosim run --pace`` takes at the loop's and the status frames' rates
+    [Hz]: ``"clock"``, and ``"bus"`` when the loop has one period per status frame.
 
     The last is the one under which the status frame is youngest when the stack reads it
     (:func:`frame_age`): a command that serves whichever run comes (``motosim rig``)
     refuses, under it, what every run refuses.
-
-    Parameters
-    ----------
-    control_rate : float
-        The loop's rate [Hz].
-    measurement_rate : float
-        The drive's status frame rate [Hz].
-
-    Returns
-    -------
-    tuple of str
-        The paces ``run --pace`` takes, ``"clock"`` first.
 
     Examples
     --------

@@ -587,9 +587,8 @@ def stack_warm(
     fresh: bool, scale: float,
 ) -> None:  # fmt: skip
     """One stack period on ``shadow``, a copy of ``stack``'s data and state made now, whose
-    result is thrown away: the stack's code and data are then in the CPU's caches for the
-    next period's real step. ``fresh`` and ``scale`` are computed as the period computes
-    them (constants would be typed apart and compile another copy of the step)."""
+    result is thrown away: the stack's code and data are then in the CPU's caches. ``fresh``
+    and ``scale`` are the period's (constants would compile another copy of the step)."""
     data, copy = stack.data, shadow.data
     copy.estimator[:] = data.estimator
     copy.differentiator[:] = data.differentiator
@@ -654,14 +653,10 @@ def context_warm_until(c: Any, due_ns: int) -> int:
     [ns]; the number of warm-ups run (0 before the stack has started), also kept in the
     runner's ``warm_ups``.
 
-    The spin phase of the loop's wait, spent keeping the stack hot: one warm-up always, then
-    another as long as it should end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's
-    time taken as the next's), so that the last one ends 2-4 us before the deadline (the
-    return to the interpreter and its last clock reads fit in the margin: the wake-up is not
-    delayed). Each warm-up steps a fresh copy of the stack's state: the stack itself is not
-    changed. A time already past (or no clock: :func:`monotonic_ns` -1) gives one warm-up.
-    The loop calls it through :func:`context_period` (its ``warm_until``), so that the
-    warm-ups run the very machine code of the step that follows.
+    The spin phase of the loop's wait: one warm-up always, then another as long as it should
+    end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's time taken as the next's), so
+    that the return to the interpreter fits before the deadline. A time already past (or no
+    clock: :func:`monotonic_ns` -1) gives one warm-up.
     """
     r = c.arrays.runner
     n = 0
@@ -687,11 +682,9 @@ def context_period(
     (:func:`context_warm_until`, ``warm_until`` [ns] on :func:`monotonic_ns`'s clock; their
     number in the runner's ``warm_ups``; a :class:`PeriodEnd` that does not go on).
 
-    Why both in one function: numba compiles, into each function called from Python, its own
-    copy of every compiled function it calls (the stack's step included); warm-ups called
-    through another function would warm another copy of the step's machine code (other
-    addresses in the instruction cache and the branch predictors) and only the data the step
-    shares. Through this one, the warm-ups and the period run the same copy.
+    Both in one function because numba compiles into each function called from Python its own
+    copy of every compiled function it calls: through this one, the warm-ups and the period
+    run the same copy of the step's machine code.
     """
     if warm_until >= 0:
         context_warm_until(c, warm_until)
@@ -705,13 +698,11 @@ def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, b
     of the datagrams waiting on socket ``fd`` at the deadline ``t`` [s] of period ``k`` (on
     the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
 
-    In order, without returning to the interpreter: the stack's warm-ups until about 2 us
-    before ``t`` (:func:`context_warm_until`), a spin on the clock until ``t`` has passed
-    (the test of :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float``
-    seconds), the wake-up (the :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read
-    (:func:`~motosim.io.can.recv_datagrams`), the period. The caller sleeps until shortly
-    before ``t`` and sends the frames after. A ``t`` already past (a simulated clock's)
-    neither waits nor warms more than once.
+    In order, without returning to the interpreter: the stack's warm-ups
+    (:func:`context_warm_until`), a spin on the clock until ``t`` has passed (the test of
+    :meth:`motosim.rt.clock.MonotonicClock.sleep_until`), the wake-up (the
+    :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read, the period. The caller sleeps
+    until shortly before ``t`` and sends the frames after.
     """
     context_warm_until(c, max(0, int(t * 1e9)))
     woke = monotonic_ns() / 1e9

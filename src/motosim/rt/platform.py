@@ -71,21 +71,10 @@ from motosim.io.can import Link, PlatformCodecs
 from motosim.rt.safety import MAX_COUNTER_STEP, State
 
 __all__ = [
-    "PLATFORM_FRAME",
-    "PLATFORM_MAGIC",
-    "PLATFORM_VERSION",
-    "PlatformCanSender",
-    "PlatformCueing",
-    "PlatformFrame",
-    "PlatformLink",
-    "PlatformOutput",
-    "PlatformSender",
-    "PlatformTee",
-    "PlatformTwin",
-    "decode_platform",
-    "encode_platform",
-    "platform_step",
-]
+    "PLATFORM_FRAME", "PLATFORM_MAGIC", "PLATFORM_VERSION", "PlatformCanSender", "PlatformCueing",
+    "PlatformFrame", "PlatformLink", "PlatformOutput", "PlatformSender", "PlatformTee",
+    "PlatformTwin", "decode_platform", "encode_platform", "platform_step",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 

@@ -48,13 +48,8 @@ if TYPE_CHECKING:
     from motosim.rt.platform import PlatformOutput
 
 __all__ = [
-    "LOOP_SIGNALS",
-    "RealtimeRunner",
-    "RunCounters",
-    "RunSettings",
-    "StackStepper",
-    "profile_stats",
-]
+    "LOOP_SIGNALS", "RealtimeRunner", "RunCounters", "RunSettings", "StackStepper", "profile_stats",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 
@@ -268,7 +263,7 @@ class RealtimeRunner:
         self._validity = settings.validity
         self._duration = -1 if settings.duration is None else round(settings.duration * rate)
         roll, speed_low, speed_high = settings.validity or _ANY_RANGE
-        compiled_settings = fused.RunnerSettings(
+        self._settings = fused.RunnerSettings(
             linger=max(1, round(settings.linger * rate)),
             start_timeout=max(1, round(settings.start_timeout * rate)),
             heartbeat_every=max(1, round(0.1 * rate)), dt=self.dt, duration=self._duration,
@@ -276,10 +271,9 @@ class RealtimeRunner:
             speed_high=speed_high, datagrams=link.datagrams,
             armed=not settings.wait_for_arm, warm=settings.warm,
         )  # fmt: skip
-        self._settings = compiled_settings
         self._warm_on = settings.warm
         self._woke = math.nan
-        self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(compiled_settings))
+        self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(self._settings))
         self._r = self._arrays.runner
         self._views = [memoryview(row) for row in self._arrays.rx]
         self._bad_reported = 0
@@ -355,23 +349,16 @@ class RealtimeRunner:
 
     def warm(self, until: float | None = None) -> None:
         """Bring the stack's code and data into the CPU's caches for the next period: stack
-        steps on a copy of its state, thrown away (a fused runner only; nothing changes).
+        steps on a copy of its state, thrown away (a fused runner only; nothing changes),
+        one after the other in one compiled call (:func:`~motosim.rt.fused.context_period`'s
+        ``warm_until``) until ``until`` on ``time.monotonic``'s clock [s] (None, or a time
+        already past: one warm-up).
 
-        The loop calls it in the spin phase of its wait, ``WARM_LEAD`` before each deadline
-        (:meth:`~motosim.rt.loop.RateLoop.run`'s ``warm``), with the deadline: between two
-        periods the interpreter's wait and the system calls evict the stack from the caches,
-        and its step would run several times slower than in a compiled loop. The warm-ups
-        run are counted in :attr:`warm_ups` (none before the stack has started, for a stack
-        in Python, or with the warm-ups off: :attr:`warms`).
-
-        Parameters
-        ----------
-        until : float, optional
-            Keep warming, one copy of the stack's step after the other in one compiled call
-            (:func:`~motosim.rt.fused.context_period`'s ``warm_until``: the period's own
-            machine code), until this time on ``time.monotonic``'s clock [s]: the last
-            warm-up then ends within about one step's time of it. None, or a time already
-            past (a simulated clock's): one warm-up.
+        The loop calls it ``WARM_LEAD`` before each deadline, with the deadline
+        (:meth:`~motosim.rt.loop.RateLoop.run`'s ``warm``): between two periods the
+        interpreter's wait and the system calls evict the stack from the caches. The
+        warm-ups are counted in :attr:`warm_ups` (none before the stack has started, for a
+        stack in Python, or with the warm-ups off: :attr:`warms`).
         """
         if self.warms:
             assert self._kernel is not None
@@ -384,20 +371,11 @@ class RealtimeRunner:
         return int(self._counts(self._r).warm_ups)
 
     def compile_wait(self) -> bool:
-        """Make :meth:`wait_period` available: the wait's end, the bus read and the period
-        in one compiled call (:func:`~motosim.rt.fused.context_cycle`, compiled, or loaded
-        from numba's cache, now: before the first deadline).
-
-        Only a runner whose stack is compiled, on a link that gives compiled code its socket
-        (:meth:`~motosim.io.can.Link.compiled_fd`, read by
-        :func:`~motosim.io.can.recv_datagrams`, on Linux), with numba's JIT on; the
-        others keep :meth:`period`, which does the same in Python.
-
-        Returns
-        -------
-        bool
-            Whether :meth:`wait_period` can be used.
-        """
+        """Make :meth:`wait_period` available (:func:`~motosim.rt.fused.context_cycle`
+        compiled, or loaded from numba's cache, now); whether it is. Only a runner whose stack
+        is compiled, on a link that gives compiled code its socket
+        (:meth:`~motosim.io.can.Link.compiled_fd`, on Linux), with numba's JIT on; the others
+        keep :meth:`period`, which does the same in Python."""
         if self._cycle is not None:
             return True
         fd = self.link.compiled_fd() if self._warms else -1
