@@ -174,32 +174,15 @@ class RateLoop:
         self._warm = warm
         self._woke = woke
 
-    @property
-    def period(self) -> float:
-        """The period [s]."""
-        return self._period
-
     def stop(self) -> None:
         """Ask the loop to end after the current step (safe from a signal handler)."""
         self._stop = True
 
     def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
-        """Call ``step(k, deadline)`` at each deadline until it returns False or ``periods`` pass.
-
-        Parameters
-        ----------
-        step : callable
-            ``step(k, deadline) -> bool``: ``k`` is the deadline's index (0, 1, ...; skipped
-            indices are not called), ``deadline`` its time [s] on the clock; False ends the
-            loop.
-        periods : int
-            The largest number of deadlines, >= 0; the first is one period from now.
-
-        Returns
-        -------
-        int
-            The number of steps run.
-        """
+        """Call ``step(k, deadline)`` at each deadline until it returns False or ``periods``
+        (>= 0) pass; the number of steps run. ``k`` is the deadline's index (0, 1, ...;
+        skipped indices are not called), ``deadline`` its time [s] on the clock, the first
+        one period from now."""
         _check_periods(periods)
         clock = self._clock
         now = clock.now
@@ -348,13 +331,8 @@ class FramePacedLoop(RateLoop):
         return self._timeouts
 
     def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
-        """Call ``step(k, t)`` once per frame until it returns False or ``periods`` pass.
-
-        Returns
-        -------
-        int
-            The number of steps run.
-        """
+        """Call ``step(k, t)`` once per frame until it returns False or ``periods`` pass;
+        the number of steps run."""
         _check_periods(periods)
         now = self._clock.now
         wait = self._wait

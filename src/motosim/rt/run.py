@@ -424,6 +424,11 @@ class RealtimeRunner:
         self._request(self._r, True, False)
         self.safety.request_stop()
 
+    @property
+    def stop_requested(self) -> bool:
+        """Whether :meth:`request_stop` was called."""
+        return bool(self._counts(self._r).stop)
+
     def arm(self) -> None:
         """Start the torque (a fade-in through the safety stage) in the next period.
 
@@ -448,16 +453,6 @@ class RealtimeRunner:
         return float(r.left_t) if r.left else math.nan
 
     @property
-    def stop_requested(self) -> bool:
-        """Whether :meth:`request_stop` was called."""
-        return bool(self._counts(self._r).stop)
-
-    @property
-    def reached_end(self) -> bool:
-        """Whether the run reached its ``duration`` (the torque then fades out)."""
-        return bool(self._counts(self._r).ended)
-
-    @property
     def max_periods(self) -> int:
         """The loop's periods to give a run with a ``duration``: the duration, then ten times
         the most the fade-out needs (the fade, then the slew-rate limit's way down from the
@@ -469,6 +464,11 @@ class RealtimeRunner:
         fade = math.ceil(limits.fade_in / self.dt)
         slew = math.ceil(limits.max_current / (limits.max_slew * self.dt))
         return self._duration + 10 * (fade + slew + 2) + self._settings.linger
+
+    @property
+    def reached_end(self) -> bool:
+        """Whether the run reached its ``duration`` (the torque then fades out)."""
+        return bool(self._counts(self._r).ended)
 
     def emergency_stop(self) -> None:
         """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
@@ -604,15 +604,9 @@ class RealtimeRunner:
             self._bad_reported = bad
         s = self.safety
         return RunCounters(
-            status_frames=self.status_frames,
-            frames_lost=s.frames_lost,
-            frames_stale=s.frames_stale,
-            send_errors=self.send_errors,
-            state=s.state.name,
-            fault=s.fault.name,
-            fault_reason=s.describe(),
-            fault_time=s.fault_time,
-        )
+            self.status_frames, s.frames_lost, s.frames_stale, self.send_errors, s.state.name,
+            s.fault.name, s.describe(), s.fault_time,
+        )  # fmt: skip
 
 
 PROFILE_STAGES = ("read", "control", "send", "rest")
