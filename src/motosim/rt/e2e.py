@@ -174,20 +174,10 @@ def _taken(st: Any, counter: int, delta: int, clean: int) -> int:
 
 @njit(cache=True)
 def e2e_check(st: Any, new_data: bool, crc_ok: bool, counter: int) -> int:
-    """One receive cycle of ``E2E_P01Check``: its :class:`E2EStatus` code (also kept in
-    ``st.status``), or :data:`INPUT_ERROR` for a counter outside 0 to :data:`MAX_COUNTER`.
-
-    Parameters
-    ----------
-    st : E2EState
-        The receiver's state, updated in place.
-    new_data : bool
-        Whether a new frame came this cycle (False: ``counter`` and ``crc_ok`` are unread).
-    crc_ok : bool
-        Whether the frame's CRC is right.
-    counter : int
-        The frame's counter.
-    """
+    """One receive cycle of ``E2E_P01Check`` on the receiver's state ``st`` (updated in
+    place): its :class:`E2EStatus` code (also kept in ``st.status``), or :data:`INPUT_ERROR`
+    for a ``counter`` outside 0 to :data:`MAX_COUNTER`. ``new_data``: whether a frame came
+    this cycle (else ``crc_ok``, whether its CRC is right, and ``counter`` are unread)."""
     st.max_delta_counter = min(st.max_delta_counter + 1, MAX_COUNTER)
     if not new_data:
         st.no_new_or_repeated_data_counter = min(

@@ -142,22 +142,10 @@ def decode_platform(data: bytes) -> PlatformFrame:
 
 
 class PlatformCueing(NamedTuple):
-    """What :func:`platform_step` steps: the cueing's coefficients, its state and scratch.
-
-    Attributes
-    ----------
-    pitch : ndarray, shape (5,)
-        Suspension pitch section (``lowpass2`` of the rider's pitch model).
-    washout : ndarray, shape (26,)
-        :meth:`motosim.cueing.washout.WashoutDesign.coefficients`.
-    limits : ndarray, shape (3, 4)
-        :meth:`motosim.cueing.limits.LimitDesign.coefficients`.
-    state : ndarray, shape (19,)
-        ``[previous v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]``,
-        updated in place; zeros at rest.
-    command : ndarray, shape (4,)
-        The washout's roll, pitch, yaw and horizon command, written each period.
-    """
+    """What :func:`platform_step` steps: the suspension pitch section (``lowpass2`` of the
+    rider's pitch model), the washout's and the limits' coefficients, the state ``[previous
+    v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]`` (zeros at rest,
+    updated in place) and the washout's roll, pitch, yaw and horizon command (scratch)."""
 
     pitch: Array
     washout: Array

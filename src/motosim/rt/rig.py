@@ -380,9 +380,8 @@ class VirtualRig:
         """Where the status and command frames' signals sit in their decoded values."""
         st = codecs.status
         self._values = np.zeros(len(st.names))
-        self._p = {part: codecs.position(st, part) for part in ("angle", "current", "enabled")}
-        self._p["counter"] = codecs.position(st, "counter")
-        self._p["drive_fault"] = codecs.position(st, "drive_fault")
+        parts = ("angle", "current", "enabled", "counter", "drive_fault")
+        self._p = {part: codecs.position(st, part) for part in parts}
         self._command = np.zeros(len(codecs.command.names))
         self._c_current = codecs.position(codecs.command, "current_command")
         self._c_enable = codecs.position(codecs.command, "enable")
@@ -564,12 +563,10 @@ class VirtualRider:
     """The scenario's virtual rider at the rig, steering by the state that ``run`` publishes.
 
     The rider of :func:`motosim.sim.rider.rider_torque` (the same path, gains and limits as
-    offline, from :func:`motosim.sim.build_rig`) looks at the virtual motorcycle's states in
-    the newest datagram of the run's state stream (:mod:`motosim.rt.telemetry`); before the
-    first one it holds 0 N*m. The scenario's probe (``[rider] probe``, ``world.rider_probe``)
-    is added at the time it is asked for, as offline; the rig asks once per status frame,
-    so at status frames slower than the control rate the probe is held over a frame period
-    where offline it changes every control period.
+    offline) looks at the virtual motorcycle's states in the newest datagram of the run's
+    state stream (:mod:`motosim.rt.telemetry`); before the first one it holds 0 N*m. The
+    scenario's probe (``world.rider_probe``) is added at the time it is asked for, once per
+    status frame (held over a frame period where offline it changes every control period).
 
     Parameters
     ----------
@@ -631,19 +628,8 @@ class VirtualRider:
             )
 
     def __call__(self, t: float) -> float:
-        """The rider's torque at a time of the rig.
-
-        Parameters
-        ----------
-        t : float
-            The time since the rider took the handlebar [s].
-
-        Returns
-        -------
-        float
-            The rider's torque [N*m]: the path's, from the newest state row, plus the probe's
-            at ``t``.
-        """
+        """The rider's torque [N*m] ``t`` [s] after the rider took the handlebar: the path's,
+        from the newest state row, plus the probe's at ``t``."""
         if self.receiver.poll():
             row, at = self.receiver.row, self._at
             for i, state_at in enumerate(self._states_at):
@@ -672,20 +658,12 @@ class VirtualRider:
 class LockstepLink(Link):
     """A link whose blocking receive lets simulated time pass (bus pacing in lock-step).
 
-    ``receive(timeout)`` with a positive ``timeout`` polls ``link`` and, while nothing has
-    come, advances ``clock`` by ``tick`` [s] at a time (a rig listening on the clock runs and
-    sends meanwhile) until a frame comes or ``timeout`` has passed: what a blocking receive
-    on a real bus does, deterministically. ``send`` and a zero-timeout ``receive`` go
-    straight to ``link``.
-
-    Parameters
-    ----------
-    link : Link
-        The host's end of the bus.
-    clock : SimulatedClock
-        The clock the rig listens on.
-    tick : float
-        The time step of the wait [s], > 0 (the rig's plant step: frames are due on it).
+    ``receive(timeout)`` with a positive ``timeout`` polls ``link`` (the host's end of the
+    bus) and, while nothing has come, advances ``clock`` (the one the rig listens on: the rig
+    runs and sends meanwhile) by ``tick`` [s] > 0 at a time (the rig's plant step: frames are
+    due on it) until a frame comes or ``timeout`` has passed: what a blocking receive on a
+    real bus does, deterministically. ``send`` and a zero-timeout ``receive`` go straight to
+    ``link``.
     """
 
     def __init__(self, link: Link, clock: SimulatedClock, tick: float) -> None:

@@ -528,17 +528,14 @@ class SafetyStage:
     Notes
     -----
     The frozen-sensor monitor tells a frozen angle sensor from a rider who holds the
-    handlebar still against the motor, which is legitimate (a steady turn: the rider's torque
-    balances the motor's and the angle stands still for seconds). Only the angle and the
-    motor current are measured, so a still angle under a large *steady* current proves
-    nothing. What a rider cannot do is hold the handlebar to one encoder count while the
-    motor torque *changes* a lot: an arm is a spring of at most a few hundred N*m/rad, so a
-    change of a few N*m moves the handlebar by milliradians, tens of counts. The monitor
-    keeps the motor torque ``tau_0 = N k_t i`` of the period the measured angle last changed
-    and, while it stands still, integrates the turn of a *free* handlebar of eq. (5) driven
-    by the change of torque since then, quasi-statically (the inertia's lag,
-    ``J_eq / beta_eq`` = 3 ms for Table I, is neglected), with twice the dry friction as a
-    dead band (the still handlebar may sit anywhere in the friction band)::
+    handlebar still against the motor (a steady turn, legitimate): a still angle under a
+    large *steady* current proves nothing, but no rider holds the handlebar to one encoder
+    count while the motor torque *changes* a lot (an arm is a spring of at most a few
+    hundred N*m/rad). The monitor keeps the motor torque ``tau_0 = N k_t i`` of the period
+    the measured angle last changed and, while it stands still, integrates the turn of a
+    *free* handlebar of eq. (5) driven by the change of torque since then, quasi-statically
+    (the inertia's lag ``J_eq / beta_eq`` neglected), with twice the dry friction as a dead
+    band (the still handlebar may sit anywhere in the friction band)::
 
         d = |N k_t i - tau_0|,   theta_free += max(0, d - 2 beta_s) / beta_eq * dt
 
@@ -745,22 +742,15 @@ class SafetyStage:
         tau_hat: float,
         now: float | None = None,
     ) -> float:
-        """The current to send [A] for the stack's ``command`` [A] this period.
+        """The current to send [A] for the stack's ``command`` [A] this period, given the
+        last valid handlebar angle ``theta`` [rad], its estimated rate ``omega`` [rad/s] and
+        the estimated rider torque ``tau_hat`` [N*m] (NaN if the stack has none: hands-off
+        off).
 
-        Parameters
-        ----------
-        command : float
-            The stack's current command [A].
-        theta, omega : float
-            Last valid handlebar angle [rad] and its estimated rate [rad/s].
-        tau_hat : float
-            The estimated rider torque [N*m] (NaN if the stack has none: hands-off off).
-        now : float, optional
-            The loop's time [s] since the stage's first step, for the fault's time stamp
-            and the watchdog: the control periods since the last step, rounded (at least
-            one), count as periods without a status frame unless one came, so that the
-            deadlines a late loop skipped count too. By default the stage counts its own
-            periods, one per step.
+        ``now`` is the loop's time [s] since the stage's first step, for the fault's time
+        stamp and the watchdog: the control periods since the last step, rounded (at least
+        one), count as periods without a status frame unless one came, so that the deadlines
+        a late loop skipped count too. By default the stage counts its own periods.
         """
         t = math.nan if now is None else float(now)
         return float(

@@ -4,16 +4,13 @@
 checked options and the scenario's ``[realtime]`` settings) and runs:
 
 1. :meth:`~RealtimeSession.prepare` loads the compiled stack, opens the bus and builds the
-   :class:`~motosim.rt.run.RealtimeRunner` (the period: read the drive's frames, step the
-   stack, pass its command through the safety stage, send it, record a row);
+   :class:`~motosim.rt.run.RealtimeRunner`;
 2. :meth:`~RealtimeSession.open` starts the recorder process
    (:class:`~motosim.rt.recorder.Recorder`), which drains the runner's ring into the result
    files;
-3. :meth:`~RealtimeSession.run` applies the privileges, runs the rate loop once and returns
-   the :class:`Outcome`. The run's end is a stop request inside that one loop run: at the
-   duration the runner fades the torque out (``RunSettings(duration=...)``),
-   as on :meth:`~RealtimeSession.request_stop`, and its period returns False once the torque
-   is zero; a fault zeroes it at once and ends the run shortly after;
+3. :meth:`~RealtimeSession.run` applies the privileges, runs the rate loop once (at the
+   duration the runner fades the torque out, as on a stop request, and ends the run once it
+   is zero) and returns the :class:`Outcome`;
 4. :meth:`~RealtimeSession.close` lets the recorder release the result folder (after the
    caller has written its own files beside the rows) and frees the shared ring.
 
@@ -26,7 +23,7 @@ import enum
 import math
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Self
 
@@ -425,9 +422,7 @@ class RealtimeSession:
             "profile": done.profile,
             "state_stream": done.stream,
             "units": "s",
-            "privileges": [
-                {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
-            ],
+            "privileges": [asdict(p) for p in privileges],
             "counters": {
                 "status_frames": counters.status_frames,
                 "frames_lost": counters.frames_lost,
