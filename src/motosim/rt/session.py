@@ -219,7 +219,7 @@ class RealtimeSession:
         self._recorder: Recorder | None = None
         self._buttons: Any = None
         self._fast = False
-        self._stop = 0  # stop requests before the runner was built: 1 stop, 2 E-stop
+        self._stop_asked = self._estop_asked = False  # before the runner was built
 
     @property
     def runner(self) -> "RealtimeRunner":
@@ -232,14 +232,14 @@ class RealtimeSession:
     def request_stop(self) -> None:
         """Fade the torque out and end the run (safe from a signal handler)."""
         if self._runner is None:
-            self._stop = max(self._stop, 1)
+            self._stop_asked = True
         else:
             self._runner.request_stop()
 
     def emergency_stop(self) -> None:
         """Zero the torque now and end the run (safe from a signal handler)."""
         if self._runner is None:
-            self._stop = 2
+            self._estop_asked = True
         else:
             self._runner.emergency_stop()
 
@@ -280,8 +280,10 @@ class RealtimeSession:
             stack, self._link, handlebar_codecs(), settings, platform=platform, clock=self.clock,
             now=self.clock.now,
         )  # fmt: skip
-        if self._stop:  # asked for while the runner was built
-            self.emergency_stop() if self._stop == 2 else self.request_stop()
+        if self._estop_asked:  # asked for while the runner was built
+            self.emergency_stop()
+        elif self._stop_asked:
+            self.request_stop()
 
     def _platform_output(self, names: tuple[str, ...]) -> Any:
         """The motion platform's stage (None without a platform file)."""
@@ -363,7 +365,7 @@ class RealtimeSession:
             extra["failure"] = runner.left_range  # the motorcycle fell: flagged, as offline
         done = recorder.close(complete, extra)
         counters = runner.counters()
-        bus_errors = int(getattr(self._link, "errors", 0))
+        bus_errors = int(runner.link.errors)
         self._close_link()
         return self._outcome(stats, counters, privileges, done, bus_errors)
 
