@@ -113,31 +113,13 @@ class LiveSink(Protocol):
 
 @dataclass(frozen=True)
 class RecorderSettings:
-    """What the recorder process needs (picklable).
-
-    Attributes
-    ----------
-    ring : object
-        The shared ring's handle (:attr:`motosim.rt.ring.SampleRing.handle`).
-    names : tuple of str
-        The ring's columns (:attr:`motosim.rt.run.RealtimeRunner.names`).
-    folder : Path
-        The result folder.
-    metadata : dict
-        The result's metadata.
-    overwrite : bool
-        Replace a complete result already in the folder.
-    torque_per_amp : float
-        The handlebar's motor torque per ampere [N*m/A], for the result's motor torque.
-    rate : float
-        The control rate [Hz] (the state stream's pace).
-    telemetry : (str, int) or None
-        Where to publish the state stream; None: nowhere.
-    live : LiveSink or None
-        The live view to feed every 5 ms; None: no view.
-    controls : Connection or None
-        With ``live``: the sending end of the pipe its buttons go to.
-    """
+    """What the recorder process needs (picklable): the shared ring's handle
+    (:attr:`motosim.rt.ring.SampleRing.handle`) and columns
+    (:attr:`motosim.rt.run.RealtimeRunner.names`); the result's folder, metadata and
+    ``overwrite`` (:class:`~motosim.rt.session.SessionConfig`'s); the handlebar's motor torque
+    per ampere [N*m/A] (the result's motor torque); the control rate [Hz] (the state
+    stream's pace); where to publish the state stream (None: nowhere); the live view to feed
+    every 5 ms (None: none) and, with it, the sending end of the pipe its buttons go to."""
 
     ring: Any
     names: tuple[str, ...]

@@ -139,10 +139,9 @@ class RunSettings:
         The control rate [Hz], > 0.
     duration : float, optional
         The run's duration [s], >= 0: after its last period the torque fades out (as on a
-        stop request) and :meth:`RealtimeRunner.period` returns False once it is off, all in
-        one run of the loop (give it :attr:`RealtimeRunner.max_periods`);
-        :attr:`RealtimeRunner.reached_end` says whether it got there. Without it the run
-        goes on until a stop request, a fault or the loop's end.
+        stop request) and :meth:`RealtimeRunner.period` returns False once it is off, in one
+        run of the loop of :attr:`RealtimeRunner.max_periods`. Without it the run goes on
+        until a stop request, a fault or the loop's end.
     linger : float
         How long the zero command is still sent after a fault before the run ends [s], >= 0.
     periods_per_frame : int
@@ -160,9 +159,9 @@ class RunSettings:
         :meth:`RealtimeRunner.arm` is called (the view's Arm button); the loop runs and
         records meanwhile.
     warm : bool
-        Warm the stack before each deadline (:meth:`RealtimeRunner.warm`, and the compiled
-        wait of :meth:`RealtimeRunner.wait_period`): True by default; False, the wait only
-        spins (``motosim run --warm off``). The rows are the same either way.
+        Warm the stack before each deadline (:meth:`RealtimeRunner.warm`, and in
+        :meth:`RealtimeRunner.wait_period`); False: the wait only spins. The rows are the
+        same either way.
     handlebar : HandlebarParameters, optional
         The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
     validity : tuple of float, optional

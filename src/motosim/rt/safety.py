@@ -597,9 +597,7 @@ class SafetyStage:
         self._p = safety_params(limits, self.dt, int(periods_per_frame), handlebar)
         from motosim.rt.stack import compiled  # the stack's numba, loaded with the stage
 
-        self._brief: Callable[[SafetyState], tuple[int, int, float]] = compiled(
-            safety_brief, self._s
-        )
+        self._brief: Callable[..., tuple[int, int, float]] = compiled(safety_brief, self._s)
         self._snapshot: Callable[[SafetyState], SafetySnapshot] = compiled(safety_snapshot, self._s)
 
     @property
