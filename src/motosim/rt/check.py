@@ -172,20 +172,9 @@ def advice(
     privileges: Sequence[Privilege] = (),
     bus: str = "",
 ) -> list[str]:
-    """What a real-time run's timing and fault point to, one line each (none: nothing).
-
-    Parameters
-    ----------
-    stats : TimingStats
-        The loop's timing.
-    fault : str
-        The safety stage's fault name (``"NONE"``, ``"WATCHDOG"``, ``"NO_DRIVE"``, ...).
-    asked_all : bool
-        Whether --fifo, --cpu and --mlock were all given.
-    privileges : sequence of Privilege
-        The privileges applied or refused.
-    bus : str
-        The run's ``--bus``.
+    """What a real-time run's timing and safety ``fault`` (its name) point to, one line each
+    (none: nothing); ``asked_all``: whether --fifo, --cpu and --mlock were all given,
+    ``privileges`` those applied or refused, ``bus`` the run's ``--bus``.
 
     Examples
     --------

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MAX_LATENCY", "RealtimeOptions", "frame_age", "parse_latency", "parse_safety",
-    "run_paces", "split_realtime", "within_safety",
+    "run_paces", "split_realtime", "table_number", "within_safety",
 ]  # fmt: skip
 
 MAX_LATENCY = 1.0
@@ -137,24 +137,12 @@ def frame_age(
 
 
 def run_paces(control_rate: float, measurement_rate: float) -> tuple[str, ...]:
-    """The paces ``motosim run`` takes at these rates [Hz]: ``"clock"``, and ``"bus"``
-    when the loop has one period per status frame (equal rates).
+    """The paces ``motosim run --pace`` takes at the loop's and the status frames' rates
+    [Hz]: ``"clock"``, and ``"bus"`` when the loop has one period per status frame.
 
     The last is the one under which the status frame is youngest when the stack reads it
     (:func:`frame_age`): a command that serves whichever run comes (``motosim rig``)
     refuses, under it, what every run refuses.
-
-    Parameters
-    ----------
-    control_rate : float
-        The loop's rate [Hz].
-    measurement_rate : float
-        The drive's status frame rate [Hz].
-
-    Returns
-    -------
-    tuple of str
-        The paces ``run --pace`` takes, ``"clock"`` first.
 
     Examples
     --------
@@ -182,17 +170,18 @@ def parse_safety(table: Any, *, origin: str) -> SafetyLimits:
     missing = [n for n in names if n not in table and n not in optional]
     if missing:
         raise MotosimError(f"{where}: missing {', '.join(missing)}")
-    values: dict[str, Any] = {}
-    for key, value in table.items():
-        if key == "watchdog_periods":
-            if not isinstance(value, int) or isinstance(value, bool):
-                raise MotosimError(f"{where} watchdog_periods = {value!r}: expected an integer")
-            values[key] = value
-        elif isinstance(value, bool) or not isinstance(value, int | float):
-            raise MotosimError(f"{where} {key} = {value!r}: expected a number")
-        else:
-            values[key] = float(value)
-    return SafetyLimits(**values)
+    integer = "watchdog_periods"
+    return SafetyLimits(**{k: table_number(k, v, where, k == integer) for k, v in table.items()})
+
+
+def table_number(key: str, value: Any, where: str, integer: bool = False) -> Any:
+    """The number ``value`` of ``key`` in the table ``where`` (a float, or with ``integer`` the
+    integer as it is), or a one-line error."""
+    if isinstance(value, bool) or not isinstance(value, int if integer else int | float):
+        raise MotosimError(
+            f"{where} {key} = {value!r}: expected {'an integer' if integer else 'a number'}"
+        )
+    return value if integer else float(value)
 
 
 def within_safety(inputs: "RunInputs", limits: SafetyLimits) -> "RunInputs":
@@ -201,8 +190,8 @@ def within_safety(inputs: "RunInputs", limits: SafetyLimits) -> "RunInputs":
     The stack saturates its command where the safety stage would clamp it, so its
     estimator is told the current the drive carries, not a command the clamp cuts: told
     more than the drive carries, it reads the difference as rider torque until the next
-    status frame, and with 100 Hz frames under a 1 kHz loop that sustains an 8 Hz limit
-    cycle at the clamp (measured on the lane change at 20 m/s with a 10 A clamp).
+    status frame, and with 100 Hz frames under a 1 kHz loop that sustains a limit cycle at
+    the clamp.
     """
     controller = inputs.scenario.controller
     if limits.max_current >= controller.max_current:

@@ -31,28 +31,21 @@ The CRC itself (CRC-8 SAE J1850 over the data identifier and the frame) is the c
 check is told whether it was right.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from enum import IntEnum
 from typing import Any, NamedTuple
 
 from numba import njit
-from numba.core import types
 from numba.experimental import structref
 
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
+from motosim.rt.safety import FieldsStruct
 
 __all__ = [
-    "INPUT_ERROR",
-    "MAX_COUNTER",
-    "E2EConfig",
-    "E2EReceiver",
-    "E2ESnapshot",
-    "E2EState",
-    "E2EStatus",
-    "e2e_check",
-    "e2e_restart",
-]
+    "INPUT_ERROR", "MAX_COUNTER", "E2EConfig", "E2EReceiver", "E2ESnapshot", "E2EState",
+    "E2EStatus", "e2e_check", "e2e_restart",
+]  # fmt: skip
 
 
 class E2EStatus(IntEnum):
@@ -73,15 +66,6 @@ MAX_COUNTER = 14
 INPUT_ERROR = -1
 """What :func:`e2e_check` returns for a counter outside 0 to :data:`MAX_COUNTER` (the
 profile's ``E2E_E_INPUTERR_WRONG``): the status and the counter state are not changed."""
-
-_OK = int(E2EStatus.OK)
-_NONEWDATA = int(E2EStatus.NONEWDATA)
-_WRONGCRC = int(E2EStatus.WRONGCRC)
-_SYNC = int(E2EStatus.SYNC)
-_INITIAL = int(E2EStatus.INITIAL)
-_REPEATED = int(E2EStatus.REPEATED)
-_OKSOMELOST = int(E2EStatus.OKSOMELOST)
-_WRONGSEQUENCE = int(E2EStatus.WRONGSEQUENCE)
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,148 +90,12 @@ class E2EConfig:
     sync_counter_init: int
 
     def __post_init__(self) -> None:
-        for name in (
-            "max_delta_counter_init", "max_no_new_or_repeated_data", "sync_counter_init"
-        ):  # fmt: skip
+        for name in _SETTINGS:
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, int) and 0 <= value <= 14):
                 raise MotosimError(
                     f"E2E {name} = {short_repr(value)}; expected an integer from 0 to 14"
                 )
-
-
-class _Settings(NamedTuple):
-    """:class:`E2EConfig` as compiled code reads it."""
-
-    max_delta_counter_init: int
-    max_no_new_or_repeated_data: int
-    sync_counter_init: int
-
-
-@structref.register
-class E2EStateType(types.StructRef):
-    """numba's type of :class:`E2EState`."""
-
-    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
-        """The fields' types without literal values."""
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
-
-
-class E2EState(structref.StructRefProxy):
-    """The receiver's state of Profile 1 (``E2E_P01CheckStateType``), shared with compiled
-    code.
-
-    Fields (read in compiled code; from Python through :class:`E2EReceiver`):
-    ``last_valid_counter``, ``max_delta_counter``, ``wait_for_first_data``, ``lost_data``
-    (frames lost before the last one taken), ``status`` (:class:`E2EStatus`),
-    ``sync_counter``, ``no_new_or_repeated_data_counter`` and the settings ``config``.
-    """
-
-    def __new__(cls, config: E2EConfig) -> "E2EState":
-        settings = _Settings(
-            config.max_delta_counter_init,
-            config.max_no_new_or_repeated_data,
-            config.sync_counter_init,
-        )
-        made: E2EState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, settings, 0, 0, True, 0, _NONEWDATA, 0, 0
-        )
-        return made
-
-
-structref.define_proxy(  # type: ignore[no-untyped-call]
-    E2EState,
-    E2EStateType,
-    ["config", "last_valid_counter", "max_delta_counter", "wait_for_first_data", "lost_data",
-     "status", "sync_counter", "no_new_or_repeated_data_counter"],
-)  # fmt: skip
-
-
-@njit(cache=True)
-def e2e_restart(st: Any) -> None:
-    """Start the receiver afresh (``E2E_P01CheckInit``): the next frame is ``INITIAL``."""
-    st.last_valid_counter = 0
-    st.max_delta_counter = 0
-    st.wait_for_first_data = True
-    st.lost_data = 0
-    st.status = _NONEWDATA
-    st.sync_counter = 0
-    st.no_new_or_repeated_data_counter = 0
-
-
-@njit(cache=True, inline="always")
-def _taken(st: Any, counter: int, delta: int, clean: int) -> int:
-    """A frame taken ``delta`` counts on: ``clean`` (OK or OKSOMELOST) or SYNC while the
-    receiver synchronises."""
-    cfg = st.config
-    st.max_delta_counter = cfg.max_delta_counter_init
-    st.last_valid_counter = counter
-    st.lost_data = delta - 1
-    sync = True
-    if st.no_new_or_repeated_data_counter <= cfg.max_no_new_or_repeated_data:
-        if st.sync_counter > 0:
-            st.sync_counter -= 1
-        else:
-            sync = False
-    else:
-        st.sync_counter = cfg.sync_counter_init
-    st.no_new_or_repeated_data_counter = 0
-    return _SYNC if sync else clean
-
-
-@njit(cache=True)
-def e2e_check(st: Any, new_data: bool, crc_ok: bool, counter: int) -> int:
-    """One receive cycle of ``E2E_P01Check``: its :class:`E2EStatus` code (also kept in
-    ``st.status``), or :data:`INPUT_ERROR` for a counter outside 0 to :data:`MAX_COUNTER`.
-
-    Parameters
-    ----------
-    st : E2EState
-        The receiver's state, updated in place.
-    new_data : bool
-        Whether a new frame came this cycle (False: ``counter`` and ``crc_ok`` are unread).
-    crc_ok : bool
-        Whether the frame's CRC is right.
-    counter : int
-        The frame's counter.
-    """
-    st.max_delta_counter = min(st.max_delta_counter + 1, MAX_COUNTER)
-    if not new_data:
-        st.no_new_or_repeated_data_counter = min(
-            st.no_new_or_repeated_data_counter + 1, MAX_COUNTER
-        )
-        st.status = _NONEWDATA
-        return _NONEWDATA
-    if counter < 0 or counter > MAX_COUNTER:
-        return INPUT_ERROR
-    if not crc_ok:
-        st.status = _WRONGCRC
-        return _WRONGCRC
-    if st.wait_for_first_data:
-        st.wait_for_first_data = False
-        st.max_delta_counter = st.config.max_delta_counter_init
-        st.last_valid_counter = counter
-        st.status = _INITIAL
-        return _INITIAL
-    delta = (counter - st.last_valid_counter) % (MAX_COUNTER + 1)
-    if delta == 0:
-        st.no_new_or_repeated_data_counter = min(
-            st.no_new_or_repeated_data_counter + 1, MAX_COUNTER
-        )
-        status = _REPEATED
-    elif delta == 1:
-        status = _taken(st, counter, delta, _OK)
-    elif delta <= st.max_delta_counter:
-        status = _taken(st, counter, delta, _OKSOMELOST)
-    else:
-        st.no_new_or_repeated_data_counter = 0
-        st.sync_counter = st.config.sync_counter_init
-        if st.sync_counter > 0:
-            st.max_delta_counter = st.config.max_delta_counter_init
-            st.last_valid_counter = counter
-        status = _WRONGSEQUENCE
-    st.status = status
-    return status
 
 
 class E2ESnapshot(NamedTuple):
@@ -260,6 +108,114 @@ class E2ESnapshot(NamedTuple):
     status: int
     sync_counter: int
     no_new_or_repeated_data_counter: int
+
+
+_SETTINGS = tuple(f.name for f in fields(E2EConfig))
+
+
+@structref.register
+class E2EStateType(FieldsStruct):
+    """numba's type of :class:`E2EState`."""
+
+
+class E2EState(structref.StructRefProxy):
+    """The receiver's state of Profile 1 (``E2E_P01CheckStateType``), shared with compiled
+    code.
+
+    Fields (read in compiled code; from Python through :class:`E2EReceiver`):
+    ``last_valid_counter``, ``max_delta_counter``, ``wait_for_first_data``, ``lost_data``
+    (frames lost before the last one taken), ``status`` (:class:`E2EStatus`),
+    ``sync_counter``, ``no_new_or_repeated_data_counter``, then the fields of :class:`E2EConfig`.
+    """
+
+    def __new__(cls, config: E2EConfig) -> "E2EState":
+        settings = (getattr(config, name) for name in _SETTINGS)
+        made: E2EState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
+            cls, 0, 0, True, 0, int(E2EStatus.NONEWDATA), 0, 0, *settings
+        )
+        return made
+
+
+structref.define_proxy(  # type: ignore[no-untyped-call]
+    E2EState, E2EStateType, [*E2ESnapshot._fields, *_SETTINGS]
+)
+
+
+@njit(cache=True)
+def e2e_restart(st: Any) -> None:
+    """Start the receiver afresh (``E2E_P01CheckInit``): the next frame is ``INITIAL``."""
+    st.last_valid_counter = 0
+    st.max_delta_counter = 0
+    st.wait_for_first_data = True
+    st.lost_data = 0
+    st.status = E2EStatus.NONEWDATA
+    st.sync_counter = 0
+    st.no_new_or_repeated_data_counter = 0
+
+
+@njit(cache=True, inline="always")
+def _taken(st: Any, counter: int, delta: int, clean: int) -> int:
+    """A frame taken ``delta`` counts on: ``clean`` (OK or OKSOMELOST) or SYNC while the
+    receiver synchronises."""
+    st.max_delta_counter = st.max_delta_counter_init
+    st.last_valid_counter = counter
+    st.lost_data = delta - 1
+    sync = True
+    if st.no_new_or_repeated_data_counter <= st.max_no_new_or_repeated_data:
+        if st.sync_counter > 0:
+            st.sync_counter -= 1
+        else:
+            sync = False
+    else:
+        st.sync_counter = st.sync_counter_init
+    st.no_new_or_repeated_data_counter = 0
+    return E2EStatus.SYNC if sync else clean
+
+
+@njit(cache=True)
+def e2e_check(st: Any, new_data: bool, crc_ok: bool, counter: int) -> int:
+    """One receive cycle of ``E2E_P01Check`` on the receiver's state ``st`` (updated in
+    place): its :class:`E2EStatus` code (also kept in ``st.status``), or :data:`INPUT_ERROR`
+    for a ``counter`` outside 0 to :data:`MAX_COUNTER`. ``new_data``: whether a frame came
+    this cycle (else ``crc_ok``, whether its CRC is right, and ``counter`` are unread)."""
+    st.max_delta_counter = min(st.max_delta_counter + 1, MAX_COUNTER)
+    if not new_data:
+        st.no_new_or_repeated_data_counter = min(
+            st.no_new_or_repeated_data_counter + 1, MAX_COUNTER
+        )
+        st.status = E2EStatus.NONEWDATA
+        return E2EStatus.NONEWDATA
+    if counter < 0 or counter > MAX_COUNTER:
+        return INPUT_ERROR
+    if not crc_ok:
+        st.status = E2EStatus.WRONGCRC
+        return E2EStatus.WRONGCRC
+    if st.wait_for_first_data:
+        st.wait_for_first_data = False
+        st.max_delta_counter = st.max_delta_counter_init
+        st.last_valid_counter = counter
+        st.status = E2EStatus.INITIAL
+        return E2EStatus.INITIAL
+    delta = (counter - st.last_valid_counter) % (MAX_COUNTER + 1)
+    status: int
+    if delta == 0:
+        st.no_new_or_repeated_data_counter = min(
+            st.no_new_or_repeated_data_counter + 1, MAX_COUNTER
+        )
+        status = E2EStatus.REPEATED
+    elif delta == 1:
+        status = _taken(st, counter, delta, E2EStatus.OK)
+    elif delta <= st.max_delta_counter:
+        status = _taken(st, counter, delta, E2EStatus.OKSOMELOST)
+    else:
+        st.no_new_or_repeated_data_counter = 0
+        st.sync_counter = st.sync_counter_init
+        if st.sync_counter > 0:
+            st.max_delta_counter = st.max_delta_counter_init
+            st.last_valid_counter = counter
+        status = E2EStatus.WRONGSEQUENCE
+    st.status = status
+    return status
 
 
 @njit(cache=True)

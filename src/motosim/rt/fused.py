@@ -4,37 +4,22 @@
 reads the waiting frames' raw bytes from the socket, makes one call of :func:`fused_period`
 (compiled with numba, on arrays allocated before the first deadline) and sends the command
 frame's bytes that the call wrote. The call does, in order, what each period of the runner
-does (see :mod:`motosim.rt.run`):
-
-1. :func:`take_frames`: each frame read (a python-can ``udp_multicast`` datagram read by
-   :func:`~motosim.io.can.unpack_frame`, or a frame's id, length and bytes), the status frames
-   decoded (:func:`~motosim.io.can.decode_frame`) and checked by the safety stage, the E-stop
-   frames too;
-2. :func:`begin`: the first period's time, the ``NO_DRIVE`` timeout, the start on the first
-   valid status frame, an arm request;
-3. the stack (:func:`~motosim.rt.stack.stack_reset` on the start,
-   :func:`~motosim.rt.stack.stack_period`);
-4. :func:`finish`: the virtual motorcycle's range (a fall, a speed outside the model's: the
-   torque fades out and the run ends, as offline, as it does after the run's duration),
-   the safety stage
-   (:func:`~motosim.rt.safety.safety_step`), the command frame and, in the first period
-   served of every ``heartbeat_every``, the heartbeat frame encoded
-   (:func:`~motosim.io.can.encode_frame`) in place in the bytes to send; the row written into
-   the ring's next slot (its head is advanced by the runner once the time stamps of the
-   send are in the row).
+does (see :mod:`motosim.rt.run`): :func:`take_frames` (the frames read, decoded and checked
+by the safety stage), :func:`begin` (the first deadline, the ``NO_DRIVE`` timeout, the start,
+an arm request), the stack (:func:`~motosim.rt.stack.stack_reset` on the start,
+:func:`~motosim.rt.stack.stack_period`) and :func:`finish` (the virtual motorcycle's range,
+the safety stage, the command and heartbeat frames encoded in place, the row written into the
+ring's next slot; the runner advances the ring's head once the send's time stamps are in it).
 
 The runner holds every argument of :func:`fused_period` in one :class:`PeriodContext` (a
 numba ``structref`` built before the first deadline) and calls :func:`context_period` on it:
 numba unboxes one pointer per call instead of the stack's model and data records and every
-array of :class:`PeriodArrays` (about 20 arrays; the cost of both in ``docs/performance.md``).
-
-On the clock, with a link whose socket compiled code can read, the runner's
-:meth:`~motosim.rt.run.RealtimeRunner.wait_period` calls :func:`context_cycle` instead, which
-also ends the loop's wait and reads the socket before the period: no interpreter between the
-stack's last warm-up and its step. A stack in Python (a test double) is stepped between
-:func:`take_frames` and :func:`begin`, and :func:`finish`: the same compiled functions.
-
-The runner's state is a :class:`RunnerState` (a numba ``structref``, fields by name).
+array of :class:`PeriodArrays` (the cost of both in ``docs/performance.md``). On the clock,
+with a link whose socket compiled code can read, :func:`context_cycle` also ends the loop's
+wait and reads the socket before the period. A stack in Python (a test double) is stepped
+between :func:`take_frames` and :func:`begin`, and :func:`finish`: the same compiled
+functions. The runner's state is a :class:`RunnerState` (a numba ``structref``, fields by
+name).
 """
 
 import math
@@ -54,6 +39,7 @@ from motosim.io.can import RECV_AVAILABLE, decode_frame, encode_frame, recv_data
 from motosim.rt.ring import RingCounter
 from motosim.rt.safety import (
     Fault,
+    FieldsStruct,
     SafetyParams,
     State,
     safety_enable,
@@ -67,46 +53,20 @@ from motosim.rt.safety import (
 from motosim.rt.stack import StackParts, stack_period, stack_reset
 
 __all__ = [
-    "RECV_AVAILABLE",
-    "WARM_MARGIN_NS",
-    "LoopColumn",
-    "PeriodArrays",
-    "PeriodContext",
-    "PeriodEnd",
-    "RunnerCounts",
-    "RunnerSettings",
-    "RunnerState",
-    "SignalPositions",
-    "begin",
-    "context_cycle",
-    "context_period",
-    "context_warm",
-    "context_warm_until",
-    "finish",
-    "fused_period",
-    "monotonic_ns",
-    "runner_counts",
-    "runner_request",
-    "stack_inputs",
-    "stack_warm",
-    "take_frames",
-]
+    "RECV_AVAILABLE", "WARM_MARGIN_NS", "LoopColumn", "PeriodArrays", "PeriodContext",
+    "PeriodEnd", "RunnerCounts", "RunnerSettings", "RunnerState", "SignalPositions", "begin",
+    "context_cycle", "context_period", "context_warm", "context_warm_until", "finish",
+    "fused_period", "monotonic_ns", "runner_counts", "runner_request", "stack_inputs",
+    "stack_warm", "take_frames",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Ints = NDArray[np.int64]
 
 
-class _Struct(types.StructRef):
-    """A numba ``structref`` type whose fields' types are taken without literal values."""
-
-    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
-        """The fields' types without literal values."""
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
-
-
 @structref.register
-class RunnerStateType(_Struct):
+class RunnerStateType(FieldsStruct):
     """numba's type of :class:`RunnerState`."""
 
 
@@ -317,8 +277,8 @@ class LoopColumn(IntEnum):
 @njit(cache=True)
 def monotonic_ns() -> int:
     """The machine's monotonic clock [ns], read from compiled code (the clock of
-    ``time.monotonic``: one ``clock_gettime`` call, about 20-40 ns, no interpreter); -1 where
-    the C library has none (Windows).
+    ``time.monotonic``: one ``clock_gettime`` call, no interpreter); -1 where the C library
+    has none (Windows).
 
     Examples
     --------
@@ -627,9 +587,8 @@ def stack_warm(
     fresh: bool, scale: float,
 ) -> None:  # fmt: skip
     """One stack period on ``shadow``, a copy of ``stack``'s data and state made now, whose
-    result is thrown away: the stack's code and data are then in the CPU's caches for the
-    next period's real step. ``fresh`` and ``scale`` are computed as the period computes
-    them (constants would be typed apart and compile another copy of the step)."""
+    result is thrown away: the stack's code and data are then in the CPU's caches. ``fresh``
+    and ``scale`` are the period's (constants would compile another copy of the step)."""
     data, copy = stack.data, shadow.data
     copy.estimator[:] = data.estimator
     copy.differentiator[:] = data.differentiator
@@ -644,7 +603,7 @@ def stack_warm(
 
 
 @structref.register
-class PeriodContextType(_Struct):
+class PeriodContextType(FieldsStruct):
     """numba's type of :class:`PeriodContext` (one per set of field types)."""
 
 
@@ -694,14 +653,10 @@ def context_warm_until(c: Any, due_ns: int) -> int:
     [ns]; the number of warm-ups run (0 before the stack has started), also kept in the
     runner's ``warm_ups``.
 
-    The spin phase of the loop's wait, spent keeping the stack hot: one warm-up always, then
-    another as long as it should end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's
-    time taken as the next's), so that the last one ends 2-4 us before the deadline (the
-    return to the interpreter and its last clock reads fit in the margin: the wake-up is not
-    delayed). Each warm-up steps a fresh copy of the stack's state: the stack itself is not
-    changed. A time already past (or no clock: :func:`monotonic_ns` -1) gives one warm-up.
-    The loop calls it through :func:`context_period` (its ``warm_until``), so that the
-    warm-ups run the very machine code of the step that follows.
+    The spin phase of the loop's wait: one warm-up always, then another as long as it should
+    end ``WARM_MARGIN_NS`` before ``due_ns`` (the last one's time taken as the next's), so
+    that the return to the interpreter fits before the deadline. A time already past (or no
+    clock: :func:`monotonic_ns` -1) gives one warm-up.
     """
     r = c.arrays.runner
     n = 0
@@ -727,11 +682,9 @@ def context_period(
     (:func:`context_warm_until`, ``warm_until`` [ns] on :func:`monotonic_ns`'s clock; their
     number in the runner's ``warm_ups``; a :class:`PeriodEnd` that does not go on).
 
-    Why both in one function: numba compiles, into each function called from Python, its own
-    copy of every compiled function it calls (the stack's step included); warm-ups called
-    through another function would warm another copy of the step's machine code (other
-    addresses in the instruction cache and the branch predictors) and only the data the step
-    shares. Through this one, the warm-ups and the period run the same copy.
+    Both in one function because numba compiles into each function called from Python its own
+    copy of every compiled function it calls: through this one, the warm-ups and the period
+    run the same copy of the step's machine code.
     """
     if warm_until >= 0:
         context_warm_until(c, warm_until)
@@ -745,13 +698,11 @@ def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, b
     of the datagrams waiting on socket ``fd`` at the deadline ``t`` [s] of period ``k`` (on
     the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
 
-    In order, without returning to the interpreter: the stack's warm-ups until about 2 us
-    before ``t`` (:func:`context_warm_until`), a spin on the clock until ``t`` has passed
-    (the test of :meth:`motosim.rt.clock.MonotonicClock.sleep_until`, on the same ``float``
-    seconds), the wake-up (the :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read
-    (:func:`~motosim.io.can.recv_datagrams`), the period. The caller sleeps until shortly
-    before ``t`` and sends the frames after. A ``t`` already past (a simulated clock's)
-    neither waits nor warms more than once.
+    In order, without returning to the interpreter: the stack's warm-ups
+    (:func:`context_warm_until`), a spin on the clock until ``t`` has passed (the test of
+    :meth:`motosim.rt.clock.MonotonicClock.sleep_until`), the wake-up (the
+    :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read, the period. The caller sleeps
+    until shortly before ``t`` and sends the frames after.
     """
     context_warm_until(c, max(0, int(t * 1e9)))
     woke = monotonic_ns() / 1e9

@@ -97,18 +97,13 @@ def _check_estimator(sc: Scenario) -> None:
 class Lockstep:
     """The run ``inputs`` against the virtual rig, in lock-step on a simulated clock.
 
-    Builds the compiled stack of the run (:func:`~motosim.sim.build_stack`), accounting for
-    status frames ``delay`` old (:func:`~motosim.sim.stack.account_for_delay`); the
-    virtual rig of its true handlebar with the scenario's rider from the rig's t = 0: its
-    torque profile, or its virtual rider (:class:`~motosim.rt.rig.VirtualRider`) steering
-    by the stack's rows, which the runner publishes over UDP on localhost, and its hands
-    and hands-off phases (:mod:`motosim.sim.hands`) as :func:`~motosim.sim.build_rig`
-    holds them; the runner
-    (:class:`~motosim.rt.run.RealtimeRunner`) with ``limits``, stamping its rows on the
-    simulated clock; the two ends of the virtual bus ``channel``; and the clock, whose
-    first deadline is at t = 0 and which advances the rig to each deadline before the
-    loop's period. Unlike ``motosim run``, the runner has no frozen-sensor monitor (no
-    handlebar given) and goes on outside the model's range unless ``validity`` is given.
+    The compiled stack of the run, accounting for status frames ``delay`` old; the virtual
+    rig of its true handlebar with the scenario's rider from the rig's t = 0 (its torque
+    profile, or its :class:`~motosim.rt.rig.VirtualRider` steering by the stack's rows, sent
+    over UDP on localhost; its hands as :func:`~motosim.sim.build_rig` holds them); the
+    runner, stamping its rows on the simulated clock, whose first deadline is at t = 0.
+    Unlike ``motosim run``, the runner has no frozen-sensor monitor (no handlebar given) and
+    goes on outside the model's range unless ``validity`` is given.
 
     Parameters
     ----------

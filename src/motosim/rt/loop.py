@@ -94,22 +94,10 @@ def timing_stats(
         nan = float("nan")
         return TimingStats(rate, periods, 0, missed, *(nan,) * 8, gaps=gaps)
     qs = (50.0, 99.0, 99.9)
-    w = np.percentile(wake, qs)
-    c = np.percentile(compute, qs)
+    w = [float(x) for x in (*np.percentile(wake, qs), wake.max())]
+    c = [float(x) for x in (*np.percentile(compute, qs), compute.max())]
     return TimingStats(
-        rate=rate,
-        periods=periods,
-        served=int(wake.size),
-        missed=missed,
-        wake_p50=float(w[0]),
-        wake_p99=float(w[1]),
-        wake_p999=float(w[2]),
-        wake_max=float(wake.max()),
-        compute_p50=float(c[0]),
-        compute_p99=float(c[1]),
-        compute_p999=float(c[2]),
-        compute_max=float(compute.max()),
-        gaps=gaps,
+        rate, periods, int(wake.size), missed, w[0], w[1], w[2], w[3], c[0], c[1], c[2], c[3], gaps
     )
 
 
@@ -186,32 +174,15 @@ class RateLoop:
         self._warm = warm
         self._woke = woke
 
-    @property
-    def period(self) -> float:
-        """The period [s]."""
-        return self._period
-
     def stop(self) -> None:
         """Ask the loop to end after the current step (safe from a signal handler)."""
         self._stop = True
 
     def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
-        """Call ``step(k, deadline)`` at each deadline until it returns False or ``periods`` pass.
-
-        Parameters
-        ----------
-        step : callable
-            ``step(k, deadline) -> bool``: ``k`` is the deadline's index (0, 1, ...; skipped
-            indices are not called), ``deadline`` its time [s] on the clock; False ends the
-            loop.
-        periods : int
-            The largest number of deadlines, >= 0; the first is one period from now.
-
-        Returns
-        -------
-        int
-            The number of steps run.
-        """
+        """Call ``step(k, deadline)`` at each deadline until it returns False or ``periods``
+        (>= 0) pass; the number of steps run. ``k`` is the deadline's index (0, 1, ...;
+        skipped indices are not called), ``deadline`` its time [s] on the clock, the first
+        one period from now."""
         _check_periods(periods)
         clock = self._clock
         now = clock.now
@@ -360,13 +331,8 @@ class FramePacedLoop(RateLoop):
         return self._timeouts
 
     def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
-        """Call ``step(k, t)`` once per frame until it returns False or ``periods`` pass.
-
-        Returns
-        -------
-        int
-            The number of steps run.
-        """
+        """Call ``step(k, t)`` once per frame until it returns False or ``periods`` pass;
+        the number of steps run."""
         _check_periods(periods)
         now = self._clock.now
         wait = self._wait

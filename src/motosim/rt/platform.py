@@ -16,7 +16,7 @@ stack's row (``v_x``, ``v_y``, ``psi_dot``, ``phi``) and runs one compiled step
    alone would ask for 40 deg/s), and the return to neutral after a fault is a braked,
    rate-limited one rather than a jump.
 
-The MPC cueing is not run here: its step (about 1 ms) does not fit a 1 kHz period.
+The MPC cueing is not run here: its step does not fit a 1 kHz period.
 
 Every ``send_every`` periods one command goes to the platform: a datagram of
 :data:`PLATFORM_FRAME` (:class:`PlatformSender`, a non-blocking UDP socket) or a
@@ -67,25 +67,14 @@ from motosim.cueing.limits import design_limits, limit_step
 from motosim.cueing.platform import CueingConfig, Platform
 from motosim.cueing.washout import WASHOUT_STATE_SIZE, design_washout, washout_step
 from motosim.errors import MotosimError
-from motosim.io.can import PlatformCodecs
+from motosim.io.can import Link, PlatformCodecs
 from motosim.rt.safety import MAX_COUNTER_STEP, State
 
 __all__ = [
-    "PLATFORM_FRAME",
-    "PLATFORM_MAGIC",
-    "PLATFORM_VERSION",
-    "PlatformCanSender",
-    "PlatformCueing",
-    "PlatformFrame",
-    "PlatformLink",
-    "PlatformOutput",
-    "PlatformSender",
-    "PlatformTee",
-    "PlatformTwin",
-    "decode_platform",
-    "encode_platform",
-    "platform_step",
-]
+    "PLATFORM_FRAME", "PLATFORM_MAGIC", "PLATFORM_VERSION", "PlatformCanSender", "PlatformCueing",
+    "PlatformFrame", "PlatformLink", "PlatformOutput", "PlatformSender", "PlatformTee",
+    "PlatformTwin", "decode_platform", "encode_platform", "platform_step",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 
@@ -98,25 +87,8 @@ _LIVE = (State.FADE_IN, State.RUNNING, State.STOPPING)
 
 @dataclass(frozen=True, slots=True)
 class PlatformFrame:
-    """One decoded platform datagram (fields of the module docstring's table).
-
-    Attributes
-    ----------
-    sequence : int
-        Datagram counter.
-    t : float
-        Time since the first period [s].
-    state, fault : int
-        Safety stage state and fault codes.
-    live : bool
-        Whether the platform may move.
-    angles : tuple of float
-        Roll, pitch, yaw commands [rad].
-    rates : tuple of float
-        Their rates [rad/s].
-    horizon : float
-        Visual-horizon roll [rad].
-    """
+    """One decoded platform datagram (the fields of the module docstring's table; ``live``
+    the flag, ``angles`` roll, pitch, yaw [rad], ``rates`` theirs [rad/s])."""
 
     sequence: int
     t: float
@@ -131,20 +103,8 @@ class PlatformFrame:
 def encode_platform(
     sequence: int, t: float, state: int, fault: int, live: bool, values: Array
 ) -> bytes:
-    """Pack one datagram.
-
-    Parameters
-    ----------
-    sequence : int
-        Datagram counter (taken modulo 2^32).
-    t : float
-        Time [s].
-    state, fault : int
-        Safety stage codes (0..255).
-    live : bool
-        Whether the platform may move.
-    values : ndarray, shape (7,)
-        Roll, pitch, yaw [rad], their rates [rad/s] and the horizon roll [rad].
+    """Pack one datagram (the fields of the module docstring's table; ``sequence`` taken
+    modulo 2^32; ``values`` roll, pitch, yaw [rad], their rates [rad/s], the horizon roll).
 
     Examples
     --------
@@ -182,22 +142,10 @@ def decode_platform(data: bytes) -> PlatformFrame:
 
 
 class PlatformCueing(NamedTuple):
-    """What :func:`platform_step` steps: the cueing's coefficients, its state and scratch.
-
-    Attributes
-    ----------
-    pitch : ndarray, shape (5,)
-        Suspension pitch section (``lowpass2`` of the rider's pitch model).
-    washout : ndarray, shape (26,)
-        :meth:`motosim.cueing.washout.WashoutDesign.coefficients`.
-    limits : ndarray, shape (3, 4)
-        :meth:`motosim.cueing.limits.LimitDesign.coefficients`.
-    state : ndarray, shape (19,)
-        ``[previous v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]``,
-        updated in place; zeros at rest.
-    command : ndarray, shape (4,)
-        The washout's roll, pitch, yaw and horizon command, written each period.
-    """
+    """What :func:`platform_step` steps: the suspension pitch section (``lowpass2`` of the
+    rider's pitch model), the washout's and the limits' coefficients, the state ``[previous
+    v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]`` (zeros at rest,
+    updated in place) and the washout's roll, pitch, yaw and horizon command (scratch)."""
 
     pitch: Array
     washout: Array
@@ -208,31 +156,13 @@ class PlatformCueing(NamedTuple):
 
 @njit(cache=True)
 def platform_step(
-    cueing: PlatformCueing,
-    v_x: float,
-    v_y: float,
-    psi_dot: float,
-    phi: float,
-    envelope: float,
+    cueing: PlatformCueing, v_x: float, v_y: float, psi_dot: float, phi: float, envelope: float,
     out: Array,
-) -> None:
-    """One period of the platform cueing (module docstring, steps 1 to 4).
-
-    Parameters
-    ----------
-    cueing : PlatformCueing
-        The coefficients, and the state updated in place.
-    v_x, v_y : float
-        Motorcycle forward and lateral speed [m/s].
-    psi_dot : float
-        Yaw rate [rad/s].
-    phi : float
-        Lean [rad].
-    envelope : float
-        The safety stage's envelope in [0, 1].
-    out : ndarray, shape (7,)
-        Written: roll, pitch, yaw [rad], their rates [rad/s], horizon roll [rad].
-    """
+) -> None:  # fmt: skip
+    """One period of the platform cueing (module docstring, steps 1 to 4) from the
+    motorcycle's forward and lateral speed [m/s], yaw rate [rad/s] and lean [rad] and the
+    safety stage's envelope in [0, 1]: ``cueing``'s state updated in place, ``out`` (7)
+    written with roll, pitch, yaw [rad], their rates [rad/s] and the horizon roll [rad]."""
     state, limits, cmd = cueing.state, cueing.limits, cueing.command
     dt = limits[0, 3]
     a_x = (v_x - state[0]) / dt - v_y * psi_dot if state[1] > 0.0 else 0.0
@@ -290,22 +220,18 @@ class PlatformSender:
         self._socket.close()
 
 
-class _FrameSender(Protocol):
-    def send(self, frame_id: int, data: bytes) -> bool: ...
-
-
 class PlatformCanSender:
     """Send platform commands as ``PF_COMMAND`` frames on a CAN link (the run's bus).
 
     Parameters
     ----------
-    link : object with ``send(frame_id, data) -> bool``
+    link : Link
         The link the run uses (:func:`motosim.io.can.open_link`); not closed by :meth:`close`.
     codecs : PlatformCodecs
         From :func:`motosim.io.can.platform_codecs`.
     """
 
-    def __init__(self, link: _FrameSender, codecs: PlatformCodecs) -> None:
+    def __init__(self, link: Link, codecs: PlatformCodecs) -> None:
         self._link = link
         self.codecs = codecs
         self._values = np.zeros(len(codecs.command.names))
@@ -404,24 +330,9 @@ class PlatformOutput:
 
     def step(self, k: int, t: float, row: Array | None, state: State, fault: int,
              envelope: float) -> None:  # fmt: skip
-        """One period: the cueing from the stack row (or neutral without one) and, every
-        ``send_every`` periods, a datagram.
-
-        Parameters
-        ----------
-        k : int
-            Period index.
-        t : float
-            Time since the first period [s].
-        row : ndarray or None
-            The stack's row this period (None before the drive's first status frame).
-        state : State
-            The safety stage's state.
-        fault : int
-            Its fault code.
-        envelope : float
-            Its envelope in [0, 1].
-        """
+        """Period ``k`` at ``t`` [s] since the first: the cueing from the stack's ``row``
+        (neutral without one: before the drive's first status frame) and the safety stage's
+        ``state``, ``fault`` and ``envelope``; every ``send_every`` periods, a command."""
         if row is None:
             v_x = v_y = psi_dot = phi = 0.0
             envelope = 0.0

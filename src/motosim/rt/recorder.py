@@ -24,7 +24,7 @@ a later layer provides).
 import enum
 import threading
 from collections.abc import Callable
-from contextlib import ExitStack
+from contextlib import ExitStack, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple, Protocol
@@ -35,17 +35,9 @@ from numpy.typing import NDArray
 from motosim.errors import MotosimError, RunFailedError
 
 __all__ = [
-    "Close",
-    "Control",
-    "Done",
-    "Failed",
-    "LiveSink",
-    "Ready",
-    "Recorder",
-    "RecorderSettings",
-    "Release",
-    "recorder_main",
-]
+    "Close", "Control", "Done", "Failed", "LiveSink", "Ready", "Recorder", "RecorderSettings",
+    "Release", "recorder_main",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 
@@ -121,31 +113,13 @@ class LiveSink(Protocol):
 
 @dataclass(frozen=True)
 class RecorderSettings:
-    """What the recorder process needs (picklable).
-
-    Attributes
-    ----------
-    ring : object
-        The shared ring's handle (:attr:`motosim.rt.ring.SampleRing.handle`).
-    names : tuple of str
-        The ring's columns (:attr:`motosim.rt.run.RealtimeRunner.names`).
-    folder : Path
-        The result folder.
-    metadata : dict
-        The result's metadata.
-    overwrite : bool
-        Replace a complete result already in the folder.
-    torque_per_amp : float
-        The handlebar's motor torque per ampere [N*m/A], for the result's motor torque.
-    rate : float
-        The control rate [Hz] (the state stream's pace).
-    telemetry : (str, int) or None
-        Where to publish the state stream; None: nowhere.
-    live : LiveSink or None
-        The live view to feed every 5 ms; None: no view.
-    controls : Connection or None
-        With ``live``: the sending end of the pipe its buttons go to.
-    """
+    """What the recorder process needs (picklable): the shared ring's handle
+    (:attr:`motosim.rt.ring.SampleRing.handle`) and columns
+    (:attr:`motosim.rt.run.RealtimeRunner.names`); the result's folder, metadata and
+    ``overwrite`` (:class:`~motosim.rt.session.SessionConfig`'s); the handlebar's motor torque
+    per ampere [N*m/A] (the result's motor torque); the control rate [Hz] (the state
+    stream's pace); where to publish the state stream (None: nowhere); the live view to feed
+    every 5 ms (None: none) and, with it, the sending end of the pipe its buttons go to."""
 
     ring: Any
     names: tuple[str, ...]
@@ -196,10 +170,8 @@ class Recorder:
 
     def close(self, complete: bool, extra: dict[str, Any]) -> Done:
         """Ask the recorder to close the result; its :class:`Done`."""
-        try:
+        with suppress(OSError):  # it has ended (a write failed): its answer is read below
             self._conn.send(Close(complete, extra))
-        except OSError:  # it has ended (a write failed): its answer is read below
-            pass
         answer = self._answer(Done, "finish")
         assert isinstance(answer, Done)
         self._closed = True
@@ -210,10 +182,8 @@ class Recorder:
         end of the pipe closes the result partial), then join it; killed if it has not ended
         within 10 s."""
         if self._closed:
-            try:
+            with suppress(OSError):  # it has ended
                 self._conn.send(Release())
-            except OSError:  # it has ended
-                pass
         self._conn.close()
         if self._process.pid is None:  # never started
             return
@@ -256,10 +226,8 @@ def recorder_main(conn: Any, settings: RecorderSettings) -> None:
             conn.send(Failed(str(err)))
             return
         if _record(conn, settings, lock):
-            try:
+            with suppress(EOFError, OSError):
                 conn.recv()  # Release: the loop has written its files, or has ended
-            except (EOFError, OSError):
-                pass
 
 
 class _Drain:

@@ -42,6 +42,7 @@ from motosim.model.handlebar import step_exact
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import SimulatedClock
+from motosim.rt.config import table_number
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
@@ -172,19 +173,9 @@ def parse_rig(
             raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
         if key == "faults":
             values[key] = _parse_faults(value, f"{where[:-1]}.faults]")
-        elif key == "encoder_bits":
-            if not isinstance(value, int) or isinstance(value, bool):
-                raise MotosimError(f"{where} {key} = {value!r}: expected an integer")
-            values[key] = value
         else:
-            values[key] = _number(value, f"{where} {key}")
+            values[key] = table_number(key, value, where, key == "encoder_bits")
     return RigSettings(**values)
-
-
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise MotosimError(f"{where} = {value!r}: expected a number")
-    return float(value)
 
 
 def _parse_faults(table: Any, where: str) -> RigFaults:
@@ -194,7 +185,7 @@ def _parse_faults(table: Any, where: str) -> RigFaults:
     for key in table:
         if key not in allowed:
             raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
-    return RigFaults(**{key: _number(value, f"{where} {key}") for key, value in table.items()})
+    return RigFaults(**{key: table_number(key, value, where) for key, value in table.items()})
 
 
 class Bar(IntEnum):
@@ -363,7 +354,6 @@ class VirtualRig:
         self._seq = 0
         self._last_due: dict[int, float] = {}
         self._counter = 0
-        self._estop_counter = 0
         self._previous: bytes | None = None
         self._burst = False
         self._frozen = math.nan
@@ -391,9 +381,8 @@ class VirtualRig:
         """Where the status and command frames' signals sit in their decoded values."""
         st = codecs.status
         self._values = np.zeros(len(st.names))
-        self._p = {part: codecs.position(st, part) for part in ("angle", "current", "enabled")}
-        self._p["counter"] = codecs.position(st, "counter")
-        self._p["drive_fault"] = codecs.position(st, "drive_fault")
+        parts = ("angle", "current", "enabled", "counter", "drive_fault")
+        self._p = {part: codecs.position(st, part) for part in parts}
         self._command = np.zeros(len(codecs.command.names))
         self._c_current = codecs.position(codecs.command, "current_command")
         self._c_enable = codecs.position(codecs.command, "enable")
@@ -466,8 +455,7 @@ class VirtualRig:
             if self._let_go and (not self.enabled or silent > _RUN_GONE):
                 self._k_rider = -1  # the run has ended: the rider lets go
             # up to the next status sample, not beyond t: a command received by then is
-            # carried from then, as a drive does (a plant run ahead to the next status sample
-            # carried it only from there: a command delay of up to a status period)
+            # carried from then, as a drive does
             n = min(self._sub - self.k % self._sub, max(1, math.ceil(t / self.h - self.k - 1e-9)))
             rider, k0 = self.rider_torque, self.k - self._k_rider
             t_rider = k0 * self.h
@@ -576,12 +564,10 @@ class VirtualRider:
     """The scenario's virtual rider at the rig, steering by the state that ``run`` publishes.
 
     The rider of :func:`motosim.sim.rider.rider_torque` (the same path, gains and limits as
-    offline, from :func:`motosim.sim.build_rig`) looks at the virtual motorcycle's states in
-    the newest datagram of the run's state stream (:mod:`motosim.rt.telemetry`); before the
-    first one it holds 0 N*m. The scenario's probe (``[rider] probe``, ``world.rider_probe``)
-    is added at the time it is asked for, as offline; the rig asks once per status frame,
-    so at status frames slower than the control rate the probe is held over a frame period
-    where offline it changes every control period.
+    offline) looks at the virtual motorcycle's states in the newest datagram of the run's
+    state stream (:mod:`motosim.rt.telemetry`); before the first one it holds 0 N*m. The
+    scenario's probe (``world.rider_probe``) is added at the time it is asked for, once per
+    status frame (held over a frame period where offline it changes every control period).
 
     Parameters
     ----------
@@ -618,8 +604,11 @@ class VirtualRider:
         self._k_path = 0
         self.torque = 0.0
         self.lateral_error = 0.0
-        self._steer(world.path[0, 0], world.path[1, 0], world.path[2, 0])  # compiled now,
-        # not on the run's first state row (a stall of the rig's frames at the run's start)
+        path = world.path  # the compiled rider loaded now, not on the run's first state row
+        # (a stall of the rig's frames at the run's start); nothing kept
+        self._torque(
+            np.zeros(8), float(world.rider_speeds[0]), path[2, 0], path[0, 0], path[1, 0], 0
+        )
 
     @staticmethod
     def check(world: RigModel) -> None:
@@ -640,63 +629,42 @@ class VirtualRider:
             )
 
     def __call__(self, t: float) -> float:
-        """The rider's torque at a time of the rig.
-
-        Parameters
-        ----------
-        t : float
-            The time since the rider took the handlebar [s].
-
-        Returns
-        -------
-        float
-            The rider's torque [N*m]: the path's, from the newest state row, plus the probe's
-            at ``t``.
-        """
+        """The rider's torque [N*m] ``t`` [s] after the rider took the handlebar: the path's,
+        from the newest state row, plus the probe's at ``t``."""
         if self.receiver.poll():
-            row, at, w = self.receiver.row, self._at, self.world
+            row, at = self.receiver.row, self._at
             for i, state_at in enumerate(self._states_at):
                 self._x_v[i] = row[state_at]
-            tau, self._k_path, self.lateral_error = rider_torque(
-                self._x_v, row[at["v_x"]], row[at["psi"]], row[at["x"]], row[at["y"]],
-                self._k_path, w.path,
-                w.path_ds, w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss,
-                w.rider_limits[0], w.rider_limits[1],
-            )  # fmt: skip
+            tau, self._k_path, self.lateral_error = self._torque(
+                self._x_v, row[at["v_x"]], row[at["psi"]], row[at["x"]], row[at["y"]], self._k_path
+            )
             self.torque = float(tau)
         probe = self.world.rider_probe
         k = max(math.floor(t * self.rate + 1e-9), 0)
         return self.torque + (float(probe[k]) if k < probe.size else 0.0)
 
-    def _steer(self, x: float, y: float, psi: float) -> float:
-        """The rider's torque [N*m] upright on the path at ``x``, ``y`` [m], heading ``psi``
-        [rad], at the schedule's first speed; nothing kept (the compiled rider loaded)."""
+    def _torque(
+        self, x_v: Array, v_x: float, psi: float, x: float, y: float, k_path: int
+    ) -> tuple[float, int, float]:
+        """:func:`~motosim.sim.rider.rider_torque` of the scenario's rider at the states
+        ``x_v``, speed ``v_x`` [m/s], heading ``psi`` [rad] and place ``x``, ``y`` [m], from
+        the path's point ``k_path`` on: the torque [N*m], the next point, the lateral error."""
         w = self.world
-        tau, _, _ = rider_torque(
-            np.zeros(8), float(w.rider_speeds[0]), psi, x, y, 0, w.path, w.path_ds,
-            w.rider_speeds, w.rider_K, w.rider_x_ss, w.rider_tau_ss, w.rider_limits[0],
-            w.rider_limits[1],
+        return rider_torque(
+            x_v, v_x, psi, x, y, k_path, w.path, w.path_ds, w.rider_speeds, w.rider_K,
+            w.rider_x_ss, w.rider_tau_ss, w.rider_limits[0], w.rider_limits[1],
         )  # fmt: skip
-        return float(tau)
 
 
 class LockstepLink(Link):
     """A link whose blocking receive lets simulated time pass (bus pacing in lock-step).
 
-    ``receive(timeout)`` with a positive ``timeout`` polls ``link`` and, while nothing has
-    come, advances ``clock`` by ``tick`` [s] at a time (a rig listening on the clock runs and
-    sends meanwhile) until a frame comes or ``timeout`` has passed: what a blocking receive
-    on a real bus does, deterministically. ``send`` and a zero-timeout ``receive`` go
-    straight to ``link``.
-
-    Parameters
-    ----------
-    link : Link
-        The host's end of the bus.
-    clock : SimulatedClock
-        The clock the rig listens on.
-    tick : float
-        The time step of the wait [s], > 0 (the rig's plant step: frames are due on it).
+    ``receive(timeout)`` with a positive ``timeout`` polls ``link`` (the host's end of the
+    bus) and, while nothing has come, advances ``clock`` (the one the rig listens on: the rig
+    runs and sends meanwhile) by ``tick`` [s] > 0 at a time (the rig's plant step: frames are
+    due on it) until a frame comes or ``timeout`` has passed: what a blocking receive on a
+    real bus does, deterministically. ``send`` and a zero-timeout ``receive`` go straight to
+    ``link``.
     """
 
     def __init__(self, link: Link, clock: SimulatedClock, tick: float) -> None:

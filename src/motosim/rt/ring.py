@@ -106,11 +106,6 @@ class SampleRing:
         return self._dropped
 
     @property
-    def written(self) -> int:
-        """Rows pushed so far."""
-        return int(self._counters[RingCounter.written])
-
-    @property
     def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """The rows and the counters (rows written, rows read), for a producer that writes a
         row in place (the fused period of :mod:`motosim.rt.fused`): it writes the slot

@@ -48,13 +48,8 @@ if TYPE_CHECKING:
     from motosim.rt.platform import PlatformOutput
 
 __all__ = [
-    "LOOP_SIGNALS",
-    "RealtimeRunner",
-    "RunCounters",
-    "RunSettings",
-    "StackStepper",
-    "profile_stats",
-]
+    "LOOP_SIGNALS", "RealtimeRunner", "RunCounters", "RunSettings", "StackStepper", "profile_stats",
+]  # fmt: skip
 
 Array = NDArray[np.float64]
 
@@ -144,10 +139,9 @@ class RunSettings:
         The control rate [Hz], > 0.
     duration : float, optional
         The run's duration [s], >= 0: after its last period the torque fades out (as on a
-        stop request) and :meth:`RealtimeRunner.period` returns False once it is off, all in
-        one run of the loop (give it :attr:`RealtimeRunner.max_periods`);
-        :attr:`RealtimeRunner.reached_end` says whether it got there. Without it the run
-        goes on until a stop request, a fault or the loop's end.
+        stop request) and :meth:`RealtimeRunner.period` returns False once it is off, in one
+        run of the loop of :attr:`RealtimeRunner.max_periods`. Without it the run goes on
+        until a stop request, a fault or the loop's end.
     linger : float
         How long the zero command is still sent after a fault before the run ends [s], >= 0.
     periods_per_frame : int
@@ -165,9 +159,9 @@ class RunSettings:
         :meth:`RealtimeRunner.arm` is called (the view's Arm button); the loop runs and
         records meanwhile.
     warm : bool
-        Warm the stack before each deadline (:meth:`RealtimeRunner.warm`, and the compiled
-        wait of :meth:`RealtimeRunner.wait_period`): True by default; False, the wait only
-        spins (``motosim run --warm off``). The rows are the same either way.
+        Warm the stack before each deadline (:meth:`RealtimeRunner.warm`, and in
+        :meth:`RealtimeRunner.wait_period`); False: the wait only spins. The rows are the
+        same either way.
     handlebar : HandlebarParameters, optional
         The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
     validity : tuple of float, optional
@@ -268,7 +262,7 @@ class RealtimeRunner:
         self._validity = settings.validity
         self._duration = -1 if settings.duration is None else round(settings.duration * rate)
         roll, speed_low, speed_high = settings.validity or _ANY_RANGE
-        compiled_settings = fused.RunnerSettings(
+        self._settings = fused.RunnerSettings(
             linger=max(1, round(settings.linger * rate)),
             start_timeout=max(1, round(settings.start_timeout * rate)),
             heartbeat_every=max(1, round(0.1 * rate)), dt=self.dt, duration=self._duration,
@@ -276,10 +270,9 @@ class RealtimeRunner:
             speed_high=speed_high, datagrams=link.datagrams,
             armed=not settings.wait_for_arm, warm=settings.warm,
         )  # fmt: skip
-        self._settings = compiled_settings
         self._warm_on = settings.warm
         self._woke = math.nan
-        self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(compiled_settings))
+        self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(self._settings))
         self._r = self._arrays.runner
         self._views = [memoryview(row) for row in self._arrays.rx]
         self._bad_reported = 0
@@ -355,23 +348,16 @@ class RealtimeRunner:
 
     def warm(self, until: float | None = None) -> None:
         """Bring the stack's code and data into the CPU's caches for the next period: stack
-        steps on a copy of its state, thrown away (a fused runner only; nothing changes).
+        steps on a copy of its state, thrown away (a fused runner only; nothing changes),
+        one after the other in one compiled call (:func:`~motosim.rt.fused.context_period`'s
+        ``warm_until``) until ``until`` on ``time.monotonic``'s clock [s] (None, or a time
+        already past: one warm-up).
 
-        The loop calls it in the spin phase of its wait, ``WARM_LEAD`` before each deadline
-        (:meth:`~motosim.rt.loop.RateLoop.run`'s ``warm``), with the deadline: between two
-        periods the interpreter's wait and the system calls evict the stack from the caches,
-        and its step would run several times slower than in a compiled loop. The warm-ups
-        run are counted in :attr:`warm_ups` (none before the stack has started, for a stack
-        in Python, or with the warm-ups off: :attr:`warms`).
-
-        Parameters
-        ----------
-        until : float, optional
-            Keep warming, one copy of the stack's step after the other in one compiled call
-            (:func:`~motosim.rt.fused.context_period`'s ``warm_until``: the period's own
-            machine code), until this time on ``time.monotonic``'s clock [s]: the last
-            warm-up then ends within about one step's time of it. None, or a time already
-            past (a simulated clock's): one warm-up.
+        The loop calls it ``WARM_LEAD`` before each deadline, with the deadline
+        (:meth:`~motosim.rt.loop.RateLoop.run`'s ``warm``): between two periods the
+        interpreter's wait and the system calls evict the stack from the caches. The
+        warm-ups are counted in :attr:`warm_ups` (none before the stack has started, for a
+        stack in Python, or with the warm-ups off: :attr:`warms`).
         """
         if self.warms:
             assert self._kernel is not None
@@ -384,20 +370,11 @@ class RealtimeRunner:
         return int(self._counts(self._r).warm_ups)
 
     def compile_wait(self) -> bool:
-        """Make :meth:`wait_period` available: the wait's end, the bus read and the period
-        in one compiled call (:func:`~motosim.rt.fused.context_cycle`, compiled, or loaded
-        from numba's cache, now: before the first deadline).
-
-        Only a runner whose stack is compiled, on a link that gives compiled code its socket
-        (:meth:`~motosim.io.can.Link.compiled_fd`, read by
-        :func:`~motosim.io.can.recv_datagrams`, on Linux), with numba's JIT on; the
-        others keep :meth:`period`, which does the same in Python.
-
-        Returns
-        -------
-        bool
-            Whether :meth:`wait_period` can be used.
-        """
+        """Make :meth:`wait_period` available (:func:`~motosim.rt.fused.context_cycle`
+        compiled, or loaded from numba's cache, now); whether it is. Only a runner whose stack
+        is compiled, on a link that gives compiled code its socket
+        (:meth:`~motosim.io.can.Link.compiled_fd`, on Linux), with numba's JIT on; the others
+        keep :meth:`period`, which does the same in Python."""
         if self._cycle is not None:
             return True
         fd = self.link.compiled_fd() if self._warms else -1
@@ -446,6 +423,11 @@ class RealtimeRunner:
         self._request(self._r, True, False)
         self.safety.request_stop()
 
+    @property
+    def stop_requested(self) -> bool:
+        """Whether :meth:`request_stop` was called."""
+        return bool(self._counts(self._r).stop)
+
     def arm(self) -> None:
         """Start the torque (a fade-in through the safety stage) in the next period.
 
@@ -470,16 +452,6 @@ class RealtimeRunner:
         return float(r.left_t) if r.left else math.nan
 
     @property
-    def stop_requested(self) -> bool:
-        """Whether :meth:`request_stop` was called."""
-        return bool(self._counts(self._r).stop)
-
-    @property
-    def reached_end(self) -> bool:
-        """Whether the run reached its ``duration`` (the torque then fades out)."""
-        return bool(self._counts(self._r).ended)
-
-    @property
     def max_periods(self) -> int:
         """The loop's periods to give a run with a ``duration``: the duration, then ten times
         the most the fade-out needs (the fade, then the slew-rate limit's way down from the
@@ -491,6 +463,11 @@ class RealtimeRunner:
         fade = math.ceil(limits.fade_in / self.dt)
         slew = math.ceil(limits.max_current / (limits.max_slew * self.dt))
         return self._duration + 10 * (fade + slew + 2) + self._settings.linger
+
+    @property
+    def reached_end(self) -> bool:
+        """Whether the run reached its ``duration`` (the torque then fades out)."""
+        return bool(self._counts(self._r).ended)
 
     def emergency_stop(self) -> None:
         """Zero the torque now and latch the keyboard E-stop (safe from a signal handler)."""
@@ -626,15 +603,9 @@ class RealtimeRunner:
             self._bad_reported = bad
         s = self.safety
         return RunCounters(
-            status_frames=self.status_frames,
-            frames_lost=s.frames_lost,
-            frames_stale=s.frames_stale,
-            send_errors=self.send_errors,
-            state=s.state.name,
-            fault=s.fault.name,
-            fault_reason=s.describe(),
-            fault_time=s.fault_time,
-        )
+            self.status_frames, s.frames_lost, s.frames_stale, self.send_errors, s.state.name,
+            s.fault.name, s.describe(), s.fault_time,
+        )  # fmt: skip
 
 
 PROFILE_STAGES = ("read", "control", "send", "rest")

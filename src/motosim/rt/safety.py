@@ -17,17 +17,12 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   (IDLE once the command sent is zero: the slew-rate limit may take longer than the fade);
 - a communication watchdog: no valid status frame for ``watchdog_periods`` periods (the
   loop's deadlines, those it skipped when late included) -> zero command and a latched
-  fault; a status frame is valid when its checksum is right and its
-  alive counter has moved forward, by 1 to 7 of its 16 values (a stale or duplicated frame,
-  or an older one delivered after a newer, does not feed the watchdog and is not used: the
-  counter's window of AUTOSAR's E2E profiles, *Specification of SW-C End-to-End
-  Communication Protection Library*, R4.0; after 7 or more frames lost in a row the counter
-  is taken up again at the second of two frames in a row one count apart, if as many
-  frame periods have passed without a valid frame as the counter went on, within one, so
-  that a ``watchdog_periods`` above 7 frames is kept too; older frames delivered late come
-  without that silence and are not taken up, and a gateway replaying its last three
-  frames trips a watchdog of up to 13 frames: a longer one cannot tell the replay from
-  the drive's counter gone on, a limit of the 4-bit counter);
+  fault; a status frame is valid when its checksum is right and its alive counter has moved
+  forward by 1 to 7 of its 16 values (a stale, duplicated or older frame does not feed the
+  watchdog and is not used: the counter's window of AUTOSAR's E2E profiles,
+  *Specification of SW-C End-to-End Communication Protection Library*, R4.0); after 7 or
+  more frames lost in a row the counter is taken up again as
+  :meth:`SafetyStage.status_frame` says;
 - guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
@@ -124,20 +119,14 @@ def fault_reason(fault: int, *, watchdog_periods: int) -> str:
 
 
 SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
-    "max_current": (0.01, 1000.0, "A"),
-    "max_slew": (0.1, 1e9, "A/s"),
-    "max_speed": (0.01, 1e4, "rad/s"),
-    "speed_band": (0.01, 1e4, "rad/s"),
-    "soft_stop": (0.01, 100.0, "rad"),
-    "hard_stop": (0.01, 100.0, "rad"),
-    "end_stop_gain": (0.0, 1e4, "A/rad"),
-    "hands_off_torque": (0.0, 100.0, "N*m"),
-    "hands_off_time": (0.001, 3600.0, "s"),
-    "hands_off_gain": (0.0, 1.0, ""),
-    "fade_in": (0.001, 60.0, "s"),
-    "watchdog_periods": (1, 10_000, ""),
+    "max_current": (0.01, 1000.0, "A"), "max_slew": (0.1, 1e9, "A/s"),
+    "max_speed": (0.01, 1e4, "rad/s"), "speed_band": (0.01, 1e4, "rad/s"),
+    "soft_stop": (0.01, 100.0, "rad"), "hard_stop": (0.01, 100.0, "rad"),
+    "end_stop_gain": (0.0, 1e4, "A/rad"), "hands_off_torque": (0.0, 100.0, "N*m"),
+    "hands_off_time": (0.001, 3600.0, "s"), "hands_off_gain": (0.0, 1.0, ""),
+    "fade_in": (0.001, 60.0, "s"), "watchdog_periods": (1, 10_000, ""),
     "frozen_angle": (0.001, 10.0, "rad"),
-}
+}  # fmt: skip
 """Admitted interval (low, high, SI unit) of each safety limit. The lower bounds are far
 below any usable limit (10 mA, 0.1 A/s, 10 mrad/s, 1 ms): a smaller positive value is a typo
 or a unit slip and would make the stage trip or stall at once; the upper bounds are far beyond
@@ -212,10 +201,9 @@ MAX_COUNTER_STEP = 7
 frames lost); a larger one is an older frame delivered after a newer."""
 
 # --- the compiled stage ---------------------------------------------------------------
-# The stage's state (a numba structref) and limits (a named tuple) are what compiled code
-# (the fused period of :mod:`motosim.rt.fused`) and :class:`SafetyStage` step with the very
-# same functions, which name the codes of :class:`State` and :class:`Fault` (numba takes the
-# members of a global IntEnum as constants).
+# Its state (a numba structref) and limits (a named tuple) are stepped by the same functions
+# from :class:`SafetyStage` and from the fused period (numba takes an IntEnum's members as
+# constants).
 
 
 _LIMITS = tuple(f.name for f in fields(SafetyLimits) if f.name != "watchdog_periods")
@@ -236,10 +224,7 @@ N k_t [N*m/A], twice its dry friction (the monitor's dead band) [N*m] and beta_e
 
 
 def safety_params(
-    limits: SafetyLimits,
-    dt: float,
-    periods_per_frame: int,
-    handlebar: HandlebarParameters | None,
+    limits: SafetyLimits, dt: float, periods_per_frame: int, handlebar: HandlebarParameters | None
 ) -> Any:
     """The limits, the period [s], the watchdog's periods (``watchdog_periods`` frame
     periods of ``periods_per_frame`` control periods), the control periods per status frame
@@ -257,19 +242,39 @@ def safety_params(
     return SafetyParams(*(float(getattr(limits, name)) for name in _LIMITS), *derived)
 
 
-@structref.register
-class SafetyStateType(types.StructRef):
-    """numba's type of :class:`SafetyState`."""
+class FieldsStruct(types.StructRef):
+    """A numba ``structref`` type whose fields' types are taken without literal values."""
 
     def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
         """The fields' types without literal values."""
         return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
 
 
-_SAFETY_FIELDS = (
-    "state", "fault", "fault_time", "t", "envelope", "last", "counter", "fresh", "missing",
-    "quiet", "hands_off", "ref_theta", "ref_torque", "free", "lost", "stale", "behind",
-)  # fmt: skip
+@structref.register
+class SafetyStateType(FieldsStruct):
+    """numba's type of :class:`SafetyState`."""
+
+
+class SafetySnapshot(NamedTuple):
+    """The fields of a :class:`SafetyState` at one instant."""
+
+    state: int
+    fault: int
+    fault_time: float
+    t: float
+    envelope: float
+    last: float
+    counter: int
+    fresh: bool
+    missing: float
+    quiet: float
+    hands_off: bool
+    ref_theta: float
+    ref_torque: float
+    free: float
+    lost: int
+    stale: int
+    behind: int
 
 
 class SafetyState(structref.StructRefProxy):
@@ -295,34 +300,7 @@ class SafetyState(structref.StructRefProxy):
         return made
 
 
-structref.define_proxy(SafetyState, SafetyStateType, list(_SAFETY_FIELDS))  # type: ignore[no-untyped-call]
-
-
-class SafetySnapshot(NamedTuple):
-    """The fields of a :class:`SafetyState` at one instant."""
-
-    state: int
-    fault: int
-    fault_time: float
-    t: float
-    envelope: float
-    last: float
-    counter: int
-    fresh: bool
-    missing: float
-    quiet: float
-    hands_off: bool
-    ref_theta: float
-    ref_torque: float
-    free: float
-    lost: int
-    stale: int
-    behind: int
-
-
-def new_safety_state() -> SafetyState:
-    """A stage's state, IDLE without a fault."""
-    return SafetyState()
+structref.define_proxy(SafetyState, SafetyStateType, list(SafetySnapshot._fields))  # type: ignore[no-untyped-call]
 
 
 @njit(cache=True)
@@ -380,12 +358,7 @@ def _periods_since(s: Any, p: Any, now: float) -> float:
 
 @njit(cache=True)
 def safety_status_frame(
-    s: Any,
-    p: Any,
-    checksum_ok: bool,
-    counter: float,
-    drive_fault: bool,
-    now: float,
+    s: Any, p: Any, checksum_ok: bool, counter: float, drive_fault: bool, now: float
 ) -> bool:
     """:meth:`SafetyStage.status_frame` on the state and limits (``now`` NaN: the
     frame is taken as one period after the last step)."""
@@ -400,17 +373,10 @@ def safety_status_frame(
     behind = s.behind
     s.behind = -1
     if last >= 0 and (step == 0 or step > MAX_COUNTER_STEP):
-        # Two frames in a row one count apart, both beyond the window, are the drive's
-        # counter gone on while 7 or more frames were lost, or two older frames (delivered
-        # late, or replayed: 8, 9 after 10): a 4-bit counter cannot tell them apart. The
-        # silence can: 7 or more frames lost leave as many frame periods without a valid
-        # frame (none this period either), and the counter has gone on by as many frames
-        # as the silence lasted (within one: the frames' jitter); older frames come
-        # without that silence, and a gateway replaying its last frames trips the watchdog
-        # first unless it is longer than 13 frames. The periods since the last step are
-        # counted from ``now`` (as the step counts them): a loop late as the frames come
-        # back has skipped deadlines that its next step would count only after them.
-        # frame periods since the last valid frame
+        # The silence of 7 or more frames lost (as many frame periods without a valid frame,
+        # the counter gone on by as many frames, within one) tells them from older frames
+        # (:meth:`SafetyStage.status_frame`); the periods since the last step counted from
+        # ``now``, as the step counts them.
         frames = (s.missing + _periods_since(s, p, now)) / p.per_frame
         silence = (
             not s.fresh
@@ -511,13 +477,7 @@ def _limited(s: Any, p: Any, command: float, theta: float, omega: float, tau_hat
 
 @njit(cache=True)
 def safety_step(
-    s: Any,
-    p: Any,
-    command: float,
-    theta: float,
-    omega: float,
-    tau_hat: float,
-    now: float,
+    s: Any, p: Any, command: float, theta: float, omega: float, tau_hat: float, now: float
 ) -> float:
     """:meth:`SafetyStage.step` on the state (``now`` NaN: the stage counts its own
     periods; else the periods since the last step are counted from ``now``, so that the
@@ -568,17 +528,14 @@ class SafetyStage:
     Notes
     -----
     The frozen-sensor monitor tells a frozen angle sensor from a rider who holds the
-    handlebar still against the motor, which is legitimate (a steady turn: the rider's torque
-    balances the motor's and the angle stands still for seconds). Only the angle and the
-    motor current are measured, so a still angle under a large *steady* current proves
-    nothing. What a rider cannot do is hold the handlebar to one encoder count while the
-    motor torque *changes* a lot: an arm is a spring of at most a few hundred N*m/rad, so a
-    change of a few N*m moves the handlebar by milliradians, tens of counts. The monitor
-    keeps the motor torque ``tau_0 = N k_t i`` of the period the measured angle last changed
-    and, while it stands still, integrates the turn of a *free* handlebar of eq. (5) driven
-    by the change of torque since then, quasi-statically (the inertia's lag,
-    ``J_eq / beta_eq`` = 3 ms for Table I, is neglected), with twice the dry friction as a
-    dead band (the still handlebar may sit anywhere in the friction band)::
+    handlebar still against the motor (a steady turn, legitimate): a still angle under a
+    large *steady* current proves nothing, but no rider holds the handlebar to one encoder
+    count while the motor torque *changes* a lot (an arm is a spring of at most a few
+    hundred N*m/rad). The monitor keeps the motor torque ``tau_0 = N k_t i`` of the period
+    the measured angle last changed and, while it stands still, integrates the turn of a
+    *free* handlebar of eq. (5) driven by the change of torque since then, quasi-statically
+    (the inertia's lag ``J_eq / beta_eq`` neglected), with twice the dry friction as a dead
+    band (the still handlebar may sit anywhere in the friction band)::
 
         d = |N k_t i - tau_0|,   theta_free += max(0, d - 2 beta_s) / beta_eq * dt
 
@@ -636,13 +593,11 @@ class SafetyStage:
         self._watchdog = limits.watchdog_periods * int(periods_per_frame)
         self.limits = limits
         self.dt = float(dt)
-        self._s = new_safety_state()
+        self._s = SafetyState()
         self._p = safety_params(limits, self.dt, int(periods_per_frame), handlebar)
         from motosim.rt.stack import compiled  # the stack's numba, loaded with the stage
 
-        self._brief: Callable[[SafetyState], tuple[int, int, float]] = compiled(
-            safety_brief, self._s
-        )
+        self._brief: Callable[..., tuple[int, int, float]] = compiled(safety_brief, self._s)
         self._snapshot: Callable[[SafetyState], SafetySnapshot] = compiled(safety_snapshot, self._s)
 
     @property
@@ -753,7 +708,9 @@ class SafetyStage:
         since the last valid frame, and those since the last step, the deadlines a late loop
         skipped included, counted from ``now``), are 7 or more frames lost: the second is
         valid (the counter taken up again). Without that silence they are older frames
-        (delivered late, or replayed) and both are refused.
+        (delivered late, or replayed) and both are refused: a gateway replaying its last
+        three frames trips a watchdog of up to 13 frames, a longer one cannot tell the replay
+        from the counter gone on (a limit of the 4-bit counter).
 
         ``now`` is the time of the period that reads the frame [s], on the clock of
         :meth:`step`'s ``now`` (by default, and for a stage stepped without one: one period
@@ -783,22 +740,15 @@ class SafetyStage:
         tau_hat: float,
         now: float | None = None,
     ) -> float:
-        """The current to send [A] for the stack's ``command`` [A] this period.
+        """The current to send [A] for the stack's ``command`` [A] this period, given the
+        last valid handlebar angle ``theta`` [rad], its estimated rate ``omega`` [rad/s] and
+        the estimated rider torque ``tau_hat`` [N*m] (NaN if the stack has none: hands-off
+        off).
 
-        Parameters
-        ----------
-        command : float
-            The stack's current command [A].
-        theta, omega : float
-            Last valid handlebar angle [rad] and its estimated rate [rad/s].
-        tau_hat : float
-            The estimated rider torque [N*m] (NaN if the stack has none: hands-off off).
-        now : float, optional
-            The loop's time [s] since the stage's first step, for the fault's time stamp
-            and the watchdog: the control periods since the last step, rounded (at least
-            one), count as periods without a status frame unless one came, so that the
-            deadlines a late loop skipped count too. By default the stage counts its own
-            periods, one per step.
+        ``now`` is the loop's time [s] since the stage's first step, for the fault's time
+        stamp and the watchdog: the control periods since the last step, rounded (at least
+        one), count as periods without a status frame unless one came, so that the deadlines
+        a late loop skipped count too. By default the stage counts its own periods.
         """
         t = math.nan if now is None else float(now)
         return float(

@@ -4,16 +4,13 @@
 checked options and the scenario's ``[realtime]`` settings) and runs:
 
 1. :meth:`~RealtimeSession.prepare` loads the compiled stack, opens the bus and builds the
-   :class:`~motosim.rt.run.RealtimeRunner` (the period: read the drive's frames, step the
-   stack, pass its command through the safety stage, send it, record a row);
+   :class:`~motosim.rt.run.RealtimeRunner`;
 2. :meth:`~RealtimeSession.open` starts the recorder process
    (:class:`~motosim.rt.recorder.Recorder`), which drains the runner's ring into the result
    files;
-3. :meth:`~RealtimeSession.run` applies the privileges, runs the rate loop once and returns
-   the :class:`Outcome`. The run's end is a stop request inside that one loop run: at the
-   duration the runner fades the torque out (``RunSettings(duration=...)``),
-   as on :meth:`~RealtimeSession.request_stop`, and its period returns False once the torque
-   is zero; a fault zeroes it at once and ends the run shortly after;
+3. :meth:`~RealtimeSession.run` applies the privileges, runs the rate loop once (at the
+   duration the runner fades the torque out, as on a stop request, and ends the run once it
+   is zero) and returns the :class:`Outcome`;
 4. :meth:`~RealtimeSession.close` lets the recorder release the result folder (after the
    caller has written its own files beside the rows) and frees the shared ring.
 
@@ -26,9 +23,8 @@ import enum
 import math
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from types import TracebackType
 from typing import TYPE_CHECKING, Any, Literal, Self
 
 from motosim.errors import MotosimError
@@ -223,7 +219,7 @@ class RealtimeSession:
         self._recorder: Recorder | None = None
         self._buttons: Any = None
         self._fast = False
-        self._stop = 0  # stop requests before the runner was built: 1 stop, 2 E-stop
+        self._stop_asked = self._estop_asked = False  # before the runner was built
 
     @property
     def runner(self) -> "RealtimeRunner":
@@ -236,14 +232,14 @@ class RealtimeSession:
     def request_stop(self) -> None:
         """Fade the torque out and end the run (safe from a signal handler)."""
         if self._runner is None:
-            self._stop = max(self._stop, 1)
+            self._stop_asked = True
         else:
             self._runner.request_stop()
 
     def emergency_stop(self) -> None:
         """Zero the torque now and end the run (safe from a signal handler)."""
         if self._runner is None:
-            self._stop = 2
+            self._estop_asked = True
         else:
             self._runner.emergency_stop()
 
@@ -284,8 +280,10 @@ class RealtimeSession:
             stack, self._link, handlebar_codecs(), settings, platform=platform, clock=self.clock,
             now=self.clock.now,
         )  # fmt: skip
-        if self._stop:  # asked for while the runner was built
-            self.emergency_stop() if self._stop == 2 else self.request_stop()
+        if self._estop_asked:  # asked for while the runner was built
+            self.emergency_stop()
+        elif self._stop_asked:
+            self.request_stop()
 
     def _platform_output(self, names: tuple[str, ...]) -> Any:
         """The motion platform's stage (None without a platform file)."""
@@ -367,7 +365,7 @@ class RealtimeSession:
             extra["failure"] = runner.left_range  # the motorcycle fell: flagged, as offline
         done = recorder.close(complete, extra)
         counters = runner.counters()
-        bus_errors = int(getattr(self._link, "errors", 0))
+        bus_errors = int(runner.link.errors)
         self._close_link()
         return self._outcome(stats, counters, privileges, done, bus_errors)
 
@@ -426,9 +424,7 @@ class RealtimeSession:
             "profile": done.profile,
             "state_stream": done.stream,
             "units": "s",
-            "privileges": [
-                {"name": p.name, "applied": p.applied, "detail": p.detail} for p in privileges
-            ],
+            "privileges": [asdict(p) for p in privileges],
             "counters": {
                 "status_frames": counters.status_frames,
                 "frames_lost": counters.frames_lost,
@@ -471,12 +467,7 @@ class RealtimeSession:
     def __enter__(self) -> Self:
         return self
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 

@@ -14,11 +14,9 @@ bookkeeping of the real-time loop:
 - the true rider torque is unknown in real time (0: a ``motorcycle.input = "true"`` run is a
   simulation-only reference and is refused by ``motosim run``);
 - where the drive's status frames come slower than the control periods (the paper's 100 Hz
-  CAN link under a 1 kHz loop), the stack takes its measurement in the period a new frame
-  arrives, not on its own count: the drive's clock is not the loop's, and a count would read
-  a frame up to a frame period old, or one frame twice and skip the next, which the
-  observer's fixed step reads as motion (a lost frame: the last one, 1.5 frame periods
-  after it).
+  CAN link under a 1 kHz loop), the stack measures in the period a new frame arrives, not on
+  its own count: the drive's clock is not the loop's, and a count would read one frame twice
+  and skip the next, which the observer's fixed step reads as motion.
 
 :func:`result_block` turns the loop's rows into the columns of the result files that
 ``motosim simulate`` writes, so that ``motosim report`` reads a real-time run as it is.
@@ -115,11 +113,9 @@ class CompiledStack:
 
     Notes
     -----
-    One period is :func:`stack_period`, compiled: the real-time runner calls it inside its
-    fused period (:mod:`motosim.rt.fused`), and :meth:`step` calls the same function from
-    Python. The constructor compiles (or loads) it for the model's types before the loop's
-    first deadline and keeps the compiled overload to call it without numba's per-call type
-    dispatch (the same machine code).
+    One period is :func:`stack_period`, which the runner's fused period calls and
+    :meth:`step` calls from Python: the constructor compiles (or loads) it before the loop's
+    first deadline (:func:`compiled`).
     """
 
     names = STACK_SIGNALS
@@ -131,9 +127,7 @@ class CompiledStack:
         self.data = new_data(model)
         self.force = _series(force, "force")
         self.side_force = _series(side_force, "side_force")
-        self.state = np.zeros(len(LoopState))
-        """What :func:`stack_period` keeps between periods, in the order of
-        :class:`LoopState`."""
+        self.state = np.zeros(len(LoopState))  # in the order of LoopState
         self._row = np.zeros(len(STACK_SIGNALS))
         # before its first step: the motorcycle upright and straight at its speed, as reset
         self._row[STACK_SIGNALS.index("v_x")] = model.speed
@@ -221,12 +215,10 @@ def stack_period(
 def compiled(kernel: Any, *args: Any) -> Any:
     """The compiled ``kernel`` for the types of ``args``, called without numba's dispatch.
 
-    A numba dispatcher works out the types of its arguments on every call: for the stack's
-    model and data structures that costs more than the step itself (``docs/performance.md``,
-    ``bench/bench_rt_period.py``). The overload compiled (or loaded from the cache) here for
-    the types of ``args`` has an ``entry_point`` that unboxes the same arguments and runs the
-    same machine code; nothing is run. Without numba's JIT (``NUMBA_DISABLE_JIT=1``) the
-    plain function is returned.
+    A numba dispatcher works out the types of its arguments on every call (its cost in
+    ``docs/performance.md``); the overload compiled (or loaded from the cache) here has an
+    ``entry_point`` that unboxes the same arguments and runs the same machine code; nothing is
+    run. Without numba's JIT (``NUMBA_DISABLE_JIT=1``) the plain function is returned.
     """
     if not hasattr(kernel, "compile"):
         return kernel

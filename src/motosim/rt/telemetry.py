@@ -5,17 +5,16 @@ stack's row (:data:`motosim.rt.stack.STACK_SIGNALS`: the torque estimate, the me
 the command and the virtual motorcycle's states, SI units) as one little-endian datagram
 ``<Q d 16d`` to a UDP address (localhost by default). It is what a visual or a telemetry
 display reads, and what the virtual rig's virtual rider steers by, as a person steers by the
-visual. Sending is one non-blocking ``sendto`` (a few microseconds); a datagram that cannot
-be sent is dropped and counted, never waited for.
+visual. Sending is one non-blocking ``sendto``; a datagram that cannot be sent is dropped
+and counted, never waited for.
 
 ``motosim run`` sends it from outside the loop: a :class:`StateRelay` in the result writer's
 process reads the newest row of the loop's shared ring every millisecond and publishes its
-stack columns, so the loop's period has no ``sendto`` of its own (its tail of 30-100 us
-under load). The state then reaches a reader about a millisecond later (the relay's
-:meth:`StateRelay.lag_stats` measure it), as a person sees the visual some tens of
-milliseconds after the event anyway. A :class:`StateSender` can still be the runner's
-``telemetry`` (called in the period: the lock-step tests, where the rider must see the
-period's state at once).
+stack columns, so the loop's period has no ``sendto`` of its own. The state then reaches a
+reader about a millisecond later (the relay's :meth:`StateRelay.lag_stats` measure it), as a
+person sees the visual some tens of milliseconds after the event anyway. A
+:class:`StateSender` can still be the runner's ``telemetry`` (called in the period: the
+lock-step tests, where the rider must see the period's state at once).
 """
 
 import ipaddress
@@ -33,18 +32,9 @@ from numpy.typing import NDArray
 from motosim.errors import MotosimError
 from motosim.rt.ring import RingCounter
 
-__all__ = [
-    "DEFAULT_ADDRESS", "StateReceiver", "StateRelay", "StateSender", "is_host", "parse_address",
-]  # fmt: skip
-
-DEFAULT_ADDRESS = ("127.0.0.1", 47474)
-"""Where the state stream goes when nothing else is asked."""
+__all__ = ["StateReceiver", "StateRelay", "StateSender", "is_host", "parse_address"]
 
 _WIDTH = 16
-
-
-def _format(width: int) -> struct.Struct:
-    return struct.Struct(f"<Qd{width}d")
 
 
 _DIGITS = re.compile(r"[0-9.]+")
@@ -67,6 +57,20 @@ def is_host(text: str) -> bool:
     except ValueError:  # digits and dots only: an IPv4 address out of range, not a name
         return _HOSTNAME.fullmatch(text) is not None and not _DIGITS.fullmatch(text)
     return True
+
+
+def _socket(address: tuple[str, int], *, bind: bool) -> socket.socket:
+    """A non-blocking UDP socket bound to ``address`` (else connected to it), or a one-line
+    error saying why it cannot listen (send) there."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        (sock.bind if bind else sock.connect)(address)
+    except OSError as err:
+        sock.close()
+        why = f"cannot listen there: {err.strerror}" if bind else f"cannot send there: {err}"
+        raise MotosimError(f"--telemetry {address[0]}:{address[1]}: {why}") from None
+    sock.setblocking(False)
+    return sock
 
 
 def parse_address(text: str) -> tuple[str, int]:
@@ -92,17 +96,7 @@ class StateSender:
     """
 
     def __init__(self, address: tuple[str, int], *, width: int = _WIDTH) -> None:
-        self._format = _format(width)
-        self._address = address
-        self._socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._socket.setblocking(False)
-        try:
-            self._socket.connect(address)
-        except OSError as err:
-            self._socket.close()
-            raise MotosimError(
-                f"--telemetry {address[0]}:{address[1]}: cannot send there: {err}"
-            ) from None
+        self._socket = _socket(address, bind=False)
         self._buffer = np.zeros(2 + width, dtype="<f8")
         self._index = self._buffer[:1].view("<u8")
         self._bytes = self._buffer.data.cast("B")
@@ -130,16 +124,8 @@ class StateReceiver:
     picks a free port, see :attr:`address`)."""
 
     def __init__(self, address: tuple[str, int], *, width: int = _WIDTH) -> None:
-        self._format = _format(width)
-        self._socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        try:
-            self._socket.bind(address)
-        except OSError as err:
-            self._socket.close()
-            raise MotosimError(
-                f"--telemetry {address[0]}:{address[1]}: cannot listen there: {err.strerror}"
-            ) from None
-        self._socket.setblocking(False)
+        self._format = struct.Struct(f"<Qd{width}d")
+        self._socket = _socket(address, bind=True)
         self.address: tuple[str, int] = self._socket.getsockname()
         self.row = np.zeros(width)
         self.index = -1
