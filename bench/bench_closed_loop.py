@@ -45,7 +45,7 @@ from numba import njit
 from motosim.control.torque_feedback import design_torque_feedback
 from motosim.params import load_parameters
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
-from motosim.sim.stack import StackModel, new_data, reset, step
+from motosim.sim.stack import NO_PREDICTION, StackModel, new_data, reset, step
 
 SCENARIO = """
 [scenario]
@@ -321,9 +321,8 @@ def _without_projection(model: StackModel) -> StackModel:
 def _without_feedforward(model: StackModel) -> StackModel:
     """The stack with neither feedforward term (rider-torque cancellation, predicted or not,
     reference inverse dynamics): the step skips their code, as it did before they existed."""
-    ff = model.feedforward.copy()
-    ff[:2] = 0.0
-    return model._replace(feedforward=ff, prediction=np.zeros_like(model.prediction))
+    ff = model.feedforward._replace(cancellation=0.0, reference=0.0)
+    return model._replace(feedforward=ff, prediction=NO_PREDICTION)
 
 
 def run() -> dict[str, float]:
