@@ -39,13 +39,14 @@ def _rig(rider: float, hands: np.ndarray, off: np.ndarray | None = None) -> Virt
 
 def test_rig_hands_are_the_simulators_plant() -> None:
     """3 N*m of active torque through firm hands about 0.05 rad: the arms' inertia and
-    damping added to the handlebar's, their spring held over each 0.1 ms sub-step."""
+    damping added to the handlebar's, their spring taken at each 0.1 ms sub-step's midpoint
+    (as the simulator's plant takes it at each step's)."""
     J_a, c_a, k_a, hold = 0.1, 4.0, 50.0, 0.05
     rig = _rig(3.0, np.array([J_a, c_a, k_a, hold]))
     rig.advance_to(0.5)
     theta, omega = 0.0, 0.0
     for _ in range(5000):
-        torque = 3.0 - k_a * (theta - hold)
+        torque = 3.0 - k_a * (theta + 0.5e-4 * omega - hold)
         theta, omega = step_exact(
             theta, omega, torque, HB.J_eq + J_a, HB.beta_eq + c_a, HB.beta_s, 1e-4
         )
