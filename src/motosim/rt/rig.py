@@ -46,7 +46,7 @@ from motosim.rt.config import table_number
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
-from motosim.sim.hands import is_held
+from motosim.sim.hands import is_held, step_spring
 from motosim.sim.rider import rider_torque
 
 __all__ = [
@@ -240,8 +240,7 @@ def _plant_steps(
         if not held:
             theta, omega = step_exact(theta, omega, kt * i, p.J, p.beta, p.beta_s, h)
         elif arms:
-            spring = k_a * (theta + 0.5 * h * omega - hold)  # at the sub-step's midpoint
-            torque = tau_r[min(k0 + k, last)] + kt * i - spring
+            torque = tau_r[min(k0 + k, last)] + kt * i + step_spring(theta, omega, k_a, hold, h)
             theta, omega = step_exact(theta, omega, torque, p.J + J_a, p.beta + c_a, p.beta_s, h)
         else:
             torque = tau_r[min(k0 + k, last)] + kt * i

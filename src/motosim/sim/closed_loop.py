@@ -39,7 +39,7 @@ from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
 from motosim.sim.brakes import BrakeSettings, brake_torques, design_brakes, new_brake_state
 from motosim.sim.grips import held_handlebar
-from motosim.sim.hands import hands_array, hands_torque, is_held
+from motosim.sim.hands import hands_array, hands_torque, is_held, step_spring
 from motosim.sim.loop_analysis import prediction_lead
 from motosim.sim.metrics import validity_limits
 from motosim.sim.multibody_rider import (
@@ -789,14 +789,13 @@ def _run_chunk(
         Jt, bt, spring_rate = (J + J_a, beta + c_a, k_a) if holding else (J, beta, 0.0)
         motor = nkt * i_cmd
         if rig.virtual_rider or not held or _steady(rig.rider_profile, k, n_sub):
-            middle = hb[0] + 0.5 * h * hb[1]
-            torque = active + motor - spring_rate * (middle - hold)
+            torque = active + motor + step_spring(hb[0], hb[1], spring_rate, hold, h)
             hb[0], hb[1] = step_exact(hb[0], hb[1], torque, Jt, bt, beta_s, h)
         else:
             h_sub = h / n_sub
             for j in range(n_sub):
-                middle = hb[0] + 0.5 * h_sub * hb[1]
-                torque = rig.rider_profile[k * n_sub + j] + motor - spring_rate * (middle - hold)
+                spring = step_spring(hb[0], hb[1], spring_rate, hold, h_sub)
+                torque = rig.rider_profile[k * n_sub + j] + motor + spring
                 hb[0], hb[1] = step_exact(hb[0], hb[1], torque, Jt, bt, beta_s, h_sub)
         if stop:
             return row + 1

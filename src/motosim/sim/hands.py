@@ -26,7 +26,15 @@ from numpy.typing import NDArray
 
 from motosim.sim.grips import GRIPS, Hands, resolve_hands
 
-__all__ = ["GRIPS", "Hands", "hands_array", "hands_torque", "is_held", "resolve_hands"]
+__all__ = [
+    "GRIPS",
+    "Hands",
+    "hands_array",
+    "hands_torque",
+    "is_held",
+    "resolve_hands",
+    "step_spring",
+]
 
 Array = NDArray[np.float64]
 
@@ -53,6 +61,20 @@ def hands_torque(
     -1.0
     """
     return -J_a * accel - c_a * omega - k_a * (theta - hold)
+
+
+@njit(cache=True)
+def step_spring(theta: float, omega: float, k_a: float, hold: float, h: float) -> float:
+    """The arms' spring torque -k_a (theta - theta_hold) [N*m] held over a plant step of
+    ``h`` [s] from angle ``theta`` [rad] at rate ``omega`` [rad/s]: taken at the step's
+    midpoint, theta + omega h / 2, so that the step is second order in ``h``.
+
+    Examples
+    --------
+    >>> step_spring(0.1, 2.0, 10.0, 0.0, 0.01)
+    -1.1
+    """
+    return -k_a * (theta + 0.5 * h * omega - hold)
 
 
 @njit(cache=True)
