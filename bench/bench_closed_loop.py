@@ -313,9 +313,8 @@ def _ratio(duration: float, variant: Callable[[StackModel], StackModel], repeats
 
 def _without_projection(model: StackModel) -> StackModel:
     """The stack with the observer's stick projection off."""
-    settings = model.estimator.p.copy()
-    settings[9] = 0.0
-    return model._replace(estimator=model.estimator._replace(p=settings))
+    settings = model.estimator.walcott_zak._replace(stick_projection=False)
+    return model._replace(estimator=model.estimator._replace(walcott_zak=settings))
 
 
 def _without_feedforward(model: StackModel) -> StackModel:

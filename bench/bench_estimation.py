@@ -10,15 +10,14 @@ from motosim.params import load_parameters
 from timing import best
 
 
-def _loop(theta, current, h, l1, l2, Phi, Gamma, g, p):  # type: ignore[no-untyped-def]
+def _loop(theta, current, h, l1, l2, Phi, Gamma, g, settings):  # type: ignore[no-untyped-def]
     n = theta.size
     tau = np.empty(n)
     z0, z1 = theta[0], 0.0
     state = np.array([0.0, theta[0], 0.0, 0.0])
     for k in range(n):
         z0, z1 = std_step(z0, z1, theta[k], h, l1, l2, True)
-        state, _ = wz_step(state, theta[k], z1, current[k], Phi, Gamma, g, p)
-        tau[k] = state[2]
+        tau[k] = wz_step(state, theta[k], z1, current[k], Phi, Gamma, g, settings)
     return tau
 
 
@@ -34,7 +33,7 @@ def run() -> dict[str, float]:
     theta = 0.2 * np.sin(2 * np.pi * 0.5 * t)
     current = np.sin(2 * np.pi * 1.3 * t)
     lip = 300.0
-    args = (h, 1.5 * np.sqrt(lip), 1.1 * lip, obs._Phi, obs._Gamma, obs._g, obs._p)
+    args = (h, 1.5 * np.sqrt(lip), 1.1 * lip, obs._Phi, obs._Gamma, obs._g, obs._settings)
     _compiled(theta[:10], current[:10], *args)
     compiled = best(lambda: _compiled(theta, current, *args)) / t.size
     few = 5_000

@@ -60,9 +60,8 @@ def _without_feedforward(path: Path) -> RunInputs:
 def _as_landed(run: RunInputs) -> StackModel:
     """The run's stack with the observer's stick projection off, as the pinned code ran."""
     model = build_stack(run)
-    settings = model.estimator.p.copy()
-    settings[9] = 0.0
-    return model._replace(estimator=model.estimator._replace(p=settings))
+    settings = model.estimator.walcott_zak._replace(stick_projection=False)
+    return model._replace(estimator=model.estimator._replace(walcott_zak=settings))
 
 
 RMS_TOLERANCE = 0.03

@@ -116,7 +116,7 @@ def test_grid_scales_the_true_handlebar():
 def test_scenario_switches_the_stick_projection():
     """``[estimator] stick_projection = false`` gives the paper's dead-zoned compensation."""
     inputs = _inputs(1000.0)
-    assert build_stack(inputs).estimator.p[9] == 1.0
+    assert build_stack(inputs).estimator.walcott_zak.stick_projection
     est = inputs.scenario.estimator
     off = dataclasses.replace(
         inputs,
@@ -124,7 +124,7 @@ def test_scenario_switches_the_stick_projection():
             inputs.scenario, estimator=dataclasses.replace(est, stick_projection=False)
         ),
     )
-    assert build_stack(off).estimator.p[9] == 0.0
+    assert not build_stack(off).estimator.walcott_zak.stick_projection
 
 
 @pytest.mark.parametrize("speed", [10.0, 15.0, 30.0])

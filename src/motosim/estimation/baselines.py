@@ -25,7 +25,14 @@ from numpy.typing import NDArray
 from scipy.linalg import expm, solve_discrete_are
 
 from motosim.estimation._friction import smooth_sign
-from motosim.estimation.kernel import INVERSE_DYNAMICS, KALMAN, EstimatorKernel, pack
+from motosim.estimation.kernel import (
+    INVERSE_DYNAMICS,
+    KALMAN,
+    EstimatorKernel,
+    InverseDynamicsSettings,
+    KalmanSettings,
+    pack,
+)
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.checks import check_number
@@ -113,39 +120,43 @@ def design_inverse_dynamics(
 
 @njit(cache=True)
 def inverse_dynamics_step(
-    state: Array, theta: float, current: float, Phi: Array, Gamma: Array, p: Array
-) -> tuple[Array, float]:
+    state: Array, theta: float, current: float, Phi: Array, Gamma: Array, c: InverseDynamicsSettings
+) -> float:
     """One sample of the filtered inverse dynamics.
 
     Parameters
     ----------
     state : ndarray, shape (4,)
-        Filter states [theta_f, theta_f', i_f, i_f'].
+        Filter states [theta_f, theta_f', i_f, i_f'], advanced to the next sample in place.
     theta, current : float
         Angle [rad] and current [A] at this sample, held over the step.
     Phi : ndarray, shape (4, 4)
         Exact discretisation of the two filters.
     Gamma : ndarray, shape (4, 2)
         Their input matrix for [theta, current].
-    p : ndarray, shape (7,)
-        [J_eq, beta_eq, N k_t, omega_f, beta_s, dead zone, tanh width].
+    c : InverseDynamicsSettings
+        J_eq, beta_eq, N k_t, the filters' corner omega_f and the friction compensation.
 
     Returns
     -------
-    state : ndarray, shape (4,)
-        At the next sample.
-    tau_hat : float
+    float
         J theta_f'' + beta theta_f' + beta_s sign(theta_f') - N k_t i_f at this sample [N*m].
     """
-    J, beta, nkt, w, beta_s, dz, width = p[0], p[1], p[2], p[3], p[4], p[5], p[6]
+    w = c.cutoff
     acc = w * w * (theta - state[0]) - 2.0 * w * state[1]
-    tau = J * acc + beta * state[1] + beta_s * smooth_sign(state[1], dz, width) - nkt * state[2]
-    out = np.empty(4)
+    friction = c.beta_s * smooth_sign(state[1], c.dead_zone, c.friction_width)
+    tau = c.inertia * acc + c.damping * state[1] + friction - c.torque_per_amp * state[2]
+    x0, x1, x2, x3 = state[0], state[1], state[2], state[3]
     for r in range(4):
-        out[r] = Gamma[r, 0] * theta + Gamma[r, 1] * current
-        for c in range(4):
-            out[r] += Phi[r, c] * state[c]
-    return out, tau
+        state[r] = (
+            Gamma[r, 0] * theta
+            + Gamma[r, 1] * current
+            + Phi[r, 0] * x0
+            + Phi[r, 1] * x1
+            + Phi[r, 2] * x2
+            + Phi[r, 3] * x3
+        )
+    return float(tau)
 
 
 @njit(cache=True)
@@ -189,23 +200,21 @@ class InverseDynamicsEstimator:
         inputs[1, 0] = inputs[3, 1] = w * w
         self._Phi, self._Gamma = zoh(A, inputs, self.dt)
         hb = gains.handlebar
-        self._p = np.array(
-            [
-                hb.J_eq,
-                hb.beta_eq,
-                hb.torque_per_amp,
-                w,
-                gains.beta_s,
-                gains.dead_zone,
-                gains.friction_width,
-            ]
+        self._settings = InverseDynamicsSettings(
+            inertia=hb.J_eq,
+            damping=hb.beta_eq,
+            torque_per_amp=hb.torque_per_amp,
+            cutoff=w,
+            beta_s=gains.beta_s,
+            dead_zone=gains.dead_zone,
+            friction_width=gains.friction_width,
         )
         self.reset()
 
     @property
     def kernel(self) -> EstimatorKernel:
         """The compiled kernel's record (:func:`inverse_dynamics_step`), for compiled loops."""
-        return pack(INVERSE_DYNAMICS, self._Phi, self._Gamma, np.zeros(4), self._p, self.dt)
+        return pack(INVERSE_DYNAMICS, self._Phi, self._Gamma, np.zeros(4), self._settings, self.dt)
 
     def reset(self) -> None:
         """Forget the past: the next sample initialises the filters at rest."""
@@ -223,12 +232,13 @@ class InverseDynamicsEstimator:
         """
         state = self._state
         if state is None:
-            state = np.zeros(4)
+            state = self._state = np.zeros(4)
             inverse_dynamics_start(state, float(theta_h), float(theta_h_dot), float(i_m))
-        self._state, tau = inverse_dynamics_step(
-            state, float(theta_h), float(i_m), self._Phi, self._Gamma, self._p
+        x_hat = np.array([state[1], state[0]])
+        tau = inverse_dynamics_step(
+            state, float(theta_h), float(i_m), self._Phi, self._Gamma, self._settings
         )
-        return np.array([state[1], state[0]]), tau
+        return x_hat, float(tau)
 
 
 @dataclass(frozen=True, slots=True)
@@ -311,14 +321,15 @@ def kalman_step(
     Phi: Array,
     Gamma: Array,
     K: Array,
-    p: Array,
-) -> tuple[Array, Array]:
+    c: KalmanSettings,
+) -> tuple[float, float, float]:
     """Measurement update with ``theta`` and prediction over one step.
 
     Parameters
     ----------
     z : ndarray, shape (3,)
-        Predicted [theta_h', theta_h, tau_r] at this sample.
+        Predicted [theta_h', theta_h, tau_r] at this sample; the prediction at the next
+        sample in place.
     theta, current : float
         Measured angle [rad]; current held over the step [A].
     Phi : ndarray, shape (3, 3)
@@ -327,27 +338,26 @@ def kalman_step(
         int_0^h exp(A_z s) ds for the inputs [i_m, tau_p_hat].
     K : ndarray, shape (3,)
         Steady-state Kalman gain.
-    p : ndarray, shape (3,)
-        [beta_s, dead zone, tanh width].
+    c : KalmanSettings
+        The friction compensation.
 
     Returns
     -------
-    z_post : ndarray, shape (3,)
-        Filtered state at this sample.
-    z_next : ndarray, shape (3,)
-        Predicted state at the next sample.
+    tuple of float
+        Filtered [theta_h', theta_h, tau_r] at this sample [rad/s, rad, N*m].
     """
     innovation = theta - z[1]
-    post = np.empty(3)
+    p0, p1, p2 = z[0] + K[0] * innovation, z[1] + K[1] * innovation, z[2] + K[2] * innovation
+    tau_p_hat = -c.beta_s * smooth_sign(p0, c.dead_zone, c.friction_width)
     for r in range(3):
-        post[r] = z[r] + K[r] * innovation
-    tau_p_hat = -p[0] * smooth_sign(post[0], p[1], p[2])
-    nxt = np.empty(3)
-    for r in range(3):
-        nxt[r] = Gamma[r, 0] * current + Gamma[r, 1] * tau_p_hat
-        for c in range(3):
-            nxt[r] += Phi[r, c] * post[c]
-    return post, nxt
+        z[r] = (
+            Gamma[r, 0] * current
+            + Gamma[r, 1] * tau_p_hat
+            + Phi[r, 0] * p0
+            + Phi[r, 1] * p1
+            + Phi[r, 2] * p2
+        )
+    return p0, p1, p2
 
 
 @njit(cache=True)
@@ -403,13 +413,13 @@ class KalmanTorqueEstimator:
         R = np.array([[gains.angle_noise**2]])
         P = solve_discrete_are(self._Phi.T, H.T, Qd, R)
         self._K = (P @ H.T / (H @ P @ H.T + R)[0, 0])[:, 0]
-        self._p = np.array([gains.beta_s, gains.dead_zone, gains.friction_width])
+        self._settings = KalmanSettings(gains.beta_s, gains.dead_zone, gains.friction_width)
         self.reset()
 
     @property
     def kernel(self) -> EstimatorKernel:
         """The compiled kernel's record (:func:`kalman_step`, Kalman gain), for compiled loops."""
-        return pack(KALMAN, self._Phi, self._Gamma, self._K, self._p, self.dt)
+        return pack(KALMAN, self._Phi, self._Gamma, self._K, self._settings, self.dt)
 
     def reset(self) -> None:
         """Forget the past: the next sample initialises the angle; rate and torque 0."""
@@ -429,8 +439,8 @@ class KalmanTorqueEstimator:
         if z is None:
             start = np.zeros(4)
             kalman_start(start, float(theta_h), float(theta_h_dot), float(i_m))
-            z = start[:3]
-        post, self._z = kalman_step(
-            z, float(theta_h), float(i_m), self._Phi, self._Gamma, self._K, self._p
+            z = self._z = start[:3]
+        rate, angle, tau = kalman_step(
+            z, float(theta_h), float(i_m), self._Phi, self._Gamma, self._K, self._settings
         )
-        return post[:2].copy(), float(post[2])
+        return np.array([rate, angle]), float(tau)

@@ -41,6 +41,7 @@ from motosim.estimation.kernel import (
     TORQUE_SENSOR,
     WALCOTT_ZAK,
     EstimatorKernel,
+    TorqueSensorSettings,
     pack,
 )
 from motosim.estimation.walcott_zak import (
@@ -155,7 +156,8 @@ def torque_sensor_kernel(dt: float, *, low_pass: float = 0.0) -> EstimatorKernel
 
     The estimate is the measured torque through the first-order low-pass of corner
     ``low_pass`` [Hz] discretised exactly for a held input, y+ = y + a (u - y) with
-    a = 1 - exp(-2 pi f_c dt) (``p[0]``; a = 1, the torque as measured, for ``low_pass`` 0).
+    a = 1 - exp(-2 pi f_c dt) (its :class:`~motosim.estimation.kernel.TorqueSensorSettings`;
+    a = 1, the torque as measured, for ``low_pass`` 0).
 
     Parameters
     ----------
@@ -175,7 +177,7 @@ def torque_sensor_kernel(dt: float, *, low_pass: float = 0.0) -> EstimatorKernel
 
     Examples
     --------
-    >>> float(torque_sensor_kernel(1e-3).p[0])
+    >>> torque_sensor_kernel(1e-3).torque_sensor.low_pass
     1.0
     """
     if not (math.isfinite(dt) and dt > 0.0):
@@ -183,7 +185,8 @@ def torque_sensor_kernel(dt: float, *, low_pass: float = 0.0) -> EstimatorKernel
     if not (math.isfinite(low_pass) and low_pass >= 0.0):
         raise MotosimError(f"low_pass = {low_pass!r}; expected a finite corner >= 0 [Hz]")
     a = 1.0 if low_pass == 0.0 else -math.expm1(-2.0 * math.pi * low_pass * dt)
-    return pack(TORQUE_SENSOR, np.zeros((1, 1)), np.zeros((1, 1)), np.zeros(1), [a], dt)
+    zero = np.zeros((1, 1))
+    return pack(TORQUE_SENSOR, zero, zero, np.zeros(1), TorqueSensorSettings(a), dt)
 
 
 def estimate(
@@ -340,26 +343,28 @@ def step_kernel(
         Rider-torque estimate at this sample [N*m].
     """
     if k.kind == TORQUE_SENSOR:  # the low-pass's output, started at the first sample
-        if state[1] == 0.0 or k.p[0] >= 1.0:  # the first sample, or no low-pass: as measured
+        a = k.torque_sensor.low_pass
+        if state[1] == 0.0 or a >= 1.0:  # the first sample, or no low-pass: as measured
             state[0], state[1] = torque, 1.0
         else:
-            state[0] += k.p[0] * (torque - state[0])
+            state[0] += a * (torque - state[0])
         return float(state[0])
     if k.kind == WALCOTT_ZAK:
-        new, _ = wz_step(
-            state, theta, theta_dot, current, k.Phi[:2, :2], k.Gamma[:2, :], k.gain[:2], k.p
+        return wz_step(
+            state,
+            theta,
+            theta_dot,
+            current,
+            k.Phi[:2, :2],
+            k.Gamma[:2, :],
+            k.gain[:2],
+            k.walcott_zak,
         )
-        for i in range(4):
-            state[i] = new[i]
-        return float(new[2])
     if k.kind == INVERSE_DYNAMICS:
-        new, tau = inverse_dynamics_step(state, theta, current, k.Phi, k.Gamma[:, :2], k.p[:7])
-        for i in range(4):
-            state[i] = new[i]
-        return float(tau)
-    post, nxt = kalman_step(
-        state[:3], theta, current, k.Phi[:3, :3], k.Gamma[:3, :2], k.gain[:3], k.p[:3]
+        return inverse_dynamics_step(
+            state, theta, current, k.Phi, k.Gamma[:, :2], k.inverse_dynamics
+        )
+    _, _, tau = kalman_step(
+        state[:3], theta, current, k.Phi[:3, :3], k.Gamma[:3, :2], k.gain[:3], k.kalman
     )
-    for i in range(3):
-        state[i] = nxt[i]
-    return float(post[2])
+    return tau

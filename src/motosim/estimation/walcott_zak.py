@@ -41,7 +41,7 @@ from scipy.linalg import solve_continuous_lyapunov
 
 from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
-from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel, pack
+from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel, WalcottZakSettings, pack
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.checks import check_number
@@ -436,15 +436,16 @@ def wz_step(
     Phi: Array,
     Gamma: Array,
     g: Array,
-    p: Array,
-) -> tuple[Array, float]:
+    c: WalcottZakSettings,
+) -> float:
     """One sample of the Walcott-Zak observer, exactly discretised (ZOH) at its step.
 
     Parameters
     ----------
     state : ndarray, shape (4,)
         [theta_h'_hat, theta_h_hat, filtered injection, previous rate input]
-        [rad/s, rad, N*m, rad/s].
+        [rad/s, rad, N*m, rad/s], advanced to the next sample in place; entry 2 is then the
+        rider-torque estimate at this sample.
     theta, theta_dot : float
         Measured angle [rad] and differentiated rate [rad/s] at this sample.
     current : float
@@ -456,19 +457,16 @@ def wz_step(
         angle (held), and the torque input of D.
     g : ndarray, shape (2,)
         F C_a, so that F (y_a - y_a_hat) = g . ([theta_dot, theta] - x_hat).
-    p : ndarray, shape (10,)
-        [eta, epsilon, injection sign, beta_s, dead zone, tanh width, filter coefficient
-        1 - exp(-h / T), rate extrapolation weight w, N k_t [N*m/A], stick projection
-        (1.0 or 0.0)]: the rate used is theta_dot + w (theta_dot - previous theta_dot);
-        w = 1/2 turns a backward difference, the mean rate over the last step, into an
-        estimate at the sample.
+    c : WalcottZakSettings
+        The injection, the friction compensation, the filter and the rate extrapolation:
+        the rate used is theta_dot + w (theta_dot - previous theta_dot); w = 1/2 turns a
+        backward difference, the mean rate over the last step, into an estimate at the
+        sample.
 
     Returns
     -------
-    state : ndarray, shape (4,)
-        At the next sample; entry 2 is the rider-torque estimate at this sample.
-    E : float
-        Injected torque at this sample, sign included [N*m].
+    float
+        Rider-torque estimate at this sample [N*m] (``state[2]`` after the step).
 
     Notes
     -----
@@ -489,29 +487,29 @@ def wz_step(
     rate. The estimate then stays where it was while the stuck handlebar is consistent with
     it, and moves by what friction cannot explain.
     """
-    eta, eps, sgn, beta_s, dz, width, alpha = p[0], p[1], p[2], p[3], p[4], p[5], p[6]
-    rate = theta_dot + p[7] * (theta_dot - state[3])
+    beta_s = c.beta_s
+    rate = theta_dot + c.rate_weight * (theta_dot - state[3])
     s = g[0] * (rate - state[0]) + g[1] * (theta - state[1])  # F (y_a - y_a_hat)
-    E = sgn * eta * s / (abs(s) + eps)  # eq. (12), injected as + sgn D E
-    slide = smooth_sign(theta_dot, dz, width)
+    E = c.sign * c.eta * s / (abs(s) + c.epsilon)  # eq. (12), injected as + sign D E
+    slide = smooth_sign(theta_dot, c.dead_zone, c.friction_width)
     tau_p_hat = -beta_s * slide
-    if p[9] > 0.0 and beta_s > 0.0:  # stick: friction holds what the last estimate does not
-        held = -(p[8] * current + state[2])
+    if c.stick_projection and beta_s > 0.0:  # stick: friction holds what the estimate does not
+        held = -(c.torque_per_amp * current + state[2])
         tau_p_hat += (1.0 - abs(slide)) * min(max(held, -beta_s), beta_s)
     torque = tau_p_hat + E
-    out = np.empty(4)
+    x0, x1 = state[0], state[1]
     for r in range(2):
-        out[r] = (
-            Phi[r, 0] * state[0]
-            + Phi[r, 1] * state[1]
+        state[r] = (
+            Phi[r, 0] * x0
+            + Phi[r, 1] * x1
             + Gamma[r, 0] * current
             + Gamma[r, 1] * rate
             + Gamma[r, 2] * theta
             + Gamma[r, 3] * torque
         )
-    out[2] = state[2] + alpha * (E - state[2])
-    out[3] = theta_dot
-    return out, E
+    state[2] += c.filter_alpha * (E - state[2])
+    state[3] = theta_dot
+    return float(state[2])
 
 
 @njit(cache=True)
@@ -598,26 +596,24 @@ class WalcottZakObserver:
                 f"{self.error_map_radius:.3g} >= 1); raise epsilon or lower the injection "
                 f"bandwidth ({gains.injection_bandwidth:.4g} 1/s) below about 1/dt"
             )
-        self._p = np.array(
-            [
-                gains.eta,
-                gains.epsilon,
-                gains.injection_sign,
-                gains.beta_s,
-                gains.dead_zone,
-                gains.friction_width,
-                -math.expm1(-h / gains.filter_time_constant),
-                0.5 if rate_measurement == "backward_difference" else 0.0,
-                gains.handlebar.torque_per_amp,
-                1.0 if stick_projection else 0.0,
-            ]
+        self._settings = WalcottZakSettings(
+            eta=gains.eta,
+            epsilon=gains.epsilon,
+            sign=gains.injection_sign,
+            beta_s=gains.beta_s,
+            dead_zone=gains.dead_zone,
+            friction_width=gains.friction_width,
+            filter_alpha=-math.expm1(-h / gains.filter_time_constant),
+            rate_weight=0.5 if rate_measurement == "backward_difference" else 0.0,
+            torque_per_amp=gains.handlebar.torque_per_amp,
+            stick_projection=bool(stick_projection),
         )
         self.reset()
 
     @property
     def kernel(self) -> EstimatorKernel:
         """The compiled kernel's record (:func:`wz_step`, gain F C_a), for compiled loops."""
-        return pack(WALCOTT_ZAK, self._Phi, self._Gamma, self._g, self._p, self.dt)
+        return pack(WALCOTT_ZAK, self._Phi, self._Gamma, self._g, self._settings, self.dt)
 
     def reset(self) -> None:
         """Return to the initial state: the next sample initialises x_hat; tau_r_hat = 0."""
@@ -646,17 +642,9 @@ class WalcottZakObserver:
         """
         state = self._state
         if state is None:
-            state = np.zeros(4)
+            state = self._state = np.zeros(4)
             wz_start(state, float(theta_h), float(theta_h_dot), float(i_m))
-        new, _ = wz_step(
-            state,
-            float(theta_h),
-            float(theta_h_dot),
-            float(i_m),
-            self._Phi,
-            self._Gamma,
-            self._g,
-            self._p,
-        )
-        self._state = new
-        return state[:2].copy(), float(new[2])
+        x_hat = state[:2].copy()
+        args = (float(theta_h), float(theta_h_dot), float(i_m))
+        tau = wz_step(state, *args, self._Phi, self._Gamma, self._g, self._settings)
+        return x_hat, float(tau)

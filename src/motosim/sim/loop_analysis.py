@@ -269,9 +269,9 @@ def stack_loop(
             "observer"
         )
     est = model.estimator
-    Phi, Gamma, g, p = est.Phi[:2, :2], est.Gamma[:2, :4], est.gain[:2], est.p
-    injection = p[2] * p[0] / p[1]
-    alpha, w = p[6], p[7]
+    Phi, Gamma, g, wz = est.Phi[:2, :2], est.Gamma[:2, :4], est.gain[:2], est.walcott_zak
+    injection = wz.sign * wz.eta / wz.epsilon
+    alpha, w = wz.filter_alpha, wz.rate_weight
     ff = model.feedforward
     A_h, B_h = _held_plant(handlebar, hands)
     Ap, Bp = zoh(A_h, B_h, h)

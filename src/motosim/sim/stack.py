@@ -747,8 +747,8 @@ def _delay(
 def _friction_width(estimator: EstimatorKernel) -> float:
     """The rate scale of the Walcott-Zak observer's friction tanh [rad/s] (its setting
     ``friction_width``, in its kernel's parameters), else :data:`DELAY_FRICTION_WIDTH`."""
-    if estimator.kind == WALCOTT_ZAK and estimator.p[5] > 0.0:
-        return float(estimator.p[5])
+    if estimator.kind == WALCOTT_ZAK and estimator.walcott_zak.friction_width > 0.0:
+        return estimator.walcott_zak.friction_width
     return DELAY_FRICTION_WIDTH
 
 
