@@ -510,7 +510,7 @@ class VirtualRig:
         if self._previous is not None and s.stale > 0.0 and rng.random() < s.stale:
             frame = self._previous  # the previous frame again, counter unchanged
         else:
-            self._counter = (self._counter + 1) & 0xF
+            self._counter = (self._counter + 1) % 15  # E2E Profile 1's counter: 0 to 14
         self._previous = frame
         if s.burst_enter > 0.0:
             if self._burst:
