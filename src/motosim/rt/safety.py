@@ -233,10 +233,8 @@ N k_t [N*m/A], twice its dry friction (the monitor's dead band) [N*m] and beta_e
 def safety_params(
     limits: SafetyLimits, dt: float, periods_per_frame: int, handlebar: HandlebarParameters | None
 ) -> Any:
-    """The limits, the period [s], the watchdog's periods (``watchdog_periods`` frame
-    periods of ``periods_per_frame`` control periods), the control periods per status frame
-    and the frozen-sensor monitor's handlebar (N k_t [N*m/A], twice the dry friction [N*m],
-    beta_eq [N*m*s/rad]) as the compiled stage reads them."""
+    """The :data:`SafetyParams` of ``limits``, the period ``dt`` [s], ``periods_per_frame``
+    and the frozen-sensor monitor's ``handlebar`` (None: the monitor off)."""
     monitor = (
         (0.0, 0.0, 0.0)
         if handlebar is None
@@ -556,7 +554,7 @@ class SafetyStage:
     (0.0, 'communication watchdog: no valid status frame for 3 periods (t = 0.630 s)')
     """
 
-    __slots__ = ("_brief", "_p", "_s", "_snapshot", "_watchdog", "dt", "limits")
+    __slots__ = ("_brief", "_p", "_s", "_snapshot", "dt", "limits")
 
     def __init__(
         self,
@@ -576,7 +574,6 @@ class SafetyStage:
             raise MotosimError(
                 f"periods_per_frame = {periods_per_frame!r}: expected an integer >= 1"
             )
-        self._watchdog = limits.watchdog_periods * int(periods_per_frame)
         self.limits = limits
         self.dt = float(dt)
         self._s = SafetyState()
@@ -595,7 +592,7 @@ class SafetyStage:
     @property
     def watchdog_periods(self) -> int:
         """Control periods without a valid status frame that trip the watchdog."""
-        return self._watchdog
+        return int(self._p.watchdog)
 
     # --- state -------------------------------------------------------------------------
     @property
