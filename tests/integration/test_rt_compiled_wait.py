@@ -117,7 +117,7 @@ def _recording(codecs: HandlebarCodecs, n: int) -> list[list[bytes]]:
     for k in range(n):
         theta = 0.3 * np.sin(2.0 * np.pi * 2.0 * k / RATE)
         status = _datagram(
-            codecs, "status", angle=theta, current=0.5 * np.cos(k / 50.0), counter=counter & 0xF
+            codecs, "status", angle=theta, current=0.5 * np.cos(k / 50.0), counter=counter % 15
         )
         counter += 1
         waiting = [] if k in (5, 300) else [status]

@@ -36,15 +36,15 @@ from enum import IntEnum
 from typing import Any, NamedTuple
 
 from numba import njit
+from numba.core import types
 from numba.experimental import structref
 
 from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
-from motosim.rt.safety import FieldsStruct
 
 __all__ = [
     "INPUT_ERROR", "MAX_COUNTER", "E2EConfig", "E2EReceiver", "E2ESnapshot", "E2EState",
-    "E2EStatus", "e2e_check", "e2e_restart",
+    "E2EStatus", "FieldsStruct", "e2e_check", "e2e_restart",
 ]  # fmt: skip
 
 
@@ -111,6 +111,14 @@ class E2ESnapshot(NamedTuple):
 
 
 _SETTINGS = tuple(f.name for f in fields(E2EConfig))
+
+
+class FieldsStruct(types.StructRef):
+    """A numba ``structref`` type whose fields' types are taken without literal values."""
+
+    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
+        """The fields' types without literal values."""
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
 
 
 @structref.register

@@ -36,10 +36,10 @@ from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from motosim.io.can import RECV_AVAILABLE, decode_frame, encode_frame, recv_datagrams, unpack_frame
+from motosim.rt.e2e import FieldsStruct
 from motosim.rt.ring import RingCounter
 from motosim.rt.safety import (
     Fault,
-    FieldsStruct,
     SafetyParams,
     State,
     safety_enable,

@@ -68,7 +68,7 @@ from motosim.cueing.platform import CueingConfig, Platform
 from motosim.cueing.washout import WASHOUT_STATE_SIZE, design_washout, washout_step
 from motosim.errors import MotosimError
 from motosim.io.can import Link, PlatformCodecs
-from motosim.rt.safety import MAX_COUNTER_STEP, State
+from motosim.rt.safety import State
 
 __all__ = [
     "PLATFORM_FRAME", "PLATFORM_MAGIC", "PLATFORM_VERSION", "PlatformCanSender", "PlatformCueing",
@@ -83,6 +83,8 @@ PLATFORM_FRAME = struct.Struct("<4sBBBBIdfffffff")
 PLATFORM_MAGIC = b"MSPF"
 PLATFORM_VERSION = 1
 _LIVE = (State.FADE_IN, State.RUNNING, State.STOPPING)
+_MAX_COUNTER_STEP = 7
+"""The largest forward step of a ``PF_COMMAND`` frame's 4-bit counter the twin takes as new."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -466,7 +468,7 @@ class PlatformTwin:
             self._counter = -1
         if self._counter >= 0:
             step = (counter - self._counter) & 0xF
-            if step == 0 or step > MAX_COUNTER_STEP:
+            if step == 0 or step > _MAX_COUNTER_STEP:
                 self.late += 1
                 return True
             self.lost += step - 1

@@ -167,10 +167,7 @@ def parse_rig(
     are the fields of :class:`RigFaults`.
     """
     values: dict[str, Any] = dict(base)
-    allowed = {f.name for f in fields(RigSettings)}
-    for key, value in table.items():
-        if key not in allowed:
-            raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
+    for key, value in _known(table, RigSettings, where).items():
         if key == "faults":
             values[key] = _parse_faults(value, f"{where[:-1]}.faults]")
         else:
@@ -178,14 +175,20 @@ def parse_rig(
     return RigSettings(**values)
 
 
-def _parse_faults(table: Any, where: str) -> RigFaults:
+def _known(table: Any, kind: type, where: str) -> Mapping[str, Any]:
+    """``table``, checked to be a table whose keys are fields of the dataclass ``kind``."""
     if not isinstance(table, Mapping):
         raise MotosimError(f"{where}: expected a table")
-    allowed = {f.name for f in fields(RigFaults)}
+    allowed = {f.name for f in fields(kind)}
     for key in table:
         if key not in allowed:
             raise MotosimError(f"{where}: unknown key {key!r}; expected one of {sorted(allowed)}")
-    return RigFaults(**{key: table_number(key, value, where) for key, value in table.items()})
+    return table
+
+
+def _parse_faults(table: Any, where: str) -> RigFaults:
+    known = _known(table, RigFaults, where)
+    return RigFaults(**{key: table_number(key, value, where) for key, value in known.items()})
 
 
 class Bar(IntEnum):
@@ -510,7 +513,7 @@ class VirtualRig:
         if self._previous is not None and s.stale > 0.0 and rng.random() < s.stale:
             frame = self._previous  # the previous frame again, counter unchanged
         else:
-            self._counter = (self._counter + 1) & 0xF
+            self._counter = (self._counter + 1) % 15  # E2E Profile 1's counter: 0 to 14
         self._previous = frame
         if s.burst_enter > 0.0:
             if self._burst:

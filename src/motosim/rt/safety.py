@@ -17,12 +17,10 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   (IDLE once the command sent is zero: the slew-rate limit may take longer than the fade);
 - a communication watchdog: no valid status frame for ``watchdog_periods`` periods (the
   loop's deadlines, those it skipped when late included) -> zero command and a latched
-  fault; a status frame is valid when its checksum is right and its alive counter has moved
-  forward by 1 to 7 of its 16 values (a stale, duplicated or older frame does not feed the
-  watchdog and is not used: the counter's window of AUTOSAR's E2E profiles,
-  *Specification of SW-C End-to-End Communication Protection Library*, R4.0); after 7 or
-  more frames lost in a row the counter is taken up again as
-  :meth:`SafetyStage.status_frame` says;
+  fault; a status frame is valid when its checksum is right and the check of AUTOSAR E2E
+  Profile 1 (:mod:`motosim.rt.e2e`, settings :data:`STATUS_E2E`) gives it ``INITIAL``,
+  ``OK`` or ``OKSOMELOST`` (a repeated, older or out-of-sequence frame does not feed the
+  watchdog and is not used);
 - guards: a NaN or inf measurement, estimate or command, a bad checksum, a fault flag of the
   drive, an emergency stop (from a CAN frame or the keyboard) -> zero command at once and a
   latched fault with its reason and time;
@@ -57,14 +55,16 @@ from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numba import njit
-from numba.core import types
 from numba.experimental import structref
 
 from motosim.errors import MotosimError
 from motosim.params.checks import check_number, short_repr
 from motosim.params.handlebar import HandlebarParameters
+from motosim.rt.e2e import E2EConfig, E2EState, E2EStatus, FieldsStruct, e2e_check, e2e_restart
 
-__all__ = ["SAFETY_RANGES", "Fault", "SafetyLimits", "SafetyStage", "State", "fault_reason"]
+__all__ = [
+    "SAFETY_RANGES", "STATUS_E2E", "Fault", "SafetyLimits", "SafetyStage", "State", "fault_reason",
+]  # fmt: skip
 
 
 class State(IntEnum):
@@ -196,9 +196,16 @@ class SafetyLimits:
             )
 
 
-MAX_COUNTER_STEP = 7
-"""The largest forward step of a status frame's 4-bit alive counter taken as new (up to 6
-frames lost); a larger one is an older frame delivered after a newer."""
+STATUS_E2E = E2EConfig(
+    max_delta_counter_init=1, max_no_new_or_repeated_data=13, sync_counter_init=0
+)
+"""Profile 1's settings of the status frame's check, called once per frame period (those
+without a frame at the next frame): a step of the counter up to one more than the frame
+periods since the last frame taken is new (the periods without a frame are its lost frames);
+after 14 frame periods or more without a new counter (where the 15 values may have come
+round) the first frame is ``SYNC``, not used, and the next one step on is ``OK``; an older
+frame is ``WRONGSEQUENCE`` and leaves the last counter as it is (no synchronisation to
+it)."""
 
 # --- the compiled stage ---------------------------------------------------------------
 # Its state (a numba structref) and limits (a named tuple) are stepped by the same functions
@@ -226,10 +233,8 @@ N k_t [N*m/A], twice its dry friction (the monitor's dead band) [N*m] and beta_e
 def safety_params(
     limits: SafetyLimits, dt: float, periods_per_frame: int, handlebar: HandlebarParameters | None
 ) -> Any:
-    """The limits, the period [s], the watchdog's periods (``watchdog_periods`` frame
-    periods of ``periods_per_frame`` control periods), the control periods per status frame
-    and the frozen-sensor monitor's handlebar (N k_t [N*m/A], twice the dry friction [N*m],
-    beta_eq [N*m*s/rad]) as the compiled stage reads them."""
+    """The :data:`SafetyParams` of ``limits``, the period ``dt`` [s], ``periods_per_frame``
+    and the frozen-sensor monitor's ``handlebar`` (None: the monitor off)."""
     monitor = (
         (0.0, 0.0, 0.0)
         if handlebar is None
@@ -240,14 +245,6 @@ def safety_params(
         handlebar is not None, *monitor,
     )  # fmt: skip
     return SafetyParams(*(float(getattr(limits, name)) for name in _LIMITS), *derived)
-
-
-class FieldsStruct(types.StructRef):
-    """A numba ``structref`` type whose fields' types are taken without literal values."""
-
-    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
-        """The fields' types without literal values."""
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)  # type: ignore[no-untyped-call]
 
 
 @structref.register
@@ -264,7 +261,7 @@ class SafetySnapshot(NamedTuple):
     t: float
     envelope: float
     last: float
-    counter: int
+    heard: float
     fresh: bool
     missing: float
     quiet: float
@@ -274,7 +271,6 @@ class SafetySnapshot(NamedTuple):
     free: float
     lost: int
     stale: int
-    behind: int
 
 
 class SafetyState(structref.StructRefProxy):
@@ -282,34 +278,35 @@ class SafetyState(structref.StructRefProxy):
 
     Fields: ``state`` and ``fault`` (codes of :class:`State` and :class:`Fault`),
     ``fault_time`` [s] (NaN without a fault), ``t`` the stage's time [s], ``envelope`` the
-    fade's scale [-], ``last`` the last command sent [A], ``counter`` the last alive counter
-    (-1 before the first frame), ``fresh`` whether a valid frame came this period,
+    fade's scale [-], ``last`` the last command sent [A], ``heard`` the time of the last
+    status frame checked [s] (NaN before the first), ``fresh`` whether a valid frame came
+    this period,
     ``missing`` periods without one, ``quiet`` the time the rider's torque has stayed low
     [s], ``hands_off`` its flag, ``ref_theta`` [rad] and ``ref_torque`` [N*m] the
     frozen-sensor monitor's references and ``free`` its free turn [rad], ``lost`` and
-    ``stale`` the frames lost and refused, ``behind`` the alive counter of the last frame
-    refused as older (-1 if the last frame was not one). Python reads them through
+    ``stale`` the frames lost and refused, and ``e2e`` the status frame's Profile 1 check
+    (:class:`motosim.rt.e2e.E2EState`). Python reads them but ``e2e`` through
     :func:`safety_snapshot`.
     """
 
     def __new__(cls) -> "SafetyState":
         made: SafetyState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, int(State.IDLE), int(Fault.NONE), math.nan, 0.0, 0.0, 0.0, -1, False, 0.0, 0.0,
-            False, math.nan, 0.0, 0.0, 0, 0, -1,
+            cls, int(State.IDLE), int(Fault.NONE), math.nan, 0.0, 0.0, 0.0, math.nan, False, 0.0,
+            0.0, False, math.nan, 0.0, 0.0, 0, 0, E2EState(STATUS_E2E),
         )  # fmt: skip
         return made
 
 
-structref.define_proxy(SafetyState, SafetyStateType, list(SafetySnapshot._fields))  # type: ignore[no-untyped-call]
+structref.define_proxy(SafetyState, SafetyStateType, [*SafetySnapshot._fields, "e2e"])  # type: ignore[no-untyped-call]
 
 
 @njit(cache=True)
 def safety_snapshot(s: Any) -> SafetySnapshot:
     """The stage's state fields now, for Python."""
     return SafetySnapshot(
-        s.state, s.fault, s.fault_time, s.t, s.envelope, s.last, s.counter, s.fresh,
+        s.state, s.fault, s.fault_time, s.t, s.envelope, s.last, s.heard, s.fresh,
         s.missing, s.quiet, s.hands_off, s.ref_theta, s.ref_torque, s.free, s.lost,
-        s.stale, s.behind,
+        s.stale,
     )  # fmt: skip
 
 
@@ -326,8 +323,8 @@ def safety_clear(s: Any) -> None:
     s.fault_time = math.nan
     s.state = State.IDLE
     s.missing = 0.0
-    s.counter = -1
-    s.behind = -1
+    s.heard = math.nan
+    e2e_restart(s.e2e)
     s.ref_theta = math.nan
     s.free = 0.0
     s.quiet = 0.0
@@ -362,38 +359,25 @@ def safety_status_frame(
 ) -> bool:
     """:meth:`SafetyStage.status_frame` on the state and limits (``now`` NaN: the
     frame is taken as one period after the last step)."""
+    t = s.t + p.dt if now != now else now
+    if s.heard == s.heard:  # the frame periods since the last frame, each a receive cycle
+        cycles = math.floor((t - s.heard) / (p.dt * p.per_frame) + 0.5)
+        for _ in range(min(cycles - 1, 15)):  # those without a frame (15 saturate the check)
+            e2e_check(s.e2e, False, True, 0)
+    s.heard = t
+    status = e2e_check(s.e2e, True, checksum_ok, int(counter))
     if not checksum_ok:
         safety_trip(s, Fault.CHECKSUM)
         return False
     if drive_fault:  # whatever its counter: a drive that reports a fault is believed
         safety_trip(s, Fault.DRIVE_FAULT)
-    c = int(counter) & 0xF
-    last = s.counter
-    step = (c - last) & 0xF
-    behind = s.behind
-    s.behind = -1
-    if last >= 0 and (step == 0 or step > MAX_COUNTER_STEP):
-        # The silence of 7 or more frames lost (as many frame periods without a valid frame,
-        # the counter gone on by as many frames, within one) tells them from older frames
-        # (:meth:`SafetyStage.status_frame`); the periods since the last step counted from
-        # ``now``, as the step counts them.
-        frames = (s.missing + _periods_since(s, p, now)) / p.per_frame
-        silence = (
-            not s.fresh
-            and frames >= MAX_COUNTER_STEP + 1
-            and (c - last - math.floor(frames + 0.5) + 1) & 0xF <= 2
-        )
-        if step == 0 or behind < 0 or c != (behind + 1) & 0xF or not silence:
-            s.stale += 1  # the same frame again, or an older one after a newer
-            if step != 0:
-                s.behind = c
-            return False
-        # taken up again from the second
-        s.lost += ((behind - last) & 0xF) - 1
-        s.stale -= 1  # the first was no older frame: it was fresh, though not used
-    elif last >= 0:
-        s.lost += step - 1
-    s.counter = c
+    if status == E2EStatus.OK or status == E2EStatus.OKSOMELOST or status == E2EStatus.SYNC:
+        s.lost += s.e2e.lost_data
+    elif status != E2EStatus.INITIAL:  # repeated, older, or a counter of 15
+        s.stale += 1
+        return False
+    if status == E2EStatus.SYNC:  # the counter taken up again: its data not yet
+        return False
     s.fresh = True
     return True
 
@@ -558,7 +542,7 @@ class SafetyStage:
     >>> stage.enable()
     >>> out = []
     >>> for k in range(60):
-    ...     _ = stage.status_frame(checksum_ok=True, counter=k % 16, drive_fault=False)
+    ...     _ = stage.status_frame(checksum_ok=True, counter=k % 15, drive_fault=False)
     ...     out.append(stage.step(5.0, theta=0.0, omega=0.0, tau_hat=1.0))
     >>> round(out[24], 3), out[-1], stage.state.name    # half-way through the 0.5 s fade-in
     (2.5, 5.0, 'RUNNING')
@@ -570,7 +554,7 @@ class SafetyStage:
     (0.0, 'communication watchdog: no valid status frame for 3 periods (t = 0.630 s)')
     """
 
-    __slots__ = ("_brief", "_p", "_s", "_snapshot", "_watchdog", "dt", "limits")
+    __slots__ = ("_brief", "_p", "_s", "_snapshot", "dt", "limits")
 
     def __init__(
         self,
@@ -590,7 +574,6 @@ class SafetyStage:
             raise MotosimError(
                 f"periods_per_frame = {periods_per_frame!r}: expected an integer >= 1"
             )
-        self._watchdog = limits.watchdog_periods * int(periods_per_frame)
         self.limits = limits
         self.dt = float(dt)
         self._s = SafetyState()
@@ -609,7 +592,7 @@ class SafetyStage:
     @property
     def watchdog_periods(self) -> int:
         """Control periods without a valid status frame that trip the watchdog."""
-        return self._watchdog
+        return int(self._p.watchdog)
 
     # --- state -------------------------------------------------------------------------
     @property
@@ -651,13 +634,13 @@ class SafetyStage:
 
     @property
     def frames_lost(self) -> int:
-        """Status frames lost (alive counter jumps)."""
+        """Status frames lost (Profile 1's ``DeltaCounter - 1`` of the frames taken)."""
         return int(self._snapshot(self._s).lost)
 
     @property
     def frames_stale(self) -> int:
-        """Status frames whose alive counter had not moved (stale or duplicated) or went
-        back (an older frame delivered after a newer)."""
+        """Status frames refused by the counter's check: ``REPEATED`` (stale or duplicated),
+        ``WRONGSEQUENCE`` (older, or too far ahead) or a counter of 15."""
         return int(self._snapshot(self._s).stale)
 
     def brief(self) -> tuple[State, Fault, float]:
@@ -688,7 +671,7 @@ class SafetyStage:
         safety_trip(self._s, int(fault))
 
     def clear(self) -> None:
-        """Forget a latched fault and go IDLE (the watchdog, the alive counter, the
+        """Forget a latched fault and go IDLE (the watchdog, the counter's check, the
         frozen-sensor monitor and hands-off detection start afresh)."""
         safety_clear(self._s)
 
@@ -698,19 +681,14 @@ class SafetyStage:
     ) -> bool:
         """Check a received status frame; True if it is valid and fresh (use its values).
 
-        A wrong checksum trips CHECKSUM; a drive fault flag trips DRIVE_FAULT; a counter
-        that has not moved (a stale or duplicated frame) or went back (an older frame
-        delivered after a newer: more than :data:`MAX_COUNTER_STEP` ahead on the 4-bit
-        circle) makes the frame invalid; a counter that jumped by up to
-        :data:`MAX_COUNTER_STEP` counts the lost frames. Two frames in a row one count
-        apart, both beyond that window, after :data:`MAX_COUNTER_STEP` frame periods
-        without a valid frame (the silence of 7 or more frames lost: the periods stepped
-        since the last valid frame, and those since the last step, the deadlines a late loop
-        skipped included, counted from ``now``), are 7 or more frames lost: the second is
-        valid (the counter taken up again). Without that silence they are older frames
-        (delivered late, or replayed) and both are refused: a gateway replaying its last
-        three frames trips a watchdog of up to 13 frames, a longer one cannot tell the replay
-        from the counter gone on (a limit of the 4-bit counter).
+        A wrong checksum trips CHECKSUM; a drive fault flag trips DRIVE_FAULT. The counter
+        (0 to 14) goes through AUTOSAR E2E Profile 1's check (:data:`STATUS_E2E`), one
+        receive cycle per frame period: the frame periods since the last frame that passed
+        without one (the deadlines a late loop skipped included, counted from ``now``) are
+        cycles without a frame first, so that they widen the step the counter may make.
+        ``INITIAL``, ``OK`` and ``OKSOMELOST`` are valid (the lost frames counted);
+        ``REPEATED``, ``WRONGSEQUENCE`` and a counter of 15 are refused (counted stale);
+        ``SYNC`` counts its lost frames but is not used.
 
         ``now`` is the time of the period that reads the frame [s], on the clock of
         :meth:`step`'s ``now`` (by default, and for a stage stepped without one: one period

@@ -118,7 +118,7 @@ def test_status_frames_quantise_like_the_encoder_and_the_dbc() -> None:
     quantum = 2 * math.pi / 2**14
     assert rows.shape[0] == 51  # one at t = 0, then every millisecond
     assert np.all(np.abs(angle / quantum - np.round(angle / quantum)) * quantum <= 5e-6 + 1e-12)
-    assert np.all(np.diff(rows[:, ST.index("COUNTER")]) % 16 == 1)
+    assert np.all(np.diff(rows[:, ST.index("COUNTER")]) % 15 == 1)
 
 
 @pytest.mark.parametrize(
@@ -157,7 +157,7 @@ def test_loss_bursts_stale_and_duplicates_are_counted() -> None:
     rig, link = _rig(loss=0.1, burst_enter=0.02, burst_leave=0.3, stale=0.05, duplicate=0.05)
     rig.advance_to(2.0)
     counters = _status(link)[:, ST.index("COUNTER")]
-    steps = np.diff(counters) % 16
+    steps = np.diff(counters) % 15
     assert rig.frames_dropped > 200  # 10 % random plus bursts of about 3 frames
     assert np.sum(steps == 0) > 50  # stale or duplicated: the counter did not move
     assert len(link.sent) + rig.frames_dropped > 2001
@@ -182,7 +182,7 @@ def test_jitter_never_reorders_one_identifier() -> None:
         rig.advance_to(k * 1e-4)
         arrivals += [k * 1e-4] * (len(link.sent) - before)
     counters = _status(link)[:, ST.index("COUNTER")]
-    assert counters.size > 190 and np.all(np.diff(counters) % 16 == 1)
+    assert counters.size > 190 and np.all(np.diff(counters) % 15 == 1)
     assert np.ptp(np.diff(arrivals)) > 1.5e-3
 
 
@@ -198,7 +198,7 @@ def test_a_late_tick_sends_the_newest_status_frame_not_a_backlog() -> None:
     rig.advance_to(0.0095, catch_up=False)
     assert rig.frames_late == 2 and len(link.sent) == sent + 1
     counters = _status(link)[:, ST.index("COUNTER")]
-    assert (counters[-1] - counters[-2]) % 16 == 3  # the alive counter shows the gap
+    assert (counters[-1] - counters[-2]) % 15 == 3  # the alive counter shows the gap
     for k in range(10, 15):
         rig.advance_to(k * 1e-3)
     assert rig.frames_late == 2 and len(link.sent) == sent + 1 + 4
