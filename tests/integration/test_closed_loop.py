@@ -334,7 +334,8 @@ def test_design_file_observer_is_what_runs(tmp_path: Path) -> None:
     assert slow.observer is not None and slow.observer.injection_bandwidth == 100.0
     kernel_default = build_stack(default).estimator
     kernel_slow = build_stack(slow).estimator
-    assert kernel_default.p[1] != kernel_slow.p[1]  # epsilon follows the injection bandwidth
+    # epsilon follows the injection bandwidth
+    assert kernel_default.walcott_zak.epsilon != kernel_slow.walcott_zak.epsilon
     a = simulate(default, rng=np.random.default_rng(0))
     b = simulate(slow, rng=np.random.default_rng(0))
     assert np.sqrt(np.mean((a["tau_r_hat"] - b["tau_r_hat"]) ** 2)) > 0.05
