@@ -19,7 +19,7 @@ beyond Python's small floats, and nothing logs. :meth:`RateLoop.stats` summarise
 the loop has ended.
 """
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -179,11 +179,23 @@ class RateLoop:
         self._stop = True
 
     def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
-        """Call ``step(k, deadline)`` at each deadline until it returns False or ``periods``
-        (>= 0) pass; the number of steps run. ``k`` is the deadline's index (0, 1, ...;
-        skipped indices are not called), ``deadline`` its time [s] on the clock, the first
-        one period from now."""
+        """Call ``step(k, t)`` once per period until it returns False, :meth:`stop` is
+        called or ``periods`` (>= 0) pass; the number of steps run. ``k`` is the period's
+        index (0, 1, ...; skipped indices are not called), ``t`` its time [s] on the clock:
+        the deadline, the first one period from now (a frame-paced loop: the frame's
+        arrival). The pacing (:meth:`_paces`) waits, records the timing and keeps the
+        totals; this loop only calls the step."""
         _check_periods(periods)
+        self._stop = False
+        before = self._served
+        for k, t in self._paces(periods):
+            if not step(k, t):
+                self._stop = True
+        return self._served - before
+
+    def _paces(self, periods: int) -> Iterator[tuple[int, float]]:
+        """The periods of a run on the clock's deadlines: yields ``(k, deadline)`` when the
+        step is due and records its timing once it has returned."""
         clock = self._clock
         now = clock.now
         sleep_until = clock.sleep_until
@@ -195,13 +207,12 @@ class RateLoop:
         t0 = now() + period
         served = self._served
         missed = 0
-        self._stop = False
         k = 0
         while k < periods and not self._stop:
             deadline = t0 + k * period
             if woken is not None:  # the step's own compiled wait ends at the deadline
                 sleep_until(deadline - WARM_LEAD)
-                carry_on = step(k, deadline)
+                yield k, deadline
                 woke = woken()
             else:
                 if warm is not None:
@@ -209,7 +220,7 @@ class RateLoop:
                     warm(deadline)
                 sleep_until(deadline)
                 woke = now()
-                carry_on = step(k, deadline)
+                yield k, deadline
             done = now()
             slot = served % cap
             wake[slot] = woke - deadline
@@ -221,20 +232,16 @@ class RateLoop:
                 skip = int(late // period) + 1
                 missed += skip
                 k += skip
-            if not carry_on:
-                break
-        return self._close(k, periods, missed, served)
+        self._close(k, periods, missed, served)
 
-    def _close(self, k: int, periods: int, missed: int, served: int) -> int:
-        """Add a run's periods, misses and steps to the totals; return its steps."""
+    def _close(self, k: int, periods: int, missed: int, served: int) -> None:
+        """Add a run's periods, misses and steps to the totals."""
         if k > periods:  # skipped deadlines past the end of the run are not misses
             missed -= k - periods
             k = periods
         self._missed += missed
         self._periods += k
-        ran = served - self._served
         self._served = served
-        return ran
 
     def stats(self) -> TimingStats:
         """The timing of every run so far (the last ``capacity`` steps for the percentiles)."""
@@ -330,10 +337,9 @@ class FramePacedLoop(RateLoop):
         """Waits that ended without a frame."""
         return self._timeouts
 
-    def run(self, step: Callable[[int, float], bool], *, periods: int) -> int:
-        """Call ``step(k, t)`` once per frame until it returns False or ``periods`` pass;
-        the number of steps run."""
-        _check_periods(periods)
+    def _paces(self, periods: int) -> Iterator[tuple[int, float]]:
+        """The periods of a run paced by the frames: yields ``(k, t)`` once per frame (or
+        timeout) and records its timing once the step has returned."""
         now = self._clock.now
         wait = self._wait
         received = self._received
@@ -343,7 +349,6 @@ class FramePacedLoop(RateLoop):
         served = self._served
         missed = gaps = timeouts = 0
         start = frames = received() if received is not None else 0
-        self._stop = False
         k = 0
         last = now()
         limit = self._first_timeout
@@ -367,7 +372,7 @@ class FramePacedLoop(RateLoop):
             k += skip
             slot = served % cap
             wake[slot] = jitter
-            carry_on = step(k, woke)
+            yield k, woke
             spent = now() - woke
             compute[slot] = spent
             if spent > period:  # the answer left after the next frame was due
@@ -381,18 +386,16 @@ class FramePacedLoop(RateLoop):
             k += 1
             last = woke
             limit = self._timeout
-            if not carry_on:
-                break
-        return self._end(k, periods, missed, served, gaps, timeouts, frames - start)
+        self._end(k, periods, missed, served, gaps, timeouts, frames - start)
 
     def _end(
         self, k: int, periods: int, missed: int, served: int, gaps: int, timeouts: int,
         frames: int,
-    ) -> int:  # fmt: skip
+    ) -> None:  # fmt: skip
         """Add a run's timeouts and gaps (the periods that passed less the ``frames``
         received, when they are counted) to the totals; close it (:meth:`_close`)."""
         if self._received is not None:
             gaps = max(0, k - frames)
         self._timeouts += timeouts
         self._gaps += gaps
-        return self._close(k, periods, missed, served)
+        self._close(k, periods, missed, served)
