@@ -7,7 +7,7 @@ The loop: square rider torque, SIMACOM handlebar with dry friction (exact stick-
 time (``time.thread_time`` in this process, ``time.process_time`` in a subprocess), with the
 load average; which computation each one times:
 
-1. the compiled loop alone (``_run_chunk``: the rider, the encoder, the stack's step, the
+1. the compiled loop alone (``chunk_loop``'s: the rider, the encoder, the stack's step, the
    true handlebar's exact step, the row), the stack designed and the rig built beforehand;
    the rider a pure torque source (``hands = "off"``, as in the baselines below), and
    again holding the handlebar with the relaxed grip (the arms' impedance in the plant and
@@ -45,6 +45,7 @@ from numba import njit
 from motosim.control.torque_feedback import design_torque_feedback
 from motosim.params import load_parameters
 from motosim.sim import build_stack, parse_scenario, prepare, simulate
+from motosim.sim.closed_loop import _UNREFERENCED
 from motosim.sim.stack import NO_PREDICTION, StackModel, new_data, reset, step
 
 SCENARIO = """
@@ -92,11 +93,12 @@ def _loop_alone(duration: float, hands: str = "off") -> tuple[float, float]:
     """(periods/s of wall time, of thread CPU time) of the loop alone, best of three; the
     rider's ``hands`` a grip of :data:`motosim.sim.grips.GRIPS`."""
     from motosim.signals import RECORDED
-    from motosim.sim.closed_loop import _ensure_current_layout, _run_chunk, build_rig, new_world
+    from motosim.sim.closed_loop import _ensure_current_layout, build_rig, chunk_loop, new_world
 
     inputs = _inputs(duration, hands=hands)
     model = build_stack(inputs)
     _ensure_current_layout()
+    loop = chunk_loop(model)
     best = (0.0, 0.0)
     for _ in range(1 if os.environ.get("NUMBA_DISABLE_JIT") == "1" else 4):  # the first compiles
         rig = build_rig(inputs, rng=np.random.default_rng(0))
@@ -107,7 +109,7 @@ def _loop_alone(duration: float, hands: str = "off") -> tuple[float, float]:
         out = np.full((n, len(RECORDED)), np.nan)
         limits = np.array([np.inf, -np.inf, np.inf])
         wall, cpu = time.perf_counter(), time.thread_time()
-        done = _run_chunk(0, out, model, data, rig, world, limits)  # < n: left the domain
+        done = loop(0, out, model, data, rig, world, limits)  # < n: left the domain
         rate = (done / (time.perf_counter() - wall), done / (time.thread_time() - cpu))
         best = max(best, rate)
     return best
@@ -278,7 +280,7 @@ def _python_control(duration: float, *, blocks: bool) -> float:
     return t.size / (time.perf_counter() - start)
 
 
-@njit(cache=True)
+@njit(cache=True, **_UNREFERENCED)
 def _drive_stack(model, data, theta, torque):  # type: ignore[no-untyped-def]
     """The stack step alone, fed a recorded angle and rider torque; returns a checksum."""
     total = 0.0

@@ -1189,7 +1189,7 @@ def _outside(mc: Any, data: StackData) -> int:
     return _outside_sharp(mc, data)
 
 
-@overload(_outside)
+@overload(_outside, inline="always")
 def _outside_typed(mc: Any, data: StackData) -> Any:
     return _outside_multibody if is_multibody(mc) else _outside_sharp
 
@@ -1209,17 +1209,17 @@ def _pitch(mc: Any, data: StackData) -> float:
     return _pitch_sharp(mc, data)
 
 
-@overload(_pitch)
+@overload(_pitch, inline="always")
 def _pitch_typed(mc: Any, data: StackData) -> Any:
     return _pitch_multibody if is_multibody(mc) else _pitch_sharp
 
 
-@overload(_start)
+@overload(_start, inline="always")
 def _start_typed(mc: Any, data: StackData, speed: float) -> Any:
     return _start_multibody if is_multibody(mc) else _start_sharp
 
 
-@overload(_advance)
+@overload(_advance, inline="always")
 def _advance_typed(
     mc: Any, model: StackModel, data: StackData, steer: float, force: float, side_force: float
 ) -> Any:
@@ -1231,7 +1231,7 @@ def _steer_acceleration_typed(mc: Any, model: StackModel, data: StackData, torqu
     return _steer_acceleration_multibody if is_multibody(mc) else _steer_acceleration_sharp
 
 
-@overload(_contact_loads)
+@overload(_contact_loads, inline="always")
 def _contact_loads_typed(mc: Any, model: StackModel, data: StackData, force: float) -> Any:
     return _contact_loads_multibody if is_multibody(mc) else _contact_loads_sharp
 
@@ -1266,16 +1266,16 @@ def contact_loads(model: StackModel, data: StackData, force: float) -> tyred.Con
     return loads
 
 
-@overload(outside)
+@overload(outside, inline="always")
 def _outside_in(model: StackModel, data: StackData) -> Any:
     return outside
 
 
-@overload(pitch)
+@overload(pitch, inline="always")
 def _pitch_in(model: StackModel, data: StackData) -> Any:
     return pitch
 
 
-@overload(contact_loads)
+@overload(contact_loads, inline="always")
 def _contact_loads_in(model: StackModel, data: StackData, force: float) -> Any:
     return contact_loads
