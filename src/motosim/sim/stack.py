@@ -1226,6 +1226,8 @@ def _advance_typed(
     return _advance_multibody if is_multibody(mc) else _advance_sharp
 
 
+# compiled as a call rather than inlined at numba's IR level, where its loop's accumulator
+# trips numba's scope check (NumbaIRAssumptionWarning)
 @overload(_steer_acceleration)
 def _steer_acceleration_typed(mc: Any, model: StackModel, data: StackData, torque: float) -> Any:
     return _steer_acceleration_multibody if is_multibody(mc) else _steer_acceleration_sharp
