@@ -289,8 +289,11 @@ def _drive_stack(model, data, theta, torque):  # type: ignore[no-untyped-def]
     return total
 
 
-def _ratio(duration: float, variant: Callable[[StackModel], StackModel], repeats: int = 7) -> float:
-    """Time of the default stack's step over that of ``variant(stack)``.
+def _ratio(
+    duration: float, variant: Callable[[StackModel], StackModel], repeats: int = 7
+) -> tuple[float, float]:
+    """Time of the default stack's step over that of ``variant(stack)``, and the default
+    step's time [s per period of wall time].
 
     The step alone (no plant: the handlebar's stick-slip would make the two runs' worlds
     differ), fed the angle and rider torque of one recorded run, interleaved so that the
@@ -310,7 +313,7 @@ def _ratio(duration: float, variant: Callable[[StackModel], StackModel], repeats
             start = time.perf_counter()
             _drive_stack(model, data, theta, torque)
             best[name] = min(best[name], time.perf_counter() - start)
-    return best["on"] / best["off"]
+    return best["on"] / best["off"], best["on"] / theta.size
 
 
 def _without_projection(model: StackModel) -> StackModel:
@@ -329,8 +332,8 @@ def _without_feedforward(model: StackModel) -> StackModel:
 def run() -> dict[str, float]:
     """Periods per second of each (wall and CPU time), the ratios, the feedforward's cost."""
     load = os.getloadavg()[0]
-    projection = _ratio(20.0, _without_projection)
-    feedforward = _ratio(20.0, _without_feedforward)
+    projection, step_alone = _ratio(20.0, _without_projection)
+    feedforward, _ = _ratio(20.0, _without_feedforward)
     loop_wall, loop_cpu = _loop_alone(60.0)
     _, held_cpu = _loop_alone(60.0, hands="relaxed")
     whole_wall, whole_cpu = _whole_simulate(60.0)
@@ -356,6 +359,7 @@ def run() -> dict[str, float]:
         "compiled / solve_ivp, same loop (CPU)": loop_cpu / ivp_cpu,
         "compiled / python-control blocks (different loops, wall)": loop_wall / blocks,
         "compiled / python-control one nlsys (different loops, wall)": loop_wall / single,
+        "the stack step alone, fed a recorded run [us per period of wall time]": step_alone * 1e6,
         "stick projection on / off (time of a run)": projection,
         "both feedforward terms on / off (time of a run)": feedforward,
         "load average (1 min) after": os.getloadavg()[0],
