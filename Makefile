@@ -16,6 +16,8 @@ $(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
 	$(PIP_LOCKED) pip setuptools
 	$(PIP_LOCKED) -e '.[dev]'
+	@echo "compiling the closed loops ahead of the first run (about a minute, once)"
+	$(BIN)/motosim cache warm
 	touch $(STAMP)
 
 venv: $(STAMP)

@@ -128,6 +128,8 @@ SLOW_TESTS = frozenset(
         "tests/unit/test_results_faults.py::test_a_second_run_of_the_same_folder_is_refused",
         "tests/unit/test_results_faults.py::test_write_whole_removes_a_killed_writers_leftover_and_keeps_a_running_ones",
         "tests/unit/test_stack.py::test_recorded_layout_recompiles_when_the_signal_table_changes",
+        "tests/unit/test_design_cache.py::test_warm_designs_a_scenario_so_that_its_run_designs_nothing",
+        "tests/unit/test_design_cache.py::test_after_warm_a_new_process_compiles_nothing",
     }
 )
 """Tests marked ``slow`` one by one (every parametrisation of each), in files that are fast

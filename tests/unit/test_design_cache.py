@@ -187,3 +187,76 @@ def test_the_commands_say_once_that_they_design_and_use_the_cache(
     assert main(["cache", "clear"]) == 0
     assert "removed 2 design(s)" in capsys.readouterr().out
     assert not list((tmp_path / "cache").glob("*.npz"))
+
+
+SHORT_LANE_CHANGE = (
+    '[scenario]\nname = "warmed"\nduration = 0.5\n'
+    '[rider]\nkind = "virtual"\n'
+    'path = { kind = "lane_change", offset = 3.5, length = 60.0, start = 5.0 }\n'
+)
+
+
+def test_warm_designs_a_scenario_so_that_its_run_designs_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from motosim.cli.main import main
+
+    monkeypatch.setenv("MOTOSIM_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr("motosim.cli.cache.ANNOUNCE_AFTER", 0.0)
+    monkeypatch.setattr("motosim.cli.cache._on_a_terminal", lambda: True)
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(SHORT_LANE_CHANGE)
+    assert main(["cache", "warm", str(scenario), "--json"]) == 0
+    warmed = json.loads(capsys.readouterr().out)
+    assert list(warmed["seconds"]) == [str(scenario)] and warmed["seconds"][str(scenario)] > 0
+    entries = DesignCache(tmp_path / "cache").info().entries
+    assert entries == {"controller": 1, "rider": 1, "stack": 1}
+    args = ["simulate", str(scenario), "--out", str(tmp_path / "r"), "--no-report"]
+    assert main(args) == 0
+    assert "designing" not in capsys.readouterr().err
+
+
+def test_warm_refuses_a_bad_file_before_designing_any(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from motosim.cli.main import main
+
+    monkeypatch.setenv("MOTOSIM_CACHE_DIR", str(tmp_path / "cache"))
+    good = tmp_path / "s.toml"
+    good.write_text(SHORT_LANE_CHANGE)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SHORT_LANE_CHANGE.replace("duration = 0.5", "duration = -1.0"))
+    assert main(["cache", "warm", str(good), str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "duration" in err and "Traceback" not in err
+    assert DesignCache(tmp_path / "cache").info().entries == {}
+
+
+def test_after_warm_a_new_process_compiles_nothing(tmp_path: Path) -> None:
+    """The install's ``motosim cache warm`` leaves numba's cache holding the loop: a first
+    run afterwards writes no new machine code (numba writes an index and a data file for
+    each function it compiles, and rewrites the index of one it compiles again)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {
+        **os.environ,
+        "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+        "MOTOSIM_CACHE_DIR": str(tmp_path / "designs"),
+    }
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(SHORT_LANE_CHANGE)
+
+    def motosim(*args: str) -> None:
+        command = [sys.executable, "-m", "motosim", *args]
+        subprocess.run(command, env=env, check=True, capture_output=True)
+
+    motosim("cache", "warm", str(scenario))
+    compiled = {p: p.stat().st_mtime_ns for p in (tmp_path / "numba").rglob("*.nb[ic]")}
+    assert any("closed_loop" in p.name and "_run_chunk" in p.name for p in compiled)
+    motosim("simulate", str(scenario), "--out", str(tmp_path / "r"), "--no-report")
+    after = {p: p.stat().st_mtime_ns for p in (tmp_path / "numba").rglob("*.nb[ic]")}
+    assert after == compiled
