@@ -205,11 +205,17 @@ class _Checked(NamedTuple):
 
 def _check(args: argparse.Namespace) -> _Checked:
     """Read the scenario and refuse what a real-time run cannot take (one line each)."""
-    from motosim.rt.config import frame_age, parse_latency, parse_safety, run_paces
+    from motosim.rt.config import (
+        frame_age,
+        parse_latency,
+        parse_safety,
+        refuse_offline_only,
+        run_paces,
+    )
 
     cache = design_cache(args, quiet=args.json)
     sc, realtime = read_realtime(args.scenario, safety=True, pace=args.pace)
-    _refuse_offline_only(args.scenario, sc)
+    refuse_offline_only(sc, origin=args.scenario)
     limits = parse_safety(realtime.get("safety"), origin=args.scenario)
     rate, measurement = sc.rates.control, sc.rates.measurement
     latency = parse_latency(realtime, origin=args.scenario)
@@ -262,21 +268,6 @@ def _config(args: argparse.Namespace, options: RtOptions, checked: _Checked) -> 
         platform=options.platform, platform_udp=options.platform_udp,
         platform_can=args.platform_can, live=live, privileges=privilege_request(args),
     )  # fmt: skip
-
-
-def _refuse_offline_only(path: str, sc: Any) -> None:
-    """Refuse what a scenario asks of the simulator only (one line each)."""
-    if sc.motorcycle.input == "true":
-        raise MotosimError(
-            f'{path}: motorcycle input = "true" is a simulation-only reference; expected '
-            '"estimate" for a real-time run'
-        )
-    if sc.estimator.name == "torque_sensor":
-        raise MotosimError(
-            f'{path}: [estimator] name = "torque_sensor" is not read in real time yet (the '
-            "loop does not take the HB_TORQUE frame); expected an estimator of the angle and "
-            "the current"
-        )
 
 
 def _run(args: argparse.Namespace, session: "RealtimeSession") -> "Outcome":

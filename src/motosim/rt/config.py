@@ -32,11 +32,11 @@ from motosim.errors import MotosimError
 from motosim.rt.safety import SafetyLimits
 
 if TYPE_CHECKING:
-    from motosim.sim import RunInputs
+    from motosim.sim import RunInputs, Scenario
 
 __all__ = [
     "MAX_LATENCY", "RealtimeOptions", "frame_age", "parse_latency", "parse_safety",
-    "run_paces", "split_realtime", "table_number", "within_safety",
+    "refuse_offline_only", "run_paces", "split_realtime", "table_number", "within_safety",
 ]  # fmt: skip
 
 MAX_LATENCY = 1.0
@@ -198,3 +198,28 @@ def within_safety(inputs: "RunInputs", limits: SafetyLimits) -> "RunInputs":
         return inputs
     clamped = replace(controller, max_current=limits.max_current)
     return replace(inputs, scenario=replace(inputs.scenario, controller=clamped))
+
+
+def refuse_offline_only(scenario: "Scenario", *, origin: str) -> None:
+    """Refuse what ``scenario`` asks of the offline simulator only: a real-time run (``motosim
+    run``, :class:`~motosim.rt.lockstep.Lockstep`) steps the virtual motorcycle by the
+    estimate and reads no torque sensor.
+
+    Raises
+    ------
+    MotosimError
+        One line, starting with ``origin`` (the scenario file, or its name).
+    """
+    from motosim.choices import SENSOR_ESTIMATOR
+
+    if scenario.motorcycle.input == "true":
+        raise MotosimError(
+            f'{origin}: motorcycle input = "true" is a simulation-only reference; expected '
+            '"estimate" for a real-time run'
+        )
+    if scenario.estimator.name == SENSOR_ESTIMATOR:
+        raise MotosimError(
+            f'{origin}: [estimator] name = "{SENSOR_ESTIMATOR}" is not read in real time (the '
+            "loop does not take the HB_TORQUE frame); expected an estimator of the angle and "
+            "the current"
+        )

@@ -18,10 +18,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
 from motosim.io.can import Link, handlebar_codecs, open_link
 from motosim.rt.clock import SimulatedClock
+from motosim.rt.config import refuse_offline_only
 from motosim.rt.loop import RateLoop
 from motosim.rt.rig import RigRider, RigSettings, VirtualRider, VirtualRig
 from motosim.rt.run import RealtimeRunner, RunSettings
@@ -82,16 +82,6 @@ def free_limits(rate: float) -> SafetyLimits:
         hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
         hands_off_gain=1.0, fade_in=1.0 / rate,
     )  # fmt: skip
-
-
-def _check_estimator(sc: Scenario) -> None:
-    """Refuse a stack that reads a torque sensor, as ``motosim run`` does."""
-    if sc.estimator.name == SENSOR_ESTIMATOR:
-        raise MotosimError(
-            f'{sc.name}: [estimator] name = "{SENSOR_ESTIMATOR}" is not read in real time '
-            "(the loop does not take the HB_TORQUE frame, the stack would be told no "
-            "torque); expected an estimator of the angle and the current"
-        )
 
 
 class Lockstep:
@@ -181,7 +171,7 @@ class Lockstep:
         if not (math.isfinite(delay) and delay >= 0.0):
             raise MotosimError(f"delay = {delay!r} s: expected a non-negative time")
         sc = inputs.scenario
-        _check_estimator(sc)
+        refuse_offline_only(sc, origin=sc.name)
         self._rate = sc.rates.control
         self._periods = round(sc.duration * self._rate)
         model = account_for_delay(build_stack(inputs), delay, inputs.design_handlebar)
