@@ -1,4 +1,4 @@
-"""``motosim cache``: show or clear the design cache; the ``--no-cache`` option of the others."""
+"""``motosim cache``: show, clear or warm the design cache; the others' ``--no-cache``."""
 
 import argparse
 import sys

@@ -95,7 +95,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "motosim.cli.rtcheck",
         "measure this machine's wake-up latency and missed deadlines at a rate",
     ),
-    "cache": ("motosim.cli.cache", "show or clear the cache of designs (controllers, riders)"),
+    "cache": (
+        "motosim.cli.cache",
+        "show, clear or warm the cache of designs (controllers, riders)",
+    ),
 }
 """Subcommand name -> (module that registers it, one-line help shown by ``motosim --help``)."""
 
