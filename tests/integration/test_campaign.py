@@ -266,6 +266,6 @@ def test_an_exported_scenario_that_does_not_fit_leaves_no_cut_file(
     target = tmp_path / "one.toml"
     with pytest.raises(MotosimError, match=r"one(_true_handlebar)?\.toml: No space left on device"):
         export_run(plan, plan.runs[0].run_id, target)
-    # it left half a scenario under its name, which --write-scenario then refused to replace
+    # no half scenario is left under its name (which --write-scenario would refuse to replace)
     assert not list(tmp_path.glob("one*"))
     assert not list(tmp_path.glob(".one*"))

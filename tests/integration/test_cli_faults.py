@@ -414,9 +414,9 @@ def test_run_ends_at_once_when_its_folder_gains_a_file_of_another_kind(
     tmp_path: Path, capfd: pytest.CaptureFixture[str]
 ) -> None:
     # a file dropped into the result folder while run writes it: the writer process's close
-    # refused to replace the folder and raised; it died without an answer and motosim run
-    # waited 120 s for one, then printed the writer's traceback and "did not finish".
-    # Now: one line naming where the rows are, at once (capfd: the writer's stderr too)
+    # refuses to replace the folder; motosim run says so at once, in one line naming where
+    # the rows are, without waiting for the writer or printing its traceback (capfd: the
+    # writer's stderr too)
     pytest.importorskip("can", reason="motosim run needs the rt group (python-can)")
     import threading
 

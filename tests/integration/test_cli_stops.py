@@ -61,7 +61,7 @@ def test_sigterm_while_excite_replaces_a_log_keeps_the_previous_one(tmp_path: Pa
     if child.returncode == 0:  # it finished writing first: the new log, whole
         pytest.skip("the log was written before the signal arrived")
     assert child.returncode == 130 and err.endswith("motosim: interrupted\n"), err
-    # was: the old log truncated and the new one cut mid-row under the log's own name
+    # the old log whole, no new one cut mid-row under the log's own name
     assert out.read_text(encoding="utf-8") == "t,i_cmd\n0.0,0.0\n"
     assert [p.name for p in tmp_path.iterdir()] == ["excite.csv"]
 

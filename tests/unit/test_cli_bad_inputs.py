@@ -245,11 +245,11 @@ def test_a_complete_result_without_its_csv_is_not_replaced_without_overwrite(
 def test_an_output_that_is_or_holds_the_input_is_refused_even_with_overwrite(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # cueing RUN --out RUN --overwrite replaced the run it cued by its platform commands;
-    # simulate runs/s.toml --out runs --overwrite deleted the scenario with the old result;
-    # estimate LOG --out LOG --overwrite replaced the log by the estimate; excite and design
-    # --handlebar HB --out HB replaced the parameter file by a log or a design file. Without
-    # --overwrite the same refusal comes first (it said "give --overwrite", which then failed)
+    # an output that would replace its own input: cueing RUN --out RUN (the run by its
+    # platform commands), simulate runs/s.toml --out runs (the scenario with the old
+    # result), estimate LOG --out LOG, excite and design --handlebar HB --out HB (the
+    # parameter file by a log or a design file). Without --overwrite the same refusal comes
+    # first, not advice to give --overwrite
     import numpy as np
 
     from motosim.io.results import ResultWriter

@@ -437,7 +437,7 @@ def test_write_log_on_a_full_disk_keeps_the_previous_log(
     longer = TimeSeries(np.arange(5) * 0.01, np.ones((5, 1)), ("i_cmd",))
     with pytest.raises(MotosimError, match=r"cannot write .*No space left on device"):
         logs.write_log(target, longer)
-    # before: the old log truncated, two rows of the new one left in it as if complete
+    # the old log as it was, not truncated with rows of the new one in it as if complete
     assert target.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["excite.csv"]
 
