@@ -151,26 +151,22 @@ def _warm(args: argparse.Namespace, cache: "DesignCache") -> int:
     from pathlib import Path
 
     from motosim.cli._common import check_scenario_inputs, check_scenario_values
-    from motosim.params.toml import read_toml
-    from motosim.sim.scenario import parse_scenario
 
-    named = []
     for path in args.scenarios:  # every file checked before the first is designed
         check_scenario_inputs(path)
         check_scenario_values(path)
-        data = read_toml(Path(path), what="scenario file")
-        data = {k: v for k, v in data.items() if k != "realtime"}
-        named.append((path, parse_scenario(data, origin=path), Path(path).parent))
+    import numpy as np
+
+    from motosim.cli.simulate import resolve_cached
+    from motosim.io.runs import load_scenario
+    from motosim.sim import parse_scenario, simulate
+
+    named = [(path, load_scenario(path), Path(path).parent) for path in args.scenarios]
     if not args.scenarios:
         named = [
             (name, parse_scenario(data, origin=f"built-in {name}"), Path("."))
             for name, data in WARM_DEFAULTS.items()
         ]
-    import numpy as np
-
-    from motosim.cli.simulate import resolve_cached
-    from motosim.sim.closed_loop import simulate
-
     warmed = {}
     for label, scenario, base in named:
         if not args.json:
