@@ -3,7 +3,7 @@
 The whole command, timed from outside (a fresh process each time: imports, loading the
 compiled code, designing, the 10 s run at 1 kHz, writing the result, the report), wall clock
 and the CPU time of the command's processes (``resource.getrusage(RUSAGE_CHILDREN)``: the
-command and the processes it waited for), beside the load average, in three states:
+command and the processes it waited for), beside the load average, in these states:
 
 - nothing compiled, nothing designed: numba's cache empty (``NUMBA_CACHE_DIR`` a new
   folder) and the design cache empty (``MOTOSIM_CACHE_DIR`` a new folder), as after a
