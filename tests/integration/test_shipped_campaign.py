@@ -14,8 +14,8 @@ CAMPAIGNS = Path(__file__).parents[2] / "campaigns"
 
 def test_the_robustness_campaign_at_its_corners_stays_upright(tmp_path: Path) -> None:
     # a campaign whose base falls fails in every run (a square rider torque on a motorcycle
-    # nobody balances falls within 3 s). Here every factor at both ends of its range
-    # (2^7 = 128 runs of 10 s)
+    # nobody balances falls). Here every factor at both ends of its range (2^7 = 128 runs
+    # of 10 s)
     assert len(plan_campaign(load_campaign(CAMPAIGNS / "paper_robustness.toml")).runs) == 1000
     data = tomllib.loads((CAMPAIGNS / "paper_robustness.toml").read_text(encoding="utf-8"))
     data["campaign"] = {**data["campaign"], "sampling": "grid"}

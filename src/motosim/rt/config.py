@@ -28,6 +28,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any
 
+from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
 from motosim.rt.safety import SafetyLimits
 
@@ -210,8 +211,6 @@ def refuse_offline_only(scenario: "Scenario", *, origin: str) -> None:
     MotosimError
         One line, starting with ``origin`` (the scenario file, or its name).
     """
-    from motosim.choices import SENSOR_ESTIMATOR
-
     if scenario.motorcycle.input == "true":
         raise MotosimError(
             f'{origin}: motorcycle input = "true" is a simulation-only reference; expected '
