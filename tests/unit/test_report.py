@@ -52,6 +52,8 @@ def _result(names: tuple[str, ...] = NAMES, *, complete: bool = True) -> SimResu
     return SimResult(rows[:, 0], rows[:, 1:], names[1:], {"seed": 1}, {}, complete)
 
 
+SUPERSCRIPT_DIGITS = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
 PLOTS: list[Callable[[SimResult], Figure]] = [
     plot_torque,
     plot_tracking,
@@ -75,6 +77,27 @@ def test_plots_draw_what_there_is(plot: Callable[[SimResult], Figure]) -> None:
     with pytest.raises(MotosimError) as info:
         plot(_result(("t", "psi")))
     assert "\n" not in str(info.value)
+
+
+def test_the_spectra_label_each_decade_in_plain_text() -> None:
+    # one tick per power of ten on the log axes, written 10 and a superscript exponent, and
+    # no label typeset as mathematics
+    result = _result()
+    data = result.data.copy()
+    data[:, result.names.index("theta_h")] = 0.02 * np.sin(5.0 * result.t)
+    fig = plot_spectrum(SimResult(result.t, data, result.names, {"seed": 1}, {}, True))
+    fig.canvas.draw()
+    for ax in fig.axes:
+        assert ax.get_yscale() == "log"
+        assert not ax.yaxis.get_minorticklocs().size
+        low, high = ax.get_ylim()
+        shown = [loc for loc in ax.yaxis.get_majorticklocs() if low <= loc <= high]
+        labels = [ax.yaxis.get_major_formatter()(loc, k) for k, loc in enumerate(shown)]
+        assert len(shown) >= 4
+        for loc, label in zip(shown, labels, strict=True):
+            exponent = round(np.log10(loc))
+            assert loc == pytest.approx(10.0**exponent)
+            assert label == "10" + str(exponent).translate(SUPERSCRIPT_DIGITS)
 
 
 @pytest.mark.parametrize("plot", [*PLOTS, plot_spectrum])

@@ -1,6 +1,8 @@
 """The report's figures drawn in worker processes: the same report as drawn in-process."""
 
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -78,3 +80,16 @@ def test_closing_does_not_wait_for_the_fork_servers_imports(
     closing.start()
     closing.join(timeout=60.0)
     assert not closing.is_alive(), "close() waited for the fork server's imports"
+
+
+def test_the_workers_import_matplotlib_without_the_numerical_stack() -> None:
+    # the fork server imports these while the run goes on, on the other core: the compiled
+    # models (numba) and SciPy would double the time before the first figure can start
+    script = (
+        "import sys; from motosim.report.figures import _PRELOAD\n"
+        "for name in _PRELOAD: __import__(name)\n"
+        "print(sorted({m.split('.')[0] for m in sys.modules} & {'numba', 'scipy', 'llvmlite'}))"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-500:]
+    assert done.stdout.strip() == "[]"

@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.gridspec import GridSpec
-from matplotlib.ticker import ScalarFormatter
+from matplotlib.ticker import FuncFormatter, NullLocator, ScalarFormatter
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
@@ -654,6 +654,20 @@ def plot_comparison(
     return _finish(fig)
 
 
+_SUPERSCRIPTS = str.maketrans(
+    "-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079"
+)
+
+
+def _power_of_ten(value: float, _position: int | None = None) -> str:
+    """A log axis's tick label: ``value`` as 10 to an integer power in superscript digits,
+    or no label where ``value`` is not a power of ten."""
+    exponent = round(float(np.log10(value))) if value > 0 else None
+    if exponent is None or not np.isclose(value, 10.0**exponent, rtol=1e-9):
+        return ""
+    return "10" + str(exponent).translate(_SUPERSCRIPTS)
+
+
 def plot_spectrum(
     result: SimResult, *, title: str = "Spectra: motor current and tracking error"
 ) -> Figure:
@@ -690,11 +704,16 @@ def plot_spectrum(
         if top > 0:  # log scale, five decades under the highest peak (rounding stays out)
             ax.set_yscale("log")
             ax.set_ylim(top * 1e-5, top * 2.0)
+            # a tick and a grid line per decade, labelled in plain text: matplotlib's
+            # default labels are typeset as mathematics and its minor ticks are many objects,
+            # together most of the figure's drawing time
+            ax.yaxis.set_major_formatter(FuncFormatter(_power_of_ten))
+            ax.yaxis.set_minor_locator(NullLocator())
         ax.axvline(BUZZ_CUTOFF, color="0.5", ls=":", lw=1.0)
         ax.set_xlim(0.0, highest)
         ax.set_ylabel(f"{name} amplitude [{unit}]")
         ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
-        ax.grid(True, which="both", alpha=0.3)
+        ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]")
     fig.suptitle(_title(result, title))
     return fig

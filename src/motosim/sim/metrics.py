@@ -10,13 +10,15 @@ motorcycle is, and whether the motor buzzes once the rider holds the handlebar s
 
 import math
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from motosim.model.tyred import TyredModel
-from motosim.sim.rider import SPEED_RANGE
+from motosim.choices import RIDER_SPEEDS
+
+if TYPE_CHECKING:
+    from motosim.model.tyred import TyredModel
 
 __all__ = [
     "BUZZ_CUTOFF",
@@ -71,7 +73,7 @@ def validity_limits(start_speed: float) -> tuple[float, float, float]:
     -------
     tuple of float
         (largest roll [rad], lowest speed [m/s], highest speed [m/s]): :data:`FALL_ROLL`, and
-        :data:`motosim.sim.rider.SPEED_RANGE` (3-60 m/s, where the virtual rider is scheduled
+        :data:`motosim.choices.RIDER_SPEEDS` (3-60 m/s, where the virtual rider is scheduled
         and the linearisation about forward running holds), widened to include the start of
         a run that was accepted outside it with a warning.
 
@@ -82,7 +84,7 @@ def validity_limits(start_speed: float) -> tuple[float, float, float]:
     >>> validity_limits(1.0)[1:]
     (1.0, 60.0)
     """
-    low, high = SPEED_RANGE
+    low, high = RIDER_SPEEDS
     return FALL_ROLL, min(low, start_speed), max(high, start_speed)
 
 
@@ -352,7 +354,7 @@ def failure(metrics: dict[str, float]) -> str | None:
             f"(beyond {math.degrees(FALL_ROLL):.0f} deg the linear model does not hold)"
         )
     if metrics.get("flag_out_of_range"):
-        low, high = SPEED_RANGE
+        low, high = RIDER_SPEEDS
         return (
             f"the speed left the model's range: it went from {metrics['min_speed']:.3g} to "
             f"{metrics['max_speed']:.3g} m/s (the virtual rider is scheduled and the linear "
@@ -423,7 +425,7 @@ def wheel_locks(t: Array, get: Callable[[str], Array], *, to_end: bool = True) -
 
 
 def multibody_reason(
-    t: Array, get: Callable[[str], Array], model: TyredModel, limits: tuple[float, float, float]
+    t: Array, get: Callable[[str], Array], model: "TyredModel", limits: tuple[float, float, float]
 ) -> str:
     """Why a run on the multibody motorcycle stopped at its last instant, in one line.
 
