@@ -4,6 +4,7 @@ import base64
 import json
 from collections.abc import Callable
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pytest
@@ -176,10 +177,15 @@ def test_report(tmp_path: Path) -> None:
     assert "lane &lt;change&gt;" in text and "<change>" not in text  # escaped
     assert "<h2>Metrics</h2>" in text and "RMS of theta_h - delta" in text and "rk4" in text
     assert "100 Hz" in text and "complete" in text
-    images = text.split('src="data:image/png;base64,')[1:]
+    images = text.split('src="data:image/svg+xml;base64,')[1:]
     assert len(images) == 6  # torque, tracking, rate, motor torque, motorcycle, spectra
     for image in images:
-        assert base64.b64decode(image.split('"', 1)[0]).startswith(b"\x89PNG")
+        svg = ElementTree.fromstring(base64.b64decode(image.split('"', 1)[0]))
+        assert svg.tag == "{http://www.w3.org/2000/svg}svg"
+        assert float(svg.get("width", "0").removesuffix("pt")) > 0
+        assert list(svg.iter("{http://www.w3.org/2000/svg}text"))  # the texts kept as text
+        links = [e.get("{http://www.w3.org/1999/xlink}href", "") for e in svg.iter()]
+        assert all(not link or link.startswith("#") for link in links)  # nothing fetched
     assert "http://" not in text.replace("http://www.w3.org", "") and "<script" not in text
 
 

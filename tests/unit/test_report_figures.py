@@ -41,7 +41,7 @@ def test_without_workers_the_figures_are_drawn_here(tmp_path: Path) -> None:
     workers = FigureWorkers(processes=1)  # one process: nothing to gain, nothing started
     assert workers.draw(tmp_path, ["plot_torque"]) is None
     text = build_report(tmp_path, workers=workers).read_text(encoding="utf-8")
-    assert text.count('src="data:image/png;base64,') == 5
+    assert text.count('src="data:image/svg+xml;base64,') == 5
     workers.close()
 
 

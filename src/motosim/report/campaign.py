@@ -5,7 +5,7 @@
 was, how many runs succeeded and failed (with the reasons), each kept metric against each
 factor, a heat map of the first metric over the two factors most correlated with it (rank
 correlation), the failure region in that plane, and the worst runs with the command that
-re-runs each one. One file, the figures embedded as PNG, no JavaScript.
+re-runs each one. One file, the figures embedded as SVG, no JavaScript.
 """
 
 import collections
@@ -20,7 +20,7 @@ import numpy as np
 from motosim.campaign import METRICS, load_results, read_manifest
 from motosim.io.files import write_whole
 from motosim.plotting.campaign import plot_failures, plot_heatmap, plot_metric_vs_factors
-from motosim.report.figures import _png
+from motosim.report.figures import SVG_DATA, svg_base64
 from motosim.report.html import _CSS, _table
 
 __all__ = ["build_campaign_report"]
@@ -34,7 +34,7 @@ def _esc(value: object) -> str:
 
 def _figure(figure: Any, caption: str) -> str:
     return (
-        f'<figure><img alt="{_esc(caption)}" src="data:image/png;base64,{_png(figure)}">'
+        f'<figure><img alt="{_esc(caption)}" src="{SVG_DATA}{svg_base64(figure)}">'
         f"<figcaption>{_esc(caption)}</figcaption></figure>"
     )
 

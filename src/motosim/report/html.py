@@ -4,7 +4,8 @@
 computes the metrics (:func:`metrics`) unless the run stored them, draws the figures of
 :mod:`motosim.plotting.closed_loop` (:mod:`motosim.report.figures`: here, or in worker
 processes started before the run) and writes ``folder/report.html`` with the figures
-embedded as PNG: one file, no external resources, no JavaScript.
+embedded (SVG; PNG for those a command saved beside the result): one file, no external
+resources, no JavaScript.
 """
 
 import base64
@@ -18,7 +19,7 @@ import numpy as np
 
 from motosim.io.files import write_whole
 from motosim.io.results import SimResult, load_result
-from motosim.report.figures import FIGURES, draw_figure
+from motosim.report.figures import FIGURES, SVG_DATA, draw_figure
 from motosim.report.units import METRICS, shown
 from motosim.sim.metrics import run_metrics
 
@@ -213,7 +214,7 @@ def _safety_fault(folder: Path) -> str | None:
 def _start_figures(
     result: SimResult, source: Path, workers: "FigureWorkers | None"
 ) -> Callable[[], Sequence[str | None]]:
-    """A function that returns the base64 PNG of each of :data:`FIGURES` (None where the
+    """A function that returns the base64 SVG of each of :data:`FIGURES` (None where the
     signals lack): drawn by ``workers`` when given and able, which start on them here, else
     drawn in this process when it is called."""
     if not result.t.size:
@@ -246,7 +247,7 @@ def build_report(folder: str | Path, *, workers: "FigureWorkers | None" = None) 
     Path
         The report file: title, run facts (scenario, seed, version, rates), metrics table
         (the stored summary, completed by :func:`metrics`), the figures of
-        :mod:`motosim.plotting.closed_loop` that the signals allow, embedded as PNG, and the
+        :mod:`motosim.plotting.closed_loop` that the signals allow, embedded as SVG, and the
         full metadata as JSON.
 
     Raises
@@ -301,8 +302,8 @@ def build_report(folder: str | Path, *, workers: "FigureWorkers | None" = None) 
     for (caption, _), image in zip(FIGURES, figures(), strict=True):
         if image is not None:
             parts.append(
-                f'<figure><img alt="{_esc(caption)}" src="data:image/png;base64,'
-                f'{image}"><figcaption>{_esc(caption)}</figcaption></figure>'
+                f'<figure><img alt="{_esc(caption)}" src="{SVG_DATA}{image}">'
+                f"<figcaption>{_esc(caption)}</figcaption></figure>"
             )
             drawn += 1
     for name, caption in _SAVED_FIGURES:  # written beside the result by its command
