@@ -73,9 +73,12 @@ def _inputs(  # type: ignore[no-untyped-def]
         handlebar=dataclasses.replace(sc.handlebar, inertia_factor=inertia, damping_factor=damping),
     )
     return prepare(
-        sc, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
-        nominal_handlebar=hb, controller=ctrl,
-    )  # fmt: skip
+        sc,
+        sharp=load_parameters("sharp1971", "sharp"),
+        true_handlebar=hb,
+        nominal_handlebar=hb,
+        controller=ctrl,
+    )
 
 
 _CTRL = None
@@ -189,8 +192,9 @@ def _solve_ivp_loop(duration: float) -> tuple[float, float]:
     for k in range(n):
         meas = math.floor(theta / q + 0.5) * q if q > 0.0 else theta
         tau_r = float(rig.rider_profile[k * n_sub])
-        i_cmd = step(model, data, meas, rig.current_noise[k], tau_r, rig.force[k],
-                     rig.side_force[k])  # fmt: skip
+        i_cmd = step(
+            model, data, meas, rig.current_noise[k], tau_r, rig.force[k], rig.side_force[k]
+        )
         theta, omega = period(theta, omega, tau_r + nkt * i_cmd, k * h, (k + 1) * h)
     return n / (time.perf_counter() - wall), n / (time.thread_time() - cpu)
 
@@ -238,17 +242,29 @@ def _python_control(duration: float, *, blocks: bool) -> float:
     tau = np.where((t % 2.0) < 1.0, 10.0, -10.0)
     if blocks:
         plant = ct.nlsys(
-            handlebar, lambda t, x, u, p: x, name="handlebar", inputs=["tau_r", "i_m"],
-            outputs=["theta", "omega"], states=2,
-        )  # fmt: skip
+            handlebar,
+            lambda t, x, u, p: x,
+            name="handlebar",
+            inputs=["tau_r", "i_m"],
+            outputs=["theta", "omega"],
+            states=2,
+        )
         est = ct.nlsys(
-            observer, lambda t, x, u, p: [x[2]], name="observer",
-            inputs=["theta", "omega", "i_m"], outputs=["tau_hat"], states=3,
-        )  # fmt: skip
+            observer,
+            lambda t, x, u, p: [x[2]],
+            name="observer",
+            inputs=["theta", "omega", "i_m"],
+            outputs=["tau_hat"],
+            states=3,
+        )
         moto = ct.nlsys(
-            bike, lambda t, z, u, p: [z[5]], name="bike", inputs=["tau_hat"],
-            outputs=["delta"], states=12,
-        )  # fmt: skip
+            bike,
+            lambda t, z, u, p: [z[5]],
+            name="bike",
+            inputs=["tau_hat"],
+            outputs=["delta"],
+            states=12,
+        )
         err = ct.summing_junction(inputs=["theta", "-delta"], output="e", name="error")
         ctrl = ct.ss(K.A, K.B, K.C, K.D, inputs="e", outputs="i_m", name="controller")
         loop = ct.interconnect(

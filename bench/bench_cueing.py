@@ -128,8 +128,13 @@ def _platform_stage(cfg: object) -> float:
     sink.bind(("127.0.0.1", 0))
     sink.setblocking(False)
     sender = PlatformSender(sink.getsockname())
-    out = PlatformOutput(cfg, 0.001, ("v_x", "v_y", "psi_dot", "phi"), sender=sender,  # type: ignore[arg-type]
-                         send_every=10)  # fmt: skip
+    out = PlatformOutput(
+        cfg,
+        0.001,
+        ("v_x", "v_y", "psi_dot", "phi"),
+        sender=sender,  # type: ignore[arg-type]
+        send_every=10,
+    )
     row = np.array([15.0, 0.0, 0.3, 0.4])
     times = []
     for k in range(20_000):
@@ -148,21 +153,37 @@ def _platform_stage(cfg: object) -> float:
 
 
 TRAINING = (
-    "crosswind_30", "emergency_braking", "lane_change_20", "obstacle_avoidance_15", "slalom_10",
-)  # fmt: skip
+    "crosswind_30",
+    "emergency_braking",
+    "lane_change_20",
+    "obstacle_avoidance_15",
+    "slalom_10",
+)
 OTHERS = (
-    "turn_30", "straight_50_gust", "lane_change_30", "slalom_15", "lane_change_25", "avoidance_22",
-    "opendrive_curve_25", "avoidance_35", "avoidance_18", "long_turn_22",
-)  # fmt: skip
+    "turn_30",
+    "straight_50_gust",
+    "lane_change_30",
+    "slalom_15",
+    "lane_change_25",
+    "avoidance_22",
+    "opendrive_curve_25",
+    "avoidance_35",
+    "avoidance_18",
+    "long_turn_22",
+)
 """Unseen checks: two scenarios of scenarios/ and eight of bench/scenarios/ at other speeds and
 sizes (lane_change_25, avoidance_22 and opendrive_curve_25 added after the 30 m/s lane
 change's diagnosis, before their cueing was looked at; avoidance_35, the QA's, a road the
 rider cannot follow; avoidance_18 and long_turn_22 added with the diagnosis of the misses on
 avoidance_22 and opendrive_curve_25, before their cueing was looked at; docs/guide/cueing.md)."""
 HELDOUT = (
-    "avoidance_26", "avoidance_20", "long_turn_18", "turn_25", "opendrive_curve_18",
+    "avoidance_26",
+    "avoidance_20",
+    "long_turn_18",
+    "turn_25",
+    "opendrive_curve_18",
     "lane_change_15",
-)  # fmt: skip
+)
 """Held out (bench/scenarios/heldout/): written before the force band's schedule by the
 persistence of the curve ahead was tuned, simulated once, and looked at only in the final
 table."""
@@ -215,27 +236,46 @@ def table(runs: str, thresholds: str = "telban", causal: bool = True) -> str:
         road = result_road(r.metadata, origin=name)
         causal_mpc = [("mpc", None, cfg, "")] if causal or road is None else []
         with_road = (
-            [("mpc", road, cfg, ", road preview"),
-             ("mpc", road, before, ", road preview, band not scheduled")]
-            if road is not None else []
-        )  # fmt: skip
+            [
+                ("mpc", road, cfg, ", road preview"),
+                ("mpc", road, before, ", road preview, band not scheduled"),
+            ]
+            if road is not None
+            else []
+        )
         base = (0, 0.0, 0.0, 0.0)
-        for algorithm, preview, config, suffix in [("washout", None, cfg, ""), *causal_mpc,
-                                                   *with_road]:  # fmt: skip
-            run = cue(config, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0,  # type: ignore[arg-type]
-                      road=preview)  # fmt: skip
+        for algorithm, preview, config, suffix in [
+            ("washout", None, cfg, ""),
+            *causal_mpc,
+            *with_road,
+        ]:
+            run = cue(
+                config,
+                series,
+                TELBAN_CARDULLO_2005,
+                algorithm=algorithm,
+                rate=100.0,  # type: ignore[arg-type]
+                road=preview,
+            )
             s = run.score
             if thresholds == "benson":
-                s = score(BENSON_1986_1989, run.vehicle, run.platform, cfg.platform,
-                          run.commands.data[:, :3])  # fmt: skip
+                s = score(
+                    BENSON_1986_1989,
+                    run.vehicle,
+                    run.platform,
+                    cfg.platform,
+                    run.commands.data[:, :3],
+                )
             ch = s.channels
             false = 100 * np.mean([c.false_cue_share for c in ch.values()])
             missing = 100 * np.mean([c.missing_cue_share for c in ch.values()])
             label = name + (
-                "" if name in TRAINING
-                else " (held out)" if name in (*HELDOUT, *SWERVES_HELDOUT)
+                ""
+                if name in TRAINING
+                else " (held out)"
+                if name in (*HELDOUT, *SWERVES_HELDOUT)
                 else " (not training)"
-            )  # fmt: skip
+            )
             how = algorithm + suffix
             figures = (s.violations, false, ch["roll"].rms_error, ch["pitch"].rms_error)
             if algorithm == "washout":
@@ -277,8 +317,18 @@ def prediction_errors(runs: str) -> str:
 
     tuning = load_platform("simacom_platform").mpc
     h, n, tau = tuning.step, tuning.horizon, tuning.prediction_time
-    names = ("v_x", "v_y", "psi_dot", "phi_dot", "delta_dot", "phi", "delta", "F_yr", "F_yf",
-             "tau_r_hat")  # fmt: skip
+    names = (
+        "v_x",
+        "v_y",
+        "psi_dot",
+        "phi_dot",
+        "delta_dot",
+        "phi",
+        "delta",
+        "F_yr",
+        "F_yf",
+        "tau_r_hat",
+    )
     ahead = (round(0.25 / h), n)
     lines = [
         "| scenario | faded | model, torque fading | model, torque held |",
@@ -417,8 +467,14 @@ def corner_sweep(
                         float(band) if band else tuning.preview_force_false_cue_weight
                     ),
                 )
-            run = cue(dataclasses.replace(cfg, mpc=tuning), series, model,  # type: ignore[arg-type]
-                      algorithm=algorithm, rate=100.0, road=road)  # type: ignore[arg-type]  # fmt: skip
+            run = cue(
+                dataclasses.replace(cfg, mpc=tuning),
+                series,
+                model,  # type: ignore[arg-type]
+                algorithm=algorithm,
+                rate=100.0,
+                road=road,
+            )  # type: ignore[arg-type]
             ch = run.score.channels
             false = 100 * float(np.mean([c.false_cue_share for c in ch.values()]))
             roll, pitch = np.degrees(ch["roll"].rms_error), np.degrees(ch["pitch"].rms_error)
@@ -432,8 +488,9 @@ def corner_sweep(
                 counts.append(f"{channel} {int(wrong.sum())}")
                 if channel == "sway":
                     t = run.commands.t
-                    per_second = np.bincount(np.floor(t[wrong]).astype(int),
-                                             minlength=int(t[-1]) + 1)  # fmt: skip
+                    per_second = np.bincount(
+                        np.floor(t[wrong]).astype(int), minlength=int(t[-1]) + 1
+                    )
             if algorithm == "washout":
                 base, met, margins = (run.score.violations, false, roll, pitch), "", ""
             else:
@@ -445,9 +502,9 @@ def corner_sweep(
                 )
                 met = "met" if ok else "missed"
                 margins = ", ".join(
-                    f"{(b - f) / b:+.3f}" if b else "-" for f, b in ((false, base[1]),
-                                                                     (roll, base[2]))
-                )  # fmt: skip
+                    f"{(b - f) / b:+.3f}" if b else "-"
+                    for f, b in ((false, base[1]), (roll, base[2]))
+                )
             lines.append(
                 f"| {name} | {corner or algorithm} | {weight or ''} | {band or ''} | "
                 f"{run.score.violations} | "
@@ -482,8 +539,9 @@ def step_times(corners: str = "0,4", repeats: int = 3) -> str:
     for _ in range(repeats):
         for corner in corners.split(","):
             tuning = dataclasses.replace(cfg.mpc, roll_canal_corner=float(corner))
-            mpc = MpcCueing(design_mpc(dataclasses.replace(cfg, mpc=tuning),
-                                       TELBAN_CARDULLO_2005, dt))  # fmt: skip
+            mpc = MpcCueing(
+                design_mpc(dataclasses.replace(cfg, mpc=tuning), TELBAN_CARDULLO_2005, dt)
+            )
             times: dict[str, list[float]] = {"causal": [], "preview": []}
             for label in times:
                 mpc.reset()

@@ -133,9 +133,7 @@ def replay_period(c: Any, frames: Any, status_id: int, k: int) -> None:
 
 
 @njit(cache=False)
-def _replay(
-    c: Any, frames: Any, status_id: int, sent: Any, first: int, end: int
-) -> None:  # fmt: skip
+def _replay(c: Any, frames: Any, status_id: int, sent: Any, first: int, end: int) -> None:
     """The fused period over recorded status frames, in a compiled loop (the "offline" way):
     the same :func:`context_period` on the same :class:`PeriodContext` as the loop calls."""
     for k in range(first, end):
@@ -189,9 +187,12 @@ def bench_setup(n: int) -> BenchSetup:
     sc = parse_scenario(data, origin="bench")
     hb = load_parameters("simacom_handlebar", "handlebar")
     inputs = prepare(
-        sc, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
-        nominal_handlebar=hb, controller=PAPER_CONTROLLER,
-    )  # fmt: skip
+        sc,
+        sharp=load_parameters("sharp1971", "sharp"),
+        true_handlebar=hb,
+        nominal_handlebar=hb,
+        controller=PAPER_CONTROLLER,
+    )
     model = build_stack(inputs)
     codecs = handlebar_codecs()
     limits = parse_safety(tomllib.loads(safety_table(3))["realtime"]["safety"], origin="bench")
@@ -271,8 +272,13 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
     for _ in range(3):
         for name, gap in (("step after step", 0), *gaps.items(), ("after a 64 MB read", 0)):
             other.reset(0.0, 0.0)
-            _steps(*args2, theta[: block.size], block, gap,
-                   sweep if name == "after a 64 MB read" else nothing)  # fmt: skip
+            _steps(
+                *args2,
+                theta[: block.size],
+                block,
+                gap,
+                sweep if name == "after a 64 MB read" else nothing,
+            )
             share.setdefault(name, []).append(_us(float(np.median(block))))
     p50, c50 = float(np.median(times)), float(np.median(chunks))
     return {
@@ -303,9 +309,11 @@ def _stack_speed(n: int = 20_000) -> dict[str, float]:
 def _motosim(*argv: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
         [sys.executable, "-m", "motosim.cli.main", *argv],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )  # fmt: skip
+    )
 
 
 BUS = "udp_multicast:239.74.163.131"  # a group of its own (other users of the machine)
@@ -330,14 +338,38 @@ def _run_against_rig(
         # than ending the run; the tests check the 3-period watchdog itself
         scenario = text or SCENARIO.format(duration=seconds, control=control)
         path.write_text(scenario + safety_table(1000))
-        rig = _motosim("rig", str(path), "--bus", BUS, "--duration", "36000",
-                       "--rate", f"{control:g}", "--link", link, *RIG)  # fmt: skip
+        rig = _motosim(
+            "rig",
+            str(path),
+            "--bus",
+            BUS,
+            "--duration",
+            "36000",
+            "--rate",
+            f"{control:g}",
+            "--link",
+            link,
+            *RIG,
+        )
         time.sleep(5.0)
         load = os.getloadavg()
-        run = _motosim("run", str(path), "--bus", BUS, "--out", f"{tmp}/out", "--json",
-                       "--no-report", "--link", link, "--pace", pace, *RT,
-                       *(("--wait", wait) if wait else ()),
-                       *(("--warm", warm) if warm else ()))  # fmt: skip
+        run = _motosim(
+            "run",
+            str(path),
+            "--bus",
+            BUS,
+            "--out",
+            f"{tmp}/out",
+            "--json",
+            "--no-report",
+            "--link",
+            link,
+            "--pace",
+            pace,
+            *RT,
+            *(("--wait", wait) if wait else ()),
+            *(("--warm", warm) if warm else ()),
+        )
         out, err = run.communicate()
         rig.send_signal(signal.SIGINT)
         rig.communicate(timeout=30)
@@ -436,10 +468,13 @@ def ab(rounds: int, seconds: float, wait: str = "", what: str = "warm") -> None:
             shown = {v: figures.get(k) for k, v in AB_KEYS.items()}
             load = figures.get("load average (1, 5, 15 min) at the start")
             given = figures.get("privileges")
-            print(f"round {j + 1} {what} {warm}: {shown}; {offline}; load {load}; {given}",
-                  flush=True)  # fmt: skip
-    print(f"medians over {rounds} rounds ({seconds:g} s runs, 1 kHz, fast link, "
-          f"{wait or 'compiled'} wait):")  # fmt: skip
+            print(
+                f"round {j + 1} {what} {warm}: {shown}; {offline}; load {load}; {given}", flush=True
+            )
+    print(
+        f"medians over {rounds} rounds ({seconds:g} s runs, 1 kHz, fast link, "
+        f"{wait or 'compiled'} wait):"
+    )
     for warm, runs in rows.items():
         keys = [*AB_KEYS, *runs[0]] if runs else []
         med = {}
@@ -494,15 +529,20 @@ def run(seconds: float = 60.0, *, quick: bool = False) -> dict[str, object]:
     before = out.get("run 1000 Hz fast clock-python stack step in the loop, p50 us")
     if isinstance(inside, float) and isinstance(before, float):
         out["stack step in the loop: compiled wait / Python wait, p50"] = round(inside / before, 2)
-    for name, key in (("offline", "stack step in a compiled loop (offline), timed inside, p50 us"),
-                      ("offline paced at 1 kHz", "stack step in a compiled loop paced at 1 kHz "
-                       "(busy wait), p50 us")):  # fmt: skip
+    for name, key in (
+        ("offline", "stack step in a compiled loop (offline), timed inside, p50 us"),
+        (
+            "offline paced at 1 kHz",
+            "stack step in a compiled loop paced at 1 kHz (busy wait), p50 us",
+        ),
+    ):
         offline = out[f"stack {key}"]
         if isinstance(inside, float) and isinstance(offline, float):
             out[f"stack step: in the loop / {name}, p50"] = round(inside / offline, 2)
     for control in (1000.0, 100.0):
-        before, after = (out.get(f"run {control:g} Hz {x} clock compute_p50_us") for x in
-                         ("python-can", "fast"))  # fmt: skip
+        before, after = (
+            out.get(f"run {control:g} Hz {x} clock compute_p50_us") for x in ("python-can", "fast")
+        )
         if isinstance(before, float) and isinstance(after, float):
             out[f"run {control:g} Hz compute p50 fast/python-can"] = round(after / before, 2)
     return out

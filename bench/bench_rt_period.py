@@ -39,10 +39,18 @@ HB = load_parameters("simacom_handlebar", "handlebar")
 BUS = "udp_multicast:239.74.163.141"  # a group of its own (other users of the machine)
 
 LIMITS = SafetyLimits(
-    max_current=10.0, max_slew=2000.0, max_speed=6.0, speed_band=4.0, soft_stop=0.6,
-    hard_stop=0.8, end_stop_gain=50.0, hands_off_torque=0.3, hands_off_time=1.0,
-    hands_off_gain=0.3, watchdog_periods=1000,
-)  # fmt: skip
+    max_current=10.0,
+    max_slew=2000.0,
+    max_speed=6.0,
+    speed_band=4.0,
+    soft_stop=0.6,
+    hard_stop=0.8,
+    end_stop_gain=50.0,
+    hands_off_torque=0.3,
+    hands_off_time=1.0,
+    hands_off_gain=0.3,
+    watchdog_periods=1000,
+)
 
 
 def _stack() -> CompiledStack:
@@ -56,9 +64,12 @@ def _stack() -> CompiledStack:
     )
     hb = load_parameters("simacom_handlebar", "handlebar")
     inputs = prepare(
-        sc, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
-        nominal_handlebar=hb, controller=PAPER_CONTROLLER,
-    )  # fmt: skip
+        sc,
+        sharp=load_parameters("sharp1971", "sharp"),
+        true_handlebar=hb,
+        nominal_handlebar=hb,
+        controller=PAPER_CONTROLLER,
+    )
     return CompiledStack(build_stack(inputs))
 
 

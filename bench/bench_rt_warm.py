@@ -63,7 +63,7 @@ from motosim.rt.stack import CompiledStack, compiled, stack_period
 @njit(cache=False)
 def _compiled_loop(
     c: Any, frames: Any, status_id: int, out: Any, gap_ns: int, lead_ns: int, mode: int
-) -> None:  # fmt: skip
+) -> None:
     """The fused period at ``gap_ns`` on absolute deadlines, a compiled busy wait between
     two: ``mode`` 0 no warm-up, 1 one warm-up ``lead_ns`` before the deadline, 2 warm-ups
     from then until the deadline; the stack's time of each period into ``out`` [s]."""
@@ -162,8 +162,10 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
         os.write(qos, (0).to_bytes(4, "little"))  # held until the process ends
         print("CPU latency request: 0 us (idle CPUs poll instead of halting)")
     privileges = apply_privileges(priority=80, cpus=[1], mlock=True)
-    print("privileges:", ", ".join(f"{p.name} {'applied' if p.applied else 'refused'}"
-                                   for p in privileges))  # fmt: skip
+    print(
+        "privileges:",
+        ", ".join(f"{p.name} {'applied' if p.applied else 'refused'}" for p in privileges),
+    )
     n = periods
     b = bench_setup(n)
     model, theta, frames, runner, st = b.model, b.theta, b.frames, b.runner, b.codecs.status

@@ -123,8 +123,11 @@ def _pose_latency() -> dict[str, float]:
 
     thread = threading.Thread(target=writer, daemon=True)
     thread.start()
-    app = create_app(LiveFeed(ring, Control()), road_from_xy(np.array([0.0, 10]), np.zeros(2)),
-                     token="bench-token")  # fmt: skip
+    app = create_app(
+        LiveFeed(ring, Control()),
+        road_from_xy(np.array([0.0, 10]), np.zeros(2)),
+        token="bench-token",
+    )
     ages = []
     with ServerThread(app) as server, connect(f"ws://127.0.0.1:{server.port}/ws/pose") as ws:
         for _ in range(300):

@@ -47,18 +47,33 @@ def grid(runs: str, names: str, sustained: str, transient: str, window: str) -> 
         series = TimeSeries(r.t, r.data, r.names)
         road = result_road(r.metadata, origin=name)
         base = _figures(cue(cfg, series, MODEL, algorithm="washout", rate=100.0))
-        lines.append(f"| {name} | washout | | | {base[0]} | {base[1]:.2f} | {base[2]:.2f} | "
-                     f"{base[3]:.2f} | | |")  # fmt: skip
+        lines.append(
+            f"| {name} | washout | | | {base[0]} | {base[1]:.2f} | {base[2]:.2f} | "
+            f"{base[3]:.2f} | | |"
+        )
         for ws in sustained.split(","):
             for wt in transient.split(","):
                 for win in window.split(","):
-                    tuned = dataclasses.replace(cfg, mpc=dataclasses.replace(
-                        cfg.mpc, sustained_force_false_cue_weight=float(ws),
-                        preview_force_false_cue_weight=float(wt)))  # fmt: skip
+                    tuned = dataclasses.replace(
+                        cfg,
+                        mpc=dataclasses.replace(
+                            cfg.mpc,
+                            sustained_force_false_cue_weight=float(ws),
+                            preview_force_false_cue_weight=float(wt),
+                        ),
+                    )
                     share: list[float] = []
 
-                    def persistence(road: Any, arc: Any, speed: Any, *, ahead: float, behind: float,
-                                    _w: str = win, _s: list[float] = share) -> Any:  # fmt: skip
+                    def persistence(
+                        road: Any,
+                        arc: Any,
+                        speed: Any,
+                        *,
+                        ahead: float,
+                        behind: float,
+                        _w: str = win,
+                        _s: list[float] = share,
+                    ) -> Any:
                         w = float(_w) if _w else ahead
                         p = original(road, arc, speed, ahead=w, behind=w)
                         _s.append(float(np.mean(p > 0.5)))
@@ -66,12 +81,17 @@ def grid(runs: str, names: str, sustained: str, transient: str, window: str) -> 
 
                     pipeline.curve_persistence = persistence  # type: ignore[assignment]
                     try:
-                        f = _figures(cue(tuned, series, MODEL, algorithm="mpc", rate=100.0,
-                                         road=road))  # fmt: skip
+                        f = _figures(
+                            cue(tuned, series, MODEL, algorithm="mpc", rate=100.0, road=road)
+                        )
                     finally:
                         pipeline.curve_persistence = original
-                    ok = f[0] == 0 and f[1] < base[1] and f[2] <= base[2] + 1e-9 and (
-                        f[3] <= base[3] + 1e-9)  # fmt: skip
+                    ok = (
+                        f[0] == 0
+                        and f[1] < base[1]
+                        and f[2] <= base[2] + 1e-9
+                        and (f[3] <= base[3] + 1e-9)
+                    )
                     lines.append(
                         f"| {name} | {ws} | {wt} | {win or 'design'} | {f[0]} | {f[1]:.2f} | "
                         f"{f[2]:.2f} | {f[3]:.2f} | {'yes' if ok else 'NO'} | "
@@ -85,5 +105,12 @@ if __name__ == "__main__":
     cfg0 = load_platform("simacom_platform").mpc
     args = sys.argv[1:] + [""] * 5
     runs_, names_ = args[0], args[1]
-    print(grid(runs_, names_, args[2] or str(cfg0.sustained_force_false_cue_weight),
-               args[3] or str(cfg0.preview_force_false_cue_weight), args[4]))  # fmt: skip
+    print(
+        grid(
+            runs_,
+            names_,
+            args[2] or str(cfg0.sustained_force_false_cue_weight),
+            args[3] or str(cfg0.preview_force_false_cue_weight),
+            args[4],
+        )
+    )

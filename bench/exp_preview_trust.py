@@ -44,9 +44,11 @@ def main(runs: str, name: str = "avoidance_35") -> None:
         s = road.ds * np.arange(road.kappa.size)
         ahead = arc[:, None] + LEAD_DISTANCE + v[:, None] * np.linspace(0.0, 1.0, 41)
         asked = np.arctan(v[:, None] ** 2 * np.interp(ahead, s, road.kappa) / 9.81)
-        print(f"{other}: lean asked up to {np.max(np.abs(asked)) * deg:.1f} deg, ridden "
-              f"{np.max(np.abs(phi)) * deg:.1f} deg; largest distance to the line "
-              f"{np.max(np.hypot(x - road.x[k], y - road.y[k])):.2f} m")  # fmt: skip
+        print(
+            f"{other}: lean asked up to {np.max(np.abs(asked)) * deg:.1f} deg, ridden "
+            f"{np.max(np.abs(phi)) * deg:.1f} deg; largest distance to the line "
+            f"{np.max(np.hypot(x - road.x[k], y - road.y[k])):.2f} m"
+        )
     r = load_result(Path(runs) / name)
     series = TimeSeries(r.t, r.data, r.names)
     road = result_road(r.metadata, origin=name)
@@ -62,16 +64,29 @@ def main(runs: str, name: str = "avoidance_35") -> None:
 
         return trust
 
-    cases = [("washout", "washout", None, LEAN), ("mpc", "mpc", None, LEAN),
-             ("mpc, road preview trusted throughout", "mpc", road,
-              lambda road, arc, speed, **_: np.ones(arc.size)),
-             ("mpc, faded by distance, d = 0.5 m", "mpc", road, by_distance(0.5)),
-             ("mpc, faded by distance, d = 1 m", "mpc", road, by_distance(1.0)),
-             ("mpc, road preview (trusted by the lean)", "mpc", road, LEAN)]  # fmt: skip
+    cases = [
+        ("washout", "washout", None, LEAN),
+        ("mpc", "mpc", None, LEAN),
+        (
+            "mpc, road preview trusted throughout",
+            "mpc",
+            road,
+            lambda road, arc, speed, **_: np.ones(arc.size),
+        ),
+        ("mpc, faded by distance, d = 0.5 m", "mpc", road, by_distance(0.5)),
+        ("mpc, faded by distance, d = 1 m", "mpc", road, by_distance(1.0)),
+        ("mpc, road preview (trusted by the lean)", "mpc", road, LEAN),
+    ]
     for label, algorithm, preview, trust in cases:
         pipeline.preview_trust = trust  # type: ignore[assignment]
-        run = cue(cfg, series, TELBAN_CARDULLO_2005, algorithm=algorithm, rate=100.0,  # type: ignore[arg-type]
-                  road=preview)  # fmt: skip
+        run = cue(
+            cfg,
+            series,
+            TELBAN_CARDULLO_2005,
+            algorithm=algorithm,
+            rate=100.0,  # type: ignore[arg-type]
+            road=preview,
+        )
         ch = run.score.channels
         false = 100 * np.mean([c.false_cue_share for c in ch.values()])
         v, p = run.perceived_vehicle["sway"], run.perceived_platform["sway"]

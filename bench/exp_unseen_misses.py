@@ -50,8 +50,10 @@ def budget(runs: str, name: str) -> str:
     """Per-second table of where the roll error and the lateral force come from."""
     cfg = load_platform("simacom_platform")
     series, road = _load(runs, name)
-    runs_ = [cue(cfg, series, MODEL, algorithm=a, rate=100.0, road=rd)  # type: ignore[arg-type]
-             for a, rd in (("washout", None), ("mpc", None), ("mpc", road))]  # fmt: skip
+    runs_ = [
+        cue(cfg, series, MODEL, algorithm=a, rate=100.0, road=rd)  # type: ignore[arg-type]
+        for a, rd in (("washout", None), ("mpc", None), ("mpc", road))
+    ]
     t = runs_[0].commands.t
     lean = np.interp(t, series.t, series["phi"])
     pv = runs_[0].perceived_vehicle
@@ -92,8 +94,9 @@ def _foresight(series: TimeSeries, cfg: Any) -> Any:
         alpha = np.concatenate([[0.0], np.diff(p) / dt])
         yaw_accel = np.concatenate([[0.0], np.diff(r) / dt])
         held = f - SWAY_HEIGHT * alpha - SWAY_X * yaw_accel  # what the plan holds
-        j = np.minimum(np.arange(p.size)[:, None] + round(step / dt) * np.arange(horizon + 1),
-                       p.size - 1)  # fmt: skip
+        j = np.minimum(
+            np.arange(p.size)[:, None] + round(step / dt) * np.arange(horizon + 1), p.size - 1
+        )
         return np.stack([p[j], f[j] - held[:, None]], axis=-1)
 
     pipeline.road_preview = preview  # type: ignore[assignment]

@@ -91,8 +91,9 @@ suppress_warnings = ["config.cache"]
 _LITERALS = re.compile(r"(``.*?``|`[^`]*`)")
 
 
-def _escape_bars(app: object, what: str, name: str, obj: object, options: object,
-                 lines: list[str]) -> None:  # fmt: skip
+def _escape_bars(
+    app: object, what: str, name: str, obj: object, options: object, lines: list[str]
+) -> None:
     """Read ``|x|`` in a docstring as the absolute value it means, not a substitution."""
     for i, line in enumerate(lines):
         text = line.strip()

@@ -51,9 +51,13 @@ def _row(
         motorcycle=dataclasses.replace(base.motorcycle, input=motorcycle_input),
     )
     scenario = feel_scenario(
-        base, speed=speed, amplitude=amplitude, excitation=excitation,  # type: ignore[arg-type]
-        lateral_tolerance=rider[0], course_tolerance=rider[1],
-    )  # fmt: skip
+        base,
+        speed=speed,
+        amplitude=amplitude,
+        excitation=excitation,  # type: ignore[arg-type]
+        lateral_tolerance=rider[0],
+        course_tolerance=rider[1],
+    )
     inputs = resolve(scenario, ".")
     r = simulate(inputs, rng=np.random.default_rng(scenario.seed), keep=True)
     probe = scenario.rider.probe

@@ -62,10 +62,19 @@ def default_stack(
 
     def build(lead: float = 0.0) -> StackModel:
         return design_stack(
-            sharp, kernel.kernel, controller, control_rate=rate, measurement_rate=rate,
-            lipschitz=300.0, max_current=30.0, speed=speed, handlebar=hb,
-            rider_feedforward=True, reference_feedforward=True, prediction_lead=lead,
-        )  # fmt: skip
+            sharp,
+            kernel.kernel,
+            controller,
+            control_rate=rate,
+            measurement_rate=rate,
+            lipschitz=300.0,
+            max_current=30.0,
+            speed=speed,
+            handlebar=hb,
+            rider_feedforward=True,
+            reference_feedforward=True,
+            prediction_lead=lead,
+        )
 
     model = build()
     if default_prediction(rate) if prediction is None else prediction:
@@ -125,9 +134,13 @@ def rows(rate: float, speed: float, show_all: bool, prediction: bool | None) -> 
         for fb in (0.5, 1.0, 1.5):
             for fk in (0.7, 1.0, 1.3):
                 true = dataclasses.replace(
-                    hb, J_eq=hb.J_eq * fj, beta_eq=hb.beta_eq * fb, k_t=hb.k_t * fk, J_m=0.0,
+                    hb,
+                    J_eq=hb.J_eq * fj,
+                    beta_eq=hb.beta_eq * fb,
+                    k_t=hb.k_t * fk,
+                    J_m=0.0,
                     beta_vm=0.0,
-                )  # fmt: skip
+                )
                 a = analyse_stack(model, true, speed)
                 ok = (
                     a.stable
@@ -148,12 +161,14 @@ def rows(rate: float, speed: float, show_all: bool, prediction: bool | None) -> 
                 cg, cfg, cp, cfp = crossings(cancellation_loop_gain(loop, f), f)
                 bound = cancellation_bound(F, f, hb, true, 1.0 / rate)
                 bound_cell = (
-                    "none" if math.isinf(bound.gain_margin_db)
+                    "none"
+                    if math.isinf(bound.gain_margin_db)
                     else f"{bound.gain_margin_db:.1f} dB at {bound.frequency:.1f} Hz"
                 ) + (
-                    "" if math.isinf(bound.low_frequency_db)
+                    ""
+                    if math.isinf(bound.low_frequency_db)
                     else f"; low {bound.low_frequency_db:.1f} dB"
-                )  # fmt: skip
+                )
                 print(
                     f"| {fj:g}, {fb:g}, {fk:g} | {_cell(gm, fg, ' dB')}; {_cell(pm, fp, ' deg')} "
                     f"| {mode} | {_cell(cg, cfg, ' dB')}; {_cell(cp, cfp, ' deg')} "

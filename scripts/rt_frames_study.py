@@ -48,9 +48,12 @@ def _row(
     sc = inputs.scenario
     if delay is None:  # the frame's mean age when the loop reads it, as motosim run takes it
         d = frame_age(
-            latency, pace="clock", control_rate=sc.rates.control,
-            measurement_rate=sc.rates.measurement, origin="rt_frames_study",
-        )  # fmt: skip
+            latency,
+            pace="clock",
+            control_rate=sc.rates.control,
+            measurement_rate=sc.rates.measurement,
+            origin="rt_frames_study",
+        )
     else:
         d = delay
     settings = dataclasses.replace(ideal_rig(sc), latency=latency, jitter=jitter)

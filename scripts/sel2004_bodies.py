@@ -53,8 +53,9 @@ class Body(NamedTuple):
 
 
 # Sharp, Evangelou & Limebeer 2004 (via input_ex_GSXR): p8, p10, p14, p3, p5, p7, p6
-MAIN_FRAME = Body("main frame with the rider's lower body", 165.13, 0.6779, 0.4724,
-                  11.085, 22.013, 14.982, 3.691)  # fmt: skip
+MAIN_FRAME = Body(
+    "main frame with the rider's lower body", 165.13, 0.6779, 0.4724, 11.085, 22.013, 14.982, 3.691
+)
 UPPER_BODY = Body("rider's upper body", 33.68, 0.415, 1.14, 1.428, 1.347, 0.916, -0.443)
 SWING_ARM = Body("swing arm", 8.0, 0.196, 0.3113, 0.02, 0.259, 0.259, 0.0)
 UPPER_FORK = Body("upper fork and handlebar", 9.99, 1.164, 0.77, 1.341, 1.548, 0.4125, 0.0)
@@ -118,37 +119,84 @@ def meijaard_parameters() -> dict[str, Entry]:
         "c": (trail(), "m", derived, "trail: the steering axis through p2 at the caster angle"),
         "lam": (CASTER, "rad", f"{table}: caster", "steering axis from the vertical"),
         "g": (GRAVITY, "m/s^2", f"{table}", "gravity"),
-        "r_R": (rear.z_up - CROWN_REAR, "m", derived,
-                "axle height p7 less the crown radius t_R (axle height = r_R + t_R)"),
+        "r_R": (
+            rear.z_up - CROWN_REAR,
+            "m",
+            derived,
+            "axle height p7 less the crown radius t_R (axle height = r_R + t_R)",
+        ),
         "m_R": (rear.m, "kg", table, "rear wheel"),
         "I_Rxx": (rear.I_xx, "kg*m^2", table, "rear wheel, diametral"),
         "I_Ryy": (rear.I_yy, "kg*m^2", table, "rear wheel, spin"),
-    }  # fmt: skip
-    for key, body, what in (("B", B, "rear frame: main frame, upper body, swing arm"),
-                            ("H", H, "front frame: upper and lower fork")):  # fmt: skip
+    }
+    for key, body, what in (
+        ("B", B, "rear frame: main frame, upper body, swing arm"),
+        ("H", H, "front frame: upper and lower fork"),
+    ):
         p[f"x_{key}"] = (body.x, "m", derived, f"{what}: mass centre")
         p[f"z_{key}"] = (body.z, "m", derived, f"{what}: mass centre (z down)")
         p[f"m_{key}"] = (body.m, "kg", derived, what)
         for axis in ("xx", "yy", "zz", "xz"):
             value = getattr(body, f"I_{axis}")
             p[f"I_{key}{axis}"] = (value, "kg*m^2", derived, f"{what}: about its mass centre")
-    p.update({
-        "r_F": (front.z_up - CROWN_FRONT, "m", derived,
-                "axle height p6 less the crown radius t_F (axle height = r_F + t_F)"),
-        "m_F": (front.m, "kg", table, "front wheel"),
-        "I_Fxx": (front.I_xx, "kg*m^2", table, "front wheel, diametral"),
-        "I_Fyy": (front.I_yy, "kg*m^2", table, "front wheel, spin"),
-        "t_R": (CROWN_REAR, "m", "Cossalter & Lot 2002 via Evangelou 2004, sec. 9.3.5",
-                "crown radius of the rear tyre (sel2004_rear_180_55_zr17)"),
-        "t_F": (CROWN_FRONT, "m", "Cossalter & Lot 2002 via Evangelou 2004, sec. 9.3.5",
-                "crown radius of the front tyre (sel2004_front_120_70_zr17)"),
-    })  # fmt: skip
+    p.update(
+        {
+            "r_F": (
+                front.z_up - CROWN_FRONT,
+                "m",
+                derived,
+                "axle height p6 less the crown radius t_F (axle height = r_F + t_F)",
+            ),
+            "m_F": (front.m, "kg", table, "front wheel"),
+            "I_Fxx": (front.I_xx, "kg*m^2", table, "front wheel, diametral"),
+            "I_Fyy": (front.I_yy, "kg*m^2", table, "front wheel, spin"),
+            "t_R": (
+                CROWN_REAR,
+                "m",
+                "Cossalter & Lot 2002 via Evangelou 2004, sec. 9.3.5",
+                "crown radius of the rear tyre (sel2004_rear_180_55_zr17)",
+            ),
+            "t_F": (
+                CROWN_FRONT,
+                "m",
+                "Cossalter & Lot 2002 via Evangelou 2004, sec. 9.3.5",
+                "crown radius of the front tyre (sel2004_front_120_70_zr17)",
+            ),
+        }
+    )
     return p
 
 
-ORDER = ("w", "c", "lam", "g", "r_R", "m_R", "I_Rxx", "I_Ryy", "x_B", "z_B", "m_B", "I_Bxx",
-         "I_Byy", "I_Bzz", "I_Bxz", "x_H", "z_H", "m_H", "I_Hxx", "I_Hyy", "I_Hzz", "I_Hxz",
-         "r_F", "m_F", "I_Fxx", "I_Fyy", "t_R", "t_F")  # fmt: skip
+ORDER = (
+    "w",
+    "c",
+    "lam",
+    "g",
+    "r_R",
+    "m_R",
+    "I_Rxx",
+    "I_Ryy",
+    "x_B",
+    "z_B",
+    "m_B",
+    "I_Bxx",
+    "I_Byy",
+    "I_Bzz",
+    "I_Bxz",
+    "x_H",
+    "z_H",
+    "m_H",
+    "I_Hxx",
+    "I_Hyy",
+    "I_Hzz",
+    "I_Hxz",
+    "r_F",
+    "m_F",
+    "I_Fxx",
+    "I_Fyy",
+    "t_R",
+    "t_F",
+)
 
 
 def _quoted(text: str) -> str:
@@ -171,9 +219,14 @@ def render_toml() -> str:
     ]
     for name in ORDER:
         value, unit, source, note = p[name]
-        lines += ["", f"[parameters.{name}]", f"value = {round(value, 9)!r}",
-                  f"unit = {_quoted(unit)}", f"source = {_quoted(source)}",
-                  f"note = {_quoted(note)}"]  # fmt: skip
+        lines += [
+            "",
+            f"[parameters.{name}]",
+            f"value = {round(value, 9)!r}",
+            f"unit = {_quoted(unit)}",
+            f"source = {_quoted(source)}",
+            f"note = {_quoted(note)}",
+        ]
     return "\n".join(lines) + "\n"
 
 

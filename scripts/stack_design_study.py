@@ -161,9 +161,13 @@ def _controller(hb: HandlebarParameters, c: Candidate, rate: float) -> StateSpac
     key = (bandwidth, c.order, rate, c.integral_corner)
     if key not in _controllers:
         design = design_torque_feedback(
-            hb, rng=np.random.default_rng(0), bandwidth=bandwidth, order=c.order, rate=rate,
+            hb,
+            rng=np.random.default_rng(0),
+            bandwidth=bandwidth,
+            order=c.order,
+            rate=rate,
             integral_corner=c.integral_corner,
-        )  # fmt: skip
+        )
         _controllers[key] = design.controller_zoh
     return _controllers[key]
 
@@ -190,10 +194,18 @@ def build(c: Candidate, hb: HandlebarParameters, rate: float, speed: float) -> S
     )
     kernel = WalcottZakObserver(design_with(observed, settings), 1.0 / rate).kernel
     model = design_stack(
-        sharp, kernel, controller, control_rate=rate, measurement_rate=rate, lipschitz=300.0,
-        max_current=30.0, speed=speed, handlebar=hb, rider_feedforward=True,
+        sharp,
+        kernel,
+        controller,
+        control_rate=rate,
+        measurement_rate=rate,
+        lipschitz=300.0,
+        max_current=30.0,
+        speed=speed,
+        handlebar=hb,
+        rider_feedforward=True,
         reference_feedforward=True,
-    )  # fmt: skip
+    )
     ff = model.feedforward.copy()
     ff[0] = c.cancellation
     ff[1] = float(c.reference)
@@ -236,10 +248,17 @@ def grid(
     for fj in (0.5, 1.0, 1.5):
         for fb in (0.5, 1.0, 1.5):
             for fk in (0.7, 1.0, 1.3):
-                yield (fj, fb, fk), dataclasses.replace(
-                    hb, J_eq=hb.J_eq * fj, beta_eq=hb.beta_eq * fb, k_t=hb.k_t * fk, J_m=0.0,
-                    beta_vm=0.0,
-                )  # fmt: skip
+                yield (
+                    (fj, fb, fk),
+                    dataclasses.replace(
+                        hb,
+                        J_eq=hb.J_eq * fj,
+                        beta_eq=hb.beta_eq * fb,
+                        k_t=hb.k_t * fk,
+                        J_m=0.0,
+                        beta_vm=0.0,
+                    ),
+                )
 
 
 def ok(a: StackLoopAnalysis) -> bool:
@@ -283,9 +302,14 @@ SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
 
 TRAINING = (
-    "lane_change_20.toml", "crosswind_30.toml", "obstacle_avoidance_15.toml", "turn_30.toml",
-    "opendrive_curve.toml", "slalom_10.toml", "paper/fig15_riding.toml",
-)  # fmt: skip
+    "lane_change_20.toml",
+    "crosswind_30.toml",
+    "obstacle_avoidance_15.toml",
+    "turn_30.toml",
+    "opendrive_curve.toml",
+    "slalom_10.toml",
+    "paper/fig15_riding.toml",
+)
 """The closed-loop training scenarios ``--runs ... --at RATE`` simulates at RATE."""
 
 

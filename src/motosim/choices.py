@@ -23,9 +23,13 @@ __all__ = [
 ]
 
 MOTORCYCLE_PROFILES: Final = (
-    "drive_torque", "brake_torque", "front_brake_torque", "rear_brake_torque", "wind_force",
+    "drive_torque",
+    "brake_torque",
+    "front_brake_torque",
+    "rear_brake_torque",
+    "wind_force",
     "side_wind",
-)  # fmt: skip
+)
 """The profiles of a scenario's ``[motorcycle]`` table
 (:class:`motosim.sim.scenario.Motorcycle`)."""
 ESTIMATOR_NAMES: Final = ("walcott_zak", "inverse_dynamics", "kalman")

@@ -84,11 +84,40 @@ SIGNALS: Final[dict[str, Signal]] = {
 
 
 RECORDED: Final[tuple[str, ...]] = (
-    "t", "tau_r", "tau_r_active", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot",
-    "theta_h_meas", "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot",
-    "phi_dot", "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y", "F_xr", "F_xf",
-    "F_zr", "F_zf", "kappa_r", "kappa_f", "alpha_r", "alpha_f", "theta",
-)  # fmt: skip
+    "t",
+    "tau_r",
+    "tau_r_active",
+    "tau_r_hat",
+    "tau_p",
+    "theta_h",
+    "theta_h_dot",
+    "theta_h_meas",
+    "theta_h_dot_hat",
+    "i_m",
+    "tau_m",
+    "delta",
+    "v_x",
+    "v_y",
+    "psi_dot",
+    "phi_dot",
+    "delta_dot",
+    "phi",
+    "F_yr",
+    "F_yf",
+    "psi",
+    "x",
+    "y",
+    "e_y",
+    "F_xr",
+    "F_xf",
+    "F_zr",
+    "F_zf",
+    "kappa_r",
+    "kappa_f",
+    "alpha_r",
+    "alpha_f",
+    "theta",
+)
 """The signals a closed-loop run records, in column order (each one is in :data:`SIGNALS`).
 
 The simulator's output row, the result files' columns and the plots follow this tuple:

@@ -103,15 +103,26 @@ def live_run(folder: Path, duration: float = 60.0) -> Iterator[LiveRun]:
     path = folder / "live.toml"
     path.write_text(SCENARIO.format(duration=duration), encoding="utf-8")
     telemetry = f"127.0.0.1:{free_udp_port()}"
-    rig = _motosim("rig", str(path), "--bus", BUS, "--duration", str(duration + 60),
-                   "--telemetry", telemetry)  # fmt: skip
+    rig = _motosim(
+        "rig", str(path), "--bus", BUS, "--duration", str(duration + 60), "--telemetry", telemetry
+    )
     run = reader = None
     try:
         wait_for_status(BUS, 60.0)
         run = _motosim(
-            "run", str(path), "--bus", BUS, "--out", str(folder / "run"), "--no-report",
-            "--telemetry", telemetry, "--view", "--view-port", "0",
-        )  # fmt: skip
+            "run",
+            str(path),
+            "--bus",
+            BUS,
+            "--out",
+            str(folder / "run"),
+            "--no-report",
+            "--telemetry",
+            telemetry,
+            "--view",
+            "--view-port",
+            "0",
+        )
         assert run.stderr is not None
         log: list[str] = []
         match = None

@@ -41,8 +41,13 @@ def _motosim(argv: list[str], cwd: Path) -> tuple[int, str, list[str]]:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
     done = subprocess.run(
         [sys.executable, "-c", _CODE, json.dumps(argv)],
-        capture_output=True, text=True, cwd=cwd, env=env, check=False, timeout=120,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=env,
+        check=False,
+        timeout=120,
+    )
     lines = done.stderr.splitlines()
     heavy = [json.loads(x[6:]) for x in lines if x.startswith("HEAVY=")]
     err = "".join(x + "\n" for x in lines if not x.startswith("HEAVY="))
@@ -161,17 +166,21 @@ def test_a_trailing_slash_names_a_folder_never_a_file(argv: list[str], files: Pa
 
 
 def test_unreadable_inputs_are_named_for_what_they_are(files: Path) -> None:
-    _refused_early(["simulate", "loop_a.toml", "--out", "r"], files, "loop_a.toml",
-                   "symbolic link loop")  # fmt: skip
+    _refused_early(
+        ["simulate", "loop_a.toml", "--out", "r"], files, "loop_a.toml", "symbolic link loop"
+    )
     _refused_early(["design", "--handlebar", "loop_a.toml"], files, "symbolic link loop")
     _refused_early(["identify", "binary.csv"], files, "binary.csv", "binary")
     _refused_early(["simulate", ".", "--out", "r"], files, "is a directory")
-    _refused_early(["simulate", "nodesign.toml", "--out", "r"], files, "nope.toml",
-                   "no such design file")  # fmt: skip
-    _refused_early(["rig", "nohb.toml", "--bus", "virtual"], files, "gone_hb.toml",
-                   "no such parameter file")  # fmt: skip
-    _refused_early(["campaign", "c.toml", "--out", "out"], files, "gone.toml",
-                   "no such scenario file")  # fmt: skip
+    _refused_early(
+        ["simulate", "nodesign.toml", "--out", "r"], files, "nope.toml", "no such design file"
+    )
+    _refused_early(
+        ["rig", "nohb.toml", "--bus", "virtual"], files, "gone_hb.toml", "no such parameter file"
+    )
+    _refused_early(
+        ["campaign", "c.toml", "--out", "out"], files, "gone.toml", "no such scenario file"
+    )
 
 
 # --- 2. a scenario's values, before any design or run ---------------------------------------
@@ -191,11 +200,13 @@ def _scenario(folder: Path, extra_motorcycle: str = "", tail: str = "") -> Path:
         ('drive_torque = { kind = "constant", value = 1e6 }', "drive_torque reaches 1e+06 N*m"),
         ('wind_force = { kind = "constant", value = 1e9 }', "wind_force reaches 1e+09 N"),
         ('brake_torque = { kind = "constant", value = -50.0 }', "brake_torque reaches -50 N*m"),
-        ('side_wind = { kind = "square", low = 0.0, high = 2e4, period = 2.0 }',
-         "side_wind reaches 20000 N"),
+        (
+            'side_wind = { kind = "square", low = 0.0, high = 2e4, period = 2.0 }',
+            "side_wind reaches 20000 N",
+        ),
     ],
     ids=["drive", "wind", "negative_brake", "side_wind"],
-)  # fmt: skip
+)
 def test_a_scenario_value_out_of_its_range_is_bad_input_not_a_failed_run(
     line: str, named: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -211,18 +222,23 @@ def test_a_scenario_value_out_of_its_range_is_bad_input_not_a_failed_run(
     [
         ("offset = 3.5", "offset = 3500.0", "offset = 3500.0; expected a finite number >= -100"),
         ("length = 60.0", "length = 1e9", "length = 1000000000.0; expected"),
-        ('kind = "virtual"', 'kind = "torque"\nprofile = { kind = "square", low = 0.0, high = '
-         '5.0, period = 2.0, start = 1e9 }', "start = 1000000000.0; expected"),
+        (
+            'kind = "virtual"',
+            'kind = "torque"\nprofile = { kind = "square", low = 0.0, high = '
+            "5.0, period = 2.0, start = 1e9 }",
+            "start = 1000000000.0; expected",
+        ),
     ],
     ids=["lane_offset", "lane_length", "profile_start"],
-)  # fmt: skip
+)
 def test_a_path_or_profile_far_beyond_any_ride_is_refused(
     old: str, new: str, named: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     text = SCENARIO.read_text(encoding="utf-8").replace(old, new)
     if "square" in new:
-        text = text.replace('path = { kind = "lane_change", offset = 3.5, length = 60.0, '
-                            "start = 50.0 }\n", "")  # fmt: skip
+        text = text.replace(
+            'path = { kind = "lane_change", offset = 3.5, length = 60.0, start = 50.0 }\n', ""
+        )
     (tmp_path / "v.toml").write_text(text, encoding="utf-8")
     assert main(["simulate", str(tmp_path / "v.toml"), "--out", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err
@@ -267,8 +283,11 @@ def test_a_design_file_with_the_papers_controller_is_refused(
 def test_an_absurd_design_bandwidth_is_refused_naming_the_range(
     bandwidth: str, tmp_path: Path
 ) -> None:
-    _refused_early(["design", "--bandwidth", bandwidth], tmp_path,
-                   f"--bandwidth {float(bandwidth)!r} Hz; expected 0.1 to 200 Hz")  # fmt: skip
+    _refused_early(
+        ["design", "--bandwidth", bandwidth],
+        tmp_path,
+        f"--bandwidth {float(bandwidth)!r} Hz; expected 0.1 to 200 Hz",
+    )
 
 
 def test_a_linear_algebra_failure_is_a_failed_run_in_one_line(
@@ -398,9 +417,13 @@ def test_a_down_chirp_is_warned_about(tmp_path: Path, capsys: pytest.CaptureFixt
     ],
 )
 def test_a_tiny_friction_or_caster_is_warned_about_with_why(
-    packaged: str, key: str, value: str, why: str, tmp_path: Path,
+    packaged: str,
+    key: str,
+    value: str,
+    why: str,
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
-) -> None:  # fmt: skip
+) -> None:
     text = (ROOT / "src" / "motosim" / "params" / "data" / f"{packaged}.toml").read_text(
         encoding="utf-8"
     )
@@ -414,9 +437,12 @@ def test_a_tiny_friction_or_caster_is_warned_about_with_why(
 
 @pytest.mark.parametrize(
     ("table", "key"),
-    [("motorcycle", "front_brake_torque"), ("motorcycle", "rear_brake_torque"),
-     ("road", "friction")],
-)  # fmt: skip
+    [
+        ("motorcycle", "front_brake_torque"),
+        ("motorcycle", "rear_brake_torque"),
+        ("road", "friction"),
+    ],
+)
 def test_the_multibody_profiles_csv_is_checked_first(tmp_path: Path, table: str, key: str) -> None:
     """A CSV profile of the multibody motorcycle's brakes or the road's friction that names a
     missing file is refused before the numerical stack is imported, as the others are."""

@@ -102,16 +102,25 @@ def _toml_value(value: Any) -> str:
 def dumps(document: dict[str, Any]) -> str:
     """TOML text of a document: a table per top-level key, nested tables of tables as tables,
     anything else inline."""
-    lines = [f"{json.dumps(k)} = {_toml_value(v)}" for k, v in document.items()
-             if not isinstance(v, dict)]  # fmt: skip
+    lines = [
+        f"{json.dumps(k)} = {_toml_value(v)}"
+        for k, v in document.items()
+        if not isinstance(v, dict)
+    ]
 
     def table(prefix: tuple[str, ...], body: dict[str, Any]) -> None:
         lines.append("[" + ".".join(json.dumps(p) for p in prefix) + "]")
-        nested = {k: v for k, v in body.items()
-                  if isinstance(v, dict) and v and all(isinstance(x, dict) for x in v.values())
-                  and prefix != ("factors",)}  # fmt: skip
-        lines.extend(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in body.items()
-                     if k not in nested)  # fmt: skip
+        nested = {
+            k: v
+            for k, v in body.items()
+            if isinstance(v, dict)
+            and v
+            and all(isinstance(x, dict) for x in v.values())
+            and prefix != ("factors",)
+        }
+        lines.extend(
+            f"{json.dumps(k)} = {_toml_value(v)}" for k, v in body.items() if k not in nested
+        )
         for key, value in nested.items():
             table((*prefix, key), value)
 
@@ -273,8 +282,9 @@ def result(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
-def _argv(file: Path, path: tuple[str, ...], written: Path, tmp: Path,
-          result: Callable[[], Path]) -> list[tuple[list[str], tuple[str, ...]]]:  # fmt: skip
+def _argv(
+    file: Path, path: tuple[str, ...], written: Path, tmp: Path, result: Callable[[], Path]
+) -> list[tuple[list[str], tuple[str, ...]]]:
     """The commands that read ``file`` (written as ``written``) and where they stop."""
     if file == PLATFORM:
         cueing = ["cueing", str(result()), "--platform", str(written), "--out", str(tmp / "c")]
@@ -326,16 +336,22 @@ def beside(tmp_path_factory: pytest.TempPathFactory) -> Callable[[Path, str], Pa
 
 @pytest.mark.parametrize(("file", "path", "mutation", "rule"), list(_file_cases()))
 def test_every_value_of_every_file(
-    file: Path, path: tuple[str, ...], mutation: str, rule: str, tmp_path: Path,
-    request: pytest.FixtureRequest, beside: Callable[[Path, str], Path],
-) -> None:  # fmt: skip
+    file: Path,
+    path: tuple[str, ...],
+    mutation: str,
+    rule: str,
+    tmp_path: Path,
+    request: pytest.FixtureRequest,
+    beside: Callable[[Path, str], Path],
+) -> None:
     document = read_toml(file, what="file")
     problems = []
     outcomes = {}
     for name in ("zero", mutation) if rule == "like_zero" else (mutation,):
         written = beside(file, dumps(_mutated(document, path, MUTATIONS[name])))
-        for argv, stop in _argv(file, path, written, tmp_path,
-                                lambda: request.getfixturevalue("result")):  # fmt: skip
+        for argv, stop in _argv(
+            file, path, written, tmp_path, lambda: request.getfixturevalue("result")
+        ):
             outcomes[name, argv[0]] = run_cli(argv, stop)
     for (name, command), outcome in outcomes.items():
         if name == mutation:
@@ -388,8 +404,9 @@ def test_damaged_files(
     _write_beside(file, "", tmp_path).write_bytes(content)
     written = tmp_path / file.name
     path = ("realtime",) if "realtime" in file.name else ("scenario",)
-    for argv, stop in _argv(file, path, written, tmp_path,
-                            lambda: request.getfixturevalue("result")):  # fmt: skip
+    for argv, stop in _argv(
+        file, path, written, tmp_path, lambda: request.getfixturevalue("result")
+    ):
         outcome = run_cli(argv, stop)
         assert is_refusal(outcome), (argv[0], outcome)
         assert str(written) in outcome[2] and len(outcome[2]) < 2_000
@@ -501,8 +518,9 @@ def _log_cases() -> Iterator[Any]:
     yield pytest.param(_log_text(period=10.0).encode(), id="log-milliseconds")
     yield pytest.param(good.replace(".", ",").encode(), id="log-decimal-comma-comma-separated")
     yield pytest.param((lines[0] + "\n" + "\n".join(lines[1:5]) + "\n").encode(), id="log-4-rows")
-    yield pytest.param((lines[0] + "\n" + lines[1] + "," + "9" * 200_000 + "\n").encode(),
-                       id="log-huge-field")  # fmt: skip
+    yield pytest.param(
+        (lines[0] + "\n" + lines[1] + "," + "9" * 200_000 + "\n").encode(), id="log-huge-field"
+    )
     yield pytest.param(("t,theta_h,i_m\n" + "0,0,0\n" * 50).encode(), id="log-time-repeats")
     reversed_rows = [lines[0], *reversed(lines[1:])]
     yield pytest.param(("\n".join(reversed_rows) + "\n").encode(), id="log-time-reversed")
@@ -522,8 +540,9 @@ def _log_cases() -> Iterator[Any]:
 def test_damaged_logs(command: str, content: bytes, tmp_path: Path) -> None:
     log = tmp_path / "run.csv"
     log.write_bytes(content)
-    argv = [command, str(log)] + (["--out", str(tmp_path / "e.csv")] if command == "estimate"
-                                  else [])  # fmt: skip
+    argv = [command, str(log)] + (
+        ["--out", str(tmp_path / "e.csv")] if command == "estimate" else []
+    )
     outcome = run_cli(argv, ("motosim.identification.identify", "motosim.estimation.estimate"))
     assert is_refusal(outcome), outcome
 
@@ -531,8 +550,9 @@ def test_damaged_logs(command: str, content: bytes, tmp_path: Path) -> None:
 @pytest.mark.parametrize("command", ["identify", "estimate"])
 def test_a_bom_or_crlf_log_reads_as_the_original(command: str, tmp_path: Path) -> None:
     log = tmp_path / "run é.csv"
-    argv = [command, str(log)] + (["--out", str(tmp_path / "e.csv")] if command == "estimate"
-                                  else [])  # fmt: skip
+    argv = [command, str(log)] + (
+        ["--out", str(tmp_path / "e.csv")] if command == "estimate" else []
+    )
     stop = ("motosim.identification.identify", "motosim.estimation.estimate")
     for content in (_log_text().encode("utf-8-sig"), _log_text().replace("\n", "\r\n").encode()):
         log.write_bytes(content)
@@ -819,8 +839,18 @@ def test_every_option_at_its_edges(tmp_path: Path, result: Path) -> None:
 
 # --- kinds a fresh corpus found after the first: special paths, more option spellings -------
 
-_MORE_EDGES = ("1e309", "-1e309", "0x10", "Infinity", "+inf", "-nan", "1e400000", "1.0.0", "--",
-               "9" * 5000)  # fmt: skip
+_MORE_EDGES = (
+    "1e309",
+    "-1e309",
+    "0x10",
+    "Infinity",
+    "+inf",
+    "-nan",
+    "1e400000",
+    "1.0.0",
+    "--",
+    "9" * 5000,
+)
 
 
 def _with(base: list[str], option: str, value: str) -> list[str]:
@@ -914,7 +944,7 @@ def test_special_paths_as_inputs_are_refused(tmp_path: Path, result: Path) -> No
             (["design", "--handlebar", path], STOP_DESIGN),
             (["run", path, "--bus", "virtual", "--out", str(tmp_path / "r")], stop_rt),
             (["rig", path, "--bus", "virtual"], stop_rt),
-        ]:  # fmt: skip
+        ]:
             outcome = run_cli(argv, stop)
             if not is_refusal(outcome) or len(outcome[2]) > 2_000:
                 failures.append(f"{kind} {argv[:2]}: {outcome[0]} {outcome[2][-200:]!r}")

@@ -62,8 +62,12 @@ def test_runs_n_runs_the_first_n_and_says_so(
 ) -> None:
     path = _write(tmp_path)
     out = tmp_path / "out"
-    assert main(["campaign", str(path), "--out", str(out), "--jobs", "1", "--runs", "3",
-                 "--no-report"]) == 0  # fmt: skip
+    assert (
+        main(
+            ["campaign", str(path), "--out", str(out), "--jobs", "1", "--runs", "3", "--no-report"]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "--runs 3: the first 3 of the plan's 16" in printed
     manifest = json.loads((out / "manifest.json").read_text())

@@ -70,9 +70,18 @@ def test_design_with_a_latency_shows_the_margins_kept(capsys: pytest.CaptureFixt
     # 7.6 dB and 49 deg at 20 m/s with the plain cancellation, 6.9 dB and 48 deg with the
     # predicted one, the default at 100 Hz
     code, out, _ = _run(
-        capsys, "design", "--json", "--starts", "1", "--rate", "100", "--speeds", "20",
-        "--latency", "0.0055",
-    )  # fmt: skip
+        capsys,
+        "design",
+        "--json",
+        "--starts",
+        "1",
+        "--rate",
+        "100",
+        "--speeds",
+        "20",
+        "--latency",
+        "0.0055",
+    )
     assert code == 0
     (stack,) = json.loads(out)["stack"]
     assert stack["measurement_delay_s"] == 0.0055

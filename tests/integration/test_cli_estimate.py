@@ -52,9 +52,15 @@ def test_other_estimators(
     capsys: pytest.CaptureFixture[str], log_file: Path, tmp_path: Path, name: str
 ) -> None:
     code, out, _ = _run(
-        capsys, "estimate", str(log_file), "--estimator", name, "--out", str(tmp_path / "e.csv"),
+        capsys,
+        "estimate",
+        str(log_file),
+        "--estimator",
+        name,
+        "--out",
+        str(tmp_path / "e.csv"),
         "--json",
-    )  # fmt: skip
+    )
     assert code == 0 and json.loads(out)["error"]["rms"] < 10.0  # a fifth of the 50 N*m step
 
 

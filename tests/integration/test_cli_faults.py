@@ -39,12 +39,21 @@ def _long_scenario(tmp_path: Path, duration: float = 200.0) -> Path:
 def _start(scenario: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
     """``motosim simulate`` in a child process, returned once its first rows are written."""
     child = subprocess.Popen(
-        [sys.executable, "-m", "motosim", "simulate", str(scenario), "--out", str(out),
-         "--no-report", *extra],
+        [
+            sys.executable,
+            "-m",
+            "motosim",
+            "simulate",
+            str(scenario),
+            "--out",
+            str(out),
+            "--no-report",
+            *extra,
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-    )  # fmt: skip
+    )
     deadline = time.monotonic() + 120.0
     rows = partial_folder(out) / "result.partial.csv"
     while time.monotonic() < deadline and child.poll() is None:
@@ -82,8 +91,19 @@ def test_sigterm_during_simulate_keeps_a_plainly_readable_partial_result(tmp_pat
     assert table[0] == list(SIGNALS) and len(table) - 1 == rows
     assert load_result(out).t.size == rows
     # nothing blocks a rerun
-    assert main(["simulate", str(_long_scenario(tmp_path, 0.5)), "--out", str(out),
-                 "--no-report", "--overwrite"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "simulate",
+                str(_long_scenario(tmp_path, 0.5)),
+                "--out",
+                str(out),
+                "--no-report",
+                "--overwrite",
+            ]
+        )
+        == 0
+    )
 
 
 def test_a_second_overwrite_run_on_a_folder_being_written_is_refused(
@@ -284,8 +304,12 @@ def test_cueing_holds_the_folder_until_its_figures_are_written(tmp_path: Path) -
 
     out = tmp_path / "cue"
     simulated = tmp_path / "run"
-    assert main(["simulate", str(_long_scenario(tmp_path, 1.0)), "--out", str(simulated),
-                 "--no-report"]) == 0  # fmt: skip
+    assert (
+        main(
+            ["simulate", str(_long_scenario(tmp_path, 1.0)), "--out", str(simulated), "--no-report"]
+        )
+        == 0
+    )
     second = ["cueing", str(simulated), "--out", str(out), "--overwrite"]
     seen: list[tuple[int, str]] = []
     real = motosim.cli.cueing.save_figure
@@ -377,8 +401,14 @@ def test_run_holds_the_folder_until_its_timing_and_report_are_written(tmp_path: 
     import motosim.report
 
     out = tmp_path / "run"
-    second = ["simulate", str(_long_scenario(tmp_path, 0.2)), "--out", str(out), "--overwrite",
-              "--no-report"]  # fmt: skip
+    second = [
+        "simulate",
+        str(_long_scenario(tmp_path, 0.2)),
+        "--out",
+        str(out),
+        "--overwrite",
+        "--no-report",
+    ]
     seen: dict[str, tuple[int, str]] = {}
     real_write = motosim.cli.run.write_text
     real_report = motosim.report.build_report
@@ -396,8 +426,20 @@ def test_run_holds_the_folder_until_its_timing_and_report_are_written(tmp_path: 
         unittest.mock.patch.object(motosim.cli.run, "write_text", write_text),
         unittest.mock.patch.object(motosim.report, "build_report", build_report),
     ):
-        code = main(["run", str(ROOT / "scenarios" / "realtime_square.toml"), "--bus", "virtual",
-                     "--out", str(out), "--duration", "0.5", "--telemetry", "off"])  # fmt: skip
+        code = main(
+            [
+                "run",
+                str(ROOT / "scenarios" / "realtime_square.toml"),
+                "--bus",
+                "virtual",
+                "--out",
+                str(out),
+                "--duration",
+                "0.5",
+                "--telemetry",
+                "off",
+            ]
+        )
     assert code == 0
     assert list(seen) == ["timing.json", "report"]
     for what, (code, err) in seen.items():
@@ -436,8 +478,20 @@ def test_run_ends_at_once_when_its_folder_gains_a_file_of_another_kind(
     thread.start()
     begun = time.monotonic()
     try:
-        code = main(["run", str(ROOT / "scenarios" / "realtime_square.toml"), "--bus", "virtual",
-                     "--out", str(out), "--duration", "0.9", "--telemetry", "off"])  # fmt: skip
+        code = main(
+            [
+                "run",
+                str(ROOT / "scenarios" / "realtime_square.toml"),
+                "--bus",
+                "virtual",
+                "--out",
+                str(out),
+                "--duration",
+                "0.9",
+                "--telemetry",
+                "off",
+            ]
+        )
     finally:
         ended.set()
         thread.join()

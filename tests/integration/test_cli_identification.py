@@ -23,8 +23,22 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]
 def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("runs")
     assert main(["excite", "--signal", "chirp", "--out", str(folder / "chirp.csv")]) == 0
-    assert main(["excite", "--signal", "square", "--duration", "20", "--seed", "1",
-                 "--out", str(folder / "square.csv")]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "excite",
+                "--signal",
+                "square",
+                "--duration",
+                "20",
+                "--seed",
+                "1",
+                "--out",
+                str(folder / "square.csv"),
+            ]
+        )
+        == 0
+    )
     return folder
 
 
@@ -59,12 +73,16 @@ def test_excite_drives_the_voltage_its_options_give(
 @pytest.mark.parametrize(
     ("options", "settings"),
     [
-        (["--signal", "chirp", "--f0", "0.5", "--f1", "5", "--amplitude", "6"],
-         {"amplitude": 6.0, "f0": 0.5, "f1": 5.0}),
-        (["--signal", "square", "--frequency", "2", "--amplitude", "1.5"],
-         {"amplitude": 1.5, "frequency": 2.0}),
+        (
+            ["--signal", "chirp", "--f0", "0.5", "--f1", "5", "--amplitude", "6"],
+            {"amplitude": 6.0, "f0": 0.5, "f1": 5.0},
+        ),
+        (
+            ["--signal", "square", "--frequency", "2", "--amplitude", "1.5"],
+            {"amplitude": 1.5, "frequency": 2.0},
+        ),
     ],
-)  # fmt: skip
+)
 def test_excite_json_records_the_excitations_settings(
     tmp_path: Path, options: list[str], settings: dict[str, float]
 ) -> None:
@@ -75,10 +93,24 @@ def test_excite_json_records_the_excitations_settings(
 
     out = tmp_path / "run.csv"
     done = subprocess.run(
-        [sys.executable, "-m", "motosim", "excite", *options, "--duration", "10", "--seed", "3",
-         "--json", "--out", str(out)],
-        capture_output=True, text=True, check=False,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "motosim",
+            "excite",
+            *options,
+            "--duration",
+            "10",
+            "--seed",
+            "3",
+            "--json",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
     assert {k: summary[k] for k in settings} == settings
@@ -96,9 +128,17 @@ def test_identify_recovers_table1_and_writes_a_usable_file(
 ) -> None:
     out_file = runs / "identified.toml"
     code, out, _ = _run(
-        capsys, "identify", str(runs / "chirp.csv"), "--validate", str(runs / "square.csv"),
-        "--json", "--out", str(out_file), "--plot", str(runs / "id.png"),
-    )  # fmt: skip
+        capsys,
+        "identify",
+        str(runs / "chirp.csv"),
+        "--validate",
+        str(runs / "square.csv"),
+        "--json",
+        "--out",
+        str(out_file),
+        "--plot",
+        str(runs / "id.png"),
+    )
     assert code == 0
     report = json.loads(out)
     # Table I (Nehaoua et al. 2012): beta_eq 13.956 N*m*s/rad, beta_s 1.734 N*m; the default
@@ -118,9 +158,17 @@ def test_identify_with_other_motor_constants(
     capsys: pytest.CaptureFixture[str], runs: Path
 ) -> None:
     code, out, _ = _run(
-        capsys, "identify", str(runs / "chirp.csv"), "--ratio", "6", "--torque-constant",
-        "0.25", "--method", "lsq", "--json",
-    )  # fmt: skip
+        capsys,
+        "identify",
+        str(runs / "chirp.csv"),
+        "--ratio",
+        "6",
+        "--torque-constant",
+        "0.25",
+        "--method",
+        "lsq",
+        "--json",
+    )
     report = json.loads(out)
     assert code == 0
     assert report["torque_per_amp"] == 1.5
@@ -203,8 +251,20 @@ def test_validate_flags_a_model_that_does_not_generalise(
     capsys: pytest.CaptureFixture[str], runs: Path, tmp_path: Path
 ) -> None:
     # validated on a run whose angle is halved: another handlebar, or a wrong encoder scale
-    assert main(["excite", "--signal", "square", "--duration", "20", "--out",
-                 str(tmp_path / "square.csv")]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "excite",
+                "--signal",
+                "square",
+                "--duration",
+                "20",
+                "--out",
+                str(tmp_path / "square.csv"),
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     heavy = tmp_path / "heavy.csv"
     lines = (tmp_path / "square.csv").read_text().splitlines()

@@ -361,8 +361,9 @@ def test_a_design_file_scenario_runs_with_the_default_rider(
     a = simulate(inputs, rng=np.random.default_rng(0))
     b = simulate(off, rng=np.random.default_rng(0))
     np.testing.assert_array_equal(a.data, b.data)
-    code, _, err = _run(capsys, "simulate", str(tmp_path / "s.toml"), "--out",
-                        str(tmp_path / "out"), "--no-report")  # fmt: skip
+    code, _, err = _run(
+        capsys, "simulate", str(tmp_path / "s.toml"), "--out", str(tmp_path / "out"), "--no-report"
+    )
     assert code == 0, err
 
 

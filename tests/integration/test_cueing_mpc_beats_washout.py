@@ -31,8 +31,12 @@ def test_mpc_has_fewer_false_cues_and_lower_roll_and_pitch_errors(
 ) -> None:
     pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
     out = tmp_path / name
-    assert main(["simulate", str(ROOT / "scenarios" / f"{name}.toml"), "--out", str(out),
-                 "--no-report"]) == 0  # fmt: skip
+    assert (
+        main(
+            ["simulate", str(ROOT / "scenarios" / f"{name}.toml"), "--out", str(out), "--no-report"]
+        )
+        == 0
+    )
     capsys.readouterr()
     r = load_result(out)
     series = TimeSeries(r.t, r.data, r.names)

@@ -37,8 +37,9 @@ def _cue(result: Path, out: Path, capsys: pytest.CaptureFixture[str], *extra: st
     return dict(json.loads(capsys.readouterr().out))
 
 
-@pytest.mark.parametrize("scenario", ["scenarios/lane_change_20.toml",
-                                      "bench/scenarios/lane_change_30.toml"])  # fmt: skip
+@pytest.mark.parametrize(
+    "scenario", ["scenarios/lane_change_20.toml", "bench/scenarios/lane_change_30.toml"]
+)
 def test_lane_change_mpc_with_road_preview_beats_the_washout(
     scenario: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -164,9 +165,12 @@ def test_unseen_swerve_at_22_mps_mpc_with_the_huber_roll_cost_beats_the_washout(
     washout's (0.97-1.03 of them across CPUs' BLAS kernels), and the two changes cut them by
     over a fifth."""
     scores = _against_the_washout(
-        tmp_path, capsys, "avoidance_22", ("roll_canal_corner", "4.0", "0.0"),
+        tmp_path,
+        capsys,
+        "avoidance_22",
+        ("roll_canal_corner", "4.0", "0.0"),
         ("preview_force_false_cue_weight", "2.25", "1.5"),
-    )  # fmt: skip
+    )
     assert all(beats(r, w) for r, w in zip(scores["road"], scores["washout"], strict=True)), scores
     assert beats(scores["road"][0], scores["variant"][0]), scores  # what the two changes win
 

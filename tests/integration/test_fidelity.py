@@ -30,9 +30,14 @@ def _worst_against_the_run(feedforward: tuple[str, ...]) -> float:
         base, controller=dataclasses.replace(base.controller, feedforward=feedforward)
     )
     scenario = feel_scenario(
-        base, speed=20.0, amplitude=3.0, duration=20.0, excitation="chirp",
-        lateral_tolerance=0.3, course_tolerance=0.05,
-    )  # fmt: skip
+        base,
+        speed=20.0,
+        amplitude=3.0,
+        duration=20.0,
+        excitation="chirp",
+        lateral_tolerance=0.3,
+        course_tolerance=0.05,
+    )
     inputs = resolve(scenario, ".")
     r = simulate(inputs, rng=np.random.default_rng(0))
     feel = rendered_feel(r.t, r["tau_r"], r["theta_h"], r["delta"], inputs.sharp, 20.0)
@@ -67,9 +72,15 @@ def test_friction_free_stack_measured_as_the_linear_analysis_predicts() -> None:
     probe = scenario.rider.probe
     assert isinstance(probe, MultisineProfile)
     feel = periodic_feel(
-        r.t, r["tau_r"], r["theta_h"], r["delta"], inputs.sharp, 20.0, probe=probe,
+        r.t,
+        r["tau_r"],
+        r["theta_h"],
+        r["delta"],
+        inputs.sharp,
+        20.0,
+        probe=probe,
         band=(0.1, 3.0),
-    )  # fmt: skip
+    )
     loop = stack_loop(build_stack(inputs), inputs.true_handlebar, 20.0)
     ratio = feel.rendered / loop.response(feel.frequency, loop.angle, 0)
     # measured: within 0.007 dB and 0.05 deg at every line (periods of 10 and 20 s)

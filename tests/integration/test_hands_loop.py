@@ -77,9 +77,10 @@ def _profile_doc(**extra: object) -> dict:
 
 def test_noise_free_torque_sensor_gives_the_true_torque() -> None:
     doc = _profile_doc(
-        estimator={"name": "torque_sensor"}, sensor={"torque": {"noise": 0.0}},
+        estimator={"name": "torque_sensor"},
+        sensor={"torque": {"noise": 0.0}},
         controller={"kind": "none"},
-    )  # fmt: skip
+    )
     run = simulate(_inputs(doc), rng=np.random.default_rng(0))
     np.testing.assert_array_equal(run["tau_r_hat"], run["tau_r"])
     # the hands' passive torque is in it: not the square wave alone
@@ -176,8 +177,19 @@ def test_estimate_reads_a_logs_measured_torque(tmp_path: Path) -> None:
     bare = tmp_path / "bare.csv"
     write_log(bare, TimeSeries(t, columns[:, :2], ("theta_h", "i_m")))
     with pytest.raises(SystemExit) as info:
-        sys.exit(main(["estimate", str(bare), "--estimator", "torque_sensor", "--out", str(out),
-                       "--overwrite"]))  # fmt: skip
+        sys.exit(
+            main(
+                [
+                    "estimate",
+                    str(bare),
+                    "--estimator",
+                    "torque_sensor",
+                    "--out",
+                    str(out),
+                    "--overwrite",
+                ]
+            )
+        )
     assert info.value.code == 2
 
 

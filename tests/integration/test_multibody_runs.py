@@ -151,8 +151,18 @@ def test_sharp_runs_record_constant_loads_and_no_slip() -> None:
 def test_limit_braking_reaches_the_road_friction(tmp_path: Path) -> None:
     """Issue 32's target: the virtual rider brakes at >= 0.85 of the road's friction without
     a fall, its brake controller keeping the rear wheel down."""
-    assert main(["simulate", str(SCENARIOS / "limit_braking.toml"), "--out", str(tmp_path),
-                 "--no-report"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "simulate",
+                str(SCENARIOS / "limit_braking.toml"),
+                "--out",
+                str(tmp_path),
+                "--no-report",
+            ]
+        )
+        == 0
+    )
     s = _read(tmp_path)
     t = s["t"]
     braking = (t > 1.3) & (t < 3.3)
@@ -167,8 +177,10 @@ def test_limit_braking_reaches_the_road_friction(tmp_path: Path) -> None:
 
 def test_lean_45_holds_its_path(tmp_path: Path) -> None:
     """Issue 32's target: the virtual rider rides the 45 deg lean turn within 0.5 m RMS."""
-    assert main(["simulate", str(SCENARIOS / "lean_45.toml"), "--out", str(tmp_path),
-                 "--no-report"]) == 0  # fmt: skip
+    assert (
+        main(["simulate", str(SCENARIOS / "lean_45.toml"), "--out", str(tmp_path), "--no-report"])
+        == 0
+    )
     s = _read(tmp_path)
     steady = (s["t"] > 4.5) & (s["t"] < 8.5)
     assert np.degrees(np.abs(s["phi"][steady])).mean() == pytest.approx(45.0, abs=1.0)
@@ -179,8 +191,15 @@ def test_lean_45_holds_its_path(tmp_path: Path) -> None:
 def test_a_locked_front_wheel_ends_in_a_fall_named_with_its_times(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = main(["simulate", str(SCENARIOS / "front_wheel_lock.toml"), "--out", str(tmp_path),
-                 "--no-report"])  # fmt: skip
+    code = main(
+        [
+            "simulate",
+            str(SCENARIOS / "front_wheel_lock.toml"),
+            "--out",
+            str(tmp_path),
+            "--no-report",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 3
     locked = float(err.split("the front wheel locked at t = ")[1].split(" s")[0])
@@ -197,30 +216,37 @@ def test_the_low_friction_patch_and_the_limit_swerve_stay_up() -> None:
         run = closed_loop.simulate(
             _resolved(SCENARIOS / f"{name}.toml"), rng=np.random.default_rng(0)
         )
-        assert run.t[-1] == pytest.approx(load_scenario(SCENARIOS / f"{name}.toml").duration
-                                          - 1e-3)  # fmt: skip
+        assert run.t[-1] == pytest.approx(load_scenario(SCENARIOS / f"{name}.toml").duration - 1e-3)
     # the swerve uses all the front tyre's friction at its peak
-    run = closed_loop.simulate(_resolved(SCENARIOS / "limit_swerve.toml"),
-                               rng=np.random.default_rng(0))  # fmt: skip
+    run = closed_loop.simulate(
+        _resolved(SCENARIOS / "limit_swerve.toml"), rng=np.random.default_rng(0)
+    )
     assert np.max(np.abs(run["F_yf"]) / run["F_zf"]) == pytest.approx(1.0, abs=0.01)
 
 
 @pytest.mark.parametrize(
     ("table", "message"),
     [
-        ('[motorcycle]\nmodel = "multibody"\nbrake_torque = 100.0\n',
-         "brake_torque does not act on model = 'multibody'"),
-        ("[motorcycle]\nfront_brake_torque = 100.0\n",
-         "front_brake_torque does not act on model = 'sharp1971'"),
+        (
+            '[motorcycle]\nmodel = "multibody"\nbrake_torque = 100.0\n',
+            "brake_torque does not act on model = 'multibody'",
+        ),
+        (
+            "[motorcycle]\nfront_brake_torque = 100.0\n",
+            "front_brake_torque does not act on model = 'sharp1971'",
+        ),
         ("[road]\nfriction = 0.5\n", "[road] friction acts on the multibody"),
         ('[motorcycle]\nmodel = "multibody"\n[road]\nfriction = 0.0\n', "friction reaches 0"),
-        ('[motorcycle]\nmodel = "multibody"\n[road]\n'
-         'friction = { kind = "steps", times = [1.0], values = [0.5] }\n', "first at t = 0"),
+        (
+            '[motorcycle]\nmodel = "multibody"\n[road]\n'
+            'friction = { kind = "steps", times = [1.0], values = [0.5] }\n',
+            "first at t = 0",
+        ),
         ('[motorcycle]\nmodel = "multibody"\nside_wind = 100.0\n', "no wind yet"),
         ('[rider]\nkind = "virtual"\nbrake_slip = 0.7\n', "brake_slip"),
         ('[motorcycle]\nmodel = "bikesim"\n', "model"),
     ],
-)  # fmt: skip
+)
 def test_bad_multibody_keys_are_one_line_errors(table: str, message: str) -> None:
     with pytest.raises(MotosimError, match=message.replace("[", r"\[")) as err:
         _scenario(

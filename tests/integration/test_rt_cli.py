@@ -171,10 +171,17 @@ def test_the_platform_file_and_address_are_parsed_once(
     path.write_text(SCENARIO, encoding="utf-8")
     address = f"127.0.0.1:{free_udp_port()}"
     argv = {
-        "run": ["run", str(path), "--out", str(tmp_path / "o"), "--no-report", "--telemetry",
-                "off"],
+        "run": [
+            "run",
+            str(path),
+            "--out",
+            str(tmp_path / "o"),
+            "--no-report",
+            "--telemetry",
+            "off",
+        ],
         "rig": ["rig", str(path)],
-    }[command] + ["--bus", "virtual", "--duration", "0.05", "--platform-udp", address]  # fmt: skip
+    }[command] + ["--bus", "virtual", "--duration", "0.05", "--platform-udp", address]
     loads = unittest.mock.Mock(wraps=motosim.cueing.load_platform)
     parses = unittest.mock.Mock(wraps=motosim.rt.telemetry.parse_address)
     with (
@@ -229,9 +236,16 @@ def rig(tmp_path: Path, request: pytest.FixtureRequest) -> object:
     path.write_text(text, encoding="utf-8")
     telemetry = f"127.0.0.1:{free_udp_port()}"
     proc = _motosim(
-        "rig", str(path), "--bus", BUS, "--duration", "120", "--json",
-        "--telemetry", telemetry,
-    )  # fmt: skip
+        "rig",
+        str(path),
+        "--bus",
+        BUS,
+        "--duration",
+        "120",
+        "--json",
+        "--telemetry",
+        telemetry,
+    )
     try:
         wait_for_status(BUS, 60.0)
         yield path, telemetry
@@ -248,9 +262,17 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     path, telemetry = rig
     out = tmp_path / "run"
     proc = _motosim(
-        "run", str(path), "--bus", BUS, "--out", str(out), "--json", "--no-report",
-        "--telemetry", str(telemetry),
-    )  # fmt: skip
+        "run",
+        str(path),
+        "--bus",
+        BUS,
+        "--out",
+        str(out),
+        "--json",
+        "--no-report",
+        "--telemetry",
+        str(telemetry),
+    )
     stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
     payload = json.loads(stdout)
@@ -291,9 +313,16 @@ def test_ctrl_c_fades_the_torque_out_and_closes_the_files(
     path, _ = rig
     out = tmp_path / "run"
     proc = _motosim(
-        "run", str(path), "--bus", BUS, "--out", str(out), "--duration", "60",
+        "run",
+        str(path),
+        "--bus",
+        BUS,
+        "--out",
+        str(out),
+        "--duration",
+        "60",
         "--no-report",
-    )  # fmt: skip
+    )
     staging = out.with_name(out.name + ".partial")  # made by the writer just before the loop
     end = time.monotonic() + 120
     while time.monotonic() < end and not staging.exists():
@@ -368,9 +397,17 @@ def test_the_rigs_virtual_rider_steers_by_the_runs_state_stream(
     path, telemetry = rig
     out = tmp_path / "run"
     proc = _motosim(
-        "run", str(path), "--bus", BUS, "--out", str(out), "--json", "--no-report",
-        "--telemetry", telemetry,
-    )  # fmt: skip
+        "run",
+        str(path),
+        "--bus",
+        BUS,
+        "--out",
+        str(out),
+        "--json",
+        "--no-report",
+        "--telemetry",
+        telemetry,
+    )
     stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
     stream = json.loads(stdout)["state_stream"]  # sent by the writer process, not the loop
@@ -409,9 +446,19 @@ def test_run_with_the_view_serves_live_rows_and_its_buttons_go_through_the_safet
     path, _ = rig
     out = tmp_path / "run"
     proc = _motosim(
-        "run", str(path), "--bus", BUS, "--out", str(out), "--duration", "60",
-        "--no-report", "--view", "--view-port", "0",
-    )  # fmt: skip
+        "run",
+        str(path),
+        "--bus",
+        BUS,
+        "--out",
+        str(out),
+        "--duration",
+        "60",
+        "--no-report",
+        "--view",
+        "--view-port",
+        "0",
+    )
     assert proc.stderr is not None
     match = None
     lines: list[str] = []
@@ -476,9 +523,19 @@ def test_run_paced_by_the_rigs_status_frames(rig: tuple[Path, str], tmp_path: Pa
     path, telemetry = rig
     out = tmp_path / "run"
     proc = _motosim(
-        "run", str(path), "--bus", BUS, "--out", str(out), "--json", "--no-report",
-        "--telemetry", telemetry, "--pace", "bus",
-    )  # fmt: skip
+        "run",
+        str(path),
+        "--bus",
+        BUS,
+        "--out",
+        str(out),
+        "--json",
+        "--no-report",
+        "--telemetry",
+        telemetry,
+        "--pace",
+        "bus",
+    )
     stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
     payload = json.loads(stdout)

@@ -23,9 +23,21 @@ def test_run_says_the_stack_is_loading_and_when_it_is_ready(
 ) -> None:
     # no drive on this process's own virtual bus: 0.5 s idle (under the 1 s NO_DRIVE
     # timeout), exit 0
-    code = main(["run", str(SCENARIOS / "realtime_square.toml"), "--bus", "virtual",
-                 "--out", str(tmp_path / "run"), "--duration", "0.5", "--telemetry", "off",
-                 "--no-report"])  # fmt: skip
+    code = main(
+        [
+            "run",
+            str(SCENARIOS / "realtime_square.toml"),
+            "--bus",
+            "virtual",
+            "--out",
+            str(tmp_path / "run"),
+            "--duration",
+            "0.5",
+            "--telemetry",
+            "off",
+            "--no-report",
+        ]
+    )
     err = capsys.readouterr().err.splitlines()
     assert code == 0, err
     lines = [line for line in err if line.startswith("motosim run: ")]
@@ -37,10 +49,22 @@ def test_run_says_the_stack_is_loading_and_when_it_is_ready(
 def test_rig_says_when_it_is_ready_and_exits_130_on_ctrl_c() -> None:
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen(
-        [sys.executable, "-m", "motosim.cli.main", "rig", str(SCENARIOS / "realtime_square.toml"),
-         "--bus", "virtual", "--duration", "300"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "motosim.cli.main",
+            "rig",
+            str(SCENARIOS / "realtime_square.toml"),
+            "--bus",
+            "virtual",
+            "--duration",
+            "300",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     assert proc.stderr is not None
     seen = []
     try:

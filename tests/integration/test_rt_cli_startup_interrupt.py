@@ -60,11 +60,22 @@ def test_ctrl_c_while_the_stack_is_built_stops_the_run(
 
     monkeypatch.setattr(motosim.sim, "build_stack", interrupted_build)
     out = tmp_path / "run"
-    code = main([
-        "run", str(SCENARIOS / "realtime_square.toml"), "--bus", "virtual", "--out", str(out),
-        "--duration", "2", "--no-report", "--telemetry", "off",
-        "--no-cache",  # the stack built here, not read from the design cache
-    ])  # fmt: skip
+    code = main(
+        [
+            "run",
+            str(SCENARIOS / "realtime_square.toml"),
+            "--bus",
+            "virtual",
+            "--out",
+            str(out),
+            "--duration",
+            "2",
+            "--no-report",
+            "--telemetry",
+            "off",
+            "--no-cache",  # the stack built here, not read from the design cache
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 130, err
     assert "interrupted" in err and "Traceback" not in err
@@ -89,10 +100,21 @@ def test_ctrl_c_once_the_runner_is_built_releases_its_shared_ring(
         return runner
 
     monkeypatch.setattr(motosim.rt.run, "RealtimeRunner", interrupted_runner)
-    code = main([
-        "run", str(SCENARIOS / "realtime_square.toml"), "--bus", "virtual",
-        "--out", str(tmp_path / "run"), "--duration", "2", "--no-report", "--telemetry", "off",
-    ])  # fmt: skip
+    code = main(
+        [
+            "run",
+            str(SCENARIOS / "realtime_square.toml"),
+            "--bus",
+            "virtual",
+            "--out",
+            str(tmp_path / "run"),
+            "--duration",
+            "2",
+            "--no-report",
+            "--telemetry",
+            "off",
+        ]
+    )
     assert code == 130, capsys.readouterr().err
     with pytest.raises(FileNotFoundError):  # unlinked, not left to the resource tracker
         shared_memory.SharedMemory(name=names[0])
@@ -110,8 +132,17 @@ def test_ctrl_c_while_the_rig_is_built_stops_it(
         return rig_class(*args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(motosim.rt.rig, "VirtualRig", interrupted_rig)
-    code = main(["rig", str(SCENARIOS / "realtime_square.toml"), "--bus", "virtual",
-                 "--duration", "5", "--json"])  # fmt: skip
+    code = main(
+        [
+            "rig",
+            str(SCENARIOS / "realtime_square.toml"),
+            "--bus",
+            "virtual",
+            "--duration",
+            "5",
+            "--json",
+        ]
+    )
     out, err = capsys.readouterr()
     assert code == 130, err
     assert out == "" and "interrupted" in err  # stopped before its first tick

@@ -35,8 +35,9 @@ pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency
 if not fused.RECV_AVAILABLE:
     pytest.skip("the compiled socket read is Linux only", allow_module_level=True)
 if numba.config.DISABLE_JIT:
-    pytest.skip("the compiled wait needs numba's JIT (without it: the Python path)",
-                allow_module_level=True)  # fmt: skip
+    pytest.skip(
+        "the compiled wait needs numba's JIT (without it: the Python path)", allow_module_level=True
+    )
 
 from motosim.io.can import HandlebarCodecs, UdpMulticastLink, handlebar_codecs, open_link
 
@@ -51,10 +52,18 @@ SCENARIO = {
     "controller": {"kind": "paper"},
 }
 LIMITS = SafetyLimits(  # limits that bind: slew, speed, clamp, a 50 ms fade-in
-    max_current=0.1, max_slew=400.0, max_speed=1.0, speed_band=2.0, soft_stop=0.05,
-    hard_stop=5.0, end_stop_gain=20.0, hands_off_torque=0.0, hands_off_time=1.0,
-    hands_off_gain=0.5, fade_in=0.05,
-)  # fmt: skip
+    max_current=0.1,
+    max_slew=400.0,
+    max_speed=1.0,
+    speed_band=2.0,
+    soft_stop=0.05,
+    hard_stop=5.0,
+    end_stop_gain=20.0,
+    hands_off_torque=0.0,
+    hands_off_time=1.0,
+    hands_off_gain=0.5,
+    fade_in=0.05,
+)
 TIMING = {"wake", "compute", "done_read", "done_control", "done_send", "stack"}
 """The columns that are times measured on the machine's clock (they differ run to run)."""
 
@@ -93,9 +102,12 @@ def _stack() -> CompiledStack:
     scenario = parse_scenario(SCENARIO, origin="test")
     hb = load_parameters("simacom_handlebar", "handlebar")
     inputs = prepare(
-        scenario, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
-        nominal_handlebar=hb, controller=PAPER_CONTROLLER,
-    )  # fmt: skip
+        scenario,
+        sharp=load_parameters("sharp1971", "sharp"),
+        true_handlebar=hb,
+        nominal_handlebar=hb,
+        controller=PAPER_CONTROLLER,
+    )
     return CompiledStack(build_stack(inputs))
 
 
@@ -178,8 +190,10 @@ def test_the_compiled_wait_gives_the_rows_and_frames_of_the_python_path() -> Non
     assert sent == sent_c  # the command and heartbeat datagrams, byte for byte
     c, c_c = python.counters(), compiled.counters()
     assert (c.status_frames, c.frames_lost, c.frames_stale) == (
-        c_c.status_frames, c_c.frames_lost, c_c.frames_stale,
-    )  # fmt: skip
+        c_c.status_frames,
+        c_c.frames_lost,
+        c_c.frames_stale,
+    )
     assert c.fault == c_c.fault == "ESTOP_CAN"
     assert c.frames_lost >= 2 and c.frames_stale >= 1  # the recording's faults were seen
     assert python.link.errors == compiled.link.errors == 1  # the datagram that is no frame

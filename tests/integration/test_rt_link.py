@@ -123,8 +123,11 @@ def test_run_against_the_rig_over_socketcan_vcan(tmp_path: Path) -> None:
     motosim = [sys.executable, "-m", "motosim.cli.main"]
     rig = subprocess.Popen(
         [*motosim, "rig", str(path), "--bus", bus, "--duration", "120", "--telemetry", "off"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-    )  # fmt: skip
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     try:
         with open_link(bus) as link:  # the rig is up when its status frames come
             end = time.monotonic() + 60.0
@@ -132,10 +135,24 @@ def test_run_against_the_rig_over_socketcan_vcan(tmp_path: Path) -> None:
                 pass
         out = tmp_path / "run"
         run = subprocess.run(
-            [*motosim, "run", str(path), "--bus", bus, "--out", str(out), "--json",
-             "--no-report", "--telemetry", "off"],
-            capture_output=True, text=True, env=env, timeout=180,
-        )  # fmt: skip
+            [
+                *motosim,
+                "run",
+                str(path),
+                "--bus",
+                bus,
+                "--out",
+                str(out),
+                "--json",
+                "--no-report",
+                "--telemetry",
+                "off",
+            ],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=180,
+        )
     finally:
         rig.send_signal(signal.SIGINT)
         try:

@@ -270,9 +270,13 @@ def _paced(
         return got
 
     loop = FramePacedLoop(
-        rate, clock, counted, timeout=runner.watchdog_time, first_timeout=runner.first_timeout,
+        rate,
+        clock,
+        counted,
+        timeout=runner.watchdog_time,
+        first_timeout=runner.first_timeout,
         received=lambda: runner.status_frames,
-    )  # fmt: skip
+    )
     loop.run(period, periods=round(seconds * rate))
     per_period = [a + b for a, b in zip(frames[0::2], frames[1::2], strict=False)]
     return runner, loop, runner.ring.drain(), per_period
@@ -368,9 +372,10 @@ def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
     tau[:40_000] = 30.0
     tau[:30_000] = np.linspace(0.0, 30.0, 30_000)
     vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, RigRider(tau), np.random.default_rng(3))
-    limits = SafetyLimits(**{
-        name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
-    } | {"max_slew": 5.0})  # fmt: skip
+    limits = SafetyLimits(
+        **{name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__}
+        | {"max_slew": 5.0}
+    )
     runner = RealtimeRunner(
         SpringStack(30.0), host, CODECS, RunSettings(limits=limits, rate=100.0, duration=4.0)
     )
@@ -445,9 +450,10 @@ def test_the_speed_limiter_of_a_stack_without_a_rate_sees_the_handlebars_speed(
     # served between two frames read a rate up to five times too high, and the limiter cut
     # 32 of the 103 running periods.
     host, drive = links
-    limits = SafetyLimits(**{
-        name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__
-    } | {"max_speed": 6.0, "speed_band": 4.0})  # fmt: skip
+    limits = SafetyLimits(
+        **{name: getattr(LIMITS, name) for name in SafetyLimits.__dataclass_fields__}
+        | {"max_speed": 6.0, "speed_band": 4.0}
+    )
     t = np.arange(40_001) / 10_000.0
     tau = 25.0 * np.sin(2.0 * np.pi * t)  # the rider swings the handlebar at 1 Hz
     vrig = VirtualRig(HB, _settings(100.0), CODECS, drive, RigRider(tau), np.random.default_rng(3))
@@ -685,13 +691,15 @@ def test_a_duration_that_is_no_time_is_refused_in_one_line(
 
 @pytest.mark.parametrize(
     ("name", "value", "expected"),
-    [("rate", 0.0, "Hz: expected a positive rate"),
-     ("rate", math.nan, "Hz: expected a positive rate"),
-     ("linger", -0.1, "; expected a finite number >= 0 [s]"),
-     ("start_timeout", 0.0, "; expected a finite number > 0 [s]"),
-     ("periods_per_frame", 0, ": expected an integer >= 1"),
-     ("capacity", 0, ": expected an integer >= 1")],
-)  # fmt: skip
+    [
+        ("rate", 0.0, "Hz: expected a positive rate"),
+        ("rate", math.nan, "Hz: expected a positive rate"),
+        ("linger", -0.1, "; expected a finite number >= 0 [s]"),
+        ("start_timeout", 0.0, "; expected a finite number > 0 [s]"),
+        ("periods_per_frame", 0, ": expected an integer >= 1"),
+        ("capacity", 0, ": expected an integer >= 1"),
+    ],
+)
 def test_a_run_setting_out_of_its_range_is_refused_in_one_line(
     name: str, value: float, expected: str
 ) -> None:

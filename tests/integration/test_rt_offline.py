@@ -138,9 +138,12 @@ def test_the_virtual_riders_probe_is_added_at_the_rig_as_offline() -> None:
     )
     hb = load_parameters("simacom_handlebar", "handlebar")
     inputs = prepare(
-        scenario, sharp=load_parameters("sharp1971", "sharp"), true_handlebar=hb,
-        nominal_handlebar=hb, controller=PAPER_CONTROLLER,
-    )  # fmt: skip
+        scenario,
+        sharp=load_parameters("sharp1971", "sharp"),
+        true_handlebar=hb,
+        nominal_handlebar=hb,
+        controller=PAPER_CONTROLLER,
+    )
     offline = simulate(inputs, rng=np.random.default_rng(0))
     lock = Lockstep(inputs, free_limits(scenario.rates.control), channel="rt_probe")
     lock.run()
@@ -211,15 +214,21 @@ def test_the_lane_change_over_a_5_ms_bus_holds_when_the_stack_accounts_for_the_f
     inputs, limits = _lane_change_at_the_clamp()
     sc = inputs.scenario
     age = frame_age(
-        0.005, pace="clock", control_rate=sc.rates.control,
-        measurement_rate=sc.rates.measurement, origin="test",
-    )  # fmt: skip
+        0.005,
+        pace="clock",
+        control_rate=sc.rates.control,
+        measurement_rate=sc.rates.measurement,
+        origin="test",
+    )
     assert age == pytest.approx(0.0055)
     settings = dataclasses.replace(ideal_rig(sc), latency=5e-3, jitter=1e-3)
     lock = Lockstep(
-        inputs, limits, settings=settings, delay=age if account else 0.0,
+        inputs,
+        limits,
+        settings=settings,
+        delay=age if account else 0.0,
         channel=f"rt_age{account}",
-    )  # fmt: skip
+    )
     rows = lock.run()
     runner = lock.runner
     col = runner.names.index
@@ -282,10 +291,17 @@ def _run_both_ways(
     model = build_stack(inputs)
     world = build_rig(inputs, rng=np.random.default_rng(0))
     limits = SafetyLimits(  # limits that bind: slew, speed, clamp, hands-off, a 0.5 s fade
-        max_current=0.1, max_slew=400.0, max_speed=1.0, speed_band=2.0, soft_stop=0.05,
-        hard_stop=5.0, end_stop_gain=20.0, hands_off_torque=0.5, hands_off_time=0.05,
+        max_current=0.1,
+        max_slew=400.0,
+        max_speed=1.0,
+        speed_band=2.0,
+        soft_stop=0.05,
+        hard_stop=5.0,
+        end_stop_gain=20.0,
+        hands_off_torque=0.5,
+        hands_off_time=0.05,
         hands_off_gain=0.5,
-    )  # fmt: skip
+    )
     settings = dataclasses.replace(ideal_rig(sc), current_noise=0.01)
     codecs = handlebar_codecs()
     channel = f"virtual:rt_fused_{fused}_{warm}"

@@ -38,9 +38,11 @@ def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None
     config = load_platform("simacom_platform")
     can = medium == "can"  # PF_COMMAND frames on the run's bus, or UDP datagrams
     twin = PlatformTwin(
-        config.platform, 1.0 / rate, None if can else ("127.0.0.1", 0),
+        config.platform,
+        1.0 / rate,
+        None if can else ("127.0.0.1", 0),
         codecs=platform_codecs() if can else None,
-    )  # fmt: skip
+    )
     platform = PlatformOutput(config, 1.0 / rate, CompiledStack.names, send_every=10)
     # the rig's virtual rider steers by the state stream the runner publishes over UDP
     lock = Lockstep(inputs, limits, channel="rt_platform", platform=platform)

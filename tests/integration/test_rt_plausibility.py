@@ -37,10 +37,17 @@ FILES = sorted(SCENARIOS.glob("*.toml")) + sorted(SCENARIOS.glob("paper/*.toml")
 # the limits of scenarios/realtime_square.toml (the bench handlebar), hands-off detection
 # off so that only the protections under test act
 LIMITS = SafetyLimits(
-    max_current=10.0, max_slew=2000.0, max_speed=6.0, speed_band=4.0, soft_stop=0.6,
-    hard_stop=0.8, end_stop_gain=50.0, hands_off_torque=0.0, hands_off_time=1.0,
+    max_current=10.0,
+    max_slew=2000.0,
+    max_speed=6.0,
+    speed_band=4.0,
+    soft_stop=0.6,
+    hard_stop=0.8,
+    end_stop_gain=50.0,
+    hands_off_torque=0.0,
+    hands_off_time=1.0,
     hands_off_gain=0.3,
-)  # fmt: skip
+)
 
 _channels = iter(range(10**6))
 
@@ -78,10 +85,13 @@ def _lockstep(
     try:
         with open_link(channel) as host, open_link(channel) as drive:
             rig = VirtualRig(  # the scenario's hands, as `motosim rig` gives them
-                inputs.true_handlebar, settings, codecs, drive,
+                inputs.true_handlebar,
+                settings,
+                codecs,
+                drive,
                 RigRider(rider, hands=world.hands, hands_off=world.hands_off),  # type: ignore[arg-type]
                 np.random.default_rng(sc.seed),
-            )  # fmt: skip
+            )
             runner = RealtimeRunner(
                 CompiledStack(model, force=world.force, side_force=world.side_force),
                 host,

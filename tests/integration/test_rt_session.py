@@ -63,8 +63,15 @@ def _session(
     )
     clock = SimulatedClock()
     config = SessionConfig(
-        inputs, model, limits, bus, folder, {"test": True}, duration, wait="python",
-    )  # fmt: skip
+        inputs,
+        model,
+        limits,
+        bus,
+        folder,
+        {"test": True},
+        duration,
+        wait="python",
+    )
     session = RealtimeSession(config, clock)
 
     def advance(t: float) -> None:

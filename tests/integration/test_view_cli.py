@@ -124,8 +124,12 @@ def test_view_serves_the_result_until_interrupted(folder: Path, tmp_path: Path) 
     with ResultWriter(cueing, ("t", "phi_s", "theta_s", "psi_s", "phi_vis"), {}) as writer:
         writer.append(np.column_stack([t, 0.1 * t, 0 * t, 0 * t, 0 * t]))
         writer.close({})
-    timing = {"timing": {"served": 51, "missed": 0}, "state": "IDLE", "fault": "NONE",
-              "fault_reason": "no fault"}  # fmt: skip
+    timing = {
+        "timing": {"served": 51, "missed": 0},
+        "state": "IDLE",
+        "fault": "NONE",
+        "fault_reason": "no fault",
+    }
     (folder / "timing.json").write_text(json.dumps(timing), encoding="utf-8")
     argv = ["view", str(folder), "--port", "0", "--cueing", str(cueing)]
     with subprocess.Popen(

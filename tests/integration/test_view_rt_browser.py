@@ -54,8 +54,10 @@ def test_the_dashboard_plots_the_loop_and_its_buttons_go_through_the_safety_stag
         # the loop runs and records with the torque off until Arm
         dash.wait_for("window.motosimDash && motosimDash.safety && motosimDash.panels.timing")
         assert dash.evaluate("motosimDash.safety") == {
-            "state": "idle", "fault": "NONE", "reason": "no fault"
-        }  # fmt: skip
+            "state": "idle",
+            "fault": "NONE",
+            "reason": "no fault",
+        }
         dash.wait_for("motosimDash.panels.timing.points > 100")
         before = dash.evaluate("motosimDash.panels")
         time.sleep(1.0)

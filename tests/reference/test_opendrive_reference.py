@@ -30,8 +30,9 @@ ROOT = Path(__file__).parents[2]
 ROAD = ROOT / "scenarios" / "roads" / "curve.xodr"
 
 
-def _clothoid(x0: float, y0: float, h0: float, k0: float, k1: float, length: float,
-              u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def _clothoid(
+    x0: float, y0: float, h0: float, k0: float, k1: float, length: float, u: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Position along a clothoid by the Fresnel integrals (scipy: S, C of pi t^2 / 2).
 
     heading(u) = h0 + k0 u + c u^2 / 2 = phi0 + (c / 2) (u + k0 / c)^2 with c = (k1 - k0) / L,

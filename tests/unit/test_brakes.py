@@ -86,10 +86,16 @@ def brake(
         share = min(max((t - BRAKE_AT) / ramp, 0.0), 1.0)
         f, r = brake_torques(settings, state, x, front * share, rear * share, loads, h)
         if braking:
-            rows.append((t, x[Index.forward], loads.kappa_f, loads.kappa_r, loads.F_zr,
-                         x[Index.roll]))  # fmt: skip
-        inputs = Inputs(steer_torque=tau, drive_torque=drive, front_brake_torque=f,
-                        rear_brake_torque=r, friction=friction)  # fmt: skip
+            rows.append(
+                (t, x[Index.forward], loads.kappa_f, loads.kappa_r, loads.F_zr, x[Index.roll])
+            )
+        inputs = Inputs(
+            steer_torque=tau,
+            drive_torque=drive,
+            front_brake_torque=f,
+            rear_brake_torque=r,
+            friction=friction,
+        )
         x = np.array(tyred.step(model, State(*x), inputs, h), dtype=float)
         domain = tyred.domain(model, State(*x))
         if domain != Domain.INSIDE or x[Index.forward] < END:
@@ -120,8 +126,9 @@ def test_braking_at_the_limit_without_a_lock_a_lift_or_a_fall(
 ) -> None:
     # issue 32's target: >= 0.85 mu g; the demand (3000 and 1000 N*m within 0.3 s) would lock
     # both wheels on any of these roads
-    run = brake(model, rider, design_brakes(model), friction=friction, front=3000.0,
-                rear=1000.0, ramp=0.3)  # fmt: skip
+    run = brake(
+        model, rider, design_brakes(model), friction=friction, front=3000.0, rear=1000.0, ramp=0.3
+    )
     assert run.domain == Domain.INSIDE
     assert run.deceleration >= 0.85 * friction * G
     assert np.max(np.abs(run.kappa_f)) < 0.5
@@ -190,8 +197,7 @@ def test_braking_in_a_turn_keeps_the_rider_on_its_path(model: tyred.TyredModel) 
     # schedule follows the falling speed down to 10.5 m/s, the lean with it
     rider = design_multibody_rider(model, speeds=(10.0, 15.0, 20.0), leans=(0.0, 15.0, 30.0))
     radius = 20.0**2 / (G * math.tan(math.radians(25.0)))
-    route = paths.constant_radius_turn(radius, angle=3.0, start=20.0, transition=25.0,
-                                       total=400.0)  # fmt: skip
+    route = paths.constant_radius_turn(radius, angle=3.0, start=20.0, transition=25.0, total=400.0)
     path = np.vstack([route.x, route.y, route.psi, route.kappa])
     x = np.array(tyred.upright_state(model, 20.0), dtype=float)
     settings, state = design_brakes(model), new_brake_state()
@@ -207,8 +213,13 @@ def test_braking_in_a_turn_keeps_the_rider_on_its_path(model: tyred.TyredModel) 
         f, r = brake_torques(settings, state, x, 300.0 * share, 100.0 * share, loads, h)
         if braking:
             offsets.append(e_y)
-        inputs = Inputs(steer_torque=tau, drive_torque=drive, front_brake_torque=f,
-                        rear_brake_torque=r, friction=1.0)  # fmt: skip
+        inputs = Inputs(
+            steer_torque=tau,
+            drive_torque=drive,
+            front_brake_torque=f,
+            rear_brake_torque=r,
+            friction=1.0,
+        )
         x = np.array(tyred.step(model, State(*x), inputs, h), dtype=float)
         assert tyred.domain(model, State(*x)) == Domain.INSIDE
         if x[Index.forward] < 10.5:

@@ -75,11 +75,13 @@ def test_choices_written_out_in_the_commands_equal_their_sources() -> None:
     ("argv", "option"),
     [
         (["run", "s.toml", "--out", "o", "--bus", "virtual", "--link", "fast"], "--link fast"),
-        (["run", "s.toml", "--out", "o", "--bus", "socketcan:can0", "--wait", "python"],
-         "--wait python"),
+        (
+            ["run", "s.toml", "--out", "o", "--bus", "socketcan:can0", "--wait", "python"],
+            "--wait python",
+        ),
         (["rig", "s.toml", "--bus", "virtual", "--link", "python-can"], "--link python-can"),
     ],
-)  # fmt: skip
+)
 def test_udp_multicast_options_on_another_bus_refused_before_the_work(
     argv: list[str], option: str
 ) -> None:
@@ -102,8 +104,10 @@ def test_udp_multicast_options_left_out_pass_silently_with_another_bus() -> None
     # their defaults are not "given": the refusal that comes is the next check's (--spin)
     done = subprocess.run(
         [sys.executable, "-m", "motosim", "rig", "s.toml", "--bus", "virtual", "--spin", "-1"],
-        capture_output=True, text=True, check=False,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert done.returncode == 2
     assert done.stderr == "motosim: error: --spin -1.0; expected microseconds in [0, 1000000)\n"
 
@@ -121,8 +125,17 @@ def test_the_compiled_wait_given_where_it_cannot_run_is_refused_before_the_work(
     # paced by the bus, or through python-can's link, the loop waits in Python: --wait
     # compiled given there fell back to it without a word (only timing.json's "wait" said
     # so). One line, exit 2, before the numerical stack is imported (the file does not exist)
-    argv = ["run", "s.toml", "--out", "o", "--bus", "udp_multicast:239.74.166.12",
-            "--wait", "compiled", *given]  # fmt: skip
+    argv = [
+        "run",
+        "s.toml",
+        "--out",
+        "o",
+        "--bus",
+        "udp_multicast:239.74.166.12",
+        "--wait",
+        "compiled",
+        *given,
+    ]
     done = subprocess.run(
         [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
     )
@@ -141,8 +154,18 @@ def test_the_wait_left_out_or_python_passes_silently_paced_by_the_bus_or_on_pyth
 ) -> None:
     # the default, and the Python wait those runs use, are not refused: the refusal that
     # comes is the next check's (--spin)
-    argv = ["run", "s.toml", "--out", "o", "--bus", "udp_multicast:239.74.166.12", "--spin",
-            "-1", *given, *wait]  # fmt: skip
+    argv = [
+        "run",
+        "s.toml",
+        "--out",
+        "o",
+        "--bus",
+        "udp_multicast:239.74.166.12",
+        "--spin",
+        "-1",
+        *given,
+        *wait,
+    ]
     done = subprocess.run(
         [sys.executable, "-m", "motosim", *argv], capture_output=True, text=True, check=False
     )

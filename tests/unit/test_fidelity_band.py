@@ -28,5 +28,7 @@ def test_plot_feel_marks_a_multisine_lines_and_not_a_welch_grid() -> None:
         feel = FeelResponse(f, h, h, h, np.ones(m))
         lines = plot_feel(feel, speed=20.0).axes[0].get_lines()
         assert [line.get_marker() not in ("None", None, "") for line in lines] == [
-            False, marked, marked,
-        ]  # fmt: skip
+            False,
+            marked,
+            marked,
+        ]

@@ -12,8 +12,13 @@ from motosim.sim.scenario import MultisineProfile
 DT = 1e-3
 # G(z): a lightly damped second-order system, 1 Hz, zeta 0.3, gain 0.01 rad/(N*m), by Tustin
 _W, _Z = 2 * np.pi * 1.0, 0.3
-_A = np.array([1 + _Z * _W * DT + (_W * DT / 2) ** 2, 2 * (_W * DT / 2) ** 2 - 2,
-               1 - _Z * _W * DT + (_W * DT / 2) ** 2])  # fmt: skip
+_A = np.array(
+    [
+        1 + _Z * _W * DT + (_W * DT / 2) ** 2,
+        2 * (_W * DT / 2) ** 2 - 2,
+        1 - _Z * _W * DT + (_W * DT / 2) ** 2,
+    ]
+)
 _B = 0.01 * (_W * DT / 2) ** 2 * np.array([1.0, 2.0, 1.0])
 K = 200.0  # a "rider" who pushes back on the output: u = r - K y [N*m/rad]
 

@@ -27,8 +27,13 @@ def test_hands_torque_on_a_still_handlebar_is_the_spring(grip: str) -> None:
 def test_hands_off_phases() -> None:
     off = np.array([[1.0, 2.0], [5.0, 6.0]])
     assert [is_held(t, off) for t in (0.5, 1.0, 1.5, 2.0, 5.5, 7.0)] == [
-        True, False, False, True, False, True,
-    ]  # fmt: skip
+        True,
+        False,
+        False,
+        True,
+        False,
+        True,
+    ]
 
 
 @pytest.mark.parametrize(
@@ -56,14 +61,18 @@ def test_hands_keys_refuse_nonsense_in_one_line(rider: dict, expected: str) -> N
 @pytest.mark.parametrize(
     ("tables", "expected"),
     [
-        ({"sensor": {"torque": {"noise": -1.0}}, "estimator": {"name": "torque_sensor"}},
-         "noise = -1"),
-        ({"sensor": {"torque": {"offset": math.inf}}, "estimator": {"name": "torque_sensor"}},
-         "offset = inf"),
+        (
+            {"sensor": {"torque": {"noise": -1.0}}, "estimator": {"name": "torque_sensor"}},
+            "noise = -1",
+        ),
+        (
+            {"sensor": {"torque": {"offset": math.inf}}, "estimator": {"name": "torque_sensor"}},
+            "offset = inf",
+        ),
         ({"sensor": {"torque": {}}}, "[sensor] torque is read by [estimator] name"),
         ({"sensor": {"force": {}}}, "unknown key 'force'"),
     ],
-)  # fmt: skip
+)
 def test_sensor_keys_refuse_nonsense_in_one_line(tables: dict, expected: str) -> None:
     doc = {"scenario": {"name": "x"}, "rider": {"kind": "torque", "profile": 0.0}, **tables}
     with pytest.raises(MotosimError) as err:

@@ -104,9 +104,13 @@ def test_nominal_stack_at_1khz_is_stable_with_margins():
 def test_grid_scales_the_true_handlebar():
     inputs = _inputs(1000.0)
     grid = robustness_grid(
-        build_stack(inputs), inputs.true_handlebar, 20.0, inertia=(1.0,), damping=(1.0,),
+        build_stack(inputs),
+        inputs.true_handlebar,
+        20.0,
+        inertia=(1.0,),
+        damping=(1.0,),
         torque_constant=(0.7, 1.0),
-    )  # fmt: skip
+    )
     assert [k for k, _ in grid] == [(1.0, 1.0, 0.7), (1.0, 1.0, 1.0)]
     nominal = analyse_stack(build_stack(inputs), inputs.true_handlebar, 20.0)
     assert grid[1][1] == nominal
@@ -202,9 +206,12 @@ def test_a_biased_observer_keeps_margins_on_fewer_of_the_grid():
 
 def _half_inertia(handlebar, torque_constant: float = 1.0):
     return dataclasses.replace(
-        handlebar, J_eq=0.5 * handlebar.J_eq, k_t=torque_constant * handlebar.k_t, J_m=0.0,
+        handlebar,
+        J_eq=0.5 * handlebar.J_eq,
+        k_t=torque_constant * handlebar.k_t,
+        J_m=0.0,
         beta_vm=0.0,
-    )  # fmt: skip
+    )
 
 
 def _gain_margin(loop_gain: np.ndarray) -> float:

@@ -103,8 +103,7 @@ def test_the_rider_rides_a_45_deg_lean_turn_within_half_a_metre(
     lean_deg: float,
 ) -> None:
     # issue 32's target: within 0.5 m RMS of the path over the steady part, without a fall
-    route = paths.constant_radius_turn(radius, angle=2.0, start=20.0, transition=25.0,
-                                       total=200.0)  # fmt: skip
+    route = paths.constant_radius_turn(radius, angle=2.0, start=20.0, transition=25.0, total=200.0)
     run = ride(model, rider, route, friction=friction, duration=5.0)
     assert run.domain == Domain.INSIDE
     steady = np.abs(run.kappa - 1.0 / radius) < 1e-9

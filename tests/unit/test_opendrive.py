@@ -21,8 +21,10 @@ TEXT = ROAD.read_text(encoding="utf-8")
 def _geometry(shape: str, **start: str) -> bytes:
     attrs = {"s": "0", "x": "0", "y": "0", "hdg": "0", "length": "10", **start}
     text = " ".join(f'{k}="{v}"' for k, v in attrs.items())
-    return (f'<OpenDRIVE><road id="1"><planView><geometry {text}>{shape}</geometry>'
-            "</planView></road></OpenDRIVE>").encode()  # fmt: skip
+    return (
+        f'<OpenDRIVE><road id="1"><planView><geometry {text}>{shape}</geometry>'
+        "</planView></road></OpenDRIVE>"
+    ).encode()
 
 
 def test_reads_lines_arcs_and_spirals() -> None:
@@ -150,13 +152,15 @@ def test_path_kind_parses_and_round_trips_with_its_geometry() -> None:
 
 def test_a_polynomial_road_is_continuous_and_round_trips() -> None:
     # a gentle poly3 bend, then the line that starts where it ends (as an exporter writes it)
-    (bend,) = parse_opendrive(_geometry('<poly3 a="0" b="0" c="0.002" d="-2e-5"/>',
-                                        length="50"), origin="r.xodr")  # fmt: skip
+    (bend,) = parse_opendrive(
+        _geometry('<poly3 a="0" b="0" c="0.002" d="-2e-5"/>', length="50"), origin="r.xodr"
+    )
     x, y, hdg = bend.end()
     line = f'<geometry s="50" x="{x!r}" y="{y!r}" hdg="{hdg!r}" length="30"><line/></geometry>'
     raw = _geometry('<poly3 a="0" b="0" c="0.002" d="-2e-5"/>', length="50")
-    geometry = parse_opendrive(raw.replace(b"</planView>", line.encode() + b"</planView>"),
-                               origin="r.xodr")  # fmt: skip
+    geometry = parse_opendrive(
+        raw.replace(b"</planView>", line.encode() + b"</planView>"), origin="r.xodr"
+    )
     assert [g.kind for g in geometry] == ["paramPoly3", "line"]
     rider = {"kind": "virtual", "path": {"kind": "opendrive", "file": "r.xodr"}}
     doc = {"scenario": {"name": "x"}, "motorcycle": {"speed": 15.0}, "rider": rider}

@@ -53,9 +53,17 @@ def _write(tmp_path: Path, text: str) -> Path:
 
 def _handlebar_text(**overrides: str) -> str:
     values = {
-        "J_eq": "0.05", "beta_eq": "10.0", "beta_s": "1.0", "N": "10.0", "k_t": "0.2",
-        "J_m": "1e-4", "beta_vm": "1e-3", "R": "1.0", "L": "1e-3", "k_e": "0.2",
-    }  # fmt: skip
+        "J_eq": "0.05",
+        "beta_eq": "10.0",
+        "beta_s": "1.0",
+        "N": "10.0",
+        "k_t": "0.2",
+        "J_m": "1e-4",
+        "beta_vm": "1e-3",
+        "R": "1.0",
+        "L": "1e-3",
+        "k_e": "0.2",
+    }
     values.update(overrides)
     body = "\n".join(f"{k} = {v}" for k, v in values.items() if v != "")
     return f'[set]\nname = "x"\nmodel = "handlebar"\n\n[parameters]\n{body}\n'

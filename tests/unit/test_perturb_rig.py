@@ -60,8 +60,9 @@ def test_perturbed_rig_without_a_torque_sensor_keeps_no_error() -> None:
             sensor=dataclasses.replace(inputs.scenario.sensor, torque=None),
         ),
     )
-    rig = perturb_rig(build_rig(plain, rng=np.random.default_rng(1)), plain,
-                      rng=np.random.default_rng(3))  # fmt: skip
+    rig = perturb_rig(
+        build_rig(plain, rng=np.random.default_rng(1)), plain, rng=np.random.default_rng(3)
+    )
     assert not np.any(rig.torque_error)
     assert np.array_equal(
         rig.current_noise, build_rig(plain, rng=np.random.default_rng(3)).current_noise

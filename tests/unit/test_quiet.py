@@ -94,10 +94,20 @@ def test_dahl_friction_barely_moves_on_a_wobble_and_reaches_beta_s_on_a_slide() 
 
 def _stack(quiet: Quiet):  # type: ignore[no-untyped-def]
     return design_stack(
-        BIKE, ESTIMATORS["walcott_zak"](HB, H).kernel, PAPER_CONTROLLER, control_rate=1000.0,
-        measurement_rate=1000.0, lipschitz=L, discretization="tustin", max_current=30.0,
-        speed=20.0, true_torque=True, handlebar=HB, rider_feedforward=True, quiet=quiet,
-    )  # fmt: skip
+        BIKE,
+        ESTIMATORS["walcott_zak"](HB, H).kernel,
+        PAPER_CONTROLLER,
+        control_rate=1000.0,
+        measurement_rate=1000.0,
+        lipschitz=L,
+        discretization="tustin",
+        max_current=30.0,
+        speed=20.0,
+        true_torque=True,
+        handlebar=HB,
+        rider_feedforward=True,
+        quiet=quiet,
+    )
 
 
 def test_a_sticking_handlebar_holds_the_estimate_and_the_integral() -> None:

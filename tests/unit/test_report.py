@@ -26,10 +26,30 @@ from motosim.plotting.closed_loop import (
 from motosim.report import build_report, metrics
 
 NAMES = (
-    "t", "tau_r", "tau_r_hat", "tau_p", "theta_h", "theta_h_dot", "theta_h_meas",
-    "theta_h_dot_hat", "i_m", "tau_m", "delta", "v_x", "v_y", "psi_dot", "phi_dot",
-    "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y", "e_y",
-)  # fmt: skip
+    "t",
+    "tau_r",
+    "tau_r_hat",
+    "tau_p",
+    "theta_h",
+    "theta_h_dot",
+    "theta_h_meas",
+    "theta_h_dot_hat",
+    "i_m",
+    "tau_m",
+    "delta",
+    "v_x",
+    "v_y",
+    "psi_dot",
+    "phi_dot",
+    "delta_dot",
+    "phi",
+    "F_yr",
+    "F_yf",
+    "psi",
+    "x",
+    "y",
+    "e_y",
+)
 
 
 def _rows(n: int = 60, dt: float = 0.01) -> np.ndarray:
@@ -334,8 +354,13 @@ def test_the_papers_figures_are_numbered_once(tmp_path: Path) -> None:
 
     from motosim.cli.paper import _figures
 
-    names = ("fig11_nominal", "fig11_perturbed", "fig14_compensated", "fig14_uncompensated",
-             "fig15_riding")  # fmt: skip
+    names = (
+        "fig11_nominal",
+        "fig11_perturbed",
+        "fig14_compensated",
+        "fig14_uncompensated",
+        "fig15_riding",
+    )
     written = _figures({name: _result() for name in names}, tmp_path)
     numbers: dict[str, list[str]] = {}
     for file, caption in written:
@@ -346,6 +371,11 @@ def test_the_papers_figures_are_numbered_once(tmp_path: Path) -> None:
             numbers.setdefault(found.group(1), []).append(found.group(3) or "whole")
     # the paper's Figs. 11, 13 (its two halves), 14, 15, 16, 17 and 18, each once
     assert numbers == {
-        "11": ["whole"], "13": ["left", "right"], "14": ["whole"], "15": ["whole"],
-        "16": ["whole"], "17": ["whole"], "18": ["whole"],
-    }  # fmt: skip
+        "11": ["whole"],
+        "13": ["left", "right"],
+        "14": ["whole"],
+        "15": ["whole"],
+        "16": ["whole"],
+        "17": ["whole"],
+        "18": ["whole"],
+    }

@@ -23,10 +23,23 @@ def test_every_number_a_run_summarises_has_its_unit() -> None:
     import numpy as np
 
     t = np.linspace(0.0, 4.0, 401)
-    columns = {name: np.sin(t + k) for k, name in enumerate(
-        ("tau_r", "tau_r_hat", "theta_h", "delta", "theta_h_dot", "theta_h_dot_hat", "phi",
-         "e_y", "v_x", "i_m")
-    )}  # fmt: skip
+    columns = {
+        name: np.sin(t + k)
+        for k, name in enumerate(
+            (
+                "tau_r",
+                "tau_r_hat",
+                "theta_h",
+                "delta",
+                "theta_h_dot",
+                "theta_h_dot_hat",
+                "phi",
+                "e_y",
+                "v_x",
+                "i_m",
+            )
+        )
+    }
     columns["v_x"] = np.full_like(t, 20.0)
     summary = run_metrics(t, columns.get, complete=True, max_current=30.0)
     assert set(summary) <= set(METRICS), set(summary) - set(METRICS)
@@ -47,9 +60,19 @@ def test_simulate_prints_the_unit(key: str, si: float, line: str) -> None:
 
 def test_a_campaign_rows_other_columns_are_shown_as_they_are() -> None:
     # motosim campaign --rerun prints its row: factors, None, strings, the campaign's metrics
-    row = {"J_eq": 0.0415, "failed_at": None, "design": "d0", "max_abs_i_m": 3.25,
-           "max_abs_tracking_error": math.radians(1.5), "index": 3}  # fmt: skip
+    row = {
+        "J_eq": 0.0415,
+        "failed_at": None,
+        "design": "d0",
+        "max_abs_i_m": 3.25,
+        "max_abs_tracking_error": math.radians(1.5),
+        "index": 3,
+    }
     assert [" ".join(line.split()) for line in summary_lines(row)] == [
-        "J_eq 0.0415", "failed_at None", "design d0", "max_abs_i_m 3.25 A",
-        "max_abs_tracking_error 1.5 deg", "index 3",
-    ]  # fmt: skip
+        "J_eq 0.0415",
+        "failed_at None",
+        "design d0",
+        "max_abs_i_m 3.25 A",
+        "max_abs_tracking_error 1.5 deg",
+        "index 3",
+    ]

@@ -480,8 +480,10 @@ def test_folder_lock_names_no_dead_pid_when_a_reader_holds_a_stale_lock(tmp_path
     stale.write_text(f"pid {_dead_pid()}\n", encoding="ascii")
     with subprocess.Popen(
         [sys.executable, "-c", _READER, str(stale)],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-    ) as reader:  # fmt: skip
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    ) as reader:
         try:
             assert reader.stdout is not None and reader.stdout.readline().strip() == "reading"
             with pytest.raises(MotosimError) as info:

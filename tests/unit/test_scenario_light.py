@@ -54,8 +54,10 @@ def test_a_scenario_parsed_and_refused_imports_nothing_heavy(
 ) -> None:
     done = subprocess.run(
         [sys.executable, "-c", _PARSE.format(bad=bad, heavy=HEAVY)],
-        capture_output=True, text=True, check=False,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr[-500:]
     error, heavy = done.stdout.strip().splitlines()
     assert error.startswith("bad.toml") and refusal in error
@@ -91,8 +93,11 @@ def test_a_scenario_value_out_of_range_is_one_line_before_the_stack(
     )
     done = subprocess.run(
         [sys.executable, "-c", _COMMAND.format(argv=argv, heavy=HEAVY)],
-        capture_output=True, text=True, check=False, cwd=tmp_path,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr[-500:]
     assert done.stdout.strip() == "2 []"
     assert done.stderr.startswith("motosim: error: bad.toml [motorcycle]: drive_torque reaches")

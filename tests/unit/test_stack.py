@@ -130,11 +130,20 @@ def _cancelling(lead: float):
     ``lead`` [s] ahead (0: the plain cancellation), at 1 kHz; the motorcycle stays upright."""
     hb = dataclasses.replace(HB, beta_s=0.0)
     model = design_stack(
-        BIKE, ESTIMATORS["walcott_zak"](hb, 1e-3).kernel, PAPER_CONTROLLER, control_rate=1000.0,
-        measurement_rate=1000.0, lipschitz=300.0, discretization="tustin", max_current=1e9,
-        speed=20.0, true_torque=True, handlebar=hb, rider_feedforward=True,
+        BIKE,
+        ESTIMATORS["walcott_zak"](hb, 1e-3).kernel,
+        PAPER_CONTROLLER,
+        control_rate=1000.0,
+        measurement_rate=1000.0,
+        lipschitz=300.0,
+        discretization="tustin",
+        max_current=1e9,
+        speed=20.0,
+        true_torque=True,
+        handlebar=hb,
+        rider_feedforward=True,
         prediction_lead=lead,
-    )  # fmt: skip
+    )
     return model, hb
 
 
@@ -244,9 +253,15 @@ def test_the_prediction_over_a_measurements_age_takes_the_observers_friction_wid
     settings = dataclasses.replace(ObserverSettings.for_step(0.01), friction_width=0.02)
     kernel = WalcottZakObserver(design_with(HB, settings), 0.01).kernel
     model = design_stack(
-        BIKE, kernel, PAPER_CONTROLLER, control_rate=1000.0, measurement_rate=100.0,
-        lipschitz=300.0, max_current=30.0, speed=20.0,
-    )  # fmt: skip
+        BIKE,
+        kernel,
+        PAPER_CONTROLLER,
+        control_rate=1000.0,
+        measurement_rate=100.0,
+        lipschitz=300.0,
+        max_current=30.0,
+        speed=20.0,
+    )
     assert account_for_delay(model, 0.005, HB).delay.friction_width == 0.02
     other = account_for_delay(_stack(name="inverse_dynamics", measurement=100.0), 0.005, HB)
     assert other.delay.friction_width == DELAY_FRICTION_WIDTH

@@ -263,9 +263,16 @@ class _Worker:
         if key not in self.riders:
             shared = design.rider if key[1] == design.rider_settings else None
             self.riders[key] = shared or design_virtual_rider(
-                RunInputs(scenario, design.sharp, design.nominal, design.nominal, None, {},
-                          multibody=design.multibody)
-            )  # fmt: skip
+                RunInputs(
+                    scenario,
+                    design.sharp,
+                    design.nominal,
+                    design.nominal,
+                    None,
+                    {},
+                    multibody=design.multibody,
+                )
+            )
         return self.riders[key]
 
     def rig(self, design: Design, inputs: RunInputs, rng: np.random.Generator) -> RigModel:
@@ -346,9 +353,13 @@ def _run_one(
     try:
         rig = worker.rig(d, inputs, np.random.default_rng(scenario.seed))
         ts = simulate(
-            inputs, rng=np.random.default_rng(scenario.seed), stack=d.stack,
-            chunk=scenario.duration, stop_outside=limits, rig=rig,
-        )  # fmt: skip
+            inputs,
+            rng=np.random.default_rng(scenario.seed),
+            stack=d.stack,
+            chunk=scenario.duration,
+            stop_outside=limits,
+            rig=rig,
+        )
     except RunFailedError as err:
         return "failed", str(err), math.nan if err.time is None else err.time, nan, None
     values = _metrics(ts, task.metrics)
@@ -422,8 +433,17 @@ def _batches(
     tasks = []
     for key, runs in groups.items():
         for i in range(0, len(runs), size):
-            tasks.append(Task(designs[key], plan.base, c.factors, tuple(runs[i : i + size]),
-                              c.metrics, c.limits, series))  # fmt: skip
+            tasks.append(
+                Task(
+                    designs[key],
+                    plan.base,
+                    c.factors,
+                    tuple(runs[i : i + size]),
+                    c.metrics,
+                    c.limits,
+                    series,
+                )
+            )
     return tasks
 
 
@@ -575,9 +595,18 @@ def run_campaign(
             metrics=campaign.metrics,
         )
         return _fill(
-            campaign, out, plan, store, chosen, workers, scheduler, start, on_progress,
-            runs, cache,
-        )  # fmt: skip
+            campaign,
+            out,
+            plan,
+            store,
+            chosen,
+            workers,
+            scheduler,
+            start,
+            on_progress,
+            runs,
+            cache,
+        )
 
 
 def _fill(
@@ -746,12 +775,19 @@ def rerun_series(plan: Plan, run_id: str) -> tuple[dict[str, Any], dict[str, Any
     """
     c = plan.campaign
     planned = plan.run(run_id)
-    task = Task(design_for(plan, planned.design), plan.base, c.factors, (planned,), c.metrics,
-                c.limits)  # fmt: skip
+    task = Task(
+        design_for(plan, planned.design), plan.base, c.factors, (planned,), c.metrics, c.limits
+    )
     status, reason, failed_at, values, ts = _run_one(task, planned)
-    row: dict[str, Any] = {"run_id": planned.run_id, "index": planned.index, "seed": planned.seed,
-                           "design": planned.design, "status": status, "reason": reason,
-                           "failed_at": failed_at}  # fmt: skip
+    row: dict[str, Any] = {
+        "run_id": planned.run_id,
+        "index": planned.index,
+        "seed": planned.seed,
+        "design": planned.design,
+        "status": status,
+        "reason": reason,
+        "failed_at": failed_at,
+    }
     row.update(zip([f.path for f in c.factors], planned.values, strict=True))
     row.update(zip(c.metrics, values, strict=True))
     kept: dict[str, Any] = {}

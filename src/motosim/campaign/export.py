@@ -19,8 +19,12 @@ from motosim.sim.scenario import scenario_dict
 
 __all__ = ["export_run", "scenario_toml"]
 
-_FILE_KEYS = (("handlebar", "true"), ("handlebar", "nominal"), ("motorcycle", "params"),
-              ("controller", "design"))  # fmt: skip
+_FILE_KEYS = (
+    ("handlebar", "true"),
+    ("handlebar", "nominal"),
+    ("motorcycle", "params"),
+    ("controller", "design"),
+)
 
 
 def _value(value: Any) -> str:

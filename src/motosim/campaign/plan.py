@@ -44,10 +44,21 @@ __all__ = [
 Array = NDArray[np.float64]
 
 _RIG_ONLY = (
-    "name", "description", "duration", "seed", "measurement.", "rider.", "handlebar.true",
-    "handlebar.inertia_factor", "handlebar.damping_factor", "motorcycle.drive_torque",
-    "motorcycle.brake_torque", "motorcycle.wind_force", "rates.plant", f"{TRUE_HANDLEBAR}.",
-)  # fmt: skip
+    "name",
+    "description",
+    "duration",
+    "seed",
+    "measurement.",
+    "rider.",
+    "handlebar.true",
+    "handlebar.inertia_factor",
+    "handlebar.damping_factor",
+    "motorcycle.drive_torque",
+    "motorcycle.brake_torque",
+    "motorcycle.wind_force",
+    "rates.plant",
+    f"{TRUE_HANDLEBAR}.",
+)
 """Keys that change only the simulated world around the stack, never its design."""
 
 
@@ -306,8 +317,10 @@ def _motorcycle(source: str | Path) -> dict[str, Any]:
     """The motorcycle's parameter set as plain values, with its tyre sets' (a multibody set
     names them): what a campaign's runs depend on of the motorcycle."""
     pset = load_parameter_set(source)
-    tyres = {key: dataclasses.asdict(load_parameters(name, "tyre"))
-             for key, name in sorted(pset.tyres.items())}  # fmt: skip
+    tyres = {
+        key: dataclasses.asdict(load_parameters(name, "tyre"))
+        for key, name in sorted(pset.tyres.items())
+    }
     return {"set": dataclasses.asdict(pset.values), "tyres": tyres}
 
 
@@ -347,8 +360,9 @@ def plan_campaign(campaign: Campaign) -> Plan:
         _check_factor(factor, base, true_sets[scenario.handlebar.true])
     kinds = [_kind(f, base) for f in campaign.factors]
     rows = sample_values(campaign)
-    rows = [tuple(float(v) if k is float else v for v, k in zip(r, kinds, strict=True))
-            for r in rows]  # fmt: skip
+    rows = [
+        tuple(float(v) if k is float else v for v, k in zip(r, kinds, strict=True)) for r in rows
+    ]
     fingerprint = _hash(
         {
             "version": __version__,

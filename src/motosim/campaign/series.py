@@ -138,8 +138,10 @@ def load_series(folder: str | Path, run_id: str) -> dict[str, NDArray[np.float64
     zarr = _zarr()
     path = Path(folder) / SERIES / run_id
     if not (path / "zarr.json").is_file():
-        raise MotosimError(f"{folder}: no series of run {run_id!r}; expected a run of a campaign "
-                           "with series = [...] that did not fail")  # fmt: skip
+        raise MotosimError(
+            f"{folder}: no series of run {run_id!r}; expected a run of a campaign "
+            "with series = [...] that did not fail"
+        )
     group = zarr.open_group(str(path), mode="r")
     names = ["t", *group.attrs["signals"]]
     return {n: np.asarray(group[n][:], dtype=np.float64) for n in names}

@@ -119,8 +119,9 @@ class Factor:
         if self.path.startswith(f"{TRUE_HANDLEBAR}."):
             name = self.path.split(".", 1)[1]
             if name not in _HANDLEBAR_FIELDS:
-                raise MotosimError(_unknown(self.path, [f"{TRUE_HANDLEBAR}.{n}" for n in
-                                                        _HANDLEBAR_FIELDS]))  # fmt: skip
+                raise MotosimError(
+                    _unknown(self.path, [f"{TRUE_HANDLEBAR}.{n}" for n in _HANDLEBAR_FIELDS])
+                )
         if bool(self.values) == (self.distribution is not None):
             raise MotosimError(
                 f"{self.path}: expected either values = [...] or a distribution "
@@ -388,8 +389,19 @@ def parse_campaign(data: Mapping[str, Any], *, origin: str, folder: str | Path) 
         raise MotosimError(f"{origin}: missing table [campaign]")
     if not isinstance(factors, Mapping):
         raise MotosimError(f"{origin}: missing table [factors]")
-    known = ["name", "description", "scenario", "sampling", "runs", "seed", "metrics",
-             "task_seconds", "limits", "series", "every"]  # fmt: skip
+    known = [
+        "name",
+        "description",
+        "scenario",
+        "sampling",
+        "runs",
+        "seed",
+        "metrics",
+        "task_seconds",
+        "limits",
+        "series",
+        "every",
+    ]
     where = f"{origin} [campaign]"
     try:
         for key in head:

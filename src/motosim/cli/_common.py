@@ -76,15 +76,24 @@ class Typical(NamedTuple):
 
 
 _SPEEDS = Typical(
-    3.0, 55.0, "m/s", "of a ride the model represents (Sharp 1971: the machine falls below 3, "
-    "wobble is unstable above 55)"
-)  # fmt: skip
+    3.0,
+    55.0,
+    "m/s",
+    "of a ride the model represents (Sharp 1971: the machine falls below 3, "
+    "wobble is unstable above 55)",
+)
 _MODES_SWEEP = Typical(
-    2.0, 60.0, "m/s", "of a modes sweep (the weave unstable at walking pace, the wobble above "
-    "55 m/s)"
-)  # fmt: skip
-_LOOP_RATE = Typical(100.0, 10_000.0, "Hz", "of a handlebar loop (100 Hz over the paper's CAN "
-                     "link, up to a drive's 10 kHz)")  # fmt: skip
+    2.0,
+    60.0,
+    "m/s",
+    "of a modes sweep (the weave unstable at walking pace, the wobble above 55 m/s)",
+)
+_LOOP_RATE = Typical(
+    100.0,
+    10_000.0,
+    "Hz",
+    "of a handlebar loop (100 Hz over the paper's CAN link, up to a drive's 10 kHz)",
+)
 _TURNS = Typical(
     5.0, 50.0, "m/s", "of a steady turn on a road (a roundabout at 5, a motorway bend at 50)"
 )

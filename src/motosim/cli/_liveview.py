@@ -59,9 +59,14 @@ class ViewSink:
     """The live view of a run: its road, title, duration [s], port and access token."""
 
     def __init__(
-        self, token: str, port: int, road: tuple[Array, Array], duration: float, title: str,
+        self,
+        token: str,
+        port: int,
+        road: tuple[Array, Array],
+        duration: float,
+        title: str,
         watchdog_periods: int,
-    ) -> None:  # fmt: skip
+    ) -> None:
         self.token = token
         self.port = port
         self.road = road
@@ -124,5 +129,6 @@ def view_sink(
         road = road_from_xy(built.x, built.y)
     else:
         road = road_from_xy(np.array([0.0, length]), np.zeros(2))
-    return ViewSink(new_token(), args.view_port, (road.x, road.y), duration, sc.name,
-                    limits.watchdog_periods)  # fmt: skip
+    return ViewSink(
+        new_token(), args.view_port, (road.x, road.y), duration, sc.name, limits.watchdog_periods
+    )

@@ -19,9 +19,14 @@ if TYPE_CHECKING:
     from motosim.sim import RunInputs, Scenario
 
 __all__ = [
-    "RtOptions", "check_rt_options", "check_wait", "load_realtime", "read_realtime",
-    "resolve_realtime", "rig_settings",
-]  # fmt: skip
+    "RtOptions",
+    "check_rt_options",
+    "check_wait",
+    "load_realtime",
+    "read_realtime",
+    "resolve_realtime",
+    "rig_settings",
+]
 
 
 def _platform_address(text: str) -> tuple[str, int]:
@@ -122,8 +127,10 @@ def read_realtime(
     frame_age(
         parse_latency(realtime, origin=str(path)),
         pace=pace or run_paces(rates.control, rates.measurement)[-1],
-        control_rate=rates.control, measurement_rate=rates.measurement, origin=str(path),
-    )  # fmt: skip
+        control_rate=rates.control,
+        measurement_rate=rates.measurement,
+        origin=str(path),
+    )
     rig_settings(scenario, realtime, origin=str(path))
     _check_realtime_motorcycle(scenario, origin=str(path))
     return scenario, realtime

@@ -73,8 +73,12 @@ class _Announcer:
     def _show(self, label: str) -> None:
         with self._lock:
             if not self._done:
-                print(f"motosim: {label}: designing (once: kept in the design cache)...",
-                      end="", file=sys.stderr, flush=True)  # fmt: skip
+                print(
+                    f"motosim: {label}: designing (once: kept in the design cache)...",
+                    end="",
+                    file=sys.stderr,
+                    flush=True,
+                )
                 self._shown = True
 
     def __call__(self, label: str, seconds: float | None) -> None:
@@ -197,9 +201,13 @@ def run(args: argparse.Namespace) -> int:
     info = cache.info()
     if args.json:
         print_json(
-            {"folder": str(info.folder), "entries": info.entries,
-             "count": sum(info.entries.values()), "bytes": info.size}
-        )  # fmt: skip
+            {
+                "folder": str(info.folder),
+                "entries": info.entries,
+                "count": sum(info.entries.values()),
+                "bytes": info.size,
+            }
+        )
         return 0
     count = sum(info.entries.values())
     kinds = ", ".join(f"{n} {k}" for k, n in info.entries.items())

@@ -95,9 +95,13 @@ def _progress_bar(enabled: bool, total: int, initial: int) -> Any:
     from tqdm import tqdm
 
     return tqdm(
-        total=total, initial=initial, unit=" runs", file=sys.stderr, leave=False,
+        total=total,
+        initial=initial,
+        unit=" runs",
+        file=sys.stderr,
+        leave=False,
         dynamic_ncols=True,
-    )  # fmt: skip
+    )
 
 
 def _same_series(out: str, run_id: str, series: dict[str, Any]) -> bool:
@@ -282,9 +286,13 @@ def run(args: argparse.Namespace) -> int:
         import dataclasses
 
         print_json(
-            {**dataclasses.asdict(summary), "report": str(report) if report else None,
-             "command_wall": end - start, "report_time": end - report_start}
-        )  # fmt: skip
+            {
+                **dataclasses.asdict(summary),
+                "report": str(report) if report else None,
+                "command_wall": end - start,
+                "report_time": end - report_start,
+            }
+        )
         return 0
     s = summary
     shortened = (

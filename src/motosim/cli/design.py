@@ -175,10 +175,15 @@ def _stack(a: "StackLoopAnalysis") -> dict[str, Any]:
 
 
 def _stack_analysis(
-    hb: HandlebarParameters, settings: "ObserverSettings", controller: "StateSpace", rate: float,
-    speeds: list[float], prediction: bool | None, latency: float = 0.0,
+    hb: HandlebarParameters,
+    settings: "ObserverSettings",
+    controller: "StateSpace",
+    rate: float,
+    speeds: list[float],
+    prediction: bool | None,
+    latency: float = 0.0,
     hands: "Hands | None" = None,
-) -> list[dict[str, Any]]:  # fmt: skip
+) -> list[dict[str, Any]]:
     """The whole sampled stack (observer, feedforward, motorcycle) at each speed, and its grid;
     with a ``latency`` [s], accounting for it, and (``unaccounted``) the stack designed for
     a fresh sample read as old; with ``hands``, the stack designed for them and held by
@@ -194,10 +199,18 @@ def _stack_analysis(
     def analysed(account: bool, true_hands: "Hands | None" = hands) -> list[dict[str, Any]]:
         entries = []
         for nominal, grid in analyse_design(
-            sharp, kernel.kernel, controller, hb, rate=rate, speeds=speeds,
-            prediction=prediction, delay=latency, account=account, hands=designed,
+            sharp,
+            kernel.kernel,
+            controller,
+            hb,
+            rate=rate,
+            speeds=speeds,
+            prediction=prediction,
+            delay=latency,
+            account=account,
+            hands=designed,
             true_hands=true_hands,
-        ):  # fmt: skip
+        ):
             entry = _stack(nominal)
             entry["grid"] = {
                 "points": grid.points,

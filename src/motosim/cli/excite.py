@@ -97,14 +97,25 @@ def _plan(args: argparse.Namespace) -> int:
         "N": args.ratio,
         "k_t": args.torque_constant,
     }
-    options = {"J_eq": "--inertia", "beta_eq": "--damping", "beta_s": "--dry-friction",
-               "N": "--ratio", "k_t": "--torque-constant"}  # fmt: skip
+    options = {
+        "J_eq": "--inertia",
+        "beta_eq": "--damping",
+        "beta_s": "--dry-friction",
+        "N": "--ratio",
+        "k_t": "--torque-constant",
+    }
     for name, value in given.items():
         if value is not None:
             spec = HandlebarParameters.SPECS[name]
-            check_number(value, where=options[name], lower=spec.lower, upper=spec.upper,
-                         lower_closed=spec.lower_closed, upper_closed=spec.upper_closed,
-                         unit=spec.unit)  # fmt: skip
+            check_number(
+                value,
+                where=options[name],
+                lower=spec.lower,
+                upper=spec.upper,
+                lower_closed=spec.lower_closed,
+                upper_closed=spec.upper_closed,
+                unit=spec.unit,
+            )
     check_number(args.max_current, where="--max-current", lower=0.01, upper=1000.0, unit="A")
     check_number(args.angle_limit, where="--angle-limit", lower=1e-3, upper=math.pi, unit="rad")
     rough = {name: getattr(hb, name) if value is None else value for name, value in given.items()}
@@ -161,8 +172,9 @@ _MAX_SAMPLES = 10_000_000  # samples of one excitation log (a few hundred MB at 
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse absurd options in one line before any work or allocation."""
     check_number(args.rate, where="--rate", lower=1.0, upper=1e5, unit="Hz")
-    check_number(args.duration, where="--duration", lower=0.0, lower_closed=False, upper=3600.0,
-                 unit="s")  # fmt: skip
+    check_number(
+        args.duration, where="--duration", lower=0.0, lower_closed=False, upper=3600.0, unit="s"
+    )
     if args.duration * args.rate > _MAX_SAMPLES:
         raise MotosimError(
             f"--duration x --rate = {args.duration * args.rate:.3g} samples; expected at most "

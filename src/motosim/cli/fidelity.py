@@ -155,10 +155,16 @@ def run(args: argparse.Namespace) -> int:
         base = load_scenario(args.scenario) if args.scenario else Scenario(name="default")
         folder = Path(args.scenario).parent if args.scenario else Path(".")
         scenario = feel_scenario(
-            base, speed=args.speed, amplitude=args.amplitude, band=band, duration=duration,
-            excitation="chirp" if chirp else "multisine", period=args.period, periods=args.periods,
+            base,
+            speed=args.speed,
+            amplitude=args.amplitude,
+            band=band,
+            duration=duration,
+            excitation="chirp" if chirp else "multisine",
+            period=args.period,
+            periods=args.periods,
             radius=args.radius,
-        )  # fmt: skip
+        )
         cache = design_cache(args, quiet=getattr(args, "json", False))
         inputs, stack = resolve_cached(scenario, folder, cache)
     for option in ("--speed", "--duration", "--amplitude"):

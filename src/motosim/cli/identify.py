@@ -154,8 +154,9 @@ def run(args: argparse.Namespace) -> int:
     )
     log = rig.series
     span = float(log.t[-1] - log.t[0])
-    check_number(args.current_delay, where="--current-delay", lower=0.0, upper=min(1.0, span / 10),
-                 unit="s")  # fmt: skip
+    check_number(
+        args.current_delay, where="--current-delay", lower=0.0, upper=min(1.0, span / 10), unit="s"
+    )
     drive = args.drive if args.drive != "auto" else drive_from_columns(log.names)[0]
     est = identify(
         log,

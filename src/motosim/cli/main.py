@@ -226,8 +226,14 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 _SHOWN: set[str] = set()
 
 
-def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
-                  file: TextIO | None = None, line: str | None = None) -> None:  # fmt: skip
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
     """Print a warning as one line ``motosim: warning: ...``, once: a
     :class:`MotosimWarning` as it is, another (a library's: NumPy's overflow, SciPy's
     ill-conditioning) with its kind and the file that raised it, not the two lines of

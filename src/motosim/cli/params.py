@@ -42,10 +42,21 @@ def _list(args: argparse.Namespace) -> int:
 
 
 _DERIVED_UNITS = {
-    "j": "m", "k": "m", "l": "m", "wheelbase": "m", "m": "kg", "J_R": "kg*m^2", "r_D": "m",
-    "m_eq": "kg", "mass": "kg", "x_G": "m", "z_G": "m", "J_h": "kg*m^2",
-    "beta_vh": "N*m*s/rad", "N*k_t": "N*m/A",
-}  # fmt: skip
+    "j": "m",
+    "k": "m",
+    "l": "m",
+    "wheelbase": "m",
+    "m": "kg",
+    "J_R": "kg*m^2",
+    "r_D": "m",
+    "m_eq": "kg",
+    "mass": "kg",
+    "x_G": "m",
+    "z_G": "m",
+    "J_h": "kg*m^2",
+    "beta_vh": "N*m*s/rad",
+    "N*k_t": "N*m/A",
+}
 """The unit of each derived value ``params show`` prints (:func:`derived_geometry`'s, the
 multibody set's mass and mass centre, the handlebar's own inertia, damping and N k_t)."""
 

@@ -148,9 +148,13 @@ def _run(args: argparse.Namespace, stops: StopHandler) -> int:
         if twin is not None and args.platform_can:
             rig.on_frame = twin.receive_frame
         stops.check()  # Ctrl-C while the rig was built: no run
-        print(f"motosim rig: ready on {args.bus} ({time.monotonic() - start:.1f} s): "
-              f"{args.rate:g} Hz ticks, status frames at {settings.status_rate:g} Hz; "
-              "Ctrl-C stops", file=sys.stderr, flush=True)  # fmt: skip
+        print(
+            f"motosim rig: ready on {args.bus} ({time.monotonic() - start:.1f} s): "
+            f"{args.rate:g} Hz ticks, status frames at {settings.status_rate:g} Hz; "
+            "Ctrl-C stops",
+            file=sys.stderr,
+            flush=True,
+        )
         stats, privileges, stopped = _serve(args, rig, twin, link, settings, stops)
     summary = _summary(args, rig, twin, link, stats, privileges)
     _print(args, summary, rig, stats)
@@ -216,13 +220,18 @@ def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
 
     sc = inputs.scenario
     held = RigRider(
-        rider, hands=hands_array(sc.rider_hands),
+        rider,
+        hands=hands_array(sc.rider_hands),
         hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
-    )  # fmt: skip
+    )
     return VirtualRig(
-        inputs.true_handlebar, settings, handlebar_codecs(), link, held,
+        inputs.true_handlebar,
+        settings,
+        handlebar_codecs(),
+        link,
+        held,
         np.random.default_rng(sc.seed),
-    )  # fmt: skip
+    )
 
 
 class _Received:
@@ -242,12 +251,19 @@ class _Received:
         rig = self.rig
         if not self.seen and rig.commands:
             self.seen = rig.commands
-            print(f"motosim rig: first command frame at t = {rig.t:.3f} s", file=sys.stderr,
-                  flush=True)  # fmt: skip
+            print(
+                f"motosim rig: first command frame at t = {rig.t:.3f} s",
+                file=sys.stderr,
+                flush=True,
+            )
         elif self.seen and rig.t >= self.next:
             self.next += self.EVERY
-            print(f"motosim rig: t = {rig.t:.0f} s, {rig.commands} commands received, "
-                  f"{rig.frames_sent} status frames sent", file=sys.stderr, flush=True)  # fmt: skip
+            print(
+                f"motosim rig: t = {rig.t:.0f} s, {rig.commands} commands received, "
+                f"{rig.frames_sent} status frames sent",
+                file=sys.stderr,
+                flush=True,
+            )
 
 
 def _serve(

@@ -168,9 +168,10 @@ def _table(stats: "TimingStats", privileges: tuple[Privilege, ...], verdict: "Ve
         lines.append("no real-time privilege asked for (see --fifo, --cpu, --mlock)")
     lines += [check.line() for check in verdict.checks]
     lines.append(
-        "verdict: PASS, this PC keeps the targets at this rate" if verdict.passed else
-        "verdict: FAIL (see the real-time guide: Setting up the lab PC)"
-    )  # fmt: skip
+        "verdict: PASS, this PC keeps the targets at this rate"
+        if verdict.passed
+        else "verdict: FAIL (see the real-time guide: Setting up the lab PC)"
+    )
     return "\n".join(lines)
 
 

@@ -178,8 +178,11 @@ def run(args: argparse.Namespace) -> int:
         with RealtimeSession(config, clock_from_args(args)) as session:
             session.prepare()
             stops.check()  # Ctrl-C while the stack loaded: no run
-            print(f"motosim run: the stack is ready ({time.monotonic() - start:.1f} s)",
-                  file=sys.stderr, flush=True)  # fmt: skip
+            print(
+                f"motosim run: the stack is ready ({time.monotonic() - start:.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
             stops.aim(session)  # from now on Ctrl-C is a stop, then an E-stop
             outcome = _run(args, session)
             stops.release()  # the loop has ended: Ctrl-C interrupts what is left
@@ -219,8 +222,13 @@ def _check(args: argparse.Namespace) -> _Checked:
     limits = parse_safety(realtime.get("safety"), origin=args.scenario)
     rate, measurement = sc.rates.control, sc.rates.measurement
     latency = parse_latency(realtime, origin=args.scenario)
-    age = frame_age(latency, pace=args.pace, control_rate=rate, measurement_rate=measurement,
-                    origin=args.scenario)  # fmt: skip
+    age = frame_age(
+        latency,
+        pace=args.pace,
+        control_rate=rate,
+        measurement_rate=measurement,
+        origin=args.scenario,
+    )
     if args.pace not in run_paces(rate, measurement):
         raise MotosimError(
             f"--pace bus with control = {rate:g} Hz and measurement = {measurement:g} Hz; "
@@ -257,17 +265,37 @@ def _config(args: argparse.Namespace, options: RtOptions, checked: _Checked) -> 
     model = account_for_delay(model, checked.age, inputs.design_handlebar)  # the frames' age
     udp = args.bus.partition(":")[0] == "udp_multicast"
     link = "fast" if args.link != "python-can" and udp else "python-can"
-    metadata = run_metadata(inputs) | {"realtime": {
-        "bus": args.bus, "link": link, "pace": args.pace, "status_latency": checked.latency,
-        "measurement_delay": checked.age, "safety": limits, "duration": duration,
-    }}  # fmt: skip
+    metadata = run_metadata(inputs) | {
+        "realtime": {
+            "bus": args.bus,
+            "link": link,
+            "pace": args.pace,
+            "status_latency": checked.latency,
+            "measurement_delay": checked.age,
+            "safety": limits,
+            "duration": duration,
+        }
+    }
     return SessionConfig(
-        inputs, model, limits, args.bus, folder, metadata, duration, pace=args.pace,
-        wait=args.wait or "compiled", fast_link=args.link != "python-can",
-        warm=args.warm == "on", overwrite=args.overwrite, telemetry=options.telemetry,
-        platform=options.platform, platform_udp=options.platform_udp,
-        platform_can=args.platform_can, live=live, privileges=privilege_request(args),
-    )  # fmt: skip
+        inputs,
+        model,
+        limits,
+        args.bus,
+        folder,
+        metadata,
+        duration,
+        pace=args.pace,
+        wait=args.wait or "compiled",
+        fast_link=args.link != "python-can",
+        warm=args.warm == "on",
+        overwrite=args.overwrite,
+        telemetry=options.telemetry,
+        platform=options.platform,
+        platform_udp=options.platform_udp,
+        platform_can=args.platform_can,
+        live=live,
+        privileges=privilege_request(args),
+    )
 
 
 def _run(args: argparse.Namespace, session: "RealtimeSession") -> "Outcome":
@@ -285,8 +313,11 @@ def _run(args: argparse.Namespace, session: "RealtimeSession") -> "Outcome":
         print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=err)
     c = session.config
     paced = "clock" if c.pace == "clock" else "status frames"
-    print(f"motosim run: {c.rate:g} Hz on {c.bus}, paced by the {paced}, {c.duration:g} s",
-          file=err, flush=True)  # fmt: skip
+    print(
+        f"motosim run: {c.rate:g} Hz on {c.bus}, paced by the {paced}, {c.duration:g} s",
+        file=err,
+        flush=True,
+    )
     return session.run()
 
 
@@ -312,11 +343,15 @@ def _print(args: argparse.Namespace, config: "SessionConfig", outcome: "Outcome"
     else:
         wake = "wake-up" if config.pace == "clock" else "frame interval jitter"
         gaps = f", {stats.gaps} frame periods without a frame" if config.pace == "bus" else ""
-        print(f"{config.inputs.scenario.name}: {stats.served} periods at {stats.rate:g} Hz, "
-              f"result in {folder}")  # fmt: skip
-        print(f"  {wake} p99 {stats.wake_p99 * 1e6:.0f} us, compute p99 "
-              f"{stats.compute_p99 * 1e6:.0f} us, missed {stats.missed} of "
-              f"{stats.periods}{gaps}")  # fmt: skip
+        print(
+            f"{config.inputs.scenario.name}: {stats.served} periods at {stats.rate:g} Hz, "
+            f"result in {folder}"
+        )
+        print(
+            f"  {wake} p99 {stats.wake_p99 * 1e6:.0f} us, compute p99 "
+            f"{stats.compute_p99 * 1e6:.0f} us, missed {stats.missed} of "
+            f"{stats.periods}{gaps}"
+        )
         for p in outcome.privileges:
             print(f"  {p}")
         print(f"  state {counters.state}; {counters.fault_reason}")
@@ -327,13 +362,15 @@ def _print(args: argparse.Namespace, config: "SessionConfig", outcome: "Outcome"
                 "rig and run pair a group of its own, --bus udp_multicast:239.74.163.50)"
             )
         asked = config.privileges.all_given
-        for line in advice(stats, counters.fault, asked_all=asked, privileges=outcome.privileges,
-                           bus=config.bus):  # fmt: skip
+        for line in advice(
+            stats, counters.fault, asked_all=asked, privileges=outcome.privileges, bus=config.bus
+        ):
             print(f"  {line}")
     name = config.inputs.scenario.name
     if outcome.ending is Ending.FELL:
-        raise RunFailedError(f"{name}: {outcome.reason}; the result is in {folder}, flagged",
-                             time=outcome.time)  # fmt: skip
+        raise RunFailedError(
+            f"{name}: {outcome.reason}; the result is in {folder}, flagged", time=outcome.time
+        )
     if outcome.ending is Ending.FAULT:
         raise RunFailedError(
             f"safety fault: {outcome.reason}; the result until then is in {folder}",

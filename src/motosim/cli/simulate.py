@@ -163,9 +163,12 @@ def _simulate(args: argparse.Namespace, folder: Path, workers: "FigureWorkers | 
 
                     summary = load_result(folder).summary
                     print_json(
-                        {"out": str(folder), "report": str(report) if report else None,
-                         "metrics": summary}
-                    )  # fmt: skip
+                        {
+                            "out": str(folder),
+                            "report": str(report) if report else None,
+                            "metrics": summary,
+                        }
+                    )
             raise
         for line in warnings(summary):
             print(f"motosim: warning: {line}", file=sys.stderr)

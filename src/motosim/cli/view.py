@@ -137,8 +137,9 @@ def run_view(args: argparse.Namespace) -> int:
     except ValueError:
         local = args.host == "localhost"
     if not local:
-        print(f"motosim: warning: serving on {args.host}, reachable from the network",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"motosim: warning: serving on {args.host}, reachable from the network", file=sys.stderr
+        )
     server = ServerThread(app, args.host, args.port).start()
     print(f"rider's view: {server.url}/?token={token}")
     print(f"dashboard:    {server.url}/dashboard?token={token}")

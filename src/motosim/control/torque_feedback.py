@@ -503,9 +503,13 @@ def synthesize_controller(
         bandwidth = default_bandwidth(rate)
     check_options(bandwidth=bandwidth, rate=rate, integral_corner=integral_corner)
     gain, corner, _, tuned = _shaped_synthesis(
-        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts,
+        hb,
+        rng=rng,
+        bandwidth=bandwidth,
+        order=order,
+        n_starts=n_starts,
         integral_corner=integral_corner,
-    )  # fmt: skip
+    )
     return series(tuned.controller, _weight(gain, corner))
 
 
@@ -555,9 +559,13 @@ def design_torque_feedback(
         bandwidth = default_bandwidth(rate)
     check_options(bandwidth=bandwidth, rate=rate, integral_corner=integral_corner)
     gain, corner, G_s, tuned = _shaped_synthesis(
-        hb, rng=rng, bandwidth=bandwidth, order=order, n_starts=n_starts,
+        hb,
+        rng=rng,
+        bandwidth=bandwidth,
+        order=order,
+        n_starts=n_starts,
         integral_corner=integral_corner,
-    )  # fmt: skip
+    )
     full = ncfsyn(G_s.A, G_s.B, G_s.C, G_s.D)
     K = series(tuned.controller, _weight(gain, corner))
     num, den = ss2tf(K.A, K.B, K.C, K.D)

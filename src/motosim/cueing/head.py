@@ -46,9 +46,17 @@ __all__ = [
 Array = NDArray[np.float64]
 
 HEAD_SIGNALS = (
-    "a_x", "a_y", "theta", "theta_dot",
-    "omega_x", "omega_y", "omega_z", "f_x", "f_y", "f_z",
-)  # fmt: skip
+    "a_x",
+    "a_y",
+    "theta",
+    "theta_dot",
+    "omega_x",
+    "omega_y",
+    "omega_z",
+    "f_x",
+    "f_y",
+    "f_z",
+)
 """Columns of :func:`vehicle_motion` and :func:`platform_motion` (see :mod:`motosim.signals`)."""
 
 GRAVITY = 9.81  # [m/s^2], the g of the Sharp parameter sets
@@ -218,9 +226,16 @@ def vehicle_motion(
         theta = theta + series["theta"]
     theta_dot = np.gradient(theta, dt)
     omega, f = head_kinematics(
-        np.column_stack([a_x, a_y]), phi, theta, phi_dot, theta_dot, psi_dot,
-        (rider.x, 0.0, -rider.height), dt, g=g,
-    )  # fmt: skip
+        np.column_stack([a_x, a_y]),
+        phi,
+        theta,
+        phi_dot,
+        theta_dot,
+        psi_dot,
+        (rider.x, 0.0, -rider.height),
+        dt,
+        g=g,
+    )
     data = np.column_stack([a_x, a_y, theta, theta_dot, omega, f])
     return TimeSeries(t, data, HEAD_SIGNALS)
 

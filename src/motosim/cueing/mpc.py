@@ -422,8 +422,7 @@ def _axis(config: CueingConfig, model: VestibularModel, axis: int, dt: float) ->
             band_lin_sustained.append(np.array([tuning.sustained_force_false_cue_weight / thr_o]))
             band_steps[1] = np.append(band_steps[1], N - 1)
     w_angle = (tuning.pitch_angle_weight if axis == 1 else tuning.angle_weight) / limits.angle**2
-    for e, w in ((e_angle, w_angle),
-                 (e_rate, tuning.rate_weight / rate**2)):  # fmt: skip
+    for e, w in ((e_angle, w_angle), (e_rate, tuning.rate_weight / rate**2)):
         M = np.einsum("i,kij->kj", e, Gam)
         E = np.einsum("i,kij->kj", e, Phi)
         P += w * M.T @ M
@@ -491,8 +490,9 @@ def design_mpc(config: CueingConfig, model: VestibularModel, dt: float) -> MpcDe
         raise MotosimError(
             f"loop period dt = {dt!r} s; expected > 0 and <= the MPC step {config.mpc.step:g} s"
         )
-    return MpcDesign(dt, (_axis(config, model, 0, dt), _axis(config, model, 1, dt),
-                          _axis(config, model, 2, dt)))  # fmt: skip
+    return MpcDesign(
+        dt, (_axis(config, model, 0, dt), _axis(config, model, 1, dt), _axis(config, model, 2, dt))
+    )
 
 
 class MpcCueing:
@@ -621,8 +621,10 @@ class MpcCueing:
         U = np.zeros((2 * nc + no, r + 1))
         U[:nc, c : c + nc], U[:nc, c + nc], U[:nc, c + nc + 1] = Ac, Bc, Bc
         U[nc : nc + no, o : o + no], U[nc : nc + no, o + no], U[nc : nc + no, o + no + 1] = (
-            Ao, Bo, Bo,
-        )  # fmt: skip
+            Ao,
+            Bo,
+            Bo,
+        )
         U[nc + no :, f : f + nc], U[nc + no :, f + nc], U[nc + no :, f + nc + 1] = Ac, Bc, Bc
         return K, U, nc, no
 
@@ -730,9 +732,17 @@ class MpcCueing:
                 fading = plan.head_height * alpha if math.isfinite(alpha) else 0.0
                 held = w_o - fading
             v = np.concatenate(
-                [x0, self._canal[j], (0.0, w_c), self._otolith[j], (held, fading),
-                 self._feed_canal[j], (0.0, feed_rate), (reference[j] - feed,)]
-            )  # fmt: skip
+                [
+                    x0,
+                    self._canal[j],
+                    (0.0, w_c),
+                    self._otolith[j],
+                    (held, fading),
+                    self._feed_canal[j],
+                    (0.0, feed_rate),
+                    (reference[j] - feed,),
+                ]
+            )
             N = plan.P.shape[0]
             nb = plan.band_M.shape[0]
             band_lin = plan.band_lin

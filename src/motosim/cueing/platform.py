@@ -49,8 +49,15 @@ MAX_SIZE = 1e4
 """Largest magnitude of any platform or tuning number in SI units (rad/s^2, rad/s, m, Hz)."""
 
 
-def _check(context: str, name: str, value: float, *, lower: float, upper: float = MAX_SIZE,
-           closed: bool = False) -> None:  # fmt: skip
+def _check(
+    context: str,
+    name: str,
+    value: float,
+    *,
+    lower: float,
+    upper: float = MAX_SIZE,
+    closed: bool = False,
+) -> None:
     if not closed and lower == 0.0:  # positive: at least SMALLEST
         lower, closed = SMALLEST, True
     ok = math.isfinite(value) and (value >= lower if closed else value > lower) and value <= upper
@@ -180,13 +187,27 @@ class WashoutTuning:
     horizon_gain: float
 
     def __post_init__(self) -> None:
-        for name in ("roll_scale", "roll_onset_gain", "tilt_scale", "pitch_onset_gain",
-                     "yaw_gain", "horizon_gain"):  # fmt: skip
+        for name in (
+            "roll_scale",
+            "roll_onset_gain",
+            "tilt_scale",
+            "pitch_onset_gain",
+            "yaw_gain",
+            "horizon_gain",
+        ):
             _check("washout", name, getattr(self, name), lower=0.0, closed=True)
         _check("washout", "roll_sustained", self.roll_sustained, lower=0.0, upper=math.pi / 2)
-        for name in ("roll_onset_frequency", "roll_onset_damping", "tilt_frequency",
-                     "tilt_damping", "tilt_rate", "pitch_onset_frequency",
-                     "pitch_onset_damping", "yaw_frequency", "yaw_damping"):  # fmt: skip
+        for name in (
+            "roll_onset_frequency",
+            "roll_onset_damping",
+            "tilt_frequency",
+            "tilt_damping",
+            "tilt_rate",
+            "pitch_onset_frequency",
+            "pitch_onset_damping",
+            "yaw_frequency",
+            "yaw_damping",
+        ):
             _check("washout", name, getattr(self, name), lower=0.0)
 
 
@@ -359,8 +380,9 @@ def _table(data: Mapping[str, Any], key: str, origin: str) -> Mapping[str, Any]:
     return value
 
 
-def _numbers(table: Mapping[str, Any], keys: Mapping[str, float], where: str,
-             origin: str) -> list[float]:  # fmt: skip
+def _numbers(
+    table: Mapping[str, Any], keys: Mapping[str, float], where: str, origin: str
+) -> list[float]:
     """The values of ``keys`` in order, converted to SI, with one-line errors."""
     unknown = set(table) - set(keys)
     if unknown:
@@ -452,14 +474,42 @@ def parse_platform(data: Mapping[str, Any], *, origin: str) -> CueingConfig:
         if "false_cue_steps" not in mpc_table:
             raise MotosimError(f"{origin}: missing key 'false_cue_steps' in [mpc]")
         steps = mpc_table.pop("false_cue_steps")
-        (step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge, pitch_angle,
-         false_cue, force_false_cue, preview_force, sustained_force, roll_corner) = _numbers(
-            mpc_table, _MPC_KEYS, "mpc", origin)  # fmt: skip
-        mpc = MpcTuning(
-            horizon, step, canal, otolith, angle, rate, accel, pitch_rate, prediction, surge,
-            pitch_angle, false_cue, steps, force_false_cue, preview_force, sustained_force,
+        (
+            step,
+            canal,
+            otolith,
+            angle,
+            rate,
+            accel,
+            pitch_rate,
+            prediction,
+            surge,
+            pitch_angle,
+            false_cue,
+            force_false_cue,
+            preview_force,
+            sustained_force,
             roll_corner,
-        )  # fmt: skip
+        ) = _numbers(mpc_table, _MPC_KEYS, "mpc", origin)
+        mpc = MpcTuning(
+            horizon,
+            step,
+            canal,
+            otolith,
+            angle,
+            rate,
+            accel,
+            pitch_rate,
+            prediction,
+            surge,
+            pitch_angle,
+            false_cue,
+            steps,
+            force_false_cue,
+            preview_force,
+            sustained_force,
+            roll_corner,
+        )
     except MotosimError as err:
         message = str(err)
         raise MotosimError(

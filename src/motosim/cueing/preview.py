@@ -139,8 +139,11 @@ class Road:
                 f"road of {self.x.size}, {self.y.size}, {n} samples of x, y, kappa; "
                 "expected the same number, at least 2"
             )
-        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.y))
-                and np.all(np.isfinite(self.kappa))):  # fmt: skip
+        if not (
+            np.all(np.isfinite(self.x))
+            and np.all(np.isfinite(self.y))
+            and np.all(np.isfinite(self.kappa))
+        ):
             raise MotosimError("road with a non-finite position or curvature; expected finite")
 
 

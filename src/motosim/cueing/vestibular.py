@@ -100,9 +100,18 @@ class VestibularModel:
     thresholds: tuple[float, float, float, float, float]
 
     def __post_init__(self) -> None:
-        values = [getattr(self, n) for n in ("canal_tau_L", "canal_tau_S", "canal_tau_a",
-                                             "otolith_K", "otolith_tau_a", "otolith_tau_L",
-                                             "otolith_tau_S")]  # fmt: skip
+        values = [
+            getattr(self, n)
+            for n in (
+                "canal_tau_L",
+                "canal_tau_S",
+                "canal_tau_a",
+                "otolith_K",
+                "otolith_tau_a",
+                "otolith_tau_L",
+                "otolith_tau_S",
+            )
+        ]
         if not all(math.isfinite(v) and v > 0 for v in [*values, *self.thresholds]) or len(
             self.thresholds
         ) != len(CHANNELS):

@@ -91,10 +91,20 @@ class WashoutDesign:
     def coefficients(self) -> Array:
         """The packed coefficient array that :func:`washout_step` reads, shape (26,)."""
         return np.array(
-            [*self.roll_onset, *self.tilt, *self.pitch_onset, *self.yaw, self.roll_scale,
-             self.roll_sustained, self.tilt_scale, self.tilt_step, self.horizon_gain, self.g],
+            [
+                *self.roll_onset,
+                *self.tilt,
+                *self.pitch_onset,
+                *self.yaw,
+                self.roll_scale,
+                self.roll_sustained,
+                self.tilt_scale,
+                self.tilt_step,
+                self.horizon_gain,
+                self.g,
+            ],
             dtype=np.float64,
-        )  # fmt: skip
+        )
 
 
 def design_washout(tuning: WashoutTuning, dt: float, *, g: float = 9.81) -> WashoutDesign:
@@ -131,8 +141,12 @@ def design_washout(tuning: WashoutTuning, dt: float, *, g: float = 9.81) -> Wash
     if not (math.isfinite(dt) and dt > 0.0):
         raise MotosimError(f"loop period dt = {dt!r}; expected a finite number > 0 [s]")
     nyquist = math.pi / dt
-    for name in ("roll_onset_frequency", "tilt_frequency", "pitch_onset_frequency",
-                 "yaw_frequency"):  # fmt: skip
+    for name in (
+        "roll_onset_frequency",
+        "tilt_frequency",
+        "pitch_onset_frequency",
+        "yaw_frequency",
+    ):
         w = getattr(tuning, name)
         if w > 0.2 * nyquist:
             raise MotosimError(

@@ -271,9 +271,11 @@ def estimate(
         record, state = torque_sensor_kernel(dt), np.zeros(4)
         start_kernel(record, state, theta[0], 0.0, current[0])
         measured = np.array(
-            [step_kernel(record, state, theta[k], rate[k], current[k], arrays[2][k])
-             for k in range(tt.size)]
-        )  # fmt: skip
+            [
+                step_kernel(record, state, theta[k], rate[k], current[k], arrays[2][k])
+                for k in range(tt.size)
+            ]
+        )
         return rate, measured
     stepper = ESTIMATORS[name](hb, dt, friction_compensation=friction_compensation)
     tau = np.empty(tt.size)

@@ -272,9 +272,13 @@ def codec_table(codec: FrameCodec) -> NDArray[np.float64]:
     """
     table = np.zeros((len(codec.names) + 1, 8))
     table[0, :6] = (
-        codec.frame_id, codec.length, codec.checksum_index, codec._checksum_shift,
-        codec._id_crc, codec.counter_index,
-    )  # fmt: skip
+        codec.frame_id,
+        codec.length,
+        codec.checksum_index,
+        codec._checksum_shift,
+        codec._id_crc,
+        codec.counter_index,
+    )
     for i, (start, mask, sign, _wrap, scale, offset, lo, hi) in enumerate(codec._fields):
         length = mask.bit_length()
         if length > 63:
@@ -878,9 +882,17 @@ class UdpMulticastLink(Link):
     """
 
     __slots__ = (
-        "_bus", "_dest", "_out", "_poll", "_sock", "_templates", "_unpack", "errors",
-        "own_filtered", "spec",
-    )  # fmt: skip
+        "_bus",
+        "_dest",
+        "_out",
+        "_poll",
+        "_sock",
+        "_templates",
+        "_unpack",
+        "errors",
+        "own_filtered",
+        "spec",
+    )
     datagrams = True
 
     def __init__(self, bus: Any, group: str, port: int, spec: str) -> None:

@@ -580,9 +580,20 @@ def longitudinal_acceleration(
 
 @njit(cache=True)
 def _bike_rates(
-    z: Array, out: Array, A: Array, Bv: Array, tau: float, Bw: Array, side: float, force: float,
-    m: float, m_eq: float, v_min: float, cos_psi: float, sin_psi: float,
-) -> None:  # fmt: skip
+    z: Array,
+    out: Array,
+    A: Array,
+    Bv: Array,
+    tau: float,
+    Bw: Array,
+    side: float,
+    force: float,
+    m: float,
+    m_eq: float,
+    v_min: float,
+    cos_psi: float,
+    sin_psi: float,
+) -> None:
     v_x = z[8]
     for r in range(8):
         acc = Bv[r] * tau + Bw[r] * side

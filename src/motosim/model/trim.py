@@ -193,12 +193,27 @@ def horizontal_tyre_force(model: TyredModel, state: State, loads: dict[str, floa
 
 def _state(unknowns: _Unknowns, yaw_rate: float) -> State:
     return State(
-        x=0.0, y=0.0, z=unknowns.z, yaw=0.0, roll=unknowns.roll, pitch=unknowns.pitch,
-        rear_angle=0.0, steer=unknowns.steer, front_angle=0.0, forward=unknowns.forward,
-        lateral=unknowns.lateral, vertical=0.0, yaw_rate=yaw_rate, roll_rate=0.0,
-        pitch_rate=0.0, rear_spin=unknowns.rear_spin, steer_rate=0.0,
-        front_spin=unknowns.front_spin, Fy_r=unknowns.Fy_r, Fy_f=unknowns.Fy_f,
-    )  # fmt: skip
+        x=0.0,
+        y=0.0,
+        z=unknowns.z,
+        yaw=0.0,
+        roll=unknowns.roll,
+        pitch=unknowns.pitch,
+        rear_angle=0.0,
+        steer=unknowns.steer,
+        front_angle=0.0,
+        forward=unknowns.forward,
+        lateral=unknowns.lateral,
+        vertical=0.0,
+        yaw_rate=yaw_rate,
+        roll_rate=0.0,
+        pitch_rate=0.0,
+        rear_spin=unknowns.rear_spin,
+        steer_rate=0.0,
+        front_spin=unknowns.front_spin,
+        Fy_r=unknowns.Fy_r,
+        Fy_f=unknowns.Fy_f,
+    )
 
 
 def _inputs(unknowns: _Unknowns, friction: float) -> Inputs:
@@ -273,14 +288,28 @@ def steady_turn(model: TyredModel, speed: float, radius: float, *, friction: flo
     loads = contact_loads(model, state, inputs)
     _check_inside(model, state, loads, friction, speed, radius)
     return Trim(
-        speed=float(speed), radius=float(radius), yaw_rate=yaw_rate, phi=unknowns.roll,
-        delta=unknowns.steer, tau_r=unknowns.steer_torque, drive_torque=unknowns.drive_torque,
-        F_xf=loads["F_xf"], F_xr=loads["F_xr"], F_yf=loads["F_yf"], F_yr=loads["F_yr"],
-        F_zf=loads["F_zf"], F_zr=loads["F_zr"], kappa_f=loads["kappa_f"],
-        kappa_r=loads["kappa_r"], alpha_f=loads["alpha_f"], alpha_r=loads["alpha_r"],
-        camber_f=loads["camber_f"], camber_r=loads["camber_r"], phi_kinematic=phi_k,
+        speed=float(speed),
+        radius=float(radius),
+        yaw_rate=yaw_rate,
+        phi=unknowns.roll,
+        delta=unknowns.steer,
+        tau_r=unknowns.steer_torque,
+        drive_torque=unknowns.drive_torque,
+        F_xf=loads["F_xf"],
+        F_xr=loads["F_xr"],
+        F_yf=loads["F_yf"],
+        F_yr=loads["F_yr"],
+        F_zf=loads["F_zf"],
+        F_zr=loads["F_zr"],
+        kappa_f=loads["kappa_f"],
+        kappa_r=loads["kappa_r"],
+        alpha_f=loads["alpha_f"],
+        alpha_r=loads["alpha_r"],
+        camber_f=loads["camber_f"],
+        camber_r=loads["camber_r"],
+        phi_kinematic=phi_k,
         state=state,
-    )  # fmt: skip
+    )
 
 
 def _first_guess(model: TyredModel, speed: float, lateral_acceleration: float) -> _Unknowns:
@@ -296,12 +325,19 @@ def _first_guess(model: TyredModel, speed: float, lateral_acceleration: float) -
     compression = upright.z + r_r
     radius = speed**2 / lateral_acceleration
     return _Unknowns(
-        z=compression - (r_r - t_r) * math.cos(roll) - t_r, roll=roll, pitch=upright.pitch,
-        steer=_wheelbase(model) / radius / math.cos(model.lam), forward=speed, lateral=0.0,
-        rear_spin=-speed / r_r, front_spin=-speed / float(model.radii[1]),
-        Fy_r=static["F_zr"] * math.tan(phi_k), Fy_f=static["F_zf"] * math.tan(phi_k),
-        steer_torque=0.0, drive_torque=0.0,
-    )  # fmt: skip
+        z=compression - (r_r - t_r) * math.cos(roll) - t_r,
+        roll=roll,
+        pitch=upright.pitch,
+        steer=_wheelbase(model) / radius / math.cos(model.lam),
+        forward=speed,
+        lateral=0.0,
+        rear_spin=-speed / r_r,
+        front_spin=-speed / float(model.radii[1]),
+        Fy_r=static["F_zr"] * math.tan(phi_k),
+        Fy_f=static["F_zf"] * math.tan(phi_k),
+        steer_torque=0.0,
+        drive_torque=0.0,
+    )
 
 
 def _solve(

@@ -661,9 +661,27 @@ def _pack(s: State) -> Array:
 @njit(cache=True)
 def _unpack(x: Array) -> State:
     return State(
-        x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9],
-        x[10], x[11], x[12], x[13], x[14], x[15], x[16], x[17], x[18], x[19],
-    )  # fmt: skip
+        x[0],
+        x[1],
+        x[2],
+        x[3],
+        x[4],
+        x[5],
+        x[6],
+        x[7],
+        x[8],
+        x[9],
+        x[10],
+        x[11],
+        x[12],
+        x[13],
+        x[14],
+        x[15],
+        x[16],
+        x[17],
+        x[18],
+        x[19],
+    )
 
 
 @njit(cache=True)
@@ -685,9 +703,12 @@ def validate_inputs(inputs: Inputs) -> Inputs:
         check_number(getattr(inputs, name), where=f"tyred inputs: {name}", unit="N*m")
     for name in ("front_brake_torque", "rear_brake_torque"):
         check_number(
-            getattr(inputs, name), where=f"tyred inputs: {name}", lower=0.0, lower_closed=True,
+            getattr(inputs, name),
+            where=f"tyred inputs: {name}",
+            lower=0.0,
+            lower_closed=True,
             unit="N*m",
-        )  # fmt: skip
+        )
     check_number(
         inputs.friction, where="tyred inputs: friction", lower=0.0, upper=3.0, lower_closed=False
     )
@@ -790,10 +811,19 @@ def upright_state(model: TyredModel, speed: float) -> State:
     return State(*x)
 
 
-LATERAL = tuple(int(i) for i in (
-    Index.roll, Index.steer, Index.lateral, Index.yaw_rate, Index.roll_rate, Index.steer_rate,
-    Index.Fy_r, Index.Fy_f,
-))  # fmt: skip
+LATERAL = tuple(
+    int(i)
+    for i in (
+        Index.roll,
+        Index.steer,
+        Index.lateral,
+        Index.yaw_rate,
+        Index.roll_rate,
+        Index.steer_rate,
+        Index.Fy_r,
+        Index.Fy_f,
+    )
+)
 """Roll, steer, lateral velocity, yaw rate, roll rate, steer rate, F_y rear, F_y front."""
 
 

@@ -391,9 +391,11 @@ def mf_forces(
     B_t = (c.q_Bz1 + c.q_Bz2 * dfz) * (1.0 + c.q_Bz5 * g_abs + c.q_Bz6 * gamma * gamma)
     C_t = c.q_Cz1
     D_t = (
-        F_z * (c.R_c / c.F_z0) * (c.q_Dz1 + c.q_Dz2 * dfz)
+        F_z
+        * (c.R_c / c.F_z0)
+        * (c.q_Dz1 + c.q_Dz2 * dfz)
         * (1.0 + c.q_Dz3 * g_abs + c.q_Dz4 * gamma * gamma)
-    )  # fmt: skip
+    )
     E_t = min(
         (c.q_Ez1 + c.q_Ez2 * dfz + c.q_Ez3 * dfz * dfz)
         * (1.0 + c.q_Ez5 * gamma * (2.0 / math.pi) * math.atan(B_t * C_t * tan_a)),
@@ -406,10 +408,11 @@ def mf_forces(
     t = D_t * math.cos(C_t * math.atan(_shape(B_t, E_t, a_t))) * cos_a
     B_r = c.q_Bz9 + c.q_Bz10 * B_y * C_y
     D_r = (
-        F_z * c.R_c
+        F_z
+        * c.R_c
         * ((c.q_Dz8 + c.q_Dz9 * dfz) * gamma + (c.q_Dz10 + c.q_Dz11 * dfz) * gamma * g_abs)
         * cos_a
-    )  # fmt: skip
+    )
     M_zr = D_r * math.cos(math.atan(B_r * a_r))
     M_z = -t * G_yk * F_y00 + M_zr
     M_x = c.R_0 * F_z * (c.q_Sx1 + c.q_Sx2 * gamma + c.q_Sx3 * F_y / c.F_z0)

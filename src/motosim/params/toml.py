@@ -29,8 +29,13 @@ from motosim.errors import MotosimError
 from motosim.params.checks import path_problem, short_repr
 
 __all__ = [
-    "MAX_DEPTH", "MAX_FILE_BYTES", "MAX_MAGNITUDE", "parse_toml", "read_limited", "read_toml",
-]  # fmt: skip
+    "MAX_DEPTH",
+    "MAX_FILE_BYTES",
+    "MAX_MAGNITUDE",
+    "parse_toml",
+    "read_limited",
+    "read_toml",
+]
 
 MAX_FILE_BYTES = 1_000_000
 """Largest TOML file read [bytes]; motosim's files are a few kilobytes."""

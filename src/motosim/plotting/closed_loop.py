@@ -153,9 +153,13 @@ def _present(result: SimResult, names: Sequence[str], figure: str) -> list[str]:
 def _legend_above(ax: Axes, *, columns: int = 3, fontsize: float = 8) -> None:
     """The legend in a row above the axes, off the data."""
     ax.legend(
-        loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=columns, fontsize=fontsize,
-        frameon=False, borderaxespad=0.2,
-    )  # fmt: skip
+        loc="lower left",
+        bbox_to_anchor=(0.0, 1.0),
+        ncols=columns,
+        fontsize=fontsize,
+        frameon=False,
+        borderaxespad=0.2,
+    )
 
 
 # a y axis whose data span less than _FLAT times the magnitude of their middle (at least
@@ -370,9 +374,13 @@ def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimat
     have = _present(result, names, "plot_rate")
     if len(have) < 2 or result.t.size < 8:
         return _pair_figure(
-            result, names, figure="plot_rate", title=title, error_label="estimate - true",
+            result,
+            names,
+            figure="plot_rate",
+            title=title,
+            error_label="estimate - true",
             quantity="handlebar rate",
-        )  # fmt: skip
+        )
     true = np.rad2deg(result["theta_h_dot"])
     raw = np.rad2deg(result["theta_h_dot_hat"])
     dt = float(np.median(np.diff(result.t)))
@@ -384,9 +392,15 @@ def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimat
     # above, the legend's two rows; between the columns, the error's legend beside it; below,
     # the two lines on the encoder's step
     grid = _fixed_grid(
-        fig, 2, 2, top=_TITLE + 2 * _LEGEND_ROW, bottom=_BOTTOM + (0.35 if step else 0.0),
-        wgap=_LEFT + 0.8, width_ratios=[2.2, 1.0], height_ratios=[2, 1],
-    )  # fmt: skip
+        fig,
+        2,
+        2,
+        top=_TITLE + 2 * _LEGEND_ROW,
+        bottom=_BOTTOM + (0.35 if step else 0.0),
+        wgap=_LEFT + 0.8,
+        width_ratios=[2.2, 1.0],
+        height_ratios=[2, 1],
+    )
     main = fig.add_subplot(grid[0, 0])
     error_ax = fig.add_subplot(grid[1, 0], sharex=main)
     zoom = fig.add_subplot(grid[:, 1])
@@ -398,8 +412,14 @@ def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimat
         if step is not None:
             band = f"+/- one encoder count per sample, q/dt = {step:.3g} deg/s"
             ax.axhspan(-step, step, color="tab:orange", alpha=0.12, lw=0, label=band)
-        ax.plot(t, raw[part], color="tab:red", lw=0.6, alpha=0.3,
-                label="differentiator theta_h_dot_hat (each sample)")  # fmt: skip
+        ax.plot(
+            t,
+            raw[part],
+            color="tab:red",
+            lw=0.6,
+            alpha=0.3,
+            label="differentiator theta_h_dot_hat (each sample)",
+        )
         ax.plot(t, smooth[part], color="tab:red", lw=1.2, label=average)
         ax.plot(t, true[part], color="k", lw=1.0, ls="--", label="true rate theta_h_dot")
         ax.set_ylabel("handlebar rate [deg/s]")
@@ -407,8 +427,7 @@ def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimat
     _legend_above(main, columns=2)
     zoom.set_title(f"zoom {low:.2f}-{high:.2f} s", fontsize=9)
     zoom.set_xlabel("time [s]")
-    error_ax.plot(result.t, raw - true, color="tab:purple", lw=0.5, alpha=0.3,
-                  label="each sample")  # fmt: skip
+    error_ax.plot(result.t, raw - true, color="tab:purple", lw=0.5, alpha=0.3, label="each sample")
     error_ax.plot(result.t, smooth - true, color="tab:purple", lw=1.0, label="averaged")
     if step is not None:
         for sign in (-1.0, 1.0):
@@ -426,8 +445,9 @@ def plot_rate(result: SimResult, *, title: str = "Handlebar rate and its estimat
             "steps of the differentiator's output while the handlebar creeps\n(the shaded "
             "band); "
             "averaged, the output follows the true rate.",
-            fontsize=8, color="0.3",
-        )  # fmt: skip
+            fontsize=8,
+            color="0.3",
+        )
     fig.suptitle(_title(result, title))
     return _finish(fig)
 
@@ -637,8 +657,13 @@ def plot_comparison(
             # (the truth, the handlebar) in black: two series a panel, each told by colour
             if second in result:
                 values, _ = _display(second, result[second])
-                ax.plot(result.t, values, color=colours[column], lw=0.9,
-                        label=_LABELS.get(second, second))  # fmt: skip
+                ax.plot(
+                    result.t,
+                    values,
+                    color=colours[column],
+                    lw=0.9,
+                    label=_LABELS.get(second, second),
+                )
             if first in result:
                 values, _ = _display(first, result[first])
                 ax.plot(result.t, values, color="k", lw=1.1, label=_LABELS.get(first, first))

@@ -42,8 +42,13 @@ def plot_perception(run: CueingRun, *, thresholds: tuple[float, ...], title: str
         label, unit, scale = _LABELS[name]
         ax.axhspan(-thr * scale, thr * scale, color="0.9", lw=0)
         ax.plot(t, run.perceived_vehicle[name] * scale, color="k", lw=1.0, label="motorcycle")
-        ax.plot(t, run.perceived_platform[name] * scale, color="tab:red", lw=1.0,
-                label=f"platform ({run.algorithm})")  # fmt: skip
+        ax.plot(
+            t,
+            run.perceived_platform[name] * scale,
+            color="tab:red",
+            lw=1.0,
+            label=f"platform ({run.algorithm})",
+        )
         cs = run.score.channels[name]
         ax.set_ylabel(f"{name} [{unit}]")
         ax.set_title(

@@ -102,8 +102,14 @@ def plot_identification(
         ax.plot(replay.t, model, color="tab:red", lw=1.0, ls="--", label="model")
         ax.set_title(f"{label}: NRMSE {replay.nrmse:.3f}", fontsize=9, loc="left")
         ax.set_ylabel("handlebar angle theta_h [deg]")
-        ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncols=2, fontsize=8,
-                  frameon=False, borderaxespad=0.2)  # fmt: skip
+        ax.legend(
+            loc="lower right",
+            bbox_to_anchor=(1.0, 1.0),
+            ncols=2,
+            fontsize=8,
+            frameon=False,
+            borderaxespad=0.2,
+        )
         ax.grid(True, alpha=0.3)
         err = fig.add_subplot(grid[1, cols], sharex=ax)
         err.plot(replay.t, model - measured, color="tab:red", lw=0.8)

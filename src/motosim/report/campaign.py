@@ -81,9 +81,12 @@ def build_campaign_report(folder: str | Path) -> Path:
     ]
     if call:
         facts.append(
-            ("last call", f"{call.get('computed')} runs in {call.get('wall', 0.0):.2f} s, "
-             f"overhead {100 * call.get('overhead', 0.0):.1f} %")
-        )  # fmt: skip
+            (
+                "last call",
+                f"{call.get('computed')} runs in {call.get('wall', 0.0):.2f} s, "
+                f"overhead {100 * call.get('overhead', 0.0):.1f} %",
+            )
+        )
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
@@ -99,10 +102,19 @@ def build_campaign_report(folder: str | Path) -> Path:
             values = results[m][~failed]
             values = values[np.isfinite(values)]
             if values.size:
-                ok_rows.append((m, METRICS.get(m, ""), f"{np.min(values):.4g}",
-                                f"{np.median(values):.4g}", f"{np.max(values):.4g}"))  # fmt: skip
-        parts += ["<h2>Metrics over the successful runs</h2>",
-                  _table(("metric", "meaning", "min", "median", "max"), ok_rows)]  # fmt: skip
+                ok_rows.append(
+                    (
+                        m,
+                        METRICS.get(m, ""),
+                        f"{np.min(values):.4g}",
+                        f"{np.median(values):.4g}",
+                        f"{np.max(values):.4g}",
+                    )
+                )
+        parts += [
+            "<h2>Metrics over the successful runs</h2>",
+            _table(("metric", "meaning", "min", "median", "max"), ok_rows),
+        ]
         if failed.any():
             reasons = collections.Counter(
                 str(r).split(" at t =")[0] for r in results["reason"][failed]
@@ -192,8 +204,12 @@ def _worst(
     rows: list[tuple[str, ...]] = []
     for j in order:
         run_id = str(results["run_id"][j])
-        values = ", ".join(f"{f} = {results[f][j]:.4g}" if isinstance(results[f][j], float)
-                           else f"{f} = {results[f][j]}" for f in factors)  # fmt: skip
+        values = ", ".join(
+            f"{f} = {results[f][j]:.4g}"
+            if isinstance(results[f][j], float)
+            else f"{f} = {results[f][j]}"
+            for f in factors
+        )
         command = (
             f"motosim campaign {shlex.quote(file)} --out {shlex.quote(str(folder))} "
             f"--rerun {run_id} --write-scenario {run_id}.toml"

@@ -68,8 +68,11 @@ class Targets:
     compute_share: float = 0.2
 
     def __post_init__(self) -> None:
-        for name, value in (("wake_p99", self.wake_p99), ("missed", self.missed),
-                            ("compute_share", self.compute_share)):  # fmt: skip
+        for name, value in (
+            ("wake_p99", self.wake_p99),
+            ("missed", self.missed),
+            ("compute_share", self.compute_share),
+        ):
             if not (0.0 < value < 1.0):
                 raise MotosimError(f"{name} = {value!r}; expected a value in (0, 1)")
 
@@ -131,11 +134,13 @@ def verdict(stats: TimingStats, targets: Targets = Targets()) -> Verdict:
     """
     period = 1.0 / stats.rate
     missed = stats.miss_ratio if stats.served else float("nan")
-    return Verdict((
-        Check("wake-up p99", stats.wake_p99, targets.wake_p99, "us"),
-        Check("missed deadlines", missed, targets.missed, "%"),
-        Check("compute p99", stats.compute_p99, targets.compute_share * period, "us"),
-    ))  # fmt: skip
+    return Verdict(
+        (
+            Check("wake-up p99", stats.wake_p99, targets.wake_p99, "us"),
+            Check("missed deadlines", missed, targets.missed, "%"),
+            Check("compute p99", stats.compute_p99, targets.compute_share * period, "us"),
+        )
+    )
 
 
 _PRIVILEGE_HELP = "(the real-time guide: Setting up the lab PC)"

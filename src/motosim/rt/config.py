@@ -36,9 +36,17 @@ if TYPE_CHECKING:
     from motosim.sim import RunInputs, Scenario
 
 __all__ = [
-    "MAX_LATENCY", "RealtimeOptions", "frame_age", "parse_latency", "parse_safety",
-    "refuse_offline_only", "run_paces", "split_realtime", "table_number", "within_safety",
-]  # fmt: skip
+    "MAX_LATENCY",
+    "RealtimeOptions",
+    "frame_age",
+    "parse_latency",
+    "parse_safety",
+    "refuse_offline_only",
+    "run_paces",
+    "split_realtime",
+    "table_number",
+    "within_safety",
+]
 
 MAX_LATENCY = 1.0
 """Largest ``status_latency`` read [s]; the stack accounts for up to one frame period."""

@@ -43,9 +43,17 @@ from motosim.errors import MotosimError
 from motosim.params.checks import short_repr
 
 __all__ = [
-    "INPUT_ERROR", "MAX_COUNTER", "E2EConfig", "E2EReceiver", "E2ESnapshot", "E2EState",
-    "E2EStatus", "FieldsStruct", "e2e_check", "e2e_restart",
-]  # fmt: skip
+    "INPUT_ERROR",
+    "MAX_COUNTER",
+    "E2EConfig",
+    "E2EReceiver",
+    "E2ESnapshot",
+    "E2EState",
+    "E2EStatus",
+    "FieldsStruct",
+    "e2e_check",
+    "e2e_restart",
+]
 
 
 class E2EStatus(IntEnum):
@@ -230,9 +238,14 @@ def e2e_check(st: Any, new_data: bool, crc_ok: bool, counter: int) -> int:
 def _snapshot(st: Any) -> E2ESnapshot:
     """The state's counter fields, for Python."""
     return E2ESnapshot(
-        st.last_valid_counter, st.max_delta_counter, st.wait_for_first_data, st.lost_data,
-        st.status, st.sync_counter, st.no_new_or_repeated_data_counter,
-    )  # fmt: skip
+        st.last_valid_counter,
+        st.max_delta_counter,
+        st.wait_for_first_data,
+        st.lost_data,
+        st.status,
+        st.sync_counter,
+        st.no_new_or_repeated_data_counter,
+    )
 
 
 class E2EReceiver:

@@ -53,12 +53,30 @@ from motosim.rt.safety import (
 from motosim.rt.stack import StackParts, stack_period, stack_reset
 
 __all__ = [
-    "RECV_AVAILABLE", "WARM_MARGIN_NS", "LoopColumn", "PeriodArrays", "PeriodContext",
-    "PeriodEnd", "RunnerCounts", "RunnerSettings", "RunnerState", "SignalPositions", "begin",
-    "context_cycle", "context_period", "context_warm", "context_warm_until", "finish",
-    "fused_period", "monotonic_ns", "runner_counts", "runner_request", "stack_inputs",
-    "stack_warm", "take_frames",
-]  # fmt: skip
+    "RECV_AVAILABLE",
+    "WARM_MARGIN_NS",
+    "LoopColumn",
+    "PeriodArrays",
+    "PeriodContext",
+    "PeriodEnd",
+    "RunnerCounts",
+    "RunnerSettings",
+    "RunnerState",
+    "SignalPositions",
+    "begin",
+    "context_cycle",
+    "context_period",
+    "context_warm",
+    "context_warm_until",
+    "finish",
+    "fused_period",
+    "monotonic_ns",
+    "runner_counts",
+    "runner_request",
+    "stack_inputs",
+    "stack_warm",
+    "take_frames",
+]
 
 Array = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
@@ -100,11 +118,34 @@ class RunnerSettings(NamedTuple):
 
 
 _STATE_FIELDS = (
-    "t0", "theta", "current", "prev_theta", "fresh_at", "omega", "started", "fresh", "stop",
-    "finishing", "arm_request", "after_fault", "sent", "calls", "status_frames", "bad",
-    "recv_errors", "left", "left_t", "left_phi", "left_speed", "stack_time", "woke",
-    "warm_ups", "beats", "k_last", "ended",
-)  # fmt: skip
+    "t0",
+    "theta",
+    "current",
+    "prev_theta",
+    "fresh_at",
+    "omega",
+    "started",
+    "fresh",
+    "stop",
+    "finishing",
+    "arm_request",
+    "after_fault",
+    "sent",
+    "calls",
+    "status_frames",
+    "bad",
+    "recv_errors",
+    "left",
+    "left_t",
+    "left_phi",
+    "left_speed",
+    "stack_time",
+    "woke",
+    "warm_ups",
+    "beats",
+    "k_last",
+    "ended",
+)
 
 
 class RunnerState(structref.StructRefProxy):
@@ -133,9 +174,36 @@ class RunnerState(structref.StructRefProxy):
     def __new__(cls, settings: RunnerSettings) -> "RunnerState":
         nan = math.nan
         made: RunnerState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, *settings, nan, nan, nan, nan, 0.0, 0.0, False, False, False, False, False,
-            0, 0, 0, 0, 0, 0, False, nan, nan, nan, nan, nan, 0, 0, -1, False,
-        )  # fmt: skip
+            cls,
+            *settings,
+            nan,
+            nan,
+            nan,
+            nan,
+            0.0,
+            0.0,
+            False,
+            False,
+            False,
+            False,
+            False,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            False,
+            nan,
+            nan,
+            nan,
+            nan,
+            nan,
+            0,
+            0,
+            -1,
+            False,
+        )
         return made
 
 
@@ -165,9 +233,19 @@ class RunnerCounts(NamedTuple):
 def runner_counts(r: Any) -> RunnerCounts:
     """The fields of the runner's state Python reads, in one compiled call."""
     return RunnerCounts(
-        r.stop, r.status_frames, r.bad, r.recv_errors, r.left, r.left_t, r.left_phi,
-        r.left_speed, r.warm_ups, r.ended, r.stack_time, r.woke,
-    )  # fmt: skip
+        r.stop,
+        r.status_frames,
+        r.bad,
+        r.recv_errors,
+        r.left,
+        r.left_t,
+        r.left_phi,
+        r.left_speed,
+        r.warm_ups,
+        r.ended,
+        r.stack_time,
+        r.woke,
+    )
 
 
 @njit(cache=True)
@@ -558,9 +636,14 @@ def _plain(end: PeriodEnd) -> tuple[bool, bool, int, bool, float]:
 
 @njit(cache=True)
 def fused_period(
-    stack: StackParts, a: PeriodArrays, frames: int, k: int, t: float, woke: float,
+    stack: StackParts,
+    a: PeriodArrays,
+    frames: int,
+    k: int,
+    t: float,
+    woke: float,
     done_read: float,
-) -> tuple[bool, bool, int, bool, float]:  # fmt: skip
+) -> tuple[bool, bool, int, bool, float]:
     """One whole period of a runner whose stack is compiled: :func:`take_frames` of the
     ``frames`` read, :func:`begin`, the stack (:func:`~motosim.rt.stack.stack_reset`,
     :func:`~motosim.rt.stack.stack_period` of ``stack``, a
@@ -583,9 +666,14 @@ def fused_period(
 
 @njit(cache=True)
 def stack_warm(
-    stack: StackParts, shadow: StackParts, shadow_row: Array, theta: float, current: float,
-    fresh: bool, scale: float,
-) -> None:  # fmt: skip
+    stack: StackParts,
+    shadow: StackParts,
+    shadow_row: Array,
+    theta: float,
+    current: float,
+    fresh: bool,
+    scale: float,
+) -> None:
     """One stack period on ``shadow``, a copy of ``stack``'s data and state made now, whose
     result is thrown away: the stack's code and data are then in the CPU's caches. ``fresh``
     and ``scale`` are the period's (constants would compile another copy of the step)."""

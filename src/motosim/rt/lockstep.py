@@ -30,7 +30,7 @@ from motosim.rt.stack import CompiledStack
 from motosim.rt.telemetry import StateReceiver, StateSender
 from motosim.sim import RunInputs, Scenario, build_rig, build_stack
 from motosim.sim.closed_loop import RigModel
-from motosim.sim.stack import account_for_delay
+from motosim.sim.stack import StackModel, account_for_delay
 
 if TYPE_CHECKING:
     from motosim.rt.platform import PlatformOutput
@@ -78,10 +78,31 @@ def free_limits(rate: float) -> SafetyLimits:
     (1000.0, 0.001)
     """
     return SafetyLimits(
-        max_current=1e3, max_slew=1e9, max_speed=1e3, speed_band=1.0, soft_stop=10.0,
-        hard_stop=20.0, end_stop_gain=0.0, hands_off_torque=0.0, hands_off_time=1.0,
-        hands_off_gain=1.0, fade_in=1.0 / rate,
-    )  # fmt: skip
+        max_current=1e3,
+        max_slew=1e9,
+        max_speed=1e3,
+        speed_band=1.0,
+        soft_stop=10.0,
+        hard_stop=20.0,
+        end_stop_gain=0.0,
+        hands_off_torque=0.0,
+        hands_off_time=1.0,
+        hands_off_gain=1.0,
+        fade_in=1.0 / rate,
+    )
+
+
+def _stack_and_world(inputs: RunInputs, delay: float, seed: int) -> tuple[StackModel, RigModel]:
+    """The stack of ``inputs`` for status frames ``delay`` old and the rig's world, checked
+    before any socket is opened."""
+    if not (math.isfinite(delay) and delay >= 0.0):
+        raise MotosimError(f"delay = {delay!r} s: expected a non-negative time")
+    refuse_offline_only(inputs.scenario, origin=inputs.scenario.name)
+    model = account_for_delay(build_stack(inputs), delay, inputs.design_handlebar)
+    world = build_rig(inputs, rng=np.random.default_rng(seed))
+    if world.virtual_rider:
+        VirtualRider.check(world)
+    return model, world
 
 
 class Lockstep:
@@ -168,16 +189,10 @@ class Lockstep:
         validity: tuple[float, float, float] | None = None,
         platform: "PlatformOutput | None" = None,
     ) -> None:
-        if not (math.isfinite(delay) and delay >= 0.0):
-            raise MotosimError(f"delay = {delay!r} s: expected a non-negative time")
+        model, world = _stack_and_world(inputs, delay, seed)
         sc = inputs.scenario
-        refuse_offline_only(sc, origin=sc.name)
         self._rate = sc.rates.control
         self._periods = round(sc.duration * self._rate)
-        model = account_for_delay(build_stack(inputs), delay, inputs.design_handlebar)
-        world = build_rig(inputs, rng=np.random.default_rng(seed))
-        if world.virtual_rider:
-            VirtualRider.check(world)  # before the sockets are opened
         codecs = handlebar_codecs()
         self.clock = SimulatedClock(-1.0 / self._rate)  # the first deadline at t = 0
         self.rider_torques: list[tuple[float, float]] = []
@@ -192,18 +207,29 @@ class Lockstep:
             self._links.append(drive)
             held = RigRider(rider, on_enable=False, hands=world.hands, hands_off=world.hands_off)
             self.rig = VirtualRig(
-                inputs.true_handlebar, settings or ideal_rig(sc), codecs, drive, held,
+                inputs.true_handlebar,
+                settings or ideal_rig(sc),
+                codecs,
+                drive,
+                held,
                 np.random.default_rng(seed),
-            )  # fmt: skip
+            )
             run_settings = RunSettings(
-                limits, self._rate, capacity=max(1 << 16, self._periods + 1),
-                periods_per_frame=model.measure_every, validity=validity,
-            )  # fmt: skip
+                limits,
+                self._rate,
+                capacity=max(1 << 16, self._periods + 1),
+                periods_per_frame=model.measure_every,
+                validity=validity,
+            )
             self.runner = RealtimeRunner(
                 CompiledStack(model, force=world.force, side_force=world.side_force),
-                self.host, codecs, run_settings, platform=platform, now=self.clock.now,
+                self.host,
+                codecs,
+                run_settings,
+                platform=platform,
+                now=self.clock.now,
                 telemetry=None if self._sender is None else self._sender.send,
-            )  # fmt: skip
+            )
         except BaseException:
             self.close()
             raise

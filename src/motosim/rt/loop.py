@@ -389,9 +389,15 @@ class FramePacedLoop(RateLoop):
         self._end(k, periods, missed, served, gaps, timeouts, frames - start)
 
     def _end(
-        self, k: int, periods: int, missed: int, served: int, gaps: int, timeouts: int,
+        self,
+        k: int,
+        periods: int,
+        missed: int,
+        served: int,
+        gaps: int,
+        timeouts: int,
         frames: int,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """Add a run's timeouts and gaps (the periods that passed less the ``frames``
         received, when they are counted) to the totals; close it (:meth:`_close`)."""
         if self._received is not None:

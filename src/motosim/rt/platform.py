@@ -71,10 +71,21 @@ from motosim.io.can import Link, PlatformCodecs
 from motosim.rt.safety import State
 
 __all__ = [
-    "PLATFORM_FRAME", "PLATFORM_MAGIC", "PLATFORM_VERSION", "PlatformCanSender", "PlatformCueing",
-    "PlatformFrame", "PlatformLink", "PlatformOutput", "PlatformSender", "PlatformTee",
-    "PlatformTwin", "decode_platform", "encode_platform", "platform_step",
-]  # fmt: skip
+    "PLATFORM_FRAME",
+    "PLATFORM_MAGIC",
+    "PLATFORM_VERSION",
+    "PlatformCanSender",
+    "PlatformCueing",
+    "PlatformFrame",
+    "PlatformLink",
+    "PlatformOutput",
+    "PlatformSender",
+    "PlatformTee",
+    "PlatformTwin",
+    "decode_platform",
+    "encode_platform",
+    "platform_step",
+]
 
 Array = NDArray[np.float64]
 
@@ -115,9 +126,15 @@ def encode_platform(
     (48, 7)
     """
     return PLATFORM_FRAME.pack(
-        PLATFORM_MAGIC, PLATFORM_VERSION, state, fault, 1 if live else 0,
-        sequence & 0xFFFFFFFF, t, *(float(v) for v in values[:7]),
-    )  # fmt: skip
+        PLATFORM_MAGIC,
+        PLATFORM_VERSION,
+        state,
+        fault,
+        1 if live else 0,
+        sequence & 0xFFFFFFFF,
+        t,
+        *(float(v) for v in values[:7]),
+    )
 
 
 def decode_platform(data: bytes) -> PlatformFrame:
@@ -158,9 +175,14 @@ class PlatformCueing(NamedTuple):
 
 @njit(cache=True)
 def platform_step(
-    cueing: PlatformCueing, v_x: float, v_y: float, psi_dot: float, phi: float, envelope: float,
+    cueing: PlatformCueing,
+    v_x: float,
+    v_y: float,
+    psi_dot: float,
+    phi: float,
+    envelope: float,
     out: Array,
-) -> None:  # fmt: skip
+) -> None:
     """One period of the platform cueing (module docstring, steps 1 to 4) from the
     motorcycle's forward and lateral speed [m/s], yaw rate [rad/s] and lean [rad] and the
     safety stage's envelope in [0, 1]: ``cueing``'s state updated in place, ``out`` (7)
@@ -319,9 +341,10 @@ class PlatformOutput:
         self._cueing = PlatformCueing(
             lowpass2(rider.pitch_gain, rider.pitch_frequency, rider.pitch_damping, dt),
             design_washout(config.washout, dt).coefficients(),
-            design_limits(config.platform, dt).coefficients(), np.zeros(_STATE_SIZE),
+            design_limits(config.platform, dt).coefficients(),
+            np.zeros(_STATE_SIZE),
             np.zeros(4),
-        )  # fmt: skip
+        )
         self.values = np.zeros(7)
         """The last roll, pitch, yaw [rad], rates [rad/s] and horizon roll [rad]."""
         self.sender: PlatformLink | None = sender
@@ -330,8 +353,9 @@ class PlatformOutput:
         at_rest = self._cueing._replace(state=np.zeros(_STATE_SIZE))
         platform_step(at_rest, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros(7))  # compiled now
 
-    def step(self, k: int, t: float, row: Array | None, state: State, fault: int,
-             envelope: float) -> None:  # fmt: skip
+    def step(
+        self, k: int, t: float, row: Array | None, state: State, fault: int, envelope: float
+    ) -> None:
         """Period ``k`` at ``t`` [s] since the first: the cueing from the stack's ``row``
         (neutral without one: before the drive's first status frame) and the safety stage's
         ``state``, ``fault`` and ``envelope``; every ``send_every`` periods, a command."""

@@ -27,9 +27,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 __all__ = [
-    "Privilege", "apply_privileges", "freeze_gc", "lock_memory", "pin_cpus", "set_fifo_priority",
+    "Privilege",
+    "apply_privileges",
+    "freeze_gc",
+    "lock_memory",
+    "pin_cpus",
+    "set_fifo_priority",
     "thaw_gc",
-]  # fmt: skip
+]
 
 _MCL_CURRENT = 1
 _MCL_FUTURE = 2

@@ -35,9 +35,17 @@ from numpy.typing import NDArray
 from motosim.errors import MotosimError, RunFailedError
 
 __all__ = [
-    "Close", "Control", "Done", "Failed", "LiveSink", "Ready", "Recorder", "RecorderSettings",
-    "Release", "recorder_main",
-]  # fmt: skip
+    "Close",
+    "Control",
+    "Done",
+    "Failed",
+    "LiveSink",
+    "Ready",
+    "Recorder",
+    "RecorderSettings",
+    "Release",
+    "recorder_main",
+]
 
 Array = NDArray[np.float64]
 

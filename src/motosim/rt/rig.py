@@ -50,9 +50,16 @@ from motosim.sim.hands import is_held, step_spring
 from motosim.sim.rider import rider_torque
 
 __all__ = [
-    "Bar", "BarPlant", "LockstepLink", "RigFaults", "RigRider", "RigSettings",
-    "VirtualRider", "VirtualRig", "parse_rig",
-]  # fmt: skip
+    "Bar",
+    "BarPlant",
+    "LockstepLink",
+    "RigFaults",
+    "RigRider",
+    "RigSettings",
+    "VirtualRider",
+    "VirtualRig",
+    "parse_rig",
+]
 
 Array = NDArray[np.float64]
 _NEVER = math.inf
@@ -396,9 +403,16 @@ class VirtualRig:
         the compile would stall the status frames and trip the run's watchdog."""
         hb = self.hb
         plant = BarPlant(
-            hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp, self._a_i,
-            self.settings.max_current, self.h, self.hands, self.hands_off,
-        )  # fmt: skip
+            hb.J_eq,
+            hb.beta_eq,
+            hb.beta_s,
+            hb.torque_per_amp,
+            self._a_i,
+            self.settings.max_current,
+            self.h,
+            self.hands,
+            self.hands_off,
+        )
         for tau_r in (self._idle, self.rider_torque):
             _plant_steps(self.x.copy(), 0.0, plant, tau_r, 0, 1, 0.0)
         return plant
@@ -653,9 +667,21 @@ class VirtualRider:
         the path's point ``k_path`` on: the torque [N*m], the next point, the lateral error."""
         w = self.world
         return rider_torque(
-            x_v, v_x, psi, x, y, k_path, w.path, w.path_ds, w.rider_speeds, w.rider_K,
-            w.rider_x_ss, w.rider_tau_ss, w.rider_limits[0], w.rider_limits[1],
-        )  # fmt: skip
+            x_v,
+            v_x,
+            psi,
+            x,
+            y,
+            k_path,
+            w.path,
+            w.path_ds,
+            w.rider_speeds,
+            w.rider_K,
+            w.rider_x_ss,
+            w.rider_tau_ss,
+            w.rider_limits[0],
+            w.rider_limits[1],
+        )
 
 
 class LockstepLink(Link):

@@ -48,8 +48,13 @@ if TYPE_CHECKING:
     from motosim.rt.platform import PlatformOutput
 
 __all__ = [
-    "LOOP_SIGNALS", "RealtimeRunner", "RunCounters", "RunSettings", "StackStepper", "profile_stats",
-]  # fmt: skip
+    "LOOP_SIGNALS",
+    "RealtimeRunner",
+    "RunCounters",
+    "RunSettings",
+    "StackStepper",
+    "profile_stats",
+]
 
 Array = NDArray[np.float64]
 
@@ -76,8 +81,12 @@ _ANY_RANGE = (math.inf, -math.inf, math.inf)
 def _row_positions(names: tuple[str, ...]) -> dict[str, int]:
     """Where the stack's row ``names`` holds what the period reads of it (-1: nowhere): the
     estimate of the rider's torque, the handlebar's rate, the roll and the speed."""
-    signals = {"tau_at": "tau_r_hat", "rate_at": "theta_h_dot_hat", "phi_at": "phi",
-               "speed_at": "v_x"}  # fmt: skip
+    signals = {
+        "tau_at": "tau_r_hat",
+        "rate_at": "theta_h_dot_hat",
+        "phi_at": "phi",
+        "speed_at": "v_x",
+    }
     return {at: names.index(name) if name in names else -1 for at, name in signals.items()}
 
 
@@ -197,8 +206,9 @@ class RunSettings:
         ):
             raise MotosimError(f"duration = {self.duration!r} s: expected a time >= 0")
         check_number(self.linger, where="linger", lower=0.0, unit="s")
-        check_number(self.start_timeout, where="start_timeout", lower=0.0, lower_closed=False,
-                     unit="s")  # fmt: skip
+        check_number(
+            self.start_timeout, where="start_timeout", lower=0.0, lower_closed=False, unit="s"
+        )
         for name in ("periods_per_frame", "capacity"):
             if getattr(self, name) < 1:
                 raise MotosimError(f"{name} = {getattr(self, name)!r}: expected an integer >= 1")
@@ -254,9 +264,11 @@ class RealtimeRunner:
         self.codecs = codecs
         self.dt = 1.0 / rate
         self.safety = SafetyStage(
-            settings.limits, dt=self.dt, periods_per_frame=settings.periods_per_frame,
+            settings.limits,
+            dt=self.dt,
+            periods_per_frame=settings.periods_per_frame,
             handlebar=settings.handlebar,
-        )  # fmt: skip
+        )
         self.names = LOOP_SIGNALS + tuple(stepper.names)
         self.ring = SampleRing(settings.capacity, len(self.names), shared=settings.shared_ring)
         self._validity = settings.validity
@@ -265,11 +277,17 @@ class RealtimeRunner:
         self._settings = fused.RunnerSettings(
             linger=max(1, round(settings.linger * rate)),
             start_timeout=max(1, round(settings.start_timeout * rate)),
-            heartbeat_every=max(1, round(0.1 * rate)), dt=self.dt, duration=self._duration,
-            **_row_positions(tuple(stepper.names)), roll=roll, speed_low=speed_low,
-            speed_high=speed_high, datagrams=link.datagrams,
-            armed=not settings.wait_for_arm, warm=settings.warm,
-        )  # fmt: skip
+            heartbeat_every=max(1, round(0.1 * rate)),
+            dt=self.dt,
+            duration=self._duration,
+            **_row_positions(tuple(stepper.names)),
+            roll=roll,
+            speed_low=speed_low,
+            speed_high=speed_high,
+            datagrams=link.datagrams,
+            armed=not settings.wait_for_arm,
+            warm=settings.warm,
+        )
         self._warm_on = settings.warm
         self._woke = math.nan
         self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(self._settings))
@@ -288,12 +306,21 @@ class RealtimeRunner:
         heartbeat_frame, heartbeat_at = link.frame_buffer(hb.frame_id, hb.length)
         position = codecs.position
         positions = fused.SignalPositions(
-            position(st, "angle"), position(st, "current"), position(st, "counter"),
-            position(st, "drive_fault"), position(es, "estop_signal"),
-            position(cmd, "current_command"), position(cmd, "enable"), position(cmd, "counter"),
-            position(hb, "state"), position(hb, "fault"), position(hb, "counter"),
-            command_at, heartbeat_at, len(LOOP_SIGNALS),
-        )  # fmt: skip
+            position(st, "angle"),
+            position(st, "current"),
+            position(st, "counter"),
+            position(st, "drive_fault"),
+            position(es, "estop_signal"),
+            position(cmd, "current_command"),
+            position(cmd, "enable"),
+            position(cmd, "counter"),
+            position(hb, "state"),
+            position(hb, "fault"),
+            position(hb, "counter"),
+            command_at,
+            heartbeat_at,
+            len(LOOP_SIGNALS),
+        )
         safety, limits = self.safety.compiled_parts
         ring, head = self.ring.arrays
         if stepper.compiled_parts is not None:
@@ -301,16 +328,27 @@ class RealtimeRunner:
         else:
             stack_row = np.zeros(len(stepper.names))
         return PeriodArrays(
-            runner=r, positions=positions, safety=safety, limits=limits,
-            status=codec_table(st), estop=codec_table(es), command=codec_table(cmd),
-            heartbeat=codec_table(hb), status_values=np.zeros(len(st.names)),
-            estop_values=np.zeros(len(es.names)), command_values=np.zeros(len(cmd.names)),
+            runner=r,
+            positions=positions,
+            safety=safety,
+            limits=limits,
+            status=codec_table(st),
+            estop=codec_table(es),
+            command=codec_table(cmd),
+            heartbeat=codec_table(hb),
+            status_values=np.zeros(len(st.names)),
+            estop_values=np.zeros(len(es.names)),
+            command_values=np.zeros(len(cmd.names)),
             heartbeat_values=np.zeros(len(hb.names)),
             rx=np.zeros((fused.RX_FRAMES, fused.RX_BYTES), dtype=np.uint8),
             rx_length=np.zeros(fused.RX_FRAMES, dtype=np.int64),
-            rx_id=np.zeros(fused.RX_FRAMES, dtype=np.int64), command_frame=command_frame,
-            heartbeat_frame=heartbeat_frame, stack_row=stack_row, ring=ring, ring_head=head,
-        )  # fmt: skip
+            rx_id=np.zeros(fused.RX_FRAMES, dtype=np.int64),
+            command_frame=command_frame,
+            heartbeat_frame=heartbeat_frame,
+            stack_row=stack_row,
+            ring=ring,
+            ring_head=head,
+        )
 
     def _compile(self) -> None:
         """Compile (or load) every function of the period for its arrays' types, and keep
@@ -603,9 +641,15 @@ class RealtimeRunner:
             self._bad_reported = bad
         s = self.safety
         return RunCounters(
-            self.status_frames, s.frames_lost, s.frames_stale, self.send_errors, s.state.name,
-            s.fault.name, s.describe(), s.fault_time,
-        )  # fmt: skip
+            self.status_frames,
+            s.frames_lost,
+            s.frames_stale,
+            self.send_errors,
+            s.state.name,
+            s.fault.name,
+            s.describe(),
+            s.fault_time,
+        )
 
 
 PROFILE_STAGES = ("read", "control", "send", "rest")

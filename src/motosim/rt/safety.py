@@ -63,8 +63,14 @@ from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.e2e import E2EConfig, E2EState, E2EStatus, FieldsStruct, e2e_check, e2e_restart
 
 __all__ = [
-    "SAFETY_RANGES", "STATUS_E2E", "Fault", "SafetyLimits", "SafetyStage", "State", "fault_reason",
-]  # fmt: skip
+    "SAFETY_RANGES",
+    "STATUS_E2E",
+    "Fault",
+    "SafetyLimits",
+    "SafetyStage",
+    "State",
+    "fault_reason",
+]
 
 
 class State(IntEnum):
@@ -119,14 +125,20 @@ def fault_reason(fault: int, *, watchdog_periods: int) -> str:
 
 
 SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
-    "max_current": (0.01, 1000.0, "A"), "max_slew": (0.1, 1e9, "A/s"),
-    "max_speed": (0.01, 1e4, "rad/s"), "speed_band": (0.01, 1e4, "rad/s"),
-    "soft_stop": (0.01, 100.0, "rad"), "hard_stop": (0.01, 100.0, "rad"),
-    "end_stop_gain": (0.0, 1e4, "A/rad"), "hands_off_torque": (0.0, 100.0, "N*m"),
-    "hands_off_time": (0.001, 3600.0, "s"), "hands_off_gain": (0.0, 1.0, ""),
-    "fade_in": (0.001, 60.0, "s"), "watchdog_periods": (1, 10_000, ""),
+    "max_current": (0.01, 1000.0, "A"),
+    "max_slew": (0.1, 1e9, "A/s"),
+    "max_speed": (0.01, 1e4, "rad/s"),
+    "speed_band": (0.01, 1e4, "rad/s"),
+    "soft_stop": (0.01, 100.0, "rad"),
+    "hard_stop": (0.01, 100.0, "rad"),
+    "end_stop_gain": (0.0, 1e4, "A/rad"),
+    "hands_off_torque": (0.0, 100.0, "N*m"),
+    "hands_off_time": (0.001, 3600.0, "s"),
+    "hands_off_gain": (0.0, 1.0, ""),
+    "fade_in": (0.001, 60.0, "s"),
+    "watchdog_periods": (1, 10_000, ""),
     "frozen_angle": (0.001, 10.0, "rad"),
-}  # fmt: skip
+}
 """Admitted interval (low, high, SI unit) of each safety limit. The lower bounds are far
 below any usable limit (10 mA, 0.1 A/s, 10 mrad/s, 1 ms): a smaller positive value is a typo
 or a unit slip and would make the stage trip or stall at once; the upper bounds are far beyond
@@ -241,9 +253,12 @@ def safety_params(
         else (float(handlebar.torque_per_amp), 2.0 * handlebar.beta_s, float(handlebar.beta_eq))
     )
     derived = (
-        float(limits.watchdog_periods * periods_per_frame), float(dt), float(periods_per_frame),
-        handlebar is not None, *monitor,
-    )  # fmt: skip
+        float(limits.watchdog_periods * periods_per_frame),
+        float(dt),
+        float(periods_per_frame),
+        handlebar is not None,
+        *monitor,
+    )
     return SafetyParams(*(float(getattr(limits, name)) for name in _LIMITS), *derived)
 
 
@@ -291,9 +306,25 @@ class SafetyState(structref.StructRefProxy):
 
     def __new__(cls) -> "SafetyState":
         made: SafetyState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls, int(State.IDLE), int(Fault.NONE), math.nan, 0.0, 0.0, 0.0, math.nan, False, 0.0,
-            0.0, False, math.nan, 0.0, 0.0, 0, 0, E2EState(STATUS_E2E),
-        )  # fmt: skip
+            cls,
+            int(State.IDLE),
+            int(Fault.NONE),
+            math.nan,
+            0.0,
+            0.0,
+            0.0,
+            math.nan,
+            False,
+            0.0,
+            0.0,
+            False,
+            math.nan,
+            0.0,
+            0.0,
+            0,
+            0,
+            E2EState(STATUS_E2E),
+        )
         return made
 
 
@@ -304,10 +335,23 @@ structref.define_proxy(SafetyState, SafetyStateType, [*SafetySnapshot._fields, "
 def safety_snapshot(s: Any) -> SafetySnapshot:
     """The stage's state fields now, for Python."""
     return SafetySnapshot(
-        s.state, s.fault, s.fault_time, s.t, s.envelope, s.last, s.heard, s.fresh,
-        s.missing, s.quiet, s.hands_off, s.ref_theta, s.ref_torque, s.free, s.lost,
+        s.state,
+        s.fault,
+        s.fault_time,
+        s.t,
+        s.envelope,
+        s.last,
+        s.heard,
+        s.fresh,
+        s.missing,
+        s.quiet,
+        s.hands_off,
+        s.ref_theta,
+        s.ref_torque,
+        s.free,
+        s.lost,
         s.stale,
-    )  # fmt: skip
+    )
 
 
 @njit(cache=True)
@@ -695,8 +739,11 @@ class SafetyStage:
         after the last step).
         """
         t = math.nan if now is None else float(now)
-        return bool(safety_status_frame(self._s, self._p, bool(checksum_ok), float(counter),
-                                        bool(drive_fault), t))  # fmt: skip
+        return bool(
+            safety_status_frame(
+                self._s, self._p, bool(checksum_ok), float(counter), bool(drive_fault), t
+            )
+        )
 
     def silent(self) -> None:
         """The watchdog's whole time passed without a valid status frame (a bus-paced loop's
@@ -730,9 +777,10 @@ class SafetyStage:
         """
         t = math.nan if now is None else float(now)
         return float(
-            safety_step(self._s, self._p, float(command), float(theta), float(omega),
-                        float(tau_hat), t)
-        )  # fmt: skip
+            safety_step(
+                self._s, self._p, float(command), float(theta), float(omega), float(tau_hat), t
+            )
+        )
 
 
 @njit(cache=True)

@@ -271,15 +271,26 @@ class RealtimeSession:
             self._platform_can(platform)
         rate = c.rate
         settings = run.RunSettings(
-            c.limits, rate, duration=c.periods / rate, periods_per_frame=c.model.measure_every,
+            c.limits,
+            rate,
+            duration=c.periods / rate,
+            periods_per_frame=c.model.measure_every,
             capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
-            shared_ring=True, wait_for_arm=c.live is not None, warm=c.warm,
-            handlebar=c.inputs.nominal_handlebar, validity=validity_limits(sc.motorcycle.speed),
-        )  # fmt: skip
+            shared_ring=True,
+            wait_for_arm=c.live is not None,
+            warm=c.warm,
+            handlebar=c.inputs.nominal_handlebar,
+            validity=validity_limits(sc.motorcycle.speed),
+        )
         self._runner = run.RealtimeRunner(
-            stack, self._link, handlebar_codecs(), settings, platform=platform, clock=self.clock,
+            stack,
+            self._link,
+            handlebar_codecs(),
+            settings,
+            platform=platform,
+            clock=self.clock,
             now=self.clock.now,
-        )  # fmt: skip
+        )
         if self._estop_asked:  # asked for while the runner was built
             self.emergency_stop()
         elif self._stop_asked:
@@ -294,9 +305,12 @@ class RealtimeSession:
 
         sender = None if c.platform_udp is None else PlatformSender(c.platform_udp)
         platform = PlatformOutput(
-            c.platform, 1.0 / c.rate, names, sender=sender,
+            c.platform,
+            1.0 / c.rate,
+            names,
+            sender=sender,
             send_every=max(1, round(c.rate / 100.0)),
-        )  # fmt: skip
+        )
         self._platform = platform
         self._closers.append(lambda: _close_sender(platform))
         return platform
@@ -318,9 +332,17 @@ class RealtimeSession:
         if c.live is not None:
             self._buttons, controls = multiprocessing.get_context("spawn").Pipe(duplex=False)
         settings = RecorderSettings(
-            runner.ring.handle, runner.names, c.folder, c.metadata, c.overwrite,
-            c.inputs.nominal_handlebar.torque_per_amp, c.rate, c.telemetry, c.live, controls,
-        )  # fmt: skip
+            runner.ring.handle,
+            runner.names,
+            c.folder,
+            c.metadata,
+            c.overwrite,
+            c.inputs.nominal_handlebar.torque_per_amp,
+            c.rate,
+            c.telemetry,
+            c.live,
+            controls,
+        )
         self._recorder = Recorder(settings)
         url = self._recorder.start()
         if controls is not None:
@@ -381,10 +403,14 @@ class RealtimeSession:
         loop: RateLoop
         if c.pace == "bus":
             loop = FramePacedLoop(
-                rate, clock, runner.wait_status, timeout=runner.watchdog_time,
-                first_timeout=runner.first_timeout, capacity=capacity,
+                rate,
+                clock,
+                runner.wait_status,
+                timeout=runner.watchdog_time,
+                first_timeout=runner.first_timeout,
+                capacity=capacity,
                 received=lambda: runner.status_frames,
-            )  # fmt: skip
+            )
         elif c.wait == "compiled" and runner.compile_wait():
             # the wait's end, the bus read and the period in one compiled call
             loop = RateLoop(rate, clock, capacity=capacity, woke=runner.woke)

@@ -41,16 +41,37 @@ from motosim.sim.stack import (
 )
 
 __all__ = [
-    "RESULT_SIGNALS", "STACK_SIGNALS", "CompiledStack", "LoopState", "StackParts", "compiled",
-    "result_block", "stack_period", "stack_reset",
-]  # fmt: skip
+    "RESULT_SIGNALS",
+    "STACK_SIGNALS",
+    "CompiledStack",
+    "LoopState",
+    "StackParts",
+    "compiled",
+    "result_block",
+    "stack_period",
+    "stack_reset",
+]
 
 Array = NDArray[np.float64]
 
 STACK_SIGNALS = (
-    "tau_r_hat", "theta_h_meas", "theta_h_dot_hat", "i_m", "delta", "v_x", "v_y", "psi_dot",
-    "phi_dot", "delta_dot", "phi", "F_yr", "F_yf", "psi", "x", "y",
-)  # fmt: skip
+    "tau_r_hat",
+    "theta_h_meas",
+    "theta_h_dot_hat",
+    "i_m",
+    "delta",
+    "v_x",
+    "v_y",
+    "psi_dot",
+    "phi_dot",
+    "delta_dot",
+    "phi",
+    "F_yr",
+    "F_yf",
+    "psi",
+    "x",
+    "y",
+)
 """The stack's row: its estimate, the measurement it used, its command [A] and the virtual
 motorcycle's states (names of :mod:`motosim.signals`)."""
 

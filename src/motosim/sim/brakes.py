@@ -168,20 +168,42 @@ def design_brakes(
     >>> settings.slip_target, round(settings.min_rear_load)  # 5 % of the static rear load [N]
     (0.1, 65)
     """
-    check_number(slip_target, where="brakes: slip_target", lower=0.0, upper=0.5,
-                 lower_closed=False, upper_closed=False)  # fmt: skip
+    check_number(
+        slip_target,
+        where="brakes: slip_target",
+        lower=0.0,
+        upper=0.5,
+        lower_closed=False,
+        upper_closed=False,
+    )
     check_number(time_constant, where="brakes: time_constant", lower=1e-3, upper=1.0, unit="s")
-    check_number(min_rear_load_share, where="brakes: min_rear_load_share", lower=0.0,
-                 upper=1.0, upper_closed=False)  # fmt: skip
-    check_number(rear_load_band_share, where="brakes: rear_load_band_share", lower=0.0,
-                 upper=1.0, lower_closed=False)  # fmt: skip
+    check_number(
+        min_rear_load_share,
+        where="brakes: min_rear_load_share",
+        lower=0.0,
+        upper=1.0,
+        upper_closed=False,
+    )
+    check_number(
+        rear_load_band_share,
+        where="brakes: rear_load_band_share",
+        lower=0.0,
+        upper=1.0,
+        lower_closed=False,
+    )
     check_number(load_lead, where="brakes: load_lead", lower=0.0, upper=0.5, unit="s")
     check_number(min_speed, where="brakes: min_speed", lower=0.5, upper=20.0, unit="m/s")
     if override_torque != math.inf:
-        check_number(override_torque, where="brakes: override_torque", lower=0.0,
-                     lower_closed=False, unit="N*m")  # fmt: skip
-    check_number(rise_rate, where="brakes: rise_rate", lower=0.0, lower_closed=False,
-                 upper=1e9, unit="N*m/s")  # fmt: skip
+        check_number(
+            override_torque,
+            where="brakes: override_torque",
+            lower=0.0,
+            lower_closed=False,
+            unit="N*m",
+        )
+    check_number(
+        rise_rate, where="brakes: rise_rate", lower=0.0, lower_closed=False, upper=1e9, unit="N*m/s"
+    )
     from motosim.model.tyred import observe, upright_state
 
     p = dict(zip(gen.PARAMETERS, (float(v) for v in model.p), strict=True))
@@ -291,10 +313,18 @@ def brake_torques(
         front = demand_front
         if demand_front < settings.override_torque:
             front, state[BrakeState.front_slip_integral] = _wheel(
-                demand_front, applied_front, state[BrakeState.front_slip_integral],
-                -loads.kappa_f, -loads.F_xf, speed, settings.radius_front,
-                settings.inertia_front, settings.slip_target, settings, dt,
-            )  # fmt: skip
+                demand_front,
+                applied_front,
+                state[BrakeState.front_slip_integral],
+                -loads.kappa_f,
+                -loads.F_xf,
+                speed,
+                settings.radius_front,
+                settings.inertia_front,
+                settings.slip_target,
+                settings,
+                dt,
+            )
             # the rear load a lead time ahead, from its rate
             last = state[BrakeState.F_zr]
             rate = (loads.F_zr - last) / dt if last > 0.0 else 0.0
@@ -306,10 +336,18 @@ def brake_torques(
         rear = demand_rear
         if demand_rear < settings.override_torque:
             rear, state[BrakeState.rear_slip_integral] = _wheel(
-                demand_rear, applied_rear, state[BrakeState.rear_slip_integral],
-                -loads.kappa_r, -loads.F_xr, speed, settings.radius_rear,
-                settings.inertia_rear, settings.slip_target, settings, dt,
-            )  # fmt: skip
+                demand_rear,
+                applied_rear,
+                state[BrakeState.rear_slip_integral],
+                -loads.kappa_r,
+                -loads.F_xr,
+                speed,
+                settings.radius_rear,
+                settings.inertia_rear,
+                settings.slip_target,
+                settings,
+                dt,
+            )
     state[BrakeState.F_zr] = loads.F_zr
     state[BrakeState.front_brake_torque] = front
     state[BrakeState.rear_brake_torque] = rear

@@ -436,22 +436,42 @@ class RigData(NamedTuple):
 def new_world(scenario: Scenario) -> RigData:
     """The world's states at the start of a run of ``scenario``."""
     return RigData(
-        np.zeros(3), np.zeros(1, dtype=np.int64), np.array([scenario.motorcycle.speed]),
+        np.zeros(3),
+        np.zeros(1, dtype=np.int64),
+        np.array([scenario.motorcycle.speed]),
         new_brake_state(),
-    )  # fmt: skip
+    )
 
 
 _NO_MULTIBODY_RIDER = MultibodyRider(
-    speeds=np.array([1.0, 2.0]), leans=np.zeros(2), curvature=np.zeros((2, 2)),
-    x_ss=np.zeros((2, 2, 15)), tau_ss=np.zeros((2, 2)), drive_ss=np.zeros((2, 2)),
-    K=np.zeros((2, 2, 17)), speed_gain=0.0, preview=0.0, max_torque=0.0, max_drive_torque=0.0,
-)  # fmt: skip
+    speeds=np.array([1.0, 2.0]),
+    leans=np.zeros(2),
+    curvature=np.zeros((2, 2)),
+    x_ss=np.zeros((2, 2, 15)),
+    tau_ss=np.zeros((2, 2)),
+    drive_ss=np.zeros((2, 2)),
+    K=np.zeros((2, 2, 17)),
+    speed_gain=0.0,
+    preview=0.0,
+    max_torque=0.0,
+    max_drive_torque=0.0,
+)
 """The rig's multibody rider when the motorcycle is Sharp's (never read)."""
 _NO_BRAKES = BrakeSettings(
-    enabled=False, slip_target=0.1, time_constant=1.0, radius_front=1.0, radius_rear=1.0,
-    inertia_front=1.0, inertia_rear=1.0, min_rear_load=0.0, rear_load_band=1.0, load_lead=0.0,
-    min_speed=0.0, override_torque=math.inf, rise_rate=math.inf,
-)  # fmt: skip
+    enabled=False,
+    slip_target=0.1,
+    time_constant=1.0,
+    radius_front=1.0,
+    radius_rear=1.0,
+    inertia_front=1.0,
+    inertia_rear=1.0,
+    min_rear_load=0.0,
+    rear_load_band=1.0,
+    load_lead=0.0,
+    min_speed=0.0,
+    override_torque=math.inf,
+    rise_rate=math.inf,
+)
 """The brakes of a run that does not modulate them."""
 
 
@@ -489,17 +509,22 @@ def perturb_rig(rig: RigModel, inputs: RunInputs, *, rng: np.random.Generator) -
     sensor = inputs.scenario.sensor.torque
     if sensor is not None and sensor.noise:  # after the current's noise, as build_rig
         rig.torque_error[:] = sensor.offset
-        np.add(rig.torque_error, rng.normal(0.0, sensor.noise, rig.torque_error.size),
-               out=rig.torque_error)  # fmt: skip
+        np.add(
+            rig.torque_error,
+            rng.normal(0.0, sensor.noise, rig.torque_error.size),
+            out=rig.torque_error,
+        )
     return rig
 
 
 def rig_key(scenario: Scenario) -> Scenario:
     """What a run's rig depends on besides its true handlebar and its seed: two runs with
     equal keys (and equal motorcycles and tables) share a rig up to :func:`perturb_rig`."""
-    return dataclasses.replace(scenario, seed=0, handlebar=dataclasses.replace(
-        scenario.handlebar, inertia_factor=1.0, damping_factor=1.0
-    ))  # fmt: skip
+    return dataclasses.replace(
+        scenario,
+        seed=0,
+        handlebar=dataclasses.replace(scenario.handlebar, inertia_factor=1.0, damping_factor=1.0),
+    )
 
 
 def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array:
@@ -630,9 +655,13 @@ def _placeholder_gains(rider: MultibodyRider) -> RiderGains:
     """A two-speed schedule for the linear-model rider slots of a rig whose rider is the
     multibody one (never read)."""
     return RiderGains(
-        np.array([1.0, 2.0]), np.zeros((2, 10)), np.zeros((2, 8)), np.zeros(2),
-        rider.preview, rider.max_torque,
-    )  # fmt: skip
+        np.array([1.0, 2.0]),
+        np.zeros((2, 10)),
+        np.zeros((2, 8)),
+        np.zeros(2),
+        rider.preview,
+        rider.max_torque,
+    )
 
 
 def _multibody_period_sharp(
@@ -656,9 +685,15 @@ def _multibody_period_multibody(
     if braking:  # the throttle then holds the speed the brakes leave
         world.target_speed[0] = data.motorcycle[MotorcycleState.v_x]
     tau, drive, idx, e_y = multibody_rider_torque(
-        rig.multibody_rider, data.multibody, loads, int(world.path_index[0]), rig.path,
-        rig.path_ds, world.target_speed[0], braking,
-    )  # fmt: skip
+        rig.multibody_rider,
+        data.multibody,
+        loads,
+        int(world.path_index[0]),
+        rig.path,
+        rig.path_ds,
+        world.target_speed[0],
+        braking,
+    )
     world.path_index[0] = idx
     u[MotorcycleInput.drive_torque] += drive
     front, rear = brake_torques(
@@ -736,12 +771,21 @@ def _run_chunk(
             tau_rider += rig.rider_probe[k]
         elif rig.virtual_rider:
             tau_rider, idx, e_y = rider_torque(
-                z[: MotorcycleState.v_x], z[MotorcycleState.v_x], z[MotorcycleState.psi],
-                z[MotorcycleState.x], z[MotorcycleState.y], int(world.path_index[0]), rig.path,
+                z[: MotorcycleState.v_x],
+                z[MotorcycleState.v_x],
+                z[MotorcycleState.psi],
+                z[MotorcycleState.x],
+                z[MotorcycleState.y],
+                int(world.path_index[0]),
+                rig.path,
                 rig.path_ds,
-                rig.rider_speeds, rig.rider_K, rig.rider_x_ss, rig.rider_tau_ss,
-                rig.rider_limits[0], rig.rider_limits[1],
-            )  # fmt: skip
+                rig.rider_speeds,
+                rig.rider_K,
+                rig.rider_x_ss,
+                rig.rider_tau_ss,
+                rig.rider_limits[0],
+                rig.rider_limits[1],
+            )
             world.path_index[0] = idx
             tau_rider += rig.rider_probe[k]
         else:
@@ -775,9 +819,14 @@ def _run_chunk(
         # the stack: command, estimate, virtual motorcycle
         told = tau_rider + rig.torque_error[k] if rig.sensed else tau_rider
         i_cmd = step(
-            stack, data, theta_meas, rig.current_noise[k], told, rig.force[k],
+            stack,
+            data,
+            theta_meas,
+            rig.current_noise[k],
+            told,
+            rig.force[k],
             rig.side_force[k],
-        )  # fmt: skip
+        )
         o[_COL.theta_h_meas] = data.held[Held.theta_h_meas]
         o[_COL.theta_h_dot_hat] = data.held[Held.theta_h_dot_hat]
         o[_COL.tau_r_hat] = data.held[Held.tau_r_hat]
@@ -811,9 +860,14 @@ compile)."""
 
 @njit(cache=True, **_UNREFERENCED)  # type: ignore[untyped-decorator]
 def _run_chunk_unreferenced(
-    k0: int, out: Array, stack: StackModel, data: StackData, rig: RigModel, world: RigData,
+    k0: int,
+    out: Array,
+    stack: StackModel,
+    data: StackData,
+    rig: RigModel,
+    world: RigData,
     limits: Array,
-) -> int:  # fmt: skip
+) -> int:
     """:func:`_run_chunk` compiled without numba's reference counting, for a loop that
     allocates nothing (Sharp 1971's): the arrays the step takes from its named tuples are
     then not counted in and out at every period (see "Compiled without reference counting"

@@ -22,8 +22,11 @@ __all__ = [
     "resolve_hands",
 ]
 
-_LIMITS = (("inertia", 1.0, "kg*m^2"), ("damping", 100.0, "N*m*s/rad"),
-           ("stiffness", 1000.0, "N*m/rad"))  # fmt: skip
+_LIMITS = (
+    ("inertia", 1.0, "kg*m^2"),
+    ("damping", 100.0, "N*m*s/rad"),
+    ("stiffness", 1000.0, "N*m/rad"),
+)
 """Largest value of each parameter a scenario accepts, an order of magnitude above the firm
 grip's: beyond, a value is a unit slip."""
 

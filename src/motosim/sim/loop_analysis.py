@@ -189,8 +189,11 @@ class StackLoop:
         output row c, A_open = A - b c and L = -c (zI - A_open)^-1 b. (The closed-loop
         response from the same input, c (zI - A)^-1 b = -L / (1 + L), is not the loop gain.)
         """
-        row = {LoopInput.current: self.current, LoopInput.estimate: self.estimate,
-               LoopInput.angle: self.measured}[LoopInput(column)]  # fmt: skip
+        row = {
+            LoopInput.current: self.current,
+            LoopInput.estimate: self.estimate,
+            LoopInput.angle: self.measured,
+        }[LoopInput(column)]
         n = self.A.shape[0]
         b = self.B[:, column]
         A_open = self.A - np.outer(b, row)
@@ -281,9 +284,18 @@ def stack_loop(
     c = model.prediction
     predicted = ff.cancellation > 0.0 and c.lead > 0.0
     delayed = dl.age > 0.0  # the stack accounts for a delay
-    sizes = {"plant": 2, "theta_prev": 1, "rate_prev": 1, "observer": 2, "estimate": 1,
-             "prediction": 4 if predicted else 0, "controller": nc, "motorcycle": _LATERAL,
-             "before": 2 if bus > 0.0 else 0, "carried": 1 if delayed else 0}  # fmt: skip
+    sizes = {
+        "plant": 2,
+        "theta_prev": 1,
+        "rate_prev": 1,
+        "observer": 2,
+        "estimate": 1,
+        "prediction": 4 if predicted else 0,
+        "controller": nc,
+        "motorcycle": _LATERAL,
+        "before": 2 if bus > 0.0 else 0,
+        "carried": 1 if delayed else 0,
+    }
     start, n = {}, 0
     for name, size in sizes.items():
         start[name] = n
@@ -349,9 +361,13 @@ def stack_loop(
     A[start["rate_prev"]] = z1
     for r in range(2):
         A[start["observer"] + r] = (
-            Phi[r, 0] * x0 + Phi[r, 1] * x1 + Gamma[r, 0] * told + Gamma[r, 1] * rate_used
-            + Gamma[r, 2] * measured + Gamma[r, 3] * E
-        )  # fmt: skip
+            Phi[r, 0] * x0
+            + Phi[r, 1] * x1
+            + Gamma[r, 0] * told
+            + Gamma[r, 1] * rate_used
+            + Gamma[r, 2] * measured
+            + Gamma[r, 3] * E
+        )
         # the estimator is told the measured current
         _inputs(B, start["observer"] + r, 0.0, Gamma[r, 0] * share, cancel)
     A[start["estimate"]] = estimate
@@ -373,9 +389,17 @@ def stack_loop(
     B[:, LoopInput.angle] = A[:, n]
     own, own_input = held_motorcycle(Av, model.Bv.copy(), hands)
     return StackLoop(
-        A[:, :n].copy(), B, command[:n], rate[:n], theta[:n], cancelled[:n], h, own,
-        own_input, measured[:n],
-    )  # fmt: skip
+        A[:, :n].copy(),
+        B,
+        command[:n],
+        rate[:n],
+        theta[:n],
+        cancelled[:n],
+        h,
+        own,
+        own_input,
+        measured[:n],
+    )
 
 
 def estimate_filter(
@@ -858,11 +882,21 @@ def analyse_design(
 
     def build(speed: float, lead: float = 0.0) -> StackModel:
         return design_stack(
-            sharp, estimator, controller, control_rate=rate, measurement_rate=rate,
-            lipschitz=300.0, max_current=30.0, speed=speed, handlebar=designed_for,
-            rider_feedforward=True, reference_feedforward=True, prediction_lead=lead,
-            measurement_delay=delay if account else 0.0, hands=hands,
-        )  # fmt: skip
+            sharp,
+            estimator,
+            controller,
+            control_rate=rate,
+            measurement_rate=rate,
+            lipschitz=300.0,
+            max_current=30.0,
+            speed=speed,
+            handlebar=designed_for,
+            rider_feedforward=True,
+            reference_feedforward=True,
+            prediction_lead=lead,
+            measurement_delay=delay if account else 0.0,
+            hands=hands,
+        )
 
     out = []
     predict = default_prediction(rate) if prediction is None else prediction

@@ -157,9 +157,14 @@ def _butterworth_highpass(cutoff: float, dt: float) -> list[_Section]:
     for zeta in (math.cos(3.0 * math.pi / 8.0), math.cos(math.pi / 8.0)):
         a0 = k * k + 2.0 * zeta * w * k + w * w
         out.append(
-            _Section(k * k / a0, -2.0 * k * k / a0, k * k / a0, 2.0 * (w * w - k * k) / a0,
-                     (k * k - 2.0 * zeta * w * k + w * w) / a0)
-        )  # fmt: skip
+            _Section(
+                k * k / a0,
+                -2.0 * k * k / a0,
+                k * k / a0,
+                2.0 * (w * w - k * k) / a0,
+                (k * k - 2.0 * zeta * w * k + w * w) / a0,
+            )
+        )
     return out
 
 

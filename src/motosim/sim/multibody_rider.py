@@ -312,8 +312,9 @@ def design_multibody_rider(
         raise MotosimError(f"multibody rider: speeds = {speeds!r}; expected values in [1, 100] m/s")
     if l_grid[0] != 0.0 or l_grid[-1] >= math.radians(70.0):
         raise MotosimError(f"multibody rider: leans = {leans!r}; expected 0 first, below 70 deg")
-    check_number(friction, where="multibody rider: friction", lower=0.0, upper=3.0,
-                 lower_closed=False)  # fmt: skip
+    check_number(
+        friction, where="multibody rider: friction", lower=0.0, upper=3.0, lower_closed=False
+    )
     for name, value, unit in (
         ("lateral_tolerance", lateral_tolerance, "m"),
         ("course_tolerance", course_tolerance, "rad"),
@@ -323,8 +324,14 @@ def design_multibody_rider(
         ("speed_gain", speed_gain, "N*m*s/m"),
         ("max_drive_torque", max_drive_torque, "N*m"),
     ):
-        check_number(value, where=f"multibody rider: {name}", lower=0.0, lower_closed=False,
-                     upper=1e6, unit=unit)  # fmt: skip
+        check_number(
+            value,
+            where=f"multibody rider: {name}",
+            lower=0.0,
+            lower_closed=False,
+            upper=1e6,
+            unit=unit,
+        )
     check_number(preview, where="multibody rider: preview", lower=0.0, upper=10.0, unit="s")
     nv, nl = v_grid.size, l_grid.size
     curvature = np.empty((nv, nl))
@@ -343,10 +350,18 @@ def design_multibody_rider(
             x_ss[i, j] = x0[_STATES]
             tau_ss[i, j], drive_ss[i, j] = tau, drive
     return MultibodyRider(
-        speeds=v_grid, leans=l_grid, curvature=curvature, x_ss=x_ss, tau_ss=tau_ss,
-        drive_ss=drive_ss, K=K, speed_gain=float(speed_gain), preview=float(preview),
-        max_torque=float(max_torque), max_drive_torque=float(max_drive_torque),
-    )  # fmt: skip
+        speeds=v_grid,
+        leans=l_grid,
+        curvature=curvature,
+        x_ss=x_ss,
+        tau_ss=tau_ss,
+        drive_ss=drive_ss,
+        K=K,
+        speed_gain=float(speed_gain),
+        preview=float(preview),
+        max_torque=float(max_torque),
+        max_drive_torque=float(max_drive_torque),
+    )
 
 
 @njit(cache=True)
@@ -394,9 +409,11 @@ def _bracket_lean(curvature: Array, i: int, w: float, value: float) -> tuple[int
 def _blend(table: Array, i: int, j: int, weights: tuple[float, float, float, float]) -> float:
     """The bilinear blend of ``table``'s corners (i, j) .. (i + 1, j + 1)."""
     value: float = (
-        weights[0] * table[i, j] + weights[1] * table[i, j + 1]
-        + weights[2] * table[i + 1, j] + weights[3] * table[i + 1, j + 1]
-    )  # fmt: skip
+        weights[0] * table[i, j]
+        + weights[1] * table[i, j + 1]
+        + weights[2] * table[i + 1, j]
+        + weights[3] * table[i + 1, j + 1]
+    )
     return value
 
 

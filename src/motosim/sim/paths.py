@@ -228,10 +228,12 @@ class RoadGeometry:
             ("curv_start", self.curv_start, MAX_CURVATURE),
             ("curv_end", self.curv_end, MAX_CURVATURE),
         ):
-            if not (isinstance(value, int | float) and math.isfinite(value)
-                    and abs(value) <= bound):  # fmt: skip
-                raise MotosimError(f"{name} = {value!r}; expected a finite number within "
-                                   f"+-{bound:g}")  # fmt: skip
+            if not (
+                isinstance(value, int | float) and math.isfinite(value) and abs(value) <= bound
+            ):
+                raise MotosimError(
+                    f"{name} = {value!r}; expected a finite number within +-{bound:g}"
+                )
         if not (math.isfinite(self.length) and 0.0 < self.length <= MAX_ROAD_LENGTH):
             raise MotosimError(
                 f"length = {self.length!r}; expected a finite length > 0 and at most "
@@ -281,8 +283,9 @@ class RoadGeometry:
             x, y = self._cubic_pose(self.poly, u)[:2]
             return x, y
         n = max(1, math.ceil(self.length / _STEP))
-        grid = np.union1d(np.concatenate([[0.0], np.clip(u, 0.0, None)]),
-                          np.linspace(0.0, self.length, n + 1))  # fmt: skip
+        grid = np.union1d(
+            np.concatenate([[0.0], np.clip(u, 0.0, None)]), np.linspace(0.0, self.length, n + 1)
+        )
         a, b = grid[:-1], grid[1:]
         half = 0.5 * (b - a)
         nodes = 0.5 * (a + b)[:, None] + half[:, None] * _NODES[None, :]
@@ -314,8 +317,12 @@ class RoadGeometry:
         pu, pv, du, dv, ddu, ddv = _poly_values(poly, p)
         c, s = math.cos(self.hdg), math.sin(self.hdg)
         kappa: Array = (du * ddv - dv * ddu) / np.hypot(du, dv) ** 3
-        return (self.x + c * pu - s * pv, self.y + s * pu + c * pv,
-                self.hdg + np.arctan2(dv, du), kappa)  # fmt: skip
+        return (
+            self.x + c * pu - s * pv,
+            self.y + s * pu + c * pv,
+            self.hdg + np.arctan2(dv, du),
+            kappa,
+        )
 
 
 def _poly_values(poly: tuple[float, ...], p: Array) -> tuple[Array, ...]:

@@ -165,9 +165,13 @@ def design_rider(
     if not (math.isfinite(preview) and preview >= 0):
         raise MotosimError(f"rider preview = {preview!r}; expected a finite time >= 0 [s]")
     K, x_ss, tau_ss = _schedule(
-        p, tuple(float(v) for v in grid), lateral_tolerance, course_tolerance, roll_tolerance,
+        p,
+        tuple(float(v) for v in grid),
+        lateral_tolerance,
+        course_tolerance,
+        roll_tolerance,
         torque_scale,
-    )  # fmt: skip
+    )
     return RiderGains(grid, K, x_ss, tau_ss, float(preview), float(max_torque))
 
 

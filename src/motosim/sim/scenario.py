@@ -149,8 +149,15 @@ MAX_OFFSET = 100.0
 """Largest lateral offset or amplitude of a path [m]: a road is tens of metres wide."""
 
 
-def _check(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
-           low_open: bool = False, unit: str = "") -> None:  # fmt: skip
+def _check(
+    name: str,
+    value: float,
+    *,
+    low: float = -math.inf,
+    high: float = math.inf,
+    low_open: bool = False,
+    unit: str = "",
+) -> None:
     """Refuse a number outside [low, high] (or (low, high]) naming it (one-line error).
 
     A positive quantity (``low = 0`` open) must be at least :data:`SMALLEST`.
@@ -521,9 +528,12 @@ class SlalomPath:
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
         return paths.slalom(
-            self.amplitude, wavelength=self.wavelength, cycles=self.cycles, start=self.start,
+            self.amplitude,
+            wavelength=self.wavelength,
+            cycles=self.cycles,
+            start=self.start,
             total=total,
-        )  # fmt: skip
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -551,9 +561,12 @@ class TurnPath:
     def build(self, total: float) -> paths.Path:
         """The path, ``total`` [m] long."""
         return paths.constant_radius_turn(
-            self.radius, angle=self.angle, start=self.start, transition=self.transition,
+            self.radius,
+            angle=self.angle,
+            start=self.start,
+            transition=self.transition,
             total=total,
-        )  # fmt: skip
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -1155,8 +1168,17 @@ def implausible(scenario: "Scenario") -> list[str]:
 
 # --- the parser: TOML onto the constructors -----------------------------------------------
 
-_TABLES = ("rates", "measurement", "motorcycle", "rider", "handlebar", "estimator", "controller",
-           "sensor", "road")  # fmt: skip
+_TABLES = (
+    "rates",
+    "measurement",
+    "motorcycle",
+    "rider",
+    "handlebar",
+    "estimator",
+    "controller",
+    "sensor",
+    "road",
+)
 
 
 def _describe(tp: Any) -> str:

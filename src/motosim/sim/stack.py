@@ -589,9 +589,13 @@ def design_stack(
             assert held_Bw is not None
             Bw = held_Bw
         motorcycle = SharpMotorcycle(
-            float(d["m"]), float(d["m_eq"]), float(sharp_model.MIN_SPEED), substeps,
-            float(d["m"] * sharp.g + sharp.Z_f), float(-sharp.Z_f),
-        )  # fmt: skip
+            float(d["m"]),
+            float(d["m_eq"]),
+            float(sharp_model.MIN_SPEED),
+            substeps,
+            float(d["m"] * sharp.g + sharp.Z_f),
+            float(-sharp.Z_f),
+        )
     else:
         if arms is not None:
             multibody = tyred.held(multibody, arms.inertia, arms.damping)
@@ -628,8 +632,11 @@ def design_stack(
 
 def _checked_quiet(quiet: Quiet) -> Quiet:
     """``quiet`` with its fields as floats and int; MotosimError naming one out of range."""
-    bounds = (("quantum", quiet.quantum, 0.1), ("presliding", quiet.presliding, 0.1),
-              ("release", quiet.release, 100.0))  # fmt: skip
+    bounds = (
+        ("quantum", quiet.quantum, 0.1),
+        ("presliding", quiet.presliding, 0.1),
+        ("release", quiet.release, 100.0),
+    )
     for name, value, high in bounds:
         if not (math.isfinite(value) and 0.0 <= value <= high):
             raise MotosimError(f"quiet {name} = {value!r}; expected 0 to {high:g}")
@@ -639,9 +646,13 @@ def _checked_quiet(quiet: Quiet) -> Quiet:
     if not (0 <= quiet.stick_samples <= 100_000):
         raise MotosimError(f"quiet stick_samples = {quiet.stick_samples!r}; expected 0 to 100000")
     return Quiet(
-        float(quiet.quantum), float(quiet.position_gain), float(quiet.rate_gain),
-        float(quiet.presliding), float(quiet.release), int(quiet.stick_samples),
-    )  # fmt: skip
+        float(quiet.quantum),
+        float(quiet.position_gain),
+        float(quiet.rate_gain),
+        float(quiet.presliding),
+        float(quiet.release),
+        int(quiet.stick_samples),
+    )
 
 
 _AS_SHARP = {
@@ -888,8 +899,14 @@ def _command(model: StackModel, data: StackData, theta_meas: float, stuck: bool)
         qt = model.quiet
         if qt.presliding > 0.0:  # a Dahl friction of the steer displacement
             h = model.differentiator.h
-            friction = dahl_friction(data.held[Held.friction_feedforward], rate * h, ff.beta_s,
-                                     qt.presliding, h, qt.release)  # fmt: skip
+            friction = dahl_friction(
+                data.held[Held.friction_feedforward],
+                rate * h,
+                ff.beta_s,
+                qt.presliding,
+                h,
+                qt.release,
+            )
             data.held[Held.friction_feedforward] = friction
         else:
             friction = ff.beta_s * math.tanh(rate / ff.friction_width)
@@ -981,8 +998,15 @@ def step_scaled(
         g = model.differentiator
         z1_before = data.differentiator[1]
         if qt.quantum > 0.0:  # the count's cell, not its centre: the angle read is z0
-            z0, z1 = cell_step(data.differentiator[0], z1_before, theta_meas, g.h, qt.quantum,
-                               qt.position_gain, qt.rate_gain)  # fmt: skip
+            z0, z1 = cell_step(
+                data.differentiator[0],
+                z1_before,
+                theta_meas,
+                g.h,
+                qt.quantum,
+                qt.position_gain,
+                qt.rate_gain,
+            )
             angle = z0
         else:
             z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, g.h, g.k1, g.k0, True)
@@ -1008,9 +1032,13 @@ def step_scaled(
             estimate = held[Held.tau_r_hat]
         else:
             estimate = step_kernel(
-                model.estimator, data.estimator, angle, z1, current_scale * told + current_error,
+                model.estimator,
+                data.estimator,
+                angle,
+                z1,
+                current_scale * told + current_error,
                 rider_torque,
-            )  # fmt: skip
+            )
         c = model.prediction
         if c.lead > 0.0:
             # the estimate's rate through the notch and the low-pass (transposed form II)
@@ -1047,28 +1075,52 @@ def _start_multibody(mc: Any, data: StackData, speed: float) -> None:
 
 
 def _advance_sharp(
-    mc: Any, model: StackModel, data: StackData, steer: float, force: float,
+    mc: Any,
+    model: StackModel,
+    data: StackData,
+    steer: float,
+    force: float,
     side_force: float,
-) -> None:  # fmt: skip
+) -> None:
     h = model.dt / mc.substeps
     for _ in range(mc.substeps):
-        bike_rk4(data.motorcycle, data.work, model.A0, model.A1, model.Bv, steer, model.Bw,
-                 side_force, force, mc.m, mc.m_eq, mc.min_speed, h)  # fmt: skip
+        bike_rk4(
+            data.motorcycle,
+            data.work,
+            model.A0,
+            model.A1,
+            model.Bv,
+            steer,
+            model.Bw,
+            side_force,
+            force,
+            mc.m,
+            mc.m_eq,
+            mc.min_speed,
+            h,
+        )
 
 
 @njit(cache=True, inline="always")
 def _multibody_inputs(data: StackData, steer: float) -> tyred.Inputs:
     u = data.inputs
     return tyred.Inputs(
-        steer, u[MotorcycleInput.drive_torque], u[MotorcycleInput.front_brake_torque],
-        u[MotorcycleInput.rear_brake_torque], u[MotorcycleInput.friction],
-    )  # fmt: skip
+        steer,
+        u[MotorcycleInput.drive_torque],
+        u[MotorcycleInput.front_brake_torque],
+        u[MotorcycleInput.rear_brake_torque],
+        u[MotorcycleInput.friction],
+    )
 
 
 def _advance_multibody(
-    mc: Any, model: StackModel, data: StackData, steer: float, force: float,
+    mc: Any,
+    model: StackModel,
+    data: StackData,
+    steer: float,
+    force: float,
     side_force: float,
-) -> None:  # fmt: skip
+) -> None:
     h = model.dt / mc.substeps
     inputs = _multibody_inputs(data, steer)
     x = data.multibody
@@ -1123,9 +1175,19 @@ def _contact_loads_sharp(
 ) -> tyred.ContactLoads:
     z = data.motorcycle
     return tyred.ContactLoads(
-        force, z[MotorcycleState.F_yr], mc.rear_load, 0.0, 0.0, 0.0, z[MotorcycleState.F_yf],
-        mc.front_load, 0.0, 0.0, z[MotorcycleState.x], z[MotorcycleState.y],
-    )  # fmt: skip
+        force,
+        z[MotorcycleState.F_yr],
+        mc.rear_load,
+        0.0,
+        0.0,
+        0.0,
+        z[MotorcycleState.F_yf],
+        mc.front_load,
+        0.0,
+        0.0,
+        z[MotorcycleState.x],
+        z[MotorcycleState.y],
+    )
 
 
 def _contact_loads_multibody(

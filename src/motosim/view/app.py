@@ -59,10 +59,26 @@ STATIC: Final = Path(__file__).parent / "static"
 """The page files and the vendored three.js build."""
 
 DASHBOARD_SIGNALS: Final = (
-    "t", "tau_r", "tau_r_hat", "delta", "theta_h", "phi", "v_x", "e_y", "i_m",
-    "period", "compute", "wake", "missed", "state", "fault",
-    "phi_s", "theta_s", "psi_s", "phi_vis",
-)  # fmt: skip
+    "t",
+    "tau_r",
+    "tau_r_hat",
+    "delta",
+    "theta_h",
+    "phi",
+    "v_x",
+    "e_y",
+    "i_m",
+    "period",
+    "compute",
+    "wake",
+    "missed",
+    "state",
+    "fault",
+    "phi_s",
+    "theta_s",
+    "psi_s",
+    "phi_vis",
+)
 """The signals the dashboard plots (those the feed has): the rider's torque and its estimate,
 steer and handlebar, roll, speed, the real-time loop's timing and safety codes
 (:data:`motosim.view.live.LOOP_VIEW_SIGNALS`), the platform commands of :mod:`motosim.cueing`."""
@@ -71,8 +87,15 @@ _POSE: Final = ("t", "x", "y", "psi", "phi", "delta", "v_x", "theta_h", "theta")
 _DASHBOARD_RATE: Final = 200.0  # Hz, rows per second kept for the plots
 _REPLAY_POINTS: Final = 4000  # rows of a whole replayed run sent to the dashboard
 _PEAKS: Final = ("period", "compute", "wake")  # decimated by their maximum, not a sample
-_UNITS: Final = {"t_clock": "s", "wake": "s", "compute": "s", "period": "s", "missed": "1",
-                 "state": "1", "fault": "1"}  # fmt: skip
+_UNITS: Final = {
+    "t_clock": "s",
+    "wake": "s",
+    "compute": "s",
+    "period": "s",
+    "missed": "1",
+    "state": "1",
+    "fault": "1",
+}
 _POLL: Final = 0.002  # s, how often /ws/pose looks for a new row
 _HEARTBEAT: Final = 0.25  # s, the longest /ws/pose stays silent (the status still changes)
 
@@ -282,8 +305,9 @@ def create_app(
     def replay_rows(request: Request) -> Response:
         """The whole run's dashboard signals, at most ``_REPLAY_POINTS`` rows (a replay)."""
         if not isinstance(feed, ReplayFeed):
-            return JSONResponse({"error": "not a replay: the rows come over /ws/signals"},
-                                status_code=404)  # fmt: skip
+            return JSONResponse(
+                {"error": "not a replay: the rows come over /ws/signals"}, status_code=404
+            )
         rows = feed.rows()[:, dash_cols]
         stride = max(1, -(-rows.shape[0] // _REPLAY_POINTS))
         rows = _decimate(rows, 0, stride, peak_cols)

@@ -24,8 +24,14 @@ from motosim.rt.safety import Fault, State, fault_reason
 from motosim.timeseries import TimeSeries
 
 __all__ = [
-    "Feed", "LiveFeed", "ReplayFeed", "Road", "RunControl", "merge_signals", "road_from_xy",
-]  # fmt: skip
+    "Feed",
+    "LiveFeed",
+    "ReplayFeed",
+    "Road",
+    "RunControl",
+    "merge_signals",
+    "road_from_xy",
+]
 
 Array = NDArray[np.float64]
 

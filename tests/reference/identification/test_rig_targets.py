@@ -142,10 +142,30 @@ def test_planned_excitation_identifies_all_three(
     rough = [f"{1.3 * J:g}", f"{0.7 * beta:g}", f"{1.3 * beta_s:g}"]
     with pytest.raises(SystemExit):
         sys.exit(
-            main(["excite", "--plan", "--max-current", "6", "--inertia", rough[0], "--damping",
-                  rough[1], "--dry-friction", rough[2], "--ratio", "1", "--torque-constant",
-                  "1", "--counts", "16384", "--pulley-ratio", "1", "--json"])
-        )  # fmt: skip
+            main(
+                [
+                    "excite",
+                    "--plan",
+                    "--max-current",
+                    "6",
+                    "--inertia",
+                    rough[0],
+                    "--damping",
+                    rough[1],
+                    "--dry-friction",
+                    rough[2],
+                    "--ratio",
+                    "1",
+                    "--torque-constant",
+                    "1",
+                    "--counts",
+                    "16384",
+                    "--pulley-ratio",
+                    "1",
+                    "--json",
+                ]
+            )
+        )
     plan = json.loads(capsys.readouterr().out)
     t, theta, current = rig_log(
         J=J,
@@ -175,9 +195,14 @@ def test_friction_smooth_near_zero_speed(
     for case, hb in HANDLEBARS.items():
         J, beta, beta_s = hb
         t, theta, current = rig_log(
-            J=J, beta=beta, beta_s=beta_s, sample_rate=100.0, duration=60.0, amplitude=4.0,
+            J=J,
+            beta=beta,
+            beta_s=beta_s,
+            sample_rate=100.0,
+            duration=60.0,
+            amplitude=4.0,
             friction_width=1e-3,
-        )  # fmt: skip
+        )
         path = tmp_path / f"smooth-{case}.csv"
         write_csv(str(path), t, theta, current)
         report = _identify(capsys, path)

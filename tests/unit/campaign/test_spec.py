@@ -105,9 +105,8 @@ def test_latin_hypercube_puts_one_run_in_each_stratum_of_each_factor(tmp_path: P
 def test_distributions_stay_in_their_range_and_have_their_moments(tmp_path: Path) -> None:
     factors = {
         "handlebar.inertia_factor": {"distribution": "loguniform", "low": 0.1, "high": 10.0},
-        "handlebar.damping_factor": {"distribution": "normal", "mean": 1.0, "std": 0.2,
-                                     "low": 0.9},
-    }  # fmt: skip
+        "handlebar.damping_factor": {"distribution": "normal", "mean": 1.0, "std": 0.2, "low": 0.9},
+    }
     rows = np.array(sample_values(_campaign(tmp_path, factors, runs=4000, sampling="random")))
     log = np.log10(rows[:, 0])
     assert log.min() >= -1.0 and log.max() <= 1.0
@@ -121,9 +120,13 @@ def test_distributions_stay_in_their_range_and_have_their_moments(tmp_path: Path
 def test_a_grid_is_the_full_factorial_repeated(tmp_path: Path) -> None:
     factors = {
         "measurement.encoder_bits": [12, 14],
-        "handlebar.inertia_factor": {"distribution": "uniform", "low": 0.5, "high": 1.5,
-                                     "levels": 3},
-    }  # fmt: skip
+        "handlebar.inertia_factor": {
+            "distribution": "uniform",
+            "low": 0.5,
+            "high": 1.5,
+            "levels": 3,
+        },
+    }
     campaign = _campaign(tmp_path, factors, sampling="grid", runs=12)
     rows = sample_values(campaign)
     assert len(rows) == 12 and len(set(rows)) == 6

@@ -12,9 +12,17 @@ pytest.importorskip("pyarrow")
 
 def _columns(run_id: str) -> dict[str, list[object]]:
     return {
-        "run_id": [run_id], "index": [0], "seed": [1], "design": [""], "status": ["ok"],
-        "reason": [""], "failed_at": [float("nan")], "elapsed": [0.1], "x": [1.0], "rms": [2.0],
-    }  # fmt: skip
+        "run_id": [run_id],
+        "index": [0],
+        "seed": [1],
+        "design": [""],
+        "status": ["ok"],
+        "reason": [""],
+        "failed_at": [float("nan")],
+        "elapsed": [0.1],
+        "x": [1.0],
+        "rms": [2.0],
+    }
 
 
 def test_a_part_that_does_not_fit_is_one_line_and_leaves_no_cut_file(
@@ -55,12 +63,17 @@ def test_running_is_read_as_stopped_once_no_process_holds_the_lock(tmp_path: Pat
     store = ResultStore(folder, fingerprint="f", factors=[("x", float)], metrics=["rms"])
     store.write_manifest({"fingerprint": "f", "status": "running"})
     with subprocess.Popen(  # the campaign's process, holding the folder's lock
-        [sys.executable, "-c",
-         "import sys\nfrom motosim.io.files import FolderLock\n"
-         "with FolderLock(sys.argv[1]):\n    print('held', flush=True)\n    sys.stdin.read()\n",
-         str(folder)],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-    ) as holder:  # fmt: skip
+        [
+            sys.executable,
+            "-c",
+            "import sys\nfrom motosim.io.files import FolderLock\n"
+            "with FolderLock(sys.argv[1]):\n    print('held', flush=True)\n    sys.stdin.read()\n",
+            str(folder),
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    ) as holder:
         try:
             assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
             assert read_manifest(folder)["status"] == "running"

@@ -123,7 +123,8 @@ def test_a_planned_sweep_through_neutral_is_not_stopped_there(platform: Platform
     plan = a * (np.cos(w * t) - np.cos(2 * w * t))
     speed = a * w * (2 * np.sin(2 * w * t) - np.sin(w * t))
     zero = 0 * t
-    followed = apply_limits(design, np.column_stack([plan, zero, zero]),
-                            np.column_stack([speed, zero, zero]))[:, 0]  # fmt: skip
+    followed = apply_limits(
+        design, np.column_stack([plan, zero, zero]), np.column_stack([speed, zero, zero])
+    )[:, 0]
     assert np.max(np.abs(followed - plan)) < np.radians(0.05)
     assert np.max(np.abs(np.diff(followed, 2))) / DT**2 < np.radians(100.0)

@@ -29,10 +29,12 @@ def test_the_quadratic_part_is_the_squared_cost_and_only_roll_has_a_corner() -> 
     assert roll_s.huber_M.shape[0] == 0 and roll_h.huber_M.shape[0] == roll_h.P.shape[0]
     w = roll_h.huber_weight
     # within the corner: w e^2 with e = (M u + E x0 - r) / thr, the squared design's terms
-    np.testing.assert_allclose(roll_h.P + w * roll_h.huber_M.T @ roll_h.huber_M, roll_s.P,
-                               rtol=1e-10, atol=1e-12)  # fmt: skip
-    np.testing.assert_allclose(roll_h.F + w * roll_h.huber_M.T @ roll_h.huber_E, roll_s.F,
-                               rtol=1e-10, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        roll_h.P + w * roll_h.huber_M.T @ roll_h.huber_M, roll_s.P, rtol=1e-10, atol=1e-12
+    )
+    np.testing.assert_allclose(
+        roll_h.F + w * roll_h.huber_M.T @ roll_h.huber_E, roll_s.F, rtol=1e-10, atol=1e-12
+    )
     assert roll_h.huber_thr == TELBAN_CARDULLO_2005.thresholds[0]
     for j in (1, 2):  # pitch and yaw keep the squared cost
         assert huber.axes[j].huber_M.shape[0] == 0

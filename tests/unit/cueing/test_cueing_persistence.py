@@ -93,18 +93,20 @@ def test_on_a_long_curve_the_platform_holds_more_tilt_than_with_the_transient_ba
     # a ride along a long curve: 40 m straight, a 60 m clothoid to a 15 deg lean, 140 m held;
     # the motorcycle at the steady-turn lean of the road under it (the road's x, y straight:
     # only the curvature is read)
-    kappa = np.concatenate([np.zeros(800), np.linspace(0.0, _kappa(15.0), 1200),
-                            np.full(4000, _kappa(15.0))])  # fmt: skip
+    kappa = np.concatenate(
+        [np.zeros(800), np.linspace(0.0, _kappa(15.0), 1200), np.full(4000, _kappa(15.0))]
+    )
     road = _road(kappa)
     t = np.arange(0.0, 11.0, 0.01)
     s = V * t
     phi = np.arctan(V**2 * np.interp(s, 0.05 * np.arange(kappa.size), kappa) / G)
     ride = TimeSeries(
         t,
-        np.column_stack([V + 0 * t, 0 * t, G * np.tan(phi) / V, np.gradient(phi, t), phi,
-                         s, 0 * t]),
+        np.column_stack(
+            [V + 0 * t, 0 * t, G * np.tan(phi) / V, np.gradient(phi, t), phi, s, 0 * t]
+        ),
         ("v_x", "v_y", "psi_dot", "phi_dot", "phi", "x", "y"),
-    )  # fmt: skip
+    )
     cfg = load_platform("simacom_platform")
     transient = dataclasses.replace(
         cfg,
@@ -112,8 +114,9 @@ def test_on_a_long_curve_the_platform_holds_more_tilt_than_with_the_transient_ba
             cfg.mpc, sustained_force_false_cue_weight=cfg.mpc.preview_force_false_cue_weight
         ),
     )
-    runs = [cue(c, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=road)
-            for c in (cfg, transient)]  # fmt: skip
+    runs = [
+        cue(c, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=road) for c in (cfg, transient)
+    ]
     held = [float(np.mean(r.commands["phi_s"][t > 8.0])) for r in runs]
     assert held[0] > 1.2 * held[1] > 0.0, np.degrees(held)
     assert [r.score.violations for r in runs] == [0, 0]

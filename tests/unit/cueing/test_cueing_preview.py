@@ -88,17 +88,27 @@ def test_the_plan_follows_the_previewed_roll_and_no_preview_is_the_causal_plan()
     from motosim.cueing.mpc import apply_mpc
 
     t = np.arange(0.0, 0.1, 0.01)
-    still = TimeSeries(t, np.column_stack([20 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t]),
-                       ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))  # fmt: skip
+    still = TimeSeries(
+        t,
+        np.column_stack([20 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t]),
+        ("v_x", "v_y", "psi_dot", "phi_dot", "phi"),
+    )
     with pytest.raises(MotosimError, match=r"road preview of shape \(10, 20, 2\)"):
-        apply_mpc(design, vehicle_motion(still, cfg.rider), np.zeros((10, 3)),
-                  preview=np.zeros((10, 20, 2)))  # fmt: skip
+        apply_mpc(
+            design,
+            vehicle_motion(still, cfg.rider),
+            np.zeros((10, 3)),
+            preview=np.zeros((10, 20, 2)),
+        )
 
 
 def test_cue_needs_the_positions_for_a_road() -> None:
     t = np.arange(0.0, 1.0, 0.01)
-    ride = TimeSeries(t, np.column_stack([20 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t]),
-                      ("v_x", "v_y", "psi_dot", "phi_dot", "phi"))  # fmt: skip
+    ride = TimeSeries(
+        t,
+        np.column_stack([20 + 0 * t, 0 * t, 0 * t, 0 * t, 0 * t]),
+        ("v_x", "v_y", "psi_dot", "phi_dot", "phi"),
+    )
     cfg = load_platform("simacom_platform")
     pytest.importorskip("osqp", reason="the MPC needs the cueing extra (osqp)")
     with pytest.raises(MotosimError, match="road preview of a run without x and y"):
@@ -209,15 +219,19 @@ def test_the_preview_fades_with_the_lean_asked_and_where_untrusted_is_the_causal
     phi = 0.2 * np.sin(2 * np.pi * 0.5 * t)
     ride = TimeSeries(
         t,
-        np.column_stack([v + 0 * t, 0 * t, G * np.tan(phi) / v, np.gradient(phi, t), phi,
-                         v * t, 0 * t]),
+        np.column_stack(
+            [v + 0 * t, 0 * t, G * np.tan(phi) / v, np.gradient(phi, t), phi, v * t, 0 * t]
+        ),
         ("v_x", "v_y", "psi_dot", "phi_dot", "phi", "x", "y"),
-    )  # fmt: skip
+    )
     wavy = np.sin(0.05 * np.arange(4001) / 15.0)
     runs = [
         cue(cfg, ride, TELBAN_CARDULLO_2005, algorithm="mpc", road=road)
-        for road in (None, _road(np.tan(np.radians(60)) * G / v**2 * wavy),
-                     _road(np.tan(np.radians(20)) * G / v**2 * wavy))
-    ]  # fmt: skip
+        for road in (
+            None,
+            _road(np.tan(np.radians(60)) * G / v**2 * wavy),
+            _road(np.tan(np.radians(20)) * G / v**2 * wavy),
+        )
+    ]
     np.testing.assert_array_equal(runs[1].commands.data, runs[0].commands.data)
     assert not np.array_equal(runs[2].commands.data, runs[0].commands.data)

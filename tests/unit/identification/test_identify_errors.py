@@ -142,9 +142,13 @@ def test_plan_excitation_limits():
     assert fast.f1 == pytest.approx(10.0) and "sample at" in fast.notes[0]
     with pytest.raises(MotosimError, match="2 beta_s"):
         plan_excitation(
-            J_eq=0.06, beta_eq=9.0, beta_s=3.0, torque_per_amp=1.0, sample_rate=100.0,
+            J_eq=0.06,
+            beta_eq=9.0,
+            beta_s=3.0,
+            torque_per_amp=1.0,
+            sample_rate=100.0,
             max_current=5.0,
-        )  # fmt: skip
+        )
 
 
 @pytest.mark.parametrize(

@@ -27,10 +27,17 @@ DB = load_dbc()
 PLATFORM = platform_codecs()
 FRAMES = {
     c.frame_id: c
-    for c in (CODECS.status, CODECS.command, CODECS.estop, CODECS.heartbeat, CODECS.torque,
-              PLATFORM.command, PLATFORM.status)
+    for c in (
+        CODECS.status,
+        CODECS.command,
+        CODECS.estop,
+        CODECS.heartbeat,
+        CODECS.torque,
+        PLATFORM.command,
+        PLATFORM.status,
+    )
     if c is not None
-}  # fmt: skip
+}
 
 
 def test_crc8_check_values() -> None:
@@ -129,9 +136,13 @@ def test_udp_multicast_datagrams_are_read_as_python_can_packs_them(
     from can.interfaces.udp_multicast.utils import pack_message
 
     message = can.Message(
-        arbitration_id=frame_id, data=payload, is_extended_id=False, is_error_frame=error,
-        timestamp=stamp, channel=channel,
-    )  # fmt: skip
+        arbitration_id=frame_id,
+        data=payload,
+        is_extended_id=False,
+        is_error_frame=error,
+        timestamp=stamp,
+        channel=channel,
+    )
     datagram = np.frombuffer(b"xx" + pack_message(message), dtype=np.uint8)
     kind, got, start, length = unpack_frame(datagram, 2, datagram.size - 2)
     assert (kind, got, datagram[start : start + length].tobytes()) == (

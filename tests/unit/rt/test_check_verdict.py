@@ -13,8 +13,9 @@ from motosim.rt.privileges import Privilege
 
 def _stats(wake: float, compute: float, missed: int, rate: float = 1000.0) -> TimingStats:
     served = 1000 - missed
-    return timing_stats(rate, np.full(served, wake), np.full(served, compute),
-                        periods=1000, missed=missed)  # fmt: skip
+    return timing_stats(
+        rate, np.full(served, wake), np.full(served, compute), periods=1000, missed=missed
+    )
 
 
 def test_the_verdict_checks_each_target_at_its_limit() -> None:
@@ -41,12 +42,15 @@ def test_targets_are_checked() -> None:
         Targets(wake_p99=0.0)
 
 
-@pytest.mark.parametrize(("stats", "code"), [(_stats(20e-6, 5e-6, 0), 0),
-                                              (_stats(20e-6, 5e-6, 400), 1)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("stats", "code"), [(_stats(20e-6, 5e-6, 0), 0), (_stats(20e-6, 5e-6, 400), 1)]
+)
 def test_rt_check_exits_0_on_pass_and_1_on_fail(
-    stats: TimingStats, code: int, monkeypatch: pytest.MonkeyPatch,
+    stats: TimingStats,
+    code: int,
+    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
-) -> None:  # fmt: skip
+) -> None:
     import motosim.rt.check
     from motosim.cli.main import main
 
@@ -71,11 +75,13 @@ def test_a_late_loop_is_told_the_privileges_only_when_they_were_not_given() -> N
     late = _stats(20e-6, 5e-6, 50)  # 5 % missed
     plain = advice(late, "WATCHDOG", asked_all=False)
     assert len(plain) == 1 and "give --fifo 80 --cpu 1 --mlock" in plain[0]
-    given = advice(late, "WATCHDOG", asked_all=True,
-                   privileges=(Privilege("SCHED_FIFO 80", True, "applied"),))  # fmt: skip
+    given = advice(
+        late, "WATCHDOG", asked_all=True, privileges=(Privilege("SCHED_FIFO 80", True, "applied"),)
+    )
     assert "give --fifo" not in given[0] and "under --fifo, --cpu and --mlock" in given[0]
-    refused = advice(late, "NONE", asked_all=True,
-                     privileges=(Privilege("SCHED_FIFO 80", False, "EPERM"),))  # fmt: skip
+    refused = advice(
+        late, "NONE", asked_all=True, privileges=(Privilege("SCHED_FIFO 80", False, "EPERM"),)
+    )
     assert "refused: SCHED_FIFO 80" in refused[0]
 
 

@@ -94,16 +94,18 @@ def test_the_profiles_statuses(
 
 
 def test_lost_data_counts_the_frames_missing_before_the_one_taken() -> None:
-    rx = E2EReceiver(E2EConfig(max_delta_counter_init=5, max_no_new_or_repeated_data=14,
-                               sync_counter_init=0))  # fmt: skip
+    rx = E2EReceiver(
+        E2EConfig(max_delta_counter_init=5, max_no_new_or_repeated_data=14, sync_counter_init=0)
+    )
     assert [rx.check(c) for c in (2, 7)] == [INITIAL, OKSOMELOST]
     assert rx.snapshot().lost_data == 4
     assert rx.check(8) == OK and rx.snapshot().lost_data == 0
 
 
 def test_the_tolerance_grows_per_call_to_at_most_14() -> None:
-    rx = E2EReceiver(E2EConfig(max_delta_counter_init=0, max_no_new_or_repeated_data=14,
-                               sync_counter_init=0))  # fmt: skip
+    rx = E2EReceiver(
+        E2EConfig(max_delta_counter_init=0, max_no_new_or_repeated_data=14, sync_counter_init=0)
+    )
     rx.check(0)
     assert rx.snapshot().max_delta_counter == 0
     for n in range(1, 20):
@@ -114,16 +116,18 @@ def test_the_tolerance_grows_per_call_to_at_most_14() -> None:
 
 
 def test_restart_waits_for_a_first_frame_again() -> None:
-    rx = E2EReceiver(E2EConfig(max_delta_counter_init=1, max_no_new_or_repeated_data=14,
-                               sync_counter_init=0))  # fmt: skip
+    rx = E2EReceiver(
+        E2EConfig(max_delta_counter_init=1, max_no_new_or_repeated_data=14, sync_counter_init=0)
+    )
     assert [rx.check(c) for c in (4, 5)] == [INITIAL, OK]
     rx.restart()
     assert rx.check(11) == INITIAL and rx.check(12) == OK
 
 
 def test_an_invalid_counter_is_an_input_error_that_changes_nothing() -> None:
-    rx = E2EReceiver(E2EConfig(max_delta_counter_init=1, max_no_new_or_repeated_data=14,
-                               sync_counter_init=0))  # fmt: skip
+    rx = E2EReceiver(
+        E2EConfig(max_delta_counter_init=1, max_no_new_or_repeated_data=14, sync_counter_init=0)
+    )
     rx.check(3)
     assert e2e_check(rx.state, True, True, 15) == INPUT_ERROR
     assert rx.status == INITIAL and rx.snapshot().last_valid_counter == 3
@@ -141,7 +145,9 @@ def test_an_invalid_counter_is_an_input_error_that_changes_nothing() -> None:
 )
 def test_bad_settings_are_refused(key: str, value: object) -> None:
     settings: dict[str, object] = {
-        "max_delta_counter_init": 1, "max_no_new_or_repeated_data": 1, "sync_counter_init": 1,
-    } | {key: value}  # fmt: skip
+        "max_delta_counter_init": 1,
+        "max_no_new_or_repeated_data": 1,
+        "sync_counter_init": 1,
+    } | {key: value}
     with pytest.raises(MotosimError, match=rf"E2E {key} = .*; expected an integer from 0 to 14"):
         E2EConfig(**settings)  # type: ignore[arg-type]

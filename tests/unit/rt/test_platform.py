@@ -80,9 +80,14 @@ def test_zero_violations_on_wild_motion(config: CueingConfig) -> None:
     out = PlatformOutput(config, DT, NAMES)
     n = 5000
     rows = np.column_stack(
-        [np.zeros(n), 20 + 15 * rng.standard_normal(n), 3 * rng.standard_normal(n),
-         2 * rng.standard_normal(n), 1.2 * np.sign(np.sin(np.arange(n) * DT * 7.0))]
-    )  # fmt: skip
+        [
+            np.zeros(n),
+            20 + 15 * rng.standard_normal(n),
+            3 * rng.standard_normal(n),
+            2 * rng.standard_normal(n),
+            1.2 * np.sign(np.sin(np.arange(n) * DT * 7.0)),
+        ]
+    )
     values = np.empty((n, 3))
     for k in range(n):
         out.step(k, k * DT, rows[k], State.RUNNING, 0, float((k // 700) % 2))

@@ -211,8 +211,13 @@ def test_bus_off_sends_nothing_for_its_duration() -> None:
 
 
 def test_parse_rig_checks_keys_and_types() -> None:
-    base = {"plant_rate": 1e4, "status_rate": 1e3, "encoder_bits": 14, "current_noise": 0.0,
-            "max_current": 30.0}  # fmt: skip
+    base = {
+        "plant_rate": 1e4,
+        "status_rate": 1e3,
+        "encoder_bits": 14,
+        "current_noise": 0.0,
+        "max_current": 30.0,
+    }
     s = parse_rig({"loss": 0.01, "faults": {"sign_flip": 2}}, base=base)
     assert s.loss == 0.01 and s.faults.sign_flip == 2.0
     with pytest.raises(MotosimError, match="unknown key 'lost'"):
@@ -237,9 +242,12 @@ def test_nothing_is_compiled_when_the_run_starts() -> None:
     profile.flags.writeable = False
     link = FakeLink()
     settings = RigSettings(
-        plant_rate=10_000.0, status_rate=1000.0, encoder_bits=14, current_noise=0.0,
+        plant_rate=10_000.0,
+        status_rate=1000.0,
+        encoder_bits=14,
+        current_noise=0.0,
         max_current=30.0,
-    )  # fmt: skip
+    )
     rig = VirtualRig(HB, settings, CODECS, link, RigRider(profile), np.random.default_rng(0))
     rig_module._plant_steps.disable_compile()  # a compile (or cache load) now raises
     try:

@@ -13,9 +13,12 @@ from motosim.io.can import handlebar_codecs
 
 HB = load_parameters("simacom_handlebar", "handlebar")
 SETTINGS = RigSettings(
-    plant_rate=10_000.0, status_rate=1000.0, encoder_bits=14, current_noise=0.0,
+    plant_rate=10_000.0,
+    status_rate=1000.0,
+    encoder_bits=14,
+    current_noise=0.0,
     max_current=30.0,
-)  # fmt: skip
+)
 
 
 class _Link:

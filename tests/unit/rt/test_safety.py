@@ -40,9 +40,11 @@ class Driver:
         periods_per_frame: int = 1,
     ) -> None:
         self.stage = SafetyStage(
-            limits, dt=1.0 / rate, handlebar=HB if handlebar else None,
+            limits,
+            dt=1.0 / rate,
+            handlebar=HB if handlebar else None,
             periods_per_frame=periods_per_frame,
-        )  # fmt: skip
+        )
         self.counter = 0
 
     def period(self, command: float = 10.0, *, frame: bool = True, **kw: float) -> float:

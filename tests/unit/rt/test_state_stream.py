@@ -38,9 +38,14 @@ def test_the_relay_sends_the_newest_row_of_the_ring_once_the_stack_started() -> 
     buffer, counters = ring.arrays
     sent: list[tuple[int, float, list[float]]] = []
     relay = StateRelay(
-        buffer, counters, names, 5, lambda k, t, row: sent.append((k, t, row.tolist())),
-        rate=1000.0, now=lambda: 10.0,
-    )  # fmt: skip
+        buffer,
+        counters,
+        names,
+        5,
+        lambda k, t, row: sent.append((k, t, row.tolist())),
+        rate=1000.0,
+        now=lambda: 10.0,
+    )
     assert not relay.poll()  # nothing written yet
     ring.push(np.array([0.0, np.nan, 9.0, 0.0, 0.0, 0.0, 0.0]))
     assert not relay.poll() and sent == []  # no valid angle yet

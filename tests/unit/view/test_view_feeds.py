@@ -95,8 +95,13 @@ def test_live_feed_reads_the_ring_and_reports_the_control() -> None:
     rows, cursor = feed.read_since(0)
     assert rows.shape == (3, 7) and cursor == 3
     assert feed.status() == {
-        "mode": "live", "state": "running", "t": 2.0, "duration": None, "rate": 1.0, "epoch": 0
-    }  # fmt: skip
+        "mode": "live",
+        "state": "running",
+        "t": 2.0,
+        "duration": None,
+        "rate": 1.0,
+        "epoch": 0,
+    }
 
 
 def test_road_follows_and_extends_the_path() -> None:

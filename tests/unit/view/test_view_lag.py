@@ -37,8 +37,7 @@ def _ring(state: State = State.RUNNING, fault: Fault = Fault.NONE) -> TelemetryR
     ring = TelemetryRing(NAMES, 64)
     for k in range(10):
         t = 1e-3 * k
-        ring.push(np.array([t, 20 * t, 0, 0, 0, 0, 20, state, fault, 500 + t, 2e-5, 3e-5,
-                            1e-3, 0]))  # fmt: skip
+        ring.push(np.array([t, 20 * t, 0, 0, 0, 0, 20, state, fault, 500 + t, 2e-5, 3e-5, 1e-3, 0]))
     return ring
 
 
