@@ -13,8 +13,9 @@ command and the processes it waited for), beside the load average, in these stat
 - the compiled code warm, the design cache empty (a new scenario's first run);
 - both warm (every later run), with and without the HTML report.
 
-Each warm figure is the best of ``REPEAT`` runs. With a baseline (``--baseline SRC``: the
-``src`` folder of another checkout, e.g. the previous release's), each state is measured for
+Each warm figure is the best and the median of ``REPEAT`` runs (the CPU time's median taken
+apart from the wall time's). With a baseline (``--baseline SRC``: the ``src`` folder of
+another checkout, e.g. the previous release's), each state is measured for
 it too, interleaved with ours (ours, baseline, ours, ...) in the same run, so that both see
 the same load. ``python bench/bench_time_to_result.py [--baseline SRC]``; ``make bench``
 runs it with the rest, without a baseline.
@@ -23,6 +24,7 @@ runs it with the rest, without a baseline.
 import argparse
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -31,7 +33,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "scenarios" / "lane_change_20.toml"
-REPEAT = 3
+REPEAT = 9
 
 
 def _simulate(out: Path, env: dict[str, str], *, report: bool) -> tuple[float, float]:
@@ -74,13 +76,15 @@ def run(baseline: str | None = None) -> dict[str, float]:
             figures[f"{who}{what}: wall [s]"], figures[f"{who}{what}: CPU [s]"] = measured
 
         def record(what: str, *, report: bool, repeat: int) -> None:
-            best: dict[str, tuple[float, float]] = {}
+            runs: dict[str, list[tuple[float, float]]] = {who: [] for who in envs}
             for _ in range(repeat):
                 for who, env in envs.items():
-                    measured = _simulate(folder / f"run-{len(who)}", env, report=report)
-                    best[who] = min(best.get(who, measured), measured)
-            for who, measured in best.items():
-                note(who, what, measured)
+                    runs[who].append(_simulate(folder / f"run-{len(who)}", env, report=report))
+            for who, measured in runs.items():
+                note(who, what, min(measured))
+                if repeat > 1:
+                    wall, cpu = (statistics.median(m) for m in zip(*measured, strict=True))
+                    note(who, f"{what}, median", (wall, cpu))
 
         record("nothing compiled, nothing designed (no cache warm)", report=True, repeat=1)
         for i, (who, env) in enumerate(envs.items()):  # an install's new caches, warmed
