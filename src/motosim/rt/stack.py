@@ -30,6 +30,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
+from motosim.signals import RECORDED
 from motosim.sim.stack import (
     Held,
     MotorcycleState,
@@ -54,26 +55,10 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-STACK_SIGNALS = (
-    "tau_r_hat",
-    "theta_h_meas",
-    "theta_h_dot_hat",
-    "i_m",
-    "delta",
-    "v_x",
-    "v_y",
-    "psi_dot",
-    "phi_dot",
-    "delta_dot",
-    "phi",
-    "F_yr",
-    "F_yf",
-    "psi",
-    "x",
-    "y",
-)
+_MOTORCYCLE_SIGNALS = tuple(name for name in RECORDED if name in MotorcycleState.__members__)
+STACK_SIGNALS = ("tau_r_hat", "theta_h_meas", "theta_h_dot_hat", "i_m", *_MOTORCYCLE_SIGNALS)
 """The stack's row: its estimate, the measurement it used, its command [A] and the virtual
-motorcycle's states (names of :mod:`motosim.signals`)."""
+motorcycle's states, in the order of :data:`motosim.signals.RECORDED`."""
 
 _ROW_FROM_HELD = tuple(
     (STACK_SIGNALS.index(h.name), int(h)) for h in Held if h.name in STACK_SIGNALS
