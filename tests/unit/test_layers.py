@@ -2,7 +2,8 @@
 
 params -> model -> {identification, estimation, control, cueing} -> sim -> io -> {rt, campaign,
 plotting} -> {report, view} -> cli: a module imports only from its own package and from layers
-to its left, and siblings in braces do not import each other.
+to its left, and siblings in braces do not import each other. Also: no file opts out of the
+formatter's layout.
 """
 
 import ast
@@ -66,3 +67,17 @@ def test_matplotlib_only_in_plotting() -> None:
             continue
         text = path.read_text(encoding="utf-8")
         assert "import matplotlib" not in text and "from matplotlib" not in text, path
+
+
+def test_no_file_opts_out_of_the_formatter() -> None:
+    # every file in ruff format's layout (docs/contributing.md, "The code's layout")
+    root = SRC.parents[1]
+    markers = ("# fmt: " + "skip", "# fmt: " + "off")
+    found = [
+        f"{path.relative_to(root)}:{number}"
+        for folder in ("src", "tests", "bench", "scripts", "examples")
+        for path in sorted((root / folder).rglob("*.py"))
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if any(marker in line for marker in markers)
+    ]
+    assert not found, found
