@@ -9,9 +9,7 @@ costliest first. Without a fork server (Windows) or a second core nothing is sta
 figures are drawn in the calling process; both ways give the same SVG images.
 """
 
-import base64
 import contextlib
-import io
 import multiprocessing
 import os
 import signal
@@ -25,14 +23,7 @@ from typing import Any
 from motosim.errors import MotosimError
 from motosim.io.results import SimResult, load_result
 
-__all__ = [
-    "FIGURES",
-    "SVG_DATA",
-    "FigureWorkers",
-    "draw_figure",
-    "draw_saved_figure",
-    "svg_base64",
-]
+__all__ = ["FIGURES", "SVG_DATA", "FigureWorkers", "draw_figure", "draw_saved_figure"]
 
 FIGURES: tuple[tuple[str, str], ...] = (
     ("Rider torque tau_r and its estimate tau_r_hat (paper Figs. 11 and 14)", "plot_torque"),
@@ -67,33 +58,19 @@ _PRELOAD = ["motosim.report.figures", "motosim.plotting.closed_loop", "motosim.s
 
 
 SVG_DATA = "data:image/svg+xml;base64,"
-"""The start of an ``<img>`` source holding one of :func:`svg_base64`'s images."""
-
-
-def svg_base64(figure: Any) -> str:
-    """``figure`` as SVG, base64-encoded (``SVG_DATA + svg_base64(figure)``: an image source).
-
-    Vector images: a browser draws them at any zoom, and writing them costs about two
-    thirds of rendering and compressing the same figure as PNG.
-    """
-    import matplotlib
-
-    buffer = io.BytesIO()
-    # the texts kept as text (the browser sets them in DejaVu Sans or the next font of the
-    # list it has), the clip paths' ids from a fixed salt and no date: a figure drawn twice
-    # gives the same bytes
-    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": "motosim"}):
-        figure.savefig(buffer, format="svg", metadata={"Date": None})
-    return base64.b64encode(buffer.getvalue()).decode("ascii")
+"""The start of an ``<img>`` source holding one of
+:func:`motosim.plotting.images.svg_base64`'s images."""
 
 
 def draw_figure(result: SimResult, name: str) -> str | None:
-    """The figure ``name`` of :data:`FIGURES` drawn from ``result``, as base64 SVG.
+    """The figure ``name`` of :data:`FIGURES` drawn from ``result``, as base64 SVG
+    (:func:`motosim.plotting.images.svg_base64`).
 
     Returns None when the result lacks the figure's signals. matplotlib is imported on the
     first figure.
     """
     from motosim.plotting import closed_loop
+    from motosim.plotting.images import svg_base64
 
     try:
         figure = getattr(closed_loop, name)(result)
