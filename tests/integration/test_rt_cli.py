@@ -217,6 +217,11 @@ def _udp_multicast() -> None:
         pytest.skip(f"udp_multicast is not available here: {err}")
 
 
+def _run(path: Path, out: Path, *options: str) -> subprocess.Popen[str]:
+    """``motosim run PATH --bus BUS --out OUT --no-report OPTIONS`` started."""
+    return _motosim("run", str(path), "--bus", BUS, "--out", str(out), "--no-report", *options)
+
+
 def _motosim(*argv: str) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     return subprocess.Popen(
@@ -261,18 +266,7 @@ def rig(tmp_path: Path, request: pytest.FixtureRequest) -> object:
 def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_path: Path) -> None:
     path, telemetry = rig
     out = tmp_path / "run"
-    proc = _motosim(
-        "run",
-        str(path),
-        "--bus",
-        BUS,
-        "--out",
-        str(out),
-        "--json",
-        "--no-report",
-        "--telemetry",
-        str(telemetry),
-    )
+    proc = _run(path, out, "--json", "--telemetry", str(telemetry))
     stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
     payload = json.loads(stdout)
@@ -312,17 +306,7 @@ def test_ctrl_c_fades_the_torque_out_and_closes_the_files(
 ) -> None:
     path, _ = rig
     out = tmp_path / "run"
-    proc = _motosim(
-        "run",
-        str(path),
-        "--bus",
-        BUS,
-        "--out",
-        str(out),
-        "--duration",
-        "60",
-        "--no-report",
-    )
+    proc = _run(path, out, "--duration", "60")
     staging = out.with_name(out.name + ".partial")  # made by the writer just before the loop
     end = time.monotonic() + 120
     while time.monotonic() < end and not staging.exists():
@@ -396,18 +380,7 @@ def test_the_rigs_virtual_rider_steers_by_the_runs_state_stream(
     # offline the motorcycle is 3.46 m aside at 4 s (motosim simulate of this file, seed 0)
     path, telemetry = rig
     out = tmp_path / "run"
-    proc = _motosim(
-        "run",
-        str(path),
-        "--bus",
-        BUS,
-        "--out",
-        str(out),
-        "--json",
-        "--no-report",
-        "--telemetry",
-        telemetry,
-    )
+    proc = _run(path, out, "--json", "--telemetry", telemetry)
     stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
     stream = json.loads(stdout)["state_stream"]  # sent by the writer process, not the loop
@@ -445,20 +418,7 @@ def test_run_with_the_view_serves_live_rows_and_its_buttons_go_through_the_safet
 
     path, _ = rig
     out = tmp_path / "run"
-    proc = _motosim(
-        "run",
-        str(path),
-        "--bus",
-        BUS,
-        "--out",
-        str(out),
-        "--duration",
-        "60",
-        "--no-report",
-        "--view",
-        "--view-port",
-        "0",
-    )
+    proc = _run(path, out, "--duration", "60", "--view", "--view-port", "0")
     assert proc.stderr is not None
     match = None
     lines: list[str] = []
@@ -522,20 +482,7 @@ def test_pace_bus_needs_the_control_rate_of_the_status_frames(
 def test_run_paced_by_the_rigs_status_frames(rig: tuple[Path, str], tmp_path: Path) -> None:
     path, telemetry = rig
     out = tmp_path / "run"
-    proc = _motosim(
-        "run",
-        str(path),
-        "--bus",
-        BUS,
-        "--out",
-        str(out),
-        "--json",
-        "--no-report",
-        "--telemetry",
-        telemetry,
-        "--pace",
-        "bus",
-    )
+    proc = _run(path, out, "--json", "--telemetry", telemetry, "--pace", "bus")
     stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
     payload = json.loads(stdout)

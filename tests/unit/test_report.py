@@ -24,32 +24,10 @@ from motosim.plotting.closed_loop import (
     plot_tracking,
 )
 from motosim.report import build_report, metrics
+from motosim.signals import RECORDED
 
-NAMES = (
-    "t",
-    "tau_r",
-    "tau_r_hat",
-    "tau_p",
-    "theta_h",
-    "theta_h_dot",
-    "theta_h_meas",
-    "theta_h_dot_hat",
-    "i_m",
-    "tau_m",
-    "delta",
-    "v_x",
-    "v_y",
-    "psi_dot",
-    "phi_dot",
-    "delta_dot",
-    "phi",
-    "F_yr",
-    "F_yf",
-    "psi",
-    "x",
-    "y",
-    "e_y",
-)
+# the offline simulator's columns up to the path error, without the active rider torque
+NAMES = tuple(n for n in RECORDED[: RECORDED.index("e_y") + 1] if n != "tau_r_active")
 
 
 def _rows(n: int = 60, dt: float = 0.01) -> np.ndarray:
