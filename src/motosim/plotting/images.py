@@ -4,7 +4,10 @@ import base64
 import io
 from typing import Any
 
-__all__ = ["svg_base64"]
+__all__ = ["SVG_DATA", "svg_base64"]
+
+SVG_DATA = "data:image/svg+xml;base64,"
+"""The start of an ``<img>`` source holding one of :func:`svg_base64`'s images."""
 
 
 def svg_base64(figure: Any) -> str:
@@ -22,9 +25,8 @@ def svg_base64(figure: Any) -> str:
     Returns
     -------
     str
-        The SVG's bytes in base64: the source of an ``<img>`` after
-        ``data:image/svg+xml;base64,``. The texts are kept as text, and a figure drawn twice
-        gives the same string.
+        The SVG's bytes in base64: the source of an ``<img>`` after :data:`SVG_DATA`. The
+        texts are kept as text, and a figure drawn twice gives the same string.
     """
     import matplotlib
 

@@ -20,8 +20,7 @@ import numpy as np
 from motosim.campaign import METRICS, load_results, read_manifest
 from motosim.io.files import write_whole
 from motosim.plotting.campaign import plot_failures, plot_heatmap, plot_metric_vs_factors
-from motosim.plotting.images import svg_base64
-from motosim.report.figures import SVG_DATA
+from motosim.plotting.images import SVG_DATA, svg_base64
 from motosim.report.html import _CSS, _table
 
 __all__ = ["build_campaign_report"]

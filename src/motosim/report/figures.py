@@ -23,7 +23,7 @@ from typing import Any
 from motosim.errors import MotosimError
 from motosim.io.results import SimResult, load_result
 
-__all__ = ["FIGURES", "SVG_DATA", "FigureWorkers", "draw_figure", "draw_saved_figure"]
+__all__ = ["FIGURES", "FigureWorkers", "draw_figure", "draw_saved_figure"]
 
 FIGURES: tuple[tuple[str, str], ...] = (
     ("Rider torque tau_r and its estimate tau_r_hat (paper Figs. 11 and 14)", "plot_torque"),
@@ -55,11 +55,6 @@ _COSTLIEST_FIRST = (
 )
 # what the workers import, the buzz metric's cut-off (the spectra's line) included
 _PRELOAD = ["motosim.report.figures", "motosim.plotting.closed_loop", "motosim.sim.metrics"]
-
-
-SVG_DATA = "data:image/svg+xml;base64,"
-"""The start of an ``<img>`` source holding one of
-:func:`motosim.plotting.images.svg_base64`'s images."""
 
 
 def draw_figure(result: SimResult, name: str) -> str | None:

@@ -19,7 +19,8 @@ import numpy as np
 
 from motosim.io.files import write_whole
 from motosim.io.results import SimResult, load_result
-from motosim.report.figures import FIGURES, SVG_DATA, draw_figure
+from motosim.plotting.images import SVG_DATA
+from motosim.report.figures import FIGURES, draw_figure
 from motosim.report.units import METRICS, shown
 from motosim.sim.metrics import run_metrics
 
