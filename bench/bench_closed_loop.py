@@ -96,7 +96,13 @@ def _loop_alone(duration: float, hands: str = "off") -> tuple[float, float]:
     """(periods/s of wall time, of thread CPU time) of the loop alone, best of three; the
     rider's ``hands`` a grip of :data:`motosim.sim.grips.GRIPS`."""
     from motosim.signals import RECORDED
-    from motosim.sim.closed_loop import _ensure_current_layout, build_rig, chunk_loop, new_world
+    from motosim.sim.closed_loop import (
+        NO_STOP,
+        _ensure_current_layout,
+        build_rig,
+        chunk_loop,
+        new_world,
+    )
 
     inputs = _inputs(duration, hands=hands)
     model = build_stack(inputs)
@@ -110,9 +116,8 @@ def _loop_alone(duration: float, hands: str = "off") -> tuple[float, float]:
         world = new_world(inputs.scenario)
         n = rig.current_noise.size
         out = np.full((n, len(RECORDED)), np.nan)
-        limits = np.array([np.inf, -np.inf, np.inf])
         wall, cpu = time.perf_counter(), time.thread_time()
-        done = loop(0, out, model, data, rig, world, limits)  # < n: left the domain
+        done = loop(0, out, model, data, rig, world, NO_STOP)  # < n: left the domain
         rate = (done / (time.perf_counter() - wall), done / (time.thread_time() - cpu))
         best = max(best, rate)
     return best

@@ -580,8 +580,7 @@ STOP_RT = (
     "motosim.io.can.open_link",
     "motosim.cli.rtcheck.apply_privileges",
     "motosim.rt.check.check_timing",
-    "motosim.cli.run.resolve_realtime",
-    "motosim.cli._realtime.resolve_realtime",
+    "motosim.rt.config.resolve_realtime",
 )
 STOP_VIEW = (
     "motosim.view.app.ServerThread",

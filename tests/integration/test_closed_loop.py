@@ -26,6 +26,7 @@ from motosim.sim import (
     run_metadata,
     simulate,
 )
+from motosim.sim.hands import NO_ARMS
 from motosim.sim.metrics import run_metrics
 
 ROOT = Path(__file__).parents[2]
@@ -314,7 +315,7 @@ def test_true_handlebar_uses_its_own_motor_constant(tmp_path: Path) -> None:
         1.25 * same.true_handlebar.torque_per_amp
     )
     rig = build_rig(geared, rng=np.random.default_rng(0))
-    assert rig.handlebar[3] == geared.true_handlebar.torque_per_amp
+    assert rig.handlebar.torque_per_amp == geared.true_handlebar.torque_per_amp
     a = simulate(same, rng=np.random.default_rng(0))
     b = simulate(geared, rng=np.random.default_rng(0))
     np.testing.assert_allclose(b["tau_m"], geared.true_handlebar.torque_per_amp * b["i_m"])
@@ -353,7 +354,7 @@ def test_a_design_file_scenario_runs_with_the_default_rider(
     assert inputs.scenario.rider.hands is None and not inputs.scenario.models_hands
     assert inputs.scenario.rider_hands is None and inputs.scenario.stack_hands is None
     rig = build_rig(inputs, rng=np.random.default_rng(0))
-    assert not np.any(rig.hands)
+    assert rig.arms == NO_ARMS
     sc = inputs.scenario
     off = dataclasses.replace(
         inputs, scenario=dataclasses.replace(sc, rider=dataclasses.replace(sc.rider, hands="off"))

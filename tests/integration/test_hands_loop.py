@@ -18,7 +18,7 @@ from motosim.io.runs import load_run
 from motosim.params import load_parameters
 from motosim.sim import prepare, simulate
 from motosim.sim.closed_loop import RunInputs, build_rig
-from motosim.sim.hands import GRIPS, hands_array
+from motosim.sim.hands import GRIPS, NO_ARMS, arms_of
 from motosim.sim.scenario import parse_scenario
 
 ROOT = Path(__file__).parents[2]
@@ -108,7 +108,7 @@ def test_relaxed_hands_by_default_and_off_is_no_hands() -> None:
     inputs = _inputs(base)
     assert inputs.scenario.rider.hands is None
     rig = build_rig(inputs, rng=np.random.default_rng(0))
-    assert np.array_equal(rig.hands, hands_array(GRIPS["relaxed"]))
+    assert rig.arms == arms_of(GRIPS["relaxed"]) != NO_ARMS
     default = simulate(inputs, rng=np.random.default_rng(0))
     relaxed = simulate(
         _inputs(_profile_doc(controller={"kind": "none"})), rng=np.random.default_rng(0)
@@ -118,7 +118,7 @@ def test_relaxed_hands_by_default_and_off_is_no_hands() -> None:
         inputs.scenario, rider=dataclasses.replace(inputs.scenario.rider, hands="off")
     )
     rig = build_rig(dataclasses.replace(inputs, scenario=off), rng=np.random.default_rng(0))
-    assert not rig.hands.any() and rig.hands_off.shape == (0, 2) and not rig.sensed
+    assert rig.arms == NO_ARMS and rig.hands_off.shape == (0, 2) and not rig.sensed
 
 
 def test_hands_off_phase_removes_every_torque() -> None:

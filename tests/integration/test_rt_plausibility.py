@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motosim.cli._realtime import load_realtime, rig_settings
 from motosim.errors import MotosimError
 from motosim.io.runs import load_scenario
 from motosim.rt.clock import SimulatedClock
+from motosim.rt.config import load_realtime, rig_settings
 from motosim.rt.loop import RateLoop
 from motosim.rt.rig import RigFaults, RigRider, VirtualRig
 from motosim.rt.run import RealtimeRunner, RunSettings
@@ -89,7 +89,7 @@ def _lockstep(
                 settings,
                 codecs,
                 drive,
-                RigRider(rider, hands=world.hands, hands_off=world.hands_off),  # type: ignore[arg-type]
+                RigRider(rider, arms=world.arms, hands_off=world.hands_off),
                 np.random.default_rng(sc.seed),
             )
             runner = RealtimeRunner(

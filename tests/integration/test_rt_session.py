@@ -18,15 +18,14 @@ import pytest
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
-from motosim.cli._realtime import load_realtime
 from motosim.io.can import handlebar_codecs, open_link
 from motosim.io.results import load_result
 from motosim.rt.clock import SimulatedClock
-from motosim.rt.config import parse_safety, within_safety
+from motosim.rt.config import load_realtime, parse_safety, within_safety
 from motosim.rt.lockstep import ideal_rig
 from motosim.rt.rig import RigRider, VirtualRig
 from motosim.rt.safety import State
-from motosim.rt.session import Ending, RealtimeSession, SessionConfig
+from motosim.rt.session import Ending, RealtimeSession, RunOptions, SessionConfig
 from motosim.sim import build_stack
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "realtime_square.toml"
@@ -70,7 +69,7 @@ def _session(
         folder,
         {"test": True},
         duration,
-        wait="python",
+        RunOptions(wait="python"),
     )
     session = RealtimeSession(config, clock)
 
@@ -155,4 +154,4 @@ def test_the_config_refuses_a_duration_out_of_range(designed: tuple[Any, Any, An
     with pytest.raises(MotosimError, match=r"duration = nan s; expected seconds in \(0, 86400\]"):
         SessionConfig(inputs, model, limits, "virtual", Path("x"), {}, math.nan)
     with pytest.raises(MotosimError, match="pace = 'frames'; expected 'clock' or 'bus'"):
-        SessionConfig(inputs, model, limits, "virtual", Path("x"), {}, 1.0, pace="frames")  # type: ignore[arg-type]
+        RunOptions(pace="frames")  # type: ignore[arg-type]

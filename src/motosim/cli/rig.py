@@ -117,16 +117,13 @@ class _TickStop:
 
 def _run(args: argparse.Namespace, stops: StopHandler) -> int:
     """:func:`run`, with Ctrl-C counted by ``stops`` until the loop takes it over."""
-    from motosim.cli._realtime import (
-        check_rt_options,
-        read_realtime,
-        resolve_realtime,
-        rig_settings,
-    )
+    from motosim.cli._realtime import check_rt_options
 
     options = check_rt_options(args)  # before the rig and the simulator are imported
     if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 100_000.0):
         raise MotosimError(f"--rate {args.rate!r}; expected a rate from 1 to 100000 Hz")
+    from motosim.rt.config import read_realtime, resolve_realtime, rig_settings
+
     with deferred_warnings():  # the scenario's, once its checks have passed
         scenario, realtime = read_realtime(args.scenario)
         settings = rig_settings(scenario, realtime, origin=args.scenario)
@@ -216,12 +213,12 @@ def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
 
     from motosim.io.can import handlebar_codecs
     from motosim.rt.rig import RigRider, VirtualRig
-    from motosim.sim.hands import hands_array
+    from motosim.sim.hands import arms_of
 
     sc = inputs.scenario
     held = RigRider(
         rider,
-        hands=hands_array(sc.rider_hands),
+        arms=arms_of(sc.rider_hands),
         hands_off=np.array(sc.rider.hands_off, dtype=np.float64).reshape(-1, 2),
     )
     return VirtualRig(

@@ -1,6 +1,7 @@
 """``motosim run``: the stack in real time against the handlebar drive over CAN.
 
-The command parses, builds the run's :class:`~motosim.rt.session.SessionConfig`, runs the
+The command parses its options into a :class:`~motosim.rt.request.RunRequest`, has
+:mod:`motosim.rt.request` check it and build the run's configuration, runs the
 :class:`~motosim.rt.session.RealtimeSession` and prints what happened; Ctrl-C is one
 :class:`~motosim.cli._common.StopHandler` (a stop, then an emergency stop).
 """
@@ -10,7 +11,8 @@ import json
 import sys
 import threading
 import time
-from typing import TYPE_CHECKING, Any, NamedTuple
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from motosim.cli._common import (
     StopHandler,
@@ -24,14 +26,7 @@ from motosim.cli._common import (
     warn_atypical,
     write_text,
 )
-from motosim.cli._realtime import (
-    RtOptions,
-    check_rt_options,
-    check_wait,
-    load_realtime,
-    read_realtime,
-    resolve_realtime,
-)
+from motosim.cli._realtime import RtOptions, check_rt_options, check_wait
 from motosim.cli.cache import add_cache_option, design_cache
 from motosim.cli.rtcheck import (
     add_link_option,
@@ -45,9 +40,10 @@ from motosim.errors import MotosimError, RunFailedError
 from motosim.params.checks import short_repr
 
 if TYPE_CHECKING:
+    from motosim.rt.request import RunRequest
     from motosim.rt.session import Outcome, RealtimeSession, SessionConfig
 
-__all__ = ["load_realtime", "register"]
+__all__ = ["register"]
 
 
 def register(sub: Any) -> None:
@@ -155,38 +151,43 @@ def _add_output_options(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run in real time; write the result; exit 0, 130 after Ctrl-C, 3 on a fall or a fault."""
-    check_udp_only_options(args)  # before the numerical stack is imported
+    check_udp_only_options(args)  # the options first, then the files, before the stack loads
     check_wait(args)
-    check_privilege_options(args)  # the options first, then the files
+    check_privilege_options(args)
     check_scenario_inputs(args.scenario)
     check_named_input(args.platform, "platform file")
-    check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
-    check_scenario_values(args.scenario)  # before the numerical stack is imported
+    folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
+    check_scenario_values(args.scenario)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
-    options = check_rt_options(args)  # before the stack and the simulator are imported
+    request = _request(args, check_rt_options(args), folder)
     stops = StopHandler()
     with stops.installed():
+        from motosim.rt.request import check_run, session_config
+
         with deferred_warnings():  # the scenario's, once every check has passed
-            checked = _check(args)  # every refusal before the loading line
+            cache = design_cache(args, quiet=args.json)
+            checked = check_run(request)  # every refusal before the loading line
+            if args.view:
+                from motosim.view.app import _need_starlette
+
+                _need_starlette()
             print("motosim run: loading the compiled stack ...", file=sys.stderr, flush=True)
             start = time.monotonic()
-            config = _config(args, options, checked)
+            config = session_config(request, checked, cache, live=_live_view(args))
         warn_atypical("run", "--duration", args.duration)  # once every check has passed
         from motosim.rt.session import RealtimeSession
 
         with RealtimeSession(config, clock_from_args(args)) as session:
             session.prepare()
             stops.check()  # Ctrl-C while the stack loaded: no run
-            print(
-                f"motosim run: the stack is ready ({time.monotonic() - start:.1f} s)",
-                file=sys.stderr,
-                flush=True,
-            )
+            took = time.monotonic() - start
+            print(f"motosim run: the stack is ready ({took:.1f} s)", file=sys.stderr, flush=True)
             stops.aim(session)  # from now on Ctrl-C is a stop, then an E-stop
-            outcome = _run(args, session)
+            outcome = _run(session)
             stops.release()  # the loop has ended: Ctrl-C interrupts what is left
-            write_text(outcome.folder / "timing.json", _json(outcome.report))
+            payload = _finite_or_none(outcome.report)
+            write_text(outcome.folder / "timing.json", json.dumps(payload, indent=2) + "\n")
             html = None
             if args.report:
                 from motosim.report import build_report
@@ -195,95 +196,12 @@ def run(args: argparse.Namespace) -> int:
     return _print(args, config, outcome, html)
 
 
-class _Checked(NamedTuple):
-    """The scenario and the options, checked: what :func:`_config` builds the run from."""
+def _request(args: argparse.Namespace, options: RtOptions, folder: Path) -> "RunRequest":
+    """The checked options as the run's request."""
+    from motosim.rt.request import RunRequest
+    from motosim.rt.session import RunOptions
 
-    scenario: Any
-    realtime: dict[str, Any]
-    limits: Any
-    latency: float
-    age: float
-    cache: Any
-
-
-def _check(args: argparse.Namespace) -> _Checked:
-    """Read the scenario and refuse what a real-time run cannot take (one line each)."""
-    from motosim.rt.config import (
-        frame_age,
-        parse_latency,
-        parse_safety,
-        refuse_offline_only,
-        run_paces,
-    )
-
-    cache = design_cache(args, quiet=args.json)
-    sc, realtime = read_realtime(args.scenario, safety=True, pace=args.pace)
-    refuse_offline_only(sc, origin=args.scenario)
-    limits = parse_safety(realtime.get("safety"), origin=args.scenario)
-    rate, measurement = sc.rates.control, sc.rates.measurement
-    latency = parse_latency(realtime, origin=args.scenario)
-    age = frame_age(
-        latency,
-        pace=args.pace,
-        control_rate=rate,
-        measurement_rate=measurement,
-        origin=args.scenario,
-    )
-    if args.pace not in run_paces(rate, measurement):
-        raise MotosimError(
-            f"--pace bus with control = {rate:g} Hz and measurement = {measurement:g} Hz; "
-            "expected equal rates (one period per status frame)"
-        )
-    if args.view:
-        from motosim.view.app import _need_starlette
-
-        _need_starlette()
-    return _Checked(sc, realtime, limits, latency, age, cache)
-
-
-def _config(args: argparse.Namespace, options: RtOptions, checked: _Checked) -> "SessionConfig":
-    """The run resolved, its stack designed: the session's configuration."""
-    from motosim.io.cache import cached_stack
-    from motosim.rt.config import within_safety
-    from motosim.rt.session import SessionConfig
-    from motosim.sim import run_metadata
-    from motosim.sim.stack import account_for_delay
-
-    folder = check_result_folder(args.out, args.scenario, overwrite=args.overwrite)
-    cache, limits = checked.cache, checked.limits
-    inputs = resolve_realtime(args.scenario, checked.scenario, cache)
-    inputs = within_safety(inputs, limits)  # the stack saturates where the clamp cuts
-    sc = inputs.scenario
-    duration = sc.duration if args.duration is None else args.duration
-    live = None
-    if args.view:
-        from motosim.cli._liveview import view_sink
-
-        live = view_sink(args, inputs, duration, limits)
-    with cache.designing(sc.name):
-        model = cached_stack(cache, inputs)
-    model = account_for_delay(model, checked.age, inputs.design_handlebar)  # the frames' age
-    udp = args.bus.partition(":")[0] == "udp_multicast"
-    link = "fast" if args.link != "python-can" and udp else "python-can"
-    metadata = run_metadata(inputs) | {
-        "realtime": {
-            "bus": args.bus,
-            "link": link,
-            "pace": args.pace,
-            "status_latency": checked.latency,
-            "measurement_delay": checked.age,
-            "safety": limits,
-            "duration": duration,
-        }
-    }
-    return SessionConfig(
-        inputs,
-        model,
-        limits,
-        args.bus,
-        folder,
-        metadata,
-        duration,
+    how = RunOptions(
         pace=args.pace,
         wait=args.wait or "compiled",
         fast_link=args.link != "python-can",
@@ -293,26 +211,34 @@ def _config(args: argparse.Namespace, options: RtOptions, checked: _Checked) -> 
         platform=options.platform,
         platform_udp=options.platform_udp,
         platform_can=args.platform_can,
-        live=live,
         privileges=privilege_request(args),
     )
+    return RunRequest(args.scenario, args.bus, folder, args.duration, how)
 
 
-def _run(args: argparse.Namespace, session: "RealtimeSession") -> "Outcome":
+def _live_view(args: argparse.Namespace) -> Any:
+    """What builds the rider's view of ``--view`` (None without)."""
+    if not args.view:
+        return None
+    from motosim.cli._liveview import view_sink
+
+    return lambda inputs, duration, limits: view_sink(args, inputs, duration, limits)
+
+
+def _run(session: "RealtimeSession") -> "Outcome":
     """Open the result, say how to stop, run the loop."""
     err = sys.stderr
     url = session.open()
-    live = session.config.live
-    if url is not None and live is not None:
-        token = getattr(live, "token", "")
+    c = session.config
+    if url is not None and c.live is not None:
+        token = getattr(c.live, "token", "")
         print(f"motosim run: rider's view {url}/?token={token}", file=err)
         print(f"motosim run: dashboard    {url}/dashboard?token={token}", file=err)
         print("motosim run: the torque is off until Arm is pressed", file=err, flush=True)
     if sys.stdin is not None and sys.stdin.isatty():
         threading.Thread(target=_keyboard, args=(session,), daemon=True).start()
         print("motosim run: Enter = emergency stop, Ctrl-C = stop", file=err)
-    c = session.config
-    paced = "clock" if c.pace == "clock" else "status frames"
+    paced = "clock" if c.options.pace == "clock" else "status frames"
     print(
         f"motosim run: {c.rate:g} Hz on {c.bus}, paced by the {paced}, {c.duration:g} s",
         file=err,
@@ -328,44 +254,16 @@ def _keyboard(session: "RealtimeSession") -> None:
         return
 
 
-def _json(payload: Any) -> str:
-    return json.dumps(_finite_or_none(payload), indent=2, allow_nan=False) + "\n"
-
-
 def _print(args: argparse.Namespace, config: "SessionConfig", outcome: "Outcome", html: Any) -> int:
     """The summary (or its JSON) and the exit code of the outcome."""
-    from motosim.rt.check import advice
+    from motosim.rt.request import summary_lines
     from motosim.rt.session import Ending
 
-    folder, stats, counters = outcome.folder, outcome.stats, outcome.counters
+    folder = outcome.folder
     if args.json:
         print_json({"out": str(folder), "report": str(html) if html else None} | outcome.report)
     else:
-        wake = "wake-up" if config.pace == "clock" else "frame interval jitter"
-        gaps = f", {stats.gaps} frame periods without a frame" if config.pace == "bus" else ""
-        print(
-            f"{config.inputs.scenario.name}: {stats.served} periods at {stats.rate:g} Hz, "
-            f"result in {folder}"
-        )
-        print(
-            f"  {wake} p99 {stats.wake_p99 * 1e6:.0f} us, compute p99 "
-            f"{stats.compute_p99 * 1e6:.0f} us, missed {stats.missed} of "
-            f"{stats.periods}{gaps}"
-        )
-        for p in outcome.privileges:
-            print(f"  {p}")
-        print(f"  state {counters.state}; {counters.fault_reason}")
-        if counters.frames_lost > max(10, counters.status_frames // 10):
-            print(
-                f"  {counters.frames_lost} status frames lost for {counters.status_frames} "
-                "received: is a second rig or drive on this bus? (udp_multicast: give each "
-                "rig and run pair a group of its own, --bus udp_multicast:239.74.163.50)"
-            )
-        asked = config.privileges.all_given
-        for line in advice(
-            stats, counters.fault, asked_all=asked, privileges=outcome.privileges, bus=config.bus
-        ):
-            print(f"  {line}")
+        print("\n".join(summary_lines(config, outcome)))
     name = config.inputs.scenario.name
     if outcome.ending is Ending.FELL:
         raise RunFailedError(
@@ -377,11 +275,8 @@ def _print(args: argparse.Namespace, config: "SessionConfig", outcome: "Outcome"
             time=outcome.time,
         )
     if outcome.ending is Ending.STOPPED:
-        how = (
-            "emergency stop, torque zeroed"
-            if counters.fault != "NONE"
-            else "stopped, torque faded out"
-        )
+        zeroed = outcome.counters.fault != "NONE"
+        how = "emergency stop, torque zeroed" if zeroed else "stopped, torque faded out"
         print(f"motosim run: {how}; result in {folder}", file=sys.stderr)
         return 130
     return 0

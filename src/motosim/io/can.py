@@ -38,6 +38,7 @@ import struct
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from enum import IntEnum
 from pathlib import Path
 from typing import Any, Self
 
@@ -52,13 +53,17 @@ from motosim.errors import MotosimError
 from motosim.io.bus_spec import check_bus
 
 __all__ = [
+    "FRAME_ROW",
     "RECV_AVAILABLE",
     "CanLink",
+    "DatagramKind",
     "FrameCodec",
+    "FrameColumn",
     "HandlebarCodecs",
     "HandlebarMapping",
     "Link",
     "PlatformCodecs",
+    "SignalColumn",
     "SignalLayout",
     "UdpMulticastLink",
     "codec_table",
@@ -258,42 +263,81 @@ class FrameCodec:
         return self._crc(raw) == (raw >> self._checksum_shift) & 0xFF
 
 
+class FrameColumn(IntEnum):
+    """The columns of a codec table's first row, the frame's (:func:`codec_table`)."""
+
+    frame_id = 0
+    length = 1
+    """[bytes]."""
+    checksum_index = 2
+    """The checksum signal's index (-1: none)."""
+    checksum_shift = 3
+    """The checksum's first bit."""
+    id_crc = 4
+    """The CRC of the frame id's two bytes."""
+    counter_index = 5
+    """The counter signal's index (-1: none)."""
+
+
+class SignalColumn(IntEnum):
+    """The columns of a codec table's signal rows (:func:`codec_table`)."""
+
+    start = 0
+    """Start bit."""
+    bits = 1
+    """Length [bits]."""
+    signed = 2
+    """1 for a signed signal, else 0."""
+    scale = 3
+    offset = 4
+    low = 5
+    """Lowest raw value."""
+    high = 6
+    """Highest raw value."""
+
+
+FRAME_ROW = 0
+"""The row of the frame's columns in a codec table; the signals' rows follow it."""
+
+
 def codec_table(codec: FrameCodec) -> NDArray[np.float64]:
     """The codec as the array the compiled :func:`encode_frame` and :func:`decode_frame` read.
 
-    Row 0: frame id, length [bytes], checksum index (-1: none), checksum bit, the CRC of the
-    frame id's two bytes, counter index (-1: none); then one row per signal: start bit,
-    length [bits], signed (0/1), scale, offset, lowest and highest raw value.
+    Row :data:`FRAME_ROW` holds the frame's values (:class:`FrameColumn`), then one row per
+    signal holds its values (:class:`SignalColumn`).
 
     Raises
     ------
     MotosimError
         For a signal of 64 bits (the compiled codec works on 63-bit raw values).
     """
-    table = np.zeros((len(codec.names) + 1, 8))
-    table[0, :6] = (
-        codec.frame_id,
-        codec.length,
-        codec.checksum_index,
-        codec._checksum_shift,
-        codec._id_crc,
-        codec.counter_index,
-    )
+    table = np.zeros((len(codec.names) + 1, max(len(FrameColumn), len(SignalColumn))))
+    frame = table[FRAME_ROW]
+    frame[FrameColumn.frame_id] = codec.frame_id
+    frame[FrameColumn.length] = codec.length
+    frame[FrameColumn.checksum_index] = codec.checksum_index
+    frame[FrameColumn.checksum_shift] = codec._checksum_shift
+    frame[FrameColumn.id_crc] = codec._id_crc
+    frame[FrameColumn.counter_index] = codec.counter_index
     for i, (start, mask, sign, _wrap, scale, offset, lo, hi) in enumerate(codec._fields):
         length = mask.bit_length()
         if length > 63:
             raise MotosimError(
                 f"signal {codec.names[i]}: {length} bits; expected at most 63 (compiled codec)"
             )
-        table[i + 1, :7] = (start, length, 1.0 if sign else 0.0, scale, offset, lo, hi)
+        row = table[FRAME_ROW + 1 + i]
+        row[SignalColumn.start], row[SignalColumn.bits] = start, length
+        row[SignalColumn.signed] = 1.0 if sign else 0.0
+        row[SignalColumn.scale], row[SignalColumn.offset] = scale, offset
+        row[SignalColumn.low], row[SignalColumn.high] = lo, hi
     return table
 
 
 @njit(cache=True)
 def _table_crc(table: NDArray[np.float64], raw: np.uint64) -> int:
     """CRC-8/SAE-J1850 of the frame id and the frame ``raw`` (checksum bits zeroed)."""
-    crc = int(table[0, 4])
-    for b in range(int(table[0, 1])):
+    crc = int(table[FRAME_ROW, FrameColumn.id_crc])
+    for b in range(int(table[FRAME_ROW, FrameColumn.length])):
         byte = int((raw >> np.uint64(8 * b)) & np.uint64(0xFF))
         crc = int(_CRC8_TABLE[crc ^ byte])
     return crc ^ 0xFF
@@ -312,22 +356,22 @@ def decode_frame(
     ``table`` is :func:`codec_table`'s; False (``out`` unchanged) on a wrong length, False
     (``out`` written) on a wrong checksum.
     """
-    if length != int(table[0, 1]):
+    if length != int(table[FRAME_ROW, FrameColumn.length]):
         return False
     raw = np.uint64(0)
     for b in range(length):
         raw |= np.uint64(data[start + b]) << np.uint64(8 * b)
     for i in range(table.shape[0] - 1):
-        f = table[i + 1]
-        bits = int(f[1])
+        f = table[FRAME_ROW + 1 + i]
+        bits = int(f[SignalColumn.bits])
         mask = (np.uint64(1) << np.uint64(bits)) - np.uint64(1)
-        r = np.int64((raw >> np.uint64(int(f[0]))) & mask)
-        if f[2] != 0.0 and (r >> np.int64(bits - 1)) & np.int64(1):
+        r = np.int64((raw >> np.uint64(int(f[SignalColumn.start]))) & mask)
+        if f[SignalColumn.signed] != 0.0 and (r >> np.int64(bits - 1)) & np.int64(1):
             r -= np.int64(1) << np.int64(bits)
-        out[i] = r * f[3] + f[4]
-    if table[0, 2] < 0.0:
+        out[i] = r * f[SignalColumn.scale] + f[SignalColumn.offset]
+    if table[FRAME_ROW, FrameColumn.checksum_index] < 0.0:
         return True
-    shift = np.uint64(int(table[0, 3]))
+    shift = np.uint64(int(table[FRAME_ROW, FrameColumn.checksum_shift]))
     keep = ~(np.uint64(0xFF) << shift)
     return _table_crc(table, raw & keep) == int((raw >> shift) & np.uint64(0xFF))
 
@@ -343,19 +387,19 @@ def encode_frame(
     """
     raw = np.uint64(0)
     for i in range(table.shape[0] - 1):
-        f = table[i + 1]
-        v = (values[i] - f[4]) / f[3]
+        f = table[FRAME_ROW + 1 + i]
+        v = (values[i] - f[SignalColumn.offset]) / f[SignalColumn.scale]
         r = np.int64(0)
         if v == v:
-            r = np.int64(np.rint(min(max(v, f[5]), f[6])))
-        bits = np.int64(f[1])
+            r = np.int64(np.rint(min(max(v, f[SignalColumn.low]), f[SignalColumn.high])))
+        bits = np.int64(f[SignalColumn.bits])
         mask = (np.int64(1) << bits) - np.int64(1)
-        raw |= np.uint64(r & mask) << np.uint64(int(f[0]))
-    if table[0, 2] >= 0.0:
-        shift = np.uint64(int(table[0, 3]))
+        raw |= np.uint64(r & mask) << np.uint64(int(f[SignalColumn.start]))
+    if table[FRAME_ROW, FrameColumn.checksum_index] >= 0.0:
+        shift = np.uint64(int(table[FRAME_ROW, FrameColumn.checksum_shift]))
         keep = ~(np.uint64(0xFF) << shift)
         raw = (raw & keep) | (np.uint64(_table_crc(table, raw & keep)) << shift)
-    for b in range(int(table[0, 1])):
+    for b in range(int(table[FRAME_ROW, FrameColumn.length])):
         out[start + b] = np.uint8((raw >> np.uint64(8 * b)) & np.uint64(0xFF))
 
 
@@ -404,17 +448,33 @@ def _msgpack_size(buf: NDArray[np.uint8], pos: int, end: int) -> tuple[int, int]
     return -1, 0
 
 
+class DatagramKind(IntEnum):
+    """What a ``udp_multicast`` datagram holds (:func:`unpack_frame`)."""
+
+    NOT_A_FRAME = -1
+    """Bytes that are no python-can datagram."""
+    FLAGGED = 0
+    """An error or a remote frame, to ignore."""
+    DATA = 1
+    """A data frame."""
+
+
+_NOT_A_FRAME = int(DatagramKind.NOT_A_FRAME)
+_FLAGGED = int(DatagramKind.FLAGGED)
+_DATA = int(DatagramKind.DATA)
+
+
 @njit(cache=True)
 def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, int, int, int]:
     """A python-can ``udp_multicast`` datagram (its ``pack_message``'s msgpack map), compiled.
 
-    Returns ``(kind, frame_id, data_start, data_length)``: kind 1 for a data frame, 0 for an
-    error or remote frame (to ignore), -1 for bytes that are not such a datagram.
+    Returns ``(kind, frame_id, data_start, data_length)``, ``kind`` a :class:`DatagramKind`
+    code.
     """
     end = start + length
     pos = start
     if length < 1:
-        return -1, 0, 0, 0
+        return _NOT_A_FRAME, 0, 0, 0
     c = _byte(buf, pos)
     if 0x80 <= c <= 0x8F:
         entries = c & 0x0F
@@ -423,23 +483,23 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
         entries = (_byte(buf, pos + 1) << 8) | _byte(buf, pos + 2)
         pos += 3
     else:
-        return -1, 0, 0, 0
+        return _NOT_A_FRAME, 0, 0, 0
     frame_id, data_start, data_length = -1, 0, -1
     flagged = False
     for _ in range(entries):
         if pos >= end:
-            return -1, 0, 0, 0
+            return _NOT_A_FRAME, 0, 0, 0
         head, size = _msgpack_size(buf, pos, end)
         c = _byte(buf, pos)
         if head < 0 or not (0xA0 <= c <= 0xBF or c == 0xD9):  # keys are strings
-            return -1, 0, 0, 0
+            return _NOT_A_FRAME, 0, 0, 0
         key, key_length = pos + head, size
         pos = key + key_length
         if pos >= end:
-            return -1, 0, 0, 0
+            return _NOT_A_FRAME, 0, 0, 0
         head, size = _msgpack_size(buf, pos, end)
         if head < 0 or pos + head + size > end:
-            return -1, 0, 0, 0
+            return _NOT_A_FRAME, 0, 0, 0
         c = _byte(buf, pos)
         value = pos + head
         if _is_key(buf, key, key_length, _KEY_ID):
@@ -450,19 +510,19 @@ def unpack_frame(buf: NDArray[np.uint8], start: int, length: int) -> tuple[int, 
                 for j in range(size):
                     frame_id = (frame_id << 8) | _byte(buf, value + j)
             else:
-                return -1, 0, 0, 0
+                return _NOT_A_FRAME, 0, 0, 0
         elif _is_key(buf, key, key_length, _KEY_ERROR) or _is_key(
             buf, key, key_length, _KEY_REMOTE
         ):
             flagged = flagged or c == 0xC3
         elif _is_key(buf, key, key_length, _KEY_DATA):
             if c != 0xC4 and c != 0xC5:
-                return -1, 0, 0, 0
+                return _NOT_A_FRAME, 0, 0, 0
             data_start, data_length = value, size
         pos = value + size
     if frame_id < 0 or data_length < 0:
-        return -1, 0, 0, 0
-    return 0 if flagged else 1, frame_id, data_start, data_length
+        return _NOT_A_FRAME, 0, 0, 0
+    return _FLAGGED if flagged else _DATA, frame_id, data_start, data_length
 
 
 @dataclass(frozen=True, slots=True)

@@ -20,6 +20,7 @@ integrated by RK4 sub-steps.
 
 import math
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -33,10 +34,12 @@ from motosim.timeseries import TimeSeries
 
 __all__ = [
     "HandlebarMatrices",
+    "HandlebarPlant",
     "friction_torque",
     "linear_model",
     "matrices",
     "perturbed",
+    "plant_of",
     "simulate_handlebar",
     "step_exact",
     "step_smooth",
@@ -56,6 +59,23 @@ class HandlebarMatrices:
     B: Array
     D: Array
     C: Array
+
+
+class HandlebarPlant(NamedTuple):
+    """The handlebar of eq. (5) as compiled loops step it (:func:`step_exact`): J_eq
+    [kg*m^2], beta_eq [N*m*s/rad], beta_s [N*m] and the torque per ampere N k_t [N*m/A]."""
+
+    J_eq: float
+    beta_eq: float
+    beta_s: float
+    torque_per_amp: float
+
+
+def plant_of(hb: HandlebarParameters) -> HandlebarPlant:
+    """The :class:`HandlebarPlant` of ``hb``."""
+    return HandlebarPlant(
+        float(hb.J_eq), float(hb.beta_eq), float(hb.beta_s), float(hb.torque_per_amp)
+    )
 
 
 def perturbed(

@@ -26,22 +26,30 @@ age (:func:`frame_age`, :func:`motosim.sim.stack.account_for_delay`).
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motosim.choices import SENSOR_ESTIMATOR
-from motosim.errors import MotosimError
+from motosim.errors import MotosimError, warn
+from motosim.params.toml import read_toml
 from motosim.rt.safety import SafetyLimits
 
 if TYPE_CHECKING:
+    from motosim.io.cache import DesignCache
+    from motosim.rt.rig import RigSettings
     from motosim.sim import RunInputs, Scenario
 
 __all__ = [
     "MAX_LATENCY",
     "RealtimeOptions",
     "frame_age",
+    "load_realtime",
     "parse_latency",
     "parse_safety",
+    "read_realtime",
     "refuse_offline_only",
+    "resolve_realtime",
+    "rig_settings",
     "run_paces",
     "split_realtime",
     "table_number",
@@ -230,3 +238,106 @@ def refuse_offline_only(scenario: "Scenario", *, origin: str) -> None:
             "loop does not take the HB_TORQUE frame); expected an estimator of the angle and "
             "the current"
         )
+
+
+def load_realtime(
+    path: str, *, safety: bool = False, pace: str | None = None, cache: "DesignCache | None" = None
+) -> tuple["RunInputs", dict[str, Any]]:
+    """Read a scenario file: its resolved run and its ``[realtime]`` table
+    (:func:`read_realtime`, then :func:`resolve_realtime`)."""
+    scenario, realtime = read_realtime(path, safety=safety, pace=pace)
+    return resolve_realtime(path, scenario, cache), realtime
+
+
+def read_realtime(
+    path: str, *, safety: bool = False, pace: str | None = None
+) -> tuple["Scenario", dict[str, Any]]:
+    """Read and check a scenario file: its scenario and its ``[realtime]`` table.
+
+    With ``safety``, a missing ``[realtime.safety]`` table is refused here, before the run is
+    resolved (which designs its controller: seconds). A ``status_latency`` that makes the
+    status frame older than the stack accounts for is refused here too, in the line
+    ``motosim run`` gives (:func:`frame_age`): for ``motosim run`` at its
+    ``pace``; without a ``pace`` (``motosim rig``, which serves whichever run comes) at the
+    pace of ``run`` that reads the frame youngest at the scenario's rates
+    (:func:`run_paces`), so that a lab learns it before starting the rig.
+    The rig thus keeps a latency that ``run --pace clock`` refuses and ``run --pace bus``
+    takes (equal control and measurement rates: up to a frame period against half a control
+    period less). The rig's own ``[realtime.rig]`` latency, the bus it emulates, is not
+    bounded by the frame period: a slow bus is what it is there to show ``run``.
+    """
+    from motosim.sim import parse_scenario
+    from motosim.sim.scenario import implausible
+
+    data = read_toml(Path(path), what="scenario file")
+    rest, realtime = split_realtime(data, origin=str(path))
+    scenario = parse_scenario(rest, origin=str(path))
+    for line in implausible(scenario):
+        warn(f"{path}: {line}")
+    # both tables are checked whichever command reads the file: a typo in the table the
+    # other command uses is refused now, not when that command runs
+    if "safety" in realtime or safety:
+        parse_safety(realtime.get("safety"), origin=str(path))
+    rates = scenario.rates
+    frame_age(
+        parse_latency(realtime, origin=str(path)),
+        pace=pace or run_paces(rates.control, rates.measurement)[-1],
+        control_rate=rates.control,
+        measurement_rate=rates.measurement,
+        origin=str(path),
+    )
+    rig_settings(scenario, realtime, origin=str(path))
+    _check_realtime_motorcycle(scenario, origin=str(path))
+    return scenario, realtime
+
+
+def resolve_realtime(
+    path: str, scenario: "Scenario", cache: "DesignCache | None" = None
+) -> "RunInputs":
+    """The run of a scenario read by :func:`read_realtime` (its files resolved beside
+    ``path``, its controller designed, from ``cache`` when one is given)."""
+    from motosim.io.runs import resolve
+
+    source = Path(path)
+    if cache is None:
+        return resolve(scenario, source.parent)
+    with cache.designing(scenario.name):
+        return resolve(scenario, source.parent, cache=cache)
+
+
+def _check_realtime_motorcycle(scenario: "Scenario", *, origin: str) -> None:
+    """Refuse what the real-time loop does not read of a multibody motorcycle: its drive and
+    brake torques and the road's friction change only offline (motosim simulate)."""
+    from motosim.sim.scenario import ConstantProfile, Road
+
+    mc = scenario.motorcycle
+    if mc.model != "multibody":
+        return
+    for key in ("drive_torque", "front_brake_torque", "rear_brake_torque"):
+        if getattr(mc, key) != ConstantProfile(0.0):
+            raise MotosimError(
+                f"{origin}: [motorcycle] {key} on the multibody motorcycle is read offline "
+                "only (motosim simulate); expected none in real time"
+            )
+    if scenario.road != Road():
+        raise MotosimError(
+            f"{origin}: [road] friction is read offline only (motosim simulate); expected "
+            "none in real time (the road's friction 1)"
+        )
+
+
+def rig_settings(scenario: "Scenario", realtime: dict[str, Any], *, origin: str) -> "RigSettings":
+    """The virtual rig's settings: the ``[realtime.rig]`` table over the scenario's values."""
+    from motosim.rt.rig import parse_rig
+
+    return parse_rig(
+        realtime.get("rig", {}),
+        base={
+            "plant_rate": scenario.rates.plant,
+            "status_rate": scenario.rates.measurement,
+            "encoder_bits": scenario.measurement.encoder_bits,
+            "current_noise": scenario.measurement.current_noise,
+            "max_current": scenario.controller.max_current,
+        },
+        where=f"{origin}: [realtime.rig]",
+    )

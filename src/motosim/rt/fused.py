@@ -35,7 +35,16 @@ from numba.experimental import structref
 from numba.extending import intrinsic
 from numpy.typing import NDArray
 
-from motosim.io.can import RECV_AVAILABLE, decode_frame, encode_frame, recv_datagrams, unpack_frame
+from motosim.io.can import (
+    FRAME_ROW,
+    RECV_AVAILABLE,
+    DatagramKind,
+    FrameColumn,
+    decode_frame,
+    encode_frame,
+    recv_datagrams,
+    unpack_frame,
+)
 from motosim.rt.e2e import FieldsStruct
 from motosim.rt.ring import RingCounter
 from motosim.rt.safety import (
@@ -78,6 +87,9 @@ __all__ = [
     "take_frames",
 ]
 
+_NOT_A_FRAME = int(DatagramKind.NOT_A_FRAME)
+_FLAGGED = int(DatagramKind.FLAGGED)
+
 Array = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Ints = NDArray[np.int64]
@@ -117,35 +129,37 @@ class RunnerSettings(NamedTuple):
     warm: bool
 
 
-_STATE_FIELDS = (
-    "t0",
-    "theta",
-    "current",
-    "prev_theta",
-    "fresh_at",
-    "omega",
-    "started",
-    "fresh",
-    "stop",
-    "finishing",
-    "arm_request",
-    "after_fault",
-    "sent",
-    "calls",
-    "status_frames",
-    "bad",
-    "recv_errors",
-    "left",
-    "left_t",
-    "left_phi",
-    "left_speed",
-    "stack_time",
-    "woke",
-    "warm_ups",
-    "beats",
-    "k_last",
-    "ended",
-)
+_STATE_START: dict[str, float | int | bool] = {
+    "t0": math.nan,
+    "theta": math.nan,
+    "current": math.nan,
+    "prev_theta": math.nan,
+    "fresh_at": 0.0,
+    "omega": 0.0,
+    "started": False,
+    "fresh": False,
+    "stop": False,
+    "finishing": False,
+    "arm_request": False,
+    "after_fault": 0,
+    "sent": 0,
+    "calls": 0,
+    "status_frames": 0,
+    "bad": 0,
+    "recv_errors": 0,
+    "left": False,
+    "left_t": math.nan,
+    "left_phi": math.nan,
+    "left_speed": math.nan,
+    "stack_time": math.nan,
+    "woke": math.nan,
+    "warm_ups": 0,
+    "beats": 0,
+    "k_last": -1,
+    "ended": False,
+}
+"""Each field of the runner's own state (after :class:`RunnerSettings`') at the start."""
+_STATE_FIELDS = tuple(_STATE_START)
 
 
 class RunnerState(structref.StructRefProxy):
@@ -172,37 +186,8 @@ class RunnerState(structref.StructRefProxy):
     """
 
     def __new__(cls, settings: RunnerSettings) -> "RunnerState":
-        nan = math.nan
         made: RunnerState = structref.StructRefProxy.__new__(  # type: ignore[no-untyped-call]
-            cls,
-            *settings,
-            nan,
-            nan,
-            nan,
-            nan,
-            0.0,
-            0.0,
-            False,
-            False,
-            False,
-            False,
-            False,
-            0,
-            0,
-            0,
-            0,
-            0,
-            0,
-            False,
-            nan,
-            nan,
-            nan,
-            nan,
-            nan,
-            0,
-            0,
-            -1,
-            False,
+            cls, *settings, *_STATE_START.values()
         )
         return made
 
@@ -413,16 +398,16 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
     that are no python-can frames are counted (the runner's ``bad``).
     """
     r, q, s = a.runner, a.positions, a.safety
-    status_id = int(a.status[0, 0])
-    estop_id = int(a.estop[0, 0])
+    status_id = int(a.status[FRAME_ROW, FrameColumn.frame_id])
+    estop_id = int(a.estop[FRAME_ROW, FrameColumn.frame_id])
     count = 0
     for j in range(first, end):
         if r.datagrams:
             kind, frame_id, start, length = unpack_frame(a.rx[j], 0, a.rx_length[j])
-            if kind < 0:
+            if kind == _NOT_A_FRAME:
                 r.bad += 1
                 continue
-            if kind == 0:  # an error or remote frame
+            if kind == _FLAGGED:  # an error or remote frame
                 continue
         else:
             frame_id, start, length = a.rx_id[j], 0, a.rx_length[j]

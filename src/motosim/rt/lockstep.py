@@ -205,7 +205,7 @@ class Lockstep:
             self._links.append(self.host)
             drive = open_link(f"virtual:{channel}")
             self._links.append(drive)
-            held = RigRider(rider, on_enable=False, hands=world.hands, hands_off=world.hands_off)
+            held = RigRider(rider, on_enable=False, arms=world.arms, hands_off=world.hands_off)
             self.rig = VirtualRig(
                 inputs.true_handlebar,
                 settings or ideal_rig(sc),

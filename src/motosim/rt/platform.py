@@ -55,6 +55,7 @@ import math
 import socket
 import struct
 from dataclasses import dataclass
+from enum import IntEnum
 from operator import itemgetter
 from typing import NamedTuple, Protocol
 
@@ -74,6 +75,7 @@ __all__ = [
     "PLATFORM_FRAME",
     "PLATFORM_MAGIC",
     "PLATFORM_VERSION",
+    "Motion",
     "PlatformCanSender",
     "PlatformCueing",
     "PlatformFrame",
@@ -82,6 +84,7 @@ __all__ = [
     "PlatformSender",
     "PlatformTee",
     "PlatformTwin",
+    "PlatformValue",
     "decode_platform",
     "encode_platform",
     "platform_step",
@@ -160,16 +163,46 @@ def decode_platform(data: bytes) -> PlatformFrame:
     )
 
 
+class Motion(IntEnum):
+    """What :attr:`PlatformCueing.motion` remembers between periods."""
+
+    v_x = 0
+    """The previous period's forward speed [m/s]."""
+    started = 1
+    """1 once a period has run (the forward acceleration needs two speeds)."""
+
+
+class PlatformValue(IntEnum):
+    """The platform's command, in the order of :func:`platform_step`'s ``out`` (and of the
+    datagram's values)."""
+
+    roll = 0
+    pitch = 1
+    yaw = 2
+    roll_rate = 3
+    pitch_rate = 4
+    yaw_rate = 5
+    horizon = 6
+
+
 class PlatformCueing(NamedTuple):
-    """What :func:`platform_step` steps: the suspension pitch section (``lowpass2`` of the
-    rider's pitch model), the washout's and the limits' coefficients, the state ``[previous
-    v_x, started, pitch section (2), washout (9), limit managers (3 x 2)]`` (zeros at rest,
-    updated in place) and the washout's roll, pitch, yaw and horizon command (scratch)."""
+    """What :func:`platform_step` steps.
+
+    Coefficients: the suspension pitch section (``lowpass2`` of the rider's pitch model),
+    the washout's, and the limit managers' rows (roll, pitch, yaw) with the period ``dt``
+    [s]. States, zeros at rest and updated in place: ``motion`` (:class:`Motion`), the pitch
+    section's two, the washout's and each axis's limit manager's (its output [rad] and
+    rate [rad/s]). ``command`` is scratch: the washout's roll, pitch, yaw and horizon.
+    """
 
     pitch: Array
     washout: Array
     limits: Array
-    state: Array
+    dt: float
+    motion: Array
+    pitch_state: Array
+    washout_state: Array
+    limit_state: Array
     command: Array
 
 
@@ -185,24 +218,45 @@ def platform_step(
 ) -> None:
     """One period of the platform cueing (module docstring, steps 1 to 4) from the
     motorcycle's forward and lateral speed [m/s], yaw rate [rad/s] and lean [rad] and the
-    safety stage's envelope in [0, 1]: ``cueing``'s state updated in place, ``out`` (7)
-    written with roll, pitch, yaw [rad], their rates [rad/s] and the horizon roll [rad]."""
-    state, limits, cmd = cueing.state, cueing.limits, cueing.command
-    dt = limits[0, 3]
-    a_x = (v_x - state[0]) / dt - v_y * psi_dot if state[1] > 0.0 else 0.0
-    state[0] = v_x
-    state[1] = 1.0
-    theta = biquad_step(cueing.pitch, 0, state, 2, a_x)
-    washout_step(cueing.washout, state[4 : 4 + WASHOUT_STATE_SIZE], phi, theta, a_x, psi_dot, cmd)
+    safety stage's envelope in [0, 1]: ``cueing``'s states updated in place, ``out``
+    written with the command (:class:`PlatformValue`)."""
+    motion, cmd = cueing.motion, cueing.command
+    started = motion[Motion.started] > 0.0
+    a_x = (v_x - motion[Motion.v_x]) / cueing.dt - v_y * psi_dot if started else 0.0
+    motion[Motion.v_x] = v_x
+    motion[Motion.started] = 1.0
+    theta = biquad_step(cueing.pitch, 0, cueing.pitch_state, 0, a_x)
+    washout_step(cueing.washout, cueing.washout_state, phi, theta, a_x, psi_dot, cmd)
     scale = min(1.0, max(0.0, envelope))
-    for j in range(3):
-        s = 4 + WASHOUT_STATE_SIZE + 2 * j
-        out[j] = limit_step(limits[j], state[s : s + 2], scale * cmd[j], 0.0)
-        out[3 + j] = state[s + 1]
-    out[6] = cmd[3] + cmd[0] - out[0]  # the horizon completes the roll the platform gives
+    for j, rate in _AXES:  # the angle and rate of roll, pitch and yaw
+        axis = cueing.limit_state[j]
+        out[j] = limit_step(cueing.limits[j], axis, scale * cmd[j], 0.0)
+        out[rate] = axis[_LIMIT_RATE]
+    # the horizon completes the roll the platform gives
+    out[PlatformValue.horizon] = cmd[_HORIZON] + cmd[_ROLL] - out[PlatformValue.roll]
 
 
-_STATE_SIZE = 4 + WASHOUT_STATE_SIZE + 6
+_AXES = (
+    (int(PlatformValue.roll), int(PlatformValue.roll_rate)),
+    (int(PlatformValue.pitch), int(PlatformValue.pitch_rate)),
+    (int(PlatformValue.yaw), int(PlatformValue.yaw_rate)),
+)
+"""Each axis's angle and rate in :func:`platform_step`'s ``out`` (its row of the limits)."""
+_LIMIT_RATE = 1
+"""The rate [rad/s] in a limit manager's state (:func:`~motosim.cueing.limits.limit_step`)."""
+_ROLL, _HORIZON = 0, 3
+"""The roll and the horizon in the washout's command
+(:func:`~motosim.cueing.washout.washout_step`)."""
+
+
+def _at_rest(cueing: PlatformCueing) -> PlatformCueing:
+    """``cueing`` with fresh states, zeros (the platform at rest)."""
+    return cueing._replace(
+        motion=np.zeros(len(Motion)),
+        pitch_state=np.zeros(2),
+        washout_state=np.zeros(WASHOUT_STATE_SIZE),
+        limit_state=np.zeros((3, 2)),
+    )
 
 
 class PlatformLink(Protocol):
@@ -338,20 +392,28 @@ class PlatformOutput:
         if not (isinstance(send_every, int) and send_every >= 1):
             raise MotosimError(f"platform send_every = {send_every!r}; expected an integer >= 1")
         rider = config.rider
-        self._cueing = PlatformCueing(
-            lowpass2(rider.pitch_gain, rider.pitch_frequency, rider.pitch_damping, dt),
-            design_washout(config.washout, dt).coefficients(),
-            design_limits(config.platform, dt).coefficients(),
-            np.zeros(_STATE_SIZE),
-            np.zeros(4),
+        limits = design_limits(config.platform, dt).coefficients()
+        blank = np.zeros(0)
+        self._cueing = _at_rest(
+            PlatformCueing(
+                lowpass2(rider.pitch_gain, rider.pitch_frequency, rider.pitch_damping, dt),
+                design_washout(config.washout, dt).coefficients(),
+                limits,
+                float(dt),
+                blank,
+                blank,
+                blank,
+                blank,
+                np.zeros(4),
+            )
         )
-        self.values = np.zeros(7)
-        """The last roll, pitch, yaw [rad], rates [rad/s] and horizon roll [rad]."""
+        self.values = np.zeros(len(PlatformValue))
+        """The last command (:class:`PlatformValue`)."""
         self.sender: PlatformLink | None = sender
         self.send_every = send_every
         self.sequence = 0
-        at_rest = self._cueing._replace(state=np.zeros(_STATE_SIZE))
-        platform_step(at_rest, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros(7))  # compiled now
+        at_rest = _at_rest(self._cueing)
+        platform_step(at_rest, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros(len(PlatformValue)))  # compiled
 
     def step(
         self, k: int, t: float, row: Array | None, state: State, fault: int, envelope: float

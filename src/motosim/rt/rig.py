@@ -4,8 +4,9 @@
 ``motosim run`` cannot tell it from hardware:
 
 - the true handlebar of eq. (5), integrated in plant sub-steps (10 kHz by default) with
-  exact stick-slip (:func:`motosim.model.handlebar.step_exact`), driven by the rider's torque
-  (a profile of the scenario) and the motor torque ``N k_t i_m``;
+  exact stick-slip by the simulated rig's plant (:func:`motosim.sim.hands.plant_step`),
+  driven by the rider's torque (a profile of the scenario), held by the rider's arms, and
+  the motor torque ``N k_t i_m``;
 - the drive's current loop, a first-order lag of ``current_time_constant`` [s] towards the
   commanded current, limited to ``max_current`` [A]; no command for ``command_timeout``
   [s], or ENABLE 0, and the drive stops the torque (its own STO);
@@ -38,7 +39,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs, Link
-from motosim.model.handlebar import step_exact
+from motosim.model.handlebar import HandlebarPlant, plant_of
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt.clock import SimulatedClock
@@ -46,7 +47,7 @@ from motosim.rt.config import table_number
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
-from motosim.sim.hands import is_held, step_spring
+from motosim.sim.hands import NO_ARMS, Arms, is_held, plant_step
 from motosim.sim.rider import rider_torque
 
 __all__ = [
@@ -208,19 +209,15 @@ class Bar(IntEnum):
 
 
 class BarPlant(NamedTuple):
-    """What :func:`_plant_steps` steps: the true handlebar's inertia [kg*m^2], damping
-    [N*m*s/rad], Coulomb friction [N*m] and torque constant [N*m/A]; the current's lag
-    ``a_i`` (``1 - exp(-h/T)``) and limit [A]; the sub-step ``h`` [s]; the rider's hands
-    (:func:`motosim.sim.hands.hands_array`) and hands-off phases (rows [t0, t1] [s])."""
+    """What :func:`_plant_steps` steps: the true handlebar; the current's lag ``a_i``
+    (``1 - exp(-h/T)``) and limit [A]; the sub-step ``h`` [s]; the rider's arms and
+    hands-off phases (rows [t0, t1] [s])."""
 
-    J: float
-    beta: float
-    beta_s: float
-    torque_per_amp: float
+    handlebar: HandlebarPlant
     a_i: float
     max_i: float
     h: float
-    hands: Array
+    arms: Arms
     hands_off: Array
 
 
@@ -231,30 +228,20 @@ def _plant_steps(
     """Advance ``x`` (:class:`Bar`) by ``n`` sub-steps of ``p.h`` [s] in place.
 
     The current follows its command with ``i += (i_cmd - i) a_i``, limited to ``max_i``;
-    the rider's torque is ``tau_r[k0 + k]`` (held at its last value). The hands
-    (:mod:`motosim.sim.hands`; zeros: none) act while the rider holds the handlebar
-    (``t_rider`` >= 0, the rider's time at the first sub-step [s], outside the hands-off
-    phases, where no rider torque acts): the arms' inertia and damping add to the
-    handlebar's, their spring is a torque taken at each sub-step's midpoint.
+    the rider's torque is ``tau_r[k0 + k]`` (held at its last value) and acts, with the
+    arms, while the rider holds the handlebar: ``t_rider`` >= 0, the rider's time at the
+    first sub-step [s], outside the hands-off phases. Each sub-step is the simulated rig's
+    (:func:`motosim.sim.hands.plant_step`).
     """
     theta, omega, i = x[Bar.theta], x[Bar.omega], x[Bar.i_m]
     last = tau_r.size - 1
-    h, kt = p.h, p.torque_per_amp
-    J_a, c_a, k_a, hold = p.hands  # the arms' inertia, damping, stiffness and held angle
-    arms = J_a > 0.0 or c_a > 0.0 or k_a > 0.0
+    h, kt, off = p.h, p.handlebar.torque_per_amp, p.hands_off
     for k in range(n):
         i += (i_cmd - i) * p.a_i
         i = min(max(i, -p.max_i), p.max_i)
-        off = p.hands_off
         held = t_rider >= 0.0 and (off.shape[0] == 0 or is_held(t_rider + k * h, off))
-        if not held:
-            theta, omega = step_exact(theta, omega, kt * i, p.J, p.beta, p.beta_s, h)
-        elif arms:
-            torque = tau_r[min(k0 + k, last)] + kt * i + step_spring(theta, omega, k_a, hold, h)
-            theta, omega = step_exact(theta, omega, torque, p.J + J_a, p.beta + c_a, p.beta_s, h)
-        else:
-            torque = tau_r[min(k0 + k, last)] + kt * i
-            theta, omega = step_exact(theta, omega, torque, p.J, p.beta, p.beta_s, h)
+        torque = tau_r[min(k0 + k, last)] + kt * i if held else kt * i
+        theta, omega = plant_step(theta, omega, torque, p.handlebar, p.arms, held, h)
     x[Bar.theta], x[Bar.omega], x[Bar.i_m] = theta, omega, i
 
 
@@ -268,9 +255,8 @@ class RigRider:
         The rider's active torque [N*m] at each plant sub-step from the rider's start (held
         after the end), or a function of the time since the rider's start [s] giving it then
         (a :class:`VirtualRider`), asked once per status period.
-    hands : ndarray, shape (4,), optional
-        The rider's arms while the rider holds the handlebar, [J_a [kg*m^2], c_a
-        [N*m*s/rad], k_a [N*m/rad], theta_hold [rad]] (``RigModel.hands`` of
+    arms : Arms, optional
+        The rider's arms while the rider holds the handlebar (``RigModel.arms`` of
         :func:`motosim.sim.build_rig`); by default none, a pure torque source.
     hands_off : ndarray, shape (m, 2), optional
         Phases [t0, t1] of the rider's time [s] in which nobody holds the handlebar.
@@ -283,11 +269,12 @@ class RigRider:
     Raises
     ------
     MotosimError
-        On a profile that is empty or not finite, or arms of the wrong shape (one line).
+        On a profile that is empty or not finite, or hands-off phases of the wrong shape
+        (one line).
     """
 
     torque: Array | Callable[[float], float]
-    hands: Array | None = None
+    arms: Arms = NO_ARMS
     hands_off: Array | None = None
     on_enable: bool = True
 
@@ -297,14 +284,10 @@ class RigRider:
             if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)):
                 raise MotosimError("rider torque: expected a non-empty 1-D array of finite N*m")
             object.__setattr__(self, "torque", tau)
-        hands = np.zeros(4) if self.hands is None else np.asarray(self.hands, dtype=np.float64)
-        if hands.shape != (4,) or not np.all(np.isfinite(hands)):
-            raise MotosimError("hands: expected [J_a, c_a, k_a, theta_hold], finite")
         off = self.hands_off
         off = np.zeros((0, 2)) if off is None else np.asarray(off, dtype=np.float64)
         if off.ndim != 2 or off.shape[1] != 2:
             raise MotosimError("hands_off: expected rows [t0, t1] [s]")
-        object.__setattr__(self, "hands", hands)
         object.__setattr__(self, "hands_off", off)
 
 
@@ -348,7 +331,7 @@ class VirtualRig:
         self.codecs = codecs
         self.link = link
         self.rng = rng
-        self.hands: Array = rider.hands  # type: ignore[assignment]
+        self.arms = rider.arms
         self.hands_off: Array = rider.hands_off  # type: ignore[assignment]
         self.x = np.array([float(theta0), 0.0, 0.0])
         self.h = 1.0 / settings.plant_rate
@@ -401,16 +384,12 @@ class VirtualRig:
         for each type of profile a run's start passes (the idle one and the rider's; a
         read-only profile is another type): not on the run's first enabled command, where
         the compile would stall the status frames and trip the run's watchdog."""
-        hb = self.hb
         plant = BarPlant(
-            hb.J_eq,
-            hb.beta_eq,
-            hb.beta_s,
-            hb.torque_per_amp,
+            plant_of(self.hb),
             self._a_i,
             self.settings.max_current,
             self.h,
-            self.hands,
+            self.arms,
             self.hands_off,
         )
         for tau_r in (self._idle, self.rider_torque):
@@ -620,11 +599,10 @@ class VirtualRider:
         self._k_path = 0
         self.torque = 0.0
         self.lateral_error = 0.0
-        path = world.path  # the compiled rider loaded now, not on the run's first state row
-        # (a stall of the rig's frames at the run's start); nothing kept
-        self._torque(
-            np.zeros(8), float(world.rider_speeds[0]), path[2, 0], path[0, 0], path[1, 0], 0
-        )
+        # the compiled rider loaded now, not on the run's first state row (a stall of the
+        # rig's frames at the run's start); nothing kept
+        x, y, psi, _ = world.path[:, 0]  # the path's start: its rows x, y, heading, curvature
+        self._torque(np.zeros(8), float(world.rider_speeds[0]), psi, x, y, 0)
 
     @staticmethod
     def check(world: RigModel) -> None:
@@ -679,8 +657,8 @@ class VirtualRider:
             w.rider_K,
             w.rider_x_ss,
             w.rider_tau_ss,
-            w.rider_limits[0],
-            w.rider_limits[1],
+            w.rider_preview,
+            w.rider_max_torque,
         )
 
 

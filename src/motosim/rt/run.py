@@ -542,7 +542,8 @@ class RealtimeRunner:
         while True:
             remaining = until - now()
             if remaining <= 0.0:
-                if self._inputs(a)[0]:  # the stack has started
+                started, *_ = self._inputs(a)
+                if started:
                     self.safety.silent()
                 return False
             if self._read_bus(0, remaining) and self._take(a, 0, 1, now()):
@@ -576,7 +577,7 @@ class RealtimeRunner:
         if self._cycle is None:
             raise MotosimError("wait_period needs compile_wait() first (and its True)")
         end = self._cycle(self._context, self._fd, k, t)
-        self._woke = end[4]
+        *_, self._woke = end  # PeriodEnd.woke
         return self._send(end, k, t)
 
     def woke(self) -> float:

@@ -642,12 +642,14 @@ class SafetyStage:
     @property
     def state(self) -> State:
         """IDLE, FADE_IN, RUNNING, FAULT or STOPPING."""
-        return State(self._brief(self._s)[0])
+        state, _, _ = self._brief(self._s)
+        return State(state)
 
     @property
     def fault(self) -> Fault:
         """The latched fault (NONE when there is none)."""
-        return Fault(self._brief(self._s)[1])
+        _, fault, _ = self._brief(self._s)
+        return Fault(fault)
 
     @property
     def fault_time(self) -> float:
@@ -668,7 +670,8 @@ class SafetyStage:
     @property
     def envelope(self) -> float:
         """The fade-in/fade-out scale of the command, in [0, 1]."""
-        return self._brief(self._s)[2]
+        _, _, envelope = self._brief(self._s)
+        return envelope
 
     @property
     def scale(self) -> float:

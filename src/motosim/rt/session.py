@@ -40,7 +40,14 @@ if TYPE_CHECKING:
     from motosim.sim import RunInputs
     from motosim.sim.stack import StackModel
 
-__all__ = ["Ending", "Outcome", "PrivilegeRequest", "RealtimeSession", "SessionConfig"]
+__all__ = [
+    "Ending",
+    "Outcome",
+    "PrivilegeRequest",
+    "RealtimeSession",
+    "RunOptions",
+    "SessionConfig",
+]
 
 Pace = Literal["clock", "bus"]
 Wait = Literal["compiled", "python"]
@@ -60,6 +67,53 @@ class PrivilegeRequest:
     def all_given(self) -> bool:
         """Whether every privilege that helps a loop's timing was asked for."""
         return self.priority is not None and self.cpus is not None and self.mlock
+
+
+@dataclass(frozen=True, slots=True)
+class RunOptions:
+    """How a real-time run runs and what it sends beside the drive's frames.
+
+    Attributes
+    ----------
+    pace : {"clock", "bus"}
+        What starts each period: the clock's deadlines or the drive's status frame.
+    wait : {"compiled", "python"}
+        How a clock-paced loop ends its wait (the compiled wait only where the runner
+        offers it: :meth:`~motosim.rt.run.RealtimeRunner.compile_wait`).
+    fast_link : bool
+        The fast udp_multicast link (on that bus; python-can's bus elsewhere).
+    warm : bool
+        Warm the stack before each deadline.
+    overwrite : bool
+        Replace a complete result already in the folder.
+    telemetry : (str, int) or None
+        Where the recorder publishes the state stream.
+    platform : CueingConfig or None
+        The motion platform's file, when its commands are sent.
+    platform_udp : (str, int) or None
+        Where the platform's datagrams go.
+    platform_can : bool
+        Send the platform's commands as frames on the run's bus too.
+    privileges : PrivilegeRequest
+        The real-time privileges asked for.
+    """
+
+    pace: Pace = "clock"
+    wait: Wait = "compiled"
+    fast_link: bool = True
+    warm: bool = True
+    overwrite: bool = False
+    telemetry: tuple[str, int] | None = None
+    platform: "CueingConfig | None" = None
+    platform_udp: tuple[str, int] | None = None
+    platform_can: bool = False
+    privileges: PrivilegeRequest = field(default_factory=PrivilegeRequest)
+
+    def __post_init__(self) -> None:
+        if self.pace not in ("clock", "bus"):
+            raise MotosimError(f"pace = {self.pace!r}; expected 'clock' or 'bus'")
+        if self.wait not in ("compiled", "python"):
+            raise MotosimError(f"wait = {self.wait!r}; expected 'compiled' or 'python'")
 
 
 @dataclass(frozen=True)
@@ -84,30 +138,11 @@ class SessionConfig:
         The result's metadata.
     duration : float
         How long the run lasts before its torque fades out [s], (0, 86400].
-    pace : {"clock", "bus"}
-        What starts each period: the clock's deadlines or the drive's status frame.
-    wait : {"compiled", "python"}
-        How a clock-paced loop ends its wait (the compiled wait only where the runner
-        offers it: :meth:`~motosim.rt.run.RealtimeRunner.compile_wait`).
-    fast_link : bool
-        The fast udp_multicast link (on that bus; python-can's bus elsewhere).
-    warm : bool
-        Warm the stack before each deadline.
-    overwrite : bool
-        Replace a complete result already in the folder.
-    telemetry : (str, int) or None
-        Where the recorder publishes the state stream.
-    platform : CueingConfig or None
-        The motion platform's file, when its commands are sent.
-    platform_udp : (str, int) or None
-        Where the platform's datagrams go.
-    platform_can : bool
-        Send the platform's commands as frames on the run's bus too.
+    options : RunOptions
+        How the run runs and what it sends beside the drive's frames.
     live : LiveSink or None
         The rider's view and the dashboard, fed by the recorder; with it the torque stays
         off until the view's Arm.
-    privileges : PrivilegeRequest
-        The real-time privileges asked for.
     """
 
     inputs: "RunInputs" = field(repr=False)
@@ -117,25 +152,12 @@ class SessionConfig:
     folder: Path
     metadata: dict[str, Any] = field(repr=False)
     duration: float
-    pace: Pace = "clock"
-    wait: Wait = "compiled"
-    fast_link: bool = True
-    warm: bool = True
-    overwrite: bool = False
-    telemetry: tuple[str, int] | None = None
-    platform: "CueingConfig | None" = None
-    platform_udp: tuple[str, int] | None = None
-    platform_can: bool = False
+    options: RunOptions = field(default_factory=RunOptions)
     live: LiveSink | None = None
-    privileges: PrivilegeRequest = PrivilegeRequest()
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.duration) and 0.0 < self.duration <= 86_400.0):
             raise MotosimError(f"duration = {self.duration!r} s; expected seconds in (0, 86400]")
-        if self.pace not in ("clock", "bus"):
-            raise MotosimError(f"pace = {self.pace!r}; expected 'clock' or 'bus'")
-        if self.wait not in ("compiled", "python"):
-            raise MotosimError(f"wait = {self.wait!r}; expected 'compiled' or 'python'")
 
     @property
     def rate(self) -> float:
@@ -259,15 +281,15 @@ class RealtimeSession:
         sc = c.inputs.scenario
         world = build_rig(c.inputs, rng=np.random.default_rng(sc.seed))
         stack = CompiledStack(c.model, force=world.force, side_force=world.side_force)
-        if c.telemetry is not None:  # sent by the recorder, refused here rather than there
+        if c.options.telemetry is not None:  # sent by the recorder, refused here rather than there
             from motosim.rt.telemetry import StateSender
 
-            StateSender(c.telemetry, width=len(stack.names)).close()
+            StateSender(c.options.telemetry, width=len(stack.names)).close()
         platform = self._platform_output(tuple(stack.names))
-        self._link = open_link(c.bus, fast=c.fast_link)
+        self._link = open_link(c.bus, fast=c.options.fast_link)
         self._closers.append(self._link.close)
         self._fast = self._link.datagrams  # the fast link on this bus
-        if platform is not None and c.platform_can:
+        if platform is not None and c.options.platform_can:
             self._platform_can(platform)
         rate = c.rate
         settings = run.RunSettings(
@@ -278,7 +300,7 @@ class RealtimeSession:
             capacity=max(1 << 14, round(5.0 * rate)),  # 5 s of rows between two drains
             shared_ring=True,
             wait_for_arm=c.live is not None,
-            warm=c.warm,
+            warm=c.options.warm,
             handlebar=c.inputs.nominal_handlebar,
             validity=validity_limits(sc.motorcycle.speed),
         )
@@ -299,13 +321,13 @@ class RealtimeSession:
     def _platform_output(self, names: tuple[str, ...]) -> Any:
         """The motion platform's stage (None without a platform file)."""
         c = self.config
-        if c.platform is None:
+        if c.options.platform is None:
             return None
         from motosim.rt.platform import PlatformOutput, PlatformSender
 
-        sender = None if c.platform_udp is None else PlatformSender(c.platform_udp)
+        sender = None if c.options.platform_udp is None else PlatformSender(c.options.platform_udp)
         platform = PlatformOutput(
-            c.platform,
+            c.options.platform,
             1.0 / c.rate,
             names,
             sender=sender,
@@ -336,10 +358,10 @@ class RealtimeSession:
             runner.names,
             c.folder,
             c.metadata,
-            c.overwrite,
+            c.options.overwrite,
             c.inputs.nominal_handlebar.torque_per_amp,
             c.rate,
-            c.telemetry,
+            c.options.telemetry,
             c.live,
             controls,
         )
@@ -370,7 +392,7 @@ class RealtimeSession:
         runner, recorder = self.runner, self._recorder
         if recorder is None:
             raise MotosimError("the session's recorder is not started: call open() first")
-        asked = self.config.privileges
+        asked = self.config.options.privileges
         privileges = apply_privileges(priority=asked.priority, cpus=asked.cpus, mlock=asked.mlock)
         loop, step = self._loop()
         freeze_gc()
@@ -401,7 +423,7 @@ class RealtimeSession:
         capacity = max(1, min(runner.max_periods, 1 << 22))
         inner = runner.period
         loop: RateLoop
-        if c.pace == "bus":
+        if c.options.pace == "bus":
             loop = FramePacedLoop(
                 rate,
                 clock,
@@ -411,7 +433,7 @@ class RealtimeSession:
                 capacity=capacity,
                 received=lambda: runner.status_frames,
             )
-        elif c.wait == "compiled" and runner.compile_wait():
+        elif c.options.wait == "compiled" and runner.compile_wait():
             # the wait's end, the bus read and the period in one compiled call
             loop = RateLoop(rate, clock, capacity=capacity, woke=runner.woke)
             inner = runner.wait_period
@@ -443,9 +465,9 @@ class RealtimeSession:
         platform = self._platform
         report = {
             "link": "fast" if self._fast else "python-can",
-            "pace": c.pace,
+            "pace": c.options.pace,
             "wait": "compiled" if runner.waits_compiled else "python",
-            "warm": runner.warms and c.pace == "clock",
+            "warm": runner.warms and c.options.pace == "clock",
             "timing": stats.as_dict(),
             "profile": done.profile,
             "state_stream": done.stream,
@@ -459,7 +481,7 @@ class RealtimeSession:
                 "bus_errors": bus_errors,
                 "ring_dropped": int(done.summary.get("ring_dropped", 0)),
                 "platform_datagrams": 0 if platform is None else platform.sequence,
-                "platform_can": c.platform_can,
+                "platform_can": c.options.platform_can,
             },
             "state": counters.state,
             "fault": counters.fault,

@@ -16,6 +16,7 @@ import zlib
 from collections import namedtuple
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from enum import IntEnum
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -32,14 +33,14 @@ from motosim.estimation.walcott_zak import (
     WalcottZakObserver,
     design_with,
 )
-from motosim.model.handlebar import perturbed, step_exact
-from motosim.model.tyred import ContactLoads, TyredModel
+from motosim.model.handlebar import HandlebarPlant, perturbed, plant_of
+from motosim.model.tyred import ContactLoads, Domain, TyredModel
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.signals import RECORDED
 from motosim.sim.brakes import BrakeSettings, brake_torques, design_brakes, new_brake_state
 from motosim.sim.grips import held_handlebar
-from motosim.sim.hands import hands_array, hands_torque, is_held, step_spring
+from motosim.sim.hands import Arms, arms_of, hands_torque, is_held, plant_step
 from motosim.sim.loop_analysis import prediction_lead
 from motosim.sim.metrics import validity_limits
 from motosim.sim.multibody_rider import (
@@ -72,6 +73,8 @@ __all__ = [
     "RigData",
     "RigModel",
     "RunInputs",
+    "StopLimits",
+    "TrueBar",
     "build_rig",
     "build_stack",
     "design_virtual_rider",
@@ -102,6 +105,8 @@ _COLUMNS_OF_MOTORCYCLE = tuple(
     (RECORDED.index(m.name), int(m)) for m in MotorcycleState if m.name in RECORDED
 )
 """The recorded columns of the motorcycle's states, each with its position in the state."""
+_INSIDE = int(Domain.INSIDE)
+"""The code of a motorcycle inside its model's domain (:func:`~motosim.sim.stack.outside`)."""
 
 
 @njit(cache=True)
@@ -243,12 +248,11 @@ def observer_settings(measurement_rate: float, *, cancellation: bool = True) -> 
     times the handlebar's J_eq: 2 at 100 Hz, 1.33 at 150 Hz, 1 from 200 Hz. Believing the
     handlebar heavier than it is, the observer reads the excess J_eq theta_h'' as rider
     torque, which the cancellation takes off the motor, and its estimate filter (rider torque
-    to estimate) keeps a gain within 1.15 where it would reach 2 near 16 Hz: the sampled
-    loop's margins at 100 Hz rise from 5.5 dB and 37 deg to 7.8 dB and 55 deg (20 m/s, the
-    packaged handlebar; :func:`motosim.sim.loop_analysis.analyse_stack`), the rendered feel
-    over 0.1-3 Hz unchanged within 0.15 dB and 1 deg. From 500 Hz the bias costs margins,
-    hence 1 there; without the cancellation it would only add J_eq theta_h'' to the
-    estimate.
+    to estimate) keeps a gain near 1 where it would reach 2 near 16 Hz: the sampled loop's
+    margins at 100 Hz rise (:func:`motosim.sim.loop_analysis.analyse_stack`; the design
+    guide gives them) and the rendered feel over 0.1-3 Hz is unchanged. From 500 Hz the
+    bias costs margins, hence 1 there; without the cancellation it would only add J_eq
+    theta_h'' to the estimate.
 
     Parameters
     ----------
@@ -347,8 +351,8 @@ class RigModel(NamedTuple):
 
     Attributes
     ----------
-    handlebar : ndarray, shape (4,)
-        The true handlebar's [J_eq, beta_eq, beta_s, N k_t] (SI units).
+    handlebar : HandlebarPlant
+        The true handlebar.
     plant_substeps : int
         Plant sub-steps per stack period (while the rider's torque changes within one).
     quantum : float
@@ -366,17 +370,19 @@ class RigModel(NamedTuple):
         Path spacing [m].
     rider_speeds, rider_K, rider_x_ss, rider_tau_ss : ndarray
         The virtual rider's gain schedule (:class:`~motosim.sim.rider.RiderGains`).
-    rider_limits : ndarray, shape (2,)
-        [preview [s], largest torque [N*m]].
+    rider_preview : float
+        The virtual rider's preview [s].
+    rider_max_torque : float
+        The virtual rider's largest torque [N*m].
     force : ndarray, shape (n,)
         Longitudinal force of eq. (2) each period [N].
     side_force : ndarray, shape (n,)
         Side force on the motorcycle (side wind, to the right) each period [N].
     current_noise : ndarray, shape (n,)
         Current-sensor error each period [A].
-    hands : ndarray, shape (4,)
-        The rider's arms at the handlebar, [J_a [kg*m^2], c_a [N*m*s/rad], k_a [N*m/rad],
-        theta_hold [rad]] (:mod:`motosim.sim.hands`); zeros: a pure torque source.
+    arms : Arms
+        The rider's arms at the handlebar (:mod:`motosim.sim.hands`); zeros: a pure torque
+        source.
     hands_off : ndarray, shape (m, 2)
         Phases [t0, t1] [s] in which nobody holds the handlebar (no torque at all).
     sensed : bool
@@ -396,7 +402,7 @@ class RigModel(NamedTuple):
         (:mod:`motosim.sim.brakes`; ``enabled`` false: as demanded).
     """
 
-    handlebar: Array
+    handlebar: HandlebarPlant
     plant_substeps: int
     quantum: float
     virtual_rider: bool
@@ -408,11 +414,12 @@ class RigModel(NamedTuple):
     rider_K: Array
     rider_x_ss: Array
     rider_tau_ss: Array
-    rider_limits: Array
+    rider_preview: float
+    rider_max_torque: float
     force: Array
     side_force: Array
     current_noise: Array
-    hands: Array
+    arms: Arms
     hands_off: Array
     sensed: bool
     torque_error: Array
@@ -421,11 +428,32 @@ class RigModel(NamedTuple):
     brakes: BrakeSettings
 
 
+class TrueBar(IntEnum):
+    """The true handlebar's state in :attr:`RigData.handlebar`: angle theta_h [rad], rate
+    theta_h' [rad/s] and the rate a period before [rad/s]."""
+
+    theta = 0
+    omega = 1
+    last_omega = 2
+
+
+class StopLimits(NamedTuple):
+    """Where a run stops (:func:`simulate`'s ``stop_outside``): the largest roll [rad] and
+    the lowest and highest speeds [m/s]."""
+
+    roll: float
+    low_speed: float
+    high_speed: float
+
+
+NO_STOP = StopLimits(math.inf, -math.inf, math.inf)
+"""Limits a run never leaves."""
+
+
 class RigData(NamedTuple):
-    """The world's states: the true handlebar [theta_h, theta_h', theta_h' a period before],
-    the rider's path index, the speed its throttle holds [m/s] (the start speed, then the
-    speed at which it last braked) and its brake controller's state
-    (:class:`~motosim.sim.brakes.BrakeState`)."""
+    """The world's states: the true handlebar (:class:`TrueBar`), the rider's path index,
+    the speed its throttle holds [m/s] (the start speed, then the speed at which it last
+    braked) and its brake controller's state (:class:`~motosim.sim.brakes.BrakeState`)."""
 
     handlebar: Array
     path_index: NDArray[np.int64]
@@ -436,7 +464,7 @@ class RigData(NamedTuple):
 def new_world(scenario: Scenario) -> RigData:
     """The world's states at the start of a run of ``scenario``."""
     return RigData(
-        np.zeros(3),
+        np.zeros(len(TrueBar)),
         np.zeros(1, dtype=np.int64),
         np.array([scenario.motorcycle.speed]),
         new_brake_state(),
@@ -493,15 +521,14 @@ def rider_route(scenario: Scenario) -> tuple[Array, float]:
 
 def perturb_rig(rig: RigModel, inputs: RunInputs, *, rng: np.random.Generator) -> RigModel:
     """``rig``, built for a run that differs from ``inputs`` only in its true handlebar and its
-    seed, made ``inputs``' in place: the handlebar's parameters, the current sensor's noise
-    and the torque sensor's error (drawn from ``rng`` as :func:`build_rig` draws them, in
+    seed, made ``inputs``': the handlebar's parameters, and in place the current sensor's
+    noise and the torque sensor's error (drawn from ``rng`` as :func:`build_rig` draws them, in
     the same order).
 
     A campaign's worker builds the rig once and perturbs it run after run; the caller
     checks that the runs differ only there (:func:`rig_key`).
     """
-    hb = inputs.true_handlebar
-    rig.handlebar[:] = (hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp)
+    rig = rig._replace(handlebar=plant_of(inputs.true_handlebar))
     noise = inputs.scenario.measurement.current_noise
     if noise:
         rng.standard_normal(out=rig.current_noise)  # rng.normal(0, noise, n), in place
@@ -531,7 +558,7 @@ def _plant_rate_profile(profile: Profile, n: int, n_sub: int, h: float) -> Array
     """``profile`` at the ``n * n_sub`` plant sub-steps of a run, read-only.
 
     Cached: the runs of a campaign that share a rider profile and rates share this array
-    instead of sampling it again (about 3 ms for a 10 s run at 10 kHz).
+    instead of sampling it again.
     """
     t_fine = (np.arange(n * n_sub) / (n * n_sub)) * (n * h)
     values = profile.sample(t_fine, {})
@@ -585,7 +612,6 @@ def build_rig(
         motorcycle_inputs[:, MotorcycleInput.friction] = sc.road.friction.sample(t, inputs.tables)
     bits = sc.measurement.encoder_bits
     noise = sc.measurement.current_noise
-    hb = inputs.true_handlebar
     current_noise = rng.normal(0.0, noise, n) if noise else np.zeros(n)
     sensor = sc.sensor.torque
     torque_error = np.zeros(n)
@@ -595,7 +621,7 @@ def build_rig(
             torque_error += rng.normal(0.0, sensor.noise, n)
     off = np.array(rider.hands_off, dtype=np.float64).reshape(-1, 2)
     return RigModel(
-        handlebar=np.array([hb.J_eq, hb.beta_eq, hb.beta_s, hb.torque_per_amp]),
+        handlebar=plant_of(inputs.true_handlebar),
         plant_substeps=n_sub,
         quantum=2 * math.pi / 2**bits if bits else 0.0,
         virtual_rider=rider.kind == "virtual",
@@ -607,11 +633,12 @@ def build_rig(
         rider_K=gains.K,
         rider_x_ss=gains.x_ss,
         rider_tau_ss=gains.tau_ss,
-        rider_limits=np.array([gains.preview, gains.max_torque]),
+        rider_preview=float(gains.preview),
+        rider_max_torque=float(gains.max_torque),
         force=force,
         side_force=mc.side_wind.sample(t, inputs.tables),
         current_noise=current_noise,
-        hands=hands_array(sc.rider_hands),
+        arms=arms_of(sc.rider_hands),
         hands_off=off,
         sensed=sc.estimator.name == SENSOR_ESTIMATOR,
         torque_error=torque_error,
@@ -743,17 +770,16 @@ def _run_chunk(
     data: StackData,
     rig: RigModel,
     world: RigData,
-    limits: Array,
+    limits: StopLimits,
 ) -> int:
     """Advance ``out.shape[0]`` stack periods from period ``k0``, recording a row each.
 
-    Stops after the first row whose roll exceeds ``limits[0]`` [rad], whose speed leaves
-    ``limits[1]`` to ``limits[2]`` [m/s] or whose motorcycle is outside its model's domain
-    (:func:`~motosim.sim.stack.outside`); returns the number of rows recorded.
+    Stops after the first row outside ``limits`` or whose motorcycle is outside its model's
+    domain (:func:`~motosim.sim.stack.outside`); returns the number of rows recorded.
     """
-    J, beta, beta_s, nkt = rig.handlebar[0], rig.handlebar[1], rig.handlebar[2], rig.handlebar[3]
-    J_a, c_a, k_a, hold = rig.hands[0], rig.hands[1], rig.hands[2], rig.hands[3]
-    arms = J_a > 0.0 or c_a > 0.0 or k_a > 0.0
+    plant, a = rig.handlebar, rig.arms
+    beta_s, nkt = plant.beta_s, plant.torque_per_amp
+    arms = a.J_a > 0.0 or a.c_a > 0.0 or a.k_a > 0.0
     n_sub = rig.plant_substeps
     h = stack.dt
     hb = world.handlebar
@@ -761,7 +787,8 @@ def _run_chunk(
     for row in range(out.shape[0]):
         k = k0 + row
         q = rig.quantum
-        theta_meas = math.floor(hb[0] / q + 0.5) * q if q > 0.0 else hb[0]
+        theta = hb[TrueBar.theta]
+        theta_meas = math.floor(theta / q + 0.5) * q if q > 0.0 else theta
         held = rig.hands_off.shape[0] == 0 or is_held(k * h, rig.hands_off)
         # the multibody motorcycle's road and the rider's demands (nothing on Sharp 1971's)
         steered, tau_rider, e_y, loads = _multibody_period(
@@ -783,8 +810,8 @@ def _run_chunk(
                 rig.rider_K,
                 rig.rider_x_ss,
                 rig.rider_tau_ss,
-                rig.rider_limits[0],
-                rig.rider_limits[1],
+                rig.rider_preview,
+                rig.rider_max_torque,
             )
             world.path_index[0] = idx
             tau_rider += rig.rider_probe[k]
@@ -794,28 +821,30 @@ def _run_chunk(
         holding = arms and held
         if not held:
             tau_rider = 0.0
-        elif holding:  # the arms' passive torque, theta_h'' the last period's mean
-            accel = (hb[1] - hb[2]) / h if k > 0 else 0.0
-            tau_rider += hands_torque(hb[0], hb[1], accel, J_a, c_a, k_a, hold)
+        omega = hb[TrueBar.omega]
+        if holding:  # the arms' passive torque, theta_h'' the last period's mean
+            accel = (omega - hb[TrueBar.last_omega]) / h if k > 0 else 0.0
+            tau_rider += hands_torque(theta, omega, accel, a.J_a, a.c_a, a.k_a, a.theta_hold)
         if arms:
-            hb[2] = hb[1]
+            hb[TrueBar.last_omega] = omega
         o = out[row]
         o[_COL.t] = k * h
         o[_COL.tau_r] = tau_rider
         o[_COL.tau_r_active] = active
-        o[_COL.tau_p] = -beta_s if hb[1] > 0.0 else (beta_s if hb[1] < 0.0 else 0.0)
-        o[_COL.theta_h] = hb[0]
-        o[_COL.theta_h_dot] = hb[1]
+        o[_COL.tau_p] = -beta_s if omega > 0.0 else (beta_s if omega < 0.0 else 0.0)
+        o[_COL.theta_h] = theta
+        o[_COL.theta_h_dot] = omega
         for column, at in _COLUMNS_OF_MOTORCYCLE:
             o[column] = z[at]
         o[_COL.e_y] = e_y
-        left = outside(stack, data) != 0
+        left = outside(stack, data) != _INSIDE
         o[_COL.F_xr], o[_COL.F_xf] = loads.F_xr, loads.F_xf
         o[_COL.F_zr], o[_COL.F_zf] = loads.F_zr, loads.F_zf
         o[_COL.kappa_r], o[_COL.kappa_f] = loads.kappa_r, loads.kappa_f
         o[_COL.alpha_r], o[_COL.alpha_f] = loads.alpha_r, loads.alpha_f
         o[_COL.theta] = pitch(stack, data)
-        stop = left or abs(o[_COL.phi]) > limits[0] or not limits[1] <= o[_COL.v_x] <= limits[2]
+        inside = limits.low_speed <= o[_COL.v_x] <= limits.high_speed
+        stop = left or abs(o[_COL.phi]) > limits.roll or not inside
         # the stack: command, estimate, virtual motorcycle
         told = tau_rider + rig.torque_error[k] if rig.sensed else tau_rider
         i_cmd = step(
@@ -832,21 +861,17 @@ def _run_chunk(
         o[_COL.tau_r_hat] = data.held[Held.tau_r_hat]
         o[_COL.i_m] = i_cmd
         o[_COL.tau_m] = nkt * i_cmd
-        # the true handlebar over the period, the current held: one exact step while the
-        # rider's torque is constant over it, else one per plant sub-step; held by the arms,
-        # their inertia and damping in the plant and their spring a torque taken at each
-        # step's midpoint
-        Jt, bt, spring_rate = (J + J_a, beta + c_a, k_a) if holding else (J, beta, 0.0)
+        # the true handlebar over the period, the current held: one step while the rider's
+        # torque is constant over it, else one per plant sub-step
         motor = nkt * i_cmd
         if rig.virtual_rider or not held or _steady(rig.rider_profile, k, n_sub):
-            torque = active + motor + step_spring(hb[0], hb[1], spring_rate, hold, h)
-            hb[0], hb[1] = step_exact(hb[0], hb[1], torque, Jt, bt, beta_s, h)
+            theta, omega = plant_step(theta, omega, active + motor, plant, a, holding, h)
         else:
             h_sub = h / n_sub
             for j in range(n_sub):
-                spring = step_spring(hb[0], hb[1], spring_rate, hold, h_sub)
-                torque = rig.rider_profile[k * n_sub + j] + motor + spring
-                hb[0], hb[1] = step_exact(hb[0], hb[1], torque, Jt, bt, beta_s, h_sub)
+                torque = rig.rider_profile[k * n_sub + j] + motor
+                theta, omega = plant_step(theta, omega, torque, plant, a, holding, h_sub)
+        hb[TrueBar.theta], hb[TrueBar.omega] = theta, omega
         if stop:
             return row + 1
     return len(out)
@@ -866,7 +891,7 @@ def _run_chunk_unreferenced(
     data: StackData,
     rig: RigModel,
     world: RigData,
-    limits: Array,
+    limits: StopLimits,
 ) -> int:
     """:func:`_run_chunk` compiled without numba's reference counting, for a loop that
     allocates nothing (Sharp 1971's): the arrays the step takes from its named tuples are
@@ -962,7 +987,7 @@ def simulate(
     reset(model, data, 0.0, 0.0)
     n = rig.current_noise.size
     rows = max(1, round(chunk * sc.rates.control))
-    limits = np.array(stop_outside or (math.inf, -math.inf, math.inf), dtype=np.float64)
+    limits = NO_STOP if stop_outside is None else StopLimits(*map(float, stop_outside))
     blocks = []
     loop = chunk_loop(model)
     for k0 in range(0, n, rows):

@@ -20,18 +20,24 @@ own table. Both are defined in :mod:`motosim.sim.grips`, which a scenario's chec
 without numba.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from motosim.model.handlebar import HandlebarPlant, step_exact
 from motosim.sim.grips import GRIPS, Hands, resolve_hands
 
 __all__ = [
     "GRIPS",
+    "NO_ARMS",
+    "Arms",
     "Hands",
-    "hands_array",
+    "arms_of",
     "hands_torque",
     "is_held",
+    "plant_step",
     "resolve_hands",
     "step_spring",
 ]
@@ -39,11 +45,28 @@ __all__ = [
 Array = NDArray[np.float64]
 
 
-def hands_array(hands: Hands | None) -> Array:
-    """[J_a, c_a, k_a, theta_hold] of ``hands`` (zeros without), for compiled loops."""
+class Arms(NamedTuple):
+    """The arms at the handlebar as compiled loops take them: J_a [kg*m^2], c_a
+    [N*m*s/rad], k_a [N*m/rad] and the held angle theta_hold [rad]; zeros: a pure torque
+    source."""
+
+    J_a: float
+    c_a: float
+    k_a: float
+    theta_hold: float
+
+
+NO_ARMS = Arms(0.0, 0.0, 0.0, 0.0)
+"""No arms: the rider is a pure torque source."""
+
+
+def arms_of(hands: Hands | None) -> Arms:
+    """The :class:`Arms` of ``hands`` (:data:`NO_ARMS` without)."""
     if hands is None:
-        return np.zeros(4)
-    return np.array([hands.inertia, hands.damping, hands.stiffness, hands.hold])
+        return NO_ARMS
+    return Arms(
+        float(hands.inertia), float(hands.damping), float(hands.stiffness), float(hands.hold)
+    )
 
 
 @njit(cache=True)
@@ -85,3 +108,34 @@ def is_held(t: float, off: Array) -> bool:
         if off[i, 0] <= t < off[i, 1]:
             return False
     return True
+
+
+@njit(cache=True)
+def plant_step(
+    theta: float,
+    omega: float,
+    torque: float,
+    plant: HandlebarPlant,
+    arms: Arms,
+    held: bool,
+    h: float,
+) -> tuple[float, float]:
+    """The true handlebar over a plant step of ``h`` [s], exact stick-slip
+    (:func:`~motosim.model.handlebar.step_exact`).
+
+    ``torque`` [N*m], held over the step, is the rider's active torque and the motor's. While
+    the rider ``held`` the handlebar, the arms' inertia and damping add to J_eq and beta_eq
+    and their spring is a torque taken at the step's midpoint (:func:`step_spring`). This is
+    the one plant of the simulated rig (:mod:`motosim.sim.closed_loop`) and of the virtual
+    rig (:mod:`motosim.rt.rig`).
+
+    Returns
+    -------
+    theta, omega : float
+        The angle [rad] and rate [rad/s] at the end of the step.
+    """
+    if not held:
+        return step_exact(theta, omega, torque, plant.J_eq, plant.beta_eq, plant.beta_s, h)
+    spring = step_spring(theta, omega, arms.k_a, arms.theta_hold, h)
+    J = plant.J_eq + arms.J_a
+    return step_exact(theta, omega, torque + spring, J, plant.beta_eq + arms.c_a, plant.beta_s, h)

@@ -78,6 +78,40 @@ _GRID_POINTS = 600  # frequencies of the margin and limit-cycle search
 _LATERAL = 8  # Sharp 1971's lateral states, the first of MotorcycleState
 
 
+class _Bar(IntEnum):
+    """The handlebar's state of eq. (10), (theta_h', theta_h): its matrices' rows."""
+
+    rate = 0
+    angle = 1
+
+
+class _Drive(IntEnum):
+    """The handlebar's inputs in :func:`_held_plant`, (i_m, tau_r): its B's columns."""
+
+    current = 0
+    torque = 1
+
+
+class _Told(IntEnum):
+    """What the Walcott-Zak observer's step is told: the columns of its Gamma."""
+
+    current = 0
+    rate = 1
+    angle = 2
+    injection = 3
+
+
+class _Prediction(IntEnum):
+    """The predicted cancellation's states in the loop: the filtered rate of the estimate,
+    the notch's two states and the low-pass's (the stack's ``Held.tau_r_hat_rate``,
+    ``notch_0``, ``notch_1``, ``low_pass``)."""
+
+    rate = 0
+    notch_0 = 1
+    notch_1 = 2
+    low_pass = 3
+
+
 class LoopInput(IntEnum):
     """The inputs of :class:`StackLoop` (the columns of its B), by name."""
 
@@ -103,7 +137,7 @@ def _held_plant(handlebar: HandlebarParameters, hands: Hands | None) -> tuple[Ar
     hb = matrices(held)
     A = hb.A.copy()
     if hands is not None:
-        A[0, 1] = -hands.stiffness / held.J_eq
+        A[_Bar.rate, _Bar.angle] = -hands.stiffness / held.J_eq
     return A, np.column_stack([hb.B, hb.D])
 
 
@@ -285,15 +319,15 @@ def stack_loop(
     predicted = ff.cancellation > 0.0 and c.lead > 0.0
     delayed = dl.age > 0.0  # the stack accounts for a delay
     sizes = {
-        "plant": 2,
+        "plant": len(_Bar),
         "theta_prev": 1,
         "rate_prev": 1,
-        "observer": 2,
+        "observer": len(_Bar),  # the observer's (theta_h', theta_h)
         "estimate": 1,
-        "prediction": 4 if predicted else 0,
+        "prediction": len(_Prediction) if predicted else 0,
         "controller": nc,
         "motorcycle": _LATERAL,
-        "before": 2 if bus > 0.0 else 0,
+        "before": len(_Bar) if bus > 0.0 else 0,
         "carried": 1 if delayed else 0,
     }
     start, n = {}, 0
@@ -305,10 +339,10 @@ def stack_loop(
     def state(name: str, k: int = 0) -> Array:
         return np.asarray(eye[start[name] + k], dtype=float)
 
-    theta, rate = state("plant", 1), state("plant", 0)
+    theta, rate = state("plant", _Bar.angle), state("plant", _Bar.rate)
     delta = state("motorcycle", MotorcycleState.delta)
     delta_rate = state("motorcycle", MotorcycleState.delta_dot)
-    measured = (state("before", 1) if bus > 0.0 else theta) + eye[n]
+    measured = (state("before", _Bar.angle) if bus > 0.0 else theta) + eye[n]
     held = state("estimate")  # the command uses the previous sample's estimate
     z1 = (measured - state("theta_prev")) / h
     rate_used = z1 + w * (z1 - state("rate_prev"))
@@ -320,7 +354,7 @@ def stack_loop(
     command = model.Dd[0, 0] * error
     for j in range(nc):
         command = command + model.Cd[0, j] * state("controller", j)
-    cancelled = held + c.lead * state("prediction") if predicted else held
+    cancelled = held + c.lead * state("prediction", _Prediction.rate) if predicted else held
     torque = -ff.cancellation * cancelled
     if ff.reference > 0.0:  # the friction term's tanh is left out with the friction itself
         m0 = start["motorcycle"]
@@ -331,27 +365,32 @@ def stack_loop(
         torque = torque + ff.J_eq * steer_acc + ff.beta_eq * delta_rate
     if ff.cancellation > 0.0 or ff.reference > 0.0:
         command = command + torque / ff.torque_per_amp
-    x0, x1 = state("observer", 0), state("observer", 1)
-    E = injection * (g[0] * (rate_used - x0) + g[1] * (measured - x1))
+    x0, x1 = state("observer", _Bar.rate), state("observer", _Bar.angle)
+    E = injection * (g[_Bar.rate] * (rate_used - x0) + g[_Bar.angle] * (measured - x1))
     estimate = held + alpha * (E - held)
 
     # the cancellation's break point: a torque w added to the estimate it reads
     cancel = -ff.cancellation / ff.torque_per_amp if ff.cancellation > 0.0 else 0.0
 
     A = np.zeros((n, n + 1))  # rows over the states and the measurement's n
-    B = np.zeros((n, 4))
-    for r in range(2):
-        A[start["plant"] + r] = Ap[r, 0] * rate + Ap[r, 1] * theta + Bp[r, 0] * command
-        _inputs(B, start["plant"] + r, Bp[r, 1], Bp[r, 0], cancel)
+    B = np.zeros((n, len(LoopInput)))
+
+    def bar_rows(rows: int, Ab: Array, Bb: Array) -> None:
+        """The loop's rows of a handlebar's state (theta_h', theta_h) after a step of Ab,
+        Bb."""
+        for i in _Bar.rate, _Bar.angle:
+            on_state = Ab[i, _Bar.rate] * rate + Ab[i, _Bar.angle] * theta
+            A[rows + i] = on_state + Bb[i, _Drive.current] * command
+            _inputs(B, rows + i, Bb[i, _Drive.torque], Bb[i, _Drive.current], cancel)
+
+    bar_rows(start["plant"], Ap, Bp)
     told, share = command, 1.0  # the current the observer is told, and the new command's share
     if bus > 0.0:
         if h - bus > 1e-12 * h:
             Ab, Bb = zoh(A_h, B_h, h - bus)
         else:
             Ab, Bb = np.eye(2), np.zeros((2, 2))
-        for r in range(2):
-            A[start["before"] + r] = Ab[r, 0] * rate + Ab[r, 1] * theta + Bb[r, 0] * command
-            _inputs(B, start["before"] + r, Bb[r, 1], Bb[r, 0], cancel)
+        bar_rows(start["before"], Ab, Bb)
     if delayed:
         A[start["carried"]] = command
         _inputs(B, start["carried"], 0.0, 1.0, cancel)
@@ -359,26 +398,27 @@ def stack_loop(
         told = share * command + dl.carried * carried
     A[start["theta_prev"]] = measured
     A[start["rate_prev"]] = z1
-    for r in range(2):
-        A[start["observer"] + r] = (
-            Phi[r, 0] * x0
-            + Phi[r, 1] * x1
-            + Gamma[r, 0] * told
-            + Gamma[r, 1] * rate_used
-            + Gamma[r, 2] * measured
-            + Gamma[r, 3] * E
+    for i in _Bar.rate, _Bar.angle:
+        A[start["observer"] + i] = (
+            Phi[i, _Bar.rate] * x0
+            + Phi[i, _Bar.angle] * x1
+            + Gamma[i, _Told.current] * told
+            + Gamma[i, _Told.rate] * rate_used
+            + Gamma[i, _Told.angle] * measured
+            + Gamma[i, _Told.injection] * E
         )
         # the estimator is told the measured current
-        _inputs(B, start["observer"] + r, 0.0, Gamma[r, 0] * share, cancel)
+        _inputs(B, start["observer"] + i, 0.0, Gamma[i, _Told.current] * share, cancel)
     A[start["estimate"]] = estimate
     if predicted:  # the estimate's rate through the notch, the low-pass (as step does)
         x = (estimate - held) / h
-        y = c.b0 * x + state("prediction", 1)
-        rate_filtered = c.g * y + state("prediction", 3)
-        A[start["prediction"]] = rate_filtered
-        A[start["prediction"] + 1] = c.b1 * x - c.a1 * y + state("prediction", 2)
-        A[start["prediction"] + 2] = c.b2 * x - c.a2 * y
-        A[start["prediction"] + 3] = c.g * y + c.pole * rate_filtered
+        y = c.b0 * x + state("prediction", _Prediction.notch_0)
+        rate_filtered = c.g * y + state("prediction", _Prediction.low_pass)
+        p0 = start["prediction"]
+        A[p0 + _Prediction.rate] = rate_filtered
+        A[p0 + _Prediction.notch_0] = c.b1 * x - c.a1 * y + state("prediction", _Prediction.notch_1)
+        A[p0 + _Prediction.notch_1] = c.b2 * x - c.a2 * y
+        A[p0 + _Prediction.low_pass] = c.g * y + c.pole * rate_filtered
     for r in range(nc):
         row = model.Bd[r, 0] * error
         for j in range(nc):
@@ -441,8 +481,8 @@ def prediction_lead(model: StackModel, handlebar: HandlebarParameters) -> float:
     """T_d of the predicted cancellation: the estimate filter's delay [s].
 
     The lag of F (:func:`estimate_filter`, the stack without prediction) at
-    :data:`PREDICTION_FREQUENCY`, -arg F / (2 pi f), at the stack's speed: 11.7 ms at 1 kHz,
-    28 ms at 100 Hz for the default design on the packaged handlebar.
+    :data:`PREDICTION_FREQUENCY`, -arg F / (2 pi f), at the stack's speed (the simulate
+    guide gives it for the default designs).
 
     Parameters
     ----------
@@ -867,8 +907,8 @@ def analyse_design(
     it (:func:`~motosim.sim.stack.account_for_delay`), else it is the stack designed for a
     fresh sample, read ``delay`` old. The predicted cancellation's lead is that of the stack
     designed for a fresh sample, as :func:`motosim.sim.build_stack` gives it to ``motosim
-    run`` before the stack accounts for the age (read on the stack accounting for 5.5 ms at
-    100 Hz it would be 33.7 ms instead of 28.2).
+    run`` before the stack accounts for the age (read on the stack that accounts for it, the
+    lead would grow with the age).
 
     ``hands`` are the rider's hands the stack is designed for (by default none): give then
     ``estimator`` and ``controller`` designed for :func:`~motosim.sim.grips.held_handlebar`

@@ -51,6 +51,7 @@ __all__ = [
     "PREDICTION_RATE",
     "Delay",
     "DifferentiatorGains",
+    "DifferentiatorState",
     "Feedforward",
     "Held",
     "MotorcycleInput",
@@ -148,6 +149,16 @@ class Held(IntEnum):
     """The reference feedforward's dry-friction torque, with presliding memory [N*m]."""
     still = 9
     """Measurements in a row with the same encoder count [-]."""
+
+
+class DifferentiatorState(IntEnum):
+    """Positions in the super-twisting differentiator's state
+    (:attr:`StackData.differentiator`)."""
+
+    z0 = 0
+    """The angle it tracks [rad]."""
+    z1 = 1
+    """The rate it estimates [rad/s]."""
 
 
 class MotorcycleInput(IntEnum):
@@ -387,8 +398,8 @@ class StackData(NamedTuple):
     ----------
     estimator : ndarray, shape (4,)
         The estimator's state.
-    differentiator : ndarray, shape (2,)
-        [z0 [rad], z1 [rad/s]].
+    differentiator : ndarray, shape (len(DifferentiatorState),)
+        The differentiator's state, in the order of :class:`DifferentiatorState`.
     controller : ndarray, shape (n,)
         The discrete controller's state.
     motorcycle : ndarray, shape (12,)
@@ -401,7 +412,7 @@ class StackData(NamedTuple):
     inputs : ndarray, shape (4,)
         The multibody motorcycle's inputs this period, in the order of
         :class:`MotorcycleInput`.
-    held : ndarray, shape (8,)
+    held : ndarray, shape (len(Held),)
         Outputs held between measurements, in the order of :class:`Held`.
     periods : ndarray of int64, shape (1,)
         Periods since :func:`reset`.
@@ -801,9 +812,9 @@ def new_data(model: StackModel) -> StackData:
     n = model.Ad.shape[0]
     return StackData(
         estimator=np.zeros(4),
-        differentiator=np.zeros(2),
+        differentiator=np.zeros(len(DifferentiatorState)),
         controller=np.zeros(n),
-        motorcycle=np.zeros(12),
+        motorcycle=np.zeros(len(MotorcycleState)),
         multibody=np.zeros(
             tyred.N_STATE if isinstance(model.motorcycle, MultibodyMotorcycle) else 0
         ),
@@ -823,8 +834,8 @@ def reset(model: StackModel, data: StackData, theta: float, current: float) -> N
     current ``current`` [A]; the controller at rest; the motorcycle upright and straight at
     ``model.speed``.
     """
-    data.differentiator[0] = theta
-    data.differentiator[1] = 0.0
+    data.differentiator[DifferentiatorState.z0] = theta
+    data.differentiator[DifferentiatorState.z1] = 0.0
     start_kernel(model.estimator, data.estimator, theta, 0.0, current)
     data.controller[:] = 0.0
     _start(model.motorcycle, data, model.speed)
@@ -996,10 +1007,11 @@ def step_scaled(
         stuck = qt.stick_samples > 0 and held[Held.still] >= qt.stick_samples
         held[Held.theta_h_meas] = theta_meas
         g = model.differentiator
-        z1_before = data.differentiator[1]
+        z0_before = data.differentiator[DifferentiatorState.z0]
+        z1_before = data.differentiator[DifferentiatorState.z1]
         if qt.quantum > 0.0:  # the count's cell, not its centre: the angle read is z0
             z0, z1 = cell_step(
-                data.differentiator[0],
+                z0_before,
                 z1_before,
                 theta_meas,
                 g.h,
@@ -1009,7 +1021,7 @@ def step_scaled(
             )
             angle = z0
         else:
-            z0, z1 = std_step(data.differentiator[0], z1_before, theta_meas, g.h, g.k1, g.k0, True)
+            z0, z1 = std_step(z0_before, z1_before, theta_meas, g.h, g.k1, g.k0, True)
             angle = theta_meas
         dl = model.delay
         if dl.age > 0.0:  # a measurement d old: the angle now, predicted over d
@@ -1025,8 +1037,8 @@ def step_scaled(
         else:
             held[Held.i_m] = _command(model, data, angle, stuck)
             told = held[Held.i_m]
-        data.differentiator[0] = z0
-        data.differentiator[1] = z1
+        data.differentiator[DifferentiatorState.z0] = z0
+        data.differentiator[DifferentiatorState.z1] = z1
         held[Held.theta_h_dot_hat] = z1
         if stuck and model.estimator.kind != TORQUE_SENSOR:  # unobservable: hold the estimate
             estimate = held[Held.tau_r_hat]

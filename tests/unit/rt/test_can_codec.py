@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from motosim.errors import MotosimError
 from motosim.io.can import (
+    DatagramKind,
     FrameCodec,
     SignalLayout,
     codec_table,
@@ -146,12 +147,13 @@ def test_udp_multicast_datagrams_are_read_as_python_can_packs_them(
     datagram = np.frombuffer(b"xx" + pack_message(message), dtype=np.uint8)
     kind, got, start, length = unpack_frame(datagram, 2, datagram.size - 2)
     assert (kind, got, datagram[start : start + length].tobytes()) == (
-        0 if error else 1,
+        DatagramKind.FLAGGED if error else DatagramKind.DATA,
         frame_id,
         payload,
     )
-    assert unpack_frame(datagram, 2, datagram.size - 3)[0] == -1  # cut short
-    assert unpack_frame(np.frombuffer(b"\x93\x01\x02\x03", np.uint8), 0, 4)[0] == -1
+    assert unpack_frame(datagram, 2, datagram.size - 3)[0] == DatagramKind.NOT_A_FRAME  # cut
+    not_a_map = np.frombuffer(b"\x93\x01\x02\x03", np.uint8)
+    assert unpack_frame(not_a_map, 0, 4)[0] == DatagramKind.NOT_A_FRAME
 
 
 def test_every_frame_of_the_dbc_has_a_codec() -> None:

@@ -6,6 +6,7 @@ import pytest
 from motosim.model.handlebar import step_exact
 from motosim.params import load_parameters
 from motosim.rt.rig import Bar, RigRider, RigSettings, VirtualRig
+from motosim.sim.hands import NO_ARMS, Arms
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
 
@@ -29,13 +30,13 @@ class _Link:
         return None
 
 
-def _rig(rider: float, hands: np.ndarray, off: np.ndarray | None = None) -> VirtualRig:
+def _rig(rider: float, arms: Arms, off: np.ndarray | None = None) -> VirtualRig:
     return VirtualRig(
         HB,
         SETTINGS,
         handlebar_codecs(),
         _Link(),
-        RigRider(np.full(100_000, rider), on_enable=False, hands=hands, hands_off=off),
+        RigRider(np.full(100_000, rider), on_enable=False, arms=arms, hands_off=off),
         np.random.default_rng(0),
     )
 
@@ -45,7 +46,7 @@ def test_rig_hands_are_the_simulators_plant() -> None:
     damping added to the handlebar's, their spring taken at each 0.1 ms sub-step's midpoint
     (as the simulator's plant takes it at each step's)."""
     J_a, c_a, k_a, hold = 0.1, 4.0, 50.0, 0.05
-    rig = _rig(3.0, np.array([J_a, c_a, k_a, hold]))
+    rig = _rig(3.0, Arms(J_a, c_a, k_a, hold))
     rig.advance_to(0.5)
     theta, omega = 0.0, 0.0
     for _ in range(5000):
@@ -58,12 +59,13 @@ def test_rig_hands_are_the_simulators_plant() -> None:
 
 
 def test_rig_without_hands_is_unchanged_and_hands_off_removes_the_rider() -> None:
-    plain = _rig(3.0, np.zeros(4))
+    plain = _rig(3.0, NO_ARMS)
     plain.advance_to(0.2)
     theta, omega = 0.0, 0.0
     for _ in range(2000):
         theta, omega = step_exact(theta, omega, 3.0, HB.J_eq, HB.beta_eq, HB.beta_s, 1e-4)
     assert plain.x[Bar.theta] == theta and plain.x[Bar.omega] == omega
-    off = _rig(3.0, np.array([0.1, 4.0, 50.0, 0.0]), np.array([[0.0, 1.0]]))
+    off = _rig(3.0, Arms(0.1, 4.0, 50.0, 0.0), np.array([[0.0, 1.0]]))
     off.advance_to(0.2)
-    assert off.x[0] == 0.0 and off.x[1] == 0.0  # nobody holds it, no current: at rest
+    # nobody holds it, no current: at rest
+    assert off.x[Bar.theta] == 0.0 and off.x[Bar.omega] == 0.0
