@@ -193,9 +193,9 @@ def test_a_campaign_on_a_folder_another_instance_writes_is_refused(
 def test_a_campaign_and_a_simulate_of_one_folder_exclude_each_other(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # with the campaign's lock inside --out (3dc0dd8) a simulate took its own lock beside
-    # --out, and its publishing rename replaced the whole folder: the campaign's manifest and
-    # parts were deleted while the campaign said it had succeeded
+    # both take the one lock of the folder: were a simulate to lock beside --out, its
+    # publishing rename would replace the whole folder, the campaign's manifest and parts
+    # with it, while the campaign said it had succeeded
     import numpy as np
 
     import motosim.campaign.execute

@@ -333,8 +333,8 @@ def test_a_loop_late_while_the_bus_is_off_sends_zero_on_its_first_period_back(
 ) -> None:
     # The bus goes off at 0.8 s and the loop stalls for 5.5 periods in the period before
     # (it skips 5 deadlines): once back, 6 periods have passed without a status frame, more
-    # than the watchdog's 3, so its first period sends zero (before, the skipped deadlines
-    # were not counted: the stale command went out for 2 more periods).
+    # than the watchdog's 3, so its first period sends zero: the skipped deadlines count,
+    # else the stale command would go out for 2 more periods.
     host, drive = links
     settings = _settings(rate, bus_off_at=0.8, bus_off_duration=1.0)
     vrig = _held_rig(drive, settings, 0, 20_001)
@@ -417,8 +417,8 @@ def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
 ) -> None:
     # The NaN guard promises zero torque for a NaN in a measurement, the estimate or the
     # command: the stack's rider-torque estimate (tau_r_hat) or rate going NaN while its
-    # command stays finite trips NON_FINITE in that period (before, a NaN estimate was
-    # taken for "no estimate" and the command went on).
+    # command stays finite trips NON_FINITE in that period: a NaN estimate is not taken for
+    # "no estimate", with which the command would go on.
     host, drive = links
     vrig = _held_rig(drive, _settings(100.0), 4, 20_001)
     runner = RealtimeRunner(

@@ -501,8 +501,8 @@ def refuse_inside(
     """Refuse an output that is, or holds, an input the command reads.
 
     Replacing it (``--overwrite`` replaces a result folder whole) would delete the input:
-    ``cueing RUN --out RUN`` replaced the run it cued, ``simulate runs/s.toml --out runs``
-    deleted the scenario.
+    ``cueing RUN --out RUN`` would replace the run it cues, ``simulate runs/s.toml --out
+    runs`` would delete the scenario.
 
     Parameters
     ----------

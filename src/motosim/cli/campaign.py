@@ -205,7 +205,7 @@ def _check_options(args: argparse.Namespace) -> None:
             f"--scheduler {short_repr(args.scheduler)}; expected a Dask scheduler address such "
             "as tcp://host:8786"
         )
-    if args.write_scenario:  # it replaced an existing file (the base scenario) silently
+    if args.write_scenario:  # an existing file (the base scenario, say) is not replaced
         target = check_output(
             args.write_scenario, overwrite=True, option="--write-scenario", suffixes=(".toml",)
         )

@@ -37,8 +37,8 @@ __all__ = ["INTEGRAL_CORNER", "MAX_ORDER", "MAX_STARTS", "register"]
 
 
 MAX_STARTS = 32
-"""Most random starts of the fixed-order search: each takes a fraction of a second at order 1
-and about 10 s at order 3 (measured on a shared 2-core machine), so 32 bound a run to minutes."""
+"""Most random starts of the fixed-order search: a start at order 3 takes seconds, so 32
+bound a run to minutes (the design guide gives the times)."""
 
 MAX_SEED = 2**63 - 1
 """Largest seed (a 64-bit signed integer, as in a TOML file)."""

@@ -13,9 +13,9 @@ motorcycle, where no linearisation about upright running holds, the reference is
 motorcycle's own delta / tau_r measured in the same run (give ``sharp`` None).
 
 The multisine is the default: a linear chirp over 0.1-5 Hz in 60 s spends about a second
-below 0.2 Hz, and its Welch estimate is 3 dB and 20 deg off there even on a linear stack (no
-friction, exact angle), where the periodic estimate matches the linear analysis of
-:mod:`motosim.sim.loop_analysis` within 0.01 dB.
+below 0.2 Hz, too little for its Welch estimate there even on a linear stack (no friction,
+exact angle), where the periodic estimate matches the linear analysis of
+:mod:`motosim.sim.loop_analysis` (the simulate guide compares them).
 """
 
 import dataclasses
@@ -139,11 +139,9 @@ def feel_scenario(
     ``(periods + 1) * period``), or a linear chirp over ``duration`` [s].
 
     The rider holds the straight loosely (``lateral_tolerance`` [m] and ``course_tolerance``
-    [rad] of :class:`~motosim.sim.scenario.Rider`): a rider who holds it within 0.3 m and
-    0.05 rad cancels 96 % of the probe at 0.1 Hz with their own balancing torque, and the
-    little torque left at the lowest lines is then measured against the estimate's errors in
-    stick phases (at 20 m/s, 1 kHz, 10 N*m: 3.0 dB and 19 deg off over 0.1-3 Hz; 0.8 dB and 6
-    deg with 3 m and 0.5 rad, which cancel 68 %).
+    [rad] of :class:`~motosim.sim.scenario.Rider`): a rider who holds it tightly cancels
+    most of the probe at the lowest lines with their own balancing torque, and the little
+    torque left there is then measured against the estimate's errors in stick phases.
     """
     if not (math.isfinite(amplitude) and 0 < amplitude <= 50.0):
         raise MotosimError(f"amplitude = {amplitude!r}; expected a torque in (0, 50] N*m")

@@ -247,8 +247,8 @@ class ChirpProfile:
 
     def __post_init__(self) -> None:
         _check("amplitude", self.amplitude)
-        # at most 10 kHz, as a multisine's lines (1e9 Hz was accepted); beyond half the rate
-        # it is sampled at it would alias: refused by Scenario, which knows the rates
+        # at most 10 kHz, as a multisine's lines; beyond half the rate it is sampled at it
+        # would alias: refused by Scenario, which knows the rates
         _check("f0", self.f0, low=0.0, high=1e4, unit="Hz")
         _check("f1", self.f1, low=0.0, high=1e4, unit="Hz")
         _check("start", self.start, low=-MAX_TIME, high=MAX_TIME, unit="s")

@@ -165,8 +165,8 @@ def test_twin_goes_to_neutral_when_the_datagrams_stop(config: CueingConfig) -> N
 
 
 def test_twin_ignores_a_datagram_older_than_the_last(config: CueingConfig) -> None:
-    # UDP may deliver out of order: an older datagram is counted late and not used (before,
-    # it was applied and its sequence's wrap counted as 4 billion datagrams lost)
+    # UDP may deliver out of order: an older datagram is counted late and not used (applied,
+    # its sequence's wrap would count as 4 billion datagrams lost)
     twin = PlatformTwin(config.platform, 0.01, watchdog=10.0)
     values = np.array([0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     twin.receive(encode_platform(5, 0.05, State.RUNNING, 0, True, values))

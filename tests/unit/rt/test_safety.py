@@ -403,8 +403,8 @@ def test_deadlines_a_late_loop_skipped_count_for_the_watchdog(skipped: int) -> N
     # The watchdog promises zero torque once no valid status frame came for
     # watchdog_periods (3) periods of the loop. A loop that is late skips deadlines (it
     # does not step then): the drive's silence meanwhile counts, so the first step after
-    # 3 or more periods of silence sends zero (before, only the steps were counted: a
-    # stall of 50 periods left the stale command on for 2 more periods).
+    # 3 or more periods of silence sends zero (counting only the steps, a stall of 50
+    # periods would leave the stale command on for 2 more periods).
     d = Driver(rate=1000.0)
     d.stage.enable()
     t = 0.0
@@ -454,8 +454,8 @@ def test_a_stop_goes_idle_only_once_the_command_sent_is_zero() -> None:
 def test_hands_off_scales_the_stacks_command_not_the_end_stops_spring() -> None:
     # Hands-off detection reduces the feedback gain (the stack's command) while nobody
     # holds the handlebar; the soft end stop's spring is a limit of its own and must keep
-    # its full strength then, when nothing else holds the handlebar back (before, it was
-    # scaled too: to 25 % here, to nothing with hands_off_gain = 0).
+    # its full strength then, when nothing else holds the handlebar back (scaled with the
+    # command, it would be 25 % here and nothing with hands_off_gain = 0).
     for gain in (0.25, 0.0):
         lim = SafetyLimits(**{**_fields(LIMITS), "hands_off_torque": 0.5, "hands_off_gain": gain})
         d = Driver(lim, rate=100.0).running()
@@ -471,7 +471,7 @@ def test_hands_off_scales_the_stacks_command_not_the_end_stops_spring() -> None:
 
 def test_a_period_without_an_estimate_keeps_the_hands_off_gain() -> None:
     # tau_hat NaN is "no estimate this period": it must not give the full gain back while
-    # nobody holds the handlebar (before, the reduced gain was skipped with the detection)
+    # nobody holds the handlebar: the reduced gain is not skipped with the detection
     lim = SafetyLimits(**{**_fields(LIMITS), "hands_off_torque": 0.5})
     d = Driver(lim, rate=100.0).running()
     for _ in range(25):
@@ -492,7 +492,7 @@ def test_nothing_the_stage_sends_pushes_a_handlebar_too_fast_faster(
     # At max_speed + speed_band and beyond, the speed limiter promises no torque in the
     # direction of motion, at any angle: beyond the soft stop the end stop's spring pulls
     # back, and on a handlebar already returning too fast it must not push it faster
-    # (before, the spring was added after the limiter: 40 A/rad * 0.29 rad = 11.6 A with a
+    # (the spring added after the limiter would give 40 A/rad * 0.29 rad = 11.6 A with a
     # handlebar at 0.79 rad coming back at 100 rad/s).
     omega = sign * speed
     d = Driver().running()
