@@ -50,7 +50,7 @@ import numpy as np
 from numba import njit
 
 from bench_rt import _steps, _us, bench_setup, replay_period
-from motosim.io.can import recv_datagrams
+from motosim.io.can import recv_frames
 from motosim.rt import fused
 from motosim.rt.clock import MonotonicClock
 from motosim.rt.fused import context_period, context_warm, context_warm_until, monotonic_ns
@@ -124,6 +124,15 @@ def _step_only(c: Any) -> None:
     stack_period(c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale)
 
 
+def _udp_multicast(frame_id: int, data: bytes) -> bytes:
+    """The frame as python-can's udp_multicast bus sends it (its ``pack_message``)."""
+    import can
+    from can.interfaces.udp_multicast.utils import pack_message
+
+    message = can.Message(arbitration_id=frame_id, data=data, is_extended_id=False)
+    return bytes(pack_message(message))
+
+
 @njit(cache=False)
 def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> Any:
     """:func:`~motosim.rt.fused.context_cycle` with its warm-ups replaced by ``mode``'s:
@@ -149,7 +158,8 @@ def _cycle_variant(c: Any, fd: int, k: int, t: float, mode: int) -> Any:
     woke = monotonic_ns() / 1e9
     while woke < t:
         woke = monotonic_ns() / 1e9
-    frames = recv_datagrams(fd, c.arrays.rx, c.arrays.rx_length)[0] if fd >= 0 else 1
+    a = c.arrays
+    frames = recv_frames(fd, a.rx, a.rx_length, a.rx_id)[0] if fd >= 0 else 1
     done_read = monotonic_ns() / 1e9
     return fused.fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)
 
@@ -177,6 +187,7 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
     poll = select.poll()
     poll.register(rx, select.POLLIN)
     datagram = bytes(72)  # about a python-can udp_multicast frame
+    packed = [_udp_multicast(st.frame_id, frame.tobytes()) for frame in frames]
     buffer = memoryview(bytearray(512))
     clock = MonotonicClock()
     lead = WARM_LEAD
@@ -232,9 +243,8 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
         t0 = clock.now() + 1e-3
         for k in range(n):
             deadline = t0 + k * 1e-3
-            tx.sendto(frames[k].tobytes(), target)  # the drive's frame, waiting at the wake-up
+            tx.sendto(packed[k], target)  # the drive's frame, waiting at the wake-up
             clock.sleep_until(deadline - lead)
-            a.rx_id[0] = st.frame_id  # a raw frame (this runner's link is no udp_multicast)
             cycle(context, fd, k, deadline)
             a.ring_head[0] += 1
             out[k] = fused.runner_counts(a.runner).stack_time
@@ -253,11 +263,11 @@ def main(periods: int, only: str = "", poll_idle: bool = False) -> None:
         for k in range(n):
             deadline = t0 + k * 1e-3
             if read:
-                tx.sendto(frames[k].tobytes(), target)  # waiting at the wake-up
+                tx.sendto(packed[k], target)  # waiting at the wake-up
             else:
                 a.rx[0, : st.length] = frames[k]
                 a.rx_length[0] = st.length
-            a.rx_id[0] = st.frame_id
+                a.rx_id[0] = st.frame_id
             clock.sleep_until(deadline - lead)
             end = _cycle_variant(context, fd, k, deadline, mode)
             a.ring_head[0] += 1

@@ -68,6 +68,7 @@ __all__ = [
     "UdpMulticastLink",
     "codec_table",
     "crc8_sae_j1850",
+    "datagrams_to_frames",
     "decode_frame",
     "encode_frame",
     "handlebar_codecs",
@@ -75,7 +76,7 @@ __all__ = [
     "open_link",
     "packaged_dbc",
     "platform_codecs",
-    "recv_datagrams",
+    "recv_frames",
     "unpack_frame",
 ]
 
@@ -702,8 +703,8 @@ def platform_codecs(path: str | Path | None = None) -> PlatformCodecs:
     return PlatformCodecs(command, status, angles(command), angles(status), live, watchdog)
 
 
-Rows = Sequence[Any]
-"""Writable buffers of one frame each (memoryviews of a ``uint8`` array's rows)."""
+Rows = NDArray[np.uint8]
+"""Rows of one frame each: a C-contiguous ``uint8`` array of shape (frames, bytes)."""
 
 Ints = NDArray[np.int64]
 
@@ -715,14 +716,15 @@ class Link:
     A transport gives :meth:`send` and :meth:`receive`; the other methods work frame by frame
     from those two, and a transport with a faster path overrides them in its own class
     (:class:`UdpMulticastLink`: python-can's datagrams sent and read whole, its socket read
-    from compiled code). A link is a context manager that closes it.
+    from compiled code by :func:`recv_frames`). Whatever the transport, what is read is
+    frames: each one's data bytes, length and id. A link is a context manager that closes
+    it.
     """
 
     errors = 0
-    """Frames that could not be sent or read."""
-    datagrams = False
-    """Whether :meth:`receive_into` writes python-can ``udp_multicast`` datagrams (read by
-    :func:`unpack_frame`) rather than each frame's data bytes and id."""
+    """Frames that could not be sent or read, and reads that were no frame."""
+    label = "python-can"
+    """How a run's timing report names the link."""
 
     def send(self, frame_id: int, data: bytes) -> bool:
         """Send one standard frame; False if the bus refused it."""
@@ -746,28 +748,28 @@ class Link:
     def receive_into(
         self, rows: Rows, lengths: Ints, ids: Ints, start: int, timeout: float = 0.0
     ) -> int:
-        """Read the frames waiting into ``rows[start:]`` (their sizes into ``lengths``,
-        their ids into ``ids`` unless :attr:`datagrams`); the index after the last one. With
-        ``timeout`` > 0, at most one, waiting up to ``timeout`` [s] for it. Here by
-        :meth:`receive`, a frame's data cut to its row."""
+        """Read the frames waiting into ``rows[start:]`` (their data bytes from each row's
+        start, their sizes into ``lengths``, their ids into ``ids``); the index after the
+        last one. With ``timeout`` > 0, at most one, waiting up to ``timeout`` [s] for it.
+        Here by :meth:`receive`, a frame's data cut to its row."""
         receive = self.receive
         n = start
-        while n < len(rows):  # bounded: a flooded bus cannot hold the loop
+        while n < rows.shape[0]:  # bounded: a flooded bus cannot hold the loop
             frame = receive(timeout)
             if frame is None:
                 break
-            data = frame[1][: len(rows[n])]
+            data = frame[1][: rows.shape[1]]
             ids[n] = frame[0]
             lengths[n] = len(data)
-            rows[n][: len(data)] = data
+            rows[n, : len(data)] = np.frombuffer(data, dtype=np.uint8)
             n += 1
             if timeout > 0.0:
                 break
         return n
 
     def compiled_fd(self) -> int:
-        """A non-blocking socket whose datagrams compiled code may read with ``recv``
-        (:func:`recv_datagrams`), or -1 (here: none)."""
+        """A non-blocking socket whose frames compiled code may read with ``recv``
+        (:func:`recv_frames`), or -1 (here: none)."""
         return -1
 
     def close(self) -> None:
@@ -835,7 +837,7 @@ class CanLink(Link):
 
 
 RECV_AVAILABLE = sys.platform == "linux"
-"""Whether :func:`recv_datagrams` can read a socket from compiled code here (Linux: the C
+"""Whether :func:`recv_frames` can read a socket from compiled code here (Linux: the C
 library's ``recv`` with ``MSG_DONTWAIT`` and its ``errno`` through ``__errno_location``)."""
 
 _MSG_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
@@ -885,10 +887,34 @@ _read: Any = _recv
 
 
 @njit(cache=True)
-def recv_datagrams(fd: int, rx: NDArray[np.uint8], lengths: Ints) -> tuple[int, int]:
-    """Read the datagrams waiting on socket ``fd`` (non-blocking) into ``rx``'s rows and
-    their sizes into ``lengths``, at most a row each; the number read and the number of
-    reads that failed otherwise than "nothing waiting".
+def datagrams_to_frames(
+    rx: Rows, lengths: Ints, ids: Ints, first: int, end: int
+) -> tuple[int, int]:
+    """python-can ``udp_multicast`` datagrams in ``rx[first:end]`` (their sizes in
+    ``lengths``) turned into frames in place: each data frame's bytes moved to the start of
+    a row, in order from ``rx[first]``, its length into ``lengths`` and its id into ``ids``;
+    error and remote frames dropped. Returns the index after the last frame and the number
+    of datagrams that were no frame."""
+    n, bad = first, 0
+    for j in range(first, end):
+        kind, frame_id, start, length = unpack_frame(rx[j], 0, lengths[j])
+        if kind == _NOT_A_FRAME:
+            bad += 1
+        elif kind == _DATA:
+            row, datagram = rx[n], rx[j]
+            for b in range(length):  # each byte to an index no later than its own
+                row[b] = datagram[start + b]
+            ids[n], lengths[n] = frame_id, length
+            n += 1
+    return n, bad
+
+
+@njit(cache=True)
+def recv_frames(fd: int, rx: Rows, lengths: Ints, ids: Ints) -> tuple[int, int, int]:
+    """Read the frames waiting on the ``udp_multicast`` socket ``fd`` (non-blocking) into
+    ``rx``'s rows (:func:`datagrams_to_frames`), at most a datagram a row; the frames read,
+    the reads that failed otherwise than "nothing waiting" and the datagrams that were no
+    frame.
 
     The compiled twin of :meth:`UdpMulticastLink.receive_into`: a datagram longer than a
     row is cut to it, as ``recv_into`` cuts it; an interrupted read is tried again (as
@@ -896,15 +922,17 @@ def recv_datagrams(fd: int, rx: NDArray[np.uint8], lengths: Ints) -> tuple[int, 
     too. Linux only (:data:`RECV_AVAILABLE`).
     """
     size = rx.shape[1]
-    n = 0
+    n, errors = 0, 0
     while n < rx.shape[0]:
         got = _read(fd, rx[n], size)
         if got >= 0:
             lengths[n] = got
             n += 1
         elif got != -_EINTR:
-            return n, 0 if got == -_EAGAIN or got == -_EWOULDBLOCK else 1
-    return n, 0
+            errors = 0 if got == -_EAGAIN or got == -_EWOULDBLOCK else 1
+            break
+    frames, bad = datagrams_to_frames(rx, lengths, ids, 0, n)
+    return frames, errors, bad
 
 
 class UdpMulticastLink(Link):
@@ -953,7 +981,7 @@ class UdpMulticastLink(Link):
         "own_filtered",
         "spec",
     )
-    datagrams = True
+    label = "fast"
 
     def __init__(self, bus: Any, group: str, port: int, spec: str) -> None:
         import msgpack  # type: ignore[import-untyped]  # python-can[multicast] brings it
@@ -1021,9 +1049,9 @@ class UdpMulticastLink(Link):
     def receive_into(
         self, rows: Rows, lengths: Ints, ids: Ints, start: int, timeout: float = 0.0
     ) -> int:
-        """:meth:`Link.receive_into` of whole datagrams (``ids`` unused: the id is in the
-        datagram), which :func:`unpack_frame` reads."""
-        limit = len(rows)
+        """:meth:`Link.receive_into`: whole datagrams read, then turned into frames in place
+        (:func:`datagrams_to_frames`; a datagram that is no frame counts in :attr:`errors`)."""
+        limit = rows.shape[0]
         if timeout > 0.0:
             if not self.readable(timeout):
                 return start
@@ -1040,7 +1068,9 @@ class UdpMulticastLink(Link):
                 self.errors += 1
                 break
             n += 1
-        return n
+        end, bad = datagrams_to_frames(rows, lengths, ids, start, n)
+        self.errors += bad
+        return end
 
     def compiled_fd(self) -> int:
         """The receiving socket's file descriptor (non-blocking), or -1 where compiled code

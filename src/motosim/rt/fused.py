@@ -38,12 +38,10 @@ from numpy.typing import NDArray
 from motosim.io.can import (
     FRAME_ROW,
     RECV_AVAILABLE,
-    DatagramKind,
     FrameColumn,
     decode_frame,
     encode_frame,
-    recv_datagrams,
-    unpack_frame,
+    recv_frames,
 )
 from motosim.rt.e2e import FieldsStruct
 from motosim.rt.ring import RingCounter
@@ -87,9 +85,6 @@ __all__ = [
     "take_frames",
 ]
 
-_NOT_A_FRAME = int(DatagramKind.NOT_A_FRAME)
-_FLAGGED = int(DatagramKind.FLAGGED)
-
 Array = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Ints = NDArray[np.int64]
@@ -107,8 +102,7 @@ class RunnerSettings(NamedTuple):
     [s], the run's ``duration`` [periods] (the torque fades out from there; -1: no end);
     where the stack's row holds its estimate of the rider's torque, the handlebar's rate,
     the motorcycle's roll and speed (-1: nowhere); the motorcycle's range (largest
-    ``roll`` [rad], lowest and highest speed [m/s]); whether the frames read are python-can
-    ``udp_multicast`` datagrams (else id, length and bytes); whether the torque starts with
+    ``roll`` [rad], lowest and highest speed [m/s]); whether the torque starts with
     the drive's first status frame (``armed``, else on an arm request); whether the stack is
     warmed before each deadline (:func:`context_warm_until`)."""
 
@@ -124,7 +118,6 @@ class RunnerSettings(NamedTuple):
     roll: float
     speed_low: float
     speed_high: float
-    datagrams: bool
     armed: bool
     warm: bool
 
@@ -173,8 +166,9 @@ class RunnerState(structref.StructRefProxy):
     frame this period), ``stop`` (requested), ``finishing`` (the torque fades out: the
     duration is over or the motorcycle left its range), ``arm_request``; ``after_fault``
     periods since a fault; counts of command frames ``sent``, periods run (``calls``),
-    ``status_frames`` received, datagrams that were no frames (``bad``) and socket reads
-    failed otherwise than "nothing waiting" (``recv_errors``); whether (``left``), when
+    ``status_frames`` received, and of the compiled socket reads, datagrams that were no
+    frames (``bad``) and reads failed otherwise than "nothing waiting" (``recv_errors``);
+    whether (``left``), when
     (``left_t``, since the first deadline [s]), at which roll [rad] and speed [m/s] the
     motorcycle left its range; ``stack_time`` the stack's time this period [s] (NaN where
     it did not step); ``woke`` the wake-up of the last :func:`context_cycle` [s];
@@ -394,27 +388,18 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
 
     A status frame is decoded and checked by the safety stage (checksum, alive counter, the
     drive's fault flag); if valid and fresh, its angle and current are kept. An E-stop frame
-    pressed, or unreadable, trips the emergency stop. Other frames are ignored; datagrams
-    that are no python-can frames are counted (the runner's ``bad``).
+    pressed, or unreadable, trips the emergency stop. Other frames are ignored.
     """
     r, q, s = a.runner, a.positions, a.safety
     status_id = int(a.status[FRAME_ROW, FrameColumn.frame_id])
     estop_id = int(a.estop[FRAME_ROW, FrameColumn.frame_id])
     count = 0
     for j in range(first, end):
-        if r.datagrams:
-            kind, frame_id, start, length = unpack_frame(a.rx[j], 0, a.rx_length[j])
-            if kind == _NOT_A_FRAME:
-                r.bad += 1
-                continue
-            if kind == _FLAGGED:  # an error or remote frame
-                continue
-        else:
-            frame_id, start, length = a.rx_id[j], 0, a.rx_length[j]
+        frame_id, length = a.rx_id[j], a.rx_length[j]
         if frame_id == status_id:
             r.status_frames += 1
             values = a.status_values
-            ok = decode_frame(a.status, a.rx[j], start, length, values)
+            ok = decode_frame(a.status, a.rx[j], 0, length, values)
             fault = values[q.drive_fault] > 0.5
             # the safety stage's time: the loop's since the first deadline (NaN before it)
             if safety_status_frame(s, a.limits, ok, values[q.counter], fault, t - r.t0):
@@ -424,7 +409,7 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
             count += 1
         elif frame_id == estop_id:
             values = a.estop_values
-            ok = decode_frame(a.estop, a.rx[j], start, length, values)
+            ok = decode_frame(a.estop, a.rx[j], 0, length, values)
             safety_estop_frame(s, ok, values[q.estop] > 0.5)
     return count
 
@@ -768,13 +753,13 @@ def context_period(
 @njit(cache=True)
 def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, bool, float]:
     """The wait's end, the bus read and the period, in one compiled call: :func:`fused_period`
-    of the datagrams waiting on socket ``fd`` at the deadline ``t`` [s] of period ``k`` (on
+    of the frames waiting on socket ``fd`` at the deadline ``t`` [s] of period ``k`` (on
     the clock of :func:`monotonic_ns`, ``time.monotonic``'s), returning its value.
 
     In order, without returning to the interpreter: the stack's warm-ups
     (:func:`context_warm_until`), a spin on the clock until ``t`` has passed (the test of
     :meth:`motosim.rt.clock.MonotonicClock.sleep_until`), the wake-up (the
-    :class:`PeriodEnd`'s ``woke`` [s]), the datagrams read, the period. The caller sleeps
+    :class:`PeriodEnd`'s ``woke`` [s]), the frames read, the period. The caller sleeps
     until shortly before ``t`` and sends the frames after.
     """
     context_warm_until(c, max(0, int(t * 1e9)))
@@ -782,7 +767,9 @@ def context_cycle(c: Any, fd: int, k: int, t: float) -> tuple[bool, bool, int, b
     while woke < t:
         woke = monotonic_ns() / 1e9
     c.arrays.runner.woke = woke
-    frames, errors = recv_datagrams(fd, c.arrays.rx, c.arrays.rx_length)
-    c.arrays.runner.recv_errors += errors
+    a = c.arrays
+    frames, errors, bad = recv_frames(fd, a.rx, a.rx_length, a.rx_id)
+    a.runner.recv_errors += errors
+    a.runner.bad += bad
     done_read = monotonic_ns() / 1e9
     return fused_period(c.stack, c.arrays, frames, k, t, woke, done_read)

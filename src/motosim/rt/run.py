@@ -284,7 +284,6 @@ class RealtimeRunner:
             roll=roll,
             speed_low=speed_low,
             speed_high=speed_high,
-            datagrams=link.datagrams,
             armed=not settings.wait_for_arm,
             warm=settings.warm,
         )
@@ -292,7 +291,6 @@ class RealtimeRunner:
         self._woke = math.nan
         self._arrays = self._allocate(stepper, link, codecs, fused.RunnerState(self._settings))
         self._r = self._arrays.runner
-        self._views = [memoryview(row) for row in self._arrays.rx]
         self._bad_reported = 0
         self.send_errors = 0
         self._compile()
@@ -523,7 +521,7 @@ class RealtimeRunner:
         """Read the frames waiting (one, waiting up to ``timeout`` [s], if ``timeout`` > 0)
         into the period's arrays from ``start``; the index after the last one."""
         a = self._arrays
-        return self.link.receive_into(self._views, a.rx_length, a.rx_id, start, timeout)
+        return self.link.receive_into(a.rx, a.rx_length, a.rx_id, start, timeout)
 
     def wait_status(self, until: float) -> bool:
         """Block on the bus until a status frame arrives or ``clock`` reaches ``until`` [s].

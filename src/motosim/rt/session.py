@@ -240,7 +240,6 @@ class RealtimeSession:
         self._closers: list[Callable[[], None]] = []
         self._recorder: Recorder | None = None
         self._buttons: Any = None
-        self._fast = False
         self._stop_asked = self._estop_asked = False  # before the runner was built
 
     @property
@@ -288,7 +287,6 @@ class RealtimeSession:
         platform = self._platform_output(tuple(stack.names))
         self._link = open_link(c.bus, fast=c.options.fast_link)
         self._closers.append(self._link.close)
-        self._fast = self._link.datagrams  # the fast link on this bus
         if platform is not None and c.options.platform_can:
             self._platform_can(platform)
         rate = c.rate
@@ -464,7 +462,7 @@ class RealtimeSession:
             ending, reason, time = Ending.COMPLETED, counters.fault_reason, math.nan
         platform = self._platform
         report = {
-            "link": "fast" if self._fast else "python-can",
+            "link": self._link.label,
             "pace": c.options.pace,
             "wait": "compiled" if runner.waits_compiled else "python",
             "warm": runner.warms and c.options.pace == "clock",

@@ -12,6 +12,7 @@ from motosim.io.can import (
     SignalLayout,
     codec_table,
     crc8_sae_j1850,
+    datagrams_to_frames,
     decode_frame,
     encode_frame,
     handlebar_codecs,
@@ -154,6 +155,39 @@ def test_udp_multicast_datagrams_are_read_as_python_can_packs_them(
     assert unpack_frame(datagram, 2, datagram.size - 3)[0] == DatagramKind.NOT_A_FRAME  # cut
     not_a_map = np.frombuffer(b"\x93\x01\x02\x03", np.uint8)
     assert unpack_frame(not_a_map, 0, 4)[0] == DatagramKind.NOT_A_FRAME
+
+
+def test_datagrams_become_frames_in_order_and_the_rest_is_counted() -> None:
+    """What a ``udp_multicast`` read leaves to the period: frames only (python-can's own
+    ``pack_message`` makes the datagrams), the error frame dropped, bytes that are no
+    datagram counted, the frames moved to the first rows in their order."""
+    can = pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
+    pytest.importorskip("msgpack", reason="python-can's udp_multicast needs msgpack")
+    from can.interfaces.udp_multicast.utils import pack_message
+
+    def packed(frame_id: int, data: bytes, error: bool = False) -> bytes:
+        message = can.Message(
+            arbitration_id=frame_id, data=data, is_extended_id=False, is_error_frame=error
+        )
+        return bytes(pack_message(message))
+
+    datagrams = [
+        b"\x93\x01\x02\x03",  # no python-can map
+        packed(0x101, bytes(range(8))),
+        packed(0x180, b"\x01", error=True),
+        packed(0x100, b"\xaa\x55"),
+    ]
+    rx = np.zeros((6, 512), dtype=np.uint8)  # rows as long as the loop's (fused.RX_BYTES)
+    lengths = np.zeros(6, dtype=np.int64)
+    ids = np.full(6, -1, dtype=np.int64)
+    for j, datagram in enumerate(datagrams, start=1):  # from row 1: a read's ``start``
+        rx[j, : len(datagram)] = np.frombuffer(datagram, dtype=np.uint8)
+        lengths[j] = len(datagram)
+    end, bad = datagrams_to_frames(rx, lengths, ids, 1, 1 + len(datagrams))
+    assert (end, bad) == (3, 1)
+    assert ids[1:3].tolist() == [0x101, 0x100] and lengths[1:3].tolist() == [8, 2]
+    assert rx[1, :8].tobytes() == bytes(range(8)) and rx[2, :2].tobytes() == b"\xaa\x55"
+    assert ids[0] == -1 and not rx[0].any()  # the rows before ``start`` untouched
 
 
 def test_every_frame_of_the_dbc_has_a_codec() -> None:
