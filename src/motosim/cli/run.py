@@ -160,10 +160,12 @@ def run(args: argparse.Namespace) -> int:
     check_scenario_values(args.scenario)
     if not 0 <= args.view_port < 65536:
         raise MotosimError(f"--view-port {short_repr(args.view_port)}; expected 0..65535")
-    request = _request(args, check_rt_options(args), folder)
+    options = check_rt_options(args)
     stops = StopHandler()
     with stops.installed():
         from motosim.rt.request import check_run, session_config
+
+        request = _request(args, options, folder)
 
         with deferred_warnings():  # the scenario's, once every check has passed
             cache = design_cache(args, quiet=args.json)
@@ -187,7 +189,8 @@ def run(args: argparse.Namespace) -> int:
             outcome = _run(session)
             stops.release()  # the loop has ended: Ctrl-C interrupts what is left
             payload = _finite_or_none(outcome.report)
-            write_text(outcome.folder / "timing.json", json.dumps(payload, indent=2) + "\n")
+            timing = json.dumps(payload, indent=2, allow_nan=False) + "\n"
+            write_text(outcome.folder / "timing.json", timing)
             html = None
             if args.report:
                 from motosim.report import build_report
