@@ -58,7 +58,7 @@ class SpringStack:
 
     def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
         command = -self.gain * theta_meas
-        self._row[0], self._row[1] = theta_meas, command
+        self._row[:] = theta_meas, command  # names: theta_in, i_out
         return command
 
     def row(self) -> np.ndarray:
@@ -393,14 +393,14 @@ def test_the_end_of_a_run_fades_out_to_zero_under_a_slow_slew_limit(
 
 
 class EstimateStack(SpringStack):
-    """The spring, with an estimate and a rate in its row that go NaN from ``bad_from``
-    (``column``), its command still finite."""
+    """The spring, with an estimate and a rate in its row, the ``column`` named going NaN
+    from ``bad_from``, its command still finite."""
 
     names = ("tau_r_hat", "theta_h_dot_hat")
 
-    def __init__(self, gain: float, column: int, bad_from: int) -> None:
+    def __init__(self, gain: float, column: str, bad_from: int) -> None:
         super().__init__(gain)
-        self.column, self.bad_from, self.steps = column, bad_from, 0
+        self.column, self.bad_from, self.steps = self.names.index(column), bad_from, 0
 
     def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
         command = -self.gain * theta_meas
@@ -411,9 +411,9 @@ class EstimateStack(SpringStack):
         return command
 
 
-@pytest.mark.parametrize("column", [0, 1])
+@pytest.mark.parametrize("column", EstimateStack.names)
 def test_a_nan_estimate_or_rate_of_the_stack_zeroes_the_command(
-    links: tuple[CanLink, CanLink], column: int
+    links: tuple[CanLink, CanLink], column: str
 ) -> None:
     # The NaN guard promises zero torque for a NaN in a measurement, the estimate or the
     # command: the stack's rider-torque estimate (tau_r_hat) or rate going NaN while its

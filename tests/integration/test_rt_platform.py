@@ -16,7 +16,13 @@ import pytest
 
 from motosim.cueing import TELBAN_CARDULLO_2005, cue, load_platform
 from motosim.rt.fused import LoopColumn
-from motosim.rt.platform import PlatformCanSender, PlatformOutput, PlatformSender, PlatformTwin
+from motosim.rt.platform import (
+    PlatformCanSender,
+    PlatformOutput,
+    PlatformSender,
+    PlatformTwin,
+    PlatformValue,
+)
 from motosim.rt.stack import CompiledStack
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
@@ -79,7 +85,7 @@ def test_platform_commands_reach_the_twin_within_the_limits(medium: str) -> None
     offline = cue(config, ride, TELBAN_CARDULLO_2005, algorithm="washout")
     last = round(sc.duration * rate) - 1
     if can:  # the last frame's command, quantised at 1e-4 rad
-        roll_rt = twin.command[0]
+        roll_rt = twin.command[PlatformValue.roll]
     else:
         roll_rt = twin.last.angles[0] if twin.last is not None else np.nan
     roll_offline = offline.commands["phi_s"][last - (last % 10)]

@@ -245,8 +245,9 @@ class Lockstep:
         virtual = VirtualRider(world, self._receiver, rate=self._rate)
 
         def rider_now(t: float) -> float:
-            self.rider_torques.append((self.rig.t, virtual(t)))
-            return self.rider_torques[-1][1]
+            torque = virtual(t)
+            self.rider_torques.append((self.rig.t, torque))
+            return torque
 
         return rider_now
 

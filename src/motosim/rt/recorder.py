@@ -287,7 +287,7 @@ class _Drain:
         col = {name: j for j, name in enumerate(RESULT_SIGNALS)}
         running = np.concatenate(self.states) == State.RUNNING if self.states else None
         return run_metrics(
-            rows[:, 0],
+            rows[:, col["t"]],
             lambda n: rows[:, col[n]] if n in col else None,
             complete=complete,
             running=running,

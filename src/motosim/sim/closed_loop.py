@@ -921,9 +921,9 @@ def _check_block(out: Array) -> None:
     row = int(np.argmin(finite.all(axis=1)))
     bad = [SIGNALS[j] for j in range(out.shape[1]) if not finite[row, j]]
     raise RunFailedError(
-        f"the simulation diverged at t = {out[row, 0]:.3f} s ({', '.join(bad)} not finite); "
+        f"the simulation diverged at t = {out[row, _COL.t]:.3f} s ({', '.join(bad)} not finite); "
         "check the rates, the controller and the rider",
-        time=float(out[row, 0]),
+        time=float(out[row, _COL.t]),
     )
 
 
@@ -1003,7 +1003,8 @@ def simulate(
         if stopped:
             break
     out = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
-    return TimeSeries(out[:, 0], out[:, 1:], SIGNALS[1:])  # views: no copy of the run
+    # t is the first column (signals.RECORDED): the others are views after it, no copy
+    return TimeSeries(out[:, _COL.t], out[:, _COL.t + 1 :], SIGNALS[1:])
 
 
 def run_metadata(inputs: RunInputs) -> dict[str, object]:

@@ -13,6 +13,7 @@ from motosim.rt.platform import (
     PlatformOutput,
     PlatformSender,
     PlatformTwin,
+    PlatformValue,
     decode_platform,
     encode_platform,
 )
@@ -65,7 +66,7 @@ def test_fades_in_with_the_envelope_and_back_to_neutral_on_a_fault(
     for k in range(6000):
         envelope = min(1.0, k * DT / 0.5) if k < 3000 else 0.0  # fade-in, then a fault
         out.step(k, k * DT, row, State.RUNNING if k < 3000 else State.FAULT, 0, envelope)
-        rolls.append(out.values[0])
+        rolls.append(out.values[PlatformValue.roll])
     roll = np.array(rolls)
     assert roll[0] == 0.0 and roll[2999] > np.radians(5.0)  # faded in, holding a roll
     assert abs(roll[-1]) < 1e-9  # back at neutral after the fault
@@ -157,7 +158,7 @@ def test_twin_goes_to_neutral_when_the_datagrams_stop(config: CueingConfig) -> N
     twin.receive(encode_platform(0, 0.0, State.RUNNING, 0, True, values))
     for _ in range(5):  # within the watchdog: the command is held
         twin.step()
-    assert twin.command[0] == pytest.approx(0.2)
+    assert twin.command[PlatformValue.roll] == pytest.approx(0.2)
     for _ in range(300):  # silence: back to neutral
         twin.step()
     np.testing.assert_allclose(twin.achieved, 0.0, atol=1e-3)

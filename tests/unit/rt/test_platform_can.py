@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from motosim.cueing import load_platform
-from motosim.rt.platform import PlatformCanSender, PlatformTee, PlatformTwin
+from motosim.rt.platform import PlatformCanSender, PlatformTee, PlatformTwin, PlatformValue
 from motosim.rt.safety import State
 
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
@@ -80,7 +80,7 @@ def test_not_live_and_silence_send_the_twin_to_neutral() -> None:
     assert np.all(twin.command == 0.0)  # LIVE 0: neutral
     _send(sender, 1, True, 0.2)
     twin.receive_frame(*bus.frames.pop())
-    assert twin.command[0] == pytest.approx(0.2, abs=1e-4)
+    assert twin.command[PlatformValue.roll] == pytest.approx(0.2, abs=1e-4)
     twin.advance_to(0.5)  # no frame for 0.5 s: the watchdog
     assert twin.timeouts == 1 and np.all(twin.command == 0.0)
     _, data = twin.status_frame()
