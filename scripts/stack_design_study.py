@@ -63,7 +63,7 @@ class Candidate:
     :func:`motosim.sim.closed_loop.observer_settings`)."""
 
     name: str
-    cancellation: float = 1.0  # feedforward[0]: share of the estimated rider torque cancelled
+    cancellation: float = 1.0  # Feedforward.cancellation: share of the estimate cancelled
     reference: bool = True  # the reference inverse-dynamics term
     reference_inertia: float = 1.0  # its J_eq, as a factor of the nominal
     reference_damping: float = 1.0  # its beta_eq, as a factor of the nominal
@@ -206,11 +206,13 @@ def build(c: Candidate, hb: HandlebarParameters, rate: float, speed: float) -> S
         rider_feedforward=True,
         reference_feedforward=True,
     )
-    ff = model.feedforward.copy()
-    ff[0] = c.cancellation
-    ff[1] = float(c.reference)
-    ff[2] *= c.reference_inertia
-    ff[3] *= c.reference_damping
+    ff = model.feedforward
+    ff = ff._replace(
+        cancellation=c.cancellation,
+        reference=float(c.reference),
+        J_eq=ff.J_eq * c.reference_inertia,
+        beta_eq=ff.beta_eq * c.reference_damping,
+    )
     model = model._replace(feedforward=ff)
     if c.compensate:
         A0 = model.A0.copy()
@@ -345,9 +347,13 @@ def runs(c: Candidate, rates: list[float], at: float | None = None) -> None:
         kernel = WalcottZakObserver(
             design_with(observed, settings), 1.0 / rate, stick_projection=est.stick_projection
         ).kernel
-        ff = reference.feedforward.copy()
-        ff[0] *= c.cancellation
-        ff[1:4] = model.feedforward[1:4]
+        own = model.feedforward
+        ff = reference.feedforward._replace(
+            cancellation=reference.feedforward.cancellation * c.cancellation,
+            reference=own.reference,
+            J_eq=own.J_eq,
+            beta_eq=own.beta_eq,
+        )
         stack = reference._replace(estimator=kernel, feedforward=ff, A0=model.A0)
         run = simulate(inputs, rng=np.random.default_rng(sc.seed), stack=stack)
         m = run_metrics(run.t, run.get, complete=True, max_current=sc.controller.max_current)
