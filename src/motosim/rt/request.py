@@ -3,7 +3,8 @@
 The command line parses its options into a :class:`RunRequest` and hands it over:
 
 1. :func:`check_run` reads the scenario and its ``[realtime]`` table and refuses what a
-   real-time run cannot take, one line each, without loading numba or SciPy;
+   real-time run cannot take, one line each, before anything is designed or the compiled
+   stack is loaded (the command's own option checks come before numba is imported);
 2. :func:`session_config` resolves the run and designs its stack (or takes it from the
    design cache): the :class:`~motosim.rt.session.SessionConfig` that
    :class:`~motosim.rt.session.RealtimeSession` runs;
