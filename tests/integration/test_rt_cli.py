@@ -22,6 +22,7 @@ from rt_tables import safety_table
 
 from motosim.cli.main import main
 from motosim.io.results import load_result
+from motosim.signals import RECORDED
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
 pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
@@ -277,6 +278,11 @@ def test_run_against_the_rig_in_another_process(rig: tuple[Path, object], tmp_pa
     result = load_result(out)
     # the link in use (--link fast, the default), in the summary and in the result
     assert payload["link"] == result.metadata["realtime"]["link"] == "fast"
+    # one row schema: the columns of an offline run's result that a real-time run knows, in
+    # their order (the stack's estimate and measurement, the current sent, the motorcycle)
+    columns = ("t", *result.names)
+    assert columns == tuple(name for name in RECORDED if name in columns)
+    assert {"tau_r_hat", "theta_h_meas", "i_m", "tau_m", "delta", "phi", "x", "y"} <= set(columns)
     report = json.loads((out / "timing.json").read_text())
     timing = report["timing"]
     # one row per 1 kHz control period served (a missed deadline is skipped and counted)

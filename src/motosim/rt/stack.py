@@ -71,10 +71,14 @@ _ROW_FROM_MOTORCYCLE = tuple(
 _ROW_COMMAND = STACK_SIGNALS.index("i_m")
 """The row's column of the command [A] (the one returned, not the held one)."""
 
-RESULT_SIGNALS = ("t", "theta_h", "tau_m", *STACK_SIGNALS)
-"""Columns of a real-time run's result files. ``i_m`` is the current *sent* (after the safety
-stage), ``tau_m`` = N k_t i_m of the nominal handlebar, and ``theta_h`` the measured angle:
-the true one, like ``tau_r``, is not known in real time."""
+RESULT_SIGNALS = tuple(
+    name for name in RECORDED if name in {"t", "theta_h", "tau_m", *STACK_SIGNALS}
+)
+"""Columns of a real-time run's result files: the columns of an offline run's
+(:data:`motosim.signals.RECORDED`) that a real-time run knows, in the same order. ``i_m`` is
+the current *sent* (after the safety stage), ``tau_m`` = N k_t i_m of the nominal handlebar,
+and ``theta_h`` the measured angle: the true one, like ``tau_r``, is not known in real
+time."""
 
 
 class LoopState(IntEnum):
@@ -250,8 +254,9 @@ def result_block(rows: Array, names: tuple[str, ...], torque_per_amp: float) -> 
     --------
     >>> names = ("t", "theta_h_meas", "i_safe", *STACK_SIGNALS[:1], "i_m")
     >>> out = result_block(np.array([[0.1, 0.2, 3.0, 0.5, 4.0]]), names, 2.0)
-    >>> [float(x) for x in out[0, :4]], float(out[0, RESULT_SIGNALS.index("i_m")])
-    ([0.1, 0.2, 6.0, 0.5], 3.0)
+    >>> at = RESULT_SIGNALS.index
+    >>> [float(out[0, at(n)]) for n in ("t", "theta_h", "tau_m", STACK_SIGNALS[0], "i_m")]
+    [0.1, 0.2, 6.0, 0.5, 3.0]
     """
     col = {name: i for i, name in enumerate(names)}
     out = np.full((rows.shape[0], len(RESULT_SIGNALS)), np.nan)
