@@ -157,7 +157,7 @@ def _steps(parts: Any, row: Any, theta: Any, times: Any, gap_ns: int, sweep: Any
         for j in range(0, sweep.size, 8):
             total += sweep[j]
         start = monotonic_ns()
-        stack_period(parts, row, theta[k], 0.0, True, 1.0)
+        stack_period(parts, row, theta[k], 0.0, True, 1.0, 0.0)
         times[k] = (monotonic_ns() - start) * 1e-9
     if total < 0.0:  # the sweep's reads are used
         times[0] = total

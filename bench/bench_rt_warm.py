@@ -57,7 +57,7 @@ from motosim.rt.fused import context_period, context_warm, context_warm_until, m
 from motosim.rt.loop import WARM_LEAD
 from motosim.rt.privileges import apply_privileges
 from motosim.rt.safety import safety_scale
-from motosim.rt.stack import CompiledStack, compiled, stack_period
+from motosim.rt.stack import CompiledStack, LoopState, compiled, stack_period
 
 
 @njit(cache=False)
@@ -118,10 +118,10 @@ def _step_only(c: Any) -> None:
     """A warm-up's step without its copies: the copy of the stack stepped on its own state
     (the stack's code, its model and the copy's data warmed; the stack's own data not)."""
     r = c.arrays.runner
-    if c.shadow.state[0] == 0.0:  # the copy starts from the stack once
+    if c.shadow.state[LoopState.period] == 0.0:  # the copy starts from the stack once
         _copy_only(c)
     scale = safety_scale(c.arrays.safety, c.arrays.limits)
-    stack_period(c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale)
+    stack_period(c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale, r.torque)
 
 
 def _udp_multicast(frame_id: int, data: bytes) -> bytes:

@@ -191,26 +191,3 @@ def test_estimate_reads_a_logs_measured_torque(tmp_path: Path) -> None:
             )
         )
     assert info.value.code == 2
-
-
-def test_run_refuses_the_torque_sensor_in_real_time(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """The real-time loop does not read the HB_TORQUE frame: a scenario asking for the
-    sensor is refused in one line rather than run on a zero torque."""
-    pytest.importorskip("cantools", reason="cantools is in the rt and dev dependency groups")
-    from rt_tables import safety_table
-
-    from motosim.cli.main import main
-
-    path = tmp_path / "s.toml"
-    path.write_text(
-        '[scenario]\nname = "x"\nduration = 1.0\n[rates]\nmeasurement = 100.0\n'
-        '[rider]\nkind = "torque"\nprofile = 0.0\n[controller]\nkind = "paper"\n'
-        '[estimator]\nname = "torque_sensor"\n' + safety_table(100),
-        encoding="utf-8",
-    )
-    code = main(["run", str(path), "--bus", "virtual", "--out", str(tmp_path / "o")])
-    err = capsys.readouterr().err
-    assert code == 2 and len(err.strip().splitlines()) == 1
-    assert 'name = "torque_sensor" is not read in real time' in err

@@ -22,6 +22,7 @@ from rt_tables import safety_table
 
 from motosim.cli.main import main
 from motosim.io.results import load_result
+from motosim.rt.config import load_realtime
 from motosim.signals import RECORDED
 
 pytest.importorskip("can", reason="python-can is in the rt and dev dependency groups")
@@ -364,6 +365,35 @@ def test_a_fall_fades_the_torque_out_and_ends_the_run_with_exit_3(
     assert result["i_m"][-1] == 0.0
     envelope = np.linspace(1.0, 0.0, after.sum() + 1)[1:]
     assert np.all(np.abs(result["i_m"][after]) <= envelope * 10.0 + 0.02)
+
+
+SENSED = SCENARIO.replace(
+    "[controller]",
+    '[estimator]\nname = "torque_sensor"\n\n[sensor.torque]\nnoise = 0.05\n\n[controller]',
+)
+
+
+@pytest.mark.parametrize("rig", [SENSED], indirect=True)
+def test_a_run_reads_the_rigs_torque_sensor(rig: tuple[Path, object], tmp_path: Path) -> None:
+    # the rig in its own process fits the scenario's torque sensor and sends HB_TORQUE after
+    # each 100 Hz status frame; the run's stack takes the rider's torque from it: the
+    # estimate follows the square +/-3 N*m (the arms of the default relaxed grip add their
+    # passive torque, the sensor 0.05 N*m of noise)
+    path, _ = rig
+    out = tmp_path / "run"
+    proc = _run(path, out, "--json")
+    stdout, stderr = proc.communicate(timeout=180)
+    assert proc.returncode == 0, stderr
+    counters = json.loads(stdout)["counters"]
+    assert counters["torque_frames"] >= 150 and counters["status_frames"] >= 150
+    result = load_result(out)
+    inputs, _ = load_realtime(str(path))
+    t, tau_hat = result.t, result["tau_r_hat"]
+    profile = inputs.scenario.rider.profile.sample(t, inputs.tables)
+    steps = t[np.flatnonzero(np.diff(profile)) + 1]
+    settled = np.min(np.abs(t[:, None] - steps[None, :]), axis=1) > 0.05  # 50 ms from a step
+    assert steps.size >= 2 and np.max(np.abs(profile)) == 3.0
+    assert np.median(np.abs(tau_hat[settled] - profile[settled])) < 0.5
 
 
 LANE_CHANGE = (

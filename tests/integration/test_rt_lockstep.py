@@ -56,7 +56,9 @@ class SpringStack:
     def reset(self, theta: float, current: float) -> None:
         self.resets.append((theta, current))
 
-    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
+    def step(
+        self, theta_meas: float, i_meas: float, fresh: bool, scale: float, torque: float
+    ) -> float:
         command = -self.gain * theta_meas
         self._row[:] = theta_meas, command  # names: theta_in, i_out
         return command
@@ -402,7 +404,9 @@ class EstimateStack(SpringStack):
         super().__init__(gain)
         self.column, self.bad_from, self.steps = self.names.index(column), bad_from, 0
 
-    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
+    def step(
+        self, theta_meas: float, i_meas: float, fresh: bool, scale: float, torque: float
+    ) -> float:
         command = -self.gain * theta_meas
         self._row[:] = (3.0, 0.0)
         if self.steps >= self.bad_from:

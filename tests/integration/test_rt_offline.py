@@ -276,8 +276,10 @@ class _StackInPython:
     def reset(self, theta: float, current: float) -> None:
         self.stack.reset(theta, current)
 
-    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
-        return self.stack.step(theta_meas, i_meas, fresh, scale)
+    def step(
+        self, theta_meas: float, i_meas: float, fresh: bool, scale: float, torque: float
+    ) -> float:
+        return self.stack.step(theta_meas, i_meas, fresh, scale, torque)
 
     def row(self) -> np.ndarray:
         return self.stack.row()

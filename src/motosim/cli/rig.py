@@ -212,7 +212,7 @@ def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
     import numpy as np
 
     from motosim.io.can import handlebar_codecs
-    from motosim.rt.rig import RigRider, VirtualRig
+    from motosim.rt.rig import RigRider, VirtualRig, torque_sensor
     from motosim.sim.hands import arms_of
 
     sc = inputs.scenario
@@ -228,6 +228,7 @@ def _virtual_rig(inputs: Any, settings: Any, link: Any, rider: Any) -> Any:
         link,
         held,
         np.random.default_rng(sc.seed),
+        torque_sensor=torque_sensor(sc),
     )
 
 

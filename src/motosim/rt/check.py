@@ -202,6 +202,12 @@ def advice(
             "(did motosim rig end or stall? its --duration counts from its own start; on a "
             "CAN bus: the cable, the termination, the drive's power)"
         )
+    elif fault == "TORQUE_SENSOR":
+        lines.append(
+            'the scenario reads a torque sensor ([estimator] name = "torque_sensor") and '
+            "its HB_TORQUE frames stopped or never came: does the drive send them (motosim "
+            "rig does for such a scenario)?"
+        )
     if late:
         lines.append(_late_advice(stats, asked_all, privileges))
     return lines

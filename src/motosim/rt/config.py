@@ -29,7 +29,6 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError, warn
 from motosim.params.toml import read_toml
 from motosim.rt.safety import SafetyLimits
@@ -220,7 +219,7 @@ def within_safety(inputs: "RunInputs", limits: SafetyLimits) -> "RunInputs":
 def refuse_offline_only(scenario: "Scenario", *, origin: str) -> None:
     """Refuse what ``scenario`` asks of the offline simulator only: a real-time run (``motosim
     run``, :class:`~motosim.rt.lockstep.Lockstep`) steps the virtual motorcycle by the
-    estimate and reads no torque sensor.
+    estimate (of the observer, or of a torque sensor's ``HB_TORQUE`` frames).
 
     Raises
     ------
@@ -231,12 +230,6 @@ def refuse_offline_only(scenario: "Scenario", *, origin: str) -> None:
         raise MotosimError(
             f'{origin}: motorcycle input = "true" is a simulation-only reference; expected '
             '"estimate" for a real-time run'
-        )
-    if scenario.estimator.name == SENSOR_ESTIMATOR:
-        raise MotosimError(
-            f'{origin}: [estimator] name = "{SENSOR_ESTIMATOR}" is not read in real time (the '
-            "loop does not take the HB_TORQUE frame); expected an estimator of the angle and "
-            "the current"
         )
 
 

@@ -104,7 +104,8 @@ class RunnerSettings(NamedTuple):
     the motorcycle's roll and speed (-1: nowhere); the motorcycle's range (largest
     ``roll`` [rad], lowest and highest speed [m/s]); whether the torque starts with
     the drive's first status frame (``armed``, else on an arm request); whether the stack is
-    warmed before each deadline (:func:`context_warm_until`)."""
+    warmed before each deadline (:func:`context_warm_until`); whether the stack reads a
+    torque sensor's ``HB_TORQUE`` frames (``sensed``)."""
 
     linger: int
     start_timeout: int
@@ -120,6 +121,7 @@ class RunnerSettings(NamedTuple):
     speed_high: float
     armed: bool
     warm: bool
+    sensed: bool
 
 
 _STATE_START: dict[str, float | int | bool] = {
@@ -129,6 +131,10 @@ _STATE_START: dict[str, float | int | bool] = {
     "prev_theta": math.nan,
     "fresh_at": 0.0,
     "omega": 0.0,
+    "torque": 0.0,
+    "torque_heard": math.nan,
+    "torque_counter": -1,
+    "torque_frames": 0,
     "started": False,
     "fresh": False,
     "stop": False,
@@ -162,7 +168,9 @@ class RunnerState(structref.StructRefProxy):
     ``t0`` the first deadline [s]; ``theta`` [rad] and ``current`` [A] the last valid
     measurement; ``prev_theta`` [rad] and ``fresh_at`` [s] the angle and deadline of the
     last fresh status frame, ``omega`` the handlebar's rate between the last two [rad/s]
-    (for a stack without a rate in its row); flags ``started``, ``fresh`` (a fresh status
+    (for a stack without a rate in its row); ``torque`` the torque sensor's last reading
+    [N*m], ``torque_heard`` the deadline it came in [s] and ``torque_counter`` its alive
+    counter, ``torque_frames`` the valid ones taken; flags ``started``, ``fresh`` (a fresh status
     frame this period), ``stop`` (requested), ``finishing`` (the torque fades out: the
     duration is over or the motorcycle left its range), ``arm_request``; ``after_fault``
     periods since a fault; counts of command frames ``sent``, periods run (``calls``),
@@ -196,6 +204,7 @@ class RunnerCounts(NamedTuple):
 
     stop: bool
     status_frames: int
+    torque_frames: int
     bad: int
     recv_errors: int
     left: bool
@@ -214,6 +223,7 @@ def runner_counts(r: Any) -> RunnerCounts:
     return RunnerCounts(
         r.stop,
         r.status_frames,
+        r.torque_frames,
         r.bad,
         r.recv_errors,
         r.left,
@@ -241,8 +251,9 @@ def runner_request(r: Any, stop: bool, arm: bool) -> None:
 class SignalPositions(NamedTuple):
     """Where the loop's signals sit in the frames' values (status: angle, current, alive
     counter, drive fault; E-stop: its signal; command: current, enable, counter; heartbeat:
-    state, fault, counter), where the command and heartbeat frames' data bytes start in the
-    bytes to send, and the number of the loop's own columns in a row."""
+    state, fault, counter; torque sensor: torque, counter), where the command and heartbeat
+    frames' data bytes start in the bytes to send, and the number of the loop's own columns
+    in a row."""
 
     angle: int
     current: int
@@ -255,6 +266,8 @@ class SignalPositions(NamedTuple):
     state: int
     fault: int
     heartbeat_counter: int
+    rider_torque: int
+    torque_counter: int
     command_at: int
     heartbeat_at: int
     loop_columns: int
@@ -351,7 +364,8 @@ class PeriodArrays(NamedTuple):
     """Everything one period reads or writes, allocated before the first deadline: the
     runner's state (a :class:`RunnerState`), the frames' layout, the safety stage's state
     and limits (:meth:`motosim.rt.safety.SafetyStage.compiled_parts`); the status, E-stop,
-    command and heartbeat frames' codecs (:func:`motosim.io.can.codec_table`) and values;
+    command, heartbeat and torque sensor's frames' codecs (:func:`motosim.io.can.codec_table`;
+    the torque frame's id -1 where the DBC has none) and values;
     the frames read this period, one per row (``RX_FRAMES`` x ``RX_BYTES``), their lengths
     [bytes] and ids (frames given as id, length and bytes); the command and heartbeat
     frames' bytes to send (:meth:`motosim.io.can.Link.frame_buffer`); the stack's row after
@@ -366,10 +380,12 @@ class PeriodArrays(NamedTuple):
     estop: Array
     command: Array
     heartbeat: Array
+    torque: Array
     status_values: Array
     estop_values: Array
     command_values: Array
     heartbeat_values: Array
+    torque_values: Array
     rx: Bytes
     rx_length: Ints
     rx_id: Ints
@@ -388,11 +404,13 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
 
     A status frame is decoded and checked by the safety stage (checksum, alive counter, the
     drive's fault flag); if valid and fresh, its angle and current are kept. An E-stop frame
-    pressed, or unreadable, trips the emergency stop. Other frames are ignored.
+    pressed, or unreadable, trips the emergency stop. A torque sensor's frame, read when the
+    stack reads the sensor, is :func:`_torque_frame`. Other frames are ignored.
     """
     r, q, s = a.runner, a.positions, a.safety
     status_id = int(a.status[FRAME_ROW, FrameColumn.frame_id])
     estop_id = int(a.estop[FRAME_ROW, FrameColumn.frame_id])
+    torque_id = int(a.torque[FRAME_ROW, FrameColumn.frame_id])
     count = 0
     for j in range(first, end):
         frame_id, length = a.rx_id[j], a.rx_length[j]
@@ -411,7 +429,40 @@ def take_frames(a: PeriodArrays, first: int, end: int, t: float) -> int:
             values = a.estop_values
             ok = decode_frame(a.estop, a.rx[j], 0, length, values)
             safety_estop_frame(s, ok, values[q.estop] > 0.5)
+        elif frame_id == torque_id and r.sensed:
+            values = a.torque_values
+            ok = decode_frame(a.torque, a.rx[j], 0, length, values)
+            _torque_frame(a, ok, values[q.rider_torque], int(values[q.torque_counter]), t)
     return count
+
+
+@njit(cache=True)
+def _torque_frame(a: PeriodArrays, ok: bool, torque: float, counter: int, t: float) -> None:
+    """A torque sensor's frame at ``t`` [s]: a wrong checksum trips ``CHECKSUM``; a valid
+    frame whose alive counter moved gives the rider's torque [N*m] from this period on; the
+    same counter again (a sensor's transmitter repeating itself) is not taken."""
+    r = a.runner
+    if not ok:
+        safety_trip(a.safety, Fault.CHECKSUM)
+        return
+    if counter == r.torque_counter:
+        return
+    r.torque_counter = counter
+    r.torque = torque
+    r.torque_heard = t
+    r.torque_frames += 1
+
+
+@njit(cache=True)
+def _watch_torque(a: PeriodArrays, t: float) -> None:
+    """The torque sensor's watchdog at the deadline ``t`` [s] of a started run: as many
+    periods without a torque taken as the status frames' watchdog waits trip
+    ``TORQUE_SENSOR`` (counted from the start if none came before it)."""
+    r, p = a.runner, a.limits
+    if r.torque_heard != r.torque_heard:
+        r.torque_heard = t
+    if math.floor((t - r.torque_heard) / p.dt + 0.5) >= p.watchdog:
+        safety_trip(a.safety, Fault.TORQUE_SENSOR)
 
 
 @njit(cache=True)
@@ -442,16 +493,20 @@ def begin(a: PeriodArrays, k: int, t: float) -> bool:
         if not r.armed and not r.stop:
             r.armed = True
             safety_enable(s)
+    if r.sensed and started:
+        _watch_torque(a, t)
     return reset
 
 
 @njit(cache=True)
-def stack_inputs(a: PeriodArrays) -> tuple[bool, float, float, bool, float]:
+def stack_inputs(a: PeriodArrays) -> tuple[bool, float, float, bool, float, float]:
     """What a stack in Python is stepped with after :func:`begin`, in one compiled call:
     whether it has started, the last valid angle [rad] and current [A], whether they came
-    fresh this period, and the share of the command the safety stage will pass."""
+    fresh this period, the share of the command the safety stage will pass and the torque
+    sensor's last reading [N*m]."""
     r = a.runner
-    return r.started, r.theta, r.current, r.fresh, safety_scale(a.safety, a.limits)
+    scale = safety_scale(a.safety, a.limits)
+    return r.started, r.theta, r.current, r.fresh, scale, r.torque
 
 
 @njit(cache=True)
@@ -628,7 +683,7 @@ def fused_period(
     if r.started:
         start = monotonic_ns()
         scale = safety_scale(a.safety, a.limits)
-        command = stack_period(stack, a.stack_row, r.theta, r.current, r.fresh, scale)
+        command = stack_period(stack, a.stack_row, r.theta, r.current, r.fresh, scale, r.torque)
         if start >= 0:
             r.stack_time = (monotonic_ns() - start) * 1e-9
     return _plain(finish(a, command, t, woke, done_read))
@@ -643,10 +698,12 @@ def stack_warm(
     current: float,
     fresh: bool,
     scale: float,
+    torque: float,
 ) -> None:
     """One stack period on ``shadow``, a copy of ``stack``'s data and state made now, whose
-    result is thrown away: the stack's code and data are then in the CPU's caches. ``fresh``
-    and ``scale`` are the period's (constants would compile another copy of the step)."""
+    result is thrown away: the stack's code and data are then in the CPU's caches. ``fresh``,
+    ``scale`` and ``torque`` are the period's (constants would compile another copy of the
+    step)."""
     data, copy = stack.data, shadow.data
     copy.estimator[:] = data.estimator
     copy.differentiator[:] = data.differentiator
@@ -657,7 +714,7 @@ def stack_warm(
     copy.held[:] = data.held
     copy.periods[:] = data.periods
     shadow.state[:] = stack.state
-    stack_period(shadow, shadow_row, theta, current, fresh, scale)
+    stack_period(shadow, shadow_row, theta, current, fresh, scale, torque)
 
 
 @structref.register
@@ -702,7 +759,7 @@ def context_warm(c: Any) -> None:
     r = c.arrays.runner
     if r.started:
         scale = safety_scale(c.arrays.safety, c.arrays.limits)
-        stack_warm(c.stack, c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale)
+        stack_warm(c.stack, c.shadow, c.shadow_row, r.theta, r.current, r.fresh, scale, r.torque)
 
 
 @njit(cache=True)

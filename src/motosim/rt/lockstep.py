@@ -23,7 +23,7 @@ from motosim.io.can import Link, handlebar_codecs, open_link
 from motosim.rt.clock import SimulatedClock
 from motosim.rt.config import refuse_offline_only
 from motosim.rt.loop import RateLoop
-from motosim.rt.rig import RigRider, RigSettings, VirtualRider, VirtualRig
+from motosim.rt.rig import RigRider, RigSettings, VirtualRider, VirtualRig, torque_sensor
 from motosim.rt.run import RealtimeRunner, RunSettings
 from motosim.rt.safety import SafetyLimits
 from motosim.rt.stack import CompiledStack
@@ -213,12 +213,14 @@ class Lockstep:
                 drive,
                 held,
                 np.random.default_rng(seed),
+                torque_sensor=torque_sensor(sc),
             )
             run_settings = RunSettings(
                 limits,
                 self._rate,
                 capacity=max(1 << 16, self._periods + 1),
                 periods_per_frame=model.measure_every,
+                torque_sensor=world.sensed,
                 validity=validity,
             )
             self.runner = RealtimeRunner(

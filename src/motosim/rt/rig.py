@@ -12,6 +12,9 @@
   [s], or ENABLE 0, and the drive stops the torque (its own STO);
 - the status frame at ``status_rate`` [Hz]: the angle quantised by the encoder
   (``encoder_bits`` per handlebar revolution) and by the DBC scaling, the current with noise;
+  with a torque sensor, its ``HB_TORQUE`` frame after each status frame: the torque of the
+  rider's hands on the handlebar (active, and the arms' passive while they hold it), with
+  the sensor's offset and noise, quantised by the DBC scaling;
 - the bus: a latency with jitter (truncated normal; a frame never overtakes an earlier one
   of the same identifier, as on CAN, where one node sends them in order), random frame
   loss (Bernoulli) and bursts (a two-state Gilbert-Elliott channel), stale frames (the
@@ -37,6 +40,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
 from motosim.io.can import HandlebarCodecs, Link
 from motosim.model.handlebar import HandlebarPlant, plant_of
@@ -47,8 +51,9 @@ from motosim.rt.config import table_number
 from motosim.rt.stack import STACK_SIGNALS
 from motosim.rt.telemetry import StateReceiver
 from motosim.sim.closed_loop import RigModel
-from motosim.sim.hands import NO_ARMS, Arms, is_held, plant_step
+from motosim.sim.hands import NO_ARMS, Arms, hands_torque, is_held, plant_step
 from motosim.sim.rider import rider_torque
+from motosim.sim.scenario import Scenario, TorqueSensor
 
 __all__ = [
     "Bar",
@@ -60,6 +65,7 @@ __all__ = [
     "VirtualRider",
     "VirtualRig",
     "parse_rig",
+    "torque_sensor",
 ]
 
 Array = NDArray[np.float64]
@@ -181,6 +187,25 @@ def parse_rig(
         else:
             values[key] = table_number(key, value, where, key == "encoder_bits")
     return RigSettings(**values)
+
+
+def torque_sensor(scenario: Scenario) -> TorqueSensor | None:
+    """The torque sensor the virtual rig of ``scenario`` has: for the estimator
+    ``torque_sensor``, its ``[sensor.torque]`` (an ideal one without the table); else none.
+
+    Examples
+    --------
+    >>> from motosim.sim import parse_scenario
+    >>> doc = {"scenario": {"name": "s"}, "rider": {"kind": "torque", "profile": 1.0}}
+    >>> torque_sensor(parse_scenario(doc, origin="s")) is None
+    True
+    >>> doc |= {"estimator": {"name": "torque_sensor"}, "sensor": {"torque": {"noise": 0.1}}}
+    >>> torque_sensor(parse_scenario(doc, origin="s"))
+    TorqueSensor(noise=0.1, offset=0.0, low_pass=0.0)
+    """
+    if scenario.estimator.name != SENSOR_ESTIMATOR:
+        return None
+    return scenario.sensor.torque or TorqueSensor()
 
 
 def _known(table: Any, kind: type, where: str) -> Mapping[str, Any]:
@@ -310,6 +335,10 @@ class VirtualRig:
         Noise, jitter and frame loss.
     theta0 : float
         Initial angle [rad].
+    torque_sensor : TorqueSensor, optional
+        A torque sensor between the grips and the steering column: the rig then sends its
+        ``HB_TORQUE`` frame after each status frame (its ``low_pass`` is the stack's, not
+        the sensor's). Without it, none.
     """
 
     def __init__(
@@ -322,7 +351,13 @@ class VirtualRig:
         rng: np.random.Generator,
         *,
         theta0: float = 0.0,
+        torque_sensor: TorqueSensor | None = None,
     ) -> None:
+        if torque_sensor is not None and codecs.torque is None:
+            raise MotosimError(
+                "the virtual rig has a torque sensor and the DBC has no torque frame "
+                f"({codecs.mapping.torque}); expected a DBC with it"
+            )
         torque = rider.torque
         self._policy = torque if callable(torque) else None
         self.rider_torque = np.zeros(1) if callable(torque) else torque
@@ -358,6 +393,11 @@ class VirtualRig:
         self._idle = np.zeros(1)
         self._held = np.zeros(1)
         self._started = False
+        self.torque_sensor = torque_sensor
+        self._hands = 0.0  # the rider's active torque now [N*m]
+        self._holding = False  # whether the rider holds the handlebar now
+        self._sampled_omega = 0.0  # the rate at the last status sample [rad/s]
+        self._torque_counter = 0
         self._plant = self._compiled_plant()
         self.frames_sent = 0
         self.frames_dropped = 0
@@ -443,6 +483,8 @@ class VirtualRig:
         s = self.settings
         if not self._started:  # the drive reports its state from power-on
             self._started = True
+            if self.torque_sensor is not None and self._k_rider == 0 and self._policy is None:
+                self._hands_at(self.rider_torque, 0, 0.0, 0.0)
             self._sample()
         while self.k * self.h < t - 1e-12:
             silent = self.t - self._last_command
@@ -462,6 +504,8 @@ class VirtualRig:
                 rider, k0 = self._held, 0
             i_cmd = self.i_cmd if live else 0.0
             _plant_steps(self.x, i_cmd, self._plant, rider, k0, n, t_rider)
+            if self.torque_sensor is not None:
+                self._hands_at(rider, k0 + n, t_rider + n * self.h, t_rider)
             self.k += n
             if self.k % self._sub == 0:
                 self._sample()
@@ -522,6 +566,37 @@ class VirtualRig:
         self._push(self.t, frame)
         if s.duplicate > 0.0 and rng.random() < s.duplicate:
             self._push(self.t, frame)
+        if self.torque_sensor is not None:
+            self._push(self.t, self._torque_frame(), self.codecs.torque.frame_id)  # type: ignore[union-attr]
+
+    def _hands_at(self, rider: Array, k: int, t: float, t_rider: float) -> None:
+        """Keep the rider's active torque now, for the torque sensor: ``rider[k]`` (the last
+        value held), at the rider's time ``t`` [s] (``t_rider`` < 0: the rider does not hold
+        the handlebar)."""
+        off = self.hands_off
+        self._holding = t_rider >= 0.0 and (off.shape[0] == 0 or is_held(t, off))
+        self._hands = float(rider[min(k, rider.size - 1)]) if self._holding else 0.0
+
+    def _torque_frame(self) -> bytes:
+        """The torque sensor's frame now: the hands' torque on the handlebar (the arms'
+        passive torque with the rate's change over the status period for theta_h''), plus
+        the sensor's offset and noise."""
+        sensor, codec = self.torque_sensor, self.codecs.torque
+        assert sensor is not None and codec is not None
+        theta, omega = float(self.x[Bar.theta]), float(self.x[Bar.omega])
+        torque = self._hands + sensor.offset
+        if self._holding:
+            a = self.arms
+            accel = (omega - self._sampled_omega) / (self._sub * self.h)
+            torque += hands_torque(theta, omega, accel, a.J_a, a.c_a, a.k_a, a.theta_hold)
+        self._sampled_omega = omega
+        if sensor.noise > 0.0:
+            torque += sensor.noise * float(self.rng.standard_normal())
+        values = np.zeros(len(codec.names))
+        values[self.codecs.position(codec, "rider_torque")] = torque
+        values[self.codecs.position(codec, "counter")] = self._torque_counter
+        self._torque_counter = (self._torque_counter + 1) % 16
+        return codec.encode(values)
 
     def _push(self, t: float, frame: bytes, frame_id: int | None = None) -> None:
         s = self.settings

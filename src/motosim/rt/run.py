@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.io.can import HandlebarCodecs, Link, codec_table
+from motosim.io.can import FRAME_ROW, FrameColumn, HandlebarCodecs, Link, codec_table
 from motosim.params.checks import check_number
 from motosim.params.handlebar import HandlebarParameters
 from motosim.rt import fused
@@ -103,11 +103,14 @@ class StackStepper(Protocol):
         """Start every state at the measured angle [rad] and current [A]."""
         ...
 
-    def step(self, theta_meas: float, i_meas: float, fresh: bool, scale: float) -> float:
+    def step(
+        self, theta_meas: float, i_meas: float, fresh: bool, scale: float, torque: float
+    ) -> float:
         """One control period: the motor current command [A]; ``fresh``: the measurement
         came in a new status frame this period (the last valid one is given otherwise);
         ``scale``: the share of the command the safety stage will pass
-        (:func:`~motosim.rt.safety.safety_scale`)."""
+        (:func:`~motosim.rt.safety.safety_scale`); ``torque``: the torque sensor's last
+        reading [N*m] (0 in a run that reads none, :attr:`RunSettings.torque_sensor`)."""
         ...
 
     def row(self) -> Array:
@@ -127,6 +130,7 @@ class RunCounters:
     """What happened on the bus and in the safety stage during a run."""
 
     status_frames: int
+    torque_frames: int
     frames_lost: int
     frames_stale: int
     send_errors: int
@@ -173,6 +177,10 @@ class RunSettings:
         same either way.
     handlebar : HandlebarParameters, optional
         The nominal handlebar, for the safety stage's frozen-sensor monitor (off without it).
+    torque_sensor : bool
+        The stack reads a torque sensor (the estimator ``torque_sensor``): the drive's
+        ``HB_TORQUE`` frames are taken, and their watchdog is on (the DBC must have the
+        frame).
     validity : tuple of float, optional
         The virtual motorcycle's range (largest roll [rad], lowest and highest speed [m/s]:
         :func:`motosim.sim.metrics.validity_limits`), read from the stack's ``phi`` and
@@ -196,6 +204,7 @@ class RunSettings:
     wait_for_arm: bool = False
     warm: bool = True
     handlebar: HandlebarParameters | None = None
+    torque_sensor: bool = False
     validity: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
@@ -255,6 +264,11 @@ class RealtimeRunner:
         now: Callable[[], float] | None = None,
     ) -> None:
         rate = settings.rate
+        if settings.torque_sensor and codecs.torque is None:
+            raise MotosimError(
+                "the run reads a torque sensor and the DBC has no torque frame "
+                f"({codecs.mapping.torque}); expected a DBC with it"
+            )
         self.stepper = stepper
         self._now = now
         self.clock = clock
@@ -286,6 +300,7 @@ class RealtimeRunner:
             speed_high=speed_high,
             armed=not settings.wait_for_arm,
             warm=settings.warm,
+            sensed=settings.torque_sensor,
         )
         self._warm_on = settings.warm
         self._woke = math.nan
@@ -303,6 +318,13 @@ class RealtimeRunner:
         command_frame, command_at = link.frame_buffer(cmd.frame_id, cmd.length)
         heartbeat_frame, heartbeat_at = link.frame_buffer(hb.frame_id, hb.length)
         position = codecs.position
+        tq = codecs.torque
+        if tq is None:  # a frame no id matches, laid out as the status frame
+            torque, torque_at = codec_table(st), (0, 0)
+            torque[FRAME_ROW, FrameColumn.frame_id] = -1.0
+        else:
+            torque = codec_table(tq)
+            torque_at = (position(tq, "rider_torque"), position(tq, "counter"))
         positions = fused.SignalPositions(
             position(st, "angle"),
             position(st, "current"),
@@ -315,6 +337,7 @@ class RealtimeRunner:
             position(hb, "state"),
             position(hb, "fault"),
             position(hb, "counter"),
+            *torque_at,
             command_at,
             heartbeat_at,
             len(LOOP_SIGNALS),
@@ -334,10 +357,12 @@ class RealtimeRunner:
             estop=codec_table(es),
             command=codec_table(cmd),
             heartbeat=codec_table(hb),
+            torque=torque,
             status_values=np.zeros(len(st.names)),
             estop_values=np.zeros(len(es.names)),
             command_values=np.zeros(len(cmd.names)),
             heartbeat_values=np.zeros(len(hb.names)),
+            torque_values=np.zeros(len((tq or st).names)),
             rx=np.zeros((fused.RX_FRAMES, fused.RX_BYTES), dtype=np.uint8),
             rx_length=np.zeros(fused.RX_FRAMES, dtype=np.int64),
             rx_id=np.zeros(fused.RX_FRAMES, dtype=np.int64),
@@ -610,12 +635,14 @@ class RealtimeRunner:
         """A period around a stack in Python: the compiled steps one by one."""
         self._take(a, 0, frames, t)
         reset = self._begin(a, k, t)
-        started, theta, current, fresh, scale = self._inputs(a)
+        started, theta, current, fresh, scale, torque = self._inputs(a)
         if reset:
             self.stepper.reset(float(theta), float(current))
         command = 0.0
         if started:
-            command = self.stepper.step(float(theta), float(current), bool(fresh), float(scale))
+            command = self.stepper.step(
+                float(theta), float(current), bool(fresh), float(scale), float(torque)
+            )
             a.stack_row[:] = self.stepper.row()
         end: PeriodEnd = self._finish(a, float(command), t, woke, done_read)
         return end
@@ -640,7 +667,8 @@ class RealtimeRunner:
             self._bad_reported = bad
         s = self.safety
         return RunCounters(
-            self.status_frames,
+            int(counts.status_frames),
+            int(counts.torque_frames),
             s.frames_lost,
             s.frames_stale,
             self.send_errors,

@@ -30,6 +30,9 @@ firmware such as OpenFFBoard's ``Axis.cpp`` and of Simucube's drives):
   keeps the flag as it is); once the rider's torque is back, the command is whole again at
   once, as fast as the slew-rate limit lets it (a rider who starts a manoeuvre needs the
   stack's feedback at once: the realtime guide, "Safety");
+- with a torque sensor (the runner's, :mod:`motosim.rt.fused`): no valid ``HB_TORQUE`` frame
+  with a new alive counter for as long as the watchdog waits -> ``TORQUE_SENSOR``, and a
+  wrong checksum -> ``CHECKSUM``;
 - a frozen-sensor monitor (given the handlebar's parameters): the angle has not changed
   while the motor torque has moved so far from its value at the angle's last change that a
   free handlebar would have turned by more than ``frozen_angle`` [rad] -> a latched fault
@@ -96,6 +99,7 @@ class Fault(IntEnum):
     END_STOP = 7
     NO_DRIVE = 8
     FROZEN_SENSOR = 9
+    TORQUE_SENSOR = 10
 
 
 _REASONS = {
@@ -110,6 +114,7 @@ _REASONS = {
     Fault.NO_DRIVE: "no valid status frame from the drive since the start",
     Fault.FROZEN_SENSOR: "frozen angle sensor: the angle stood still while the motor torque "
     "would have turned a free handlebar",
+    Fault.TORQUE_SENSOR: "torque sensor: no valid HB_TORQUE frame for {n} status periods",
 }
 
 

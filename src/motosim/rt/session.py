@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Self
 
+from motosim.choices import SENSOR_ESTIMATOR
 from motosim.errors import MotosimError
 from motosim.rt.clock import Clock
 from motosim.rt.loop import TimingStats
@@ -300,6 +301,7 @@ class RealtimeSession:
             wait_for_arm=c.live is not None,
             warm=c.options.warm,
             handlebar=c.inputs.nominal_handlebar,
+            torque_sensor=sc.estimator.name == SENSOR_ESTIMATOR,
             validity=validity_limits(sc.motorcycle.speed),
         )
         self._runner = run.RealtimeRunner(
@@ -473,6 +475,7 @@ class RealtimeSession:
             "privileges": [asdict(p) for p in privileges],
             "counters": {
                 "status_frames": counters.status_frames,
+                "torque_frames": counters.torque_frames,
                 "frames_lost": counters.frames_lost,
                 "frames_stale": counters.frames_stale,
                 "send_errors": counters.send_errors,

@@ -142,7 +142,7 @@ class CompiledStack:
         # before its first step: the motorcycle upright and straight at its speed, as reset
         self._row[STACK_SIGNALS.index("v_x")] = model.speed
         self._parts = StackParts(model, self.data, self.force, self.side_force, self.state)
-        self._step = compiled(stack_period, self._parts, self._row, 0.0, 0.0, True, 1.0)
+        self._step = compiled(stack_period, self._parts, self._row, 0.0, 0.0, True, 1.0, 0.0)
         self._reset = compiled(stack_reset, self._parts, 0.0, 0.0)
 
     @property
@@ -156,12 +156,19 @@ class CompiledStack:
         self._reset(self._parts, theta, current)
 
     def step(
-        self, theta_meas: float, i_meas: float, fresh: bool = True, scale: float = 1.0
+        self,
+        theta_meas: float,
+        i_meas: float,
+        fresh: bool = True,
+        scale: float = 1.0,
+        torque: float = 0.0,
     ) -> float:
         """One period of the compiled stack (:func:`stack_period`): the motor current
         command [A]; ``fresh``: a new status frame came this period, ``scale``: the share of
-        the command the safety stage will pass."""
-        command: float = self._step(self._parts, self._row, theta_meas, i_meas, fresh, scale)
+        the command the safety stage will pass, ``torque``: the torque sensor's last reading
+        [N*m]."""
+        parts, row = self._parts, self._row
+        command: float = self._step(parts, row, theta_meas, i_meas, fresh, scale, torque)
         return command
 
     def row(self) -> Array:
@@ -183,14 +190,22 @@ def stack_reset(stack: StackParts, theta: float, current: float) -> None:
 
 @njit(cache=True)
 def stack_period(
-    stack: StackParts, row: Array, theta_meas: float, i_meas: float, fresh: bool, scale: float
+    stack: StackParts,
+    row: Array,
+    theta_meas: float,
+    i_meas: float,
+    fresh: bool,
+    scale: float,
+    torque: float,
 ) -> float:
     """One period of ``stack`` in the loop: the motor current command [A].
 
     :func:`~motosim.sim.stack.step_scaled` with this period's forces (the last ones held),
     ``scale`` the share of the command the safety stage will pass
-    (:func:`~motosim.rt.safety.safety_scale`) and ``current_error`` the measured current
-    minus the one expected in the last period (``LoopState.expected_current``); the
+    (:func:`~motosim.rt.safety.safety_scale`), ``current_error`` the measured current
+    minus the one expected in the last period (``LoopState.expected_current``) and the
+    rider's torque ``torque`` [N*m] (a torque sensor's last reading, read by the estimator
+    of kind :data:`~motosim.estimation.kernel.TORQUE_SENSOR`; 0 without a sensor); the
     stack's row
     (:data:`STACK_SIGNALS`) into ``row``. With a measurement every
     ``model.measure_every`` > 1 periods, the stack measures in the period a ``fresh``
@@ -210,7 +225,7 @@ def stack_period(
     f = force[k] if k < force.size else force[-1]
     fy = side_force[k] if k < side_force.size else side_force[-1]
     expected = state[LoopState.expected_current]
-    command = step_scaled(model, data, theta_meas, i_meas - expected, 0.0, f, fy, scale)
+    command = step_scaled(model, data, theta_meas, i_meas - expected, torque, f, fy, scale)
     state[LoopState.expected_current] = scale * command
     state[LoopState.period] = k + 1
     held, z = data.held, data.motorcycle
