@@ -24,6 +24,8 @@ __all__ = [
     "EstimatorKind",
     "InverseDynamicsSettings",
     "KalmanSettings",
+    "ObserverInput",
+    "ObserverState",
     "TorqueSensorSettings",
     "WalcottZakSettings",
     "pack",
@@ -50,6 +52,29 @@ WALCOTT_ZAK = EstimatorKind.WALCOTT_ZAK
 INVERSE_DYNAMICS = EstimatorKind.INVERSE_DYNAMICS
 KALMAN = EstimatorKind.KALMAN
 TORQUE_SENSOR = EstimatorKind.TORQUE_SENSOR
+
+
+class ObserverState(IntEnum):
+    """Positions in the Walcott-Zak observer's state
+    (:func:`~motosim.estimation.walcott_zak.wz_step`): its estimate of the handlebar's
+    state of eq. (10), (theta_h', theta_h) [rad/s, rad], then the filtered injection, the
+    rider-torque estimate [N*m], and the rate input of the last sample [rad/s]."""
+
+    rate = 0
+    angle = 1
+    estimate = 2
+    previous_rate = 3
+
+
+class ObserverInput(IntEnum):
+    """The Walcott-Zak observer's inputs over a sample, in the order of its Gamma's columns:
+    the motor current [A], the measured rate [rad/s] and angle [rad], and the torque input
+    of D [N*m]."""
+
+    current = 0
+    rate = 1
+    angle = 2
+    torque = 3
 
 
 class WalcottZakSettings(NamedTuple):

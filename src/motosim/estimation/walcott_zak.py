@@ -41,7 +41,14 @@ from scipy.linalg import solve_continuous_lyapunov
 
 from motosim.errors import MotosimError
 from motosim.estimation._friction import smooth_sign
-from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel, WalcottZakSettings, pack
+from motosim.estimation.kernel import (
+    WALCOTT_ZAK,
+    EstimatorKernel,
+    ObserverInput,
+    ObserverState,
+    WalcottZakSettings,
+    pack,
+)
 from motosim.model.handlebar import matrices
 from motosim.model.linear import zoh
 from motosim.params.checks import check_number
@@ -443,9 +450,9 @@ def wz_step(
     Parameters
     ----------
     state : ndarray, shape (4,)
-        [theta_h'_hat, theta_h_hat, filtered injection, previous rate input]
-        [rad/s, rad, N*m, rad/s], advanced to the next sample in place; entry 2 is then the
-        rider-torque estimate at this sample.
+        The observer's state (:class:`~motosim.estimation.kernel.ObserverState`), advanced
+        to the next sample in place; its ``estimate`` is then the rider-torque estimate at
+        this sample.
     theta, theta_dot : float
         Measured angle [rad] and differentiated rate [rad/s] at this sample.
     current : float
@@ -454,7 +461,8 @@ def wz_step(
         exp((A - L C_a) h).
     Gamma : ndarray, shape (2, 4)
         int_0^h exp((A - L C_a) s) ds [B, L C_a, D]: columns for i_m, the measured rate and
-        angle (held), and the torque input of D.
+        angle (held), and the torque input of D
+        (:class:`~motosim.estimation.kernel.ObserverInput`).
     g : ndarray, shape (2,)
         F C_a, so that F (y_a - y_a_hat) = g . ([theta_dot, theta] - x_hat).
     c : WalcottZakSettings
@@ -466,7 +474,7 @@ def wz_step(
     Returns
     -------
     float
-        Rider-torque estimate at this sample [N*m] (``state[2]`` after the step).
+        Rider-torque estimate at this sample [N*m] (the state's ``estimate`` after the step).
 
     Notes
     -----
@@ -488,28 +496,29 @@ def wz_step(
     it, and moves by what friction cannot explain.
     """
     beta_s = c.beta_s
-    rate = theta_dot + c.rate_weight * (theta_dot - state[3])
-    s = g[0] * (rate - state[0]) + g[1] * (theta - state[1])  # F (y_a - y_a_hat)
+    x0, x1 = state[ObserverState.rate], state[ObserverState.angle]
+    rate = theta_dot + c.rate_weight * (theta_dot - state[ObserverState.previous_rate])
+    s = g[0] * (rate - x0) + g[1] * (theta - x1)  # F (y_a - y_a_hat)
     E = c.sign * c.eta * s / (abs(s) + c.epsilon)  # eq. (12), injected as + sign D E
     slide = smooth_sign(theta_dot, c.dead_zone, c.friction_width)
     tau_p_hat = -beta_s * slide
     if c.stick_projection and beta_s > 0.0:  # stick: friction holds what the estimate does not
-        held = -(c.torque_per_amp * current + state[2])
+        held = -(c.torque_per_amp * current + state[ObserverState.estimate])
         tau_p_hat += (1.0 - abs(slide)) * min(max(held, -beta_s), beta_s)
     torque = tau_p_hat + E
-    x0, x1 = state[0], state[1]
-    for r in range(2):
+    for r in (ObserverState.rate, ObserverState.angle):
         state[r] = (
-            Phi[r, 0] * x0
-            + Phi[r, 1] * x1
-            + Gamma[r, 0] * current
-            + Gamma[r, 1] * rate
-            + Gamma[r, 2] * theta
-            + Gamma[r, 3] * torque
+            Phi[r, ObserverState.rate] * x0
+            + Phi[r, ObserverState.angle] * x1
+            + Gamma[r, ObserverInput.current] * current
+            + Gamma[r, ObserverInput.rate] * rate
+            + Gamma[r, ObserverInput.angle] * theta
+            + Gamma[r, ObserverInput.torque] * torque
         )
-    state[2] += c.filter_alpha * (E - state[2])
-    state[3] = theta_dot
-    return float(state[2])
+    estimate = state[ObserverState.estimate] + c.filter_alpha * (E - state[ObserverState.estimate])
+    state[ObserverState.estimate] = estimate
+    state[ObserverState.previous_rate] = theta_dot
+    return float(estimate)
 
 
 @njit(cache=True)
@@ -518,10 +527,10 @@ def wz_start(state: Array, theta: float, theta_dot: float, current: float) -> No
 
     ``state`` (4,) is written in place; ``current`` [A] is not needed by this observer.
     """
-    state[0] = theta_dot
-    state[1] = theta
-    state[2] = 0.0
-    state[3] = theta_dot
+    state[ObserverState.rate] = theta_dot
+    state[ObserverState.angle] = theta
+    state[ObserverState.estimate] = 0.0
+    state[ObserverState.previous_rate] = theta_dot
 
 
 class WalcottZakObserver:
@@ -587,7 +596,7 @@ class WalcottZakObserver:
         self._Gamma = np.ascontiguousarray(Gamma)
         self._g = gains.F @ gains.C
         gain = gains.injection_sign * gains.eta / gains.epsilon
-        error_map = Phi - gain * np.outer(Gamma[:, 3], self._g)
+        error_map = Phi - gain * np.outer(Gamma[:, ObserverInput.torque], self._g)
         self.error_map_radius = float(np.max(np.abs(np.linalg.eigvals(error_map))))
         """Spectral radius of the sampled error map inside the boundary layer."""
         if gains.injection_sign > 0 and self.error_map_radius >= 1.0:
@@ -644,7 +653,7 @@ class WalcottZakObserver:
         if state is None:
             state = self._state = np.zeros(4)
             wz_start(state, float(theta_h), float(theta_h_dot), float(i_m))
-        x_hat = state[:2].copy()
+        x_hat = state[: ObserverState.estimate].copy()
         args = (float(theta_h), float(theta_h_dot), float(i_m))
         tau = wz_step(state, *args, self._Phi, self._Gamma, self._g, self._settings)
         return x_hat, float(tau)

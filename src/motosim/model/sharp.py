@@ -16,6 +16,8 @@ omits (E27, E28, E44, E48 and the tyre rows) are included.
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -34,6 +36,8 @@ __all__ = [
     "STATE_NAMES",
     "ModeTable",
     "MotorcycleResponse",
+    "MotorcycleState",
+    "RK4Work",
     "bike_rk4",
     "check_speed",
     "eigenvalues",
@@ -44,6 +48,7 @@ __all__ = [
     "lpv_matrices",
     "mass_matrix",
     "modes",
+    "rk4_work",
     "side_force_input",
     "simulate",
     "stiffness_matrices",
@@ -578,6 +583,50 @@ def longitudinal_acceleration(
     return force / d["m_eq"]
 
 
+class MotorcycleState(IntEnum):
+    """Positions in the state of the coupled Sharp + eq. (2) model (:func:`bike_rk4`):
+    Sharp 1971's eight lateral states, then eq. (2)'s speed and the ground track (the names
+    of :mod:`motosim.signals`)."""
+
+    v_y = 0
+    psi_dot = 1
+    phi_dot = 2
+    delta_dot = 3
+    phi = 4
+    delta = 5
+    F_yr = 6
+    F_yf = 7
+    v_x = 8
+    psi = 9
+    x = 10
+    y = 11
+
+
+_LATERAL = int(MotorcycleState.v_x)
+"""The lateral states come first, up to the speed."""
+_STATES = len(MotorcycleState)
+
+
+class RK4Work(NamedTuple):
+    """Scratch space of :func:`bike_rk4` (:func:`rk4_work`): the four stage rates, the stage
+    state, each of shape (12,), and the lateral matrix A_v of the step, (8, 8)."""
+
+    k1: NDArray[np.float64]
+    k2: NDArray[np.float64]
+    k3: NDArray[np.float64]
+    k4: NDArray[np.float64]
+    tmp: NDArray[np.float64]
+    A: NDArray[np.float64]
+
+
+@njit(cache=True)
+def rk4_work() -> RK4Work:
+    """A new :class:`RK4Work`, zeroed."""
+    n = _STATES
+    lateral = np.zeros((_LATERAL, _LATERAL))
+    return RK4Work(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), lateral)
+
+
 @njit(cache=True)
 def _bike_rates(
     z: Array,
@@ -594,17 +643,17 @@ def _bike_rates(
     cos_psi: float,
     sin_psi: float,
 ) -> None:
-    v_x = z[8]
-    for r in range(8):
+    v_x, v_y, psi_dot = z[MotorcycleState.v_x], z[MotorcycleState.v_y], z[MotorcycleState.psi_dot]
+    for r in range(_LATERAL):
         acc = Bv[r] * tau + Bw[r] * side
-        for c in range(8):
+        for c in range(_LATERAL):
             acc += A[r, c] * z[c]
         out[r] = acc
-    dv = (force + m * z[1] * z[0]) / m_eq
-    out[8] = 0.0 if (v_x <= v_min and dv < 0.0) else dv
-    out[9] = z[1]
-    out[10] = v_x * cos_psi - z[0] * sin_psi
-    out[11] = v_x * sin_psi + z[0] * cos_psi
+    dv = (force + m * psi_dot * v_y) / m_eq
+    out[MotorcycleState.v_x] = 0.0 if (v_x <= v_min and dv < 0.0) else dv
+    out[MotorcycleState.psi] = psi_dot
+    out[MotorcycleState.x] = v_x * cos_psi - v_y * sin_psi
+    out[MotorcycleState.y] = v_x * sin_psi + v_y * cos_psi
 
 
 _SERIES_TURN = 0.01
@@ -629,7 +678,7 @@ def _turned(psi: float, cos_psi: float, sin_psi: float, d: float) -> tuple[float
 @njit(cache=True)
 def bike_rk4(
     z: Array,
-    work: Array,
+    work: RK4Work,
     A0: Array,
     A1: Array,
     Bv: Array,
@@ -644,36 +693,37 @@ def bike_rk4(
 ) -> None:
     """One RK4 step of the coupled Sharp + eq. (2) model, in place, without allocation.
 
-    ``z`` = [x_v (8), v_x, psi, x, y]; ``work`` has shape (13, 12): five rows of stage
-    workspace and, in rows 5-12, the lateral matrix A_v = A0 + v_x A1 frozen at the start of
-    the step (the speed changes by a few mm/s over a millisecond); ``tau`` is the steer torque
-    [N*m], ``side`` a side force F_wy [N] entering through ``Bw`` (:func:`side_force_input`)
-    and ``force`` = (tau_d - tau_b) / r_D + F_wx [N], all held over ``h`` [s].
+    ``z`` is the state (:class:`MotorcycleState`); ``work`` the scratch space (:func:`rk4_work`),
+    whose ``A`` is the lateral matrix A_v = A0 + v_x A1 frozen at the start of the step (the
+    speed changes by a few mm/s over a millisecond); ``tau`` is the steer torque [N*m],
+    ``side`` a side force F_wy [N] entering through ``Bw`` (:func:`side_force_input`) and
+    ``force`` = (tau_d - tau_b) / r_D + F_wx [N], all held over ``h`` [s].
     """
-    k1, k2, k3, k4, tmp = work[0], work[1], work[2], work[3], work[4]
-    A = work[5:13, :8]
-    v = z[8]
-    for r in range(8):
-        for c in range(8):
+    k1, k2, k3, k4, tmp, A = work
+    v = z[MotorcycleState.v_x]
+    for r in range(_LATERAL):
+        for c in range(_LATERAL):
             A[r, c] = A0[r, c] + v * A1[r, c]
-    cos_psi, sin_psi = math.cos(z[9]), math.sin(z[9])
+    psi = z[MotorcycleState.psi]
+    cos_psi, sin_psi = math.cos(psi), math.sin(psi)
+    n = z.size
     _bike_rates(z, k1, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_psi, sin_psi)
-    for i in range(12):
+    for i in range(n):
         tmp[i] = z[i] + 0.5 * h * k1[i]
-    cos_k, sin_k = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    cos_k, sin_k = _turned(psi, cos_psi, sin_psi, tmp[MotorcycleState.psi] - psi)
     _bike_rates(tmp, k2, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_k, sin_k)
-    for i in range(12):
+    for i in range(n):
         tmp[i] = z[i] + 0.5 * h * k2[i]
-    cos_k, sin_k = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    cos_k, sin_k = _turned(psi, cos_psi, sin_psi, tmp[MotorcycleState.psi] - psi)
     _bike_rates(tmp, k3, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_k, sin_k)
-    for i in range(12):
+    for i in range(n):
         tmp[i] = z[i] + h * k3[i]
-    cos_k, sin_k = _turned(z[9], cos_psi, sin_psi, tmp[9] - z[9])
+    cos_k, sin_k = _turned(psi, cos_psi, sin_psi, tmp[MotorcycleState.psi] - psi)
     _bike_rates(tmp, k4, A, Bv, tau, Bw, side, force, m, m_eq, v_min, cos_k, sin_k)
-    for i in range(12):
+    for i in range(n):
         z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-    if z[8] < v_min:
-        z[8] = v_min
+    if z[MotorcycleState.v_x] < v_min:
+        z[MotorcycleState.v_x] = v_min
 
 
 @njit(cache=True)
@@ -693,9 +743,9 @@ def _run_coupled(
     max_step: float,
 ) -> NDArray[np.float64]:
     n = tau_r.size
-    out = np.empty((n, 12))
+    out = np.empty((n, _STATES))
     z = z0.copy()
-    work = np.zeros((13, 12))
+    work = rk4_work()
     out[0] = z
     for k in range(n - 1):
         n_sub = max(1, int(math.ceil(dts[k] / max_step - 1e-9)))  # noqa: RUF046 - numba typing

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
-from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel
+from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel, ObserverInput, ObserverState
 from motosim.model.handlebar import matrices
 from motosim.model.linear import StateSpace, zoh
 from motosim.model.sharp import held_steering
@@ -90,15 +90,6 @@ class _Drive(IntEnum):
 
     current = 0
     torque = 1
-
-
-class _Told(IntEnum):
-    """What the Walcott-Zak observer's step is told: the columns of its Gamma."""
-
-    current = 0
-    rate = 1
-    angle = 2
-    injection = 3
 
 
 class _Prediction(IntEnum):
@@ -306,7 +297,9 @@ def stack_loop(
             "observer"
         )
     est = model.estimator
-    Phi, Gamma, g, wz = est.Phi[:2, :2], est.Gamma[:2, :4], est.gain[:2], est.walcott_zak
+    rows = int(ObserverState.estimate)  # the observer's (theta_h', theta_h): the first rows
+    Phi, Gamma, g = est.Phi[:rows, :rows], est.Gamma[:rows, : len(ObserverInput)], est.gain[:rows]
+    wz = est.walcott_zak
     injection = wz.sign * wz.eta / wz.epsilon
     alpha, w = wz.filter_alpha, wz.rate_weight
     ff = model.feedforward
@@ -402,13 +395,13 @@ def stack_loop(
         A[start["observer"] + i] = (
             Phi[i, _Bar.rate] * x0
             + Phi[i, _Bar.angle] * x1
-            + Gamma[i, _Told.current] * told
-            + Gamma[i, _Told.rate] * rate_used
-            + Gamma[i, _Told.angle] * measured
-            + Gamma[i, _Told.injection] * E
+            + Gamma[i, ObserverInput.current] * told
+            + Gamma[i, ObserverInput.rate] * rate_used
+            + Gamma[i, ObserverInput.angle] * measured
+            + Gamma[i, ObserverInput.torque] * E
         )
         # the estimator is told the measured current
-        _inputs(B, start["observer"] + i, 0.0, Gamma[i, _Told.current] * share, cancel)
+        _inputs(B, start["observer"] + i, 0.0, Gamma[i, ObserverInput.current] * share, cancel)
     A[start["estimate"]] = estimate
     if predicted:  # the estimate's rate through the notch, the low-pass (as step does)
         x = (estimate - held) / h

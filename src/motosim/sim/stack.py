@@ -34,7 +34,7 @@ from motosim.model import sharp as sharp_model
 from motosim.model import tyred
 from motosim.model.handlebar import matrices as handlebar_matrices
 from motosim.model.linear import StateSpace, zoh
-from motosim.model.sharp import bike_rk4
+from motosim.model.sharp import MotorcycleState, RK4Work, bike_rk4, rk4_work
 from motosim.params.handlebar import HandlebarParameters
 from motosim.params.sharp import SharpParameters, derived_geometry
 from motosim.sim.grips import Hands
@@ -105,25 +105,6 @@ PREDICTION_NOTCH = (10.0, 0.5)
 """Frequency [Hz] and quality factor of the predicted cancellation's notch on the estimate's
 rate: the lead vanishes there, where the robustness grid's phase margins are set (the
 feedback's crossover, 10 Hz by default), and stays small about the motorcycle's wobble."""
-
-
-class MotorcycleState(IntEnum):
-    """Positions in the virtual motorcycle's state (:attr:`StackData.motorcycle`), the
-    order of :func:`motosim.model.sharp.bike_rk4`: Sharp 1971's eight lateral states, then
-    eq. (2)'s speed and the ground track; the names are those of :mod:`motosim.signals`."""
-
-    v_y = 0
-    psi_dot = 1
-    phi_dot = 2
-    delta_dot = 3
-    phi = 4
-    delta = 5
-    F_yr = 6
-    F_yf = 7
-    v_x = 8
-    psi = 9
-    x = 10
-    y = 11
 
 
 class Held(IntEnum):
@@ -416,7 +397,7 @@ class StackData(NamedTuple):
         Outputs held between measurements, in the order of :class:`Held`.
     periods : ndarray of int64, shape (1,)
         Periods since :func:`reset`.
-    work : ndarray, shape (13, 12)
+    work : RK4Work
         Scratch space of the motorcycle's RK4.
     controller_work : ndarray
         Scratch space of the controller (at least one entry).
@@ -430,7 +411,7 @@ class StackData(NamedTuple):
     inputs: Array
     held: Array
     periods: NDArray[np.int64]
-    work: Array
+    work: RK4Work
     controller_work: Array
 
 
@@ -821,7 +802,7 @@ def new_data(model: StackModel) -> StackData:
         inputs=np.zeros(len(MotorcycleInput)),
         held=np.zeros(len(Held)),
         periods=np.zeros(1, dtype=np.int64),
-        work=np.zeros((13, 12)),
+        work=rk4_work(),
         controller_work=np.zeros(max(1, n)),
     )
 
