@@ -30,7 +30,9 @@ from motosim.estimation.kernel import (
     KALMAN,
     EstimatorKernel,
     InverseDynamicsSettings,
+    InverseDynamicsState,
     KalmanSettings,
+    KalmanState,
     pack,
 )
 from motosim.model.handlebar import matrices
@@ -118,6 +120,12 @@ def design_inverse_dynamics(
     )
 
 
+_ANGLE_INPUT, _CURRENT_INPUT = 0, 1
+"""The inverse dynamics filters' inputs: the columns of their Gamma."""
+_KALMAN_CURRENT, _KALMAN_FRICTION = 0, 1
+"""The Kalman filter's inputs, i_m and tau_p_hat: the columns of its Gamma."""
+
+
 @njit(cache=True)
 def inverse_dynamics_step(
     state: Array, theta: float, current: float, Phi: Array, Gamma: Array, c: InverseDynamicsSettings
@@ -142,19 +150,20 @@ def inverse_dynamics_step(
     float
         J theta_f'' + beta theta_f' + beta_s sign(theta_f') - N k_t i_f at this sample [N*m].
     """
+    S = InverseDynamicsState
     w = c.cutoff
-    acc = w * w * (theta - state[0]) - 2.0 * w * state[1]
-    friction = c.beta_s * smooth_sign(state[1], c.dead_zone, c.friction_width)
-    tau = c.inertia * acc + c.damping * state[1] + friction - c.torque_per_amp * state[2]
-    x0, x1, x2, x3 = state[0], state[1], state[2], state[3]
-    for r in range(4):
+    x0, x1, x2, x3 = state[S.angle], state[S.rate], state[S.current], state[S.current_rate]
+    acc = w * w * (theta - x0) - 2.0 * w * x1
+    friction = c.beta_s * smooth_sign(x1, c.dead_zone, c.friction_width)
+    tau = c.inertia * acc + c.damping * x1 + friction - c.torque_per_amp * x2
+    for r in (S.angle, S.rate, S.current, S.current_rate):
         state[r] = (
-            Gamma[r, 0] * theta
-            + Gamma[r, 1] * current
-            + Phi[r, 0] * x0
-            + Phi[r, 1] * x1
-            + Phi[r, 2] * x2
-            + Phi[r, 3] * x3
+            Gamma[r, _ANGLE_INPUT] * theta
+            + Gamma[r, _CURRENT_INPUT] * current
+            + Phi[r, S.angle] * x0
+            + Phi[r, S.rate] * x1
+            + Phi[r, S.current] * x2
+            + Phi[r, S.current_rate] * x3
         )
     return float(tau)
 
@@ -162,10 +171,10 @@ def inverse_dynamics_step(
 @njit(cache=True)
 def inverse_dynamics_start(state: Array, theta: float, theta_dot: float, current: float) -> None:
     """Start the filters at rest at the first sample's angle [rad] and current [A], in place."""
-    state[0] = theta
-    state[1] = 0.0
-    state[2] = current
-    state[3] = 0.0
+    state[InverseDynamicsState.angle] = theta
+    state[InverseDynamicsState.rate] = 0.0
+    state[InverseDynamicsState.current] = current
+    state[InverseDynamicsState.current_rate] = 0.0
 
 
 class InverseDynamicsEstimator:
@@ -234,7 +243,7 @@ class InverseDynamicsEstimator:
         if state is None:
             state = self._state = np.zeros(4)
             inverse_dynamics_start(state, float(theta_h), float(theta_h_dot), float(i_m))
-        x_hat = np.array([state[1], state[0]])
+        x_hat = np.array([state[InverseDynamicsState.rate], state[InverseDynamicsState.angle]])
         tau = inverse_dynamics_step(
             state, float(theta_h), float(i_m), self._Phi, self._Gamma, self._settings
         )
@@ -346,16 +355,19 @@ def kalman_step(
     tuple of float
         Filtered [theta_h', theta_h, tau_r] at this sample [rad/s, rad, N*m].
     """
-    innovation = theta - z[1]
-    p0, p1, p2 = z[0] + K[0] * innovation, z[1] + K[1] * innovation, z[2] + K[2] * innovation
+    S = KalmanState
+    innovation = theta - z[S.angle]
+    p0 = z[S.rate] + K[S.rate] * innovation
+    p1 = z[S.angle] + K[S.angle] * innovation
+    p2 = z[S.torque] + K[S.torque] * innovation
     tau_p_hat = -c.beta_s * smooth_sign(p0, c.dead_zone, c.friction_width)
-    for r in range(3):
+    for r in (S.rate, S.angle, S.torque):
         z[r] = (
-            Gamma[r, 0] * current
-            + Gamma[r, 1] * tau_p_hat
-            + Phi[r, 0] * p0
-            + Phi[r, 1] * p1
-            + Phi[r, 2] * p2
+            Gamma[r, _KALMAN_CURRENT] * current
+            + Gamma[r, _KALMAN_FRICTION] * tau_p_hat
+            + Phi[r, S.rate] * p0
+            + Phi[r, S.angle] * p1
+            + Phi[r, S.torque] * p2
         )
     return p0, p1, p2
 
@@ -363,10 +375,8 @@ def kalman_step(
 @njit(cache=True)
 def kalman_start(state: Array, theta: float, theta_dot: float, current: float) -> None:
     """Start the prediction at the first sample's angle [rad], rate and torque 0, in place."""
-    state[0] = 0.0
-    state[1] = theta
-    state[2] = 0.0
-    state[3] = 0.0
+    state[:] = 0.0
+    state[KalmanState.angle] = theta
 
 
 class KalmanTorqueEstimator:

@@ -23,9 +23,12 @@ __all__ = [
     "EstimatorKernel",
     "EstimatorKind",
     "InverseDynamicsSettings",
+    "InverseDynamicsState",
     "KalmanSettings",
+    "KalmanState",
     "ObserverInput",
     "ObserverState",
+    "SensorState",
     "TorqueSensorSettings",
     "WalcottZakSettings",
     "pack",
@@ -75,6 +78,36 @@ class ObserverInput(IntEnum):
     rate = 1
     angle = 2
     torque = 3
+
+
+class InverseDynamicsState(IntEnum):
+    """Positions in the filtered inverse dynamics' state
+    (:func:`~motosim.estimation.baselines.inverse_dynamics_step`): the filtered angle
+    theta_f [rad] and its rate [rad/s], the filtered current i_f [A] and its rate [A/s];
+    also the rows and columns of the filters' Phi."""
+
+    angle = 0
+    rate = 1
+    current = 2
+    current_rate = 3
+
+
+class KalmanState(IntEnum):
+    """Positions in the Kalman filter's predicted state
+    (:func:`~motosim.estimation.baselines.kalman_step`): (theta_h', theta_h, tau_r)
+    [rad/s, rad, N*m], the rows and columns of its Phi."""
+
+    rate = 0
+    angle = 1
+    torque = 2
+
+
+class SensorState(IntEnum):
+    """Positions in the torque sensor kernel's state: the low-pass's output [N*m] and
+    whether the first sample came (1) or not (0)."""
+
+    torque = 0
+    started = 1
 
 
 class WalcottZakSettings(NamedTuple):

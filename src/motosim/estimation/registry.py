@@ -41,6 +41,7 @@ from motosim.estimation.kernel import (
     TORQUE_SENSOR,
     WALCOTT_ZAK,
     EstimatorKernel,
+    SensorState,
     TorqueSensorSettings,
     pack,
 )
@@ -346,11 +347,11 @@ def step_kernel(
     """
     if k.kind == TORQUE_SENSOR:  # the low-pass's output, started at the first sample
         a = k.torque_sensor.low_pass
-        if state[1] == 0.0 or a >= 1.0:  # the first sample, or no low-pass: as measured
-            state[0], state[1] = torque, 1.0
+        if state[SensorState.started] == 0.0 or a >= 1.0:  # the first sample, or no low-pass
+            state[SensorState.torque], state[SensorState.started] = torque, 1.0
         else:
-            state[0] += a * (torque - state[0])
-        return float(state[0])
+            state[SensorState.torque] += a * (torque - state[SensorState.torque])
+        return float(state[SensorState.torque])
     if k.kind == WALCOTT_ZAK:
         return wz_step(
             state,
