@@ -138,132 +138,6 @@ class SignalLayout:
             )
 
 
-class FrameCodec:
-    """Encode and decode one frame with precomputed shifts and masks.
-
-    Parameters
-    ----------
-    frame_id : int
-        The 11-bit identifier.
-    length : int
-        Data length [bytes], 1..8.
-    signals : sequence of SignalLayout
-        The signals, in the order of the values given to :meth:`encode` and returned by
-        :meth:`decode`.
-    checksum, counter : str or None
-        The names of the CRC-8 and alive-counter signals, if the frame has them.
-
-    Examples
-    --------
-    >>> codec = FrameCodec(
-    ...     0x101, 2, [SignalLayout("A", 0, 8, False, 1.0, 0.0),
-    ...                SignalLayout("X", 8, 8, True, 0.5, 0.0)], checksum="A")
-    >>> frame = codec.encode([0.0, -1.5])
-    >>> out = np.zeros(2)
-    >>> codec.decode(frame, out), float(out[1])
-    (True, -1.5)
-    """
-
-    __slots__ = (
-        "_checksum_mask",
-        "_checksum_shift",
-        "_fields",
-        "_id_crc",
-        "checksum_index",
-        "counter_index",
-        "frame_id",
-        "length",
-        "names",
-    )
-
-    def __init__(
-        self,
-        frame_id: int,
-        length: int,
-        signals: Sequence[SignalLayout],
-        *,
-        checksum: str | None = None,
-        counter: str | None = None,
-    ) -> None:
-        if not 0 <= frame_id < 0x800:
-            raise MotosimError(f"frame id {frame_id!r}: expected a standard 11-bit id")
-        if not 1 <= length <= 8:
-            raise MotosimError(f"frame 0x{frame_id:x}: length {length!r}; expected 1..8 bytes")
-        fields = []  # start, mask, sign bit, wrap, scale, offset, lowest and highest raw
-        for s in signals:
-            if s.start + s.length > 8 * length:
-                raise MotosimError(
-                    f"signal {s.name} ends at bit {s.start + s.length}; frame 0x{frame_id:x} "
-                    f"has {8 * length} bits"
-                )
-            mask, sign = (1 << s.length) - 1, (1 << (s.length - 1)) if s.is_signed else 0
-            hi = sign - 1 if sign else mask
-            fields.append((s.start, mask, sign, mask + 1, s.scale, s.offset, -sign, hi))
-        self.frame_id = frame_id
-        self.length = length
-        self.names = tuple(s.name for s in signals)
-        self._fields = tuple(fields)
-        self.checksum_index = self.index(checksum) if checksum is not None else -1
-        self.counter_index = self.index(counter) if counter is not None else -1
-        if self.checksum_index >= 0:
-            field = self._fields[self.checksum_index]
-            if field[1] != 0xFF or field[2]:
-                raise MotosimError(f"checksum {checksum}: expected an unsigned 8-bit signal")
-            self._checksum_shift = field[0]
-            self._checksum_mask = ~(0xFF << field[0])
-        else:
-            self._checksum_shift = 0
-            self._checksum_mask = -1
-        self._id_crc = crc8_sae_j1850(frame_id.to_bytes(2, "little")) ^ 0xFF  # running value
-
-    def index(self, name: str) -> int:
-        """The position of signal ``name`` in the value order."""
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise MotosimError(
-                f"frame 0x{self.frame_id:x} has no signal {name!r}; it has {', '.join(self.names)}"
-            ) from None
-
-    def _crc(self, raw: int) -> int:
-        frame = (raw & self._checksum_mask).to_bytes(self.length, "little")
-        return crc8_sae_j1850(frame, self._id_crc)
-
-    def encode(self, values: Sequence[float] | NDArray[np.float64]) -> bytes:
-        """The frame's bytes for physical ``values`` (saturated to each signal's range).
-
-        The checksum signal's value is ignored and computed; NaN encodes as raw 0.
-        """
-        raw = 0
-        items = values.tolist() if isinstance(values, np.ndarray) else values
-        for value, (start, mask, _sign, _wrap, scale, offset, lo, hi) in zip(
-            items, self._fields, strict=True
-        ):
-            v = (value - offset) / scale
-            r = 0 if v != v else round(min(max(v, lo), hi))
-            raw |= (r & mask) << start
-        if self.checksum_index >= 0:
-            raw = (raw & self._checksum_mask) | self._crc(raw) << self._checksum_shift
-        return raw.to_bytes(self.length, "little")
-
-    def decode(self, data: bytes | bytearray, out: NDArray[np.float64]) -> bool:
-        """Write the physical values of ``data`` into ``out``; False if length or CRC is wrong.
-
-        On a wrong length ``out`` is left unchanged.
-        """
-        if len(data) != self.length:
-            return False
-        raw = int.from_bytes(data, "little")
-        for i, (start, mask, sign, wrap, scale, offset, _lo, _hi) in enumerate(self._fields):
-            r = (raw >> start) & mask
-            if sign and r & sign:
-                r -= wrap
-            out[i] = r * scale + offset
-        if self.checksum_index < 0:
-            return True
-        return self._crc(raw) == (raw >> self._checksum_shift) & 0xFF
-
-
 class FrameColumn(IntEnum):
     """The columns of a codec table's first row, the frame's (:func:`codec_table`)."""
 
@@ -301,37 +175,124 @@ FRAME_ROW = 0
 """The row of the frame's columns in a codec table; the signals' rows follow it."""
 
 
+class FrameCodec:
+    """Encode and decode one frame: a table of shifts, masks and scalings built once, read by
+    the compiled :func:`encode_frame` and :func:`decode_frame` (the real-time period's codec).
+
+    Parameters
+    ----------
+    frame_id : int
+        The 11-bit identifier.
+    length : int
+        Data length [bytes], 1..8.
+    signals : sequence of SignalLayout
+        The signals, in the order of the values given to :meth:`encode` and returned by
+        :meth:`decode`; at most 63 bits each.
+    checksum, counter : str or None
+        The names of the CRC-8 and alive-counter signals, if the frame has them.
+
+    Examples
+    --------
+    >>> codec = FrameCodec(
+    ...     0x101, 2, [SignalLayout("A", 0, 8, False, 1.0, 0.0),
+    ...                SignalLayout("X", 8, 8, True, 0.5, 0.0)], checksum="A")
+    >>> frame = codec.encode([0.0, -1.5])
+    >>> out = np.zeros(2)
+    >>> codec.decode(frame, out), float(out[1])
+    (True, -1.5)
+    """
+
+    __slots__ = ("checksum_index", "counter_index", "frame_id", "length", "names", "table")
+
+    def __init__(
+        self,
+        frame_id: int,
+        length: int,
+        signals: Sequence[SignalLayout],
+        *,
+        checksum: str | None = None,
+        counter: str | None = None,
+    ) -> None:
+        if not 0 <= frame_id < 0x800:
+            raise MotosimError(f"frame id {frame_id!r}: expected a standard 11-bit id")
+        if not 1 <= length <= 8:
+            raise MotosimError(f"frame 0x{frame_id:x}: length {length!r}; expected 1..8 bytes")
+        self.frame_id = frame_id
+        self.length = length
+        self.names = tuple(s.name for s in signals)
+        self.checksum_index = self.index(checksum) if checksum is not None else -1
+        self.counter_index = self.index(counter) if counter is not None else -1
+        table = np.zeros((len(signals) + 1, max(len(FrameColumn), len(SignalColumn))))
+        for i, s in enumerate(signals):
+            if s.start + s.length > 8 * length:
+                raise MotosimError(
+                    f"signal {s.name} ends at bit {s.start + s.length}; frame 0x{frame_id:x} "
+                    f"has {8 * length} bits"
+                )
+            if s.length > 63:
+                raise MotosimError(f"signal {s.name}: {s.length} bits; expected at most 63")
+            sign = 1 << (s.length - 1) if s.is_signed else 0
+            row = table[FRAME_ROW + 1 + i]
+            row[SignalColumn.start], row[SignalColumn.bits] = s.start, s.length
+            row[SignalColumn.signed] = 1.0 if s.is_signed else 0.0
+            row[SignalColumn.scale], row[SignalColumn.offset] = s.scale, s.offset
+            row[SignalColumn.low] = -sign
+            row[SignalColumn.high] = sign - 1 if sign else (1 << s.length) - 1
+        frame = table[FRAME_ROW]
+        frame[FrameColumn.frame_id], frame[FrameColumn.length] = frame_id, length
+        frame[FrameColumn.checksum_index] = self.checksum_index
+        frame[FrameColumn.counter_index] = self.counter_index
+        frame[FrameColumn.id_crc] = crc8_sae_j1850(frame_id.to_bytes(2, "little")) ^ 0xFF
+        if self.checksum_index >= 0:
+            layout = signals[self.checksum_index]
+            if layout.length != 8 or layout.is_signed:
+                raise MotosimError(f"checksum {checksum}: expected an unsigned 8-bit signal")
+            frame[FrameColumn.checksum_shift] = layout.start
+        table.flags.writeable = False
+        self.table = table
+        """The codec as :func:`encode_frame` and :func:`decode_frame` read it
+        (:func:`codec_table`), read-only."""
+
+    def index(self, name: str) -> int:
+        """The position of signal ``name`` in the value order."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise MotosimError(
+                f"frame 0x{self.frame_id:x} has no signal {name!r}; it has {', '.join(self.names)}"
+            ) from None
+
+    def encode(self, values: Sequence[float] | NDArray[np.float64]) -> bytes:
+        """The frame's bytes for physical ``values`` (saturated to each signal's range).
+
+        The checksum signal's value is ignored and computed; NaN encodes as raw 0.
+        """
+        given = np.asarray(values, dtype=np.float64)
+        if given.shape != (len(self.names),):
+            raise MotosimError(
+                f"frame 0x{self.frame_id:x}: {given.shape} values; expected {len(self.names)}"
+            )
+        out = np.zeros(self.length, dtype=np.uint8)
+        encode_frame(self.table, given, out, 0)
+        return out.tobytes()
+
+    def decode(self, data: bytes | bytearray, out: NDArray[np.float64]) -> bool:
+        """Write the physical values of ``data`` into ``out``; False if length or CRC is wrong.
+
+        On a wrong length ``out`` is left unchanged.
+        """
+        frame = np.frombuffer(bytearray(data), dtype=np.uint8)
+        return bool(decode_frame(self.table, frame, 0, frame.size, out))
+
+
 def codec_table(codec: FrameCodec) -> NDArray[np.float64]:
-    """The codec as the array the compiled :func:`encode_frame` and :func:`decode_frame` read.
+    """The codec as the array the compiled :func:`encode_frame` and :func:`decode_frame` read,
+    a copy the caller may change.
 
     Row :data:`FRAME_ROW` holds the frame's values (:class:`FrameColumn`), then one row per
     signal holds its values (:class:`SignalColumn`).
-
-    Raises
-    ------
-    MotosimError
-        For a signal of 64 bits (the compiled codec works on 63-bit raw values).
     """
-    table = np.zeros((len(codec.names) + 1, max(len(FrameColumn), len(SignalColumn))))
-    frame = table[FRAME_ROW]
-    frame[FrameColumn.frame_id] = codec.frame_id
-    frame[FrameColumn.length] = codec.length
-    frame[FrameColumn.checksum_index] = codec.checksum_index
-    frame[FrameColumn.checksum_shift] = codec._checksum_shift
-    frame[FrameColumn.id_crc] = codec._id_crc
-    frame[FrameColumn.counter_index] = codec.counter_index
-    for i, (start, mask, sign, _wrap, scale, offset, lo, hi) in enumerate(codec._fields):
-        length = mask.bit_length()
-        if length > 63:
-            raise MotosimError(
-                f"signal {codec.names[i]}: {length} bits; expected at most 63 (compiled codec)"
-            )
-        row = table[FRAME_ROW + 1 + i]
-        row[SignalColumn.start], row[SignalColumn.bits] = start, length
-        row[SignalColumn.signed] = 1.0 if sign else 0.0
-        row[SignalColumn.scale], row[SignalColumn.offset] = scale, offset
-        row[SignalColumn.low], row[SignalColumn.high] = lo, hi
-    return table
+    return codec.table.copy()
 
 
 @njit(cache=True)

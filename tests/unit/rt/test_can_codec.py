@@ -80,8 +80,8 @@ def test_codec_agrees_with_cantools_both_ways(data: st.DataObject) -> None:
 @settings(max_examples=200, deadline=None)
 @given(st.data())
 def test_compiled_codec_agrees_with_cantools_both_ways(data: st.DataObject) -> None:
-    # the codec of the fused period (encode_frame, decode_frame on codec_table) against
-    # cantools' reading of the DBC, as the Python codec above
+    # the compiled codec as the fused period calls it, on a codec table's copy and at an
+    # offset in a longer buffer, against cantools' reading of the DBC
     message = data.draw(st.sampled_from(DB.messages))
     codec = FRAMES[message.frame_id]
     table = codec_table(codec)
@@ -96,30 +96,6 @@ def test_compiled_codec_agrees_with_cantools_both_ways(data: st.DataObject) -> N
     theirs = message.decode(ours, decode_choices=False)
     for name, value in zip(codec.names, out, strict=True):
         assert value == pytest.approx(theirs[name], rel=1e-12, abs=1e-12)
-
-
-@settings(max_examples=300, deadline=None)
-@given(
-    st.sampled_from(sorted(FRAMES)),
-    st.lists(st.floats(-1e6, 1e6) | st.just(float("nan")), min_size=8, max_size=8),
-    st.integers(0, 63),
-)
-def test_compiled_codec_is_the_python_codec(frame_id: int, raw: list[float], bit: int) -> None:
-    # out-of-range values saturate, halves round to even, NaN encodes as 0, as in encode;
-    # a flipped bit fails the checksum in both
-    codec = FRAMES[frame_id]
-    values = np.array(raw[: len(codec.names)])
-    table = codec_table(codec)
-    frame = np.zeros(codec.length, dtype=np.uint8)
-    encode_frame(table, values, frame, 0)
-    assert frame.tobytes() == codec.encode(values)
-    frame[(bit // 8) % codec.length] ^= 1 << (bit % 8)
-    ours, theirs = np.zeros(len(codec.names)), np.zeros(len(codec.names))
-    assert decode_frame(table, frame, 0, codec.length, ours) == codec.decode(
-        frame.tobytes(), theirs
-    )
-    assert np.array_equal(ours, theirs)
-    assert not decode_frame(table, frame, 0, codec.length - 1, ours)
 
 
 @settings(max_examples=100, deadline=None)
