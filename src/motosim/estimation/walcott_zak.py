@@ -32,10 +32,11 @@ torque below beta_s is not observable from the motion and the estimate reads tau
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numba import njit
+from numba.extending import register_jitable
 from numpy.typing import NDArray
 from scipy.linalg import solve_continuous_lyapunov
 
@@ -62,6 +63,7 @@ __all__ = [
     "design",
     "design_with",
     "invariant_zeros",
+    "observer_row",
     "wz_start",
     "wz_step",
 ]
@@ -434,6 +436,33 @@ def _check_positive(name: str, value: float, unit: str) -> None:
     check_number(value, where=name, lower=0.0, lower_closed=False, unit=unit)
 
 
+@register_jitable
+def observer_row(
+    Phi: Array,
+    Gamma: Array,
+    r: int,
+    x0: Any,
+    x1: Any,
+    current: Any,
+    rate: Any,
+    theta: Any,
+    torque: Any,
+) -> Any:
+    """Row ``r`` (an :class:`~motosim.estimation.kernel.ObserverState`) of the observer's
+    update over a sample, Phi x_hat + Gamma [i_m, rate, theta, torque], with x_hat =
+    (``x0``, ``x1``): of numbers in :func:`wz_step`, and of the rows of a linear map in the
+    loop analysis (:func:`motosim.sim.loop_analysis.stack_loop`), which writes the same
+    update in the loop's coordinates."""
+    return (
+        Phi[r, ObserverState.rate] * x0
+        + Phi[r, ObserverState.angle] * x1
+        + Gamma[r, ObserverInput.current] * current
+        + Gamma[r, ObserverInput.rate] * rate
+        + Gamma[r, ObserverInput.angle] * theta
+        + Gamma[r, ObserverInput.torque] * torque
+    )
+
+
 @njit(cache=True)
 def wz_step(
     state: Array,
@@ -507,14 +536,7 @@ def wz_step(
         tau_p_hat += (1.0 - abs(slide)) * min(max(held, -beta_s), beta_s)
     torque = tau_p_hat + E
     for r in (ObserverState.rate, ObserverState.angle):
-        state[r] = (
-            Phi[r, ObserverState.rate] * x0
-            + Phi[r, ObserverState.angle] * x1
-            + Gamma[r, ObserverInput.current] * current
-            + Gamma[r, ObserverInput.rate] * rate
-            + Gamma[r, ObserverInput.angle] * theta
-            + Gamma[r, ObserverInput.torque] * torque
-        )
+        state[r] = observer_row(Phi, Gamma, r, x0, x1, current, rate, theta, torque)
     estimate = state[ObserverState.estimate] + c.filter_alpha * (E - state[ObserverState.estimate])
     state[ObserverState.estimate] = estimate
     state[ObserverState.previous_rate] = theta_dot

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from motosim.errors import MotosimError
 from motosim.estimation.kernel import WALCOTT_ZAK, EstimatorKernel, ObserverInput, ObserverState
+from motosim.estimation.walcott_zak import observer_row
 from motosim.model.handlebar import matrices
 from motosim.model.linear import StateSpace, zoh
 from motosim.model.sharp import held_steering
@@ -392,14 +393,8 @@ def stack_loop(
     A[start["theta_prev"]] = measured
     A[start["rate_prev"]] = z1
     for i in _Bar.rate, _Bar.angle:
-        A[start["observer"] + i] = (
-            Phi[i, _Bar.rate] * x0
-            + Phi[i, _Bar.angle] * x1
-            + Gamma[i, ObserverInput.current] * told
-            + Gamma[i, ObserverInput.rate] * rate_used
-            + Gamma[i, ObserverInput.angle] * measured
-            + Gamma[i, ObserverInput.torque] * E
-        )
+        row = observer_row(Phi, Gamma, i, x0, x1, told, rate_used, measured, E)
+        A[start["observer"] + i] = row
         # the estimator is told the measured current
         _inputs(B, start["observer"] + i, 0.0, Gamma[i, ObserverInput.current] * share, cancel)
     A[start["estimate"]] = estimate
