@@ -396,7 +396,7 @@ class VirtualRig:
         self.torque_sensor = torque_sensor
         self._hands = 0.0  # the rider's active torque now [N*m]
         self._holding = False  # whether the rider holds the handlebar now
-        self._sampled_omega = 0.0  # the rate at the last status sample [rad/s]
+        self._sampled = (0.0, 0.0)  # the time [s] and rate [rad/s] of the last torque frame
         self._torque_counter = 0
         self._plant = self._compiled_plant()
         self.frames_sent = 0
@@ -579,17 +579,18 @@ class VirtualRig:
 
     def _torque_frame(self) -> bytes:
         """The torque sensor's frame now: the hands' torque on the handlebar (the arms'
-        passive torque with the rate's change over the status period for theta_h''), plus
-        the sensor's offset and noise."""
+        passive torque with the rate's change since the last torque frame for theta_h''),
+        plus the sensor's offset and noise."""
         sensor, codec = self.torque_sensor, self.codecs.torque
         assert sensor is not None and codec is not None
         theta, omega = float(self.x[Bar.theta]), float(self.x[Bar.omega])
         torque = self._hands + sensor.offset
+        t_last, omega_last = self._sampled
         if self._holding:
             a = self.arms
-            accel = (omega - self._sampled_omega) / (self._sub * self.h)
+            accel = (omega - omega_last) / (self.t - t_last) if self.t > t_last else 0.0
             torque += hands_torque(theta, omega, accel, a.J_a, a.c_a, a.k_a, a.theta_hold)
-        self._sampled_omega = omega
+        self._sampled = (self.t, omega)
         if sensor.noise > 0.0:
             torque += sensor.noise * float(self.rng.standard_normal())
         values = np.zeros(len(codec.names))
