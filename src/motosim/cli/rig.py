@@ -145,9 +145,10 @@ def _run(args: argparse.Namespace, stops: StopHandler) -> int:
         if twin is not None and args.platform_can:
             rig.on_frame = twin.receive_frame
         stops.check()  # Ctrl-C while the rig was built: no run
+        sensed = ", each with a torque sensor's HB_TORQUE" if rig.torque_sensor else ""
         print(
             f"motosim rig: ready on {args.bus} ({time.monotonic() - start:.1f} s): "
-            f"{args.rate:g} Hz ticks, status frames at {settings.status_rate:g} Hz; "
+            f"{args.rate:g} Hz ticks, status frames at {settings.status_rate:g} Hz{sensed}; "
             "Ctrl-C stops",
             file=sys.stderr,
             flush=True,
@@ -326,6 +327,7 @@ def _summary(
     return {
         "time": rig.t,
         "frames_sent": rig.frames_sent,
+        "torque_frames_sent": rig.torque_frames_sent,
         "frames_dropped": rig.frames_dropped,
         "frames_late": rig.frames_late,
         "commands": rig.commands,

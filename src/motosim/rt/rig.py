@@ -400,6 +400,8 @@ class VirtualRig:
         self._torque_counter = 0
         self._plant = self._compiled_plant()
         self.frames_sent = 0
+        self.torque_frames_sent = 0
+        """The torque sensor's frames sent (not in :attr:`frames_sent`)."""
         self.frames_dropped = 0
         self.frames_late = 0
         """Status frames not sent because the rig's process was late (see
@@ -622,13 +624,17 @@ class VirtualRig:
                 (due for due, _, frame_id, _ in queue if frame_id == status_id and due <= t),
                 default=-math.inf,
             )
+        torque_id = -1 if self.codecs.torque is None else self.codecs.torque.frame_id
         while queue and queue[0][0] <= t + 1e-12:
             due, _, frame_id, frame = heapq.heappop(queue)
             if frame_id == status_id and due < newest:
                 self.frames_late += 1
                 continue
             if self.link.send(frame_id, frame):
-                self.frames_sent += 1
+                if frame_id == torque_id:
+                    self.torque_frames_sent += 1
+                else:
+                    self.frames_sent += 1
 
 
 class VirtualRider:
