@@ -136,12 +136,9 @@ def session_config(
         model = cached_stack(cache, inputs)
     model = account_for_delay(model, checked.age, inputs.design_handlebar)
     options = request.options
-    udp = request.bus.partition(":")[0] == "udp_multicast"
-    link = "fast" if options.fast_link and udp else "python-can"
     metadata = run_metadata(inputs) | {
-        "realtime": {
+        "realtime": {  # and the link in use, once the session has opened it
             "bus": request.bus,
-            "link": link,
             "pace": options.pace,
             "status_latency": checked.latency,
             "measurement_delay": checked.age,

@@ -412,7 +412,7 @@ class VirtualRig:
         """Called with every other frame the rig reads (the platform twin's CAN frames)."""
 
     def _frame_positions(self, codecs: HandlebarCodecs) -> None:
-        """Where the status and command frames' signals sit in their decoded values."""
+        """Where the status, command and torque frames' signals sit in their values."""
         st = codecs.status
         self._values = np.zeros(len(st.names))
         parts = ("angle", "current", "enabled", "counter", "drive_fault")
@@ -420,6 +420,12 @@ class VirtualRig:
         self._command = np.zeros(len(codecs.command.names))
         self._c_current = codecs.position(codecs.command, "current_command")
         self._c_enable = codecs.position(codecs.command, "enable")
+        tq = codecs.torque
+        self._torque_id = -1 if tq is None else tq.frame_id
+        if tq is not None:
+            self._torque_values = np.zeros(len(tq.names))
+            self._t_torque = codecs.position(tq, "rider_torque")
+            self._t_counter = codecs.position(tq, "counter")
 
     def _compiled_plant(self) -> BarPlant:
         """The handlebar's plant, its sub-steps compiled (or loaded from numba's cache) now
@@ -569,14 +575,13 @@ class VirtualRig:
         if s.duplicate > 0.0 and rng.random() < s.duplicate:
             self._push(self.t, frame)
         if self.torque_sensor is not None:
-            self._push(self.t, self._torque_frame(), self.codecs.torque.frame_id)  # type: ignore[union-attr]
+            self._push(self.t, self._torque_frame(), self._torque_id)
 
     def _hands_at(self, rider: Array, k: int, t: float, t_rider: float) -> None:
         """Keep the rider's active torque now, for the torque sensor: ``rider[k]`` (the last
         value held), at the rider's time ``t`` [s] (``t_rider`` < 0: the rider does not hold
         the handlebar)."""
-        off = self.hands_off
-        self._holding = t_rider >= 0.0 and (off.shape[0] == 0 or is_held(t, off))
+        self._holding = t_rider >= 0.0 and is_held(t, self.hands_off)
         self._hands = float(rider[min(k, rider.size - 1)]) if self._holding else 0.0
 
     def _torque_frame(self) -> bytes:
@@ -595,9 +600,9 @@ class VirtualRig:
         self._sampled = (self.t, omega)
         if sensor.noise > 0.0:
             torque += sensor.noise * float(self.rng.standard_normal())
-        values = np.zeros(len(codec.names))
-        values[self.codecs.position(codec, "rider_torque")] = torque
-        values[self.codecs.position(codec, "counter")] = self._torque_counter
+        values = self._torque_values
+        values[self._t_torque] = torque
+        values[self._t_counter] = self._torque_counter
         self._torque_counter = (self._torque_counter + 1) % 16
         return codec.encode(values)
 
@@ -624,7 +629,7 @@ class VirtualRig:
                 (due for due, _, frame_id, _ in queue if frame_id == status_id and due <= t),
                 default=-math.inf,
             )
-        torque_id = -1 if self.codecs.torque is None else self.codecs.torque.frame_id
+        torque_id = self._torque_id
         while queue and queue[0][0] <= t + 1e-12:
             due, _, frame_id, frame = heapq.heappop(queue)
             if frame_id == status_id and due < newest:

@@ -353,11 +353,12 @@ class RealtimeSession:
         controls = None
         if c.live is not None:
             self._buttons, controls = multiprocessing.get_context("spawn").Pipe(duplex=False)
+        realtime = c.metadata.get("realtime", {}) | {"link": self._link.label}
         settings = RecorderSettings(
             runner.ring.handle,
             runner.names,
             c.folder,
-            c.metadata,
+            c.metadata | {"realtime": realtime},
             c.options.overwrite,
             c.inputs.nominal_handlebar.torque_per_amp,
             c.rate,
