@@ -66,7 +66,12 @@ from numpy.typing import NDArray
 from motosim.cueing.filters import biquad_step, lowpass2
 from motosim.cueing.limits import design_limits, limit_step
 from motosim.cueing.platform import CueingConfig, Platform
-from motosim.cueing.washout import WASHOUT_STATE_SIZE, design_washout, washout_step
+from motosim.cueing.washout import (
+    WASHOUT_OUTPUTS,
+    WASHOUT_STATE_SIZE,
+    design_washout,
+    washout_step,
+)
 from motosim.errors import MotosimError
 from motosim.io.can import Link, PlatformCodecs
 from motosim.rt.safety import State
@@ -244,9 +249,9 @@ _AXES = (
 """Each axis's angle and rate in :func:`platform_step`'s ``out`` (its row of the limits)."""
 _LIMIT_RATE = 1
 """The rate [rad/s] in a limit manager's state (:func:`~motosim.cueing.limits.limit_step`)."""
-_ROLL, _HORIZON = 0, 3
+_ROLL, _HORIZON = WASHOUT_OUTPUTS.index("phi_s"), WASHOUT_OUTPUTS.index("phi_vis")
 """The roll and the horizon in the washout's command
-(:func:`~motosim.cueing.washout.washout_step`)."""
+(:func:`~motosim.cueing.washout.washout_step`, :data:`~motosim.cueing.washout.WASHOUT_OUTPUTS`)."""
 
 
 def _at_rest(cueing: PlatformCueing) -> PlatformCueing:
